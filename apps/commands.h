@@ -1,0 +1,12 @@
+// The jointlab command's subcommands. Each registers itself on the CLI11 app
+// and runs library code; no numerics live in apps/.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace jointlab::apps {
+
+/// `jointlab process`: ring-down files -> frequency and damping versus amplitude.
+void add_process_command(CLI::App& app);
+
+}  // namespace jointlab::apps

@@ -1,0 +1,40 @@
+// Physical quantities and units of test channels.
+//
+// Every sample inside jointlab is SI: metres, m/s, m/s^2, newtons, seconds.
+// A unit string as written in a file header ("g", "mm/s", "m/s^2", "N") maps to
+// the quantity it measures and the factor that converts it to SI:
+// value_SI = factor * value_in_unit. Standard gravity g = 9.80665 m/s^2.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace jointlab {
+
+/// The physical quantity a channel measures.
+enum class Quantity { kDisplacement, kVelocity, kAcceleration, kForce };
+
+/// A parsed unit: what it measures and the factor to SI.
+struct Unit {
+  Quantity quantity;
+  double to_si;       ///< value_SI = to_si * value
+  std::string label;  ///< the unit as written, normalised ("m/s^2")
+};
+
+/// Looks up a unit string ("g", "m/s^2", "mm/s", "in", "N", ...); nullopt if unknown.
+std::optional<Unit> parse_unit(std::string_view text);
+
+/// The SI unit of a quantity: "m", "m/s", "m/s^2", "N".
+std::string si_unit(Quantity q);
+
+/// Lower-case name of a quantity: "displacement", "velocity", "acceleration", "force".
+std::string quantity_name(Quantity q);
+
+/// Parses "displacement" | "velocity" | "acceleration" | "force"; nullopt otherwise.
+std::optional<Quantity> parse_quantity(std::string_view text);
+
+/// Order of time differentiation from displacement: 0, 1, 2 (force: not a motion, asserts).
+int derivative_order(Quantity q);
+
+}  // namespace jointlab

@@ -1,0 +1,48 @@
+#include "jointlab/core/units.h"
+
+#include <gtest/gtest.h>
+
+namespace jointlab {
+namespace {
+
+TEST(Units, StandardGravityIsExact) {
+  const auto g = parse_unit("g");
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->quantity, Quantity::kAcceleration);
+  EXPECT_DOUBLE_EQ(g->to_si, 9.80665);
+}
+
+TEST(Units, SpellingsOfAccelerationAgree) {
+  for (const char* s : {"m/s^2", "m/s2", "m / s^2"}) {
+    const auto u = parse_unit(s);
+    ASSERT_TRUE(u.has_value()) << s;
+    EXPECT_EQ(u->quantity, Quantity::kAcceleration);
+    EXPECT_DOUBLE_EQ(u->to_si, 1.0);
+  }
+}
+
+TEST(Units, ScaledUnits) {
+  EXPECT_DOUBLE_EQ(parse_unit("mm")->to_si, 1e-3);
+  EXPECT_EQ(parse_unit("mm/s")->quantity, Quantity::kVelocity);
+  EXPECT_DOUBLE_EQ(parse_unit("in/s")->to_si, 0.0254);
+  EXPECT_EQ(parse_unit("N")->quantity, Quantity::kForce);
+  EXPECT_DOUBLE_EQ(parse_unit("kN")->to_si, 1e3);
+}
+
+TEST(Units, UnknownUnitsAreRefused) {
+  EXPECT_FALSE(parse_unit("furlong").has_value());
+  EXPECT_FALSE(parse_unit("").has_value());
+  EXPECT_FALSE(parse_unit("G").has_value());  // not standard gravity: ambiguous
+}
+
+TEST(Units, QuantityNamesRoundTrip) {
+  for (Quantity q : {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration,
+                     Quantity::kForce}) {
+    EXPECT_EQ(parse_quantity(quantity_name(q)), q);
+  }
+  EXPECT_FALSE(parse_quantity("jerk").has_value());
+  EXPECT_EQ(derivative_order(Quantity::kAcceleration), 2);
+}
+
+}  // namespace
+}  // namespace jointlab

@@ -1,0 +1,41 @@
+#include "jointlab/data/table_writer.h"
+
+#include <cassert>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "jointlab/data/atomic_file.h"
+
+namespace jointlab::data {
+
+void Table::add(std::string name, Eigen::VectorXd values) {
+  assert(columns.empty() || values.size() == columns.front().size());
+  names.push_back(std::move(name));
+  columns.push_back(std::move(values));
+}
+
+void write_table(const std::filesystem::path& path, const Table& table) {
+  std::string text;
+  for (size_t c = 0; c < table.names.size(); ++c) {
+    if (c) text += ',';
+    text += table.names[c];
+  }
+  text += '\n';
+  for (Eigen::Index r = 0; r < table.rows(); ++r) {
+    for (size_t c = 0; c < table.columns.size(); ++c) {
+      const double v = table.columns[c](r);
+      if (!std::isfinite(v)) {
+        throw std::logic_error(fmt::format("{}: refusing to write a non-finite value in column "
+                                           "'{}', row {}", path.string(), table.names[c], r + 1));
+      }
+      if (c) text += ',';
+      text += fmt::format("{:.10g}", v);
+    }
+    text += '\n';
+  }
+  write_file_atomically(path, text);
+}
+
+}  // namespace jointlab::data

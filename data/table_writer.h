@@ -1,0 +1,31 @@
+// CSV result tables: named numeric columns, written atomically.
+//
+// Values are printed with 10 significant digits ("%.10g"), enough for every
+// result jointlab reports. A NaN or Inf in a result is a bug upstream; the
+// writer refuses it (std::logic_error) rather than print it.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace jointlab::data {
+
+/// A result table: column names and equally long columns.
+struct Table {
+  std::vector<std::string> names;       ///< header row
+  std::vector<Eigen::VectorXd> columns;  ///< one vector per name
+
+  /// Appends a column; asserts equal length with the first.
+  void add(std::string name, Eigen::VectorXd values);
+  /// Number of rows (0 if no column).
+  Eigen::Index rows() const { return columns.empty() ? 0 : columns.front().size(); }
+};
+
+/// Writes `table` as comma-separated text to `path` (temporary name, then rename).
+void write_table(const std::filesystem::path& path, const Table& table);
+
+}  // namespace jointlab::data

@@ -1,0 +1,69 @@
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "jointlab/data/atomic_file.h"
+#include "jointlab/data/json_writer.h"
+#include "jointlab/data/table_writer.h"
+
+namespace jointlab::data {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / "jointlab_writers_test";
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+TEST(AtomicFile, UncommittedLeavesNothing) {
+  const fs::path p = scratch("never.txt");
+  fs::remove(p);
+  {
+    AtomicFile f(p);
+    f.stream() << "partial";
+  }
+  EXPECT_FALSE(fs::exists(p));
+  for (const auto& e : fs::directory_iterator(p.parent_path())) {
+    EXPECT_EQ(e.path().filename().string().find("never.txt.tmp"), std::string::npos);
+  }
+}
+
+TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
+  Table t;
+  t.add("a", Eigen::Vector2d(1.0, 0.5));
+  t.add("b", Eigen::Vector2d(2.0, 1e-7));
+  const fs::path p = scratch("t.csv");
+  write_table(p, t);
+  EXPECT_EQ(slurp(p), "a,b\n1,2\n0.5,1e-07\n");
+
+  t.columns[1](0) = std::numeric_limits<double>::quiet_NaN();
+  const fs::path q = scratch("nan.csv");
+  fs::remove(q);
+  EXPECT_THROW(write_table(q, t), std::logic_error);
+  EXPECT_FALSE(fs::exists(q));
+}
+
+TEST(JsonWriter, NestedDocument) {
+  JsonWriter w;
+  w.begin_object().key("name").value("a\"b").key("list").begin_array().value(1).value(2.5)
+      .end_array().key("empty").begin_object().end_object().end_object();
+  EXPECT_EQ(w.str(),
+            "{\n  \"name\": \"a\\\"b\",\n  \"list\": [\n    1,\n    2.5\n  ],\n  \"empty\": {}\n}\n");
+  JsonWriter bad;
+  EXPECT_THROW(bad.value(std::numeric_limits<double>::infinity()), std::logic_error);
+}
+
+}  // namespace
+}  // namespace jointlab::data

@@ -1,0 +1,1 @@
+#include "jointlab/tests/test_util.h"

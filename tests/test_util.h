@@ -1,0 +1,47 @@
+// One place for test tolerances: relative/absolute comparison with NaN made explicit.
+//
+// expect_close(actual, expected, rel, abs) passes when
+//   |actual - expected| <= max(rel * |expected|, abs)
+// and both are finite. A NaN never compares close to anything.
+#pragma once
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace jointlab::testing {
+
+/// True when a and b are finite and within max(rel*|b|, abs) of each other.
+inline bool is_close(double a, double b, double rel, double abs = 0.0) {
+  if (!std::isfinite(a) || !std::isfinite(b)) return false;
+  return std::abs(a - b) <= std::max(rel * std::abs(b), abs);
+}
+
+/// gtest assertion form of is_close, with both values in the failure message.
+inline ::testing::AssertionResult Close(double actual, double expected, double rel,
+                                        double abs = 0.0) {
+  if (is_close(actual, expected, rel, abs)) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure()
+         << "actual " << actual << " vs expected " << expected << " (rel err "
+         << (expected != 0 ? std::abs(actual - expected) / std::abs(expected) : INFINITY)
+         << ", allowed rel " << rel << " abs " << abs << ")";
+}
+
+/// Relative error |a-b|/|b|.
+inline double rel_err(double a, double b) { return std::abs(a - b) / std::abs(b); }
+
+/// The source tree root (set by CMake for every test).
+inline std::string source_dir() {
+  const char* s = std::getenv("JOINTLAB_SOURCE_DIR");
+  return s ? s : ".";
+}
+
+/// The build tree root (set by CMake for every test).
+inline std::string binary_dir() {
+  const char* s = std::getenv("JOINTLAB_BINARY_DIR");
+  return s ? s : ".";
+}
+
+}  // namespace jointlab::testing
