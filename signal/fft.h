@@ -1,0 +1,44 @@
+// Real discrete Fourier transforms through FFTW, with plans made once per size.
+//
+// Conventions (unscaled forward, scaled inverse, as numpy.fft):
+//   X[k] = sum_{j=0}^{n-1} x[j] exp(-2 pi i j k / n),   k = 0 .. n/2   (one-sided)
+//   x[j] = (1/n) sum_k X[k] exp(+2 pi i j k / n)
+// Bin k is the frequency k fs / n. Inputs shorter than n are zero-padded.
+// One Fft object owns its plans and work buffers: reuse it across calls of the
+// same size; it is not shared between threads (make one per thread).
+#pragma once
+
+#include <complex>
+#include <memory>
+
+#include <Eigen/Core>
+
+namespace jointlab::signal {
+
+/// Plans and buffers for real-to-complex and complex-to-complex transforms of one size.
+class Fft {
+ public:
+  /// Prepares transforms of length n (n >= 2).
+  explicit Fft(Eigen::Index n);
+  ~Fft();
+  Fft(const Fft&) = delete;
+  Fft& operator=(const Fft&) = delete;
+  Fft(Fft&&) noexcept;
+  Fft& operator=(Fft&&) noexcept;
+
+  /// Transform length.
+  Eigen::Index size() const;
+  /// One-sided spectrum X[0..n/2] of real x (x.size() <= n; zero-padded to n).
+  Eigen::VectorXcd forward(const Eigen::Ref<const Eigen::VectorXd>& x);
+  /// Complex inverse of a full n-point spectrum, scaled by 1/n.
+  Eigen::VectorXcd inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& spectrum);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Smallest m >= n whose prime factors are 2, 3, 5 and 7 (sizes FFTW is fastest on).
+Eigen::Index fast_size(Eigen::Index n);
+
+}  // namespace jointlab::signal

@@ -1,0 +1,33 @@
+// Weighted local polynomial regression: smooth value and slope of y(t) at a centre.
+//
+// Around a centre c with half-width h, samples (t_i, y_i) with |t_i - c| < h are
+// fitted by y ~ sum_{j<=p} beta_j tau^j, tau = (t - c)/h, with biweight weights
+// w_i = (1 - tau_i^2)^2. The slope at c is beta_1 / h (analytic derivative of the
+// fit, never a difference of noisy samples). Its statistical standard deviation
+// comes from the weighted residuals through the sandwich formula
+//   Cov(beta) = s^2 (X'WX)^-1 (X'W^2X) (X'WX)^-1,   s^2 = sum w r^2 / sum w,
+// multiplied by `correlation` (how many consecutive samples make one independent
+// one, e.g. the sample rate over the noise bandwidth). The fit is done at degree p
+// and p + 1; the change of slope between the two estimates the model (bias) error.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace jointlab::signal {
+
+/// Result of one local fit.
+struct LocalFit {
+  double value = 0.0;         ///< fitted y(c)
+  double slope = 0.0;         ///< fitted dy/dt at c (degree p)
+  double slope_std = 0.0;     ///< statistical one-sigma of slope
+  double slope_change = 0.0;  ///< |slope(degree p+1) - slope(degree p)|: model-error estimate
+  double residual_rms = 0.0;  ///< weighted RMS of y - fit
+  int samples = 0;            ///< samples used
+};
+
+/// Fits y(t) on the uniform grid t_i = t_first + i dt around `centre` with half-width h.
+/// Requires at least degree + 3 samples inside the window (asserts).
+LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, double dt,
+                   double centre, double half_width, int degree, double correlation);
+
+}  // namespace jointlab::signal

@@ -1,0 +1,84 @@
+#include "jointlab/signal/spectrum.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace jointlab::signal {
+
+AmplitudeSpectrum amplitude_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs,
+                                     FftCache& cache) {
+  const Eigen::Index n = x.size();
+  const Eigen::Index nfft = fast_size(n);
+  Eigen::VectorXd w(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    w(j) = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(j) /
+                                static_cast<double>(n));
+  }
+  const Eigen::VectorXd xw = ((x.array() - x.mean()) * w.array()).matrix();
+  const Eigen::VectorXcd X = cache.get(nfft).forward(xw);
+  AmplitudeSpectrum s;
+  s.frequency_hz = Eigen::VectorXd::LinSpaced(X.size(), 0.0,
+                                              fs * static_cast<double>(X.size() - 1) /
+                                                  static_cast<double>(nfft));
+  s.amplitude = X.cwiseAbs() * (2.0 / w.sum());
+  return s;
+}
+
+std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd>& a, int count,
+                                          Eigen::Index min_distance, double min_prominence) {
+  const Eigen::Index n = a.size();
+  struct Peak {
+    Eigen::Index index;
+    double height;
+    double prominence;
+  };
+  std::vector<Peak> peaks;
+  for (Eigen::Index k = 1; k + 1 < n; ++k) {
+    if (!(a(k) > a(k - 1) && a(k) >= a(k + 1))) continue;
+    // Prominence: height above the higher of the two minima reached before a higher sample.
+    double left_min = a(k), right_min = a(k);
+    for (Eigen::Index j = k - 1; j >= 0 && a(j) <= a(k); --j) left_min = std::min(left_min, a(j));
+    for (Eigen::Index j = k + 1; j < n && a(j) <= a(k); ++j) right_min = std::min(right_min, a(j));
+    peaks.push_back({k, a(k), a(k) - std::max(left_min, right_min)});
+  }
+  if (peaks.empty()) return {};
+  const double top = std::max_element(peaks.begin(), peaks.end(), [](auto& p, auto& q) {
+                       return p.height < q.height;
+                     })->height;
+  std::sort(peaks.begin(), peaks.end(),
+            [](const Peak& p, const Peak& q) { return p.prominence > q.prominence; });
+  std::vector<Eigen::Index> chosen;
+  for (const Peak& p : peaks) {
+    if (static_cast<int>(chosen.size()) >= count) break;
+    if (p.prominence < min_prominence * top) break;
+    const bool clear = std::all_of(chosen.begin(), chosen.end(), [&](Eigen::Index c) {
+      return std::abs(c - p.index) >= min_distance;
+    });
+    if (clear) chosen.push_back(p.index);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  return chosen;
+}
+
+Eigen::VectorXd integrate(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, int order,
+                          double f_min, FftCache& cache) {
+  const Eigen::Index n = x.size();
+  const Eigen::Index nfft = fast_size(2 * n);
+  Fft& fft = cache.get(nfft);
+  const Eigen::VectorXcd X = fft.forward(x);
+  Eigen::VectorXcd full = Eigen::VectorXcd::Zero(nfft);
+  const double df = fs / static_cast<double>(nfft);
+  for (Eigen::Index k = 1; k < X.size(); ++k) {
+    const double f = static_cast<double>(k) * df;
+    if (f < f_min) continue;
+    const std::complex<double> h =
+        std::pow(std::complex<double>(0.0, 2.0 * std::numbers::pi * f), -order);
+    // Hermitian symmetry gives the real result from the one-sided spectrum.
+    full(k) = h * X(k);
+    if (k != nfft - k) full(nfft - k) = std::conj(h * X(k));
+  }
+  return fft.inverse_complex(full).real().head(n);
+}
+
+}  // namespace jointlab::signal

@@ -1,0 +1,56 @@
+#include "jointlab/signal/spectrum.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+namespace jointlab::signal {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+TEST(Spectrum, SinusoidAmplitudeAndPeaks) {
+  const double fs = 1024.0;
+  const Eigen::Index n = 4096;  // 0.25 Hz bins: 30, 90, 200 Hz fall on bins
+  Eigen::VectorXd x(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double t = j / fs;
+    x(j) = 2.0 * std::cos(2 * kPi * 30 * t) + 0.5 * std::cos(2 * kPi * 90 * t) +
+           1.0 * std::sin(2 * kPi * 200 * t);
+  }
+  FftCache cache;
+  const AmplitudeSpectrum s = amplitude_spectrum(x, fs, cache);
+  const Eigen::Index k30 = 30 * 4;
+  EXPECT_NEAR(s.frequency_hz(k30), 30.0, 1e-12);
+  EXPECT_NEAR(s.amplitude(k30), 2.0, 1e-3);  // Hann scalloping is zero on-bin
+  const auto peaks = strongest_peaks(s.amplitude, 3, 8);
+  ASSERT_EQ(peaks.size(), 3u);
+  EXPECT_NEAR(s.frequency_hz(peaks[0]), 30.0, 0.3);
+  EXPECT_NEAR(s.frequency_hz(peaks[1]), 90.0, 0.3);
+  EXPECT_NEAR(s.frequency_hz(peaks[2]), 200.0, 0.3);
+  const auto two = strongest_peaks(s.amplitude, 2, 8);
+  ASSERT_EQ(two.size(), 2u);  // the two most prominent: 30 and 200 Hz
+  EXPECT_NEAR(s.frequency_hz(two[1]), 200.0, 0.3);
+}
+
+TEST(Integrate, TwiceIntegratedAccelerationIsDisplacement) {
+  // x = g(t) cos(w t) with a Gaussian g that vanishes at both ends: its exact
+  // second derivative, integrated twice in the frequency domain, must return x.
+  // Nothing is left below 5 Hz, so the error is rounding: 1e-9 of the peak.
+  const double fs = 2000.0, f = 37.0, w = 2 * kPi * f, tc = 2.0, s = 0.3;  // g(0) = g(4) = 3e-10
+  const Eigen::Index n = 8000;
+  Eigen::VectorXd acc(n), x_exact(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double t = j / fs, u = (t - tc) / (s * s);
+    const double g = std::exp(-0.5 * (t - tc) * u), g1 = -u * g, g2 = (u * u - 1 / (s * s)) * g;
+    x_exact(j) = g * std::cos(w * t);
+    acc(j) = g2 * std::cos(w * t) - 2 * g1 * w * std::sin(w * t) - g * w * w * std::cos(w * t);
+  }
+  FftCache cache;
+  const Eigen::VectorXd x = integrate(acc, fs, 2, 5.0, cache);
+  EXPECT_LT((x - x_exact).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+}  // namespace
+}  // namespace jointlab::signal
