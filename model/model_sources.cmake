@@ -1,0 +1,9 @@
+# Model files, Iwan joints, linear modes and QSMA (issue 3).
+list(APPEND JOINTLAB_MODEL_SOURCES
+  ${CMAKE_CURRENT_LIST_DIR}/iwan.cc
+  ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis.cc
+)
+list(APPEND JOINTLAB_MODEL_TESTS
+  ${CMAKE_CURRENT_LIST_DIR}/iwan_test.cc
+  ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis_test.cc
+)
