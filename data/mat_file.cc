@@ -1,0 +1,741 @@
+#include "jointlab/data/mat_file.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include <fmt/format.h>
+#include <matio.h>
+#include <unistd.h>
+
+#include "jointlab/core/error.h"
+
+namespace jointlab::data {
+namespace {
+
+// matio reports problems through a log function; keep its last word for our messages
+// instead of letting it print.
+thread_local std::string g_matio_message;
+
+void matio_log(int level, char* message) {
+  if ((level & (MATIO_LOG_LEVEL_ERROR | MATIO_LOG_LEVEL_CRITICAL)) && message) {
+    g_matio_message = message;
+  }
+}
+
+void quiet_matio() {
+  static std::once_flag once;
+  std::call_once(once, [] { Mat_LogInitFunc("jointlab", matio_log); });
+  g_matio_message.clear();
+}
+
+std::string matio_says() {
+  return g_matio_message.empty() ? std::string() : fmt::format(" ({})", g_matio_message);
+}
+
+struct MatCloser {
+  void operator()(mat_t* m) const { Mat_Close(m); }
+};
+struct VarFreer {
+  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+};
+using MatPtr = std::unique_ptr<mat_t, MatCloser>;
+using VarPtr = std::unique_ptr<matvar_t, VarFreer>;
+
+// Deflate cannot compress by more than about 1032:1; a variable whose declared size
+// exceeds that much of the file is a lie, refused before anything is allocated.
+constexpr double kMaxExpansion = 1100.0;
+
+std::optional<size_t> element_count(const matvar_t* v) {
+  if (!v || v->rank < 0 || v->rank > 32 || (v->rank > 0 && !v->dims)) return std::nullopt;
+  size_t n = 1;
+  for (int i = 0; i < v->rank; ++i) {
+    if (v->dims[i] != 0 && n > SIZE_MAX / v->dims[i]) return std::nullopt;
+    n *= v->dims[i];
+  }
+  return n;
+}
+
+bool is_numeric(const matvar_t* v) {
+  switch (v->class_type) {
+    case MAT_C_DOUBLE:
+    case MAT_C_SINGLE:
+    case MAT_C_INT8:
+    case MAT_C_UINT8:
+    case MAT_C_INT16:
+    case MAT_C_UINT16:
+    case MAT_C_INT32:
+    case MAT_C_UINT32:
+    case MAT_C_INT64:
+    case MAT_C_UINT64:
+      return !v->isLogical;
+    default:
+      return false;
+  }
+}
+
+size_t class_size(const matvar_t* v) { return Mat_SizeOfClass(v->class_type); }
+
+// Declared data size of a variable (a struct: the sum over its fields), or nullopt when it
+// overflows or nests too deep.
+std::optional<double> declared_bytes(const matvar_t* v, int depth = 0) {
+  if (depth > 8) return std::nullopt;
+  const auto n = element_count(v);
+  if (!n) return std::nullopt;
+  if (v->class_type == MAT_C_STRUCT) {
+    const unsigned nfields = Mat_VarGetNumberOfFields(const_cast<matvar_t*>(v));
+    double sum = 0;
+    auto** fields = static_cast<matvar_t**>(v->data);
+    if (!fields) return 0.0;
+    const double count = static_cast<double>(*n) * nfields;
+    if (count > 1e7) return std::nullopt;
+    for (size_t i = 0; i < static_cast<size_t>(count); ++i) {
+      if (!fields[i]) continue;
+      const auto b = declared_bytes(fields[i], depth + 1);
+      if (!b) return std::nullopt;
+      sum += *b;
+    }
+    return sum;
+  }
+  if (v->class_type == MAT_C_CELL) return static_cast<double>(*n) * 64;
+  return static_cast<double>(*n) * std::max<size_t>(class_size(v), 1);
+}
+
+// Numeric data of a read variable as doubles; nullopt when it has none.
+std::optional<std::vector<double>> numeric_data(const matvar_t* v) {
+  const auto n = element_count(v);
+  if (!n || !v->data || !is_numeric(v) || v->isComplex) return std::nullopt;
+  const size_t size = class_size(v);
+  if (size == 0 || v->nbytes < *n * size) return std::nullopt;
+  std::vector<double> out(*n);
+  const void* d = v->data;
+  for (size_t i = 0; i < *n; ++i) {
+    switch (v->class_type) {
+      case MAT_C_DOUBLE:
+        out[i] = static_cast<const double*>(d)[i];
+        break;
+      case MAT_C_SINGLE:
+        out[i] = static_cast<const float*>(d)[i];
+        break;
+      case MAT_C_INT8:
+        out[i] = static_cast<const int8_t*>(d)[i];
+        break;
+      case MAT_C_UINT8:
+        out[i] = static_cast<const uint8_t*>(d)[i];
+        break;
+      case MAT_C_INT16:
+        out[i] = static_cast<const int16_t*>(d)[i];
+        break;
+      case MAT_C_UINT16:
+        out[i] = static_cast<const uint16_t*>(d)[i];
+        break;
+      case MAT_C_INT32:
+        out[i] = static_cast<const int32_t*>(d)[i];
+        break;
+      case MAT_C_UINT32:
+        out[i] = static_cast<const uint32_t*>(d)[i];
+        break;
+      case MAT_C_INT64:
+        out[i] = static_cast<double>(static_cast<const int64_t*>(d)[i]);
+        break;
+      case MAT_C_UINT64:
+        out[i] = static_cast<double>(static_cast<const uint64_t*>(d)[i]);
+        break;
+      default:
+        return std::nullopt;
+    }
+  }
+  return out;
+}
+
+// A char array as text (rows joined by newlines); non-ASCII characters become '?'.
+std::optional<std::string> char_data(const matvar_t* v) {
+  if (!v || v->class_type != MAT_C_CHAR) return std::nullopt;
+  const auto n = element_count(v);
+  if (!n) return std::nullopt;
+  if (*n == 0) return std::string();
+  const size_t size = Mat_SizeOf(v->data_type);
+  if (!v->data || (size != 1 && size != 2 && size != 4) || v->nbytes < *n * size) {
+    return std::nullopt;
+  }
+  const size_t rows = v->rank >= 1 ? v->dims[0] : 1;
+  const size_t cols = rows ? *n / rows : 0;
+  std::string out;
+  for (size_t r = 0; r < rows; ++r) {
+    if (r) out += '\n';
+    for (size_t c = 0; c < cols; ++c) {
+      const size_t i = r + rows * c;
+      uint32_t code = 0;
+      if (size == 1) code = static_cast<const uint8_t*>(v->data)[i];
+      if (size == 2) code = static_cast<const uint16_t*>(v->data)[i];
+      if (size == 4) code = static_cast<const uint32_t*>(v->data)[i];
+      out += code >= 0x20 && code < 0x7f ? static_cast<char>(code) : '?';
+    }
+  }
+  return out;
+}
+
+// A char row or a cell of char rows as a list of strings.
+std::optional<std::vector<std::string>> string_list(const matvar_t* v, bool split_commas) {
+  if (!v) return std::nullopt;
+  std::vector<std::string> out;
+  if (v->class_type == MAT_C_CHAR) {
+    auto text = char_data(v);
+    if (!text) return std::nullopt;
+    if (!split_commas) return std::vector<std::string>{*text};
+    size_t pos = 0;
+    while (true) {
+      const size_t comma = text->find(',', pos);
+      std::string item = text->substr(pos, comma == std::string::npos ? comma : comma - pos);
+      const auto a = item.find_first_not_of(" \t");
+      const auto b = item.find_last_not_of(" \t");
+      out.push_back(a == std::string::npos ? std::string() : item.substr(a, b - a + 1));
+      if (comma == std::string::npos) break;
+      pos = comma + 1;
+    }
+    return out;
+  }
+  if (v->class_type == MAT_C_CELL) {
+    const auto n = element_count(v);
+    if (!n || *n > 100000 || !v->data) return std::nullopt;
+    for (size_t i = 0; i < *n; ++i) {
+      const matvar_t* cell = static_cast<matvar_t* const*>(v->data)[i];
+      auto text = char_data(cell);
+      if (!text) return std::nullopt;
+      out.push_back(*text);
+    }
+    return out;
+  }
+  return std::nullopt;
+}
+
+bool is_vector(const matvar_t* v, size_t& length) {
+  const auto n = element_count(v);
+  if (!n || v->rank > 2) return false;
+  if (v->rank == 2 && v->dims[0] != 1 && v->dims[1] != 1) return false;
+  length = *n;
+  return true;
+}
+
+struct Named {
+  std::string name;
+  const matvar_t* var;
+};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool is_time_name(const std::string& n) { return lower(n) == "time" || n == "t"; }
+
+double scalar_field(const Named& f, const std::string& file, const std::string& prefix) {
+  size_t len = 0;
+  const auto data = numeric_data(f.var);
+  if (!data || !is_vector(f.var, len) || len != 1) {
+    throw InputError(
+        where(file, 0, fmt::format("field '{}{}' is not a real numeric scalar", prefix, f.name)));
+  }
+  return (*data)[0];
+}
+
+// Builds the record from the fields of a struct (or the top-level variables).
+Record build_record(const std::vector<Named>& vars, const std::string& file,
+                    const std::string& prefix) {
+  Record rec;
+  rec.source = file;
+  const Named* time = nullptr;
+  const Named* fs = nullptr;
+  const Named* t0 = nullptr;
+  const Named* units = nullptr;
+  const Named* names = nullptr;
+  std::vector<const Named*> channels;
+  std::vector<std::string> ignored;
+  size_t n = 0;
+  for (const Named& v : vars) {
+    const std::string field = prefix + v.name;
+    if (!v.var) continue;
+    if (is_time_name(v.name) && !time && is_numeric(v.var)) {
+      time = &v;
+    } else if (lower(v.name) == "fs") {
+      fs = &v;
+    } else if (v.name == "t0") {
+      t0 = &v;
+    } else if (lower(v.name) == "units") {
+      units = &v;
+    } else if (v.name == "channel_names") {
+      names = &v;
+    } else if (is_numeric(v.var)) {
+      size_t len = 0;
+      const bool vec = is_vector(v.var, len);
+      if (vec && len >= 2) {
+        if (v.var->isComplex) {
+          throw InputError(where(file, 0,
+                                 fmt::format("field '{}' is complex; a time history is "
+                                             "real",
+                                             field)));
+        }
+        if (!channels.empty() && len != n) {
+          throw InputError(where(file, 0,
+                                 fmt::format("field '{}' has {} samples, field '{}{}' "
+                                             "{}: channels must share one time base",
+                                             field, len, prefix, channels[0]->name, n)));
+        }
+        n = len;
+        channels.push_back(&v);
+      } else if (vec && len == 1 && !v.var->isComplex) {
+        if (auto d = numeric_data(v.var)) rec.metadata[v.name] = fmt::format("{}", (*d)[0]);
+      } else {
+        ignored.push_back(v.name);
+      }
+    } else if (v.var->class_type == MAT_C_CHAR) {
+      if (auto text = char_data(v.var); text && text->find('\n') == std::string::npos) {
+        rec.metadata[v.name] = *text;
+      } else {
+        ignored.push_back(v.name);
+      }
+    } else {
+      ignored.push_back(v.name);
+    }
+  }
+  if (channels.empty()) {
+    throw InputError(where(
+        file, 0,
+        fmt::format("no channel: {}holds no real numeric vector "
+                    "besides the time base",
+                    prefix.empty() ? "the file "
+                                   : "struct '" + prefix.substr(0, prefix.size() - 1) + "' ")));
+  }
+  if (!ignored.empty()) {
+    std::string list;
+    for (const auto& s : ignored) list += (list.empty() ? "" : ", ") + s;
+    rec.metadata["ignored"] = list;
+  }
+
+  // Time base.
+  double time_scale = 1.0;
+  std::vector<std::string> unit_list;
+  if (units) {
+    auto list = string_list(units->var, true);
+    if (!list) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}{}' is not text (a char row or a cell"
+                                         " of strings)",
+                                         prefix, units->name)));
+    }
+    unit_list = *list;
+    if (time) {
+      if (unit_list.size() != channels.size() + 1 && unit_list.size() != 2) {
+        throw InputError(
+            where(file, 0,
+                  fmt::format("field '{}{}' has {} entries; expected the "
+                              "time unit and then 1 or {} channel units",
+                              prefix, units->name, unit_list.size(), channels.size())));
+      }
+      const std::string tu = unit_list.front();
+      unit_list.erase(unit_list.begin());
+      if (tu == "ms") {
+        time_scale = 1e-3;
+      } else if (!tu.empty() && tu != "s") {
+        throw InputError(where(
+            file, 0,
+            fmt::format("field '{}{}': time unit '{}' is not s or ms", prefix, units->name, tu)));
+      }
+    } else if (unit_list.size() != channels.size() && unit_list.size() != 1) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}{}' has {} entries; expected 1 or {} "
+                                         "channel units",
+                                         prefix, units->name, unit_list.size(), channels.size())));
+    }
+  }
+  std::optional<double> fs_value;
+  if (fs) {
+    fs_value = scalar_field(*fs, file, prefix);
+    if (!std::isfinite(*fs_value) || *fs_value <= 0) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}{}': {} Hz is not a positive sampling "
+                                         "rate",
+                                         prefix, fs->name, *fs_value)));
+    }
+  }
+  if (t0) {
+    rec.t0 = scalar_field(*t0, file, prefix);
+    if (!std::isfinite(rec.t0)) {
+      throw InputError(where(file, 0, fmt::format("field '{}{}' is not finite", prefix, t0->name)));
+    }
+  }
+  if (time) {
+    const std::string field = prefix + time->name;
+    size_t len = 0;
+    auto t = numeric_data(time->var);
+    if (!t || !is_vector(time->var, len)) {
+      throw InputError(
+          where(file, 0, fmt::format("field '{}' is not a real numeric vector", field)));
+    }
+    if (len != n) {
+      throw InputError(
+          where(file, 0, fmt::format("field '{}' has {} samples, the channels {}", field, len, n)));
+    }
+    for (double& x : *t) x *= time_scale;
+    for (size_t k = 0; k < n; ++k) {
+      if (!std::isfinite((*t)[k])) {
+        throw InputError(
+            where(file, 0, fmt::format("field '{}': sample {} is {}", field, k + 1, (*t)[k])));
+      }
+      if (k > 0 && !((*t)[k] > (*t)[k - 1])) {
+        throw InputError(where(file, 0,
+                               fmt::format("field '{}': time {} at sample {} does not "
+                                           "increase (previous {})",
+                                           field, (*t)[k], k + 1, (*t)[k - 1])));
+      }
+    }
+    const double dt = ((*t)[n - 1] - (*t)[0]) / static_cast<double>(n - 1);
+    for (size_t k = 0; k < n; ++k) {
+      const double expected = (*t)[0] + static_cast<double>(k) * dt;
+      if (std::abs((*t)[k] - expected) > 0.1 * dt) {
+        throw InputError(where(file, 0,
+                               fmt::format("field '{}': time step is not uniform: t = {}"
+                                           " at sample {} where {} was expected",
+                                           field, (*t)[k], k + 1, expected)));
+      }
+    }
+    if (!std::isfinite(1.0 / dt)) {
+      throw InputError(where(file, 0, fmt::format("field '{}': no usable time step", field)));
+    }
+    if (fs_value && std::abs(*fs_value - 1.0 / dt) > 1e-3 * *fs_value) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}{}' = {} Hz disagrees with field '{}' "
+                                         "({} Hz)",
+                                         prefix, fs->name, *fs_value, field, 1.0 / dt)));
+    }
+    rec.fs = fs_value ? *fs_value : 1.0 / dt;
+    if (!t0) rec.t0 = (*t)[0];
+  } else if (fs_value) {
+    rec.fs = *fs_value;
+  } else {
+    throw InputError(where(
+        file, 0,
+        fmt::format("no time base: {}has no 'time' vector and no 'fs'"
+                    " scalar",
+                    prefix.empty() ? "the file "
+                                   : "struct '" + prefix.substr(0, prefix.size() - 1) + "' ")));
+  }
+
+  std::vector<std::string> channel_names;
+  if (names) {
+    auto list = string_list(names->var, false);
+    if (list && list->size() == channels.size()) channel_names = *list;
+  }
+  for (size_t c = 0; c < channels.size(); ++c) {
+    const Named& v = *channels[c];
+    const std::string field = prefix + v.name;
+    auto data = numeric_data(v.var);
+    if (!data || data->size() != n) {
+      throw InputError(
+          where(file, 0, fmt::format("field '{}': data could not be read{}", field, matio_says())));
+    }
+    for (size_t k = 0; k < n; ++k) {
+      if (!std::isfinite((*data)[k])) {
+        throw InputError(where(file, 0,
+                               fmt::format("field '{}': sample {} is {} (NaN and Inf are"
+                                           " not allowed)",
+                                           field, k + 1, (*data)[k])));
+      }
+    }
+    Channel ch;
+    ch.name = channel_names.empty() || channel_names[c].empty() ? v.name : channel_names[c];
+    double scale = 1.0;
+    if (!unit_list.empty()) {
+      const std::string& u = unit_list.size() == 1 ? unit_list[0] : unit_list[c];
+      if (!u.empty()) {
+        const auto unit = parse_unit(u);
+        if (!unit) {
+          throw InputError(where(file, 0,
+                                 fmt::format("field '{}{}': unknown unit '{}' for "
+                                             "channel '{}' (known: m, mm, um, in, m/s, "
+                                             "mm/s, in/s, m/s^2, mm/s^2, g, mg, N, kN, "
+                                             "lbf)",
+                                             prefix, units->name, u, ch.name)));
+        }
+        ch.quantity = unit->quantity;
+        ch.unit = u;
+        scale = unit->to_si;
+      }
+    }
+    for (const Channel& other : rec.channels) {
+      if (other.name == ch.name) {
+        throw InputError(
+            where(file, 0, fmt::format("field '{}': two channels named '{}'", field, ch.name)));
+      }
+    }
+    ch.samples =
+        Eigen::Map<const Eigen::VectorXd>(data->data(), static_cast<Eigen::Index>(n)) * scale;
+    rec.channels.push_back(std::move(ch));
+  }
+  return rec;
+}
+
+bool has_hdf5_signature(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  char sig[8] = {};
+  const bool ok = std::fseek(f, 512, SEEK_SET) == 0 && std::fread(sig, 1, 8, f) == 8;
+  std::fclose(f);
+  return ok && std::memcmp(sig, "\x89HDF\r\n\x1a\n", 8) == 0;
+}
+
+}  // namespace
+
+Record read_mat(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  if (ec) throw InputError(where(file, 0, "cannot open file"));
+  if (file_size < 128) throw InputError(where(file, 0, "too short for a MATLAB .mat file"));
+  quiet_matio();
+  MatPtr mat(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+  if (!mat) {
+    if (has_hdf5_signature(path) && !mat_v73_supported()) {
+      throw InputError(where(file, 0,
+                             "MATLAB v7.3 (HDF5) file, and the matio library here was "
+                             "built without HDF5: save it with -v7 instead"));
+    }
+    throw InputError(
+        where(file, 0, fmt::format("not a MATLAB .mat file that matio can open{}", matio_says())));
+  }
+  const double budget = static_cast<double>(file_size) * kMaxExpansion + 1e6;
+
+  // The directory: names, classes and sizes, no data yet.
+  std::vector<VarPtr> infos;
+  while (true) {
+    VarPtr info(Mat_VarReadNextInfo(mat.get()));
+    if (!info) break;
+    if (infos.size() >= 10000) {
+      throw InputError(where(file, 0, "more than 10000 variables; not a test record"));
+    }
+    if (!info->name) continue;
+    infos.push_back(std::move(info));
+  }
+  if (infos.empty()) {
+    throw InputError(where(file, 0, fmt::format("no variables in this .mat file{}", matio_says())));
+  }
+
+  // Which variables form the record.
+  bool top_level = false;
+  for (const VarPtr& v : infos) {
+    const std::string n = v->name;
+    if ((is_time_name(n) || lower(n) == "fs") && is_numeric(v.get())) top_level = true;
+  }
+  std::vector<std::string> candidates;
+  if (!top_level) {
+    for (const VarPtr& v : infos) {
+      if (v->class_type != MAT_C_STRUCT) continue;
+      const unsigned nf = Mat_VarGetNumberOfFields(v.get());
+      char* const* fields = Mat_VarGetStructFieldnames(v.get());
+      bool has_time = false;
+      for (unsigned i = 0; fields && i < nf; ++i) {
+        if (fields[i] && (is_time_name(fields[i]) || lower(fields[i]) == "fs")) has_time = true;
+      }
+      if (has_time) candidates.push_back(v->name);
+    }
+    if (candidates.empty()) {
+      std::string list;
+      for (const VarPtr& v : infos) list += (list.empty() ? "" : ", ") + std::string(v->name);
+      throw InputError(where(file, 0,
+                             fmt::format("no time histories found: no struct with a "
+                                         "'time' or 'fs' field and no top-level 'time' "
+                                         "or 'fs' variable (variables: {})",
+                                         list)));
+    }
+    if (candidates.size() > 1) {
+      throw InputError(where(file, 0,
+                             fmt::format("structs '{}' and '{}' both hold a time base; "
+                                         "jointlab reads one record per file",
+                                         candidates[0], candidates[1])));
+    }
+  }
+
+  std::vector<VarPtr> owned;
+  std::vector<Named> vars;
+  std::string prefix;
+  for (const VarPtr& info : infos) {
+    const std::string name = info->name;
+    if (!top_level && name != candidates.front()) continue;
+    const auto bytes = declared_bytes(info.get());
+    if (!bytes || *bytes > budget) {
+      throw InputError(where(file, 0,
+                             fmt::format("variable '{}' declares more data than a {} "
+                                         "byte file can hold",
+                                         name, file_size)));
+    }
+    VarPtr var(Mat_VarRead(mat.get(), name.c_str()));
+    if (!var) {
+      throw InputError(
+          where(file, 0, fmt::format("variable '{}' could not be read{}", name, matio_says())));
+    }
+    if (top_level) {
+      vars.push_back(Named{name, var.get()});
+    } else {
+      const auto n = element_count(var.get());
+      if (var->class_type != MAT_C_STRUCT || !n || *n != 1) {
+        throw InputError(where(file, 0,
+                               fmt::format("struct '{}' is not 1x1; jointlab reads one "
+                                           "record per file",
+                                           name)));
+      }
+      prefix = name + ".";
+      const unsigned nf = Mat_VarGetNumberOfFields(var.get());
+      char* const* fields = Mat_VarGetStructFieldnames(var.get());
+      for (unsigned i = 0; fields && i < nf; ++i) {
+        matvar_t* f = Mat_VarGetStructFieldByIndex(var.get(), i, 0);
+        if (fields[i] && f) vars.push_back(Named{fields[i], f});
+      }
+    }
+    owned.push_back(std::move(var));
+  }
+  Record rec = build_record(vars, file, prefix);
+  rec.metadata["format"] = Mat_GetVersion(mat.get()) == MAT_FT_MAT73 ? "mat-v7.3" : "mat-v5";
+  return rec;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writer
+
+namespace {
+
+// A MATLAB identifier from a channel name: letters, digits, '_', starting with a letter.
+std::string field_name(const std::string& name, const std::vector<std::string>& taken) {
+  std::string s;
+  for (char c : name) {
+    s += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  }
+  if (s.empty() || !std::isalpha(static_cast<unsigned char>(s[0]))) s = "ch_" + s;
+  s = s.substr(0, 60);
+  std::string out = s;
+  for (int k = 2; std::find(taken.begin(), taken.end(), out) != taken.end(); ++k) {
+    out = fmt::format("{}_{}", s, k);
+  }
+  return out;
+}
+
+matvar_t* double_column(const double* data, size_t n) {
+  size_t dims[2] = {n, 1};
+  return Mat_VarCreate(nullptr, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(data), 0);
+}
+
+matvar_t* char_row(const std::string& text) {
+  size_t dims[2] = {1, text.size()};
+  return Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UTF8, 2, dims, const_cast<char*>(text.data()), 0);
+}
+
+std::atomic<unsigned> g_tmp_counter{0};
+
+}  // namespace
+
+void write_mat(const std::filesystem::path& path, const Record& record, MatVersion version) {
+  const std::string file = path.string();
+  if (record.channels.empty()) throw InputError(where(file, 0, "record has no channels to write"));
+  if (!(record.fs > 0) || !std::isfinite(record.fs) || !std::isfinite(record.t0)) {
+    throw InputError(where(
+        file, 0,
+        fmt::format("sampling rate {} Hz or t0 {} s cannot be written", record.fs, record.t0)));
+  }
+  const auto n = static_cast<size_t>(record.size());
+  for (const Channel& ch : record.channels) {
+    if (static_cast<size_t>(ch.samples.size()) != n) {
+      throw InputError(where(file, 0,
+                             fmt::format("channel '{}' has {} samples, channel '{}' {}", ch.name,
+                                         ch.samples.size(), record.channels[0].name, n)));
+    }
+  }
+  quiet_matio();
+
+  std::vector<std::string> fields = {"fs", "t0", "time"};
+  for (const Channel& ch : record.channels) {
+    std::vector<std::string> taken = fields;
+    taken.push_back("units");
+    taken.push_back("channel_names");
+    fields.push_back(field_name(ch.name, taken));
+  }
+  fields.push_back("units");
+  fields.push_back("channel_names");
+  std::vector<const char*> field_ptrs;
+  for (const auto& f : fields) field_ptrs.push_back(f.c_str());
+  field_ptrs.push_back(nullptr);
+
+  size_t one[2] = {1, 1};
+  VarPtr st(Mat_VarCreateStruct2("record", 2, one, field_ptrs.data()));
+  if (!st) throw InputError(where(file, 0, "cannot create the MATLAB struct" + matio_says()));
+  std::vector<double> time(n);
+  for (size_t k = 0; k < n; ++k) time[k] = record.t0 + static_cast<double>(k) / record.fs;
+  Mat_VarSetStructFieldByName(st.get(), "fs", 0, double_column(&record.fs, 1));
+  Mat_VarSetStructFieldByName(st.get(), "t0", 0, double_column(&record.t0, 1));
+  Mat_VarSetStructFieldByName(st.get(), "time", 0, double_column(time.data(), n));
+  std::string units = "s";
+  size_t name_dims[2] = {record.channels.size(), 1};
+  std::vector<matvar_t*> cells;
+  for (size_t c = 0; c < record.channels.size(); ++c) {
+    const Channel& ch = record.channels[c];
+    Mat_VarSetStructFieldByName(st.get(), fields[3 + c].c_str(), 0,
+                                double_column(ch.samples.data(), n));
+    units += ", " + (ch.quantity ? si_unit(*ch.quantity) : std::string());
+    cells.push_back(char_row(ch.name));
+  }
+  Mat_VarSetStructFieldByName(st.get(), "units", 0, char_row(units));
+  Mat_VarSetStructFieldByName(
+      st.get(), "channel_names", 0,
+      Mat_VarCreate(nullptr, MAT_C_CELL, MAT_T_CELL, 2, name_dims, cells.data(), 0));
+
+  const std::filesystem::path tmp =
+      path.string() + fmt::format(".tmp-{}-{}", ::getpid(), g_tmp_counter++);
+  const mat_ft ver = version == MatVersion::kV73 ? MAT_FT_MAT73 : MAT_FT_MAT5;
+  bool ok = false;
+  {
+    MatPtr mat(Mat_CreateVer(tmp.c_str(), nullptr, ver));
+    if (!mat) {
+      std::filesystem::remove(tmp);
+      throw InputError(where(file, 0,
+                             version == MatVersion::kV73
+                                 ? "cannot write MATLAB v7.3: matio here has no HDF5 "
+                                   "support, or the file cannot be created" +
+                                       matio_says()
+                                 : "cannot create file" + matio_says()));
+    }
+    ok =
+        Mat_VarWrite(mat.get(), st.get(),
+                     version == MatVersion::kV5 ? MAT_COMPRESSION_ZLIB : MAT_COMPRESSION_NONE) == 0;
+  }
+  std::error_code ec;
+  if (ok) std::filesystem::rename(tmp, path, ec);
+  if (!ok || ec) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError(where(file, 0, "cannot write the .mat file" + matio_says()));
+  }
+}
+
+bool mat_v73_supported() {
+  static const bool supported = [] {
+    quiet_matio();
+    const std::filesystem::path tmp = std::filesystem::temp_directory_path() /
+                                      fmt::format("jointlab-v73-probe-{}.mat", ::getpid());
+    mat_t* m = Mat_CreateVer(tmp.c_str(), nullptr, MAT_FT_MAT73);
+    const bool ok = m != nullptr;
+    if (m) Mat_Close(m);
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    return ok;
+  }();
+  return supported;
+}
+
+}  // namespace jointlab::data
