@@ -1,0 +1,128 @@
+#include "jointlab/model/fe/hcb.h"
+
+#include <cassert>
+
+#include <fmt/format.h>
+#include <Eigen/Dense>
+
+#include "jointlab/model/fe/sparse_cholesky.h"
+#include "jointlab/model/fe/sparse_eigen.h"
+
+namespace jointlab::model::fe {
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+
+// Rows `rows` and columns `cols` of a (selection by permutation-like sparse products).
+SpMat select(const SpMat& a, const SpMat& pick_rows, const SpMat& pick_cols) {
+  return pick_rows * a * pick_cols;
+}
+
+// The |idx| × n selection matrix S with (S x)_k = x_idx[k].
+SpMat selector(const std::vector<int>& idx, int n) {
+  std::vector<Eigen::Triplet<double>> t;
+  for (int k = 0; k < static_cast<int>(idx.size()); ++k) t.emplace_back(k, idx[k], 1.0);
+  SpMat s(static_cast<Eigen::Index>(idx.size()), n);
+  s.setFromTriplets(t.begin(), t.end());
+  return s;
+}
+
+}  // namespace
+
+std::string HcbOptions::validate() const {
+  if (fixed_interface_modes < 0) return "fixed_interface_modes must be >= 0";
+  if (!(tolerance > 0)) return "tolerance must be positive";
+  return "";
+}
+
+HcbReduction reduce_hcb(const SpMat& k, const SpMat& m, const std::vector<int>& boundary,
+                        const HcbOptions& options) {
+  assert(options.validate().empty());
+  const int n = static_cast<int>(k.rows());
+  const auto say = [&](const std::string& s) {
+    if (options.progress) options.progress(s);
+  };
+  std::vector<char> is_b(n, 0);
+  for (int b : boundary) {
+    assert(b >= 0 && b < n && !is_b[b]);
+    is_b[b] = 1;
+  }
+  std::vector<int> interior;
+  for (int i = 0; i < n; ++i)
+    if (!is_b[i]) interior.push_back(i);
+  const int nb = static_cast<int>(boundary.size()), ni = static_cast<int>(interior.size());
+
+  HcbReduction out;
+  out.boundary = boundary;
+  out.summary.boundary_dofs = nb;
+  out.summary.interior_dofs = ni;
+
+  const SpMat sb = selector(boundary, n), si = selector(interior, n);
+  const SpMat sbt = sb.transpose(), sit = si.transpose();
+  const SpMat k_ii = select(k, si, sit), k_ib = select(k, si, sbt), k_bb = select(k, sb, sbt);
+  const SpMat m_ii = select(m, si, sit), m_ib = select(m, si, sbt), m_bb = select(m, sb, sbt);
+
+  say(fmt::format("factorising K_ii ({} interior DOFs, {} nonzeros)", ni, k_ii.nonZeros()));
+  SparseCholesky factor;
+  if (!factor.factorize(k_ii)) {
+    out.summary.status = HcbStatus::kInteriorNotPositiveDefinite;
+    out.summary.report = fmt::format(
+        "K_ii ({} interior DOFs) is not positive definite: the {} boundary DOFs do not "
+        "restrain every part of the structure",
+        ni, nb);
+    return out;
+  }
+
+  const int nm = std::min(options.fixed_interface_modes, std::max(ni - 1, 0));
+  Eigen::MatrixXd phi(ni, 0);
+  out.interface_eigenvalues.resize(0);
+  std::string eig_report = "no fixed-interface modes";
+  if (nm > 0) {
+    say(fmt::format("fixed-interface modes: {} lowest by shift-invert Lanczos", nm));
+    EigenOptions eo;
+    eo.count = nm;
+    eo.shift = 0;
+    eo.tolerance = options.tolerance;
+    const EigenResult er = lowest_modes(factor, m_ii, eo);
+    eig_report = er.summary.report;
+    if (!er.summary.ok()) {
+      out.summary.status = HcbStatus::kEigenNotConverged;
+      out.summary.report = "fixed-interface eigen-solve failed: " + er.summary.report;
+      return out;
+    }
+    phi = er.vectors;
+    out.interface_eigenvalues = er.eigenvalues;
+  }
+  out.summary.modes = nm;
+
+  say(fmt::format("constraint modes: {} solves with the same factorisation", nb));
+  const Eigen::MatrixXd psi = -factor.solve(Eigen::MatrixXd(k_ib));
+
+  say("projecting K and M");
+  Eigen::MatrixXd kbb_r = Eigen::MatrixXd(k_bb) + Eigen::MatrixXd(k_ib.transpose() * psi);
+  const Eigen::MatrixXd mii_psi_mib = m_ii * psi + Eigen::MatrixXd(m_ib);
+  Eigen::MatrixXd mbb_r = Eigen::MatrixXd(m_bb) + psi.transpose() * mii_psi_mib +
+                          Eigen::MatrixXd(m_ib.transpose() * psi);
+  kbb_r = 0.5 * (kbb_r + kbb_r.transpose()).eval();
+  mbb_r = 0.5 * (mbb_r + mbb_r.transpose()).eval();
+  const Eigen::MatrixXd mqb = phi.transpose() * mii_psi_mib;  // nm × nb
+
+  const int nr = nb + nm;
+  Eigen::MatrixXd kr = Eigen::MatrixXd::Zero(nr, nr), mr = Eigen::MatrixXd::Zero(nr, nr);
+  kr.topLeftCorner(nb, nb) = kbb_r;
+  mr.topLeftCorner(nb, nb) = mbb_r;
+  for (int j = 0; j < nm; ++j) {
+    kr(nb + j, nb + j) = out.interface_eigenvalues(j);
+    mr(nb + j, nb + j) = 1.0;
+  }
+  mr.bottomLeftCorner(nm, nb) = mqb;
+  mr.topRightCorner(nb, nm) = mqb.transpose();
+  out.stiffness = kr.sparseView();
+  out.mass = mr.sparseView();
+  out.summary.report =
+      fmt::format("Craig-Bampton: {} DOFs -> {} ({} boundary + {} fixed-interface modes); {}", n,
+                  nr, nb, nm, eig_report);
+  return out;
+}
+
+}  // namespace jointlab::model::fe
