@@ -73,7 +73,7 @@ HcbReduction reduce_hcb(const SpMat& k, const SpMat& m, const std::vector<int>& 
     return out;
   }
 
-  const int nm = std::min(options.fixed_interface_modes, std::max(ni - 1, 0));
+  const int nm = std::min(options.fixed_interface_modes, ni);
   Eigen::MatrixXd phi(ni, 0);
   out.interface_eigenvalues.resize(0);
   std::string eig_report = "no fixed-interface modes";

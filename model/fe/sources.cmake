@@ -11,4 +11,6 @@ list(APPEND JOINTLAB_MODEL_SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/fe/hcb.cc)
 list(APPEND JOINTLAB_MODEL_TESTS
   ${CMAKE_CURRENT_SOURCE_DIR}/fe/beam_element_test.cc
-  ${CMAKE_CURRENT_SOURCE_DIR}/fe/shell_element_test.cc)
+  ${CMAKE_CURRENT_SOURCE_DIR}/fe/shell_element_test.cc
+  ${CMAKE_CURRENT_SOURCE_DIR}/fe/couplings_test.cc
+  ${CMAKE_CURRENT_SOURCE_DIR}/fe/hcb_test.cc)
