@@ -276,6 +276,13 @@ Record build_record(const std::vector<Named>& vars, const std::string& file,
     } else if (v.name == "channel_names") {
       names = &v;
     } else if (is_numeric(v.var)) {
+      const auto count = element_count(v.var);
+      if (count && *count > 0 && !v.var->data) {
+        throw InputError(where(file, 0,
+                               fmt::format("field '{}': data could not be read (truncated "
+                                           "or damaged file){}",
+                                           field, matio_says())));
+      }
       size_t len = 0;
       const bool vec = is_vector(v.var, len);
       if (vec && len >= 2) {
@@ -598,7 +605,13 @@ Record read_mat(const std::filesystem::path& path) {
       char* const* fields = Mat_VarGetStructFieldnames(var.get());
       for (unsigned i = 0; fields && i < nf; ++i) {
         matvar_t* f = Mat_VarGetStructFieldByIndex(var.get(), i, 0);
-        if (fields[i] && f) vars.push_back(Named{fields[i], f});
+        if (!fields[i] || !f || (element_count(f).value_or(1) > 0 && !f->data)) {
+          throw InputError(where(file, 0,
+                                 fmt::format("field '{}.{}' could not be read (truncated "
+                                             "or damaged file){}",
+                                             name, fields[i] ? fields[i] : "?", matio_says())));
+        }
+        vars.push_back(Named{fields[i], f});
       }
     }
     owned.push_back(std::move(var));
