@@ -18,8 +18,8 @@ std::string where(const std::string& file, long line, const std::string& message
 
 namespace {
 
-constexpr double kStandardGravity = 9.80665;  // m/s^2, by definition (CGPM 1901)
-constexpr double kInch = 0.0254;              // m, exact
+constexpr double kStandardGravity = 9.80665;     // m/s^2, by definition (CGPM 1901)
+constexpr double kInch = 0.0254;                 // m, exact
 constexpr double kPoundForce = 4.4482216152605;  // N, exact from lb and g
 
 struct Entry {
@@ -84,27 +84,35 @@ std::optional<Unit> parse_unit(std::string_view text) {
 
 std::string si_unit(Quantity q) {
   switch (q) {
-    case Quantity::kDisplacement: return "m";
-    case Quantity::kVelocity: return "m/s";
-    case Quantity::kAcceleration: return "m/s^2";
-    case Quantity::kForce: return "N";
+    case Quantity::kDisplacement:
+      return "m";
+    case Quantity::kVelocity:
+      return "m/s";
+    case Quantity::kAcceleration:
+      return "m/s^2";
+    case Quantity::kForce:
+      return "N";
   }
   return "";
 }
 
 std::string quantity_name(Quantity q) {
   switch (q) {
-    case Quantity::kDisplacement: return "displacement";
-    case Quantity::kVelocity: return "velocity";
-    case Quantity::kAcceleration: return "acceleration";
-    case Quantity::kForce: return "force";
+    case Quantity::kDisplacement:
+      return "displacement";
+    case Quantity::kVelocity:
+      return "velocity";
+    case Quantity::kAcceleration:
+      return "acceleration";
+    case Quantity::kForce:
+      return "force";
   }
   return "";
 }
 
 std::optional<Quantity> parse_quantity(std::string_view text) {
-  for (Quantity q : {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration,
-                     Quantity::kForce}) {
+  for (Quantity q :
+       {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration, Quantity::kForce}) {
     if (text == quantity_name(q)) return q;
   }
   return std::nullopt;
@@ -112,10 +120,14 @@ std::optional<Quantity> parse_quantity(std::string_view text) {
 
 int derivative_order(Quantity q) {
   switch (q) {
-    case Quantity::kDisplacement: return 0;
-    case Quantity::kVelocity: return 1;
-    case Quantity::kAcceleration: return 2;
-    case Quantity::kForce: break;
+    case Quantity::kDisplacement:
+      return 0;
+    case Quantity::kVelocity:
+      return 1;
+    case Quantity::kAcceleration:
+      return 2;
+    case Quantity::kForce:
+      break;
   }
   assert(false && "force is not a derivative of displacement");
   return -1;

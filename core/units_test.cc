@@ -36,8 +36,8 @@ TEST(Units, UnknownUnitsAreRefused) {
 }
 
 TEST(Units, QuantityNamesRoundTrip) {
-  for (Quantity q : {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration,
-                     Quantity::kForce}) {
+  for (Quantity q :
+       {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration, Quantity::kForce}) {
     EXPECT_EQ(parse_quantity(quantity_name(q)), q);
   }
   EXPECT_FALSE(parse_quantity("jerk").has_value());

@@ -128,13 +128,16 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
   if (open != std::string_view::npos) {
     const auto close = field.find(']', open);
     if (close == std::string_view::npos || !trim(field.substr(close + 1)).empty()) {
-      throw InputError(where(file, line, fmt::format("header '{}': unit must be written as "
-                                                     "'name [unit]'", field)));
+      throw InputError(where(file, line,
+                             fmt::format("header '{}': unit must be written as "
+                                         "'name [unit]'",
+                                         field)));
     }
     name = trim(field.substr(0, open));
     spec.unit_text = std::string(trim(field.substr(open + 1, close - open - 1)));
   }
-  if (name.empty()) throw InputError(where(file, line, fmt::format("header '{}' has no name", field)));
+  if (name.empty())
+    throw InputError(where(file, line, fmt::format("header '{}' has no name", field)));
   spec.name = std::string(name);
   if (lower(name) == "time") {
     spec.is_time = true;
@@ -143,18 +146,19 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
     } else if (spec.unit_text == "ms") {
       spec.time_scale = 1e-3;
     } else {
-      throw InputError(where(file, line, fmt::format("time column unit '{}' is not s or ms",
-                                                     spec.unit_text)));
+      throw InputError(
+          where(file, line, fmt::format("time column unit '{}' is not s or ms", spec.unit_text)));
     }
     return spec;
   }
   if (!spec.unit_text.empty()) {
     spec.unit = parse_unit(spec.unit_text);
     if (!spec.unit) {
-      throw InputError(where(file, line, fmt::format("column '{}': unknown unit '{}' (known: m, "
-                                                     "mm, um, in, m/s, mm/s, in/s, m/s^2, mm/s^2, "
-                                                     "g, mg, N, kN, lbf)", spec.name,
-                                                     spec.unit_text)));
+      throw InputError(where(file, line,
+                             fmt::format("column '{}': unknown unit '{}' (known: m, "
+                                         "mm, um, in, m/s, mm/s, in/s, m/s^2, mm/s^2, "
+                                         "g, mg, N, kN, lbf)",
+                                         spec.name, spec.unit_text)));
     }
   }
   return spec;
@@ -167,8 +171,8 @@ double parse_fs(const std::string& value, const std::string& file, long line) {
   std::string_view rest = space == std::string_view::npos ? "" : trim(v.substr(space));
   const auto fs = to_double(number);
   if (!fs || !std::isfinite(*fs) || *fs <= 0 || !(rest.empty() || lower(rest) == "hz")) {
-    throw InputError(where(file, line, fmt::format("fs '{}' is not a positive sample rate in Hz",
-                                                   value)));
+    throw InputError(
+        where(file, line, fmt::format("fs '{}' is not a positive sample rate in Hz", value)));
   }
   return *fs;
 }
@@ -245,8 +249,8 @@ Record parse_csv(std::string_view text, const std::string& name) {
   for (size_t i = 0; i < cols.size(); ++i) {
     for (size_t j = 0; j < i; ++j) {
       if (cols[i].name == cols[j].name) {
-        throw InputError(where(name, header_line,
-                               fmt::format("two channels named '{}'", cols[i].name)));
+        throw InputError(
+            where(name, header_line, fmt::format("two channels named '{}'", cols[i].name)));
       }
     }
   }
@@ -264,34 +268,40 @@ Record parse_csv(std::string_view text, const std::string& name) {
     if (!splitter.split(line, fields)) continue;
     if (fields.size() == cols.size() + 1 && trim(fields.back()).empty()) fields.pop_back();
     if (fields.size() != cols.size()) {
-      throw InputError(where(name, line_no, fmt::format("{} fields where the header has {}",
-                                                        fields.size(), cols.size())));
+      throw InputError(
+          where(name, line_no,
+                fmt::format("{} fields where the header has {}", fields.size(), cols.size())));
     }
     for (size_t c = 0; c < cols.size(); ++c) {
       const auto v = to_double(fields[c]);
       if (!v) {
-        throw InputError(where(name, line_no, fmt::format("column '{}': '{}' is not a number",
-                                                          cols[c].name, trim(fields[c]))));
+        throw InputError(
+            where(name, line_no,
+                  fmt::format("column '{}': '{}' is not a number", cols[c].name, trim(fields[c]))));
       }
       if (!std::isfinite(*v)) {
-        throw InputError(where(name, line_no, fmt::format("column '{}': {} sample (NaN and Inf "
-                                                          "are not allowed)", cols[c].name,
-                                                          trim(fields[c]))));
+        throw InputError(where(name, line_no,
+                               fmt::format("column '{}': {} sample (NaN and Inf "
+                                           "are not allowed)",
+                                           cols[c].name, trim(fields[c]))));
       }
       values[c].push_back(*v);
     }
     row_lines.push_back(line_no);
   }
   const size_t n = row_lines.size();
-  if (n < 2) throw InputError(where(name, line_no, fmt::format("{} data rows; need at least 2", n)));
+  if (n < 2)
+    throw InputError(where(name, line_no, fmt::format("{} data rows; need at least 2", n)));
 
   if (time_col >= 0) {
     std::vector<double>& t = values[time_col];
     for (double& v : t) v *= cols[time_col].time_scale;
     for (size_t k = 1; k < n; ++k) {
       if (!(t[k] > t[k - 1])) {
-        throw InputError(where(name, row_lines[k], fmt::format("time {} does not increase (previous"
-                                                               " {})", t[k], t[k - 1])));
+        throw InputError(where(name, row_lines[k],
+                               fmt::format("time {} does not increase (previous"
+                                           " {})",
+                                           t[k], t[k - 1])));
       }
     }
     // A step far from the typical one (a dropped or repeated sample) is named where it occurs.
@@ -300,7 +310,7 @@ Record parse_csv(std::string_view text, const std::string& name) {
     std::nth_element(steps.begin(), steps.begin() + (n - 1) / 2, steps.end());
     const double typical = steps[(n - 1) / 2];
     for (size_t k = 1; k < n; ++k) {
-      if (std::abs(t[k] - t[k - 1] - typical) > 0.5 * typical) {
+      if (std::abs(t[k] - t[k - 1] - typical) > 0.25 * typical) {
         throw InputError(where(name, row_lines[k],
                                fmt::format("time step is not uniform: {} s after {} s steps",
                                            t[k] - t[k - 1], typical)));
@@ -314,14 +324,17 @@ Record parse_csv(std::string_view text, const std::string& name) {
       if (std::abs(t[k] - expected) > 0.1 * dt) {
         throw InputError(where(name, row_lines[k],
                                fmt::format("time step is not uniform: t = {} where {} was expected "
-                                           "(dt = {})", t[k], expected, dt)));
+                                           "(dt = {})",
+                                           t[k], expected, dt)));
       }
     }
     rec.fs = 1.0 / dt;
     rec.t0 = t[0];
     if (fs_meta && std::abs(*fs_meta - rec.fs) > 1e-3 * *fs_meta) {
-      throw InputError(where(name, fs_line, fmt::format("fs {} Hz disagrees with the time column "
-                                                        "({} Hz)", *fs_meta, rec.fs)));
+      throw InputError(where(name, fs_line,
+                             fmt::format("fs {} Hz disagrees with the time column "
+                                         "({} Hz)",
+                                         *fs_meta, rec.fs)));
     }
   } else {
     rec.fs = *fs_meta;
@@ -340,8 +353,8 @@ Record parse_csv(std::string_view text, const std::string& name) {
     ch.unit = cols[c].unit_text;
     if (cols[c].unit) ch.quantity = cols[c].unit->quantity;
     const double scale = cols[c].unit ? cols[c].unit->to_si : 1.0;
-    ch.samples = Eigen::Map<const Eigen::VectorXd>(values[c].data(), static_cast<Eigen::Index>(n)) *
-                 scale;
+    ch.samples =
+        Eigen::Map<const Eigen::VectorXd>(values[c].data(), static_cast<Eigen::Index>(n)) * scale;
     rec.channels.push_back(std::move(ch));
   }
   return rec;

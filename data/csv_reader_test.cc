@@ -43,7 +43,8 @@ TEST(CsvReader, ReadsMetadataTimeAndUnits) {
 
 TEST(CsvReader, DetectsSemicolonAndTab) {
   for (const char* d : {";", "\t"}) {
-    std::string text = std::string("time") + d + "x [m]\n0" + d + "1\n0.1" + d + "2\n0.2" + d + "3\n";
+    std::string text =
+        std::string("time") + d + "x [m]\n0" + d + "1\n0.1" + d + "2\n0.2" + d + "3\n";
     const Record r = parse_csv(text, "hit.csv");
     ASSERT_EQ(r.channels.size(), 1u);
     EXPECT_NEAR(r.fs, 10.0, 1e-9);
@@ -73,7 +74,8 @@ TEST(CsvReader, BadInputsGiveOneLineErrors) {
   expect_error("", {"hit.csv", "empty file"});
   expect_error(std::string("time,x\n0,1\n\0\x01\x02", 15), {"hit.csv", "binary"});
   expect_error("time,x\n0,1\n0.1,2\n0.2,3\n0.35,4\n0.4,5\n", {"hit.csv:5", "not uniform"});
-  expect_error("time,x\n0,1\n0.1,2\n0.2,3\n0.3,4\n0.4,5\n0.55,6\n0.65,7\n0.75,8\n", {"not uniform"});
+  expect_error("time,x\n0,1\n0.1,2\n0.2,3\n0.3,4\n0.4,5\n0.55,6\n0.65,7\n0.75,8\n",
+               {"not uniform"});
   expect_error("time,x\n0,1\n0.1,2\n0.05,3\n", {"hit.csv:4", "does not increase"});
   expect_error("time,x,y\n0,1,2\n0.1,2\n", {"hit.csv:3", "2 fields", "header has 3"});
   expect_error("time,x\n0,1\n0.1,abc\n", {"hit.csv:3", "'x'", "'abc' is not a number"});

@@ -18,18 +18,18 @@ namespace jointlab::data {
 
 /// One named channel: SI samples and what they measure.
 struct Channel {
-  std::string name;                 ///< header name without the unit ("acc1")
+  std::string name;                  ///< header name without the unit ("acc1")
   std::optional<Quantity> quantity;  ///< from the unit; empty when the file gave none
-  std::string unit;                 ///< unit as written in the file ("g"), empty if none
-  Eigen::VectorXd samples;          ///< SI values
+  std::string unit;                  ///< unit as written in the file ("g"), empty if none
+  Eigen::VectorXd samples;           ///< SI values
 };
 
 /// One hit: channels on a uniform time base, plus the file's metadata.
 struct Record {
-  std::string source;                          ///< file the record came from
-  double fs = 0.0;                             ///< sample rate [Hz]
-  double t0 = 0.0;                             ///< time of the first sample [s]
-  std::vector<Channel> channels;               ///< in file order
+  std::string source;                           ///< file the record came from
+  double fs = 0.0;                              ///< sample rate [Hz]
+  double t0 = 0.0;                              ///< time of the first sample [s]
+  std::vector<Channel> channels;                ///< in file order
   std::map<std::string, std::string> metadata;  ///< "# key: value" lines
 
   /// Number of samples per channel (0 if no channel).

@@ -27,8 +27,10 @@ void write_table(const std::filesystem::path& path, const Table& table) {
     for (size_t c = 0; c < table.columns.size(); ++c) {
       const double v = table.columns[c](r);
       if (!std::isfinite(v)) {
-        throw std::logic_error(fmt::format("{}: refusing to write a non-finite value in column "
-                                           "'{}', row {}", path.string(), table.names[c], r + 1));
+        throw std::logic_error(
+            fmt::format("{}: refusing to write a non-finite value in column "
+                        "'{}', row {}",
+                        path.string(), table.names[c], r + 1));
       }
       if (c) text += ',';
       text += fmt::format("{:.10g}", v);

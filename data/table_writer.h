@@ -16,7 +16,7 @@ namespace jointlab::data {
 
 /// A result table: column names and equally long columns.
 struct Table {
-  std::vector<std::string> names;       ///< header row
+  std::vector<std::string> names;        ///< header row
   std::vector<Eigen::VectorXd> columns;  ///< one vector per name
 
   /// Appends a column; asserts equal length with the first.

@@ -57,10 +57,21 @@ TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
 
 TEST(JsonWriter, NestedDocument) {
   JsonWriter w;
-  w.begin_object().key("name").value("a\"b").key("list").begin_array().value(1).value(2.5)
-      .end_array().key("empty").begin_object().end_object().end_object();
-  EXPECT_EQ(w.str(),
-            "{\n  \"name\": \"a\\\"b\",\n  \"list\": [\n    1,\n    2.5\n  ],\n  \"empty\": {}\n}\n");
+  w.begin_object()
+      .key("name")
+      .value("a\"b")
+      .key("list")
+      .begin_array()
+      .value(1)
+      .value(2.5)
+      .end_array()
+      .key("empty")
+      .begin_object()
+      .end_object()
+      .end_object();
+  EXPECT_EQ(
+      w.str(),
+      "{\n  \"name\": \"a\\\"b\",\n  \"list\": [\n    1,\n    2.5\n  ],\n  \"empty\": {}\n}\n");
   JsonWriter bad;
   EXPECT_THROW(bad.value(std::numeric_limits<double>::infinity()), std::logic_error);
 }

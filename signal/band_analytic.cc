@@ -10,7 +10,8 @@ double band_gain(const Band& band, double taper, double f) {
   const double w = taper * (band.hi - band.lo);
   if (w <= 0) return (f > band.lo && f < band.hi) ? 1.0 : 0.0;
   const double s = std::sqrt(2.0) * w / 4.0;
-  const double g = 0.5 * (std::erf((f - band.lo - 0.5 * w) / s) - std::erf((f - band.hi + 0.5 * w) / s));
+  const double g =
+      0.5 * (std::erf((f - band.lo - 0.5 * w) / s) - std::erf((f - band.hi + 0.5 * w) / s));
   return g < 1e-12 ? 0.0 : g;
 }
 
@@ -20,24 +21,24 @@ Fft& FftCache::get(Eigen::Index n) {
   return it->second;
 }
 
-BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum,
-                         Eigen::Index n_record, Eigen::Index n_fft, double fs, const Band& band,
+BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eigen::Index n_record,
+                         Eigen::Index n_fft, double fs, const Band& band,
                          const BandOptions& options, FftCache& cache) {
   assert(spectrum.size() == n_fft / 2 + 1);
   assert(band.lo > 0 && band.hi > band.lo && band.hi <= fs / 2);
   const double df = fs / static_cast<double>(n_fft);
   // The Gaussian edges reach below 1e-12 within 1.75 w of the nominal edges.
   const double reach = 1.75 * options.taper * (band.hi - band.lo);
-  const Eigen::Index k_lo = std::max<Eigen::Index>(
-      1, static_cast<Eigen::Index>(std::floor((band.lo - reach) / df)));
+  const Eigen::Index k_lo =
+      std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::floor((band.lo - reach) / df)));
   const Eigen::Index k_hi = std::min<Eigen::Index>(
       static_cast<Eigen::Index>(std::ceil((band.hi + reach) / df)), n_fft / 2);
   const Eigen::Index width = k_hi - k_lo + 1;
   const Eigen::Index m =
-      options.full_rate
-          ? n_fft
-          : fast_size(std::max<Eigen::Index>(16, static_cast<Eigen::Index>(std::ceil(
-                                                      options.oversample * static_cast<double>(width)))));
+      options.full_rate ? n_fft
+                        : fast_size(std::max<Eigen::Index>(
+                              16, static_cast<Eigen::Index>(
+                                      std::ceil(options.oversample * static_cast<double>(width)))));
   const Eigen::Index k_c = options.full_rate ? 0 : (k_lo + k_hi) / 2;
 
   Eigen::VectorXcd shifted = Eigen::VectorXcd::Zero(m);

@@ -44,9 +44,9 @@ struct BandOptions {
 
 /// The band's analytic signal on a coarse grid: z(t_j) = baseband_j exp(2 pi i carrier_hz t_j).
 struct BandSignal {
-  double dt = 0.0;              ///< coarse grid step [s]
-  double carrier_hz = 0.0;      ///< frequency shifted out of `baseband` [Hz]
-  Eigen::VectorXcd baseband;    ///< samples covering the record (padding dropped)
+  double dt = 0.0;                  ///< coarse grid step [s]
+  double carrier_hz = 0.0;          ///< frequency shifted out of `baseband` [Hz]
+  Eigen::VectorXcd baseband;        ///< samples covering the record (padding dropped)
   double noise_bandwidth_hz = 0.0;  ///< integral of G(f)^2 over f > 0 [Hz]
 };
 
@@ -64,8 +64,8 @@ class FftCache {
 };
 
 /// Analytic signal of `band` from the one-sided spectrum of an n-sample record padded to n_fft.
-BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum,
-                         Eigen::Index n_record, Eigen::Index n_fft, double fs, const Band& band,
+BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eigen::Index n_record,
+                         Eigen::Index n_fft, double fs, const Band& band,
                          const BandOptions& options, FftCache& cache);
 
 }  // namespace jointlab::signal

@@ -13,7 +13,7 @@ constexpr double kPi = std::numbers::pi;
 
 TEST(BandGain, FlatInsideAndSmallOutside) {
   const Band b{40.0, 60.0};
-  EXPECT_NEAR(band_gain(b, 0.25, 50.0), 1.0, 1e-8);  // 6 sigma from both edges
+  EXPECT_NEAR(band_gain(b, 0.25, 50.0), 1.0, 1e-8);           // 6 sigma from both edges
   EXPECT_NEAR(band_gain(b, 0.25, 45.0), 1.0 - 0.0228, 1e-3);  // lo + w: 1 - Phi(-2)
   EXPECT_NEAR(band_gain(b, 0.25, 40.0), 0.0228, 1e-3);        // lo: Phi(-2)
   EXPECT_EQ(band_gain(b, 0.25, 20.0), 0.0);

@@ -33,8 +33,8 @@ struct Fft::Impl {
     full_in = fftw_alloc_complex(n);
     full_out = fftw_alloc_complex(n);
     r2c = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_in, half_out, FFTW_ESTIMATE);
-    c2c_backward = fftw_plan_dft_1d(static_cast<int>(n), full_in, full_out, FFTW_BACKWARD,
-                                    FFTW_ESTIMATE);
+    c2c_backward =
+        fftw_plan_dft_1d(static_cast<int>(n), full_in, full_out, FFTW_BACKWARD, FFTW_ESTIMATE);
   }
   ~Impl() {
     std::lock_guard<std::mutex> lock(planner_mutex());

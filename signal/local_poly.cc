@@ -51,8 +51,7 @@ LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, d
   out.residual_rms = std::sqrt(s2);
 
   const Eigen::MatrixXd A2 = X.transpose() * w.asDiagonal() * X;
-  const Eigen::VectorXd beta2 =
-      A2.ldlt().solve(X.transpose() * (w.array() * yy.array()).matrix());
+  const Eigen::VectorXd beta2 = A2.ldlt().solve(X.transpose() * (w.array() * yy.array()).matrix());
   out.slope_change = std::abs(beta2(1) - beta(1)) / half_width;
   return out;
 }

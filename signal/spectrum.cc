@@ -12,15 +12,14 @@ AmplitudeSpectrum amplitude_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x,
   const Eigen::Index nfft = fast_size(n);
   Eigen::VectorXd w(n);
   for (Eigen::Index j = 0; j < n; ++j) {
-    w(j) = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(j) /
-                                static_cast<double>(n));
+    w(j) = 0.5 -
+           0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(j) / static_cast<double>(n));
   }
   const Eigen::VectorXd xw = ((x.array() - x.mean()) * w.array()).matrix();
   const Eigen::VectorXcd X = cache.get(nfft).forward(xw);
   AmplitudeSpectrum s;
-  s.frequency_hz = Eigen::VectorXd::LinSpaced(X.size(), 0.0,
-                                              fs * static_cast<double>(X.size() - 1) /
-                                                  static_cast<double>(nfft));
+  s.frequency_hz = Eigen::VectorXd::LinSpaced(
+      X.size(), 0.0, fs * static_cast<double>(X.size() - 1) / static_cast<double>(nfft));
   s.amplitude = X.cwiseAbs() * (2.0 / w.sum());
   return s;
 }

@@ -1,0 +1,62 @@
+// Processing of one test record: every selected channel in every band.
+//
+// Bands come from the user or, with `modes = N`, from the N most prominent
+// peaks of the channels' summed (peak-normalised) amplitude spectra: each band
+// reaches half-way to the neighbouring peaks and at most 15 % of its peak
+// frequency on either side. Per band the linear (low-amplitude) modal data are
+// the reference channel's low-amplitude frequency and damping and, for every
+// channel, a complex amplitude: the least-squares projection of the channel's
+// displacement analytic signal onto the reference channel's over the
+// reference's kept span, scaled to the reference's envelope at the span's
+// start (so the reference channel's complex amplitude is real and positive).
+#pragma once
+
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "jointlab/core/units.h"
+#include "jointlab/data/record.h"
+#include "jointlab/modal/ringdown.h"
+
+namespace jointlab::modal {
+
+/// What to process in a record.
+struct ProcessOptions {
+  std::vector<signal::Band> bands;              ///< explicit bands (used when modes == 0)
+  int modes = 0;                                ///< number of spectral peaks to use as bands
+  std::vector<std::string> channels;            ///< channels to process (empty: all non-force)
+  Quantity quantity = Quantity::kAcceleration;  ///< quantity of channels without a unit
+  RingdownOptions ringdown;                     ///< backbone extraction settings
+  PrepareOptions prepare;                       ///< onset trimming and continuation
+  /// Empty if usable, else what is wrong.
+  std::string check() const;
+};
+
+/// One channel in one band.
+struct ChannelBand {
+  std::string channel;                     ///< channel name
+  Quantity measured;                       ///< what the channel measures
+  int band_index = 0;                      ///< 1-based band number
+  Ringdown ringdown;                       ///< backbone and summary
+  std::complex<double> complex_amplitude;  ///< operating-shape entry [m]
+};
+
+/// Everything found in one record.
+struct RecordResult {
+  std::string source;                  ///< file processed
+  std::vector<signal::Band> bands;     ///< bands used (1-based in outputs)
+  std::vector<std::string> reference;  ///< per band: reference channel for the shape
+  std::vector<ChannelBand> results;    ///< channel-major, then band
+};
+
+/// Chooses `count` bands around the most prominent spectral peaks of the channels.
+std::vector<signal::Band> bands_from_peaks(const data::Record& record,
+                                           const std::vector<const data::Channel*>& channels,
+                                           int count, signal::FftCache& cache);
+
+/// Processes a record; throws InputError for unknown channels or bands outside (0, fs/2).
+RecordResult process_record(const data::Record& record, const ProcessOptions& options,
+                            signal::FftCache& cache);
+
+}  // namespace jointlab::modal

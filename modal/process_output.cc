@@ -1,0 +1,107 @@
+#include "jointlab/modal/process_output.h"
+
+#include "jointlab/data/atomic_file.h"
+#include "jointlab/data/json_writer.h"
+#include "jointlab/data/table_writer.h"
+
+namespace jointlab::modal {
+
+std::string backbone_file_name(const std::string& source, const std::string& channel, int band) {
+  return std::filesystem::path(source).stem().string() + "." + channel + ".band" +
+         std::to_string(band) + ".csv";
+}
+
+void write_backbones(const std::filesystem::path& dir, const RecordResult& result,
+                     const RingdownOptions&) {
+  for (const ChannelBand& r : result.results) {
+    if (r.ringdown.summary.status != RingdownStatus::kOk) continue;
+    const Backbone& b = r.ringdown.backbone;
+    data::Table t;
+    t.add("time_s", b.time_s);
+    t.add("amplitude", b.amplitude);
+    t.add("frequency_hz", b.frequency_hz);
+    t.add("damping_ratio", b.damping);
+    t.add("frequency_std_hz", b.frequency_std_hz);
+    t.add("damping_std", b.damping_std);
+    t.add("damped_frequency_hz", b.damped_frequency_hz);
+    t.add("decay_rate_1_per_s", b.decay_rate);
+    t.add("displacement_m", b.displacement);
+    t.add("snr", b.snr);
+    t.add("window_s", b.window_s);
+    data::write_table(dir / backbone_file_name(result.source, r.channel, r.band_index), t);
+  }
+}
+
+void write_summary(const std::filesystem::path& dir, const std::vector<RecordResult>& results,
+                   const ProcessOptions& options) {
+  data::JsonWriter j;
+  j.begin_object();
+  j.key("program").value("jointlab process");
+  j.key("method").value(options.ringdown.method == Method::kHilbert ? "hilbert" : "pff");
+  j.key("amplitude_quantity").value(quantity_name(options.ringdown.amplitude));
+  j.key("amplitude_unit").value(si_unit(options.ringdown.amplitude));
+  j.key("files").begin_array();
+  for (const RecordResult& rec : results) {
+    j.begin_object();
+    j.key("file").value(rec.source);
+    j.key("bands").begin_array();
+    for (size_t b = 0; b < rec.bands.size(); ++b) {
+      j.begin_object();
+      j.key("band").value(static_cast<int>(b) + 1);
+      j.key("low_hz").value(rec.bands[b].lo);
+      j.key("high_hz").value(rec.bands[b].hi);
+      j.key("reference_channel").value(rec.reference[b]);
+      // The reference channel's low-amplitude values are the band's linear modal data.
+      for (const ChannelBand& r : rec.results) {
+        if (r.band_index != static_cast<int>(b) + 1 || r.channel != rec.reference[b]) continue;
+        const RingdownSummary& s = r.ringdown.summary;
+        if (s.status == RingdownStatus::kOk) {
+          j.key("linear_frequency_hz").value(s.linear_frequency_hz);
+          j.key("linear_damping_ratio").value(s.linear_damping);
+        }
+      }
+      j.key("operating_shape").begin_array();
+      for (const ChannelBand& r : rec.results) {
+        if (r.band_index != static_cast<int>(b) + 1) continue;
+        j.begin_object();
+        j.key("channel").value(r.channel);
+        j.key("real_m").value(r.complex_amplitude.real());
+        j.key("imag_m").value(r.complex_amplitude.imag());
+        j.end_object();
+      }
+      j.end_array();
+      j.end_object();
+    }
+    j.end_array();
+    j.key("outputs").begin_array();
+    for (const ChannelBand& r : rec.results) {
+      const RingdownSummary& s = r.ringdown.summary;
+      j.begin_object();
+      j.key("channel").value(r.channel);
+      j.key("measured_quantity").value(quantity_name(r.measured));
+      j.key("band").value(r.band_index);
+      j.key("noise_floor_m").value(s.noise_floor_m);
+      if (s.status == RingdownStatus::kOk) {
+        j.key("file").value(backbone_file_name(rec.source, r.channel, r.band_index));
+        j.key("points").value(static_cast<long>(r.ringdown.backbone.size()));
+        j.key("span_start_s").value(s.span_start_s);
+        j.key("span_end_s").value(s.span_end_s);
+        j.key("amplitude_decades").value(s.amplitude_decades);
+        j.key("linear_frequency_hz").value(s.linear_frequency_hz);
+        j.key("linear_damping_ratio").value(s.linear_damping);
+        if (!s.message.empty()) j.key("note").value(s.message);
+      } else {
+        j.key("file").null();
+        j.key("reason").value(s.message);
+      }
+      j.end_object();
+    }
+    j.end_array();
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+  data::write_file_atomically(dir / "summary.json", j.str());
+}
+
+}  // namespace jointlab::modal

@@ -1,0 +1,380 @@
+#include "jointlab/modal/ringdown.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "jointlab/signal/extend.h"
+#include "jointlab/signal/local_poly.h"
+
+namespace jointlab::modal {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// One local estimate of the envelope's decay and the phase's rate.
+struct Estimate {
+  double t = 0;            // centre [s from record start]
+  double log_amp = 0;      // ln A at the centre
+  double sigma = 0;        // decay rate [1/s]
+  double sigma_std = 0;    // one-sigma of sigma
+  double omega_d = 0;      // damped angular frequency [rad/s]
+  double omega_d_std = 0;  // one-sigma of omega_d
+  double misfit = 0;       // RMS of the signal about the fit [m]
+  double window = 0;       // window length [s]
+};
+
+// Hilbert estimate at `centre` from ln A and theta on the grid t_j = j dt.
+// `noise` is the noise floor (RMS of the complex analytic-signal noise); each of
+// ln A and theta then carries noise of standard deviation noise / (sqrt(2) A).
+Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd& theta, double dt,
+                          double centre, double window, double correlation, double noise,
+                          int degree) {
+  const signal::LocalFit fa =
+      signal::fit_local(log_amp, 0.0, dt, centre, window / 2, degree, correlation);
+  const signal::LocalFit fp =
+      signal::fit_local(theta, 0.0, dt, centre, window / 2, degree, correlation);
+  Estimate e;
+  e.t = centre;
+  e.log_amp = fa.value;
+  // The residual-based std is scaled by the residual RMS; the floor-based one
+  // by the known noise level: take whichever is larger.
+  const double floor_rel = noise / (std::sqrt(2.0) * std::exp(fa.value));
+  const double scale_a = fa.residual_rms > 0 ? std::max(1.0, floor_rel / fa.residual_rms) : 1.0;
+  const double scale_p = fp.residual_rms > 0 ? std::max(1.0, floor_rel / fp.residual_rms) : 1.0;
+  e.sigma = -fa.slope;
+  e.sigma_std = std::hypot(fa.slope_std * scale_a, fa.slope_change);
+  e.omega_d = fp.slope;
+  e.omega_d_std = std::hypot(fp.slope_std * scale_p, fp.slope_change);
+  e.misfit = std::exp(fa.value) * std::hypot(fa.residual_rms, fp.residual_rms);
+  e.window = window;
+  return e;
+}
+
+// Peak-fitting estimate: t(k) and ln|y_k| over the extremum index k (uniform in k).
+Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& t_peak,
+                        double centre_index, double half_count, int degree) {
+  const signal::LocalFit ft =
+      signal::fit_local(t_peak, 0.0, 1.0, centre_index, half_count, degree, 1.0);
+  const signal::LocalFit fa =
+      signal::fit_local(log_peak, 0.0, 1.0, centre_index, half_count, degree, 1.0);
+  Estimate e;
+  const double half_period = ft.slope;  // seconds per extremum
+  e.t = ft.value;
+  e.log_amp = fa.value;
+  e.sigma = -fa.slope / half_period;
+  const double rel_t = std::hypot(ft.slope_std, ft.slope_change) / half_period;
+  e.sigma_std = std::hypot(std::hypot(fa.slope_std, fa.slope_change) / half_period,
+                           std::abs(e.sigma) * rel_t);
+  e.omega_d = std::numbers::pi / half_period;
+  e.omega_d_std = e.omega_d * rel_t;
+  e.misfit = std::exp(fa.value) * fa.residual_rms;
+  e.window = 2 * half_count * half_period;
+  return e;
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+double median(std::vector<double> v) { return quantile(std::move(v), 0.5); }
+
+}  // namespace
+
+std::string RingdownOptions::check() const {
+  if (!(taper > 0 && taper < 0.5)) return "taper must be in (0, 0.5)";
+  if (!(snr_min >= 1)) return "snr_min must be at least 1";
+  if (!(min_periods >= 2)) return "min_periods must be at least 2";
+  if (!(max_window_s > 0)) return "max_window_s must be positive";
+  if (!(target_damping_rel_std > 0)) return "target_damping_rel_std must be positive";
+  if (!(max_damping_rel_std > 0)) return "max_damping_rel_std must be positive";
+  if (!(points_per_window >= 1)) return "points_per_window must be at least 1";
+  if (degree < 1 || degree > 5) return "degree must be 1 to 5";
+  if (amplitude == Quantity::kForce)
+    return "amplitude must be displacement, velocity or acceleration";
+  return {};
+}
+
+std::string RingdownSummary::report() const {
+  if (status != RingdownStatus::kOk) return "no backbone: " + message;
+  return fmt::format(
+      "kept {:.4f} s to {:.4f} s ({:.2f} decades of amplitude); noise floor {:.3e} m; "
+      "low-amplitude frequency {:.4f} Hz, damping ratio {:.5f}{}{}",
+      span_start_s, span_end_s, amplitude_decades, noise_floor_m, linear_frequency_hz,
+      linear_damping, message.empty() ? "" : "; ", message);
+}
+
+Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  Eigen::Index i_peak = 0;
+  const Eigen::VectorXd centred = x.array() - x.mean();
+  centred.head(std::max<Eigen::Index>(1, x.size() / 4)).cwiseAbs().maxCoeff(&i_peak);
+  return i_peak;
+}
+
+ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
+                                 const PrepareOptions& options, signal::FftCache& cache,
+                                 Eigen::Index impact) {
+  const Eigen::Index n = x.size();
+  const Eigen::Index i_peak = impact >= 0 ? std::min(impact, n - 1) : impact_index(x);
+  const Eigen::Index i_begin = std::min<Eigen::Index>(
+      n - 1, i_peak + static_cast<Eigen::Index>(std::round(options.onset_skip_s * fs)));
+  const Eigen::VectorXd data = x.segment(i_begin, n - i_begin);
+  const Eigen::VectorXd centred = data.array() - data.mean();
+  const Eigen::Index ext = static_cast<Eigen::Index>(std::round(options.extend_s * fs));
+  const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
+  const signal::Extension e = signal::extend_record(centred, ext, ext, options.ar_order, fit, 1e3);
+
+  ChannelSpectrum c;
+  c.n_record = e.samples.size();
+  c.n_fft = signal::fast_size(2 * c.n_record);
+  c.fs = fs;
+  c.t0 = t0 + static_cast<double>(i_begin - e.before) / fs;
+  c.data_begin_s = t0 + static_cast<double>(i_begin) / fs;
+  c.data_end_s = t0 + static_cast<double>(n - 1) / fs;
+  c.extended_begin = e.before > 0 && e.samples.head(e.before).cwiseAbs().maxCoeff() > 0;
+  c.extended_end = e.after > 0 && e.samples.tail(e.after).cwiseAbs().maxCoeff() > 0;
+  c.spectrum = cache.get(c.n_fft).forward(e.samples);
+  return c;
+}
+
+Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
+                          const signal::Band& band, const RingdownOptions& options,
+                          signal::FftCache& cache) {
+  Ringdown out;
+  RingdownSummary& sum = out.summary;
+  signal::BandOptions bo;
+  bo.taper = options.taper;
+  bo.order = derivative_order(measured);
+  out.band = signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs,
+                                   band, bo, cache);
+  const signal::BandSignal& bs = out.band;
+  const Eigen::Index m = bs.baseband.size();
+  const double dt = bs.dt;
+  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
+
+  // Envelope and unwrapped phase on the coarse grid.
+  Eigen::VectorXd amp(m), log_amp(m), theta(m);
+  double prev = 0, offset = 0;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    amp(j) = std::abs(bs.baseband(j));
+    log_amp(j) = std::log(std::max(amp(j), 1e-300));
+    double ph = std::arg(bs.baseband(j));
+    if (j > 0) {
+      const double d = ph - prev;
+      if (d > std::numbers::pi) offset -= kTwoPi;
+      if (d < -std::numbers::pi) offset += kTwoPi;
+    }
+    prev = ph;
+    theta(j) = ph + offset + kTwoPi * bs.carrier_hz * static_cast<double>(j) * dt;
+  }
+  sum.carrier_hz = bs.carrier_hz;
+
+  // Settling time of the band filter (its kernel is down to exp(-11) by then);
+  // a continued end needs only a third of it (the continuation is not exact).
+  const double edge = options.taper * (band.hi - band.lo);
+  const double settle = 3.0 / edge;
+  const double begin = channel.data_begin_s - channel.t0;
+  const double end = channel.data_end_s - channel.t0;
+  const double start = begin + (channel.extended_begin ? settle / 3 : settle);
+  const double stop = std::min(duration, end - (channel.extended_end ? settle / 3 : settle));
+  sum.peak_time_s = channel.data_begin_s;
+
+  const double correlation = std::max(1.0, 1.0 / (dt * bs.noise_bandwidth_hz));
+  // Period from the phase over the first part of the usable span.
+  const double f_guess = [&] {
+    const Eigen::Index a = std::min<Eigen::Index>(m - 1, static_cast<Eigen::Index>(start / dt));
+    const Eigen::Index b = std::min<Eigen::Index>(m - 1, a + std::max<Eigen::Index>(4, m / 20));
+    return b > a ? (theta(b) - theta(a)) / (kTwoPi * static_cast<double>(b - a) * dt)
+                 : bs.carrier_hz;
+  }();
+  const double period = 1.0 / std::max(f_guess, band.lo);
+  const double w_min =
+      std::max({options.min_periods * period, 4.0 / bs.noise_bandwidth_hz, 6.0 * dt});
+
+  if (stop - start < 2 * w_min) {
+    sum.message = fmt::format(
+        "record too short for this band: {:.3f} s usable after the filter's "
+        "settling time, {:.3f} s needed",
+        std::max(0.0, stop - start), 2 * w_min);
+    return out;
+  }
+
+  // Noise floor: residual RMS about fits spanning 16 independent noise samples,
+  // lower quartile over the record (robust to windows the fit cannot follow),
+  // divided by 0.9 (the quartile of a chi distribution with ~32 degrees of
+  // freedom) and corrected for the 3 + 3 parameters the two fits absorb.
+  const double w_noise =
+      std::min(std::max(w_min, 16.0 / bs.noise_bandwidth_hz), std::max(w_min, (stop - start) / 2));
+  std::vector<double> misfits;
+  for (double c = start + w_noise / 2; c <= stop - w_noise / 2; c += w_noise / 4) {
+    misfits.push_back(estimate_hilbert(log_amp, theta, dt, c, w_noise, correlation, 0.0, 2).misfit);
+  }
+  const double dof = std::max(2.0, 2.0 * w_noise * bs.noise_bandwidth_hz);
+  sum.noise_floor_m =
+      std::max(quantile(misfits, 0.25) / 0.9 / std::sqrt(std::max(0.25, 1.0 - 6.0 / dof)), 1e-300);
+  const double noise = sum.noise_floor_m;
+
+  // Local estimates along the span.
+  std::vector<Estimate> est;
+  if (options.method == Method::kHilbert) {
+    const double step = w_min / options.points_per_window;
+    for (double c = start + w_min / 2; c <= stop - w_min / 2 + 1e-12; c += step) {
+      const double allowed = std::min(options.max_window_s, 2 * std::min(c - start, stop - c));
+      // Longer windows average noise (std ~ W^-1.5) but bend less with the
+      // backbone (model error ~ W^2): take the window with the smallest total
+      // uncertainty, stopping early once it meets the target.
+      Estimate best =
+          estimate_hilbert(log_amp, theta, dt, c, w_min, correlation, noise, options.degree);
+      for (double w = w_min * std::sqrt(2.0); w <= allowed; w *= std::sqrt(2.0)) {
+        if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
+        const Estimate next =
+            estimate_hilbert(log_amp, theta, dt, c, w, correlation, noise, options.degree);
+        if (next.sigma_std < best.sigma_std) best = next;
+      }
+      est.push_back(best);
+    }
+  } else {
+    // Extrema of the band-passed displacement at full rate, refined by parabolas.
+    signal::BandOptions full = bo;
+    full.full_rate = true;
+    const signal::BandSignal fr = signal::band_analytic(
+        channel.spectrum, channel.n_record, channel.n_fft, channel.fs, band, full, cache);
+    const Eigen::VectorXd y = fr.baseband.real();
+    const double ts = 1.0 / channel.fs;
+    std::vector<double> tk, lk;
+    const Eigen::Index j0 = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(start / ts));
+    const Eigen::Index j1 =
+        std::min<Eigen::Index>(y.size() - 2, static_cast<Eigen::Index>(stop / ts));
+    for (Eigen::Index j = j0; j <= j1; ++j) {
+      const bool is_max = y(j) > y(j - 1) && y(j) >= y(j + 1) && y(j) > 0;
+      const bool is_min = y(j) < y(j - 1) && y(j) <= y(j + 1) && y(j) < 0;
+      if (!is_max && !is_min) continue;
+      const double ym = y(j - 1), y0 = y(j), yp = y(j + 1);
+      const double den = ym - 2 * y0 + yp;
+      const double d = den != 0 ? 0.5 * (ym - yp) / den : 0.0;
+      if (std::abs(d) > 1) continue;
+      const double peak = y0 - 0.25 * (ym - yp) * d;
+      // Successive extrema alternate in sign; a repeated sign is noise: keep the larger.
+      if (!tk.empty() && ((peak > 0) == (lk.back() > 0))) {
+        if (std::abs(peak) > std::abs(lk.back())) {
+          tk.back() = (static_cast<double>(j) + d) * ts;
+          lk.back() = peak;
+        }
+        continue;
+      }
+      tk.push_back((static_cast<double>(j) + d) * ts);
+      lk.push_back(peak);
+    }
+    const Eigen::Index np = static_cast<Eigen::Index>(tk.size());
+    Eigen::VectorXd tpk(np), lpk(np);
+    for (Eigen::Index k = 0; k < np; ++k) {
+      tpk(k) = tk[k];
+      lpk(k) = std::log(std::abs(lk[k]));
+    }
+    const double half_count = std::max(3.0, std::ceil(w_min / period));  // extrema per half window
+    for (double k = half_count; k + half_count < static_cast<double>(np);
+         k += std::max(1.0, 2 * half_count / options.points_per_window)) {
+      double hc = half_count;
+      Estimate best = estimate_peaks(lpk, tpk, k, hc, options.degree);
+      while (best.sigma_std > options.target_damping_rel_std * std::abs(best.sigma)) {
+        const double wider = hc * std::sqrt(2.0);
+        if (k - wider < 0 || k + wider > static_cast<double>(np - 1) ||
+            wider * period > options.max_window_s) {
+          break;
+        }
+        const Estimate next = estimate_peaks(lpk, tpk, k, wider, options.degree);
+        if (next.sigma_std >= best.sigma_std) break;
+        hc = wider;
+        best = next;
+      }
+      est.push_back(best);
+    }
+  }
+
+  // Valid points: envelope well above the noise floor, finite, positive decay rate.
+  std::vector<char> valid(est.size());
+  for (size_t i = 0; i < est.size(); ++i) {
+    const Estimate& e = est[i];
+    const double a = std::exp(e.log_amp);
+    valid[i] = std::isfinite(e.sigma) && std::isfinite(e.omega_d) && e.omega_d > 0 && e.sigma > 0 &&
+               std::isfinite(e.sigma_std) && a >= options.snr_min * sum.noise_floor_m &&
+               e.sigma_std <= options.max_damping_rel_std * e.sigma;
+  }
+  // Longest contiguous run of valid points.
+  size_t best_begin = 0, best_len = 0;
+  for (size_t i = 0; i < est.size();) {
+    if (!valid[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < est.size() && valid[j]) ++j;
+    if (j - i > best_len) {
+      best_len = j - i;
+      best_begin = i;
+    }
+    i = j;
+  }
+  if (best_len < 2) {
+    const double a_max = amp.maxCoeff();
+    sum.message = fmt::format(
+        "no span of the envelope stays above {} x the noise floor with a "
+        "decaying fit whose damping is known to {:.0f} % (peak envelope "
+        "{:.3e} m, noise floor {:.3e} m)",
+        options.snr_min, 100 * options.max_damping_rel_std, a_max, sum.noise_floor_m);
+    return out;
+  }
+
+  Backbone& bb = out.backbone;
+  const Eigen::Index n = static_cast<Eigen::Index>(best_len);
+  for (Eigen::VectorXd* v : {&bb.time_s, &bb.amplitude, &bb.frequency_hz, &bb.damping,
+                             &bb.frequency_std_hz, &bb.damping_std, &bb.damped_frequency_hz,
+                             &bb.decay_rate, &bb.displacement, &bb.snr, &bb.window_s}) {
+    v->resize(n);
+  }
+  const int k_out = derivative_order(options.amplitude);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Estimate& e = est[best_begin + static_cast<size_t>(i)];
+    const double wn = std::hypot(e.omega_d, e.sigma);
+    const double a = std::exp(e.log_amp);
+    bb.time_s(i) = channel.t0 + e.t;
+    bb.displacement(i) = a;
+    bb.amplitude(i) = a * std::pow(wn, k_out);
+    bb.frequency_hz(i) = wn / kTwoPi;
+    bb.damping(i) = e.sigma / wn;
+    bb.frequency_std_hz(i) =
+        std::hypot(e.omega_d * e.omega_d_std, e.sigma * e.sigma_std) / wn / kTwoPi;
+    bb.damping_std(i) = e.sigma_std / wn;
+    bb.damped_frequency_hz(i) = e.omega_d / kTwoPi;
+    bb.decay_rate(i) = e.sigma;
+    bb.snr(i) = a / sum.noise_floor_m;
+    bb.window_s(i) = e.window;
+  }
+  sum.status = RingdownStatus::kOk;
+  sum.span_start_s = bb.time_s(0);
+  sum.span_end_s = bb.time_s(n - 1);
+  sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
+  // Low-amplitude (linear) values: medians over the lowest-amplitude fifth of the span.
+  const Eigen::Index tail = std::max<Eigen::Index>(1, n / 5);
+  std::vector<double> f_low, z_low;
+  for (Eigen::Index i = n - tail; i < n; ++i) {
+    f_low.push_back(bb.frequency_hz(i));
+    z_low.push_back(bb.damping(i));
+  }
+  sum.linear_frequency_hz = median(f_low);
+  sum.linear_damping = median(z_low);
+  if (sum.linear_frequency_hz < band.lo + edge || sum.linear_frequency_hz > band.hi - edge) {
+    sum.message = fmt::format("the mode at {:.3f} Hz lies in the band's edge; widen the band",
+                              sum.linear_frequency_hz);
+  }
+  return out;
+}
+
+}  // namespace jointlab::modal

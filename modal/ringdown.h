@@ -1,0 +1,143 @@
+// Ring-down -> backbone: natural frequency and damping versus amplitude of one
+// mode in one channel (method.md section 1).
+//
+// 1. The band's analytic signal of the record converted to displacement (one
+//    frequency-domain pass: zero-phase band-pass, integration, Hilbert; see
+//    signal/band_analytic.h): z(t) = A(t) exp(i theta(t)), A in metres.
+//    Damping refers to displacement, so ln A is taken after the conversion.
+// 2. Local weighted polynomial fits of ln A(t) and theta(t) (signal/local_poly.h),
+//    differentiated analytically:  omega_d = d theta/dt,  sigma = -d ln A/dt,
+//    omega_n = sqrt(omega_d^2 + sigma^2),  zeta = sigma / omega_n.
+//    Each point's window is the shortest (from a few periods up to max_window_s)
+//    whose damping uncertainty meets target_damping_rel_std.
+// 3. Noise floor: the RMS of the analytic signal about its local smooth fit over
+//    windows of 16 / noise bandwidth (lower quartile over the record, corrected
+//    for the degrees of freedom the fit absorbs). Kept span: from the impact
+//    (continued backwards, see ChannelSpectrum) plus the filter's settling time
+//    to where the envelope falls below snr_min times the noise floor or the
+//    damping's relative uncertainty exceeds max_damping_rel_std.
+// 4. Uncertainty per point: the larger of the fit's residual-based and the noise
+//    floor's standard deviation of each slope (both corrected for correlated
+//    samples), combined with the change of the slope when the polynomial degree
+//    is raised (a model-error estimate).
+// The amplitude column is A * omega_n^k for displacement (k = 0), velocity (1)
+// or acceleration (2) amplitude.
+//
+// Method kPeaks (peak finding and fitting) instead fits parabolas through the
+// samples around each extremum of the band-passed displacement: the extrema
+// times give theta (pi per extremum) and their heights give A; the same local
+// fits then run over the extremum index.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "jointlab/core/units.h"
+#include "jointlab/signal/band_analytic.h"
+
+namespace jointlab::modal {
+
+/// How the instantaneous envelope and phase are obtained.
+enum class Method { kHilbert, kPeaks };
+
+/// Settings of backbone extraction.
+struct RingdownOptions {
+  Method method = Method::kHilbert;          ///< Hilbert (default) or peak fitting
+  Quantity amplitude = Quantity::kVelocity;  ///< quantity of the amplitude column
+  double taper = 0.25;                       ///< band edge width / band width
+  double snr_min = 30.0;                     ///< envelope / noise floor to keep a point
+  double min_periods = 8.0;                  ///< shortest fit window [periods]
+  double max_window_s = 2.0;                 ///< longest fit window [s]
+  double target_damping_rel_std = 0.005;     ///< window grows until zeta std / zeta <= this
+  double max_damping_rel_std = 0.02;         ///< points with a larger zeta std / zeta are dropped
+  double points_per_window = 4.0;            ///< output points per shortest window
+  int degree = 3;                            ///< degree of the local polynomials
+  /// Empty if the options are usable, else what is wrong.
+  std::string check() const;
+};
+
+/// The backbone of one mode in one channel: one entry per retained point, time increasing.
+struct Backbone {
+  Eigen::VectorXd time_s;               ///< time of the point [s] (record time base)
+  Eigen::VectorXd amplitude;            ///< amplitude of RingdownOptions::amplitude [SI]
+  Eigen::VectorXd frequency_hz;         ///< natural frequency omega_n / 2 pi [Hz]
+  Eigen::VectorXd damping;              ///< damping ratio zeta (fraction)
+  Eigen::VectorXd frequency_std_hz;     ///< one-sigma uncertainty of frequency_hz
+  Eigen::VectorXd damping_std;          ///< one-sigma uncertainty of damping
+  Eigen::VectorXd damped_frequency_hz;  ///< omega_d / 2 pi [Hz]
+  Eigen::VectorXd decay_rate;           ///< sigma [1/s]
+  Eigen::VectorXd displacement;         ///< displacement amplitude A [m]
+  Eigen::VectorXd snr;                  ///< envelope / noise floor
+  Eigen::VectorXd window_s;             ///< fit window used [s]
+  /// Number of points.
+  Eigen::Index size() const { return time_s.size(); }
+};
+
+/// How extraction ended.
+enum class RingdownStatus { kOk, kNoSpan };
+
+/// What extraction found besides the points.
+struct RingdownSummary {
+  RingdownStatus status = RingdownStatus::kNoSpan;  ///< kOk when a span was kept
+  std::string message;                              ///< why no span was kept, or notes
+  double noise_floor_m = 0.0;        ///< noise floor of the displacement envelope [m]
+  double peak_time_s = 0.0;          ///< time of the envelope maximum [s]
+  double span_start_s = 0.0;         ///< first kept point [s]
+  double span_end_s = 0.0;           ///< last kept point [s]
+  double amplitude_decades = 0.0;    ///< log10(max/min amplitude) over the span
+  double linear_frequency_hz = 0.0;  ///< low-amplitude natural frequency [Hz]
+  double linear_damping = 0.0;       ///< low-amplitude damping ratio
+  double carrier_hz = 0.0;           ///< dominant frequency in the band [Hz]
+  /// One paragraph for a person.
+  std::string report() const;
+};
+
+/// Settings of the record preparation shared by all bands of a channel.
+struct PrepareOptions {
+  double onset_skip_s = 0.002;  ///< data skipped after the largest sample (the impact) [s]
+  double extend_s = 0.5;        ///< linear-prediction continuation at each end [s]
+  int ar_order = 32;            ///< order of the continuation model
+  double ar_fit_s = 0.25;       ///< data the continuation model is fitted on [s]
+};
+
+/// The spectrum of one channel, computed once and shared by all its bands.
+///
+/// The analysed record starts just after the impact (the largest sample in the
+/// first quarter, plus onset_skip_s): the pre-trigger and the impact itself are
+/// replaced by the ring-down's own backward continuation, and the end is
+/// continued forward, so band filters see no abrupt start or end.
+struct ChannelSpectrum {
+  Eigen::VectorXcd spectrum;    ///< one-sided spectrum of the zero-padded analysed record
+  Eigen::Index n_record = 0;    ///< samples analysed (continuations included)
+  Eigen::Index n_fft = 0;       ///< padded length (at least twice n_record)
+  double fs = 0.0;              ///< sample rate [Hz]
+  double t0 = 0.0;              ///< time of the analysed record's first sample [s]
+  double data_begin_s = 0.0;    ///< first measured sample used [s]
+  double data_end_s = 0.0;      ///< last measured sample [s]
+  bool extended_begin = false;  ///< the start is a stable continuation
+  bool extended_end = false;    ///< the end is a stable continuation
+};
+
+/// Backbone, summary and the band's displacement analytic signal.
+struct Ringdown {
+  Backbone backbone;        ///< retained points
+  RingdownSummary summary;  ///< span, noise floor, linear values, status
+  signal::BandSignal band;  ///< displacement analytic signal of the band (coarse grid)
+};
+
+/// Index of the impact: the largest |sample| in the first quarter of the record.
+Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x);
+
+/// Mean-removed, onset-trimmed, continued and zero-padded spectrum of a channel;
+/// `impact` is the impact's sample index (negative: found by impact_index).
+ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
+                                 const PrepareOptions& options, signal::FftCache& cache,
+                                 Eigen::Index impact = -1);
+
+/// Extracts the backbone of the mode in `band` from a channel measuring `measured`.
+Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
+                          const signal::Band& band, const RingdownOptions& options,
+                          signal::FftCache& cache);
+
+}  // namespace jointlab::modal

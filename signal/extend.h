@@ -1,0 +1,32 @@
+// Extension of a record beyond its ends by linear prediction.
+//
+// A ring-down is a sum of damped sinusoids, which an autoregressive model
+//   x[k] = sum_{j=1}^{p} c_j x[k - j]      (forward),
+//   x[k] = sum_{j=1}^{p} d_j x[k + j]      (backward)
+// continues exactly (p >= twice the number of modes). Band-pass filters smear an
+// abrupt start or end of a record over their settling time; continuing the record
+// smoothly across its ends moves that transient outside the data. The
+// coefficients are least-squares fits (covariance method) over `fit_length`
+// samples next to the end being continued.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace jointlab::signal {
+
+/// What extend_record produced.
+struct Extension {
+  Eigen::VectorXd samples;  ///< before + original + after
+  Eigen::Index before = 0;  ///< samples prepended
+  Eigen::Index after = 0;   ///< samples appended
+};
+
+/// Continues x by `before` samples at its start and `after` at its end with AR
+/// models of `order` fitted over `fit_length` samples at each end. An extension
+/// whose RMS grows beyond `max_growth` times the RMS of the samples it was fitted
+/// on is judged unstable and replaced by zeros (that end is then not extended).
+Extension extend_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
+                        Eigen::Index after, int order, Eigen::Index fit_length,
+                        double max_growth = 20.0);
+
+}  // namespace jointlab::signal
