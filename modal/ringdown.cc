@@ -34,10 +34,16 @@ struct Estimate {
 Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd& theta, double dt,
                           double centre, double window, double correlation, double noise,
                           int degree) {
+  // Samples closer than the noise's correlation length add little: thin long
+  // windows to about 48 samples while keeping at least one per 1/bandwidth.
+  const auto in_window = static_cast<Eigen::Index>(window / dt);
+  const Eigen::Index stride = std::clamp<Eigen::Index>(
+      in_window / 48, 1, std::max<Eigen::Index>(1, static_cast<Eigen::Index>(correlation)));
+  const double corr = std::max(1.0, correlation / static_cast<double>(stride));
   const signal::LocalFit fa =
-      signal::fit_local(log_amp, 0.0, dt, centre, window / 2, degree, correlation);
+      signal::fit_local(log_amp, 0.0, dt, centre, window / 2, degree, corr, stride);
   const signal::LocalFit fp =
-      signal::fit_local(theta, 0.0, dt, centre, window / 2, degree, correlation);
+      signal::fit_local(theta, 0.0, dt, centre, window / 2, degree, corr, stride);
   Estimate e;
   e.t = centre;
   e.log_amp = fa.value;

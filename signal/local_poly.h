@@ -25,9 +25,11 @@ struct LocalFit {
   int samples = 0;            ///< samples used
 };
 
-/// Fits y(t) on the uniform grid t_i = t_first + i dt around `centre` with half-width h.
+/// Fits y(t) on the uniform grid t_i = t_first + i dt around `centre` with half-width h,
+/// using every `stride`-th sample (pass the correlation of the strided samples).
 /// Requires at least degree + 3 samples inside the window (asserts).
 LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, double dt,
-                   double centre, double half_width, int degree, double correlation);
+                   double centre, double half_width, int degree, double correlation,
+                   Eigen::Index stride = 1);
 
 }  // namespace jointlab::signal
