@@ -9,4 +9,7 @@ namespace jointlab::apps {
 /// `jointlab process`: ring-down files -> frequency and damping versus amplitude.
 void add_process_command(CLI::App& app);
 
+/// `jointlab build-model`: riveted beam description -> reduced (Craig-Bampton) model directory.
+void add_build_model_command(CLI::App& app);
+
 }  // namespace jointlab::apps

@@ -41,7 +41,8 @@ Eigen::VectorXd dense_eigenvalues(const Eigen::SparseMatrix<double>& k,
 
 TEST(Hcb, AllFixedInterfaceModesReproduceTheFullModelExactly) {
   // With every interior mode kept the transformation is square and invertible: the
-  // reduced eigenvalues are the full ones (to the round-off of two dense solves).
+  // reduced eigenvalues are the full ones, to the round-off of two dense generalized
+  // solves, ~ε·cond(M) ≈ 1e-16 × 1e10 (the shell's small drilling inertia) → 1e-6.
   Fixture f;
   HcbOptions o;
   o.fixed_interface_modes = 100000;
@@ -50,7 +51,7 @@ TEST(Hcb, AllFixedInterfaceModesReproduceTheFullModelExactly) {
   ASSERT_EQ(r.stiffness.rows(), f.a.size());
   const Eigen::VectorXd full = dense_eigenvalues(f.a.stiffness, f.a.mass);
   const Eigen::VectorXd red = dense_eigenvalues(r.stiffness, r.mass);
-  for (int k = 6; k < 30; ++k) EXPECT_TRUE(Close(red(k), full(k), 1e-8)) << k;
+  for (int k = 6; k < 30; ++k) EXPECT_TRUE(Close(red(k), full(k), 1e-6)) << k;
 }
 
 TEST(Hcb, ConvergesFromAboveAsModesAreAddedAndKeepsRigidBodyModes) {

@@ -152,9 +152,11 @@ ElementMatrices shell_element(const std::array<Eigen::Vector3d, 4>& p, const She
 
     const Eigen::Matrix4d nn = s.n * s.n.transpose() * w;
     const double mt = sec.density * t, mr = sec.density * t * t * t / 12;
+    const double md = sec.drilling_inertia_factor * mr;
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b)
-        for (int cc = 0; cc < 6; ++cc) m(dof(a, cc), dof(b, cc)) += (cc < 3 ? mt : mr) * nn(a, b);
+        for (int cc = 0; cc < 6; ++cc)
+          m(dof(a, cc), dof(b, cc)) += (cc < 3 ? mt : cc < 5 ? mr : md) * nn(a, b);
   }
   k -= k_ci * k_ii.ldlt().solve(k_ci.transpose());
   k = 0.5 * (k + k.transpose()).eval();
