@@ -4,10 +4,13 @@ list(APPEND JOINTLAB_MODEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis.cc
   ${CMAKE_CURRENT_LIST_DIR}/model_file.cc
   ${CMAKE_CURRENT_LIST_DIR}/linear_modes.cc
+  ${CMAKE_CURRENT_LIST_DIR}/joint_condensation.cc
+  ${CMAKE_CURRENT_LIST_DIR}/qsma.cc
 )
 list(APPEND JOINTLAB_MODEL_TESTS
   ${CMAKE_CURRENT_LIST_DIR}/iwan_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/model_file_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/linear_modes_test.cc
+  ${CMAKE_CURRENT_LIST_DIR}/qsma_test.cc
 )

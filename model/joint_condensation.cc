@@ -1,0 +1,234 @@
+#include "jointlab/model/joint_condensation.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+
+namespace jointlab::model {
+
+void JointCondensation::Law::eval(double r, double& h, double& dh, double& energy) const {
+  const double s = std::abs(r);
+  const double sign = r < 0 ? -1.0 : 1.0;
+  if (s >= phi_max) {
+    h = sign * (Kt * s - Fs);
+    dh = Kt;
+    energy = Kt * s * s / 2 - e_max - Fs * (s - phi_max);
+    return;
+  }
+  // Microslip: h = R s^(chi+2)/((chi+1)(chi+2)) written without the K_T s - F cancellation.
+  const double p = s > 0 ? std::pow(s, chi1) : 0.0;
+  h = sign * a2 * s * p;
+  dh = a1 * p;
+  energy = a3 * s * s * p;
+}
+
+JointCondensation::JointCondensation(const Model& model, const ModesOptions& modes_options) {
+  if (model.iwan_count() == 0) {
+    throw InputError("QSMA: the model has no Iwan joint (every joint is a linear spring)");
+  }
+  const Eigen::SparseMatrix<double> k_lin = model.linear_stiffness();
+  ModesOptions all = modes_options;
+  all.count = 0;
+  modes_ = linear_modes(model.mass, k_lin, all);
+
+  // Group Iwan elements by unordered pair of ends: one coordinate each. An element with
+  // swapped ends sees -r, which leaves its energy (even) and generalized force unchanged.
+  std::map<std::pair<Eigen::Index, Eigen::Index>, int> index;
+  for (const Joint& joint : model.joints) {
+    if (!joint.iwan) continue;
+    std::pair<Eigen::Index, Eigen::Index> key{joint.a, kGround};
+    if (joint.b != kGround) key = {std::min(joint.a, joint.b), std::max(joint.a, joint.b)};
+    auto [it, fresh] = index.emplace(key, static_cast<int>(coords_.size()));
+    if (fresh) coords_.push_back(JointCoordinate{key.first, key.second, {}});
+    coords_[it->second].elements.push_back(*joint.iwan);
+  }
+  const int nj = size();
+  const Eigen::Index n = model.size();
+  laws_.resize(nj);
+  phi_max_.resize(nj);
+  phi_max_min_ = INFINITY;
+  chi1_min_ = INFINITY;
+  for (int j = 0; j < nj; ++j) {
+    phi_max_(j) = 0;
+    for (const Iwan& e : coords_[j].elements) {
+      const double chi1 = e.chi() + 1, R = e.R();
+      laws_[j].push_back({e.stiffness(), e.slip_force(), e.phi_max(), chi1, R / chi1,
+                          R / (chi1 * (chi1 + 1)), R / (chi1 * (chi1 + 1) * (chi1 + 2)),
+                          e.energy(e.phi_max())});
+      phi_max_(j) = std::max(phi_max_(j), e.phi_max());
+      phi_max_min_ = std::min(phi_max_min_, e.phi_max());
+      chi1_min_ = std::min(chi1_min_, chi1);
+    }
+  }
+
+  // B^T as a dense n x n_J matrix (n_J is small).
+  Eigen::MatrixXd bt = Eigen::MatrixXd::Zero(n, nj);
+  for (int j = 0; j < nj; ++j) {
+    bt(coords_[j].a, j) = 1.0;
+    if (coords_[j].b != kGround) bt(coords_[j].b, j) = -1.0;
+  }
+  joint_shapes_ = bt.transpose() * modes_.shapes;
+
+  // G B^T from the shifted, positive definite K_lin + M Phi_rb Phi_rb^T M: for a load
+  // f orthogonal to the rigid-body modes its solution is the elastic one (Phi_rb^T M u = 0).
+  const Eigen::MatrixXd mass = Eigen::MatrixXd(model.mass);
+  Eigen::MatrixXd shifted = Eigen::MatrixXd(k_lin);
+  if (modes_.rigid_count > 0) {
+    const Eigen::MatrixXd mphi = mass * modes_.shapes.leftCols(modes_.rigid_count);
+    shifted += mphi * mphi.transpose();
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(shifted);
+  if (llt.info() != Eigen::Success) {
+    throw InputError(
+        "QSMA: the stiffness with joints at linear stiffness is not positive "
+        "semidefinite");
+  }
+  const Eigen::MatrixXd gbt = llt.solve(bt);
+  flexibility_ = bt.transpose() * gbt;
+  flexibility_ = 0.5 * (flexibility_ + flexibility_.transpose()).eval();
+  const Eigen::LLT<Eigen::MatrixXd> cl(flexibility_);
+  const Eigen::VectorXd d = flexibility_.diagonal();
+  const double pivot_ratio =
+      cl.info() == Eigen::Success
+          ? (cl.matrixLLT().diagonal().array().square() / d.array()).minCoeff()
+          : 0.0;
+  // A pivot below 1e-10 of its diagonal entry means a coordinate is (numerically) a
+  // combination of others: C has no usable inverse.
+  if (!(pivot_ratio > 1e-10)) {
+    throw InputError(
+        "QSMA: the Iwan joint coordinates are linearly dependent (a loop of joints, or a "
+        "joint whose ends cannot move relative to each other)");
+  }
+  stiffness_ = cl.solve(Eigen::MatrixXd::Identity(nj, nj));
+  stiffness_ = 0.5 * (stiffness_ + stiffness_.transpose()).eval();
+}
+
+Eigen::VectorXd JointCondensation::joint_motion(const Eigen::Ref<const Eigen::VectorXd>& u) const {
+  Eigen::VectorXd r(size());
+  for (int j = 0; j < size(); ++j) {
+    r(j) = u(coords_[j].a) - (coords_[j].b == kGround ? 0.0 : u(coords_[j].b));
+  }
+  return r;
+}
+
+void JointCondensation::evaluate(const Eigen::VectorXd& r, Eigen::VectorXd& h, Eigen::VectorXd& dh,
+                                 double& energy) const {
+  energy = 0;
+  for (int j = 0; j < size(); ++j) {
+    h(j) = 0;
+    dh(j) = 0;
+    for (const Law& law : laws_[j]) {
+      double hj, dhj, ej;
+      law.eval(r(j), hj, dhj, ej);
+      h(j) += hj;
+      dh(j) += dhj;
+      energy += ej;
+    }
+  }
+}
+
+Eigen::VectorXd JointCondensation::softening(const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  Eigen::VectorXd h(size()), dh(size());
+  double energy;
+  evaluate(r, h, dh, energy);
+  return h;
+}
+
+double JointCondensation::dissipation(const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  double d = 0;
+  for (int j = 0; j < size(); ++j) {
+    for (const Iwan& e : coords_[j].elements) d += e.dissipation(std::abs(r(j)));
+  }
+  return d;
+}
+
+bool JointCondensation::full_macroslip(const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  for (int j = 0; j < size(); ++j) {
+    if (std::abs(r(j)) < phi_max_(j)) return false;
+  }
+  return true;
+}
+
+StaticSolve JointCondensation::solve(const Eigen::Ref<const Eigen::VectorXd>& g, double alpha,
+                                     Eigen::VectorXd& r, double runaway, int max_iterations,
+                                     Eigen::VectorXd* tangent) const {
+  const int nj = size();
+  assert(g.size() == nj && r.size() == nj);
+  Eigen::VectorXd h(nj), dh(nj), kr(nj), grad(nj), step(nj), trial(nj), kt(nj);
+  Eigen::MatrixXd hessian(nj, nj);
+  Eigen::LLT<Eigen::MatrixXd> llt(nj);
+  const Eigen::VectorXd load = alpha * g;
+  const double kscale = stiffness_.diagonal().maxCoeff();
+  double energy;
+
+  auto potential = [&](const Eigen::VectorXd& x, Eigen::VectorXd& kx) {
+    evaluate(x, h, dh, energy);
+    kx.noalias() = stiffness_ * x;
+    return 0.5 * x.dot(kx) - x.dot(load) - energy;
+  };
+
+  StaticSolve out;
+  double pi = potential(r, kr);
+  for (out.iterations = 0; out.iterations < max_iterations;) {
+    grad = kr - load - h;
+    const double scale =
+        load.lpNorm<Eigen::Infinity>() + kr.lpNorm<Eigen::Infinity>() + h.lpNorm<Eigen::Infinity>();
+    // Converged when the force balance holds to 1e-12 of the forces involved.
+    if (grad.lpNorm<Eigen::Infinity>() <= 1e-12 * scale) {
+      out.converged = true;
+      break;
+    }
+    hessian = stiffness_;
+    hessian.diagonal() -= dh;
+    llt.compute(hessian);
+    // The Hessian is positive semidefinite; it is singular only where the structure has
+    // lost stiffness (Iwan elements in macroslip). A tiny shift then gives a direction
+    // that the line search either accepts (no equilibrium: the solve runs away) or cuts.
+    for (double shift = 1e-12 * kscale; llt.info() != Eigen::Success && shift < kscale;
+         shift *= 1e3) {
+      hessian.diagonal().array() += shift;
+      llt.compute(hessian);
+    }
+    ++out.iterations;
+    if (llt.info() != Eigen::Success) return out;
+    step = -llt.solve(grad);
+    const double slope = grad.dot(step);
+    const double step_norm = step.lpNorm<Eigen::Infinity>();
+    const double r_norm = r.lpNorm<Eigen::Infinity>();
+    double t = 1;
+    double pi_trial = 0;
+    for (int halving = 0; halving < 80; ++halving, t *= 0.5) {
+      trial = r + t * step;
+      pi_trial = potential(trial, kt);
+      // Armijo decrease; a step below 1e-6 of |r| is inside Newton's quadratic range,
+      // where Pi differences are rounding noise, and is taken as it is.
+      if (pi_trial <= pi + 1e-4 * t * slope || t * step_norm <= 1e-6 * r_norm) break;
+    }
+    r = trial;
+    kr = kt;
+    pi = pi_trial;
+    if (!r.allFinite() || r.lpNorm<Eigen::Infinity>() > runaway) return out;
+    if (t * step_norm <= 1e-15 * r_norm) {  // stagnation: accept only a small residual
+      grad = kr - load - h;
+      out.converged = grad.lpNorm<Eigen::Infinity>() <= 1e-9 * scale;
+      break;
+    }
+  }
+  if (tangent && llt.info() == Eigen::Success && out.iterations > 0) *tangent = llt.solve(g);
+  if (tangent && out.iterations == 0) {
+    hessian = stiffness_;
+    evaluate(r, h, dh, energy);
+    hessian.diagonal() -= dh;
+    llt.compute(hessian);
+    *tangent = llt.info() == Eigen::Success ? Eigen::VectorXd(llt.solve(g)) : Eigen::VectorXd();
+  }
+  return out;
+}
+
+}  // namespace jointlab::model

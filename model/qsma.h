@@ -1,0 +1,78 @@
+// Quasi-Static Modal Analysis (Festjens; Lacayo & Allen) of one elastic mode.
+//
+// For mode r (mass-normalised phi_r, linear omega_r with joints at K_T) the static problem
+//   K u + F_J(u) = alpha M phi_r,   Phi_rb^T M u = 0,
+// is solved for rising load levels alpha [N/kg^(1/2), i.e. the modal force]; then
+//   q = phi_r^T M u = (alpha + (B phi_r)^T h(r)) / omega_r^2         [m kg^(1/2)]
+//   omega(alpha) = sqrt(alpha / q),   zeta(alpha) = D / (2 pi alpha q),
+// D the energy one Masing cycle dissipates: the sum over Iwan elements of D(|r_j|).
+// The problem is condensed to the joint coordinates (joint_condensation.h): each load
+// level is a Newton solve of size n_J, continued from the previous level.
+//
+// Range: without q_min, the curve starts where the damping is within
+// microslip_deviation of its microslip power law zeta_0(q) = D(omega_r^2 q B phi_r /
+// omega_r^2) / (2 pi omega_r^2 q^2) (the damping of the linear joint motion). Without
+// q_max it ends at full macroslip (every Iwan element past phi_max) or at the largest
+// load the structure carries (past it no static solution exists: the joints slide
+// freely), whichever comes first; that load is bracketed to limit_tolerance and the
+// last points cluster below it (10 %, ..., 0.1 % under it, then the last converged level).
+// Points are log-spaced in alpha, so amplitude increases along the curve.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "jointlab/model/joint_condensation.h"
+
+namespace jointlab::model {
+
+/// Settings of qsma().
+struct QsmaOptions {
+  int points = 50;                    ///< number of points on the curve (>= 2)
+  double q_min = 0;                   ///< first modal amplitude; 0: automatic (microslip)
+  double q_max = 0;                   ///< last modal amplitude; 0: automatic (macroslip/limit)
+  double microslip_deviation = 0.01;  ///< automatic start: |zeta/zeta_0 - 1| at most this
+  double limit_tolerance = 1e-4;      ///< relative bracket of the end load
+  int max_newton_iterations = 60;     ///< per load level
+
+  /// What is wrong with these options, or "".
+  std::string error() const;
+};
+
+/// One point of a QSMA curve.
+struct QsmaPoint {
+  double force_amplitude = 0;  ///< load level alpha
+  double modal_amplitude = 0;  ///< q = phi_r^T M u
+  double frequency_hz = 0;     ///< sqrt(alpha/q) / (2 pi)
+  double damping_ratio = 0;    ///< D / (2 pi alpha q)
+  double max_slip = 0;         ///< largest |relative displacement| over the Iwan joints [m]
+};
+
+/// Why a QSMA curve ends.
+enum class QsmaTermination {
+  kReachedQmax,      ///< the requested q_max
+  kFullMacroslip,    ///< every Iwan element past its phi_max
+  kLimitLoad,        ///< no static solution past this load: the joints slide freely
+  kJointsNotLoaded,  ///< the mode does not move any Iwan joint (give q_max for a linear curve)
+  kEmptyRange,       ///< q_min lies beyond the end of the curve
+};
+
+/// What happened in a qsma() call.
+struct QsmaSummary {
+  QsmaTermination termination = QsmaTermination::kEmptyRange;  ///< why the curve ends
+  double end_force = 0;            ///< alpha of the last point (the limit load for kLimitLoad)
+  double end_modal_amplitude = 0;  ///< q of the last point
+  int solves = 0;                  ///< static solves, including range search and bracketing
+  int newton_iterations = 0;       ///< Hessian factorizations over every solve
+  std::string message;             ///< one line on the termination
+
+  /// A short paragraph: termination, end load, work done.
+  std::string report() const;
+};
+
+/// QSMA curve of elastic mode `mode` (1-based, as numbered by `jointlab modes`); InputError if no
+/// such mode.
+std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const QsmaOptions& options,
+                            QsmaSummary* summary);
+
+}  // namespace jointlab::model
