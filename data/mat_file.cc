@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -16,6 +19,7 @@
 #include <fmt/format.h>
 #include <matio.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include "jointlab/core/error.h"
 
@@ -501,6 +505,252 @@ bool has_hdf5_signature(const std::filesystem::path& path) {
   return ok && std::memcmp(sig, "\x89HDF\r\n\x1a\n", 8) == 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// A structural check of v5 files before matio sees them: matio allocates what a tag
+// declares (names, cell and struct arrays) before it knows the bytes are there, so every
+// tag, name, cell and field count is checked against the bytes that hold it first.
+
+class V5Check {
+ public:
+  V5Check(const std::string& file, bool swap, double budget)
+      : file_(file), swap_(swap), budget_(budget) {}
+
+  // Top level: a sequence of (possibly compressed) data elements, 8-byte aligned.
+  void top(const unsigned char* p, size_t n) {
+    size_t off = 0;
+    int count = 0;
+    while (off < n) {
+      if (n - off < 8) break;  // trailing padding
+      if (++count > 10000) fail(off, "more than 10000 variables");
+      off += element(p + off, n - off, 0, true);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(size_t off, const std::string& what) const {
+    throw InputError(
+        where(file_, 0, fmt::format("not a valid MATLAB v5 file: {} (near byte {})", what, off)));
+  }
+  uint32_t u32(const unsigned char* p) const {
+    uint32_t v;
+    std::memcpy(&v, p, 4);
+    return swap_ ? __builtin_bswap32(v) : v;
+  }
+
+  // One variable (an array, or a compressed array) at p, n bytes available; returns the
+  // bytes it occupies.
+  size_t element(const unsigned char* p, size_t n, int depth, bool top_level) {
+    if (n < 8) fail(0, "truncated data element");
+    const uint32_t w0 = u32(p);
+    const uint32_t type = w0;
+    if (type != 14 && type != 15)
+      fail(0, fmt::format("variable of data type {} is not an array", type));
+    const uint32_t bytes = u32(p + 4);
+    if (bytes > n - 8) {
+      fail(0, fmt::format("element of type {} declares {} bytes, {} remain", type, bytes, n - 8));
+    }
+    if (type == 14) matrix(p + 8, bytes, depth + 1);
+    if (type == 15) {
+      if (!top_level) fail(0, "compressed element inside a variable");
+      inflate_and_check(p + 8, bytes, depth);
+      return 8 + bytes;  // compressed elements are not padded
+    }
+    const size_t padded = 8 + ((static_cast<size_t>(bytes) + 7) / 8) * 8;
+    return std::min(padded, n);
+  }
+
+  void inflate_and_check(const unsigned char* p, size_t n, int depth) {
+    // Deflate expands at most ~1032:1; the budget bounds what a lying stream can cost.
+    std::vector<unsigned char> out;
+    z_stream z{};
+    if (inflateInit(&z) != Z_OK) fail(0, "zlib initialisation failed");
+    z.next_in = const_cast<unsigned char*>(p);
+    z.avail_in = static_cast<uInt>(std::min<size_t>(n, UINT32_MAX));
+    int rc = Z_OK;
+    while (rc == Z_OK) {
+      if (static_cast<double>(out.size()) >= budget_) {
+        inflateEnd(&z);
+        fail(0, "compressed variable expands beyond any plausible size");
+      }
+      const size_t chunk = std::min<size_t>(std::max<size_t>(out.size(), 1 << 16), 1 << 24);
+      const size_t old = out.size();
+      out.resize(old + chunk);
+      z.next_out = out.data() + old;
+      z.avail_out = static_cast<uInt>(chunk);
+      rc = inflate(&z, Z_NO_FLUSH);
+      out.resize(old + chunk - z.avail_out);
+      if (rc == Z_BUF_ERROR && z.avail_in == 0) break;  // stream ends early: truncated
+      if (rc == Z_BUF_ERROR) rc = Z_OK;
+    }
+    inflateEnd(&z);
+    if (rc != Z_STREAM_END) fail(0, "compressed variable is damaged or truncated");
+    if (out.size() < 8) fail(0, "empty compressed variable");
+    element(out.data(), out.size(), depth, false);
+  }
+
+  struct Tag {
+    uint32_t type, bytes;
+    size_t header;  // 4 (small element) or 8
+    size_t total;   // bytes the element occupies, padding included
+  };
+  // The tag of the element at p; fails unless the element fits in n bytes.
+  Tag tag(const unsigned char* p, size_t n, bool padded = true) const {
+    if (n < 8) fail(0, "truncated data element");
+    const uint32_t w0 = u32(p);
+    if (w0 >> 16) {
+      if ((w0 >> 16) > 4) fail(0, "small data element larger than 4 bytes");
+      return Tag{w0 & 0xffff, w0 >> 16, 4, 8};
+    }
+    const uint32_t bytes = u32(p + 4);
+    if (bytes > n - 8)
+      fail(0, fmt::format("element of type {} declares {} bytes, {} remain", w0, bytes, n - 8));
+    const size_t total = padded ? std::min(n, 8 + ((static_cast<size_t>(bytes) + 7) / 8) * 8)
+                                : 8 + static_cast<size_t>(bytes);
+    return Tag{w0, bytes, 8, total};
+  }
+
+  static size_t type_size(uint32_t t) {
+    switch (t) {
+      case 1:
+      case 2:
+      case 16:
+        return 1;  // int8, uint8, utf8
+      case 3:
+      case 4:
+      case 17:
+        return 2;  // int16, uint16, utf16
+      case 5:
+      case 6:
+      case 7:
+      case 18:
+        return 4;  // int32, uint32, single, utf32
+      case 9:
+      case 12:
+      case 13:
+        return 8;  // double, int64, uint64
+      default:
+        return 0;
+    }
+  }
+
+  // The sub-elements of an miMATRIX element, held to the layout MATLAB, scipy and matio
+  // write: flags, dimensions, name, then the class's own parts, each fitting its bytes.
+  void matrix(const unsigned char* p, size_t n, int depth) {
+    if (depth > 16) fail(0, "variables nested more than 16 deep");
+    if (n == 0) return;  // an empty cell or field
+    size_t off = 0;
+    auto next = [&](const char* what) {
+      if (n - std::min(off, n) < 8) fail(off, fmt::format("array {} missing", what));
+      const Tag t = tag(p + off, n - off);
+      const unsigned char* data = p + off + t.header;
+      off += t.total;
+      return std::make_pair(t, data);
+    };
+    const auto [flags, flag_data] = next("flags");
+    if (flags.type != 6 || flags.bytes != 8) fail(off, "array flags are not 8 bytes of uint32");
+    const uint32_t class_type = u32(flag_data) & 0xff;
+    const bool complex = u32(flag_data) & 0x800;
+    const auto [dims, dim_data] = next("dimensions");
+    if (dims.type != 5 || dims.bytes < 8 || dims.bytes % 4) fail(off, "bad array dimensions");
+    double count = 1;
+    for (uint32_t i = 0; i < dims.bytes / 4; ++i) {
+      const auto v = static_cast<int32_t>(u32(dim_data + 4 * i));
+      if (v < 0) fail(off, "negative dimension");
+      count *= v;
+    }
+    const auto [name, name_data] = next("name");
+    if (name.type != 1 && name.type != 2) fail(off, "array name is not text");
+    auto sub_matrices = [&](double expected) {
+      if (expected * 8 > static_cast<double>(n - std::min(off, n))) {
+        fail(off, "cell or struct array larger than its bytes");
+      }
+      for (double k = 0; k < expected; ++k) {
+        const Tag t = tag(p + off, n - std::min(off, n));
+        if (t.header != 8 || t.type != 14) fail(off, "cell or field is not an array");
+        matrix(p + off + 8, t.bytes, depth + 1);
+        off += t.total;
+      }
+    };
+    switch (class_type) {
+      case 1:  // cell
+        sub_matrices(count);
+        break;
+      case 2: {  // struct: field name length, field names, then the fields of every element
+        const auto [len_tag, len_data] = next("field name length");
+        if (len_tag.type != 5 || len_tag.bytes != 4) fail(off, "bad struct field name length");
+        const uint32_t len = u32(len_data);
+        const auto [names, names_data] = next("field names");
+        if (names.type != 1 || (len == 0 && names.bytes != 0) || (len != 0 && names.bytes % len) ||
+            len > 4096) {
+          fail(off, "bad struct field names");
+        }
+        sub_matrices(len ? count * (names.bytes / len) : 0);
+        break;
+      }
+      case 4:
+      case 6:
+      case 7:
+      case 8:
+      case 9:
+      case 10:
+      case 11:
+      case 12:
+      case 13:
+      case 14:
+      case 15: {
+        // char and numeric: real (and imaginary) part, each exactly count values
+        if (count * 16 > budget_) fail(off, "array larger than any plausible file");
+        for (int part = 0; part < (complex ? 2 : 1); ++part) {
+          if (count == 0 && n - std::min(off, n) < 8) break;
+          const auto [data, data_bytes] = next("data");
+          (void)data_bytes;
+          const size_t size = type_size(data.type);
+          if (size == 0 || static_cast<double>(data.bytes) != count * static_cast<double>(size)) {
+            fail(off, fmt::format("array data of type {} holds {} bytes for {} values", data.type,
+                                  data.bytes, count));
+          }
+        }
+        break;
+      }
+      default:
+        fail(off, fmt::format("variable of class {} (object, sparse, function or opaque) is not "
+                              "read",
+                              class_type));
+    }
+  }
+
+  const std::string& file_;
+  bool swap_;
+  double budget_;
+};
+
+// Reads the file and checks it is a v5 file whose structure holds together, or a v7.3
+// (HDF5) file; anything else (MAT v4, garbage) is refused here.
+void check_mat_file(const std::filesystem::path& path, double budget) {
+  const std::string file = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(where(file, 0, "cannot open file"));
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.size() < 128) throw InputError(where(file, 0, "too short for a MATLAB .mat file"));
+  const auto* u = reinterpret_cast<const unsigned char*>(bytes.data());
+  const bool le = u[126] == 'I' && u[127] == 'M';
+  const bool be = u[126] == 'M' && u[127] == 'I';
+  if (!le && !be) {
+    throw InputError(where(file, 0,
+                           "not a MATLAB v5/v7/v7.3 .mat file (no MAT-file header; "
+                           "MAT v4 files are not read)"));
+  }
+  const bool swap = be == (std::endian::native == std::endian::little);
+  const uint16_t version = swap ? static_cast<uint16_t>(u[124] << 8 | u[125])
+                                : static_cast<uint16_t>(u[125] << 8 | u[124]);
+  if (version == 0x0200) return;  // v7.3: HDF5 does its own checking
+  if (version != 0x0100) {
+    throw InputError(
+        where(file, 0, fmt::format("MAT-file version 0x{:04x} is not 5 or 7.3", version)));
+  }
+  V5Check(file, swap, budget).top(u + 128, bytes.size() - 128);
+}
+
 }  // namespace
 
 Record read_mat(const std::filesystem::path& path) {
@@ -509,6 +759,7 @@ Record read_mat(const std::filesystem::path& path) {
   const auto file_size = std::filesystem::file_size(path, ec);
   if (ec) throw InputError(where(file, 0, "cannot open file"));
   if (file_size < 128) throw InputError(where(file, 0, "too short for a MATLAB .mat file"));
+  check_mat_file(path, static_cast<double>(file_size) * kMaxExpansion + 1e6);
   quiet_matio();
   MatPtr mat(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
   if (!mat) {
