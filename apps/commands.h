@@ -12,4 +12,10 @@ void add_process_command(CLI::App& app);
 /// `jointlab build-model`: riveted beam description -> reduced (Craig-Bampton) model directory.
 void add_build_model_command(CLI::App& app);
 
+/// `jointlab modes`: linear modes of a model file, joints at linear stiffness.
+void add_modes_command(CLI::App& app);
+
+/// `jointlab qsma`: Quasi-Static Modal Analysis of one elastic mode of a model file.
+void add_qsma_command(CLI::App& app);
+
 }  // namespace jointlab::apps

@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "jointlab 0.1.0");
   jointlab::apps::add_process_command(app);
   jointlab::apps::add_build_model_command(app);
+  jointlab::apps::add_modes_command(app);
+  jointlab::apps::add_qsma_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

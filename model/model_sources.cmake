@@ -13,4 +13,5 @@ list(APPEND JOINTLAB_MODEL_TESTS
   ${CMAKE_CURRENT_LIST_DIR}/model_file_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/linear_modes_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/qsma_test.cc
+  ${CMAKE_CURRENT_LIST_DIR}/model_commands_test.cc
 )
