@@ -20,9 +20,10 @@ if ! command -v clang++ >/dev/null 2>&1; then
   echo "fuzz: clang++ not found (Debian package clang-14)" >&2
   exit 1
 fi
+mkdir -p "$build"
 cmake -S "$here" -B "$build" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  > "$build.configure.log" 2>&1 || { cat "$build.configure.log" >&2; exit 1; }
-cmake --build "$build" -j "$(nproc)" > "$build.build.log" 2>&1 || { cat "$build.build.log" >&2; exit 1; }
+  > "$build/configure.log" 2>&1 || { cat "$build/configure.log" >&2; exit 1; }
+cmake --build "$build" -j "$(nproc)" > "$build/build.log" 2>&1 || { cat "$build/build.log" >&2; exit 1; }
 
 mkdir -p "$build/findings"
 # A request no allocator can satisfy (matio computes some sizes from lying fields) fails
@@ -30,12 +31,15 @@ mkdir -p "$build/findings"
 # the same instead of aborting. Large allocations that do succeed are still findings
 # (libFuzzer's -malloc_limit_mb, equal to -rss_limit_mb).
 export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}allocator_may_return_null=1"
+export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}suppressions=$here/lsan.supp"
 status=0
 for t in "${targets[@]}"; do
   work="$build/corpus-$t"   # new inputs go here; the seed corpus in git stays as it is
   mkdir -p "$work"
   log="$build/fuzz_$t.log"
-  if "$build/fuzz_$t" "$work" "$here/corpus/$t" "$here/regressions/$t" -max_total_time="$seconds" -rss_limit_mb=2048 \
+  dirs=("$work" "$here/corpus/$t")
+  [ -d "$here/regressions/$t" ] && dirs+=("$here/regressions/$t")
+  if "$build/fuzz_$t" "${dirs[@]}" -max_total_time="$seconds" -rss_limit_mb=2048 \
        -timeout=5 -max_len=16384 -print_final_stats=1 -artifact_prefix="$build/findings/$t-" \
        > "$log" 2>&1; then
     runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo '?')
