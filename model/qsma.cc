@@ -33,6 +33,17 @@ class Problem {
     p_ = m.joint_shapes().col(column);
     c_ = p_ / omega2_;
     g_ = m.condensed_stiffness() * c_;
+    // Coordinates the mode's linear motion moves; the others (by symmetry, say) never
+    // reach macroslip and do not count for full macroslip.
+    loaded_ = (c_.cwiseAbs().array() > 1e-6 * c_.lpNorm<Eigen::Infinity>()).cast<double>();
+  }
+
+  // Every loaded coordinate past its phi_max.
+  bool full_macroslip(const Eigen::VectorXd& r) const {
+    for (int j = 0; j < m_.size(); ++j) {
+      if (loaded_(j) > 0 && std::abs(r(j)) < m_.phi_max(j)) return false;
+    }
+    return true;
   }
 
   const Eigen::VectorXd& c() const { return c_; }
@@ -68,7 +79,7 @@ class Problem {
   Stop classify(bool ok, const State& s) const {
     if (!ok) return Stop::kNoSolution;
     if (opt_.q_max > 0 && s.q >= opt_.q_max) return Stop::kQmax;
-    if (m_.full_macroslip(s.r)) return Stop::kMacroslip;
+    if (full_macroslip(s.r)) return Stop::kMacroslip;
     return Stop::kNone;
   }
 
@@ -131,7 +142,7 @@ class Problem {
   QsmaOptions opt_;
   QsmaSummary* sum_;
   double omega2_;
-  Eigen::VectorXd p_, c_, g_;
+  Eigen::VectorXd p_, c_, g_, loaded_;
 };
 
 std::vector<double> log_grid(double lo, double hi, int n, bool include_hi) {

@@ -10,9 +10,10 @@
 // level is a Newton solve of size n_J, continued from the previous level.
 //
 // Range: without q_min, the curve starts where the damping is within
-// microslip_deviation of its microslip power law zeta_0(q) = D(omega_r^2 q B phi_r /
-// omega_r^2) / (2 pi omega_r^2 q^2) (the damping of the linear joint motion). Without
-// q_max it ends at full macroslip (every Iwan element past phi_max) or at the largest
+// microslip_deviation of its microslip power law zeta_0(q) = D(q B phi_r) /
+// (2 pi omega_r^2 q^2) (the damping of the linear joint motion). Without q_max it ends at
+// full macroslip (every Iwan element the mode moves past phi_max; elements its linear
+// motion leaves still, |B phi_r| below 1e-6 of the largest, never slip) or at the largest
 // load the structure carries (past it no static solution exists: the joints slide
 // freely), whichever comes first; that load is bracketed to limit_tolerance and the
 // last points cluster below it (10 %, ..., 0.1 % under it, then the last converged level).
@@ -51,7 +52,7 @@ struct QsmaPoint {
 /// Why a QSMA curve ends.
 enum class QsmaTermination {
   kReachedQmax,      ///< the requested q_max
-  kFullMacroslip,    ///< every Iwan element past its phi_max
+  kFullMacroslip,    ///< every Iwan element the mode moves is past its phi_max
   kLimitLoad,        ///< no static solution past this load: the joints slide freely
   kJointsNotLoaded,  ///< the mode does not move any Iwan joint (give q_max for a linear curve)
   kEmptyRange,       ///< q_min lies beyond the end of the curve
