@@ -28,8 +28,9 @@ struct ProcessArgs {
   std::string amplitude = "velocity";
   std::string method = "hilbert";
   std::string out;
-  double snr_min = 30.0;
-  double max_damping_std = 0.02;
+  double snr_min = modal::RingdownOptions{}.snr_min;
+  double max_damping_std = modal::RingdownOptions{}.max_damping_rel_std;
+  double coverage_factor = modal::RingdownOptions{}.coverage_factor;
   unsigned threads = 0;
 };
 
@@ -71,6 +72,7 @@ void run_process(const ProcessArgs& args) {
   opt.ringdown.method = args.method == "pff" ? modal::Method::kPeaks : modal::Method::kHilbert;
   opt.ringdown.snr_min = args.snr_min;
   opt.ringdown.max_damping_rel_std = args.max_damping_std;
+  opt.ringdown.coverage_factor = args.coverage_factor;
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
 
   namespace fs = std::filesystem;
@@ -143,12 +145,13 @@ void add_process_command(CLI::App& app) {
       "band-passed (zero phase), converted to displacement, Hilbert-transformed, and\n"
       "its phase and log-envelope are fitted locally and differentiated:\n"
       "  omega_d = dtheta/dt, sigma = -dlnA/dt, f_n = sqrt(omega_d^2 + sigma^2)/2pi,\n"
-      "  zeta = sigma/omega_n, with a one-sigma uncertainty per point.\n"
+      "  zeta = sigma/omega_n, each with an uncertainty (2 sigma by default).\n"
       "Only the span well above the noise floor and clear of the impact is kept.\n"
       "Writes OUT/<file stem>.<channel>.band<k>.csv and OUT/summary.json.\n\n"
       "Example:\n"
       "  jointlab process hit1.csv hit2.csv --band 70:90 --band 280:320 --out results\n"
       "  jointlab process hit1.csv --modes 3 --channel acc1 --amplitude displacement --out r");
+  cmd->option_defaults()->always_capture_default();
   cmd->add_option("FILE", args->files,
                   "test files: CSV (see docs/csv.md), UFF 58 (.uff), MATLAB (.mat)")
       ->required()
@@ -170,12 +173,15 @@ void add_process_command(CLI::App& app) {
                   "hilbert (default) or pff (peak finding and fitting, an independent cross-check)")
       ->check(CLI::IsMember({"hilbert", "pff"}));
   cmd->add_option("--snr-min", args->snr_min,
-                  "keep points whose envelope is at least this many times the noise floor (30)")
+                  "keep points whose envelope is at least this many times the noise floor")
       ->check(CLI::Range(1.0, 1e6));
   cmd->add_option(
          "--max-damping-std", args->max_damping_std,
-         "drop points whose damping uncertainty exceeds this fraction of the damping (0.02)")
+         "drop points whose one-sigma damping uncertainty exceeds this fraction of the damping")
       ->check(CLI::Range(1e-6, 10.0));
+  cmd->add_option("--coverage-factor", args->coverage_factor,
+                  "k of the reported uncertainties k*sigma (2: about 95 % coverage; 1: one sigma)")
+      ->check(CLI::Range(1.0, 10.0));
   cmd->add_option("--threads", args->threads, "worker threads (default: every core)");
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {

@@ -109,11 +109,17 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   // One impact instant for all channels keeps their coarse grids aligned.
   Eigen::Index impact = record.size();
   for (const data::Channel* c : chans) impact = std::min(impact, impact_index(c->samples));
+  // Continue only what the bands need: content up to 1.5 times the highest band edge.
+  PrepareOptions prepare = options.prepare;
+  if (prepare.lowpass_hz == 0) {
+    double top = 0;
+    for (const signal::Band& b : out.bands) top = std::max(top, b.hi);
+    prepare.lowpass_hz = 1.5 * top;
+  }
   std::vector<ChannelSpectrum> spectra;
   std::vector<Quantity> measured;
   for (const data::Channel* c : chans) {
-    spectra.push_back(
-        channel_spectrum(c->samples, record.fs, record.t0, options.prepare, cache, impact));
+    spectra.push_back(channel_spectrum(c->samples, record.fs, record.t0, prepare, cache, impact));
     measured.push_back(c->quantity.value_or(options.quantity));
   }
   for (size_t b = 0; b < out.bands.size(); ++b) {

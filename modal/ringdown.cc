@@ -9,6 +9,7 @@
 
 #include "jointlab/signal/extend.h"
 #include "jointlab/signal/local_poly.h"
+#include "jointlab/signal/spectrum.h"
 
 namespace jointlab::modal {
 
@@ -25,6 +26,7 @@ struct Estimate {
   double omega_d = 0;      // damped angular frequency [rad/s]
   double omega_d_std = 0;  // one-sigma of omega_d
   double misfit = 0;       // RMS of the signal about the fit [m]
+  double log_amp_std = 0;  // one-sigma of ln A
   double window = 0;       // window length [s]
 };
 
@@ -52,6 +54,7 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
   const double floor_rel = noise / (std::sqrt(2.0) * std::exp(fa.value));
   const double scale_a = fa.residual_rms > 0 ? std::max(1.0, floor_rel / fa.residual_rms) : 1.0;
   const double scale_p = fp.residual_rms > 0 ? std::max(1.0, floor_rel / fp.residual_rms) : 1.0;
+  e.log_amp_std = std::hypot(fa.value_std * scale_a, fa.value_change);
   e.sigma = -fa.slope;
   e.sigma_std = std::hypot(fa.slope_std * scale_a, fa.slope_change);
   e.omega_d = fp.slope;
@@ -72,6 +75,7 @@ Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& 
   const double half_period = ft.slope;  // seconds per extremum
   e.t = ft.value;
   e.log_amp = fa.value;
+  e.log_amp_std = std::hypot(fa.value_std, fa.value_change);
   e.sigma = -fa.slope / half_period;
   const double rel_t = std::hypot(ft.slope_std, ft.slope_change) / half_period;
   e.sigma_std = std::hypot(std::hypot(fa.slope_std, fa.slope_change) / half_period,
@@ -103,6 +107,7 @@ std::string RingdownOptions::check() const {
   if (!(max_damping_rel_std > 0)) return "max_damping_rel_std must be positive";
   if (!(points_per_window >= 1)) return "points_per_window must be at least 1";
   if (degree < 1 || degree > 5) return "degree must be 1 to 5";
+  if (!(coverage_factor >= 1)) return "coverage factor must be at least 1";
   if (amplitude == Quantity::kForce)
     return "amplitude must be displacement, velocity or acceleration";
   return {};
@@ -132,18 +137,30 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   const Eigen::Index i_begin = std::min<Eigen::Index>(
       n - 1, i_peak + static_cast<Eigen::Index>(std::round(options.onset_skip_s * fs)));
   const Eigen::VectorXd data = x.segment(i_begin, n - i_begin);
-  const Eigen::VectorXd centred = data.array() - data.mean();
+  Eigen::VectorXd y = data.array() - data.mean();
+  Eigen::Index guard = 0, lag = 1;
+  if (options.lowpass_hz > 0 && 2 * options.lowpass_hz < 0.5 * fs) {
+    const double f_stop = 2 * options.lowpass_hz;
+    y = signal::lowpass(y, fs, options.lowpass_hz, f_stop, cache);
+    // The edge's kernel exp(-2 pi^2 sd^2 t^2), sd = f_stop / 8, is below 1e-6 by 4 / sd.
+    guard =
+        static_cast<Eigen::Index>(std::ceil(4.0 / (f_stop / 8.0) / (2 * std::numbers::pi) * fs));
+    lag = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(fs / (3 * f_stop)));
+  }
+  guard = std::min(guard, y.size() / 4);
   const Eigen::Index ext = static_cast<Eigen::Index>(std::round(options.extend_s * fs));
   const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
-  const signal::Extension e = signal::extend_record(centred, ext, ext, options.ar_order, fit, 1e3);
+  const signal::Extension e =
+      signal::extend_record(y.segment(guard, y.size() - 2 * guard), ext + guard, ext + guard,
+                            options.ar_order, fit, 1e3, lag);
 
   ChannelSpectrum c;
   c.n_record = e.samples.size();
   c.n_fft = signal::fast_size(2 * c.n_record);
   c.fs = fs;
-  c.t0 = t0 + static_cast<double>(i_begin - e.before) / fs;
-  c.data_begin_s = t0 + static_cast<double>(i_begin) / fs;
-  c.data_end_s = t0 + static_cast<double>(n - 1) / fs;
+  c.t0 = t0 + static_cast<double>(i_begin - e.before + guard) / fs;
+  c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
+  c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
   c.extended_begin = e.before > 0 && e.samples.head(e.before).cwiseAbs().maxCoeff() > 0;
   c.extended_end = e.after > 0 && e.samples.tail(e.after).cwiseAbs().maxCoeff() > 0;
   c.spectrum = cache.get(c.n_fft).forward(e.samples);
@@ -182,14 +199,15 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   }
   sum.carrier_hz = bs.carrier_hz;
 
-  // Settling time of the band filter (its kernel is down to exp(-11) by then);
-  // a continued end needs only a third of it (the continuation is not exact).
+  // Settling time of the band filter (its kernel is down to exp(-11) by then).
+  // A continued end needs none: the filter's transient then lies in the
+  // continuation, and the first window already starts at the data.
   const double edge = options.taper * (band.hi - band.lo);
   const double settle = 3.0 / edge;
   const double begin = channel.data_begin_s - channel.t0;
   const double end = channel.data_end_s - channel.t0;
-  const double start = begin + (channel.extended_begin ? settle / 3 : settle);
-  const double stop = std::min(duration, end - (channel.extended_end ? settle / 3 : settle));
+  const double start = begin + (channel.extended_begin ? 0.0 : settle);
+  const double stop = std::min(duration, end - (channel.extended_end ? 0.0 : settle));
   sum.peak_time_s = channel.data_begin_s;
 
   const double correlation = std::max(1.0, 1.0 / (dt * bs.noise_bandwidth_hz));
@@ -236,14 +254,21 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       // Longer windows average noise (std ~ W^-1.5) but bend less with the
       // backbone (model error ~ W^2): take the window with the smallest total
       // uncertainty, stopping early once it meets the target.
+      // The slope and the envelope each take the window that determines them
+      // best: longer windows average noise (std ~ W^-1.5 for the slope) but bend
+      // less with the backbone (model error ~ W^2).
       Estimate best =
           estimate_hilbert(log_amp, theta, dt, c, w_min, correlation, noise, options.degree);
+      Estimate best_amp = best;
       for (double w = w_min * std::sqrt(2.0); w <= allowed; w *= std::sqrt(2.0)) {
         if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
         const Estimate next =
             estimate_hilbert(log_amp, theta, dt, c, w, correlation, noise, options.degree);
         if (next.sigma_std < best.sigma_std) best = next;
+        if (next.log_amp_std < best_amp.log_amp_std) best_amp = next;
       }
+      best.log_amp = best_amp.log_amp;
+      best.log_amp_std = best_amp.log_amp_std;
       est.push_back(best);
     }
   } else {
@@ -301,6 +326,29 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         best = next;
       }
       est.push_back(best);
+    }
+  }
+
+  // A point's amplitude is uncertain too; along a backbone that bends, that
+  // moves where the point belongs: add (d sigma / d ln A) std(ln A) to sigma's
+  // uncertainty and (d omega_d / d ln A) std(ln A) to omega_d's, with the slopes
+  // taken across one window of neighbouring estimates.
+  {
+    const size_t ne = est.size();
+    std::vector<double> add_s(ne, 0.0), add_w(ne, 0.0);
+    for (size_t i = 0; i < ne; ++i) {
+      const double spacing = ne > 1 ? (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1) : 1;
+      const auto reach =
+          static_cast<size_t>(std::ceil(est[i].window / 2 / std::max(1e-12, spacing)));
+      const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
+      const double dl = est[hi].log_amp - est[lo].log_amp;
+      if (hi == lo || !(std::abs(dl) > 0)) continue;
+      add_s[i] = (est[hi].sigma - est[lo].sigma) / dl * est[i].log_amp_std;
+      add_w[i] = (est[hi].omega_d - est[lo].omega_d) / dl * est[i].log_amp_std;
+    }
+    for (size_t i = 0; i < ne; ++i) {
+      est[i].sigma_std = std::hypot(est[i].sigma_std, add_s[i]);
+      est[i].omega_d_std = std::hypot(est[i].omega_d_std, add_w[i]);
     }
   }
 
@@ -363,6 +411,9 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     bb.snr(i) = a / sum.noise_floor_m;
     bb.window_s(i) = e.window;
   }
+  // Reported uncertainties are expanded: coverage factor times one sigma.
+  bb.frequency_std_hz *= options.coverage_factor;
+  bb.damping_std *= options.coverage_factor;
   sum.status = RingdownStatus::kOk;
   sum.span_start_s = bb.time_s(0);
   sum.span_end_s = bb.time_s(n - 1);

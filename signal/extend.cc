@@ -10,31 +10,34 @@ namespace jointlab::signal {
 
 namespace {
 
-// Forward continuation of y by `count` samples; empty vector if unstable.
+// Forward continuation of y by `count` samples; zeros if unstable.
 Eigen::VectorXd continue_forward(const Eigen::VectorXd& y, Eigen::Index count, int order,
-                                 Eigen::Index fit_length, double max_growth) {
+                                 Eigen::Index fit_length, double max_growth, Eigen::Index lag) {
   const Eigen::Index n = y.size();
   const Eigen::Index len = std::min(fit_length, n);
-  if (count <= 0 || len < 4 * order) return Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0));
+  const Eigen::Index span = order * lag;  // history one prediction needs
+  if (count <= 0 || len < span + 4 * order) {
+    return Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0));
+  }
   const Eigen::Index first = n - len;
-  const Eigen::Index rows = len - order;
+  const Eigen::Index rows = len - span;
   Eigen::MatrixXd A(rows, order);
   Eigen::VectorXd b(rows);
   for (Eigen::Index r = 0; r < rows; ++r) {
-    const Eigen::Index k = first + order + r;
-    for (int j = 1; j <= order; ++j) A(r, j - 1) = y(k - j);
+    const Eigen::Index k = first + span + r;
+    for (int j = 1; j <= order; ++j) A(r, j - 1) = y(k - j * lag);
     b(r) = y(k);
   }
   const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
-  Eigen::VectorXd hist = y.tail(order);  // oldest first
-  Eigen::VectorXd out(count);
-  for (Eigen::Index k = 0; k < count; ++k) {
+  // Work on y followed by the continuation, so every lagged sample is at hand.
+  Eigen::VectorXd full(n + count);
+  full.head(n) = y;
+  for (Eigen::Index k = n; k < n + count; ++k) {
     double v = 0;
-    for (int j = 1; j <= order; ++j) v += c(j - 1) * hist(order - j);
-    out(k) = v;
-    for (int j = 0; j + 1 < order; ++j) hist(j) = hist(j + 1);
-    hist(order - 1) = v;
+    for (int j = 1; j <= order; ++j) v += c(j - 1) * full(k - j * lag);
+    full(k) = v;
   }
+  const Eigen::VectorXd out = full.tail(count);
   const double ref = std::sqrt(y.tail(len).squaredNorm() / static_cast<double>(len));
   const double got = std::sqrt(out.squaredNorm() / static_cast<double>(count));
   if (!std::isfinite(got) || got > max_growth * ref) return Eigen::VectorXd::Zero(count);
@@ -44,19 +47,20 @@ Eigen::VectorXd continue_forward(const Eigen::VectorXd& y, Eigen::Index count, i
 }  // namespace
 
 Extension extend_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
-                        Eigen::Index after, int order, Eigen::Index fit_length, double max_growth) {
-  assert(order >= 1 && before >= 0 && after >= 0);
+                        Eigen::Index after, int order, Eigen::Index fit_length, double max_growth,
+                        Eigen::Index lag) {
+  assert(order >= 1 && before >= 0 && after >= 0 && lag >= 1);
   const Eigen::Index n = x.size();
   Extension e;
   e.before = before;
   e.after = after;
   e.samples.resize(before + n + after);
   e.samples.segment(before, n) = x;
-  e.samples.tail(after) = continue_forward(x, after, order, fit_length, max_growth);
+  e.samples.tail(after) = continue_forward(x, after, order, fit_length, max_growth, lag);
   // Backward continuation is forward continuation of the time-reversed record.
   const Eigen::VectorXd reversed = x.reverse();
   e.samples.head(before) =
-      continue_forward(reversed, before, order, fit_length, max_growth).reverse();
+      continue_forward(reversed, before, order, fit_length, max_growth, lag).reverse();
   return e;
 }
 

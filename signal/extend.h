@@ -7,7 +7,10 @@
 // abrupt start or end of a record over their settling time; continuing the record
 // smoothly across its ends moves that transient outside the data. The
 // coefficients are least-squares fits (covariance method) over `fit_length`
-// samples next to the end being continued.
+// samples next to the end being continued. With lag L > 1 each sample is
+// predicted from samples L apart (x[k] from x[k - L], ..., x[k - pL]): for a
+// record sampled far above its content (low-passed) this is the recursion of
+// the decimated record, far better conditioned than lag 1.
 #pragma once
 
 #include <Eigen/Core>
@@ -22,11 +25,12 @@ struct Extension {
 };
 
 /// Continues x by `before` samples at its start and `after` at its end with AR
-/// models of `order` fitted over `fit_length` samples at each end. An extension
-/// whose RMS grows beyond `max_growth` times the RMS of the samples it was fitted
-/// on is judged unstable and replaced by zeros (that end is then not extended).
+/// models of `order` and sample spacing `lag` fitted over `fit_length` samples at
+/// each end. An extension whose RMS grows beyond `max_growth` times the RMS of the
+/// samples it was fitted on is judged unstable and replaced by zeros (that end is
+/// then not extended).
 Extension extend_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
                         Eigen::Index after, int order, Eigen::Index fit_length,
-                        double max_growth = 20.0);
+                        double max_growth = 20.0, Eigen::Index lag = 1);
 
 }  // namespace jointlab::signal

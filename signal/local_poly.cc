@@ -79,12 +79,14 @@ LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, d
   const Small cov = Ainv * M.topLeftCorner(q, q) * Ainv * (s2 * correlation);
 
   out.value = beta(0);
+  out.value_std = std::sqrt(std::max(0.0, cov(0, 0)));
   out.slope = beta(1) / half_width;
   out.slope_std = std::sqrt(std::max(0.0, cov(1, 1))) / half_width;
   out.residual_rms = std::sqrt(s2);
 
   const SmallVec beta2 = Eigen::LDLT<Small>(A).solve(rhs);
   out.slope_change = std::abs(beta2(1) - beta(1)) / half_width;
+  out.value_change = std::abs(beta2(0) - beta(0));
   return out;
 }
 

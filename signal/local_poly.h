@@ -18,6 +18,8 @@ namespace jointlab::signal {
 /// Result of one local fit.
 struct LocalFit {
   double value = 0.0;         ///< fitted y(c)
+  double value_std = 0.0;     ///< statistical one-sigma of value
+  double value_change = 0.0;  ///< |value(degree p+1) - value(degree p)|: model-error estimate
   double slope = 0.0;         ///< fitted dy/dt at c (degree p)
   double slope_std = 0.0;     ///< statistical one-sigma of slope
   double slope_change = 0.0;  ///< |slope(degree p+1) - slope(degree p)|: model-error estimate

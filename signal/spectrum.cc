@@ -60,6 +60,24 @@ std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd
   return chosen;
 }
 
+Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double f_pass,
+                        double f_stop, FftCache& cache) {
+  const Eigen::Index n = x.size();
+  const Eigen::Index nfft = fast_size(2 * n);
+  Fft& fft = cache.get(nfft);
+  const Eigen::VectorXcd X = fft.forward(x);
+  Eigen::VectorXcd full = Eigen::VectorXcd::Zero(nfft);
+  const double df = fs / static_cast<double>(nfft);
+  const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
+  for (Eigen::Index k = 0; k < X.size(); ++k) {
+    const double g = 0.5 * std::erfc((static_cast<double>(k) * df - mid) / (std::sqrt(2.0) * sd));
+    if (g < 1e-15) break;
+    full(k) = g * X(k);
+    if (k != 0 && k != nfft - k) full(nfft - k) = std::conj(g * X(k));
+  }
+  return fft.inverse_complex(full).real().head(n);
+}
+
 Eigen::VectorXd integrate(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, int order,
                           double f_min, FftCache& cache) {
   const Eigen::Index n = x.size();

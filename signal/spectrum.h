@@ -30,6 +30,12 @@ std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd
                                           int count, Eigen::Index min_distance,
                                           double min_prominence = 1e-3);
 
+/// Zero-phase low-pass: gain 1 up to f_pass, a Gaussian edge (standard deviation
+/// (f_stop - f_pass) / 4, gain 0.5 midway), ~0 beyond f_stop. x is zero-padded
+/// to twice its length so the record does not wrap onto itself.
+Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double f_pass,
+                        double f_stop, FftCache& cache);
+
 /// Frequency-domain integration (order > 0) or differentiation (order < 0) of x,
 /// with everything below f_min [Hz] removed (integration has no DC). x is zero-padded
 /// to twice its length so the record does not wrap onto itself.
