@@ -18,4 +18,7 @@ void add_modes_command(CLI::App& app);
 /// `jointlab qsma`: Quasi-Static Modal Analysis of one elastic mode of a model file.
 void add_qsma_command(CLI::App& app);
 
+/// `jointlab simulate`: impact ring-down of a model with Iwan joints, written as a test file.
+void add_simulate_command(CLI::App& app);
+
 }  // namespace jointlab::apps
