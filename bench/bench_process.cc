@@ -5,6 +5,9 @@
 // SciPy baseline (bench/scipy_baseline.py) it is compared with.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
+
+#include "jointlab/data/read_record.h"
 #include "jointlab/data/record.h"
 #include "jointlab/modal/process.h"
 #include "jointlab/tests/synthetic.h"
@@ -39,6 +42,25 @@ void BM_ProcessRecord(benchmark::State& state) {
   state.SetLabel("8 channels x 3 bands, 30720 samples");
 }
 BENCHMARK(BM_ProcessRecord)->Unit(benchmark::kMillisecond);
+
+// The same on a record read from $JOINTLAB_BENCH_RECORD (bench/compare_scipy.sh
+// writes one and times the SciPy baseline on it too); skipped when unset.
+void BM_ProcessFile(benchmark::State& state) {
+  const char* path = std::getenv("JOINTLAB_BENCH_RECORD");
+  if (!path) {
+    state.SkipWithError("JOINTLAB_BENCH_RECORD not set");
+    return;
+  }
+  const jointlab::data::Record rec = jointlab::data::read_record(path);
+  jointlab::modal::ProcessOptions opt;
+  opt.bands = {{48, 72}, {140, 185}, {320, 410}};
+  jointlab::signal::FftCache cache;
+  for (auto _ : state) {
+    auto result = jointlab::modal::process_record(rec, opt, cache);
+    benchmark::DoNotOptimize(result);
+  }
+}
+BENCHMARK(BM_ProcessFile)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

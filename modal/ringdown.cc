@@ -42,10 +42,8 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
   const Eigen::Index stride = std::clamp<Eigen::Index>(
       in_window / 48, 1, std::max<Eigen::Index>(1, static_cast<Eigen::Index>(correlation)));
   const double corr = std::max(1.0, correlation / static_cast<double>(stride));
-  const signal::LocalFit fa =
-      signal::fit_local(log_amp, 0.0, dt, centre, window / 2, degree, corr, stride);
-  const signal::LocalFit fp =
-      signal::fit_local(theta, 0.0, dt, centre, window / 2, degree, corr, stride);
+  const auto [fa, fp] =
+      signal::fit_local_pair(log_amp, theta, 0.0, dt, centre, window / 2, degree, corr, stride);
   Estimate e;
   e.t = centre;
   e.log_amp = fa.value;
@@ -260,12 +258,18 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       Estimate best =
           estimate_hilbert(log_amp, theta, dt, c, w_min, correlation, noise, options.degree);
       Estimate best_amp = best;
-      for (double w = w_min * std::sqrt(2.0); w <= allowed; w *= std::sqrt(2.0)) {
+      // Below the noise threshold a point is dropped whatever its window.
+      const bool buried = std::exp(best.log_amp) < options.snr_min * noise;
+      for (double w = w_min * std::sqrt(2.0); !buried && w <= allowed; w *= std::sqrt(2.0)) {
         if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
         const Estimate next =
             estimate_hilbert(log_amp, theta, dt, c, w, correlation, noise, options.degree);
-        if (next.sigma_std < best.sigma_std) best = next;
         if (next.log_amp_std < best_amp.log_amp_std) best_amp = next;
+        if (next.sigma_std < best.sigma_std) {
+          best = next;
+        } else if (next.sigma_std > 1.5 * best.sigma_std) {
+          break;  // clearly past the minimum: model error now dominates
+        }
       }
       best.log_amp = best_amp.log_amp;
       best.log_amp_std = best_amp.log_amp_std;

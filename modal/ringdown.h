@@ -55,7 +55,7 @@ struct RingdownOptions {
   double max_window_s = 2.0;                 ///< longest fit window [s]
   double target_damping_rel_std = 0.005;     ///< window grows until zeta std / zeta <= this
   double max_damping_rel_std = 0.015;        ///< points with a larger zeta std / zeta are dropped
-  double points_per_window = 4.0;            ///< output points per shortest window
+  double points_per_window = 3.0;            ///< output points per shortest window
   int degree = 3;                            ///< degree of the local polynomials
   double coverage_factor = 2.0;              ///< k of the reported uncertainty k * sigma
   /// Empty if the options are usable, else what is wrong.

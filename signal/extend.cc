@@ -20,11 +20,15 @@ Eigen::VectorXd continue_forward(const Eigen::VectorXd& y, Eigen::Index count, i
     return Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0));
   }
   const Eigen::Index first = n - len;
-  const Eigen::Index rows = len - span;
+  // Rows closer than the lag carry nearly the same equation (the record is
+  // oversampled by about `lag`): keep every row_step-th, at least 8 per unknown.
+  const Eigen::Index row_step =
+      std::max<Eigen::Index>(1, std::min<Eigen::Index>(lag, (len - span) / (8 * order)));
+  const Eigen::Index rows = (len - span - 1) / row_step + 1;
   Eigen::MatrixXd A(rows, order);
   Eigen::VectorXd b(rows);
   for (Eigen::Index r = 0; r < rows; ++r) {
-    const Eigen::Index k = first + span + r;
+    const Eigen::Index k = first + span + r * row_step;
     for (int j = 1; j <= order; ++j) A(r, j - 1) = y(k - j * lag);
     b(r) = y(k);
   }

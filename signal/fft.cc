@@ -25,6 +25,7 @@ struct Fft::Impl {
   fftw_complex* full_out = nullptr;
   fftw_plan r2c = nullptr;
   fftw_plan c2c_backward = nullptr;
+  fftw_plan c2r = nullptr;
 
   explicit Impl(Eigen::Index size) : n(size) {
     std::lock_guard<std::mutex> lock(planner_mutex());
@@ -35,11 +36,14 @@ struct Fft::Impl {
     r2c = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_in, half_out, FFTW_ESTIMATE);
     c2c_backward =
         fftw_plan_dft_1d(static_cast<int>(n), full_in, full_out, FFTW_BACKWARD, FFTW_ESTIMATE);
+    // c2r overwrites its input: it reads full_in (n/2 + 1 values) and writes real_in.
+    c2r = fftw_plan_dft_c2r_1d(static_cast<int>(n), full_in, real_in, FFTW_ESTIMATE);
   }
   ~Impl() {
     std::lock_guard<std::mutex> lock(planner_mutex());
     fftw_destroy_plan(r2c);
     fftw_destroy_plan(c2c_backward);
+    fftw_destroy_plan(c2r);
     fftw_free(real_in);
     fftw_free(half_out);
     fftw_free(full_in);
@@ -80,6 +84,20 @@ Eigen::VectorXcd Fft::inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& 
   for (Eigen::Index j = 0; j < n; ++j) {
     out(j) = {impl_->full_out[j][0] * scale, impl_->full_out[j][1] * scale};
   }
+  return out;
+}
+
+Eigen::VectorXd Fft::inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half_spectrum) {
+  const Eigen::Index n = impl_->n;
+  assert(half_spectrum.size() == n / 2 + 1);
+  for (Eigen::Index k = 0; k <= n / 2; ++k) {
+    impl_->full_in[k][0] = half_spectrum(k).real();
+    impl_->full_in[k][1] = half_spectrum(k).imag();
+  }
+  fftw_execute(impl_->c2r);
+  Eigen::VectorXd out(n);
+  const double scale = 1.0 / static_cast<double>(n);
+  for (Eigen::Index j = 0; j < n; ++j) out(j) = impl_->real_in[j] * scale;
   return out;
 }
 

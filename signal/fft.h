@@ -32,6 +32,8 @@ class Fft {
   Eigen::VectorXcd forward(const Eigen::Ref<const Eigen::VectorXd>& x);
   /// Complex inverse of a full n-point spectrum, scaled by 1/n.
   Eigen::VectorXcd inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& spectrum);
+  /// Real inverse of a one-sided spectrum X[0..n/2] (Hermitian symmetry implied), scaled by 1/n.
+  Eigen::VectorXd inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half_spectrum);
 
  private:
   struct Impl;

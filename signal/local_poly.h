@@ -11,6 +11,8 @@
 // and p + 1; the change of slope between the two estimates the model (bias) error.
 #pragma once
 
+#include <array>
+
 #include <Eigen/Core>
 
 namespace jointlab::signal {
@@ -33,5 +35,10 @@ struct LocalFit {
 LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, double dt,
                    double centre, double half_width, int degree, double correlation,
                    Eigen::Index stride = 1);
+
+/// The same fit of two series on one grid (the design is built once).
+std::array<LocalFit, 2> fit_local_pair(const Eigen::VectorXd& y1, const Eigen::VectorXd& y2,
+                                       double t_first, double dt, double centre, double half_width,
+                                       int degree, double correlation, Eigen::Index stride = 1);
 
 }  // namespace jointlab::signal

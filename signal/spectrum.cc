@@ -65,17 +65,13 @@ Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, d
   const Eigen::Index n = x.size();
   const Eigen::Index nfft = fast_size(2 * n);
   Fft& fft = cache.get(nfft);
-  const Eigen::VectorXcd X = fft.forward(x);
-  Eigen::VectorXcd full = Eigen::VectorXcd::Zero(nfft);
+  Eigen::VectorXcd X = fft.forward(x);
   const double df = fs / static_cast<double>(nfft);
   const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
   for (Eigen::Index k = 0; k < X.size(); ++k) {
-    const double g = 0.5 * std::erfc((static_cast<double>(k) * df - mid) / (std::sqrt(2.0) * sd));
-    if (g < 1e-15) break;
-    full(k) = g * X(k);
-    if (k != 0 && k != nfft - k) full(nfft - k) = std::conj(g * X(k));
+    X(k) *= 0.5 * std::erfc((static_cast<double>(k) * df - mid) / (std::sqrt(2.0) * sd));
   }
-  return fft.inverse_complex(full).real().head(n);
+  return fft.inverse_real(X).head(n);
 }
 
 Eigen::VectorXd integrate(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, int order,
@@ -84,18 +80,14 @@ Eigen::VectorXd integrate(const Eigen::Ref<const Eigen::VectorXd>& x, double fs,
   const Eigen::Index nfft = fast_size(2 * n);
   Fft& fft = cache.get(nfft);
   const Eigen::VectorXcd X = fft.forward(x);
-  Eigen::VectorXcd full = Eigen::VectorXcd::Zero(nfft);
+  Eigen::VectorXcd half = Eigen::VectorXcd::Zero(X.size());
   const double df = fs / static_cast<double>(nfft);
   for (Eigen::Index k = 1; k < X.size(); ++k) {
     const double f = static_cast<double>(k) * df;
     if (f < f_min) continue;
-    const std::complex<double> h =
-        std::pow(std::complex<double>(0.0, 2.0 * std::numbers::pi * f), -order);
-    // Hermitian symmetry gives the real result from the one-sided spectrum.
-    full(k) = h * X(k);
-    if (k != nfft - k) full(nfft - k) = std::conj(h * X(k));
+    half(k) = std::pow(std::complex<double>(0.0, 2.0 * std::numbers::pi * f), -order) * X(k);
   }
-  return fft.inverse_complex(full).real().head(n);
+  return fft.inverse_real(half).head(n);
 }
 
 }  // namespace jointlab::signal
