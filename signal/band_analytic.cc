@@ -48,10 +48,11 @@ BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eig
     const double g = band_gain(band, options.taper, f);
     if (g == 0.0) continue;
     noise_bw += g * g * df;
+    // (i w)^(-order) by repeated multiplication (std::pow on complex is costly).
     std::complex<double> h = 1.0;
-    if (options.order != 0) {
-      h = std::pow(std::complex<double>(0.0, 2.0 * std::numbers::pi * f), -options.order);
-    }
+    const std::complex<double> iw(0.0, 2.0 * std::numbers::pi * f);
+    for (int o = 0; o < std::abs(options.order); ++o) h *= iw;
+    if (options.order > 0) h = 1.0 / h;
     const Eigen::Index idx = ((k - k_c) % m + m) % m;
     shifted(idx) = 2.0 * g * h * spectrum(k);
   }

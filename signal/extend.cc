@@ -20,10 +20,9 @@ Eigen::VectorXd continue_forward(const Eigen::VectorXd& y, Eigen::Index count, i
     return Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0));
   }
   const Eigen::Index first = n - len;
-  // Rows closer than the lag carry nearly the same equation (the record is
-  // oversampled by about `lag`): keep every row_step-th, at least 8 per unknown.
-  const Eigen::Index row_step =
-      std::max<Eigen::Index>(1, std::min<Eigen::Index>(lag, (len - span) / (8 * order)));
+  // Neighbouring rows carry nearly the same equation in an oversampled record:
+  // keep every row_step-th row, at least 8 per unknown.
+  const Eigen::Index row_step = std::max<Eigen::Index>(1, (len - span) / (8 * order));
   const Eigen::Index rows = (len - span - 1) / row_step + 1;
   Eigen::MatrixXd A(rows, order);
   Eigen::VectorXd b(rows);
