@@ -1,0 +1,358 @@
+#include "jointlab/correlate/linear_update.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/model/linear_modes.h"
+
+namespace jointlab::correlate {
+namespace {
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+void add_joint(Triplets& t, const model::Joint& j, double k) {
+  t.emplace_back(j.a, j.a, k);
+  if (j.b != model::kGround) {
+    t.emplace_back(j.b, j.b, k);
+    t.emplace_back(j.a, j.b, -k);
+    t.emplace_back(j.b, j.a, -k);
+  }
+}
+
+}  // namespace
+
+StiffnessSets::StiffnessSets(const model::Model& model, std::vector<std::string> names)
+    : model_(&model), names_(std::move(names)) {
+  const Eigen::Index n = model.size();
+  initial_ = Eigen::VectorXd::Zero(size());
+  std::vector<Triplets> pat(names_.size());
+  Triplets fixed;
+  for (const model::Joint& j : model.joints) {
+    const auto it = std::find(names_.begin(), names_.end(), j.element);
+    if (it == names_.end()) {
+      add_joint(fixed, j, j.stiffness);
+    } else {
+      const auto k = it - names_.begin();
+      add_joint(pat[k], j, 1.0);
+      initial_(k) = j.stiffness;
+    }
+  }
+  for (int k = 0; k < size(); ++k) {
+    if (pat[k].empty()) {
+      throw InputError(
+          fmt::format("parameter set '{}': no joint of the model uses this element", names_[k]));
+    }
+    patterns_.emplace_back(n, n);
+    patterns_.back().setFromTriplets(pat[k].begin(), pat[k].end());
+  }
+  fixed_.resize(n, n);
+  fixed_.setFromTriplets(fixed.begin(), fixed.end());
+  fixed_ += model.stiffness;
+}
+
+Eigen::SparseMatrix<double> StiffnessSets::stiffness(
+    const Eigen::Ref<const Eigen::VectorXd>& theta) const {
+  Eigen::SparseMatrix<double> k = fixed_;
+  for (int i = 0; i < size(); ++i) k += theta(i) * patterns_[i];
+  return k;
+}
+
+model::Model StiffnessSets::apply(const Eigen::Ref<const Eigen::VectorXd>& theta) const {
+  model::Model out = *model_;
+  for (model::Joint& j : out.joints) {
+    const auto it = std::find(names_.begin(), names_.end(), j.element);
+    if (it == names_.end()) continue;
+    const double k = theta(it - names_.begin());
+    j.stiffness = k;
+    if (j.iwan) {
+      j.iwan = model::Iwan(j.iwan->slip_force(), k, j.iwan->chi(), j.iwan->beta());
+    }
+  }
+  return out;
+}
+
+double LinearEvaluation::max_error() const {
+  double m = 0;
+  for (const ModePair& p : pairing.pairs) m = std::max(m, std::abs(residuals(p.measured)));
+  return m;
+}
+
+LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
+                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                 double mac_threshold) {
+  const model::LinearModes modes = model::linear_modes(model.mass, sets.stiffness(theta));
+  const int elastic = modes.size() - modes.rigid_count;
+  const Eigen::MatrixXd phi = modes.shapes.rightCols(elastic);
+  const Eigen::MatrixXd at_sensors = shapes_at_sensors(sensors, phi);
+  LinearEvaluation e;
+  e.pairing = pair_modes(mac_matrix(measured.shapes, at_sensors), mac_threshold);
+  const int m = static_cast<int>(measured.frequency_hz.size());
+  e.all_model_frequency_hz.resize(elastic);
+  for (int j = 0; j < elastic; ++j)
+    e.all_model_frequency_hz(j) = modes.frequency_hz(modes.rigid_count + j);
+  e.model_frequency_hz = Eigen::VectorXd::Zero(m);
+  e.residuals = Eigen::VectorXd::Zero(m);
+  e.jacobian = Eigen::MatrixXd::Zero(m, sets.size());
+  for (const ModePair& p : e.pairing.pairs) {
+    const double f = e.all_model_frequency_hz(p.model);
+    const double fe = measured.frequency_hz(p.measured);
+    e.model_frequency_hz(p.measured) = f;
+    e.residuals(p.measured) = (f - fe) / fe;
+    if (f <= 0) continue;
+    const Eigen::VectorXd v = phi.col(p.model);
+    for (int k = 0; k < sets.size(); ++k) {
+      const double dw2 = v.dot(sets.pattern(k) * v);
+      e.jacobian(p.measured, k) =
+          theta(k) * dw2 / (8.0 * std::numbers::pi * std::numbers::pi * f * fe);
+    }
+  }
+  return e;
+}
+
+std::string LinearUpdateOptions::error() const {
+  if (!(mac_threshold >= 0 && mac_threshold <= 1)) return "mac_threshold must be in [0, 1]";
+  if (!(lower_factor > 0 && lower_factor < 1)) return "lower_factor must be in (0, 1)";
+  if (!(upper_factor > 1) || !std::isfinite(upper_factor)) return "upper_factor must be > 1";
+  if (max_iterations < 1) return "max_iterations must be >= 1";
+  if (!(tolerance >= 0)) return "tolerance must be >= 0";
+  if (!(flat_sensitivity > 0)) return "flat_sensitivity must be > 0";
+  if (!(frequency_std > 0)) return "frequency_std must be > 0";
+  if (!(sweep_decades > 0)) return "sweep_decades must be > 0";
+  if (sweep_points < 2) return "sweep_points must be >= 2";
+  return "";
+}
+
+namespace {
+
+// Ceres cost on x = ln theta with the analytic Jacobian of evaluate_linear().
+class LinearCost : public ceres::CostFunction {
+ public:
+  LinearCost(const StiffnessSets& sets, const model::Model& model,
+             const std::vector<Sensor>& sensors, const MeasuredModes& measured, double threshold)
+      : sets_(sets), model_(model), sensors_(sensors), measured_(measured), threshold_(threshold) {
+    set_num_residuals(static_cast<int>(measured.frequency_hz.size()));
+    mutable_parameter_block_sizes()->push_back(sets.size());
+  }
+  bool Evaluate(double const* const* x, double* residuals, double** jacobians) const override {
+    const int n = sets_.size();
+    Eigen::VectorXd theta(n);
+    for (int k = 0; k < n; ++k) theta(k) = std::exp(x[0][k]);
+    LinearEvaluation e;
+    try {
+      e = evaluate_linear(sets_, model_, sensors_, measured_, theta, threshold_);
+    } catch (const InputError&) {
+      return false;  // an indefinite K at this step: the optimiser shrinks its step
+    }
+    const int m = num_residuals();
+    for (int i = 0; i < m; ++i) residuals[i] = e.residuals(i);
+    if (jacobians && jacobians[0]) {
+      for (int i = 0; i < m; ++i) {
+        for (int k = 0; k < n; ++k) jacobians[0][i * n + k] = e.jacobian(i, k);
+      }
+    }
+    return true;
+  }
+
+ private:
+  const StiffnessSets& sets_;
+  const model::Model& model_;
+  const std::vector<Sensor>& sensors_;
+  const MeasuredModes& measured_;
+  double threshold_;
+};
+
+class ProgressCallback : public ceres::IterationCallback {
+ public:
+  explicit ProgressCallback(const std::function<void(int, double)>& f) : f_(f) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (f_) f_(s.iteration, s.cost);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::function<void(int, double)>& f_;
+};
+
+double rms_error(const LinearEvaluation& e) {
+  if (e.pairing.pairs.empty()) return 0;
+  return std::sqrt(e.residuals.squaredNorm() / static_cast<double>(e.pairing.pairs.size()));
+}
+
+}  // namespace
+
+Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
+                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
+  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
+  if (measured.shapes.rows() != static_cast<Eigen::Index>(sensors.size()) ||
+      measured.shapes.cols() != measured.frequency_hz.size()) {
+    throw InputError(fmt::format(
+        "measured modes: {} shapes of {} sensors for {} frequencies, expected {} sensors",
+        measured.shapes.cols(), measured.shapes.rows(), measured.frequency_hz.size(),
+        sensors.size()));
+  }
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
+    if (!(measured.frequency_hz(i) > 0) || !std::isfinite(measured.frequency_hz(i))) {
+      throw InputError(fmt::format("measured mode {}: frequency must be > 0", i + 1));
+    }
+  }
+  const StiffnessSets sets(model, names);
+  const int n = sets.size();
+  for (int k = 0; k < n; ++k) {
+    if (!(sets.initial()(k) > 0)) {
+      throw InputError(fmt::format("parameter set '{}': starting stiffness must be > 0", names[k]));
+    }
+  }
+  LinearUpdateSummary local;
+  LinearUpdateSummary& s = summary ? *summary : local;
+  s = LinearUpdateSummary{};
+
+  const Eigen::VectorXd start = sets.initial();
+  Eigen::VectorXd x = start.array().log();
+  const LinearEvaluation first =
+      evaluate_linear(sets, model, sensors, measured, start, options.mac_threshold);
+  s.initial_cost = first.cost();
+  if (first.pairing.pairs.empty()) {
+    s.status = LinearUpdateStatus::kTooFewPairs;
+    s.final_cost = s.initial_cost;
+    s.final = first;
+    return start;
+  }
+
+  ceres::Problem problem;
+  problem.AddResidualBlock(new LinearCost(sets, model, sensors, measured, options.mac_threshold),
+                           nullptr, x.data());
+  for (int k = 0; k < n; ++k) {
+    problem.SetParameterLowerBound(x.data(), k, x(k) + std::log(options.lower_factor));
+    problem.SetParameterUpperBound(x.data(), k, x(k) + std::log(options.upper_factor));
+  }
+  ceres::Solver::Options so;
+  so.max_num_iterations = options.max_iterations;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.function_tolerance = 1e-12;
+  so.gradient_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-10;
+  ProgressCallback cb(options.progress);
+  so.callbacks.push_back(&cb);
+  ceres::Solver::Summary cs;
+  ceres::Solve(so, &problem, &cs);
+  for (const ceres::IterationSummary& it : cs.iterations) s.history.push_back(it.cost);
+  s.iterations = static_cast<int>(cs.iterations.size()) - 1;
+  if (cs.termination_type == ceres::CONVERGENCE) {
+    s.status = LinearUpdateStatus::kConverged;
+  } else if (cs.termination_type == ceres::NO_CONVERGENCE) {
+    s.status = LinearUpdateStatus::kIterationLimit;
+  } else {
+    s.status = LinearUpdateStatus::kFailed;
+  }
+  Eigen::VectorXd theta = x.array().exp();
+  LinearEvaluation at =
+      evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold);
+
+  // Identifiability at the optimum.
+  s.parameters.resize(n);
+  std::vector<int> identifiable;
+  for (int k = 0; k < n; ++k) {
+    ParameterReport& p = s.parameters[k];
+    p.name = names[k];
+    p.start = start(k);
+    p.sensitivity = at.jacobian.col(k).cwiseAbs().maxCoeff();
+    p.flat = p.sensitivity < options.flat_sensitivity;
+    if (!p.flat) identifiable.push_back(k);
+  }
+  if (!identifiable.empty()) {
+    Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(identifiable.size()));
+    for (size_t c = 0; c < identifiable.size(); ++c) j.col(c) = at.jacobian.col(identifiable[c]);
+    const Eigen::MatrixXd jtj = j.transpose() * j;
+    Eigen::LDLT<Eigen::MatrixXd> ldlt(jtj);
+    const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols())) *
+                                (options.frequency_std * options.frequency_std);
+    for (size_t c = 0; c < identifiable.size(); ++c) {
+      const double v = cov(c, c);
+      s.parameters[identifiable[c]].relative_std = (v >= 0 && std::isfinite(v)) ? std::sqrt(v) : 0;
+    }
+  }
+
+  // The smallest stiffness within the tolerance, for the flat parameters.
+  if (options.tolerance > 0) {
+    for (int k = 0; k < n; ++k) {
+      if (!s.parameters[k].flat) continue;
+      auto ok = [&](double v) {
+        Eigen::VectorXd t = theta;
+        t(k) = v;
+        try {
+          const LinearEvaluation e =
+              evaluate_linear(sets, model, sensors, measured, t, options.mac_threshold);
+          return e.pairing.pairs.size() == at.pairing.pairs.size() &&
+                 e.max_error() <= options.tolerance;
+        } catch (const InputError&) {
+          return false;
+        }
+      };
+      if (!ok(theta(k))) continue;
+      double hi = std::log(theta(k));
+      double lo = std::log(start(k) * options.lower_factor);
+      if (ok(std::exp(lo))) {
+        hi = lo;
+      } else {
+        for (int it = 0; it < 40 && hi - lo > 1e-4; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (ok(std::exp(mid)) ? hi : lo) = mid;
+        }
+      }
+      theta(k) = std::exp(hi);
+      s.parameters[k].smallest_within_tolerance = theta(k);
+    }
+    at = evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold);
+  }
+
+  // One-at-a-time sweeps around the result.
+  for (int k = 0; k < n; ++k) {
+    ParameterReport& p = s.parameters[k];
+    p.value = theta(k);
+    for (int i = 0; i < options.sweep_points; ++i) {
+      const double d =
+          -options.sweep_decades + 2.0 * options.sweep_decades * i / (options.sweep_points - 1);
+      const double f = std::pow(10.0, d);
+      Eigen::VectorXd t = theta;
+      t(k) *= f;
+      try {
+        const LinearEvaluation e =
+            evaluate_linear(sets, model, sensors, measured, t, options.mac_threshold);
+        p.sweep_factor.push_back(f);
+        p.sweep_rms.push_back(rms_error(e));
+      } catch (const InputError&) {
+      }
+    }
+  }
+  s.final_cost = at.cost();
+  s.final = std::move(at);
+  return theta;
+}
+
+std::string LinearUpdateSummary::report() const {
+  static const char* names[] = {"converged", "iteration limit", "no mode paired", "failed"};
+  std::string out = fmt::format(
+      "linear update: {}, {} iterations, cost {:.4g} -> {:.4g}, {} of {} measured modes paired, "
+      "largest frequency error {:.3g} %\n",
+      names[static_cast<int>(status)], iterations, initial_cost, final_cost,
+      final.pairing.pairs.size(), final.residuals.size(), 100 * final.max_error());
+  out += final.pairing.report();
+  for (const ParameterReport& p : parameters) {
+    out += fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}", p.name, p.start, p.value,
+                       p.sensitivity,
+                       p.flat ? "  FLAT (not identified by the frequencies)"
+                              : fmt::format("  +/- {:.3g} %", 100 * p.relative_std));
+    if (p.smallest_within_tolerance > 0) out += "  (smallest within tolerance)";
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace jointlab::correlate

@@ -1,0 +1,147 @@
+// Linear model updating: named joint stiffness sets tuned to measured linear frequencies.
+//
+// Parameters: theta_k > 0, the stiffness [N/m or N m/rad] shared by every joint element the
+// model file names `name_k` ("spring.kz", or "iwan.rivet" whose elements enter at K_T):
+//     K(theta) = K_0 + sum_k theta_k S_k,   S_k = sum over its elements of e e^T, e = e_a - e_b.
+// Modes: K(theta) phi = omega^2 M phi, phi^T M phi = 1 (linear_modes.h), elastic modes only.
+// Pairing: at every evaluation the measured shapes (at the sensors) are paired with the model
+// shapes at the sensors by MAC (mac.h); residuals over measured modes i
+//     r_i = (f_model,p(i) - f_exp,i) / f_exp,i            (0 when i is unpaired)
+// and the objective is 1/2 sum r_i^2. The optimiser (Ceres, trust region, bounds) works on
+// x_k = ln theta_k, with the analytic eigenvalue sensitivity
+//     d omega_i^2 / d theta_k = phi_i^T S_k phi_i,  so  d r_i / d x_k = theta_k phi_i^T S_k phi_i
+//                                                         / (8 pi^2 f_model f_exp).
+// Identifiability: s_k = max_i |d r_i / d x_k|, the largest relative frequency change per unit
+// change of ln theta_k; a parameter with s_k below flat_sensitivity is flat (the objective
+// does not see it). A one-at-a-time sweep (theta_k times 10^[-d, d], others held) shows
+// the RMS frequency error along each parameter (the paper's Figure 3). Relative standard
+// deviations come from (J^T J)^-1 sigma^2 over the identifiable parameters, sigma the
+// relative frequency uncertainty.
+// Smallest stiffness: with tolerance > 0, each flat parameter is then lowered to the
+// smallest value (bisection in ln theta) at which every paired |r_i| is within the
+// tolerance, instead of drifting to its upper bound.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "jointlab/correlate/mac.h"
+#include "jointlab/correlate/sensors.h"
+#include "jointlab/model/model_file.h"
+
+namespace jointlab::correlate {
+
+/// K(theta) = K_0 + sum_k theta_k S_k for named joint element sets of a model.
+class StiffnessSets {
+ public:
+  /// Splits the model's joint stiffness into the named sets; InputError for a name no joint uses.
+  StiffnessSets(const model::Model& model, std::vector<std::string> names);
+  /// Number of parameters.
+  int size() const { return static_cast<int>(names_.size()); }
+  /// Element names, one per parameter.
+  const std::vector<std::string>& names() const { return names_; }
+  /// The model's current stiffness of each set.
+  const Eigen::VectorXd& initial() const { return initial_; }
+  /// S_k: the stiffness pattern of set k (unit stiffness).
+  const Eigen::SparseMatrix<double>& pattern(int k) const { return patterns_[k]; }
+  /// K(theta).
+  Eigen::SparseMatrix<double> stiffness(const Eigen::Ref<const Eigen::VectorXd>& theta) const;
+  /// A copy of the model with each set at theta_k (Iwan elements: K_T = theta_k).
+  model::Model apply(const Eigen::Ref<const Eigen::VectorXd>& theta) const;
+
+ private:
+  const model::Model* model_;
+  std::vector<std::string> names_;
+  Eigen::VectorXd initial_;
+  Eigen::SparseMatrix<double> fixed_;  // K_0 plus every joint not in a set
+  std::vector<Eigen::SparseMatrix<double>> patterns_;
+};
+
+/// Measured linear modal data: frequencies and complex shapes at the sensors.
+struct MeasuredModes {
+  Eigen::VectorXd frequency_hz;     ///< one per measured mode [Hz]
+  Eigen::MatrixXcd shapes;          ///< rows: sensors (in sensor order), columns: modes
+  std::vector<std::string> labels;  ///< a name per mode for reports ("band1"), may be empty
+};
+
+/// One evaluation of the linear objective.
+struct LinearEvaluation {
+  Pairing pairing;                     ///< measured-model pairs by MAC
+  Eigen::VectorXd model_frequency_hz;  ///< paired model frequency per measured mode (0: unpaired)
+  Eigen::VectorXd residuals;           ///< r_i
+  Eigen::MatrixXd jacobian;            ///< d r_i / d ln theta_k
+  Eigen::VectorXd all_model_frequency_hz;  ///< every elastic model frequency
+  /// 1/2 sum r_i^2.
+  double cost() const { return 0.5 * residuals.squaredNorm(); }
+  /// Largest |r_i| over paired modes.
+  double max_error() const;
+};
+
+/// Evaluates pairing, residuals and their analytic Jacobian at theta.
+LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
+                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                 double mac_threshold);
+
+/// Settings of update_linear().
+struct LinearUpdateOptions {
+  double mac_threshold = 0.6;  ///< pairs below this MAC are not made
+  double lower_factor = 1e-3;  ///< bounds: theta_k in [start * lower_factor, start * upper_factor]
+  double upper_factor = 1e3;   ///< (both > 0, lower_factor < 1 < upper_factor)
+  int max_iterations = 100;    ///< Ceres iterations
+  double tolerance = 0;        ///< > 0: flat parameters lowered to the smallest within it
+  double flat_sensitivity = 1e-3;  ///< s_k below this: flat
+  double frequency_std = 1e-3;     ///< relative frequency uncertainty for confidence
+  double sweep_decades = 2;        ///< one-at-a-time sweep over theta * 10^[-d, d]
+  int sweep_points = 9;            ///< points of the sweep (>= 2)
+  /// Called after each optimiser iteration with (iteration, cost).
+  std::function<void(int, double)> progress;
+  /// What is wrong with these options, or "".
+  std::string error() const;
+};
+
+/// What update_linear() found about one parameter.
+struct ParameterReport {
+  std::string name;         ///< element name
+  double start = 0;         ///< starting stiffness
+  double value = 0;         ///< updated stiffness
+  double sensitivity = 0;   ///< s_k at the solution
+  bool flat = false;        ///< s_k < flat_sensitivity
+  double relative_std = 0;  ///< one-sigma relative uncertainty (0 when flat: unbounded)
+  double smallest_within_tolerance = 0;  ///< set when the tolerance formulation lowered it
+  std::vector<double> sweep_factor;      ///< theta_k multipliers of the sweep
+  std::vector<double> sweep_rms;         ///< RMS relative frequency error at each multiplier
+};
+
+/// Why update_linear() stopped.
+enum class LinearUpdateStatus {
+  kConverged,       ///< the optimiser met its convergence test
+  kIterationLimit,  ///< max_iterations reached
+  kTooFewPairs,     ///< fewer paired modes than needed to say anything (none)
+  kFailed,          ///< the optimiser failed (numerical)
+};
+
+/// Outcome of update_linear().
+struct LinearUpdateSummary {
+  LinearUpdateStatus status = LinearUpdateStatus::kFailed;  ///< termination
+  double initial_cost = 0;                                  ///< objective at the start
+  double final_cost = 0;                                    ///< objective at the result
+  int iterations = 0;                                       ///< optimiser iterations
+  std::vector<double> history;              ///< objective after each iteration (first: start)
+  std::vector<ParameterReport> parameters;  ///< per parameter
+  LinearEvaluation final;                   ///< pairing and residuals at the result
+  /// One paragraph: status, cost, pairs, parameters.
+  std::string report() const;
+};
+
+/// Updates the named sets of `model` to the measured frequencies; returns theta.
+/// InputError for bad options, unknown sets or inconsistent sensors/measured shapes.
+Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& sets,
+                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                              const LinearUpdateOptions& options, LinearUpdateSummary* summary);
+
+}  // namespace jointlab::correlate

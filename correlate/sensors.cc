@@ -1,0 +1,119 @@
+#include "jointlab/correlate/sensors.h"
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+
+namespace jointlab::correlate {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+}  // namespace
+
+std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
+                                  const model::Model& model) {
+  std::vector<Sensor> out;
+  std::set<std::string> seen;
+  std::istringstream in(text);
+  std::string line;
+  long n = 0;
+  bool header = false;
+  while (std::getline(in, line)) {
+    ++n;
+    line = trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(trim(cell));
+    if (!header) {
+      if (cells.size() < 2 || cells.size() > 3 || cells[0] != "channel" || cells[1] != "dof" ||
+          (cells.size() == 3 && cells[2] != "sign")) {
+        throw InputError(where(name, n, "expected the header 'channel,dof[,sign]'"));
+      }
+      header = true;
+      continue;
+    }
+    if (cells.size() < 2 || cells.size() > 3 || cells[0].empty() || cells[1].empty()) {
+      throw InputError(where(name, n, "expected 'channel,dof[,sign]'"));
+    }
+    Sensor s;
+    s.channel = cells[0];
+    if (!seen.insert(s.channel).second) {
+      throw InputError(where(name, n, fmt::format("channel '{}' appears twice", s.channel)));
+    }
+    const std::string& d = cells[1];
+    if (d.find(':') != std::string::npos) {
+      const auto it = std::find(model.dof_labels.begin(), model.dof_labels.end(), d);
+      if (it == model.dof_labels.end()) {
+        throw InputError(
+            where(name, n, fmt::format("dof '{}' is not a label of the model's dof_labels", d)));
+      }
+      s.dof = it - model.dof_labels.begin();
+    } else {
+      size_t used = 0;
+      long v = -1;
+      try {
+        v = std::stol(d, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != d.size() || v < 0 || v >= model.size()) {
+        throw InputError(
+            where(name, n,
+                  fmt::format("dof '{}' must be an index 0..{} or a node:component label", d,
+                              model.size() - 1)));
+      }
+      s.dof = v;
+    }
+    if (cells.size() == 3 && !cells[2].empty()) {
+      if (cells[2] == "1" || cells[2] == "+1") {
+        s.sign = 1.0;
+      } else if (cells[2] == "-1") {
+        s.sign = -1.0;
+      } else {
+        throw InputError(where(name, n, fmt::format("sign '{}' must be 1 or -1", cells[2])));
+      }
+    }
+    out.push_back(s);
+  }
+  if (!header) throw InputError(where(name, 0, "empty file, expected 'channel,dof[,sign]'"));
+  if (out.empty()) throw InputError(where(name, 0, "no sensors"));
+  return out;
+}
+
+std::vector<Sensor> read_sensors(const std::filesystem::path& path, const model::Model& model) {
+  std::ifstream in(path);
+  if (!in) throw InputError(where(path.string(), 0, "cannot open the sensors file"));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_sensors(ss.str(), path.string(), model);
+}
+
+Eigen::MatrixXd shapes_at_sensors(const std::vector<Sensor>& sensors,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& shapes) {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(sensors.size()), shapes.cols());
+  for (size_t i = 0; i < sensors.size(); ++i) {
+    out.row(static_cast<Eigen::Index>(i)) = sensors[i].sign * shapes.row(sensors[i].dof);
+  }
+  return out;
+}
+
+int find_sensor(const std::vector<Sensor>& sensors, const std::string& channel) {
+  for (size_t i = 0; i < sensors.size(); ++i) {
+    if (sensors[i].channel == channel) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+}  // namespace jointlab::correlate

@@ -1,0 +1,48 @@
+// Sensors: which model DOF each measured channel sees, with its sign.
+//
+// A sensor i reads s_i * u[d_i]: the model DOF d_i (0-based matrix index, a translation in m
+// or a rotation in rad) along the channel's measuring direction, with s_i = +1 when the
+// channel's positive direction is the DOF's positive direction and -1 when opposite.
+// The model shape of mode m at the sensors is therefore Phi_s(i, m) = s_i phi_m[d_i].
+//
+// File (CSV, comma separated, '#' comment lines allowed):
+//     channel,dof[,sign]
+//     acc1,1001:3,1
+//     acc2,57,-1
+// `dof` is a 0-based matrix index or a "node:component" label of the model's dof_labels;
+// `sign` is 1 or -1 (default 1). Channel names are unique.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointlab/model/model_file.h"
+
+namespace jointlab::correlate {
+
+/// One measured channel and the model DOF it sees.
+struct Sensor {
+  std::string channel;   ///< channel name as in the test files
+  Eigen::Index dof = 0;  ///< 0-based model matrix index
+  double sign = 1.0;     ///< +1 or -1: the channel reads sign * u[dof]
+};
+
+/// Reads a sensors file against a model (labels resolve through model.dof_labels);
+/// InputError naming the file and line.
+std::vector<Sensor> read_sensors(const std::filesystem::path& path, const model::Model& model);
+
+/// Parses sensors text as if read from a file named `name`.
+std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
+                                  const model::Model& model);
+
+/// Phi_s(i, m) = s_i shapes(d_i, m): model shapes (one column per mode) at the sensors.
+Eigen::MatrixXd shapes_at_sensors(const std::vector<Sensor>& sensors,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& shapes);
+
+/// Index of the sensor named `channel`, or -1.
+int find_sensor(const std::vector<Sensor>& sensors, const std::string& channel);
+
+}  // namespace jointlab::correlate

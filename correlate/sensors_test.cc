@@ -1,0 +1,48 @@
+#include "jointlab/correlate/sensors.h"
+
+#include <gtest/gtest.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/two_chain.h"
+
+namespace jointlab::correlate {
+namespace {
+
+TEST(Sensors, ParsesIndicesLabelsAndSigns) {
+  model::Model m = two_chain_structure();
+  m.dof_labels.clear();
+  for (int i = 0; i < m.size(); ++i) m.dof_labels.push_back(std::to_string(1000 + i) + ":3");
+  const auto s = parse_sensors(
+      "# a comment\nchannel,dof,sign\nacc1,1002:3,-1\nacc2, 5 ,\nacc3,7,1\n", "sensors.csv", m);
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_EQ(s[0].dof, 2);
+  EXPECT_EQ(s[0].sign, -1.0);
+  EXPECT_EQ(s[1].dof, 5);
+  EXPECT_EQ(s[1].sign, 1.0);
+  EXPECT_EQ(find_sensor(s, "acc3"), 2);
+  EXPECT_EQ(find_sensor(s, "nope"), -1);
+  Eigen::MatrixXd shapes = Eigen::MatrixXd::Random(m.size(), 2);
+  const Eigen::MatrixXd at = shapes_at_sensors(s, shapes);
+  EXPECT_EQ(at(0, 1), -shapes(2, 1));
+  EXPECT_EQ(at(2, 0), shapes(7, 0));
+}
+
+TEST(Sensors, BadInputNamesFileAndLine) {
+  const model::Model m = two_chain_structure();
+  auto message = [&](const std::string& text) {
+    try {
+      parse_sensors(text, "s.csv", m);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("chan,dof\na,1\n").find("s.csv:1"), std::string::npos);
+  EXPECT_NE(message("channel,dof\na,99\n").find("s.csv:2"), std::string::npos);
+  EXPECT_NE(message("channel,dof\na,1\na,2\n").find("twice"), std::string::npos);
+  EXPECT_NE(message("channel,dof,sign\na,1,2\n").find("sign"), std::string::npos);
+  EXPECT_NE(message("channel,dof\na,1:3\n").find("label"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace jointlab::correlate
