@@ -1,0 +1,88 @@
+// Figures of a test campaign, drawn with PLplot's cairo drivers.
+//
+// Each figure is one function: data in, file out. The file's extension picks the driver:
+// .png -> pngcairo (reports), .svg -> svgcairo and .pdf -> pdfcairo (papers). Every call
+// opens its own PLplot stream (plmkstrm), draws black on white and closes the stream
+// (plend1), restoring the caller's current stream, so no PLplot state outlives a call.
+// Logarithmic axes take log10 of the data; non-positive values are left out of them.
+// Units are those of the data passed in; the labels passed in should name them.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointlab/correlate/scatter.h"
+
+namespace jointlab::correlate {
+
+/// Size of a figure.
+struct FigureSize {
+  int width = 900;   ///< [pixels for PNG; points x 1.25 for SVG and PDF]
+  int height = 700;  ///< same units as width
+};
+
+/// A model curve (QSMA) in the measured amplitude's units.
+struct ModelCurve {
+  std::string label;             ///< legend entry ("model, updated")
+  Eigen::VectorXd amplitude;     ///< amplitude [SI of the measured amplitude]
+  Eigen::VectorXd frequency_hz;  ///< natural frequency [Hz]
+  Eigen::VectorXd damping;       ///< damping ratio
+};
+
+/// Frequency and damping versus amplitude of one mode: every hit faint, the binned mean
+/// and its confidence band, and model curves.
+struct BackboneFigure {
+  std::string title;              ///< top line ("mode 1, acc_9003_z")
+  std::string amplitude_label;    ///< x axis ("velocity amplitude [m/s]")
+  std::vector<Curve> hits;        ///< every hit's backbone
+  ScatterSummary summary;         ///< bins (mean and interval) and flagged hits
+  std::vector<ModelCurve> model;  ///< model curves, drawn in the data's amplitude range
+};
+
+/// Draws a BackboneFigure (frequency above, damping on a log axis below) into `file`.
+void plot_backbones(const BackboneFigure& figure, const std::filesystem::path& file,
+                    const FigureSize& size = {});
+
+/// A shaded frequency band with its label.
+struct LabelledBand {
+  std::string label;  ///< text above the band ("mode 1")
+  double lo_hz = 0;   ///< lower edge [Hz]
+  double hi_hz = 0;   ///< upper edge [Hz]
+};
+
+/// Amplitude spectra of one record's channels with the analysis bands.
+struct SpectrumFigure {
+  std::string title;                       ///< top line
+  std::string amplitude_label;             ///< y axis ("amplitude [m/s^2]")
+  Eigen::VectorXd frequency_hz;            ///< bin frequencies [Hz]
+  std::vector<std::string> channel_names;  ///< one per spectrum
+  std::vector<Eigen::VectorXd> spectra;    ///< amplitude per bin, per channel
+  std::vector<LabelledBand> bands;         ///< shaded bands
+  double max_frequency_hz = 0;             ///< right end of the axis; 0: all
+};
+
+/// Draws a SpectrumFigure (log amplitude) into `file`.
+void plot_spectrum(const SpectrumFigure& figure, const std::filesystem::path& file,
+                   const FigureSize& size = {});
+
+/// Draws a MAC matrix (rows: measured modes, columns: model modes) as grey cells with
+/// their values, into `file`.
+void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<std::string>& rows,
+              const std::vector<std::string>& columns, const std::string& title,
+              const std::filesystem::path& file, const FigureSize& size = {});
+
+/// One set of relative errors, one per mode.
+struct ErrorSeries {
+  std::string label;            ///< legend entry ("before updating")
+  std::vector<double> percent;  ///< (model - test) / test x 100, one per mode
+};
+
+/// Draws grouped bars of linear frequency errors [%] per mode into `file`.
+void plot_frequency_errors(const std::vector<std::string>& modes,
+                           const std::vector<ErrorSeries>& series, const std::string& title,
+                           const std::filesystem::path& file, const FigureSize& size = {});
+
+}  // namespace jointlab::correlate
