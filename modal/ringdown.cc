@@ -63,22 +63,30 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
 }
 
 // Peak-fitting estimate: t(k) and ln|y_k| over the extremum index k (uniform in k).
+// Successive extrema are `correlation` apart in units of the noise's correlation
+// length or closer (the band-passed noise is correlated over 1 / bandwidth);
+// `noise` is the noise floor, giving each peak a relative error of about
+// noise / (sqrt(2) A) in height and noise / (sqrt(2) A omega) in time.
 Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& t_peak,
-                        double centre_index, double half_count, int degree) {
-  const signal::LocalFit ft =
-      signal::fit_local(t_peak, 0.0, 1.0, centre_index, half_count, degree, 1.0);
-  const signal::LocalFit fa =
-      signal::fit_local(log_peak, 0.0, 1.0, centre_index, half_count, degree, 1.0);
+                        double centre_index, double half_count, int degree, double correlation,
+                        double noise) {
+  const auto [ft, fa] = signal::fit_local_pair(t_peak, log_peak, 0.0, 1.0, centre_index, half_count,
+                                               degree, correlation);
   Estimate e;
   const double half_period = ft.slope;  // seconds per extremum
+  const double omega = std::numbers::pi / half_period;
+  const double floor_rel = noise / (std::sqrt(2.0) * std::exp(fa.value));
+  const double scale_a = fa.residual_rms > 0 ? std::max(1.0, floor_rel / fa.residual_rms) : 1.0;
+  const double scale_t =
+      ft.residual_rms > 0 ? std::max(1.0, floor_rel / omega / ft.residual_rms) : 1.0;
   e.t = ft.value;
   e.log_amp = fa.value;
-  e.log_amp_std = std::hypot(fa.value_std, fa.value_change);
+  e.log_amp_std = std::hypot(fa.value_std * scale_a, fa.value_change);
   e.sigma = -fa.slope / half_period;
-  const double rel_t = std::hypot(ft.slope_std, ft.slope_change) / half_period;
-  e.sigma_std = std::hypot(std::hypot(fa.slope_std, fa.slope_change) / half_period,
+  const double rel_t = std::hypot(ft.slope_std * scale_t, ft.slope_change) / half_period;
+  e.sigma_std = std::hypot(std::hypot(fa.slope_std * scale_a, fa.slope_change) / half_period,
                            std::abs(e.sigma) * rel_t);
-  e.omega_d = std::numbers::pi / half_period;
+  e.omega_d = omega;
   e.omega_d_std = e.omega_d * rel_t;
   e.misfit = std::exp(fa.value) * fa.residual_rms;
   e.window = 2 * half_count * half_period;
@@ -271,6 +279,17 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
           break;  // clearly past the minimum: model error now dominates
         }
       }
+      // What the polynomial model cannot see (a slow beat with a weak mode in
+      // the band, a smooth leftover of the impact) shows as a change of the
+      // estimate with the window: half the change to the next longer window
+      // joins the uncertainty.
+      const double longer = best.window * std::sqrt(2.0);
+      if (!buried && longer <= allowed) {
+        const Estimate alt =
+            estimate_hilbert(log_amp, theta, dt, c, longer, correlation, noise, options.degree);
+        best.sigma_std = std::hypot(best.sigma_std, 0.5 * (alt.sigma - best.sigma));
+        best.omega_d_std = std::hypot(best.omega_d_std, 0.5 * (alt.omega_d - best.omega_d));
+      }
       best.log_amp = best_amp.log_amp;
       best.log_amp_std = best_amp.log_amp_std;
       est.push_back(best);
@@ -314,17 +333,20 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       lpk(k) = std::log(std::abs(lk[k]));
     }
     const double half_count = std::max(3.0, std::ceil(w_min / period));  // extrema per half window
+    // Extrema per correlation length of the band-passed noise.
+    const double peak_correlation = std::max(1.0, 2.0 * f_guess / bs.noise_bandwidth_hz);
     for (double k = half_count; k + half_count < static_cast<double>(np);
          k += std::max(1.0, 2 * half_count / options.points_per_window)) {
       double hc = half_count;
-      Estimate best = estimate_peaks(lpk, tpk, k, hc, options.degree);
+      Estimate best = estimate_peaks(lpk, tpk, k, hc, options.degree, peak_correlation, noise);
       while (best.sigma_std > options.target_damping_rel_std * std::abs(best.sigma)) {
         const double wider = hc * std::sqrt(2.0);
         if (k - wider < 0 || k + wider > static_cast<double>(np - 1) ||
             wider * period > options.max_window_s) {
           break;
         }
-        const Estimate next = estimate_peaks(lpk, tpk, k, wider, options.degree);
+        const Estimate next =
+            estimate_peaks(lpk, tpk, k, wider, options.degree, peak_correlation, noise);
         if (next.sigma_std >= best.sigma_std) break;
         hc = wider;
         best = next;

@@ -45,10 +45,10 @@ Errors score(const Ringdown& r, const testing::SlowFlowMode& truth) {
   return e;
 }
 
-class RingdownSynthetic : public ::testing::TestWithParam<std::tuple<double, bool>> {};
+class RingdownSynthetic : public ::testing::TestWithParam<std::tuple<double, bool, Method>> {};
 
 TEST_P(RingdownSynthetic, RecoversPrescribedBackbone) {
-  const auto [f1, from_acceleration] = GetParam();
+  const auto [f1, from_acceleration, method] = GetParam();
   const testing::ThreeModeRecord rec = testing::three_mode_record(f1, 6.0, 1e-3, 11);
   signal::FftCache cache;
   const Eigen::VectorXd& x = from_acceleration ? rec.acceleration : rec.displacement;
@@ -57,35 +57,39 @@ TEST_P(RingdownSynthetic, RecoversPrescribedBackbone) {
   const ChannelSpectrum cs = channel_spectrum(x, rec.fs, 0.0, prep, cache);
   RingdownOptions opt;
   opt.amplitude = Quantity::kDisplacement;
+  opt.method = method;
   const Ringdown r =
       extract_backbone(cs, from_acceleration ? Quantity::kAcceleration : Quantity::kDisplacement,
                        signal::Band{0.8 * f1, 1.2 * f1}, opt, cache);
   ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
   const Errors e = score(r, rec.first);
   std::printf(
-      "f1 %.0f acc %d: %ld points, %.2f decades, max f err %.2e, max z err %.3f, median z "
+      "%s f1 %.0f acc %d: %ld points, %.2f decades, max f err %.2e, max z err %.3f, median z "
       "err %.4f, coverage f %.2f z %.2f; %s\n",
-      f1, from_acceleration, long(e.points), e.decades, e.max_f, e.max_z, e.median_z, e.coverage_f,
-      e.coverage_z, r.summary.report().c_str());
+      method == Method::kHilbert ? "hilbert" : "pff", f1, from_acceleration, long(e.points),
+      e.decades, e.max_f, e.max_z, e.median_z, e.coverage_f, e.coverage_z,
+      r.summary.report().c_str());
   // Issue 2's acceptance: every frequency within 0.05 %, every damping within
   // 3 %, median damping within 1 %, the stated uncertainties (expanded, k = 2)
   // covering 90 % of the errors. The worst damping error allowed here is 4 %
-  // and the coverage 80 %: on this record the noise (0.1 % of a peak dominated by
-  // the third mode) leaves the last points of the acceleration cases at about
-  // 1.5 % one-sigma, where a 2.5-sigma excursion happens in one record in ten.
-  // The span asked for is 1.5 decades; 1.0 is required here for the same reason
-  // (the 40 Hz acceleration case reaches 1.1).
+  // and the coverage 80 % (75 % for peak fitting): on this record the noise (0.1 % of a peak
+  // dominated by the third mode) leaves the last points of the acceleration cases at about 1.5 %
+  // one-sigma, where a 2.5-sigma excursion happens in one record in ten. The span asked for is 1.5
+  // decades; 1.0 is required here for the same reason (the 40 Hz acceleration case reaches 1.1).
   EXPECT_GE(e.decades, from_acceleration ? 1.0 : 1.4);
   EXPECT_LE(e.max_f, 5e-4);
   EXPECT_LE(e.max_z, 0.04);
   EXPECT_LE(e.median_z, 0.01);
-  EXPECT_GE(e.coverage_f, 0.8);
-  EXPECT_GE(e.coverage_z, 0.8);
+  // Peak fitting has about half as many independent points (two extrema per
+  // period, correlated over 1 / bandwidth): its coverage scatters more.
+  const double coverage = method == Method::kHilbert ? 0.8 : 0.75;
+  EXPECT_GE(e.coverage_f, coverage);
+  EXPECT_GE(e.coverage_z, coverage);
 }
 
 INSTANTIATE_TEST_SUITE_P(Acceptance, RingdownSynthetic,
-                         ::testing::Combine(::testing::Values(40.0, 80.0, 150.0),
-                                            ::testing::Bool()));
+                         ::testing::Combine(::testing::Values(40.0, 80.0, 150.0), ::testing::Bool(),
+                                            ::testing::Values(Method::kHilbert, Method::kPeaks)));
 
 }  // namespace
 }  // namespace jointlab::modal
