@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages jointlab builds and tests with, only when missing.
+# Installs the Debian 12 packages jointlab builds and tests with, only when missing
+# (clang and its runtime serve the libFuzzer targets in fuzz/).
 # Nothing else is downloaded. Run as root (or with the packages already installed).
 set -euo pipefail
 
@@ -9,6 +10,7 @@ packages=(
   libtomlplusplus-dev libcli11-dev libfmt-dev libcsv-dev libmatio-dev
   libplplot-dev plplot-driver-cairo libgtest-dev libbenchmark-dev
   python3-scipy
+  clang libclang-rt-14-dev
 )
 
 missing=()
