@@ -1,5 +1,7 @@
 #include "jointlab/core/units.h"
 
+#include "jointlab/core/text.h"
+
 #include <algorithm>
 #include <array>
 #include <cassert>
@@ -61,12 +63,6 @@ std::string normalise(std::string_view text) {
   for (char c : text) {
     if (!std::isspace(static_cast<unsigned char>(c))) s.push_back(c);
   }
-  return s;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
 }
 

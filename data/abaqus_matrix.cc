@@ -1,5 +1,7 @@
 #include "jointlab/data/abaqus_matrix.h"
 
+#include "jointlab/core/text.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -14,22 +16,6 @@
 
 namespace jointlab::data {
 namespace {
-
-std::string_view trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
-}
-
-std::string printable(std::string_view s) {
-  std::string out;
-  for (char c : s.substr(0, 40)) {
-    const auto u = static_cast<unsigned char>(c);
-    out.push_back(u >= 0x20 && u < 0x7f ? c : '?');
-  }
-  return out;
-}
 
 std::vector<std::string_view> split(std::string_view line) {
   std::vector<std::string_view> out;

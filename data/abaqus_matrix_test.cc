@@ -12,21 +12,10 @@
 #include <Eigen/Dense>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/test_util.h"
 
 namespace jointlab::data {
 namespace {
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    const std::string m = e.what();
-    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
-    return m;
-  }
-  ADD_FAILURE() << "no InputError";
-  return "";
-}
 
 // Two-node bar (nodes 10 and 20, axial DOF 1 and transverse DOF 2), as *MATRIX OUTPUT,
 // FORMAT=MATRIX INPUT writes its lower triangle.
@@ -107,7 +96,7 @@ TEST(AbaqusMatrixBadInput, EachDefectIsOneLineNamingFileAndLine) {
       {"99999999999999999999,1,1,1,2\n", "m.mtx:1: field 1"},
   };
   for (const Case& c : cases) {
-    const std::string m = error_of([&] { parse_abaqus_matrix(c.text, "m.mtx"); });
+    const std::string m = testing::input_error_of([&] { parse_abaqus_matrix(c.text, "m.mtx"); });
     EXPECT_NE(m.find(c.fragment), std::string::npos) << "text: " << c.text << "\nmessage: " << m;
   }
   EXPECT_THROW(read_abaqus_matrix("/nonexistent/K.mtx"), InputError);

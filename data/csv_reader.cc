@@ -1,5 +1,7 @@
 #include "jointlab/data/csv_reader.h"
 
+#include "jointlab/core/text.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -24,20 +26,6 @@ const Channel* Record::find(const std::string& name) const {
 }
 
 namespace {
-
-std::string_view trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return s.substr(first, last - first + 1);
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
 
 // Parses a whole field as a double; nullopt if anything but a number is there.
 std::optional<double> to_double(std::string_view s) {

@@ -1,5 +1,7 @@
 #include "jointlab/data/mat_file.h"
 
+#include "jointlab/core/text.h"
+
 #include <algorithm>
 #include <atomic>
 #include <bit>
@@ -234,12 +236,6 @@ struct Named {
   std::string name;
   const matvar_t* var;
 };
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 bool is_time_name(const std::string& n) { return lower(n) == "time" || n == "t"; }
 

@@ -31,18 +31,6 @@ fs::path scratch(const std::string& name) {
   return dir / name;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    const std::string m = e.what();
-    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
-    return m;
-  }
-  ADD_FAILURE() << "no InputError";
-  return "";
-}
-
 // Writes top-level variables (column vectors of doubles, or char rows) with matio directly.
 struct Var {
   std::string name;
@@ -203,14 +191,14 @@ TEST(MatFile, ReadsWhatScipyWrites) {
 TEST(MatFileBadInput, NoTimeBase) {
   const fs::path file = scratch("notime.mat");
   write_vars(file, {{"x", ramp(8, 0, 1), ""}}, "s");
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m.find(file.string() + ": no time histories found"), std::string::npos) << m;
 }
 
 TEST(MatFileBadInput, ZeroSamplingRate) {
   const fs::path file = scratch("fs0.mat");
   write_vars(file, {{"fs", {0.0}, ""}, {"x", ramp(8, 0, 1), ""}}, "s");
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m.find(": field 's.fs': 0 Hz is not a positive sampling rate"), std::string::npos) << m;
 }
 
@@ -219,11 +207,11 @@ TEST(MatFileBadInput, NanAndInfSamples) {
   std::vector<double> x = ramp(8, 0, 1);
   x[5] = NAN;
   write_vars(file, {{"time", ramp(8, 0, 0.1), ""}, {"x", x, ""}}, "s");
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m.find(": field 's.x': sample 6 is nan"), std::string::npos) << m;
   x[5] = INFINITY;
   write_vars(file, {{"time", ramp(8, 0, 0.1), ""}, {"x", x, ""}}, "");
-  const std::string m2 = error_of([&] { read_mat(file); });
+  const std::string m2 = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m2.find(": field 'x': sample 6 is inf"), std::string::npos) << m2;
 }
 
@@ -232,7 +220,7 @@ TEST(MatFileBadInput, NonMonotonicTime) {
   std::vector<double> t = ramp(8, 0, 0.1);
   std::swap(t[3], t[4]);
   write_vars(file, {{"time", t, ""}, {"x", ramp(8, 0, 1), ""}}, "rec");
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m.find("at sample 5 does not increase (previous 0.4)"), std::string::npos) << m;
 }
 
@@ -266,7 +254,7 @@ TEST(MatFileBadInput, DuplicateChannelNames) {
   Mat_VarWrite(mat, st, MAT_COMPRESSION_NONE);
   Mat_VarFree(st);
   Mat_Close(mat);
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m.find(": field 's.y': two channels named 'q'"), std::string::npos) << m;
 }
 
@@ -277,7 +265,7 @@ TEST(MatFileBadInput, TruncatedFile) {
   const fs::path file = scratch("trunc.mat");
   write_mat(file, r);
   fs::resize_file(file, fs::file_size(file) / 2);
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_EQ(m.rfind(file.string() + ": ", 0), 0u) << m;
   EXPECT_NE(m.find(": not a valid MATLAB v5 file: element of type 15 declares"), std::string::npos)
       << m;
@@ -298,14 +286,14 @@ TEST(MatFileBadInput, HugeDeclaredSize) {
   u32(9), u32(16), bytes += std::string(16, '\0');          // real part: 16 bytes only
   const fs::path file = scratch("huge.mat");
   std::ofstream(file, std::ios::binary) << bytes;
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_EQ(m.rfind(file.string() + ": ", 0), 0u) << m;
 }
 
 TEST(MatFileBadInput, NotAMatFile) {
   const fs::path file = scratch("text.mat");
   std::ofstream(file) << std::string(200, 'x');
-  const std::string m = error_of([&] { read_mat(file); });
+  const std::string m = testing::input_error_of([&] { read_mat(file); });
   EXPECT_NE(m.find("not a MATLAB v5/v7/v7.3 .mat file"), std::string::npos) << m;
 }
 
@@ -315,7 +303,7 @@ TEST(MatFileBadInput, FuzzRegressions) {
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
   int count = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
-    const std::string m = error_of([&] { read_mat(entry.path()); });
+    const std::string m = testing::input_error_of([&] { read_mat(entry.path()); });
     EXPECT_EQ(m.rfind(entry.path().string() + ": ", 0), 0u) << m;
     ++count;
   }

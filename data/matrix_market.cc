@@ -1,5 +1,7 @@
 #include "jointlab/data/matrix_market.h"
 
+#include "jointlab/core/text.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cctype>
@@ -17,13 +19,6 @@
 
 namespace jointlab::data {
 namespace {
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
 
 std::vector<std::string_view> split(std::string_view line) {
   std::vector<std::string_view> tokens;

@@ -29,18 +29,6 @@ fs::path scratch(const std::string& name) {
   return dir / name;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    const std::string m = e.what();
-    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
-    return m;
-  }
-  ADD_FAILURE() << "no InputError";
-  return "";
-}
-
 // A CSV test file as a data-acquisition front end writes it: units in g and N, a time column.
 std::string front_end_csv() {
   std::mt19937 rng(7);
@@ -117,7 +105,7 @@ TEST(RecordWriter, WriteRecordByExtension) {
   }
   EXPECT_EQ(read_uff58(scratch("x.uff")).channels[0].name, "1+Z");
   EXPECT_EQ(read_mat(scratch("x.mat")).channels[0].samples, r.channels[0].samples);
-  const std::string m = error_of([&] { write_record(scratch("x.xls"), r); });
+  const std::string m = testing::input_error_of([&] { write_record(scratch("x.xls"), r); });
   EXPECT_NE(m.find("x.xls: cannot tell the format"), std::string::npos) << m;
   EXPECT_FALSE(fs::exists(scratch("x.xls")));
 }
@@ -126,17 +114,22 @@ TEST(RecordWriter, RefusesWhatCsvCannotHold) {
   Record r;
   r.fs = 100;
   r.channels.push_back(Channel{"acc [1]", std::nullopt, "", Eigen::VectorXd::Ones(3)});
-  EXPECT_NE(error_of([&] { format_csv_record(r, "o.csv"); }).find("o.csv: channel name 'acc [1]'"),
+  EXPECT_NE(testing::input_error_of([&] {
+              format_csv_record(r, "o.csv");
+            }).find("o.csv: channel name 'acc [1]'"),
             std::string::npos);
   r.channels[0].name = "Time";
-  EXPECT_NE(error_of([&] { format_csv_record(r, "o.csv"); }).find("not 'time'"), std::string::npos);
+  EXPECT_NE(testing::input_error_of([&] { format_csv_record(r, "o.csv"); }).find("not 'time'"),
+            std::string::npos);
   r.channels[0].name = "a";
   r.channels[0].samples[1] = NAN;
-  EXPECT_NE(error_of([&] { format_csv_record(r, "o.csv"); }).find("holds NaN or Inf"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::input_error_of([&] { format_csv_record(r, "o.csv"); }).find("holds NaN or Inf"),
+      std::string::npos);
   r.fs = 0;
-  EXPECT_NE(error_of([&] { format_csv_record(r, "o.csv"); }).find("sampling rate 0 Hz"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::input_error_of([&] { format_csv_record(r, "o.csv"); }).find("sampling rate 0 Hz"),
+      std::string::npos);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "jointlab/data/uff58.h"
 
+#include "jointlab/core/text.h"
+
 #include <algorithm>
 #include <bit>
 #include <charconv>
@@ -18,23 +20,6 @@
 
 namespace jointlab::data {
 namespace {
-
-std::string_view trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t\r\n\f\v");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t\r\n\f\v");
-  return s.substr(first, last - first + 1);
-}
-
-// Text of a header field for messages: printable ASCII only, at most 40 characters.
-std::string printable(std::string_view s) {
-  std::string out;
-  for (char c : s.substr(0, 40)) {
-    const auto u = static_cast<unsigned char>(c);
-    out.push_back(u >= 0x20 && u < 0x7f ? c : '?');
-  }
-  return out;
-}
 
 bool is_none(std::string_view s) {
   s = trim(s);

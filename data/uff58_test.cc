@@ -24,18 +24,6 @@ std::filesystem::path example(const std::string& name) {
 
 // The message of the InputError `f` throws; fails the test if it throws nothing or prints
 // more than one line.
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    const std::string m = e.what();
-    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
-    return m;
-  }
-  ADD_FAILURE() << "no InputError";
-  return "";
-}
-
 // One ASCII dataset 58 with the given record 6/7/9 pieces and data lines.
 std::string dataset(const std::string& r6, const std::string& r7, const std::string& r9,
                     const std::string& data) {
@@ -118,16 +106,18 @@ TEST(Uff58, ShortLastLineAndUtf8Unit) {
 
 TEST(Uff58, RefusesSpectraAndFrfs) {
   const std::string psd = example("sample_dataset58_psd.uff").string();
-  const std::string m1 = error_of([&] { read_uff58(psd); });
+  const std::string m1 = testing::input_error_of([&] { read_uff58(psd); });
   EXPECT_NE(m1.find(psd + ":8:"), std::string::npos) << m1;
   EXPECT_NE(m1.find("function type 9 (power spectral density)"), std::string::npos) << m1;
-  const std::string m2 = error_of([&] { read_uff58(example("non_ascii_header.uff")); });
+  const std::string m2 =
+      testing::input_error_of([&] { read_uff58(example("non_ascii_header.uff")); });
   EXPECT_NE(m2.find("function type 4 (frequency response function)"), std::string::npos) << m2;
 }
 
 TEST(Uff58, RefusesTruncatedDeclaredLength) {
   // Declares 2 508 876 points and holds 42: refused before anything that size is allocated.
-  const std::string m = error_of([] { read_uff58(example("dataset_milestone_in_header.uff")); });
+  const std::string m =
+      testing::input_error_of([] { read_uff58(example("dataset_milestone_in_header.uff")); });
   EXPECT_NE(m.find("dataset_milestone_in_header.uff:14:"), std::string::npos) << m;
   EXPECT_NE(m.find("2508876 points"), std::string::npos) << m;
 }
@@ -159,11 +149,13 @@ TEST(Uff58, UnlabelledTypeIsSiAndUnknownLabelIsRefused) {
   const Record r = parse_uff58(dataset(kR6Z, kR7, none, kData4), "v.uff");
   EXPECT_EQ(*r.channels[0].quantity, Quantity::kVelocity);
   const std::string ft = "        12    1    0    0 a                    ft/s^2              ";
-  const std::string m = error_of([&] { parse_uff58(dataset(kR6Z, kR7, ft, kData4), "f.uff"); });
+  const std::string m =
+      testing::input_error_of([&] { parse_uff58(dataset(kR6Z, kR7, ft, kData4), "f.uff"); });
   EXPECT_NE(m.find("f.uff:11: record 9: unknown acceleration unit 'ft/s^2'"), std::string::npos)
       << m;
   const std::string clash = "        12    1    0    0 a                    m/s                 ";
-  const std::string m2 = error_of([&] { parse_uff58(dataset(kR6Z, kR7, clash, kData4), "c.uff"); });
+  const std::string m2 =
+      testing::input_error_of([&] { parse_uff58(dataset(kR6Z, kR7, clash, kData4), "c.uff"); });
   EXPECT_NE(m2.find("c.uff:11: record 9: unit 'm/s' measures velocity"), std::string::npos) << m2;
 }
 
@@ -177,7 +169,8 @@ TEST(Uff58, UnevenUniformAbscissaIsAccepted) {
 // The hostile-input list: each a one-line InputError naming the file and the line.
 TEST(Uff58BadInput, HugeDeclaredSizeAscii) {
   const std::string r7 = "         2 999999999         1  0.00000E+00  1.00000E-03  0.00000E+00";
-  const std::string m = error_of([&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, kData4), "h.uff"); });
+  const std::string m =
+      testing::input_error_of([&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, kData4), "h.uff"); });
   EXPECT_NE(m.find("h.uff:14: dataset 58 declares 999999999 points"), std::string::npos) << m;
 }
 
@@ -188,7 +181,7 @@ TEST(Uff58BadInput, HugeDeclaredSizeBinary) {
   std::string bin = format_uff58(r, true);
   const std::string from = "         4         4         1";
   bin.replace(bin.find(from), from.size(), "         4 999999999         1");
-  const std::string m = error_of([&] { parse_uff58(bin, "hb.uff"); });
+  const std::string m = testing::input_error_of([&] { parse_uff58(bin, "hb.uff"); });
   EXPECT_NE(m.find("hb.uff:14: dataset 58b declares 999999999 points but only"), std::string::npos)
       << m;
 }
@@ -198,12 +191,13 @@ TEST(Uff58BadInput, TruncatedBinary) {
   r.fs = 10;
   r.channels.push_back(Channel{"a", Quantity::kAcceleration, "", Eigen::VectorXd::Ones(100)});
   const std::string bin = format_uff58(r, true);
-  const std::string m = error_of([&] { parse_uff58(bin.substr(0, bin.size() - 300), "t.uff"); });
+  const std::string m =
+      testing::input_error_of([&] { parse_uff58(bin.substr(0, bin.size() - 300), "t.uff"); });
   EXPECT_NE(m.find("t.uff:14: dataset 58b declares 100 points"), std::string::npos) << m;
 }
 
 TEST(Uff58BadInput, TruncatedAscii) {
-  const std::string m = error_of(
+  const std::string m = testing::input_error_of(
       [&] { parse_uff58(dataset(kR6Z, kR7, kR9Acc, "  1.00000E+00  2.00000E+00\n"), "t.uff"); });
   EXPECT_NE(m.find("t.uff:15: dataset 58 starting at line 2 is truncated: 2 of 4"),
             std::string::npos)
@@ -211,8 +205,8 @@ TEST(Uff58BadInput, TruncatedAscii) {
 }
 
 TEST(Uff58BadInput, NanAndInf) {
-  const std::string m =
-      error_of([&] { parse_uff58(dataset(kR6Z, kR7, kR9Acc, "  1.0 nan 2.0 3.0\n"), "n.uff"); });
+  const std::string m = testing::input_error_of(
+      [&] { parse_uff58(dataset(kR6Z, kR7, kR9Acc, "  1.0 nan 2.0 3.0\n"), "n.uff"); });
   EXPECT_NE(m.find("n.uff:14: value 2 is nan"), std::string::npos) << m;
   Record r;
   r.fs = 10;
@@ -221,13 +215,13 @@ TEST(Uff58BadInput, NanAndInf) {
   const double inf = INFINITY;
   // The data block is the 4 x 8 bytes before "\n    -1\n"; value 3 is 16 bytes in.
   std::memcpy(bin.data() + bin.size() - 8 - 32 + 16, &inf, 8);
-  const std::string m2 = error_of([&] { parse_uff58(bin, "i.uff"); });
+  const std::string m2 = testing::input_error_of([&] { parse_uff58(bin, "i.uff"); });
   EXPECT_NE(m2.find("i.uff:14: dataset 58b: value 3 is inf"), std::string::npos) << m2;
 }
 
 TEST(Uff58BadInput, NonMonotonicTime) {
   const std::string r7 = "         2         3         0  0.00000E+00  0.00000E+00  0.00000E+00";
-  const std::string m = error_of(
+  const std::string m = testing::input_error_of(
       [&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, "  0.0 1.0  1.0 2.0  0.5 3.0\n"), "m.uff"); });
   EXPECT_NE(m.find("m.uff:14: uneven abscissa: point 3 at t = 0.5 does not increase"),
             std::string::npos)
@@ -235,7 +229,7 @@ TEST(Uff58BadInput, NonMonotonicTime) {
 }
 
 TEST(Uff58BadInput, DuplicateChannelNames) {
-  const std::string m = error_of([&] {
+  const std::string m = testing::input_error_of([&] {
     parse_uff58(dataset(kR6Z, kR7, kR9Acc, kData4) + dataset(kR6Z, kR7, kR9Acc, kData4), "d.uff");
   });
   EXPECT_NE(m.find("d.uff:17: dataset 58 #2: two channels named '1+Z'"), std::string::npos) << m;
@@ -243,14 +237,15 @@ TEST(Uff58BadInput, DuplicateChannelNames) {
 
 TEST(Uff58BadInput, ZeroSamplingInterval) {
   const std::string r7 = "         2         4         1  0.00000E+00  0.00000E+00  0.00000E+00";
-  const std::string m = error_of([&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, kData4), "z.uff"); });
+  const std::string m =
+      testing::input_error_of([&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, kData4), "z.uff"); });
   EXPECT_NE(m.find("z.uff:9: record 7: abscissa increment 0 is not positive"), std::string::npos)
       << m;
 }
 
 TEST(Uff58BadInput, DifferentTimeBases) {
   const std::string r7b = "         2         4         1  0.00000E+00  2.00000E-03  0.00000E+00";
-  const std::string m = error_of([&] {
+  const std::string m = testing::input_error_of([&] {
     parse_uff58(
         dataset(kR6Z, kR7, kR9Acc, kData4) +
             dataset("    1         0    0         0 NONE               2   3", r7b, kR9Acc, kData4),
@@ -261,13 +256,16 @@ TEST(Uff58BadInput, DifferentTimeBases) {
 
 TEST(Uff58BadInput, ComplexOrdinatesAndGarbage) {
   const std::string r7 = "         5         4         1  0.00000E+00  1.00000E-03  0.00000E+00";
-  const std::string m = error_of([&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, kData4), "c.uff"); });
+  const std::string m =
+      testing::input_error_of([&] { parse_uff58(dataset(kR6Z, r7, kR9Acc, kData4), "c.uff"); });
   EXPECT_NE(m.find("c.uff:9: record 7: complex ordinate data"), std::string::npos) << m;
-  EXPECT_NE(error_of([] { parse_uff58("hello\n", "g.uff"); }).find("g.uff:1: expected '-1'"),
+  EXPECT_NE(testing::input_error_of([] {
+              parse_uff58("hello\n", "g.uff");
+            }).find("g.uff:1: expected '-1'"),
             std::string::npos);
-  EXPECT_NE(error_of([] { parse_uff58("", "e.uff"); }).find("e.uff: empty file"),
+  EXPECT_NE(testing::input_error_of([] { parse_uff58("", "e.uff"); }).find("e.uff: empty file"),
             std::string::npos);
-  EXPECT_NE(error_of([] {
+  EXPECT_NE(testing::input_error_of([] {
               parse_uff58("    -1\n    58\nA\n", "s.uff");
             }).find("s.uff:3: dataset 58 starting at line 2 ends inside its header"),
             std::string::npos);

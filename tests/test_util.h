@@ -7,9 +7,12 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "jointlab/core/error.h"
 
 namespace jointlab::testing {
 
@@ -31,6 +34,20 @@ inline ::testing::AssertionResult Close(double actual, double expected, double r
 
 /// Relative error |a-b|/|b|.
 inline double rel_err(double a, double b) { return std::abs(a - b) / std::abs(b); }
+
+/// Runs f expecting an InputError with a one-line message; returns the message
+/// (an empty string, and a test failure, when nothing or something else is thrown).
+inline std::string input_error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    return m;
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
 
 /// The source tree root (set by CMake for every test).
 inline std::string source_dir() {
