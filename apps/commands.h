@@ -21,4 +21,7 @@ void add_qsma_command(CLI::App& app);
 /// `jointlab simulate`: impact ring-down of a model with Iwan joints, written as a test file.
 void add_simulate_command(CLI::App& app);
 
+/// `jointlab run`: a test campaign from hammer-test files to the report.
+void add_run_command(CLI::App& app);
+
 }  // namespace jointlab::apps

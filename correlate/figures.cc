@@ -320,11 +320,19 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     if (logy) log_y_labels(y.lo, y.hi);
   };
 
-  plvpor(0.13, 0.96, 0.53, 0.92);
+  plvpor(0.14, 0.96, 0.53, 0.92);
   draw_panel(false);
   plcol0(kBlack);
-  plmtex("l", 5.6, 0.5, 0.5, "natural frequency [Hz]");
+  plmtex("l", 6.2, 0.5, 0.5, "natural frequency [Hz]");
   plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
+
+  plvpor(0.14, 0.96, 0.12, 0.49);
+  draw_panel(true);
+  plcol0(kBlack);
+  plmtex("l", 6.2, 0.5, 0.5, "damping ratio (fraction)");
+  plmtex("b", 2.6, 0.5, 0.5, figure.amplitude_label.c_str());
+  // The legend sits in the damping panel's lower right, where a backbone whose damping
+  // rises with amplitude leaves room.
   std::vector<LegendEntry> entries;
   int n_flagged = static_cast<int>(std::count(flagged.begin(), flagged.end(), true));
   entries.push_back(
@@ -339,13 +347,7 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
   }
   for (size_t m = 0; m < figure.model.size(); ++m)
     entries.push_back({figure.model[m].label, model_colours[m % 3], false, 2.2, m < 3 ? 1 : 3});
-  legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP);
-
-  plvpor(0.13, 0.96, 0.12, 0.49);
-  draw_panel(true);
-  plcol0(kBlack);
-  plmtex("l", 5.6, 0.5, 0.5, "damping ratio (fraction)");
-  plmtex("b", 2.6, 0.5, 0.5, figure.amplitude_label.c_str());
+  legend(entries, PL_POSITION_RIGHT | PL_POSITION_BOTTOM);
   plot.finish();
 }
 

@@ -1,0 +1,311 @@
+#include "jointlab/correlate/campaign.h"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include "jointlab/core/error.h"
+
+namespace jointlab::correlate {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Names the file and line of every defect.
+struct Context {
+  std::string file;
+  fs::path dir;
+  [[noreturn]] void fail(const toml::node& node, const std::string& message) const {
+    throw InputError(where(file, static_cast<long>(node.source().begin.line), message));
+  }
+  [[noreturn]] void fail(const std::string& message) const {
+    throw InputError(where(file, 0, message));
+  }
+  fs::path resolve(const std::string& p) const {
+    const fs::path path(p);
+    return (path.is_absolute() ? path : dir / path).lexically_normal();
+  }
+};
+
+void reject_unknown(const Context& ctx, const toml::table& t, const std::string& name,
+                    const std::set<std::string>& known) {
+  for (auto&& [key, value] : t) {
+    if (known.count(std::string(key.str()))) continue;
+    std::string list;
+    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+    ctx.fail(value, fmt::format("{}: unknown key '{}' (expected {})", name, key.str(), list));
+  }
+}
+
+const toml::table& table(const Context& ctx, const toml::node& n, const std::string& field) {
+  const toml::table* t = n.as_table();
+  if (!t) ctx.fail(n, fmt::format("{} must be a table", field));
+  return *t;
+}
+
+double number(const Context& ctx, const toml::node& n, const std::string& field) {
+  if (!(n.is_integer() || n.is_floating_point()))
+    ctx.fail(n, fmt::format("{} must be a number", field));
+  const double v = *n.value<double>();
+  if (!std::isfinite(v)) ctx.fail(n, fmt::format("{} must be finite", field));
+  return v;
+}
+
+int integer(const Context& ctx, const toml::node& n, const std::string& field) {
+  if (!n.is_integer()) ctx.fail(n, fmt::format("{} must be an integer", field));
+  return static_cast<int>(*n.value<int64_t>());
+}
+
+std::string text(const Context& ctx, const toml::node& n, const std::string& field) {
+  if (!n.is_string()) ctx.fail(n, fmt::format("{} must be a string", field));
+  return *n.value<std::string>();
+}
+
+bool boolean(const Context& ctx, const toml::node& n, const std::string& field) {
+  if (!n.is_boolean()) ctx.fail(n, fmt::format("{} must be true or false", field));
+  return *n.value<bool>();
+}
+
+Quantity quantity(const Context& ctx, const toml::node& n, const std::string& field) {
+  const auto q = parse_quantity(text(ctx, n, field));
+  if (!q || *q == Quantity::kForce)
+    ctx.fail(n,
+             fmt::format("{} must be \"displacement\", \"velocity\" or \"acceleration\"", field));
+  return *q;
+}
+
+const toml::array& array(const Context& ctx, const toml::node& n, const std::string& field) {
+  const toml::array* a = n.as_array();
+  if (!a) ctx.fail(n, fmt::format("{} must be an array", field));
+  return *a;
+}
+
+CampaignUpdate read_update(const Context& ctx, const toml::node& n, const std::string& field) {
+  CampaignUpdate u;
+  u.enabled = true;
+  for (auto&& [key, value] : table(ctx, n, field)) {
+    const std::string k(key.str());
+    if (k == "enabled") {
+      u.enabled = boolean(ctx, value, field + ".enabled");
+    } else if (k == "sets") {
+      for (const toml::node& s : array(ctx, value, field + ".sets"))
+        u.sets.push_back(text(ctx, s, field + ".sets"));
+    } else {
+      u.settings[k] = number(ctx, value, field + "." + k);
+    }
+  }
+  return u;
+}
+
+}  // namespace
+
+int Campaign::hit_count() const {
+  int n = 0;
+  for (const CampaignGroup& g : groups) n += static_cast<int>(g.files.size());
+  return n;
+}
+
+const CampaignChannel* Campaign::channel(const std::string& name) const {
+  for (const CampaignChannel& c : channels)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+Campaign parse_campaign(const std::string& content, const fs::path& path) {
+  Context ctx{path.string(), fs::absolute(path).parent_path()};
+  toml::table doc;
+  try {
+    doc = toml::parse(content, path.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(where(path.string(), static_cast<long>(e.source().begin.line),
+                           std::string(e.description())));
+  }
+  reject_unknown(ctx, doc, "campaign file",
+                 {"campaign", "model", "group", "channel", "mode", "scatter", "qsma", "update"});
+  Campaign c;
+  c.file = fs::absolute(path).lexically_normal();
+  c.name = path.stem().string();
+
+  if (const toml::node* n = doc.get("campaign")) {
+    const toml::table& t = table(ctx, *n, "[campaign]");
+    reject_unknown(ctx, t, "[campaign]", {"name", "quantity", "amplitude", "truth"});
+    if (const toml::node* v = t.get("name")) c.name = text(ctx, *v, "campaign.name");
+    if (const toml::node* v = t.get("quantity"))
+      c.quantity = quantity(ctx, *v, "campaign.quantity");
+    if (const toml::node* v = t.get("amplitude"))
+      c.amplitude = quantity(ctx, *v, "campaign.amplitude");
+    if (const toml::node* v = t.get("truth")) {
+      c.truth = ctx.resolve(text(ctx, *v, "campaign.truth"));
+      if (!fs::is_regular_file(c.truth))
+        ctx.fail(*v, fmt::format("campaign.truth: no file {}", c.truth.string()));
+    }
+  }
+
+  if (const toml::node* n = doc.get("model")) {
+    const toml::table& t = table(ctx, *n, "[model]");
+    reject_unknown(ctx, t, "[model]", {"file", "description", "fixed_interface_modes"});
+    const toml::node* f = t.get("file");
+    const toml::node* d = t.get("description");
+    if ((f != nullptr) == (d != nullptr))
+      ctx.fail(*n,
+               "[model]: give exactly one of 'file' (a model.toml) or 'description' "
+               "(a riveted-beam description for build-model)");
+    const fs::path p = ctx.resolve(text(ctx, f ? *f : *d, f ? "model.file" : "model.description"));
+    if (!fs::is_regular_file(p))
+      ctx.fail(f ? *f : *d, fmt::format("model: no file {}", p.string()));
+    (f ? c.model.file : c.model.description) = p;
+    if (const toml::node* v = t.get("fixed_interface_modes")) {
+      if (!d) ctx.fail(*v, "model.fixed_interface_modes applies only with model.description");
+      c.model.fixed_interface_modes = integer(ctx, *v, "model.fixed_interface_modes");
+      if (c.model.fixed_interface_modes < 0)
+        ctx.fail(*v, "model.fixed_interface_modes must be >= 0");
+    }
+  }
+
+  const toml::node* groups = doc.get("group");
+  if (!groups) ctx.fail("no [[group]] of test files");
+  std::set<std::string> group_names, stems;
+  for (const toml::node& item : array(ctx, *groups, "[[group]]")) {
+    const toml::table& t = table(ctx, item, "[[group]]");
+    reject_unknown(ctx, t, "[[group]]", {"name", "level", "files"});
+    CampaignGroup g;
+    const toml::node* name = t.get("name");
+    if (!name) ctx.fail(item, "[[group]]: missing 'name'");
+    g.name = text(ctx, *name, "group.name");
+    if (g.name.empty() || g.name.find_first_of("/\\ ") != std::string::npos)
+      ctx.fail(*name, "group.name must be a non-empty word without spaces or slashes");
+    if (!group_names.insert(g.name).second)
+      ctx.fail(*name, fmt::format("group.name '{}' appears twice", g.name));
+    g.level = g.name;
+    if (const toml::node* v = t.get("level")) g.level = text(ctx, *v, "group.level");
+    const toml::node* files = t.get("files");
+    if (!files) ctx.fail(item, fmt::format("group '{}': missing 'files'", g.name));
+    for (const toml::node& f : array(ctx, *files, "group.files")) {
+      const fs::path p = ctx.resolve(text(ctx, f, "group.files"));
+      if (!fs::is_regular_file(p))
+        ctx.fail(f, fmt::format("group '{}': no test file {}", g.name, p.string()));
+      if (!stems.insert(p.stem().string()).second)
+        ctx.fail(f, fmt::format("group '{}': a second test file named '{}' (file names identify "
+                                "hits and must differ)",
+                                g.name, p.stem().string()));
+      g.files.push_back(p);
+    }
+    if (g.files.empty()) ctx.fail(*files, fmt::format("group '{}': no files", g.name));
+    c.groups.push_back(std::move(g));
+  }
+
+  const toml::node* channels = doc.get("channel");
+  if (!channels) ctx.fail("no [[channel]]");
+  for (const toml::node& item : array(ctx, *channels, "[[channel]]")) {
+    const toml::table& t = table(ctx, item, "[[channel]]");
+    reject_unknown(ctx, t, "[[channel]]", {"name", "dof", "sign"});
+    CampaignChannel ch;
+    const toml::node* name = t.get("name");
+    if (!name) ctx.fail(item, "[[channel]]: missing 'name'");
+    ch.name = text(ctx, *name, "channel.name");
+    if (c.channel(ch.name)) ctx.fail(*name, fmt::format("channel '{}' appears twice", ch.name));
+    if (const toml::node* v = t.get("dof")) {
+      if (v->is_integer()) {
+        ch.dof = std::to_string(*v->value<int64_t>());
+      } else {
+        ch.dof = text(ctx, *v, "channel.dof");
+      }
+    }
+    if (const toml::node* v = t.get("sign")) {
+      ch.sign = number(ctx, *v, "channel.sign");
+      if (ch.sign != 1.0 && ch.sign != -1.0) ctx.fail(*v, "channel.sign must be 1 or -1");
+    }
+    c.channels.push_back(ch);
+  }
+
+  const toml::node* modes = doc.get("mode");
+  if (!modes) ctx.fail("no [[mode]]");
+  for (const toml::node& item : array(ctx, *modes, "[[mode]]")) {
+    const toml::table& t = table(ctx, item, "[[mode]]");
+    reject_unknown(ctx, t, "[[mode]]", {"name", "band", "model_mode", "reference"});
+    CampaignMode m;
+    m.name = fmt::format("mode {}", c.modes.size() + 1);
+    if (const toml::node* v = t.get("name")) m.name = text(ctx, *v, "mode.name");
+    const toml::node* band = t.get("band");
+    if (!band) ctx.fail(item, fmt::format("{}: missing 'band = [LO, HI]' (Hz)", m.name));
+    const toml::array& b = array(ctx, *band, "mode.band");
+    if (b.size() != 2) ctx.fail(*band, "mode.band must be [LO, HI] in Hz");
+    m.band = {number(ctx, *b.get(0), "mode.band"), number(ctx, *b.get(1), "mode.band")};
+    if (!(m.band.lo > 0 && m.band.hi > m.band.lo))
+      ctx.fail(*band, "mode.band: need 0 < LO < HI (Hz)");
+    if (const toml::node* v = t.get("model_mode")) {
+      m.model_mode = integer(ctx, *v, "mode.model_mode");
+      if (m.model_mode < 1) ctx.fail(*v, "mode.model_mode must be >= 1 (elastic modes from 1)");
+    }
+    m.reference = c.channels.front().name;
+    if (const toml::node* v = t.get("reference")) {
+      m.reference = text(ctx, *v, "mode.reference");
+      if (!c.channel(m.reference))
+        ctx.fail(*v, fmt::format("mode.reference: '{}' is not a [[channel]]", m.reference));
+    }
+    c.modes.push_back(m);
+  }
+  if (c.modes.empty()) ctx.fail(*modes, "no [[mode]]");
+
+  if (const toml::node* n = doc.get("scatter")) {
+    const toml::table& t = table(ctx, *n, "[scatter]");
+    reject_unknown(ctx, t, "[scatter]",
+                   {"bins_per_decade", "confidence", "min_curves", "outlier_threshold",
+                    "frequency_floor", "damping_floor", "exclude_outliers"});
+    ScatterOptions& s = c.scatter;
+    if (const toml::node* v = t.get("bins_per_decade"))
+      s.bins_per_decade = integer(ctx, *v, "scatter.bins_per_decade");
+    if (const toml::node* v = t.get("confidence"))
+      s.confidence = number(ctx, *v, "scatter.confidence");
+    if (const toml::node* v = t.get("min_curves"))
+      s.min_curves = integer(ctx, *v, "scatter.min_curves");
+    if (const toml::node* v = t.get("outlier_threshold"))
+      s.outlier_threshold = number(ctx, *v, "scatter.outlier_threshold");
+    if (const toml::node* v = t.get("frequency_floor"))
+      s.frequency_floor = number(ctx, *v, "scatter.frequency_floor");
+    if (const toml::node* v = t.get("damping_floor"))
+      s.damping_floor = number(ctx, *v, "scatter.damping_floor");
+    if (const toml::node* v = t.get("exclude_outliers"))
+      s.exclude_outliers = boolean(ctx, *v, "scatter.exclude_outliers");
+    if (const std::string why = s.check(); !why.empty()) ctx.fail(*n, "scatter." + why);
+  }
+  if (const toml::node* n = doc.get("qsma")) {
+    const toml::table& t = table(ctx, *n, "[qsma]");
+    reject_unknown(ctx, t, "[qsma]", {"points"});
+    if (const toml::node* v = t.get("points")) {
+      c.qsma_points = integer(ctx, *v, "qsma.points");
+      if (c.qsma_points < 2 || c.qsma_points > 10000) ctx.fail(*v, "qsma.points: need 2 to 10000");
+    }
+  }
+  if (const toml::node* n = doc.get("update")) {
+    const toml::table& t = table(ctx, *n, "[update]");
+    reject_unknown(ctx, t, "[update]", {"linear", "iwan"});
+    if (const toml::node* v = t.get("linear"))
+      c.linear_update = read_update(ctx, *v, "update.linear");
+    if (const toml::node* v = t.get("iwan")) c.iwan_update = read_update(ctx, *v, "update.iwan");
+  }
+  const bool has_model = !c.model.file.empty() || !c.model.description.empty();
+  if (!has_model && (c.linear_update.enabled || c.iwan_update.enabled))
+    ctx.fail("[update] needs a [model]");
+  if (has_model) {
+    for (const CampaignChannel& ch : c.channels)
+      if (ch.dof.empty())
+        ctx.fail(fmt::format("channel '{}': 'dof' is needed with a [model]", ch.name));
+  }
+  return c;
+}
+
+Campaign read_campaign(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(where(path.string(), 0, "cannot open the campaign file"));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_campaign(ss.str(), path);
+}
+
+}  // namespace jointlab::correlate
