@@ -1,6 +1,13 @@
 #include "jointlab/correlate/two_chain.h"
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
 #include <vector>
+
+#include "jointlab/model/joint_condensation.h"
+#include "jointlab/model/qsma.h"
 
 namespace jointlab::correlate {
 
@@ -50,6 +57,44 @@ model::Model two_chain_structure(const TwoChainParameters& p) {
   out.stiffness.setFromTriplets(k.begin(), k.end());
   model::validate_model(out, "two-chain structure");
   return out;
+}
+
+MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
+                                    const std::vector<Sensor>& sensors, int sensor,
+                                    AmplitudeQuantity quantity, int points, double top,
+                                    double frequency_noise, double damping_noise, unsigned seed) {
+  const model::JointCondensation jc(model);
+  model::QsmaSummary qs;
+  const auto full = model::qsma(jc, mode, {}, &qs);
+  model::QsmaOptions o;
+  o.points = points;
+  o.q_max = top * full.back().modal_amplitude;
+  o.q_min = std::max(full.front().modal_amplitude, 0.01 * o.q_max);
+  const auto curve = model::qsma(jc, mode, o, &qs);
+  const int col = jc.modes().rigid_count + mode - 1;
+  const double ph = std::abs(jc.modes().shapes(sensors[sensor].dof, col));
+  const int pw = quantity == AmplitudeQuantity::kDisplacement ? 0
+                 : quantity == AmplitudeQuantity::kVelocity   ? 1
+                                                              : 2;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  MeasuredBackbone b;
+  b.sensor = sensor;
+  const auto n = static_cast<Eigen::Index>(curve.size());
+  b.amplitude.resize(n);
+  b.frequency_hz.resize(n);
+  b.damping_ratio.resize(n);
+  b.frequency_std_hz.resize(n);
+  b.damping_std.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const model::QsmaPoint& p = curve[i];
+    b.amplitude(i) = p.modal_amplitude * ph * std::pow(2 * std::numbers::pi * p.frequency_hz, pw);
+    b.frequency_hz(i) = p.frequency_hz * (1 + frequency_noise * g(rng));
+    b.damping_ratio(i) = p.damping_ratio * (1 + damping_noise * g(rng));
+    b.frequency_std_hz(i) = frequency_noise * p.frequency_hz;
+    b.damping_std(i) = damping_noise * p.damping_ratio;
+  }
+  return b;
 }
 
 }  // namespace jointlab::correlate

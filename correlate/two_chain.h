@@ -12,6 +12,10 @@
 // "bending" mode). Stiffness in N/m, mass in kg.
 #pragma once
 
+#include <vector>
+
+#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/correlate/sensors.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/model_file.h"
 
@@ -31,5 +35,15 @@ struct TwoChainParameters {
 
 /// Builds the two-chain model (validated).
 model::Model two_chain_structure(const TwoChainParameters& p = {});
+
+/// A backbone of elastic mode `mode` of `model` as `process` would report it at sensor
+/// `sensor`: `points` points log-spaced in modal amplitude over the two decades below `top` times
+/// the end of the automatic QSMA range (a ring-down's span), the amplitude converted to `quantity`,
+/// frequency and damping perturbed by Gaussian relative noise (frequency_noise, damping_noise;
+/// seeded) and their std columns set to those noise levels.
+MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
+                                    const std::vector<Sensor>& sensors, int sensor,
+                                    AmplitudeQuantity quantity, int points, double top,
+                                    double frequency_noise, double damping_noise, unsigned seed);
 
 }  // namespace jointlab::correlate

@@ -1,0 +1,484 @@
+#include "jointlab/correlate/iwan_update.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/model/joint_condensation.h"
+#include "jointlab/model/linear_modes.h"
+#include "jointlab/model/qsma.h"
+
+namespace jointlab::correlate {
+namespace {
+
+constexpr double kPenalty = 1e6;  // cost of a parameter set the model cannot evaluate
+
+// Linear interpolation of y(x) at x0, held at the ends; x ascending.
+double interpolate(const std::vector<double>& x, const std::vector<double>& y, double x0) {
+  if (x0 <= x.front()) return y.front();
+  if (x0 >= x.back()) return y.back();
+  const auto it = std::upper_bound(x.begin(), x.end(), x0);
+  const size_t i = static_cast<size_t>(it - x.begin());
+  const double t = (x0 - x[i - 1]) / (x[i] - x[i - 1]);
+  return y[i - 1] + t * (y[i] - y[i - 1]);
+}
+
+int power_of(AmplitudeQuantity q) {
+  return q == AmplitudeQuantity::kDisplacement ? 0 : q == AmplitudeQuantity::kVelocity ? 1 : 2;
+}
+
+}  // namespace
+
+std::string IwanUpdateOptions::error() const {
+  const IwanBounds& b = bounds;
+  if (!(b.Fs_min > 0 && b.Fs_min < b.Fs_max)) return "bounds: 0 < Fs_min < Fs_max";
+  if (!(b.gamma_min > 0 && b.gamma_min < b.gamma_max)) return "bounds: 0 < gamma_min < gamma_max";
+  if (!(b.chi_min > -1 && b.chi_min < b.chi_max)) return "bounds: -1 < chi_min < chi_max";
+  if (!(b.beta_min > 0 && b.beta_min < b.beta_max)) return "bounds: 0 < beta_min < beta_max";
+  if (!(fixed_gamma >= 0)) return "fixed_gamma must be >= 0";
+  if (samples < 2) return "samples must be >= 2";
+  if (!(contraction > 0 && contraction < 1)) return "contraction must be in (0, 1)";
+  if (max_evaluations < samples) return "max_evaluations must be >= samples";
+  if (local_starts < 1) return "local_starts must be >= 1";
+  if (qsma_points < 4) return "qsma_points must be >= 4";
+  if (!(frequency_floor > 0) || !(damping_floor > 0)) return "floors must be > 0";
+  return "";
+}
+
+IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
+                             const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
+                             AmplitudeQuantity amplitude, int qsma_points, double frequency_floor,
+                             double damping_floor)
+    : model_(&model),
+      set_(set.starts_with("iwan.") ? set : "iwan." + set),
+      sensors_(sensors),
+      targets_(std::move(targets)),
+      amplitude_(amplitude),
+      points_(qsma_points),
+      f_floor_(frequency_floor),
+      z_floor_(damping_floor) {
+  bool found = false;
+  for (const model::Joint& j : model.joints) {
+    if (j.element != set_) continue;
+    if (!j.iwan) throw InputError(fmt::format("set '{}' is not an Iwan set", set_));
+    if (!found) {
+      Ks_ = j.stiffness;
+      initial_ = {j.iwan->slip_force(), j.iwan->stiffness(), j.iwan->chi(), j.iwan->beta()};
+      found = true;
+    }
+  }
+  if (!found) throw InputError(fmt::format("no joint of the model uses the Iwan set '{}'", set_));
+  if (targets_.empty()) throw InputError("no measured backbone to update against");
+  for (const IwanTarget& t : targets_) {
+    if (t.mode < 1) throw InputError(fmt::format("mode {} must be >= 1", t.mode));
+    if (t.curves.empty()) throw InputError(fmt::format("mode {}: no measured backbone", t.mode));
+    for (const MeasuredBackbone& c : t.curves) {
+      if (c.sensor < 0 || c.sensor >= static_cast<int>(sensors_.size())) {
+        throw InputError(fmt::format("mode {}: backbone sensor index out of range", t.mode));
+      }
+      const Eigen::Index n = c.amplitude.size();
+      if (n == 0 || c.frequency_hz.size() != n || c.damping_ratio.size() != n ||
+          c.frequency_std_hz.size() != n || c.damping_std.size() != n) {
+        throw InputError(
+            fmt::format("mode {}, channel {}: backbone columns empty or of unequal "
+                        "length",
+                        t.mode, sensors_[c.sensor].channel));
+      }
+      if ((c.amplitude.array() <= 0).any() || (c.frequency_hz.array() <= 0).any() ||
+          !c.amplitude.allFinite() || !c.frequency_hz.allFinite() || !c.damping_ratio.allFinite()) {
+        throw InputError(
+            fmt::format("mode {}, channel {}: amplitudes and frequencies must be "
+                        "finite and > 0",
+                        t.mode, sensors_[c.sensor].channel));
+      }
+      residual_count_ += 2 * static_cast<int>(n);
+    }
+  }
+}
+
+model::Model IwanObjective::apply(const model::IwanParameters& p) const {
+  model::Model m = *model_;
+  for (model::Joint& j : m.joints) {
+    if (j.element != set_) continue;
+    j.stiffness = p.Kt;
+    j.iwan = model::Iwan(p);
+  }
+  return m;
+}
+
+bool IwanObjective::residuals(const model::IwanParameters& p, double* r) const {
+  ++evaluations_;
+  if (!model::iwan_parameter_error(p).empty()) return false;
+  const int pw = power_of(amplitude_);
+  const double n_total = residual_count_ / 2.0;
+  try {
+    const model::JointCondensation jc(apply(p));
+    const model::LinearModes& modes = jc.modes();
+    int k = 0;
+    for (const IwanTarget& t : targets_) {
+      if (t.mode > jc.elastic_count()) return false;
+      const int col = modes.rigid_count + t.mode - 1;
+      const double w_lin = std::sqrt(modes.omega2(col));
+      double q_lo = INFINITY, q_hi = 0;
+      for (const MeasuredBackbone& c : t.curves) {
+        const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
+        if (!(ph > 0)) return false;
+        const double scale = ph * std::pow(w_lin, pw);
+        q_lo = std::min(q_lo, c.amplitude.minCoeff() / scale);
+        q_hi = std::max(q_hi, c.amplitude.maxCoeff() / scale);
+      }
+      model::QsmaOptions qo;
+      qo.points = points_;
+      qo.q_min = 0.5 * q_lo;
+      qo.q_max = 2.0 * q_hi;  // the frequency falls with amplitude: a / omega^p grows
+      model::QsmaSummary qs;
+      const std::vector<model::QsmaPoint> curve = model::qsma(jc, t.mode, qo, &qs);
+      if (curve.size() < 2) return false;
+      for (const MeasuredBackbone& c : t.curves) {
+        const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
+        std::vector<double> la, f, z;
+        for (const model::QsmaPoint& q : curve) {
+          const double w = 2 * std::numbers::pi * q.frequency_hz;
+          const double a = q.modal_amplitude * ph * std::pow(w, pw);
+          if (!(a > 0) || (!la.empty() && std::log(a) <= la.back())) continue;
+          la.push_back(std::log(a));
+          f.push_back(q.frequency_hz);
+          z.push_back(q.damping_ratio);
+        }
+        if (la.size() < 2) return false;
+        for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
+          const double x = std::log(c.amplitude(j));
+          const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
+          const double sz = std::max(c.damping_std(j), z_floor_ * std::abs(c.damping_ratio(j)));
+          r[k++] = (interpolate(la, f, x) - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
+          r[k++] = sz > 0 ? (interpolate(la, z, x) - c.damping_ratio(j)) / (sz * std::sqrt(n_total))
+                          : 0.0;
+        }
+      }
+    }
+  } catch (const InputError&) {
+    return false;
+  }
+  for (int i = 0; i < residual_count_; ++i) {
+    if (!std::isfinite(r[i])) return false;
+  }
+  return true;
+}
+
+double IwanObjective::cost(const model::IwanParameters& p) const {
+  std::vector<double> r(residual_count_);
+  if (!residuals(p, r.data())) return kPenalty;
+  double s = 0;
+  for (double v : r) s += v * v;
+  return std::min(s, kPenalty);
+}
+
+double IwanObjective::linear_error(const model::IwanParameters& p) const {
+  const model::Model m = apply(p);
+  const model::LinearModes modes = model::linear_modes(m.mass, m.linear_stiffness());
+  double e = 0;
+  for (const IwanTarget& t : targets_) {
+    if (!(t.linear_frequency_hz > 0)) continue;
+    const int col = modes.rigid_count + t.mode - 1;
+    if (col >= modes.size()) continue;
+    e = std::max(e,
+                 std::abs(modes.frequency_hz(col) - t.linear_frequency_hz) / t.linear_frequency_hz);
+  }
+  return e;
+}
+
+namespace {
+
+// The search vector v = (F_S, gamma, chi, beta).
+using Vec4 = Eigen::Vector4d;
+
+model::IwanParameters to_params(const Vec4& v, double Ks) { return {v(0), v(1) * Ks, v(2), v(3)}; }
+
+// Evaluations with bookkeeping: history, best, budget, progress.
+struct Tracker {
+  const IwanObjective& objective;
+  const IwanUpdateOptions& options;
+  IwanUpdateSummary& summary;
+  int start_evaluations;
+  Vec4 best_v = Vec4::Zero();
+  double best = INFINITY;
+
+  int used() const { return objective.evaluations() - start_evaluations; }
+  bool spent() const { return used() >= options.max_evaluations; }
+  void record(const Vec4& v, double c) {
+    if (c < best) {
+      best = c;
+      best_v = v;
+    }
+    summary.history.push_back({used(), c, best});
+    if (options.progress) options.progress(used(), best);
+  }
+  double eval(const Vec4& v) {
+    const double c = objective.cost(to_params(v, objective.reference_stiffness()));
+    record(v, c);
+    return c;
+  }
+};
+
+struct Box {
+  Vec4 lo, hi;
+};
+
+Vec4 sample(const Box& b, bool log_scale, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Vec4 v;
+  for (int i = 0; i < 4; ++i) {
+    const double t = u(rng);
+    const bool lg = log_scale && i != 2 && b.lo(i) > 0;
+    v(i) = lg ? std::exp(std::log(b.lo(i)) + t * (std::log(b.hi(i)) - std::log(b.lo(i))))
+              : b.lo(i) + t * (b.hi(i) - b.lo(i));
+  }
+  return v;
+}
+
+Box initial_box(const IwanUpdateOptions& o) {
+  const IwanBounds& b = o.bounds;
+  Box box{Vec4(b.Fs_min, b.gamma_min, b.chi_min, b.beta_min),
+          Vec4(b.Fs_max, b.gamma_max, b.chi_max, b.beta_max)};
+  if (o.fixed_gamma > 0) box.lo(1) = box.hi(1) = o.fixed_gamma;
+  return box;
+}
+
+void monte_carlo(Tracker& tr, bool log_scale, std::mt19937& rng) {
+  const Box full = initial_box(tr.options);
+  Box box = full;
+  double previous = INFINITY;
+  while (!tr.spent()) {
+    for (int s = 0; s < tr.options.samples && !tr.spent(); ++s)
+      tr.eval(sample(box, log_scale, rng));
+    ++tr.summary.rounds;
+    if (!(tr.best < previous)) {
+      tr.summary.status = IwanUpdateStatus::kConverged;
+      return;
+    }
+    previous = tr.best;
+    for (int i = 0; i < 4; ++i) {
+      const double d = tr.options.contraction * std::max(std::abs(tr.best_v(i)), 1e-3);
+      box.lo(i) = std::max(full.lo(i), tr.best_v(i) - d);
+      box.hi(i) = std::min(full.hi(i), tr.best_v(i) + d);
+    }
+  }
+  tr.summary.status = IwanUpdateStatus::kBudget;
+}
+
+// x = (ln F_S, ln gamma, chi, ln beta).
+Vec4 to_x(const Vec4& v) { return Vec4(std::log(v(0)), std::log(v(1)), v(2), std::log(v(3))); }
+Vec4 to_v(const double* x) { return Vec4(std::exp(x[0]), std::exp(x[1]), x[2], std::exp(x[3])); }
+
+// Residuals with central-difference Jacobians (QSMA is not templated on the scalar).
+class IwanCost : public ceres::CostFunction {
+ public:
+  IwanCost(Tracker& tr, bool fixed_gamma) : tr_(tr), fixed_gamma_(fixed_gamma) {
+    set_num_residuals(tr.objective.residual_count());
+    mutable_parameter_block_sizes()->push_back(4);
+  }
+  bool Evaluate(double const* const* x, double* r, double** jac) const override {
+    const double Ks = tr_.objective.reference_stiffness();
+    const Vec4 v = to_v(x[0]);
+    if (!tr_.objective.residuals(to_params(v, Ks), r)) {
+      tr_.record(v, kPenalty);
+      return false;
+    }
+    double c = 0;
+    for (int i = 0; i < num_residuals(); ++i) c += r[i] * r[i];
+    tr_.record(v, c);
+    if (!jac || !jac[0]) return true;
+    const int m = num_residuals();
+    std::vector<double> rp(m), rm(m);
+    for (int k = 0; k < 4; ++k) {
+      if (k == 1 && fixed_gamma_) {
+        for (int i = 0; i < m; ++i) jac[0][i * 4 + k] = 0;
+        continue;
+      }
+      const double h = 1e-4;
+      double xp[4], xm[4];
+      std::copy(x[0], x[0] + 4, xp);
+      std::copy(x[0], x[0] + 4, xm);
+      xp[k] += h;
+      xm[k] -= h;
+      if (!tr_.objective.residuals(to_params(to_v(xp), Ks), rp.data()) ||
+          !tr_.objective.residuals(to_params(to_v(xm), Ks), rm.data())) {
+        return false;
+      }
+      for (int i = 0; i < m; ++i) jac[0][i * 4 + k] = (rp[i] - rm[i]) / (2 * h);
+    }
+    return true;
+  }
+
+ private:
+  Tracker& tr_;
+  bool fixed_gamma_;
+};
+
+class BudgetCallback : public ceres::IterationCallback {
+ public:
+  BudgetCallback(const Tracker& tr, int limit) : tr_(tr), limit_(limit) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return tr_.used() >= limit_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const Tracker& tr_;
+  int limit_;
+};
+
+void global_local(Tracker& tr, std::mt19937& rng) {
+  const IwanUpdateOptions& o = tr.options;
+  const Box full = initial_box(o);
+  std::vector<std::pair<double, Vec4>> samples;
+  const int n_global = std::max(o.samples, o.max_evaluations / 2);
+  for (int s = 0; s < n_global && !tr.spent(); ++s) {
+    const Vec4 v = sample(full, true, rng);
+    samples.emplace_back(tr.eval(v), v);
+  }
+  std::sort(samples.begin(), samples.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  const bool fixed = o.fixed_gamma > 0;
+  bool converged = true;
+  for (int s = 0; s < o.local_starts && s < static_cast<int>(samples.size()); ++s) {
+    if (samples[s].first >= kPenalty) break;
+    const int remaining = o.max_evaluations - tr.used();
+    if (remaining <= 9) break;
+    const int limit = tr.used() + remaining / (o.local_starts - s);
+    Vec4 x = to_x(samples[s].second);
+    ceres::Problem problem;
+    problem.AddResidualBlock(new IwanCost(tr, fixed), nullptr, x.data());
+    const Vec4 lo = to_x(full.lo), hi = to_x(full.hi);
+    if (fixed) {
+      problem.SetManifold(x.data(), new ceres::SubsetManifold(4, {1}));
+    }
+    for (int k = 0; k < 4; ++k) {
+      if (k == 1 && fixed) continue;
+      problem.SetParameterLowerBound(x.data(), k, lo(k));
+      problem.SetParameterUpperBound(x.data(), k, hi(k));
+    }
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = 50;
+    so.function_tolerance = 1e-10;
+    so.parameter_tolerance = 1e-8;
+    BudgetCallback cb(tr, limit);
+    so.callbacks.push_back(&cb);
+    ceres::Solver::Summary cs;
+    ceres::Solve(so, &problem, &cs);
+    ++tr.summary.rounds;
+    if (cs.termination_type != ceres::CONVERGENCE) converged = false;
+  }
+  tr.summary.status = converged ? IwanUpdateStatus::kConverged : IwanUpdateStatus::kBudget;
+}
+
+}  // namespace
+
+model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
+                                  IwanUpdateSummary* summary) {
+  if (const std::string e = options.error(); !e.empty()) throw InputError("update-iwan: " + e);
+  IwanUpdateSummary local;
+  IwanUpdateSummary& s = summary ? *summary : local;
+  s = IwanUpdateSummary{};
+  s.start = objective.initial();
+  Tracker tr{objective, options, s, objective.evaluations()};
+  s.initial_cost = objective.cost(s.start);
+  std::mt19937 rng(options.seed);
+  switch (options.optimizer) {
+    case IwanOptimizer::kPaper:
+      monte_carlo(tr, false, rng);
+      break;
+    case IwanOptimizer::kPaperLog:
+      monte_carlo(tr, true, rng);
+      break;
+    case IwanOptimizer::kGlobalLocal:
+      global_local(tr, rng);
+      break;
+  }
+  s.evaluations = tr.used();
+  if (!(tr.best < kPenalty)) {
+    s.status = IwanUpdateStatus::kNoValidPoint;
+    s.best = s.start;
+    s.final_cost = s.initial_cost;
+    return s.start;
+  }
+  s.best = to_params(tr.best_v, objective.reference_stiffness());
+  s.final_cost = tr.best;
+  s.linear_error = objective.linear_error(s.best);
+  // Gauss-Newton covariance in x = (ln F_S, ln K_T, chi, ln beta); residuals are normalised
+  // by sigma sqrt(N), so cov(x) = (J^T J)^-1 / N.
+  const int m = objective.residual_count();
+  Eigen::MatrixXd J(m, 4);
+  std::vector<double> rp(m), rm(m);
+  const Vec4 x0 = to_x(tr.best_v);
+  bool ok = true;
+  for (int k = 0; k < 4 && ok; ++k) {
+    const double h = 1e-4;
+    Vec4 xp = x0, xm = x0;
+    xp(k) += h;
+    xm(k) -= h;
+    ok =
+        objective.residuals(to_params(to_v(xp.data()), objective.reference_stiffness()),
+                            rp.data()) &&
+        objective.residuals(to_params(to_v(xm.data()), objective.reference_stiffness()), rm.data());
+    for (int i = 0; ok && i < m; ++i) J(i, k) = (rp[i] - rm[i]) / (2 * h);
+  }
+  if (ok) {
+    const Eigen::Matrix4d jtj = J.transpose() * J;
+    Eigen::FullPivLU<Eigen::Matrix4d> lu(jtj);
+    if (lu.isInvertible()) {
+      const Eigen::Matrix4d cov = lu.inverse() / (m / 2.0);
+      for (int k = 0; k < 4; ++k) {
+        double v = cov(k, k) > 0 ? std::sqrt(cov(k, k)) : 0;
+        if (k == 2) v = std::abs(s.best.chi) > 0 ? v / std::abs(s.best.chi) : 0;
+        s.relative_std(k) = std::isfinite(v) ? v : 0;
+      }
+    }
+  }
+  return s.best;
+}
+
+std::string IwanUpdateSummary::report() const {
+  static const char* names[] = {"converged", "evaluation budget spent", "no valid sample"};
+  return fmt::format(
+      "Iwan update: {}, {} QSMA evaluations, {} rounds, cost {:.4g} -> {:.4g}, linear frequency "
+      "error {:.3g} %\n  Fs {:.6g} -> {:.6g} N, Kt {:.6g} -> {:.6g} N/m, chi {:.4g} -> {:.4g}, "
+      "beta {:.4g} -> {:.4g}\n",
+      names[static_cast<int>(status)], evaluations, rounds, initial_cost, final_cost,
+      100 * linear_error, start.Fs, best.Fs, start.Kt, best.Kt, start.chi, best.chi, start.beta,
+      best.beta);
+}
+
+std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,
+                                      const std::vector<double>& gammas,
+                                      const IwanUpdateOptions& options) {
+  std::vector<ParetoPoint> out;
+  for (double g : gammas) {
+    if (!(g > 0)) throw InputError(fmt::format("Pareto front: gamma {} must be > 0", g));
+    IwanUpdateOptions o = options;
+    o.fixed_gamma = g;
+    IwanUpdateSummary s;
+    ParetoPoint p;
+    p.gamma = g;
+    p.params = update_iwan(objective, o, &s);
+    p.linear_error = s.linear_error;
+    p.backbone_cost = s.final_cost;
+    out.push_back(p);
+  }
+  for (ParetoPoint& a : out) {
+    for (const ParetoPoint& b : out) {
+      if (&a != &b && b.linear_error <= a.linear_error && b.backbone_cost <= a.backbone_cost &&
+          (b.linear_error < a.linear_error || b.backbone_cost < a.backbone_cost)) {
+        a.dominated = true;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace jointlab::correlate

@@ -1,0 +1,179 @@
+// Iwan updating: the four parameters of one named Iwan set from measured backbones.
+//
+// Parameters p = (F_S [N], gamma, chi, beta) shared by every element of the set, with
+// K_T = gamma K_s, K_s the set's linear stiffness in the given model (from the linear update).
+// Model curve: QSMA of elastic mode R (qsma.h) gives q, omega(q), zeta(q). The measuring
+// sensor (dof d, sign s) sees the displacement amplitude x = |q phi_R[d]|; the amplitude of
+// the quantity `process` reported is a = x omega^p (p = 0, 1, 2 for displacement, velocity,
+// acceleration), omega the QSMA frequency at that point. The model frequency and damping at
+// each measured amplitude a_j are interpolated linearly in ln a (held at the curve's ends).
+// Residuals, over the N measured points of every curve, weighted by the measured scatter:
+//     r_f,j = (f_model(a_j) - f_j) / (sigma_f,j sqrt(N)),  r_z,j = (zeta_model(a_j) - zeta_j)
+//                                                                   / (sigma_z,j sqrt(N)),
+// sigma floored at frequency_floor f_j and damping_floor zeta_j; cost = sum r^2 (a mean
+// squared normalised error: about 2 when the model is within the scatter).
+// Optimisers, on one interface and one budget of QSMA evaluations:
+//   kPaper       the paper's Monte Carlo: `samples` uniform samples in the bounds, keep the
+//                best, contract the bounds to +-contraction around it, repeat until a round
+//                brings no improvement or the budget is spent;
+//   kPaperLog    the same with F_S, gamma and beta sampled logarithmically;
+//   kGlobalLocal logarithmic sampling with half the budget, then Ceres (central differences on
+//                ln F_S, ln gamma, chi, ln beta) from the best `local_starts` samples.
+// Pareto front: for each gamma of a list the other three parameters are updated; each point
+// gives the linear-frequency error |f_model,R - f_lin,exp| / f_lin,exp and the backbone cost.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "jointlab/correlate/sensors.h"
+#include "jointlab/model/iwan.h"
+#include "jointlab/model/model_file.h"
+
+namespace jointlab::correlate {
+
+/// The amplitude quantity of measured backbones (as `process --amplitude`).
+enum class AmplitudeQuantity { kDisplacement, kVelocity, kAcceleration };
+
+/// One measured backbone curve: points of one channel (or pooled hits of it).
+struct MeasuredBackbone {
+  int sensor = 0;                    ///< index into the sensors: where the amplitude is measured
+  Eigen::VectorXd amplitude;         ///< amplitude a_j (SI units of the quantity), > 0
+  Eigen::VectorXd frequency_hz;      ///< f_j [Hz]
+  Eigen::VectorXd damping_ratio;     ///< zeta_j
+  Eigen::VectorXd frequency_std_hz;  ///< sigma_f,j [Hz] (0: the floor)
+  Eigen::VectorXd damping_std;       ///< sigma_z,j (0: the floor)
+};
+
+/// The measured data of one model mode.
+struct IwanTarget {
+  int mode = 1;                          ///< elastic model mode R (1-based, as `modes`)
+  std::vector<MeasuredBackbone> curves;  ///< its measured backbones
+  double linear_frequency_hz = 0;        ///< measured linear frequency (0: unknown)
+};
+
+/// Bounds of the Iwan parameters (F_S, gamma and beta > 0; -1 < chi).
+struct IwanBounds {
+  double Fs_min = 1, Fs_max = 1e3;         ///< [N]
+  double gamma_min = 0.3, gamma_max = 3;   ///< K_T / K_s
+  double chi_min = -0.95, chi_max = 0;     ///< exponent
+  double beta_min = 0.01, beta_max = 100;  ///< macroslip weight
+};
+
+/// Which optimiser update_iwan() runs.
+enum class IwanOptimizer { kPaper, kPaperLog, kGlobalLocal };
+
+/// Settings of update_iwan().
+struct IwanUpdateOptions {
+  IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;       ///< method
+  IwanBounds bounds;                                           ///< search box
+  double fixed_gamma = 0;                                      ///< > 0: gamma held at this value
+  AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< measured amplitude quantity
+  int samples = 100;                                           ///< samples per Monte Carlo round
+  double contraction = 0.03;      ///< Monte Carlo: bounds contract to +-this around the best
+  int max_evaluations = 1500;     ///< budget of QSMA evaluations
+  int local_starts = 3;           ///< global-local: Ceres starts from the best samples
+  int qsma_points = 30;           ///< QSMA points per curve
+  double frequency_floor = 1e-4;  ///< sigma_f at least this times f
+  double damping_floor = 0.02;    ///< sigma_z at least this times zeta
+  unsigned seed = 1;              ///< random seed
+  /// Called after every evaluation with (evaluations, best cost so far).
+  std::function<void(int, double)> progress;
+  /// What is wrong with these options, or "".
+  std::string error() const;
+};
+
+/// The objective: QSMA of the set at given parameters against the measured backbones.
+class IwanObjective {
+ public:
+  /// Prepares the objective; InputError if the set is not an Iwan set of the model, a mode or
+  /// sensor is out of range, or a curve is empty or not positive.
+  IwanObjective(const model::Model& model, const std::string& set,
+                const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
+                AmplitudeQuantity amplitude, int qsma_points, double frequency_floor,
+                double damping_floor);
+  /// K_s: the set's linear stiffness in the model [N/m].
+  double reference_stiffness() const { return Ks_; }
+  /// The set's parameters in the model.
+  const model::IwanParameters& initial() const { return initial_; }
+  /// Number of residuals.
+  int residual_count() const { return residual_count_; }
+  /// Residuals at p (K_T = p.Kt); false if the model could not be evaluated there.
+  bool residuals(const model::IwanParameters& p, double* r) const;
+  /// Sum of squared residuals at p (a large finite penalty if it cannot be evaluated).
+  double cost(const model::IwanParameters& p) const;
+  /// Relative linear-frequency error of every target at p (0 for targets without one).
+  double linear_error(const model::IwanParameters& p) const;
+  /// QSMA evaluations so far.
+  int evaluations() const { return evaluations_; }
+  /// A copy of the model with the set at p.
+  model::Model apply(const model::IwanParameters& p) const;
+
+ private:
+  const model::Model* model_;
+  std::string set_;
+  std::vector<Sensor> sensors_;
+  std::vector<IwanTarget> targets_;
+  AmplitudeQuantity amplitude_;
+  int points_;
+  double f_floor_, z_floor_;
+  double Ks_ = 0;
+  model::IwanParameters initial_;
+  int residual_count_ = 0;
+  mutable int evaluations_ = 0;
+};
+
+/// Why update_iwan() stopped.
+enum class IwanUpdateStatus {
+  kConverged,     ///< no further improvement (Monte Carlo) or Ceres converged
+  kBudget,        ///< the evaluation budget was spent
+  kNoValidPoint,  ///< no sample could be evaluated
+};
+
+/// One objective value on the way.
+struct IwanHistoryEntry {
+  int evaluation = 0;  ///< evaluations so far
+  double cost = 0;     ///< the cost of this evaluation
+  double best = 0;     ///< the best cost so far
+};
+
+/// Outcome of update_iwan().
+struct IwanUpdateSummary {
+  IwanUpdateStatus status = IwanUpdateStatus::kNoValidPoint;  ///< termination
+  model::IwanParameters start;                                ///< the model's parameters
+  model::IwanParameters best;                                 ///< the updated parameters
+  double initial_cost = 0;                                    ///< cost at start
+  double final_cost = 0;                                      ///< cost at best
+  double linear_error = 0;  ///< relative linear-frequency error at best
+  int evaluations = 0;      ///< QSMA evaluations
+  int rounds = 0;           ///< Monte Carlo rounds or local starts
+  Eigen::Vector4d relative_std =
+      Eigen::Vector4d::Zero();            ///< of (F_S, K_T, chi, beta) from
+                                          ///< the Gauss-Newton covariance at best (0 where unknown)
+  std::vector<IwanHistoryEntry> history;  ///< every evaluation
+  /// One paragraph: optimiser outcome, parameters, cost.
+  std::string report() const;
+};
+
+/// Updates the Iwan set against the objective; returns the best parameters.
+model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
+                                  IwanUpdateSummary* summary);
+
+/// One point of the Pareto front of linear-frequency error against backbone cost.
+struct ParetoPoint {
+  double gamma = 0;              ///< K_T / K_s held
+  model::IwanParameters params;  ///< the best parameters at this gamma
+  double linear_error = 0;       ///< relative linear-frequency error
+  double backbone_cost = 0;      ///< the backbone cost
+  bool dominated = false;        ///< another point is better in both
+};
+
+/// Updates (F_S, chi, beta) at each gamma and marks the non-dominated points.
+std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,
+                                      const std::vector<double>& gammas,
+                                      const IwanUpdateOptions& options);
+
+}  // namespace jointlab::correlate
