@@ -165,7 +165,7 @@ struct LegendEntry {
   double width = 2.0;
   PLINT style = 1;
 };
-void legend(const std::vector<LegendEntry>& entries, PLINT position) {
+void legend(const std::vector<LegendEntry>& entries, PLINT position, bool outside = false) {
   if (entries.empty()) return;
   const size_t n = entries.size();
   std::vector<PLINT> opt(n), text_colors(n, kBlack), box_colors(n), box_patterns(n, 0),
@@ -183,11 +183,12 @@ void legend(const std::vector<LegendEntry>& entries, PLINT position) {
   PLFLT w = 0, h = 0;
   plschr(0, 0.95);
   pllegend(&w, &h, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
-           position | PL_POSITION_INSIDE | PL_POSITION_VIEWPORT, 0.015, 0.02, 0.07, kWhite, kBlack,
-           1, 0, 0, static_cast<PLINT>(n), opt.data(), 0.8, 0.9, 1.8, 0.0, text_colors.data(),
-           text.data(), box_colors.data(), box_patterns.data(), box_scales.data(),
-           box_line_widths.data(), line_colors.data(), line_styles.data(), line_widths.data(),
-           symbol_colors.data(), symbol_scales.data(), symbol_numbers.data(), symbols.data());
+           position | (outside ? PL_POSITION_OUTSIDE : PL_POSITION_INSIDE) | PL_POSITION_VIEWPORT,
+           outside ? 0.02 : 0.015, 0.02, outside ? 0.08 : 0.07, kWhite, kBlack, 1, 0, 0,
+           static_cast<PLINT>(n), opt.data(), 0.8, 0.9, 1.8, 0.0, text_colors.data(), text.data(),
+           box_colors.data(), box_patterns.data(), box_scales.data(), box_line_widths.data(),
+           line_colors.data(), line_styles.data(), line_widths.data(), symbol_colors.data(),
+           symbol_scales.data(), symbol_numbers.data(), symbols.data());
   plschr(0, 1.15);
 }
 
@@ -320,19 +321,18 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     if (logy) log_y_labels(y.lo, y.hi);
   };
 
-  plvpor(0.14, 0.96, 0.53, 0.92);
+  plvpor(0.15, 0.67, 0.53, 0.92);
   draw_panel(false);
   plcol0(kBlack);
-  plmtex("l", 6.2, 0.5, 0.5, "natural frequency [Hz]");
+  plmtex("l", 6.2, 0.5, 0.5, "frequency [Hz]");
   plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
 
-  plvpor(0.14, 0.96, 0.12, 0.49);
+  plvpor(0.15, 0.67, 0.12, 0.49);
   draw_panel(true);
   plcol0(kBlack);
-  plmtex("l", 6.2, 0.5, 0.5, "damping ratio (fraction)");
+  plmtex("l", 6.2, 0.5, 0.5, "damping ratio");
   plmtex("b", 2.6, 0.5, 0.5, figure.amplitude_label.c_str());
-  // The legend sits in the damping panel's lower right, where a backbone whose damping
-  // rises with amplitude leaves room.
+  // The legend sits to the right of the panels, clear of the data.
   std::vector<LegendEntry> entries;
   int n_flagged = static_cast<int>(std::count(flagged.begin(), flagged.end(), true));
   entries.push_back(
@@ -342,12 +342,12 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
   if (!figure.summary.bins.empty()) {
     entries.push_back({"mean over hits", kMean, false, 2.5});
     entries.push_back(
-        {fmt::format("{:g} % interval of the mean", 100 * figure.summary.options.confidence), kBand,
+        {fmt::format("{:g} % CI of the mean", 100 * figure.summary.options.confidence), kBand,
          true});
   }
   for (size_t m = 0; m < figure.model.size(); ++m)
     entries.push_back({figure.model[m].label, model_colours[m % 3], false, 2.2, m < 3 ? 1 : 3});
-  legend(entries, PL_POSITION_RIGHT | PL_POSITION_BOTTOM);
+  legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP, true);
   plot.finish();
 }
 

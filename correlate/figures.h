@@ -44,7 +44,7 @@ struct BackboneFigure {
 
 /// Draws a BackboneFigure (frequency above, damping on a log axis below) into `file`.
 void plot_backbones(const BackboneFigure& figure, const std::filesystem::path& file,
-                    const FigureSize& size = {});
+                    const FigureSize& size = {1150, 700});
 
 /// A shaded frequency band with its label.
 struct LabelledBand {
