@@ -55,6 +55,7 @@ TEST(IwanUpdate, GlobalLocalRecoversTheParametersFromFarOff) {
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   SCOPED_TRACE(sum.report());
+  RecordProperty("report", sum.report());  // in --gtest_output=xml
   // Kt within 2 %, chi within 5 %. Below phi_max the virgin curve F = Kt u - R u^(chi+2)/(..)
   // depends on Kt, R and chi only, and QSMA curves end at full macroslip: such data fix R
   // (within 5 %), not Fs and beta separately (see docs/update-iwan.md).

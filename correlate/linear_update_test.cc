@@ -106,6 +106,7 @@ TEST(LinearUpdate, RecoversIdentifiableStiffnessAndReportsTheFlatOne) {
   LinearUpdateSummary s;
   const Eigen::VectorXd theta = update_linear(start, kSets, sensors, meas, o, &s);
   SCOPED_TRACE(s.report());
+  RecordProperty("report", s.report());  // in --gtest_output=xml
   EXPECT_EQ(s.final.pairing.pairs.size(), 6u);
   // 2 %: with 0.1 % frequency noise on six modes the stiffness error is a few 0.1 %
   // (relative_std below says so); 2 % is the acceptance bound.
