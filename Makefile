@@ -25,7 +25,8 @@ demo: build
 	@bash examples/demo.sh $(BUILD_DIR)
 
 bench: build
-	@$(BUILD_DIR)/bin/jointlab_bench_process
+	@for b in $(BUILD_DIR)/bin/jointlab_bench_*; do echo "== $$b"; $$b; done
+	@bash bench/compare_scipy.sh $(BUILD_DIR)
 
 format:
 	@clang-format -i $$(git ls-files '*.h' '*.cc')
