@@ -411,7 +411,7 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
     throw InputError(fmt::format("{}: a {}x{} MAC matrix needs {} row and {} column labels",
                                  file.string(), nr, nc, nr, nc));
   Plot plot(file, size);
-  plvpor(0.20, 0.92, 0.16, 0.86);
+  plvpor(0.22, 0.92, 0.16, 0.86);
   plwind(0, static_cast<PLFLT>(nc), 0, static_cast<PLFLT>(nr));
   plschr(0, nr > 8 || nc > 8 ? 0.75 : 1.0);
   for (Eigen::Index i = 0; i < nr; ++i) {
@@ -436,7 +436,7 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
     plmtex("lv", 1.0, 1.0 - (i + 0.5) / static_cast<double>(nr), 1.0, rows[i].c_str());
   plschr(0, 1.15);
   plmtex("b", 3.2, 0.5, 0.5, "model mode");
-  plmtex("l", 4.0, 0.5, 0.5, "measured mode");
+  plmtex("l", 8.0, 0.5, 0.5, "measured mode");
   plmtex("t", 2.4, 0.5, 0.5, title.c_str());
   plschr(0, 0.9);
   plmtex("t", 0.8, 0.5, 0.5, "MAC = |x^H y|^2 / ((x^H x)(y^H y)), 1 for collinear shapes");
