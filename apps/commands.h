@@ -21,6 +21,9 @@ void add_qsma_command(CLI::App& app);
 /// `jointlab simulate`: impact ring-down of a model with Iwan joints, written as a test file.
 void add_simulate_command(CLI::App& app);
 
+/// `jointlab update-linear` and `jointlab update-iwan`: model updating against process output.
+void add_update_commands(CLI::App& app);
+
 /// `jointlab run`: a test campaign from hammer-test files to the report.
 void add_run_command(CLI::App& app);
 

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   jointlab::apps::add_modes_command(app);
   jointlab::apps::add_qsma_command(app);
   jointlab::apps::add_simulate_command(app);
+  jointlab::apps::add_update_commands(app);
   jointlab::apps::add_run_command(app);
   try {
     app.parse(argc, argv);

@@ -1,0 +1,232 @@
+// `jointlab update-linear` and `jointlab update-iwan`: model updating against the output of
+// `jointlab process` (docs/update-linear.md, docs/update-iwan.md). Argument parsing only:
+// reading measured data (correlate/measured_data.h), the updates (linear_update.h,
+// iwan_update.h) and the files written (update_files.h, model/model_file_writer.h) are
+// library code.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "jointlab/apps/commands.h"
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/correlate/linear_update.h"
+#include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/sensors.h"
+#include "jointlab/correlate/update_files.h"
+#include "jointlab/model/model_file.h"
+#include "jointlab/model/model_file_writer.h"
+
+namespace jointlab::apps {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct LinearArgs {
+  std::string model, measured, sensors, out;
+  std::vector<std::string> sets;
+  correlate::LinearUpdateOptions options;
+};
+
+void make_out_dir(const std::string& out) {
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out)) {
+    throw InputError(fmt::format("{}: cannot create the output directory", out));
+  }
+}
+
+void run_update_linear(const LinearArgs& a) {
+  if (const std::string e = a.options.error(); !e.empty()) {
+    throw InputError(fmt::format("update-linear: {}", e));
+  }
+  const model::Model m = model::read_model(a.model);
+  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
+  const correlate::ProcessRun run = correlate::read_process_run(a.measured);
+  const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors);
+  correlate::LinearUpdateSummary summary;
+  const Eigen::VectorXd theta =
+      correlate::update_linear(m, a.sets, sensors, measured, a.options, &summary);
+  if (summary.status == correlate::LinearUpdateStatus::kTooFewPairs) {
+    throw InputError(
+        fmt::format("update-linear: no measured mode of {} pairs with a model mode (MAC >= {})",
+                    a.measured, a.options.mac_threshold));
+  }
+  const model::Model updated = correlate::StiffnessSets(m, a.sets).apply(theta);
+  make_out_dir(a.out);
+  model::write_model_file(fs::path(a.out) / "model.toml", updated);
+  correlate::write_linear_parameters(fs::path(a.out) / "parameters.csv", summary);
+  correlate::write_linear_history(fs::path(a.out) / "history.csv", summary);
+  fmt::print("{}", summary.report());
+}
+
+struct IwanArgs {
+  std::string model, measured, sensors, out, set, optimizer = "global-local";
+  std::vector<std::string> modes, channels;
+  std::vector<double> pareto;
+  std::vector<double> fs_range, gamma_range{0.05, 2.0}, chi_range{-0.95, 0.0},
+      beta_range{0.01, 100.0};
+  correlate::IwanUpdateOptions options;
+};
+
+// The search box: the given LO:HI ranges; Fs by default within a factor 30 of the start.
+correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjective& obj) {
+  correlate::IwanBounds b;
+  if (a.fs_range.size() == 2) {
+    b.Fs_min = a.fs_range[0], b.Fs_max = a.fs_range[1];
+  } else {
+    b.Fs_min = obj.initial().Fs / 30, b.Fs_max = obj.initial().Fs * 30;
+  }
+  b.gamma_min = a.gamma_range[0], b.gamma_max = a.gamma_range[1];
+  b.chi_min = a.chi_range[0], b.chi_max = a.chi_range[1];
+  b.beta_min = a.beta_range[0], b.beta_max = a.beta_range[1];
+  return b;
+}
+
+void run_update_iwan(const IwanArgs& a) {
+  const model::Model m = model::read_model(a.model);
+  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
+  const correlate::ProcessRun run = correlate::read_process_run(a.measured);
+  std::vector<int> bands;
+  const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
+  std::vector<correlate::IwanTarget> targets;
+  for (const std::string& spec : a.modes) {
+    correlate::IwanTarget t;
+    int band = 0;
+    const size_t colon = spec.find(':');
+    try {
+      size_t used = 0;
+      t.mode = std::stoi(spec.substr(0, colon), &used);
+      if (used != spec.substr(0, colon).size()) throw std::invalid_argument(spec);
+      if (colon != std::string::npos) {
+        band = std::stoi(spec.substr(colon + 1), &used);
+        if (used != spec.size() - colon - 1) throw std::invalid_argument(spec);
+      }
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("--mode {}: expected R or R:BAND (integers from 1)", spec));
+    }
+    if (t.mode < 1 || (colon != std::string::npos && band < 1)) {
+      throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
+    }
+    int col = -1;
+    if (colon == std::string::npos) {
+      col = correlate::measured_mode_of(m, sensors, measured, t.mode, 0.6);
+      if (col < 0) {
+        throw InputError(
+            fmt::format("--mode {}: no measured band pairs with model mode {} by MAC; give R:BAND",
+                        spec, t.mode));
+      }
+      band = bands[static_cast<size_t>(col)];
+    } else {
+      for (size_t i = 0; i < bands.size(); ++i) {
+        if (bands[i] == band) col = static_cast<int>(i);
+      }
+    }
+    if (col >= 0) t.linear_frequency_hz = measured.frequency_hz(col);
+    t.curves = correlate::measured_backbones(run, sensors, band, a.channels);
+    targets.push_back(std::move(t));
+  }
+  correlate::IwanUpdateOptions o = a.options;
+  o.amplitude = run.amplitude;
+  o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
+                : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
+                                             : correlate::IwanOptimizer::kGlobalLocal;
+  const correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
+                                           o.qsma_points, o.frequency_floor, o.damping_floor);
+  o.bounds = bounds_of(a, objective);
+  if (const std::string e = o.error(); !e.empty()) {
+    throw InputError(fmt::format("update-iwan: {}", e));
+  }
+  std::vector<correlate::ParetoPoint> front;
+  if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
+  correlate::IwanUpdateSummary summary;
+  const model::IwanParameters best = correlate::update_iwan(objective, o, &summary);
+  if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
+    throw InputError(fmt::format(
+        "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
+        "amplitudes of {}",
+        a.measured));
+  }
+  make_out_dir(a.out);
+  model::write_model_file(fs::path(a.out) / "model.toml", objective.apply(best));
+  correlate::write_iwan_parameters(fs::path(a.out) / "parameters.csv", summary);
+  correlate::write_iwan_history(fs::path(a.out) / "history.csv", summary);
+  if (!front.empty()) correlate::write_pareto(fs::path(a.out) / "pareto.csv", front);
+  fmt::print("{}", summary.report());
+  for (const correlate::ParetoPoint& p : front) {
+    fmt::print(
+        "  Pareto gamma {:.4g}: Fs {:.6g} N, chi {:.4g}, beta {:.4g}, linear error {:.3g} %, "
+        "backbone cost {:.4g}{}\n",
+        p.gamma, p.params.Fs, p.params.chi, p.params.beta, 100 * p.linear_error, p.backbone_cost,
+        p.dominated ? " (dominated)" : "");
+  }
+}
+
+void range_option(CLI::App* cmd, const std::string& name, std::vector<double>& v,
+                  const std::string& help) {
+  cmd->add_option(name, v, help)->delimiter(':')->expected(2);
+}
+
+}  // namespace
+
+void add_update_commands(CLI::App& app) {
+  auto la = std::make_shared<LinearArgs>();
+  CLI::App* lin = app.add_subcommand(
+      "update-linear",
+      "Updates named joint stiffness sets (spring.<name>, iwan.<name> at Kt) so the model's\n"
+      "linear frequencies match the measured ones, modes paired by MAC at every step.\n"
+      "Reads DIR/summary.json of 'jointlab process'; writes OUTDIR/model.toml (with its\n"
+      "matrices), parameters.csv and history.csv, and prints a report.");
+  lin->add_option("MODEL", la->model, "model file (TOML)")->required();
+  lin->add_option("--measured", la->measured, "output directory of 'jointlab process'")->required();
+  lin->add_option("--sensors", la->sensors, "sensors file: channel,dof[,sign]")->required();
+  lin->add_option("--set", la->sets, "element name to update (repeat for more)")->required();
+  lin->add_option("--out", la->out, "output directory")->required();
+  lin->add_option("--tolerance", la->options.tolerance,
+                  "lower flat parameters to the smallest value with every frequency error "
+                  "within this fraction (default 0: off)");
+  lin->add_option("--mac-threshold", la->options.mac_threshold,
+                  "smallest MAC of a mode pair (default 0.6)");
+  lin->callback([la] { run_update_linear(*la); });
+
+  auto ia = std::make_shared<IwanArgs>();
+  CLI::App* iw = app.add_subcommand(
+      "update-iwan",
+      "Updates the four parameters of one Iwan set (Fs, Kt = gamma Ks, chi, beta) so QSMA\n"
+      "backbones match the measured ones. Reads DIR/summary.json and the band CSVs of\n"
+      "'jointlab process'; writes OUTDIR/model.toml, parameters.csv, history.csv (and\n"
+      "pareto.csv with --pareto), and prints a report.");
+  iw->add_option("MODEL", ia->model, "model file (TOML), linear stiffness already updated")
+      ->required();
+  iw->add_option("--measured", ia->measured, "output directory of 'jointlab process'")->required();
+  iw->add_option("--sensors", ia->sensors, "sensors file: channel,dof[,sign]")->required();
+  iw->add_option("--set", ia->set, "Iwan set to update (iwan.<name> or <name>)")->required();
+  iw->add_option("--mode", ia->modes,
+                 "elastic model mode R, with measured band BAND (default: the band paired by "
+                 "MAC); repeat for more")
+      ->required();
+  iw->add_option("--channel", ia->channels,
+                 "channel whose backbones are used (repeatable; default: each file's reference "
+                 "channel of the band)");
+  iw->add_option("--optimizer", ia->optimizer, "paper, paper-log or global-local (default)")
+      ->check(CLI::IsMember({"paper", "paper-log", "global-local"}));
+  iw->add_option("--gamma", ia->options.fixed_gamma, "hold Kt / Ks at this value")
+      ->check(CLI::PositiveNumber);
+  iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")
+      ->delimiter(',');
+  iw->add_option("--evaluations", ia->options.max_evaluations,
+                 "budget of QSMA evaluations (default 1500)");
+  iw->add_option("--seed", ia->options.seed, "random seed (default 1)");
+  range_option(iw, "--fs-range", ia->fs_range, "Fs bounds LO:HI [N] (default start/30:start*30)");
+  range_option(iw, "--gamma-range", ia->gamma_range, "Kt/Ks bounds LO:HI (default 0.05:2)");
+  range_option(iw, "--chi-range", ia->chi_range, "chi bounds LO:HI (default -0.95:0)");
+  range_option(iw, "--beta-range", ia->beta_range, "beta bounds LO:HI (default 0.01:100)");
+  iw->add_option("--out", ia->out, "output directory")->required();
+  iw->callback([ia] { run_update_iwan(*ia); });
+}
+
+}  // namespace jointlab::apps

@@ -1,0 +1,299 @@
+#include "jointlab/correlate/measured_data.h"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/data/json_reader.h"
+#include "jointlab/model/linear_modes.h"
+
+namespace jointlab::correlate {
+namespace {
+
+namespace fs = std::filesystem;
+using data::JsonValue;
+
+// Typed access to summary.json with messages naming the file and the field path.
+struct Fields {
+  std::string file;
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw InputError(fmt::format("{}: {}: {}", file, path, what));
+  }
+  const JsonValue& get(const JsonValue& obj, const std::string& path, const char* key,
+                       JsonValue::Type type) const {
+    const JsonValue* v = obj.find(key);
+    if (!v) fail(path, fmt::format("missing \"{}\"", key));
+    if (v->type() != type) {
+      fail(path + "." + key, fmt::format("expected a {}, found a {}", JsonValue::type_name(type),
+                                         JsonValue::type_name(v->type())));
+    }
+    return *v;
+  }
+  double number(const JsonValue& obj, const std::string& path, const char* key) const {
+    return get(obj, path, key, JsonValue::Type::kNumber).number();
+  }
+  int band(const JsonValue& obj, const std::string& path) const {
+    const double b = number(obj, path, "band");
+    if (!(b >= 1) || b != std::floor(b) || b > 1e6) fail(path + ".band", "must be an integer >= 1");
+    return static_cast<int>(b);
+  }
+};
+
+AmplitudeQuantity quantity_of(const Fields& f, const std::string& name) {
+  if (name == "displacement") return AmplitudeQuantity::kDisplacement;
+  if (name == "velocity") return AmplitudeQuantity::kVelocity;
+  if (name == "acceleration") return AmplitudeQuantity::kAcceleration;
+  f.fail("amplitude_quantity",
+         fmt::format("\"{}\" is not displacement, velocity or acceleration", name));
+}
+
+std::string trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream ss(line);
+  std::string c;
+  while (std::getline(ss, c, ',')) cells.push_back(trim(c));
+  if (!line.empty() && line.back() == ',') cells.push_back("");
+  return cells;
+}
+
+}  // namespace
+
+ProcessRun read_process_run(const fs::path& dir) {
+  const fs::path path = dir / "summary.json";
+  if (!fs::is_directory(dir)) {
+    throw InputError(
+        fmt::format("{}: not a directory (expected a 'jointlab process' output)", dir.string()));
+  }
+  if (!fs::exists(path)) {
+    throw InputError(
+        fmt::format("{}: missing (expected a 'jointlab process' output directory)", path.string()));
+  }
+  const JsonValue doc = data::read_json(path);
+  const Fields f{path.string()};
+  if (!doc.is_object()) f.fail("document", "expected an object");
+  ProcessRun run;
+  run.dir = dir;
+  run.amplitude = quantity_of(
+      f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
+  const JsonValue& files = f.get(doc, "document", "files", JsonValue::Type::kArray);
+  for (size_t i = 0; i < files.items().size(); ++i) {
+    const JsonValue& file = files.items()[i];
+    const std::string fp = fmt::format("files[{}]", i);
+    if (!file.is_object()) f.fail(fp, "expected an object");
+    const std::string source = f.get(file, fp, "file", JsonValue::Type::kString).string();
+    const JsonValue& bands = f.get(file, fp, "bands", JsonValue::Type::kArray);
+    for (size_t b = 0; b < bands.items().size(); ++b) {
+      const JsonValue& band = bands.items()[b];
+      const std::string bp = fmt::format("{}.bands[{}]", fp, b);
+      if (!band.is_object()) f.fail(bp, "expected an object");
+      ProcessBand pb;
+      pb.source = source;
+      pb.band = f.band(band, bp);
+      pb.reference_channel =
+          f.get(band, bp, "reference_channel", JsonValue::Type::kString).string();
+      if (band.find("linear_frequency_hz")) {
+        pb.linear_frequency_hz = f.number(band, bp, "linear_frequency_hz");
+        if (!(pb.linear_frequency_hz > 0)) f.fail(bp + ".linear_frequency_hz", "must be > 0");
+      }
+      const JsonValue& shape = f.get(band, bp, "operating_shape", JsonValue::Type::kArray);
+      for (size_t c = 0; c < shape.items().size(); ++c) {
+        const JsonValue& entry = shape.items()[c];
+        const std::string cp = fmt::format("{}.operating_shape[{}]", bp, c);
+        if (!entry.is_object()) f.fail(cp, "expected an object");
+        pb.shape.emplace_back(
+            f.get(entry, cp, "channel", JsonValue::Type::kString).string(),
+            std::complex<double>(f.number(entry, cp, "real_m"), f.number(entry, cp, "imag_m")));
+      }
+      run.bands.push_back(std::move(pb));
+    }
+    const JsonValue& outputs = f.get(file, fp, "outputs", JsonValue::Type::kArray);
+    for (size_t o = 0; o < outputs.items().size(); ++o) {
+      const JsonValue& out = outputs.items()[o];
+      const std::string op = fmt::format("{}.outputs[{}]", fp, o);
+      if (!out.is_object()) f.fail(op, "expected an object");
+      ProcessOutput po;
+      po.source = source;
+      po.channel = f.get(out, op, "channel", JsonValue::Type::kString).string();
+      po.band = f.band(out, op);
+      const JsonValue* file_name = out.find("file");
+      if (!file_name) f.fail(op, "missing \"file\"");
+      if (file_name->is_string()) {
+        po.file = file_name->string();
+        if (po.file.empty() || po.file.find('/') != std::string::npos)
+          f.fail(op + ".file", fmt::format("\"{}\" is not a file name", po.file));
+      } else if (!file_name->is_null()) {
+        f.fail(op + ".file", "expected a string or null");
+      }
+      run.outputs.push_back(std::move(po));
+    }
+  }
+  return run;
+}
+
+MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
+                             std::vector<int>* bands) {
+  const std::string summary = (run.dir / "summary.json").string();
+  std::map<int, std::vector<const ProcessBand*>> by_band;
+  for (const ProcessBand& b : run.bands) {
+    if (b.linear_frequency_hz > 0) by_band[b.band].push_back(&b);
+  }
+  if (by_band.empty()) throw InputError(fmt::format("{}: no band has a linear frequency", summary));
+  MeasuredModes m;
+  const auto n_s = static_cast<Eigen::Index>(sensors.size());
+  m.frequency_hz.resize(static_cast<Eigen::Index>(by_band.size()));
+  m.shapes = Eigen::MatrixXcd::Zero(n_s, m.frequency_hz.size());
+  if (bands) bands->clear();
+  Eigen::Index col = 0;
+  bool any_sensor = false;
+  for (const auto& [k, list] : by_band) {
+    double sum = 0;
+    int best_count = -1;
+    const ProcessBand* best = nullptr;
+    for (const ProcessBand* b : list) {
+      sum += b->linear_frequency_hz;
+      int count = 0;
+      for (const auto& [channel, value] : b->shape) count += find_sensor(sensors, channel) >= 0;
+      if (count > best_count) best_count = count, best = b;
+    }
+    m.frequency_hz(col) = sum / static_cast<double>(list.size());
+    for (const auto& [channel, value] : best->shape) {
+      const int s = find_sensor(sensors, channel);
+      if (s >= 0) m.shapes(s, col) = value, any_sensor = true;
+    }
+    m.labels.push_back(fmt::format("band{}", k));
+    if (bands) bands->push_back(k);
+    ++col;
+  }
+  if (!any_sensor) {
+    throw InputError(
+        fmt::format("{}: no channel of the sensors file appears in any operating shape", summary));
+  }
+  return m;
+}
+
+MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
+  std::ifstream in(path);
+  const std::string name = path.string();
+  if (!in) throw InputError(fmt::format("{}: cannot open the backbone file", name));
+  const char* wanted[] = {"amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
+                          "damping_std"};
+  int column[5] = {-1, -1, -1, -1, -1};
+  std::vector<double> values[5];
+  std::string line;
+  long n = 0;
+  bool header = false;
+  size_t width = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    line = trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::vector<std::string> cells = split(line);
+    if (!header) {
+      for (int k = 0; k < 5; ++k) {
+        for (size_t c = 0; c < cells.size(); ++c) {
+          if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
+        }
+        if (column[k] < 0)
+          throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
+      }
+      header = true;
+      width = cells.size();
+      continue;
+    }
+    if (cells.size() != width) {
+      throw InputError(
+          where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
+    }
+    for (int k = 0; k < 5; ++k) {
+      const std::string& cell = cells[static_cast<size_t>(column[k])];
+      double x = 0;
+      size_t used = 0;
+      try {
+        x = std::stod(cell, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != cell.size() || cell.empty() || !std::isfinite(x)) {
+        throw InputError(
+            where(name, n, fmt::format("{} '{}' is not a finite number", wanted[k], cell)));
+      }
+      if (k == 0 && !(x > 0)) throw InputError(where(name, n, "amplitude must be > 0"));
+      if (k == 1 && !(x > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
+      if (k >= 3 && x < 0)
+        throw InputError(where(name, n, fmt::format("{} must be >= 0", wanted[k])));
+      values[k].push_back(x);
+    }
+  }
+  if (!header) throw InputError(where(name, 0, "empty file, expected a backbone header"));
+  if (values[0].empty()) throw InputError(where(name, 0, "no backbone point"));
+  MeasuredBackbone b;
+  b.sensor = sensor;
+  auto vec = [](const std::vector<double>& v) {
+    return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  };
+  b.amplitude = vec(values[0]);
+  b.frequency_hz = vec(values[1]);
+  b.damping_ratio = vec(values[2]);
+  b.frequency_std_hz = vec(values[3]);
+  b.damping_std = vec(values[4]);
+  return b;
+}
+
+std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
+                                                 const std::vector<Sensor>& sensors, int band,
+                                                 const std::vector<std::string>& channels) {
+  const std::string summary = (run.dir / "summary.json").string();
+  for (const std::string& c : channels) {
+    if (find_sensor(sensors, c) < 0)
+      throw InputError(fmt::format("channel '{}' is not in the sensors file", c));
+  }
+  std::vector<MeasuredBackbone> out;
+  for (const ProcessOutput& o : run.outputs) {
+    if (o.band != band || o.file.empty()) continue;
+    bool selected = false;
+    if (channels.empty()) {
+      for (const ProcessBand& b : run.bands) {
+        if (b.source == o.source && b.band == band && b.reference_channel == o.channel)
+          selected = true;
+      }
+    } else {
+      for (const std::string& c : channels) selected = selected || c == o.channel;
+    }
+    const int s = find_sensor(sensors, o.channel);
+    if (!selected || s < 0) continue;
+    out.push_back(read_backbone_csv(run.dir / o.file, s));
+  }
+  if (out.empty()) {
+    throw InputError(fmt::format(
+        "{}: no backbone of band {} on {}", summary, band,
+        channels.empty() ? "a reference channel that is a sensor" : "the selected channels"));
+  }
+  return out;
+}
+
+int measured_mode_of(const model::Model& model, const std::vector<Sensor>& sensors,
+                     const MeasuredModes& measured, int mode, double mac_threshold) {
+  const model::LinearModes modes = model::linear_modes(model.mass, model.linear_stiffness());
+  const int elastic = modes.size() - modes.rigid_count;
+  if (mode < 1 || mode > elastic) {
+    throw InputError(fmt::format("mode {}: the model has {} elastic modes", mode, elastic));
+  }
+  const Eigen::MatrixXd model_shapes = shapes_at_sensors(sensors, modes.shapes.rightCols(elastic));
+  const Pairing p = pair_modes(mac_matrix(measured.shapes, model_shapes), mac_threshold);
+  for (const ModePair& pair : p.pairs) {
+    if (pair.model == mode - 1) return pair.measured;
+  }
+  return -1;
+}
+
+}  // namespace jointlab::correlate

@@ -1,0 +1,81 @@
+// Measured data for updating, read from a `jointlab process` output directory.
+//
+// DIR/summary.json (modal/process_output.h) lists per file (hit) its bands k = 1, 2, ...
+// with the reference channel, the linear frequency [Hz] and the operating shape (complex
+// amplitude per channel, any scaling), and its outputs: one backbone CSV per channel and
+// band (columns time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz,
+// damping_std, ...; amplitude in the SI unit of summary.json's "amplitude_quantity").
+// Linear data: band k becomes one measured mode. Its frequency is the mean over the files
+// that report a linear frequency for k; its shape at the sensors (sensors.h, sensor order)
+// is the operating shape of the file that measured most of the sensor channels (the first
+// such file), 0 at sensors no file measured. A band no file gives a linear frequency for is
+// left out.
+// Backbones: every output of band k whose channel is selected becomes one MeasuredBackbone
+// (several hits and channels give several curves). By default only each file's reference
+// channel of the band is selected (the channel its linear data come from).
+#pragma once
+
+#include <complex>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/correlate/linear_update.h"
+#include "jointlab/correlate/sensors.h"
+#include "jointlab/model/model_file.h"
+
+namespace jointlab::correlate {
+
+/// One band of one processed file, as summary.json describes it.
+struct ProcessBand {
+  std::string source;              ///< the processed file
+  int band = 0;                    ///< k, from 1
+  std::string reference_channel;   ///< channel of the linear data
+  double linear_frequency_hz = 0;  ///< 0 when the summary gives none
+  std::vector<std::pair<std::string, std::complex<double>>> shape;  ///< channel, amplitude
+};
+
+/// One output (channel and band of one file) as summary.json describes it.
+struct ProcessOutput {
+  std::string source;   ///< the processed file
+  std::string channel;  ///< channel name
+  int band = 0;         ///< k, from 1
+  std::string file;     ///< backbone CSV name in the directory; empty when none was written
+};
+
+/// The contents of a process output directory's summary.json.
+struct ProcessRun {
+  std::filesystem::path dir;                                   ///< the directory
+  AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< backbone amplitude quantity
+  std::vector<ProcessBand> bands;                              ///< every file's bands
+  std::vector<ProcessOutput> outputs;                          ///< every file's outputs
+};
+
+/// Reads DIR/summary.json; InputError naming the file and the field (or line and byte).
+ProcessRun read_process_run(const std::filesystem::path& dir);
+
+/// Linear modal data per band at the sensors; `bands` (if given) receives the band number of
+/// each measured mode. InputError when no band has a linear frequency or no sensor channel
+/// appears in any operating shape.
+MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
+                             std::vector<int>* bands = nullptr);
+
+/// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`;
+/// InputError naming the file and line.
+MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor);
+
+/// Every backbone of band `band` on the selected channels (empty: each file's reference
+/// channel), each at its sensor; InputError when a selected channel is not a sensor or no
+/// backbone is found.
+std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
+                                                 const std::vector<Sensor>& sensors, int band,
+                                                 const std::vector<std::string>& channels);
+
+/// The measured column MAC-paired (mac.h) with elastic mode `mode` of the model at its linear
+/// stiffness, or -1 when that mode pairs with none.
+int measured_mode_of(const model::Model& model, const std::vector<Sensor>& sensors,
+                     const MeasuredModes& measured, int mode, double mac_threshold);
+
+}  // namespace jointlab::correlate

@@ -1,0 +1,136 @@
+#include "jointlab/correlate/measured_data.h"
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/two_chain.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::correlate {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path fresh(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("jointlab_measured_data_test_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+// Two hits; band 1 seen by a5 and b2 (b2 reference in hit 2), band 2 without linear data.
+const char* kSummary = R"({
+  "program": "jointlab process", "amplitude_quantity": "velocity", "amplitude_unit": "m/s",
+  "files": [
+    {"file": "hit1.csv",
+     "bands": [{"band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "a5",
+                "linear_frequency_hz": 58.0, "linear_damping_ratio": 0.001,
+                "operating_shape": [{"channel": "a5", "real_m": 1e-3, "imag_m": 0},
+                                    {"channel": "x9", "real_m": 1, "imag_m": 0}]},
+               {"band": 2, "low_hz": 80, "high_hz": 90, "reference_channel": "a5",
+                "operating_shape": []}],
+     "outputs": [{"channel": "a5", "band": 1, "file": "hit1.a5.band1.csv"},
+                 {"channel": "b2", "band": 1, "file": null, "reason": "too short"}]},
+    {"file": "hit2.csv",
+     "bands": [{"band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "b2",
+                "linear_frequency_hz": 58.2,
+                "operating_shape": [{"channel": "a5", "real_m": 2e-3, "imag_m": 1e-4},
+                                    {"channel": "b2", "real_m": -1e-4, "imag_m": 0}]}],
+     "outputs": [{"channel": "a5", "band": 1, "file": "hit2.a5.band1.csv"},
+                 {"channel": "b2", "band": 1, "file": "hit2.b2.band1.csv"}]}
+  ]
+})";
+
+const char* kBackbone =
+    "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,snr\n"
+    "0.1,0.02,57.5,0.004,0.01,0.0001,40\n"
+    "0.2,0.01,57.8,0.003,0.01,0.0001,30\n";
+
+TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
+  const fs::path d = fresh("good");
+  write(d / "summary.json", kSummary);
+  for (const char* f : {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv"})
+    write(d / f, kBackbone);
+  const std::vector<Sensor> sensors{{"b2", 7, 1.0}, {"a5", 5, -1.0}};
+  const ProcessRun run = read_process_run(d);
+  EXPECT_EQ(run.amplitude, AmplitudeQuantity::kVelocity);
+  ASSERT_EQ(run.bands.size(), 3u);
+  ASSERT_EQ(run.outputs.size(), 4u);
+  EXPECT_EQ(run.outputs[1].file, "");
+  std::vector<int> bands;
+  const MeasuredModes m = measured_modes(run, sensors, &bands);
+  ASSERT_EQ(bands, std::vector<int>{1});  // band 2 has no linear frequency
+  EXPECT_DOUBLE_EQ(m.frequency_hz(0), 58.1);
+  // The shape of hit 2 (both sensors measured), in sensor order.
+  EXPECT_EQ(m.shapes(0, 0), std::complex<double>(-1e-4, 0));
+  EXPECT_EQ(m.shapes(1, 0), std::complex<double>(2e-3, 1e-4));
+  // Default: each hit's reference channel (hit1 a5, hit2 b2).
+  const auto refs = measured_backbones(run, sensors, 1, {});
+  ASSERT_EQ(refs.size(), 2u);
+  EXPECT_EQ(refs[0].sensor, 1);
+  EXPECT_EQ(refs[1].sensor, 0);
+  EXPECT_EQ(refs[0].amplitude(1), 0.01);
+  EXPECT_EQ(refs[0].damping_std(0), 0.0001);
+  EXPECT_EQ(measured_backbones(run, sensors, 1, {"a5"}).size(), 2u);
+  EXPECT_NE(testing::input_error_of([&] {
+              measured_backbones(run, sensors, 2, {});
+            }).find("no backbone of band 2"),
+            std::string::npos);
+  EXPECT_NE(testing::input_error_of([&] {
+              measured_backbones(run, sensors, 1, {"zz"});
+            }).find("'zz' is not in the sensors file"),
+            std::string::npos);
+}
+
+TEST(MeasuredData, PairsTheBandWithTheModelModeByShape) {
+  TwoChainParameters p;
+  const model::Model model = two_chain_structure(p);
+  const std::vector<Sensor> sensors{
+      {"a2", 2, 1.0}, {"a5", 5, 1.0}, {"b2", 8, 1.0}, {"b5", 11, 1.0}};
+  // Measured "band 7": chain B's first mode shape (model mode 2) at the sensors.
+  MeasuredModes m;
+  m.frequency_hz = Eigen::VectorXd::Constant(1, 59.9);
+  m.shapes = Eigen::MatrixXcd::Zero(4, 1);
+  m.shapes(2, 0) = 0.6;
+  m.shapes(3, 0) = 1.0;
+  EXPECT_EQ(measured_mode_of(model, sensors, m, 2, 0.6), 0);
+  EXPECT_EQ(measured_mode_of(model, sensors, m, 1, 0.6), -1);
+}
+
+TEST(MeasuredData, DefectsNameFileAndField) {
+  const fs::path d = fresh("bad");
+  EXPECT_NE(testing::input_error_of([&] { read_process_run(d / "none"); }).find("not a directory"),
+            std::string::npos);
+  EXPECT_NE(testing::input_error_of([&] { read_process_run(d); }).find("summary.json: missing"),
+            std::string::npos);
+  write(d / "summary.json", "{\"amplitude_quantity\": \"velocity\", \"files\": [{\"file\": 3}]}");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_process_run(d);
+            }).find("summary.json: files[0].file: expected a string, found a number"),
+            std::string::npos);
+  write(d / "summary.json", "{\"amplitude_quantity\": \"velocity\", \"files\": [}");
+  EXPECT_NE(testing::input_error_of([&] { read_process_run(d); }).find("summary.json:1: column"),
+            std::string::npos);
+  write(d / "b.csv", "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_backbone_csv(d / "b.csv", 0);
+            }).find("b.csv:1: no column 'damping_std'"),
+            std::string::npos);
+  write(d / "b.csv", std::string(kBackbone) + "0.3,-1,57,0.003,0.01,0.0001,20\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_backbone_csv(d / "b.csv", 0);
+            }).find("b.csv:4: amplitude must be > 0"),
+            std::string::npos);
+  write(d / "b.csv", std::string(kBackbone) + "0.3,0.01,nan,0.003,0.01,0.0001,20\n");
+  EXPECT_NE(testing::input_error_of([&] { read_backbone_csv(d / "b.csv", 0); }).find("b.csv:4:"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace jointlab::correlate
