@@ -53,14 +53,26 @@ struct BandSignal {
 /// Band gain G(f): a box of [lo + w/2, hi - w/2] smoothed by a Gaussian of std w/4.
 double band_gain(const Band& band, double taper, double f);
 
-/// Reusable FFT plans, keyed by transform size (one workspace per thread).
+/// Reusable FFT plans keyed by transform size, and the last filter gain computed
+/// (every channel of a record shares it); one workspace per thread.
 class FftCache {
  public:
   /// The Fft of length n, created on first use.
   Fft& get(Eigen::Index n);
+  /// The gain vector made by `make` for `key`, recomputed only when the key changes.
+  template <typename Make>
+  const Eigen::VectorXd& gain(const Eigen::Vector4d& key, Make make) {
+    if (!(gain_key_ == key) || gain_.size() == 0) {
+      gain_ = make();
+      gain_key_ = key;
+    }
+    return gain_;
+  }
 
  private:
   std::map<Eigen::Index, Fft> ffts_;
+  Eigen::Vector4d gain_key_ = Eigen::Vector4d::Constant(-1.0);
+  Eigen::VectorXd gain_;
 };
 
 /// Analytic signal of `band` from the one-sided spectrum of an n-sample record padded to n_fft.

@@ -66,15 +66,21 @@ Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, d
   const Eigen::Index nfft = fast_size(2 * n);
   Fft& fft = cache.get(nfft);
   Eigen::VectorXcd X = fft.forward(x);
-  const double df = fs / static_cast<double>(nfft);
-  const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
-  // The gain is 1 to double precision below mid - 9 sd and 0 above mid + 9 sd;
-  // erfc is evaluated only on the edge between.
-  for (Eigen::Index k = 0; k < X.size(); ++k) {
-    const double f = static_cast<double>(k) * df;
-    if (f < mid - 9 * sd) continue;
-    X(k) *= f > mid + 9 * sd ? 0.0 : 0.5 * std::erfc((f - mid) / (std::sqrt(2.0) * sd));
-  }
+  // The gain is shared by every channel of a record: computed once per size and edge.
+  const Eigen::VectorXd& g =
+      cache.gain(Eigen::Vector4d(static_cast<double>(nfft), fs, f_pass, f_stop), [&] {
+        const double df = fs / static_cast<double>(nfft);
+        const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
+        Eigen::VectorXd gain(X.size());
+        for (Eigen::Index k = 0; k < X.size(); ++k) {
+          const double f = static_cast<double>(k) * df;
+          gain(k) = f < mid - 9 * sd   ? 1.0
+                    : f > mid + 9 * sd ? 0.0
+                                       : 0.5 * std::erfc((f - mid) / (std::sqrt(2.0) * sd));
+        }
+        return gain;
+      });
+  X.array() *= g.array();
   return fft.inverse_real(X).head(n);
 }
 
