@@ -279,17 +279,6 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
           break;  // clearly past the minimum: model error now dominates
         }
       }
-      // What the polynomial model cannot see (a slow beat with a weak mode in
-      // the band, a smooth leftover of the impact) shows as a change of the
-      // estimate with the window: half the change to the next longer window
-      // joins the uncertainty.
-      const double longer = best.window * std::sqrt(2.0);
-      if (!buried && longer <= allowed) {
-        const Estimate alt =
-            estimate_hilbert(log_amp, theta, dt, c, longer, correlation, noise, options.degree);
-        best.sigma_std = std::hypot(best.sigma_std, 0.5 * (alt.sigma - best.sigma));
-        best.omega_d_std = std::hypot(best.omega_d_std, 0.5 * (alt.omega_d - best.omega_d));
-      }
       best.log_amp = best_amp.log_amp;
       best.log_amp_std = best_amp.log_amp_std;
       est.push_back(best);
