@@ -255,6 +255,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   std::vector<Estimate> est;
   if (options.method == Method::kHilbert) {
     const double step = w_min / options.points_per_window;
+    double previous_window = w_min;
     for (double c = start + w_min / 2; c <= stop - w_min / 2 + 1e-12; c += step) {
       const double allowed = std::min(options.max_window_s, 2 * std::min(c - start, stop - c));
       // Longer windows average noise (std ~ W^-1.5) but bend less with the
@@ -268,7 +269,11 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       Estimate best_amp = best;
       // Below the noise threshold a point is dropped whatever its window.
       const bool buried = std::exp(best.log_amp) < options.snr_min * noise;
-      for (double w = w_min * std::sqrt(2.0); !buried && w <= allowed; w *= std::sqrt(2.0)) {
+      // The best window changes slowly along the record: start the search two
+      // steps below the previous point's choice rather than at the shortest.
+      double w_first = w_min * std::sqrt(2.0);
+      while (w_first * 2.0 < previous_window) w_first *= std::sqrt(2.0);
+      for (double w = w_first; !buried && w <= allowed; w *= std::sqrt(2.0)) {
         if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
         const Estimate next =
             estimate_hilbert(log_amp, theta, dt, c, w, correlation, noise, options.degree);
@@ -281,6 +286,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       }
       best.log_amp = best_amp.log_amp;
       best.log_amp_std = best_amp.log_amp_std;
+      if (!buried) previous_window = best.window;
       est.push_back(best);
     }
   } else {
