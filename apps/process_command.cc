@@ -1,16 +1,15 @@
 // `jointlab process`: impact ring-downs -> natural frequency and damping versus amplitude.
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <exception>
 #include <filesystem>
 #include <mutex>
-#include <thread>
 
 #include <fmt/format.h>
 
 #include "jointlab/apps/commands.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/parallel.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/modal/process.h"
 #include "jointlab/modal/process_output.h"
@@ -93,17 +92,11 @@ void run_process(const ProcessArgs& args) {
   }
 
   // Files are independent: one worker per core, each with its own FFT plans.
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned workers = std::min<unsigned>(args.threads ? args.threads : hw,
-                                              static_cast<unsigned>(args.files.size()));
   std::vector<modal::RecordResult> results(args.files.size());
-  std::vector<std::exception_ptr> errors(args.files.size());
-  std::atomic<size_t> next{0};
   std::mutex print;
-  auto work = [&] {
-    signal::FftCache cache;
-    for (size_t i = next++; i < args.files.size(); i = next++) {
-      try {
+  parallel_for(
+      args.files.size(), args.threads, [] { return signal::FftCache{}; },
+      [&](size_t i, signal::FftCache& cache) {
         const data::Record rec = data::read_record(args.files[i]);
         results[i] = modal::process_record(rec, opt, cache);
         modal::write_backbones(out, results[i], opt.ringdown);
@@ -112,18 +105,7 @@ void run_process(const ProcessArgs& args) {
           fmt::print(stderr, "{} {} band {}: {}\n", args.files[i], r.channel, r.band_index,
                      r.ringdown.summary.report());
         }
-      } catch (...) {
-        errors[i] = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (std::thread& t : pool) t.join();
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+      });
   modal::write_summary(out, results, opt);
   size_t written = 0;
   for (const auto& r : results) {

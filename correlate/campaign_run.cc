@@ -1,18 +1,17 @@
 #include "jointlab/correlate/campaign_run.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <complex>
 #include <exception>
 #include <fstream>
 #include <sstream>
-#include <thread>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/parallel.h"
 #include "jointlab/correlate/figures.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
@@ -403,27 +402,11 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
   if (!todo.empty()) {
     say(o, fmt::format("process: {} hit(s) to process, {} up to date", todo.size(),
                        summary.hits_reused));
-    const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
-    const unsigned workers =
-        std::min<unsigned>(o.threads ? o.threads : hw, static_cast<unsigned>(todo.size()));
-    std::vector<std::exception_ptr> errors(todo.size());
-    std::atomic<size_t> next{0};
-    auto work = [&] {
-      signal::FftCache cache;
-      for (size_t i = next++; i < todo.size(); i = next++) {
-        try {
+    parallel_for(
+        todo.size(), o.threads, [] { return signal::FftCache{}; },
+        [&](size_t i, signal::FftCache& cache) {
           process_hit(c, todo[i].file, hit_dir(out, todo[i].group->name), cache);
-        } catch (...) {
-          errors[i] = std::current_exception();
-        }
-      }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
-    work();
-    for (std::thread& t : pool) t.join();
-    for (const std::exception_ptr& e : errors)
-      if (e) std::rethrow_exception(e);
+        });
     summary.hits_processed = static_cast<int>(todo.size());
   } else {
     say(o, fmt::format("process: all {} hit(s) up to date", jobs.size()));
