@@ -1,5 +1,7 @@
 #include "jointlab/correlate/iwan_update.h"
 
+#include <cstdio>
+
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
@@ -56,11 +58,16 @@ TEST(IwanUpdate, GlobalLocalRecoversTheParametersFromFarOff) {
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   SCOPED_TRACE(sum.report());
   RecordProperty("report", sum.report());  // in --gtest_output=xml
-  // Kt within 2 %, chi within 5 %. Below phi_max the virgin curve F = Kt u - R u^(chi+2)/(..)
-  // depends on Kt, R and chi only, and QSMA curves end at full macroslip: such data fix R
-  // (within 5 %), not Fs and beta separately (see docs/update-iwan.md).
+  std::printf("%s", sum.report().c_str());
+  // Issue 5: Kt within 2 %, Fs, chi and beta within 5 %. The truth backbone runs to twice
+  // the full-macroslip amplitude: microslip fixes Kt, chi and R (below phi_max the virgin
+  // curve depends on them alone), the macroslip plateau F = F_S fixes F_S, and with R the
+  // onset phi_max, hence beta (docs/update-iwan.md). Observed: Kt -0.09 %, Fs -0.04 %,
+  // chi -0.1 %, beta +2.1 %.
   EXPECT_TRUE(testing::Close(p.Kt, 5e5, 0.02));
+  EXPECT_TRUE(testing::Close(p.Fs, 20.0, 0.05));
   EXPECT_TRUE(testing::Close(p.chi, -0.5, 0.05));
+  EXPECT_TRUE(testing::Close(p.beta, 1.0, 0.05));
   const model::Iwan truth(20.0, 5e5, -0.5, 1.0);
   EXPECT_TRUE(testing::Close(model::Iwan(p).R(), truth.R(), 0.05));
   EXPECT_LE(sum.evaluations, o.max_evaluations + 30);  // a Jacobian (9) may finish past it

@@ -76,9 +76,12 @@ class Problem {
     return false;
   }
 
+  // With q_max the curve continues past full macroslip (the elements carry F_S, the rest
+  // of the structure the load increase) until q_max or the limit load; without it, full
+  // macroslip ends the automatic range.
   Stop classify(bool ok, const State& s) const {
     if (!ok) return Stop::kNoSolution;
-    if (opt_.q_max > 0 && s.q >= opt_.q_max) return Stop::kQmax;
+    if (opt_.q_max > 0) return s.q >= opt_.q_max ? Stop::kQmax : Stop::kNone;
     if (full_macroslip(s.r)) return Stop::kMacroslip;
     return Stop::kNone;
   }
@@ -102,10 +105,31 @@ class Problem {
     return std::abs(zeta / zeta0 - 1);
   }
 
-  // Finds the state with q = target between a (q <= target) and b (q >= target):
-  // Illinois false position on (ln alpha, ln q).
-  State find_q(double target, State a, State b) {
-    double fa = std::log(a.q / target), fb = std::log(b.q / target);
+  // ln of the smallest |r_j| / phi_max_j over the loaded coordinates: >= 0 exactly in
+  // full macroslip.
+  double macroslip_margin(const State& s) const {
+    double m = INFINITY;
+    for (int j = 0; j < m_.size(); ++j) {
+      if (loaded_(j) > 0) m = std::min(m, std::abs(s.r(j)) / m_.phi_max(j));
+    }
+    return std::log(m);
+  }
+
+  // Finds the state with q = target between a (q <= target) and b (q >= target).
+  State find_q(double target, const State& a, const State& b) {
+    return find_root([&](const State& s) { return std::log(s.q / target); }, a, b);
+  }
+
+  // The onset of full macroslip between a (not in it) and b (in it).
+  State find_macroslip(const State& a, const State& b) {
+    return find_root([&](const State& s) { return macroslip_margin(s); }, a, b);
+  }
+
+  // Root of an increasing function f of the state between a (f <= 0) and b (f >= 0):
+  // Illinois false position on ln alpha, to |f| <= 1e-13.
+  template <class F>
+  State find_root(F f, State a, State b) {
+    double fa = f(a), fb = f(b);
     int side = 0;
     for (int it = 0; it < 100; ++it) {
       if (std::abs(fa) <= 1e-13) return a;
@@ -115,13 +139,12 @@ class Problem {
       double x = xa - fa * (xb - xa) / (fb - fa);
       if (!(x > xa && x < xb)) x = 0.5 * (xa + xb);
       State t;
-      if (!solve(std::exp(x), a, t)) {
-        b = t;  // cannot happen inside a converged bracket; shrink towards a
-        b.q = target * 2;
-        fb = std::log(2.0);
-        continue;
+      if (!solve(std::exp(x), a, t)) {  // cannot happen inside a converged bracket
+        b = a;
+        fb = fa;
+        break;
       }
-      const double ft = std::log(t.q / target);
+      const double ft = f(t);
       if (ft < 0) {
         a = t;
         fa = ft;
@@ -278,12 +301,20 @@ std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const Qsma
   }
 
   // 2. March up by doubling until the curve must stop, then bracket the end.
+  // With q_max the march may cross full macroslip: remember the doubling step that does.
   std::vector<State> marched{start};
-  State hi;
+  State hi, before_macroslip, after_macroslip;
+  bool crossed = false;
   Stop reason = Stop::kNone;
   for (int it = 0; it < 200; ++it) {
     State next;
     const bool ok = problem.solve(2 * marched.back().alpha, marched.back(), next);
+    if (ok && !crossed && problem.macroslip_margin(next) >= 0 &&
+        problem.macroslip_margin(marched.back()) < 0) {
+      crossed = true;
+      before_macroslip = marched.back();
+      after_macroslip = next;
+    }
     reason = problem.classify(ok, next);
     if (reason != Stop::kNone) {
       hi = next;
@@ -356,12 +387,31 @@ std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const Qsma
   } else {
     alphas = log_grid(first.alpha, end.alpha, n, true);
   }
+  // A curve continued past full macroslip has a kink there (the tangent of the last
+  // elements to slip drops from S to 0): the interior grid point nearest to its onset
+  // moves onto it, so that interpolating the curve never straddles the kink.
+  State onset;
+  size_t onset_index = 0;
+  if (crossed && options.q_max > 0 && alphas.size() > 2) {
+    onset = problem.find_macroslip(before_macroslip, after_macroslip);
+    const double x = std::log(onset.alpha);
+    size_t best = 1;
+    for (size_t i = 2; i + 1 < alphas.size(); ++i) {
+      if (std::abs(std::log(alphas[i]) - x) < std::abs(std::log(alphas[best]) - x)) best = i;
+    }
+    if (alphas[best - 1] < onset.alpha && onset.alpha < alphas[best + 1]) {
+      alphas[best] = onset.alpha;
+      onset_index = best;
+    }
+  }
   State cur = first;
   curve.push_back(problem.point(first));
   for (size_t i = 1; i < alphas.size(); ++i) {
     State s;
     if (i + 1 == alphas.size()) {
       s = end;
+    } else if (onset_index == i) {
+      s = onset;
     } else if (!problem.solve(alphas[i], cur, s)) {
       break;  // cannot happen below a converged end level; keep the curve consistent
     }

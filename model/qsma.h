@@ -17,6 +17,10 @@
 // load the structure carries (past it no static solution exists: the joints slide
 // freely), whichever comes first; that load is bracketed to limit_tolerance and the
 // last points cluster below it (10 %, ..., 0.1 % under it, then the last converged level).
+// With q_max it ends at q_max or at that limit load: past full macroslip each element
+// carries F(r) = F_S and dissipates D(A) = 8 (E_max + F_S (A - phi_max)) - 4 A F_S
+// (iwan.h) while the rest of the structure (springs in parallel) carries the load
+// increase; without such a load path the limit load is the full-macroslip load.
 // Points are log-spaced in alpha, so amplitude increases along the curve.
 #pragma once
 
@@ -29,9 +33,9 @@ namespace jointlab::model {
 
 /// Settings of qsma().
 struct QsmaOptions {
-  int points = 50;                    ///< number of points on the curve (>= 2)
-  double q_min = 0;                   ///< first modal amplitude; 0: automatic (microslip)
-  double q_max = 0;                   ///< last modal amplitude; 0: automatic (macroslip/limit)
+  int points = 50;   ///< number of points on the curve (>= 2)
+  double q_min = 0;  ///< first modal amplitude; 0: automatic (microslip)
+  double q_max = 0;  ///< last modal amplitude (may lie past full macroslip); 0: automatic
   double microslip_deviation = 0.01;  ///< automatic start: |zeta/zeta_0 - 1| at most this
   double limit_tolerance = 1e-4;      ///< relative bracket of the end load
   int max_newton_iterations = 60;     ///< per load level

@@ -144,6 +144,59 @@ TEST(Qsma, ExplicitModalAmplitudeRange) {
   EXPECT_EQ(summary.termination, QsmaTermination::kEmptyRange);
 }
 
+TEST(Qsma, QmaxPastFullMacroslipContinuesOnTheMacroslipBranch) {
+  // Mass on a spring with an Iwan element to ground, q_max at 4 phi_max: past phi_max the
+  // element carries F = F_S and dissipates D(A) = 8 (E_max + F_S (A - phi_max)) - 4 A F_S,
+  // the spring k0 carries the rest, and the curve still follows the closed form (1e-6, as
+  // below phi_max: same Newton tolerance, the macroslip branch is exact in iwan.h).
+  const double m = 0.5, k0 = 1.0e6;
+  const Iwan iwan(kRivet);
+  const double pm = iwan.phi_max();
+  const JointCondensation model(sdof(m, k0, kRivet));
+  QsmaOptions options;
+  options.points = 40;
+  options.q_min = 0.5 * pm * std::sqrt(m);
+  options.q_max = 4 * pm * std::sqrt(m);
+  QsmaSummary summary;
+  const auto curve = qsma(model, 1, options, &summary);
+  EXPECT_EQ(summary.termination, QsmaTermination::kReachedQmax) << summary.report();
+  ASSERT_EQ(curve.size(), 40u);
+  EXPECT_TRUE(Close(curve.back().modal_amplitude, options.q_max, 1e-10));
+  expect_closed_form(curve, iwan, k0, m);
+  // sqrt(m) alpha = k0 x + F(x) is about 40 N at x = phi_max / 2, 70 N at phi_max and
+  // 160 N at 4 phi_max: with alpha log-spaced about 60 % of the points lie in macroslip,
+  // where the closed form is the explicit plateau:
+  // omega^2 = (k0 x + F_S) / (m x), zeta = D(x) / (2 pi (k0 x + F_S) x).
+  int past = 0;
+  for (const QsmaPoint& p : curve) {
+    const double x = p.max_slip;
+    if (x <= pm) continue;
+    ++past;
+    const double force = k0 * x + kRivet.Fs;
+    const double e_max = iwan.energy(pm);
+    const double d = 8 * (e_max + kRivet.Fs * (x - pm)) - 4 * x * kRivet.Fs;
+    EXPECT_TRUE(Close(p.frequency_hz, std::sqrt(force / (m * x)) / kTwoPi, 1e-6)) << x;
+    EXPECT_TRUE(Close(p.damping_ratio, d / (kTwoPi * force * x), 1e-6)) << x;
+  }
+  EXPECT_GE(past, 20);
+  // One point sits on the onset of macroslip (the kink of the curve), found to 1e-13 in
+  // ln(x / phi_max).
+  int onset = 0;
+  for (const QsmaPoint& p : curve) onset += Close(p.max_slip, pm, 1e-11) ? 1 : 0;
+  EXPECT_EQ(onset, 1);
+
+  // Without a parallel load path (Iwan-only free pair) a q_max past macroslip still ends at
+  // the limit load alpha_lim = F_S / sqrt(mu).
+  const double m1 = 0.3, m2 = 0.7, mu = m1 * m2 / (m1 + m2);
+  const JointCondensation pair(free_pair(m1, m2, 0.0, kRivet));
+  options.q_min = 0;
+  options.q_max = 4 * pm * std::sqrt(mu);
+  const auto limited = qsma(pair, 1, options, &summary);
+  EXPECT_EQ(summary.termination, QsmaTermination::kLimitLoad) << summary.report();
+  EXPECT_TRUE(Close(limited.back().force_amplitude, kRivet.Fs / std::sqrt(mu), 2e-4));
+  expect_closed_form(limited, iwan, 0.0, mu);
+}
+
 TEST(Qsma, BadModeAndOptions) {
   const JointCondensation model(sdof(1.0, 1e6, kRivet));
   QsmaSummary summary;
@@ -376,7 +429,9 @@ void compare_with_all_dofs(const Beams& beams, const JointCondensation& condense
   double lo = a0, hi = 0;
   for (double a = a0 * 1.02; a < a0 * 100; a *= 1.02) {
     ref.set(good * (a / lo));  // proportional predictor
-    if (!ref.solve(a) || ref.full_macroslip() || (options.q_max > 0 && ref.q() >= options.q_max)) {
+    // The same range rule as qsma(): full macroslip ends the curve only without q_max.
+    if (!ref.solve(a) || (options.q_max == 0 && ref.full_macroslip()) ||
+        (options.q_max > 0 && ref.q() >= options.q_max)) {
       hi = a;
       break;
     }
@@ -387,7 +442,7 @@ void compare_with_all_dofs(const Beams& beams, const JointCondensation& condense
   while (hi / lo - 1 > 1e-4) {
     const double mid = std::sqrt(lo * hi);
     ref.set(good * (mid / lo));
-    if (!ref.solve(mid) || ref.full_macroslip() ||
+    if (!ref.solve(mid) || (options.q_max == 0 && ref.full_macroslip()) ||
         (options.q_max > 0 && ref.q() >= options.q_max)) {
       hi = mid;
     } else {
