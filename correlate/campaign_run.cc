@@ -585,7 +585,10 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
         const model::Model& base = have_updated ? model_updated : model;
         const IwanObjective objective(base, set, sensors, targets, io.amplitude, io.qsma_points,
                                       io.frequency_floor, io.damping_floor);
-        say(o, fmt::format("update: Iwan identification of {} ({} curves)", set, curves.size()));
+        size_t n_curves = 0;
+        for (const IwanTarget& t : targets) n_curves += t.curves.size();
+        say(o, fmt::format("update: Iwan identification of {} ({} modes, {} curves)", set,
+                           targets.size(), n_curves));
         update_iwan(objective, io, &iwan_summary);
         model_updated = objective.apply(iwan_summary.best);
         have_updated = true;
