@@ -5,6 +5,7 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <ostream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -24,6 +25,9 @@ struct BadCase {
   std::string text;
   std::vector<std::string> fragments;  // must all appear in the one-line message
 };
+
+// Test listings name a case by its name, not by its bytes.
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
 
 class ProcessBadInput : public ::testing::TestWithParam<BadCase> {};
 
