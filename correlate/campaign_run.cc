@@ -566,14 +566,28 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
         IwanTarget t;
         t.mode = c.modes[k].model_mode;
         t.linear_frequency_hz = measured.frequency_hz(static_cast<Eigen::Index>(k));
+        // Each point weighs by the scatter between hits in its amplitude bin (the
+        // spread a single set of joint parameters cannot fit); 0 leaves the floor.
+        const auto bin_std = [&](double a, bool frequency) {
+          for (const ScatterBin& b : scatter[k].bins) {
+            if (a >= b.amplitude_low && a < b.amplitude_high && b.curves >= 2) {
+              return frequency ? b.frequency_hz.std : b.damping.std;
+            }
+          }
+          return 0.0;
+        };
         for (const Curve& cv : curves[k]) {
           MeasuredBackbone mb;
           mb.sensor = ref[k];
           mb.amplitude = cv.amplitude;
           mb.frequency_hz = cv.frequency_hz;
           mb.damping_ratio = cv.damping;
-          mb.frequency_std_hz = Eigen::VectorXd::Zero(cv.amplitude.size());
-          mb.damping_std = Eigen::VectorXd::Zero(cv.amplitude.size());
+          mb.frequency_std_hz.resize(cv.amplitude.size());
+          mb.damping_std.resize(cv.amplitude.size());
+          for (Eigen::Index j = 0; j < cv.amplitude.size(); ++j) {
+            mb.frequency_std_hz(j) = bin_std(cv.amplitude(j), true);
+            mb.damping_std(j) = bin_std(cv.amplitude(j), false);
+          }
           t.curves.push_back(std::move(mb));
         }
         if (!t.curves.empty()) targets.push_back(std::move(t));

@@ -407,6 +407,13 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     s.final_cost = s.initial_cost;
     return s.start;
   }
+  // The start is a candidate too: never hand back parameters that fit worse.
+  if (s.initial_cost <= tr.best) {
+    s.best = s.start;
+    s.final_cost = s.initial_cost;
+    s.linear_error = objective.linear_error(s.best);
+    return s.best;
+  }
   s.best = to_params(tr.best_v, objective.reference_stiffness());
   s.final_cost = tr.best;
   s.linear_error = objective.linear_error(s.best);
