@@ -118,12 +118,7 @@ ElementMatrices beam_element(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   r.row(0) = e1;
   r.row(1) = e2;
   r.row(2) = e3;
-  Eigen::Matrix<double, 12, 12> t = Eigen::Matrix<double, 12, 12>::Zero();
-  for (int blk = 0; blk < 4; ++blk) t.block<3, 3>(3 * blk, 3 * blk) = r;
-  ElementMatrices out;
-  out.stiffness = t.transpose() * kl * t;
-  out.mass = t.transpose() * ml * t;
-  return out;
+  return to_global<12>(kl, ml, r);
 }
 
 }  // namespace jointlab::model::fe

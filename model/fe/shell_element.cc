@@ -165,12 +165,7 @@ ElementMatrices shell_element(const std::array<Eigen::Vector3d, 4>& p, const She
   r.row(0) = e1;
   r.row(1) = e2;
   r.row(2) = e3;
-  Eigen::Matrix<double, 24, 24> tr = Eigen::Matrix<double, 24, 24>::Zero();
-  for (int blk = 0; blk < 8; ++blk) tr.block<3, 3>(3 * blk, 3 * blk) = r;
-  ElementMatrices out;
-  out.stiffness = tr.transpose() * k * tr;
-  out.mass = tr.transpose() * m * tr;
-  return out;
+  return to_global<24>(k, m, r);
 }
 
 }  // namespace jointlab::model::fe
