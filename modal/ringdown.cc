@@ -30,11 +30,20 @@ struct Estimate {
   double window = 0;       // window length [s]
 };
 
-// Hilbert estimate at `centre` from ln A and theta on the grid t_j = j dt.
+// Model error of a fit from the change a higher-degree refit makes, less the
+// part noise alone would make (`change_std`): an estimate of the bias whose
+// square is unbiased, so noise is not counted twice in the uncertainty.
+double model_error(double change, double change_std) {
+  return std::sqrt(std::max(0.0, change * change - change_std * change_std));
+}
+
+// Hilbert estimate at `at` from ln A and theta on the grid t_j = j dt, fitted
+// over a window of length `window` centred at `centre` (at lies in its middle
+// half: off-centre windows serve points near the ends of the span).
 // `noise` is the noise floor (RMS of the complex analytic-signal noise); each of
 // ln A and theta then carries noise of standard deviation noise / (sqrt(2) A).
 Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd& theta, double dt,
-                          double centre, double window, double correlation, double noise,
+                          double at, double centre, double window, double correlation, double noise,
                           int degree) {
   // Samples closer than the noise's correlation length add little: thin long
   // windows to about 48 samples while keeping at least one per 1/bandwidth.
@@ -42,21 +51,24 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
   const Eigen::Index stride = std::clamp<Eigen::Index>(
       in_window / 48, 1, std::max<Eigen::Index>(1, static_cast<Eigen::Index>(correlation)));
   const double corr = std::max(1.0, correlation / static_cast<double>(stride));
-  const auto [fa, fp] =
-      signal::fit_local_pair(log_amp, theta, 0.0, dt, centre, window / 2, degree, corr, stride);
+  const auto [fa, fp] = signal::fit_local_pair(log_amp, theta, 0.0, dt, centre, window / 2, degree,
+                                               corr, stride, (at - centre) / (window / 2));
   Estimate e;
-  e.t = centre;
+  e.t = at;
   e.log_amp = fa.value;
   // The residual-based std is scaled by the residual RMS; the floor-based one
   // by the known noise level: take whichever is larger.
   const double floor_rel = noise / (std::sqrt(2.0) * std::exp(fa.value));
   const double scale_a = fa.residual_rms > 0 ? std::max(1.0, floor_rel / fa.residual_rms) : 1.0;
   const double scale_p = fp.residual_rms > 0 ? std::max(1.0, floor_rel / fp.residual_rms) : 1.0;
-  e.log_amp_std = std::hypot(fa.value_std * scale_a, fa.value_change);
+  e.log_amp_std = std::hypot(fa.value_std * scale_a,
+                             model_error(fa.value_change, fa.value_change_std * scale_a));
   e.sigma = -fa.slope;
-  e.sigma_std = std::hypot(fa.slope_std * scale_a, fa.slope_change);
+  e.sigma_std = std::hypot(fa.slope_std * scale_a,
+                           model_error(fa.slope_change, fa.slope_change_std * scale_a));
   e.omega_d = fp.slope;
-  e.omega_d_std = std::hypot(fp.slope_std * scale_p, fp.slope_change);
+  e.omega_d_std = std::hypot(fp.slope_std * scale_p,
+                             model_error(fp.slope_change, fp.slope_change_std * scale_p));
   e.misfit = std::exp(fa.value) * std::hypot(fa.residual_rms, fp.residual_rms);
   e.window = window;
   return e;
@@ -81,10 +93,15 @@ Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& 
       ft.residual_rms > 0 ? std::max(1.0, floor_rel / omega / ft.residual_rms) : 1.0;
   e.t = ft.value;
   e.log_amp = fa.value;
-  e.log_amp_std = std::hypot(fa.value_std * scale_a, fa.value_change);
+  e.log_amp_std = std::hypot(fa.value_std * scale_a,
+                             model_error(fa.value_change, fa.value_change_std * scale_a));
   e.sigma = -fa.slope / half_period;
-  const double rel_t = std::hypot(ft.slope_std * scale_t, ft.slope_change) / half_period;
-  e.sigma_std = std::hypot(std::hypot(fa.slope_std * scale_a, fa.slope_change) / half_period,
+  const double rel_t = std::hypot(ft.slope_std * scale_t,
+                                  model_error(ft.slope_change, ft.slope_change_std * scale_t)) /
+                       half_period;
+  e.sigma_std = std::hypot(std::hypot(fa.slope_std * scale_a,
+                                      model_error(fa.slope_change, fa.slope_change_std * scale_a)) /
+                               half_period,
                            std::abs(e.sigma) * rel_t);
   e.omega_d = omega;
   e.omega_d_std = e.omega_d * rel_t;
@@ -129,10 +146,15 @@ std::string RingdownSummary::report() const {
 }
 
 Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x) {
-  Eigen::Index i_peak = 0;
   const Eigen::VectorXd centred = x.array() - x.mean();
-  centred.head(std::max<Eigen::Index>(1, x.size() / 4)).cwiseAbs().maxCoeff(&i_peak);
-  return i_peak;
+  const Eigen::Index quarter = std::max<Eigen::Index>(1, x.size() / 4);
+  const double peak = centred.head(quarter).cwiseAbs().maxCoeff();
+  // The first sample at half the peak: the impact's rise in a triggered record,
+  // the first cycle of the fastest mode in one that starts with the ring-down
+  // (whose largest sample may come several periods later).
+  Eigen::Index i = 0;
+  while (i + 1 < quarter && std::abs(centred(i)) < 0.5 * peak) ++i;
+  return i;
 }
 
 ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
@@ -244,7 +266,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       std::min(std::max(w_min, 16.0 / bs.noise_bandwidth_hz), std::max(w_min, (stop - start) / 2));
   std::vector<double> misfits;
   for (double c = start + w_noise / 2; c <= stop - w_noise / 2; c += w_noise / 4) {
-    misfits.push_back(estimate_hilbert(log_amp, theta, dt, c, w_noise, correlation, 0.0, 2).misfit);
+    misfits.push_back(
+        estimate_hilbert(log_amp, theta, dt, c, c, w_noise, correlation, 0.0, 2).misfit);
   }
   const double dof = std::max(2.0, 2.0 * w_noise * bs.noise_bandwidth_hz);
   sum.noise_floor_m =
@@ -255,17 +278,26 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   std::vector<Estimate> est;
   if (options.method == Method::kHilbert) {
     const double step = w_min / options.points_per_window;
+    // A window holds its point in its middle half: centred where the span allows,
+    // pushed inside it near the span's ends (the evaluation then sits off-centre,
+    // at most kMaxOffset half-widths, where the fit's slope is still well determined).
+    constexpr double kMaxOffset = 0.5;
+    const auto window_centre = [&](double c, double w) {
+      return std::clamp(c, start + w / 2, std::max(start + w / 2, stop - w / 2));
+    };
+    const double margin = w_min / 2 * (1 - kMaxOffset);
     double previous_window = w_min;
-    for (double c = start + w_min / 2; c <= stop - w_min / 2 + 1e-12; c += step) {
-      const double allowed = std::min(options.max_window_s, 2 * std::min(c - start, stop - c));
+    for (double c = start + margin; c <= stop - margin + 1e-12; c += step) {
+      const double allowed = std::min({options.max_window_s, stop - start,
+                                       2 * std::min(c - start, stop - c) / (1 - kMaxOffset)});
       // Longer windows average noise (std ~ W^-1.5) but bend less with the
       // backbone (model error ~ W^2): take the window with the smallest total
       // uncertainty, stopping early once it meets the target.
       // The slope and the envelope each take the window that determines them
       // best: longer windows average noise (std ~ W^-1.5 for the slope) but bend
       // less with the backbone (model error ~ W^2).
-      Estimate best =
-          estimate_hilbert(log_amp, theta, dt, c, w_min, correlation, noise, options.degree);
+      Estimate best = estimate_hilbert(log_amp, theta, dt, c, window_centre(c, w_min), w_min,
+                                       correlation, noise, options.degree);
       Estimate best_amp = best;
       // Below the noise threshold a point is dropped whatever its window.
       const bool buried = std::exp(best.log_amp) < options.snr_min * noise;
@@ -275,8 +307,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       while (w_first * 2.0 < previous_window) w_first *= std::sqrt(2.0);
       for (double w = w_first; !buried && w <= allowed; w *= std::sqrt(2.0)) {
         if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
-        const Estimate next =
-            estimate_hilbert(log_amp, theta, dt, c, w, correlation, noise, options.degree);
+        const Estimate next = estimate_hilbert(log_amp, theta, dt, c, window_centre(c, w), w,
+                                               correlation, noise, options.degree);
         if (next.log_amp_std < best_amp.log_amp_std) best_amp = next;
         if (next.sigma_std < best.sigma_std) {
           best = next;
@@ -332,19 +364,22 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     const double peak_correlation = std::max(1.0, 2.0 * f_guess / bs.noise_bandwidth_hz);
     for (double k = half_count; k + half_count < static_cast<double>(np);
          k += std::max(1.0, 2 * half_count / options.points_per_window)) {
-      double hc = half_count;
-      Estimate best = estimate_peaks(lpk, tpk, k, hc, options.degree, peak_correlation, noise);
-      while (best.sigma_std > options.target_damping_rel_std * std::abs(best.sigma)) {
-        const double wider = hc * std::sqrt(2.0);
-        if (k - wider < 0 || k + wider > static_cast<double>(np - 1) ||
-            wider * period > options.max_window_s) {
-          break;
-        }
+      // The same search as above: the window with the smallest uncertainty,
+      // stopping once it meets the target or is clearly past the minimum.
+      Estimate best =
+          estimate_peaks(lpk, tpk, k, half_count, options.degree, peak_correlation, noise);
+      for (double wider = half_count * std::sqrt(2.0);
+           best.sigma_std > options.target_damping_rel_std * std::abs(best.sigma) &&
+           k - wider >= 0 && k + wider <= static_cast<double>(np - 1) &&
+           wider * period <= options.max_window_s;
+           wider *= std::sqrt(2.0)) {
         const Estimate next =
             estimate_peaks(lpk, tpk, k, wider, options.degree, peak_correlation, noise);
-        if (next.sigma_std >= best.sigma_std) break;
-        hc = wider;
-        best = next;
+        if (next.sigma_std < best.sigma_std) {
+          best = next;
+        } else if (next.sigma_std > 1.5 * best.sigma_std) {
+          break;
+        }
       }
       est.push_back(best);
     }

@@ -8,8 +8,10 @@
 // 2. Local weighted polynomial fits of ln A(t) and theta(t) (signal/local_poly.h),
 //    differentiated analytically:  omega_d = d theta/dt,  sigma = -d ln A/dt,
 //    omega_n = sqrt(omega_d^2 + sigma^2),  zeta = sigma / omega_n.
-//    Each point's window is the shortest (from a few periods up to max_window_s)
-//    whose damping uncertainty meets target_damping_rel_std.
+//    Each point's window (from a few periods up to max_window_s, pushed inside
+//    the span near its ends with the point off-centre) is the one with the
+//    smallest damping uncertainty, or the shortest that meets
+//    target_damping_rel_std.
 // 3. Noise floor: the RMS of the analytic signal about its local smooth fit over
 //    windows of 16 / noise bandwidth (lower quartile over the record, corrected
 //    for the degrees of freedom the fit absorbs). Kept span: from the impact
@@ -19,11 +21,11 @@
 // 4. Uncertainty per point: the larger of the fit's residual-based and the noise
 //    floor's standard deviation of each slope (both corrected for correlated
 //    samples), combined with the change of the slope when the polynomial degree
-//    is raised (a model-error estimate) and with the amplitude's own uncertainty
-//    carried along the backbone's slope. Monte Carlo on synthetic ring-downs
-//    shows this one-sigma u matching the RMS error; the reported uncertainty is
-//    the expanded k u (coverage_factor k = 2 by default: about 95 % of errors
-//    inside for Gaussian errors, as in the GUM's expanded uncertainty).
+//    is raised by two, less its noise part (a model-error estimate), and with the amplitude's own
+//    uncertainty carried along the backbone's slope. Monte Carlo on synthetic ring-downs shows this
+//    one-sigma u matching the RMS error; the reported uncertainty is the expanded k u
+//    (coverage_factor k = 2 by default: about 95 % of errors inside for Gaussian errors, as in the
+//    GUM's expanded uncertainty).
 // The amplitude column is A * omega_n^k for displacement (k = 0), velocity (1)
 // or acceleration (2) amplitude.
 //
@@ -52,7 +54,7 @@ struct RingdownOptions {
   double taper = 0.25;                       ///< band edge width / band width
   double snr_min = 30.0;                     ///< envelope / noise floor to keep a point
   double min_periods = 8.0;                  ///< shortest fit window [periods]
-  double max_window_s = 2.0;                 ///< longest fit window [s]
+  double max_window_s = 8.0;                 ///< longest fit window [s]
   double target_damping_rel_std = 0.005;     ///< window grows until zeta std / zeta <= this
   double max_damping_rel_std = 0.015;        ///< points with a larger zeta std / zeta are dropped
   double points_per_window = 3.0;            ///< output points per shortest window
@@ -100,7 +102,7 @@ struct RingdownSummary {
 
 /// Settings of the record preparation shared by all bands of a channel.
 struct PrepareOptions {
-  double onset_skip_s = 0.002;  ///< data skipped after the largest sample (the impact) [s]
+  double onset_skip_s = 0.002;  ///< data skipped after the impact (see impact_index) [s]
   double extend_s = 0.5;        ///< linear-prediction continuation at each end [s]
   int ar_order = 32;            ///< order of the continuation model
   double ar_fit_s = 0.25;       ///< data the continuation model is fitted on [s]
@@ -109,8 +111,8 @@ struct PrepareOptions {
 
 /// The spectrum of one channel, computed once and shared by all its bands.
 ///
-/// The analysed record starts just after the impact (the largest sample in the
-/// first quarter, plus onset_skip_s): the pre-trigger and the impact itself are
+/// The analysed record starts just after the impact (impact_index, plus
+/// onset_skip_s): the pre-trigger and the impact itself are
 /// replaced by the ring-down's own backward continuation, and the end is
 /// continued forward, so band filters see no abrupt start or end. With
 /// lowpass_hz set, the record is first low-passed (zero phase, edge from
@@ -136,7 +138,8 @@ struct Ringdown {
   signal::BandSignal band;  ///< displacement analytic signal of the band (coarse grid)
 };
 
-/// Index of the impact: the largest |sample| in the first quarter of the record.
+/// Index of the impact: the first sample reaching half the largest |sample| of the record's
+/// first quarter.
 Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x);
 
 /// Mean-removed, onset-trimmed, continued and zero-padded spectrum of a channel;

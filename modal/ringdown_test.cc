@@ -69,20 +69,28 @@ TEST_P(RingdownSynthetic, RecoversPrescribedBackbone) {
       method == Method::kHilbert ? "hilbert" : "pff", f1, from_acceleration, long(e.points),
       e.decades, e.max_f, e.max_z, e.median_z, e.coverage_f, e.coverage_z,
       r.summary.report().c_str());
-  // Issue 2's acceptance: every frequency within 0.05 %, every damping within
-  // 3 %, median damping within 1 %, the stated uncertainties (expanded, k = 2)
-  // covering 90 % of the errors. The worst damping error allowed here is 4 %
-  // and the coverage 80 % (75 % for peak fitting): on this record the noise (0.1 % of a peak
-  // dominated by the third mode) leaves the last points of the acceleration cases at about 1.5 %
-  // one-sigma, where a 2.5-sigma excursion happens in one record in ten. The span asked for is 1.5
-  // decades; 1.0 is required here for the same reason (the 40 Hz acceleration case reaches 1.1).
-  EXPECT_GE(e.decades, from_acceleration ? 1.0 : 1.4);
+  // Issue 2's acceptance: at least 1.5 decades, every frequency within 0.05 %,
+  // every damping within 3 %, median damping within 1 %, the stated uncertainties
+  // (expanded, k = 2) covering 90 % of the errors. On this record the noise is
+  // 0.1 % of a peak dominated by the third mode: from acceleration it is 3.5 times
+  // larger against mode 1 than from displacement, and at f1 = 150 Hz the mode
+  // also decays 3.75 times faster, so fewer samples carry each amplitude. Over 8
+  // seeds the Hilbert spans are 1.77-2.23 decades from displacement and
+  // 1.37-1.73 from acceleration (the lowest at 150 Hz); this seed gives 1.28 at
+  // 150 Hz. Hence 1.5 from displacement and 1.2 from acceleration here (1.4 and
+  // 1.0 for peak fitting, which has half as many independent points). The last
+  // points sit near 1.5 % one-sigma, where a 2.5-sigma excursion happens in one
+  // record in ten: the worst damping error allowed is 4 %, the coverage 80 %.
+  const bool hilbert = method == Method::kHilbert;
+  const double min_decades =
+      hilbert ? (from_acceleration ? 1.2 : 1.5) : (from_acceleration ? 1.0 : 1.4);
+  EXPECT_GE(e.decades, min_decades);
   EXPECT_LE(e.max_f, 5e-4);
   EXPECT_LE(e.max_z, 0.04);
   EXPECT_LE(e.median_z, 0.01);
   // Peak fitting has about half as many independent points (two extrema per
   // period, correlated over 1 / bandwidth): its coverage scatters more.
-  const double coverage = method == Method::kHilbert ? 0.8 : 0.75;
+  const double coverage = hilbert ? 0.8 : 0.75;
   EXPECT_GE(e.coverage_f, coverage);
   EXPECT_GE(e.coverage_z, coverage);
 }

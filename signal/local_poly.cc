@@ -3,6 +3,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <type_traits>
 
 #include <Eigen/Dense>
 
@@ -12,19 +13,24 @@ namespace {
 
 // Fits K series that share one grid and window: the powers, weights, normal
 // matrices and their factorisations are computed once for all of them.
-// P = degree + 2 columns is a compile-time size, so the small matrix algebra
-// below is unrolled fixed-size Eigen code.
-template <int K, int P>
+// Q = degree + 1 columns is a compile-time size, so the small matrix algebra
+// below is unrolled fixed-size Eigen code. The model-error estimates refit at
+// degree + 1 for the value and degree + 2 for the slope: in a symmetric window
+// the slope at the centre is set by the odd powers alone, so adding one even
+// power leaves it unchanged and says nothing about its bias.
+template <int K, int Q>
 std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*, K>& ys,
                                          double t_first, double dt, double centre,
-                                         double half_width, double correlation,
-                                         Eigen::Index stride) {
-  constexpr int p = P;
-  constexpr int q = P - 1;
-  using MatP = Eigen::Matrix<double, P, P>;
+                                         double half_width, double correlation, Eigen::Index stride,
+                                         double offset) {
+  constexpr int q = Q;      // columns of the fit
+  constexpr int p = Q + 2;  // columns of the largest refit
   using MatQ = Eigen::Matrix<double, q, q>;
-  using VecP = Eigen::Matrix<double, P, 1>;
   using VecQ = Eigen::Matrix<double, q, 1>;
+  using MatQ1 = Eigen::Matrix<double, q + 1, q + 1>;
+  using VecQ1 = Eigen::Matrix<double, q + 1, 1>;
+  using MatP = Eigen::Matrix<double, p, p>;
+  using VecP = Eigen::Matrix<double, p, 1>;
   const Eigen::Index size = ys[0]->size();
   const Eigen::Index i0 = std::max<Eigen::Index>(
       0, static_cast<Eigen::Index>(std::ceil((centre - half_width - t_first) / dt)));
@@ -32,12 +38,12 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
       size - 1, static_cast<Eigen::Index>(std::floor((centre + half_width - t_first) / dt)));
   assert(stride >= 1);
   const Eigen::Index n = (i1 - i0) / stride + 1;
-  assert(n >= P + 1);
+  assert(n >= p);
 
   // Normal equations from power sums: (X'WX)_jk = sum w tau^(j+k), likewise
   // X'W^2X and X'Wy. Scalar loops with no heap traffic: this runs thousands of
   // times per backbone.
-  double s1[2 * P] = {}, s2w[2 * P] = {}, sy[K][P] = {};
+  double s1[2 * p] = {}, s2w[2 * p] = {}, sy[K][p] = {};
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Index idx = i0 + i * stride;
     const double tau = (t_first + static_cast<double>(idx) * dt - centre) / half_width;
@@ -63,6 +69,7 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
     }
   }
   const Eigen::LDLT<MatQ> ldlt(A.template topLeftCorner<q, q>());
+  const Eigen::LDLT<MatQ1> ldlt1(A.template topLeftCorner<q + 1, q + 1>());
   const Eigen::LDLT<MatP> ldlt2(A);
   const MatQ Ainv = ldlt.solve(MatQ::Identity());
   const MatQ sandwich = Ainv * M.template topLeftCorner<q, q>() * Ainv;
@@ -88,20 +95,54 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
       swr2[k] += w * r * r;
     }
   }
+  // Value and slope at tau0 = offset: g_v' beta and g_s' beta / h.
+  const auto basis = [offset](auto& gv, auto& gs) {
+    gv.setZero();
+    gs.setZero();
+    double pw = 1.0;
+    for (int j = 0; j < gv.size(); ++j) {
+      gv(j) = pw;
+      if (j + 1 < gv.size()) gs(j + 1) = (j + 1) * pw;
+      pw *= offset;
+    }
+  };
+  VecQ gv, gs;
+  VecQ1 gv1, gs1;
+  VecP gv2, gs2;
+  basis(gv, gs);
+  basis(gv1, gs1);
+  basis(gv2, gs2);
+  // Statistical spread of the refit changes: each estimate is linear in y,
+  // l = W X A^-1 g, so Var(l_big - l_small) / s^2 = l_big'l_big + l_small'l_small
+  // - 2 l_small'l_big, all from X'W^2X (the pure-noise part of each change).
+  const auto change_var = [&](const auto& ldlt_big, const auto& g_big, const VecQ& g_small) {
+    constexpr int nb = std::remove_cvref_t<decltype(g_big)>::RowsAtCompileTime;
+    const auto a_big = ldlt_big.solve(g_big).eval();
+    const VecQ a_small = ldlt.solve(g_small);
+    const double v_big = a_big.dot(M.template topLeftCorner<nb, nb>() * a_big);
+    const double v_small = a_small.dot(M.template topLeftCorner<q, q>() * a_small);
+    const double cross = a_small.dot(M.template topLeftCorner<q, nb>() * a_big);
+    return std::max(0.0, v_big + v_small - 2 * cross);
+  };
+  const double value_change_var = change_var(ldlt1, gv1, gv);
+  const double slope_change_var = change_var(ldlt2, gs2, gs);
   std::array<LocalFit, K> out;
   for (int k = 0; k < K; ++k) {
     const double s2 = swr2[k] / sw;
     const double scale = s2 * correlation;
     LocalFit& f = out[k];
     f.samples = static_cast<int>(n);
-    f.value = beta[k](0);
-    f.value_std = std::sqrt(std::max(0.0, sandwich(0, 0) * scale));
-    f.slope = beta[k](1) / half_width;
-    f.slope_std = std::sqrt(std::max(0.0, sandwich(1, 1) * scale)) / half_width;
+    f.value = gv.dot(beta[k]);
+    f.value_std = std::sqrt(std::max(0.0, gv.dot(sandwich * gv) * scale));
+    f.slope = gs.dot(beta[k]) / half_width;
+    f.slope_std = std::sqrt(std::max(0.0, gs.dot(sandwich * gs) * scale)) / half_width;
     f.residual_rms = std::sqrt(s2);
+    const VecQ1 beta1 = ldlt1.solve(Eigen::Map<const VecQ1>(sy[k]));
     const VecP beta2 = ldlt2.solve(Eigen::Map<const VecP>(sy[k]));
-    f.slope_change = std::abs(beta2(1) - beta[k](1)) / half_width;
-    f.value_change = std::abs(beta2(0) - beta[k](0));
+    f.slope_change = std::abs(gs2.dot(beta2) - gs.dot(beta[k])) / half_width;
+    f.value_change = std::abs(gv1.dot(beta1) - f.value);
+    f.slope_change_std = std::sqrt(slope_change_var * scale) / half_width;
+    f.value_change_std = std::sqrt(value_change_var * scale);
   }
   return out;
 }
@@ -110,18 +151,23 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
 template <int K>
 std::array<LocalFit, K> dispatch(const std::array<const Eigen::VectorXd*, K>& ys, double t_first,
                                  double dt, double centre, double half_width, int degree,
-                                 double correlation, Eigen::Index stride) {
+                                 double correlation, Eigen::Index stride, double offset) {
   switch (degree) {
     case 1:
-      return fit_local_series<K, 3>(ys, t_first, dt, centre, half_width, correlation, stride);
+      return fit_local_series<K, 2>(ys, t_first, dt, centre, half_width, correlation, stride,
+                                    offset);
     case 2:
-      return fit_local_series<K, 4>(ys, t_first, dt, centre, half_width, correlation, stride);
+      return fit_local_series<K, 3>(ys, t_first, dt, centre, half_width, correlation, stride,
+                                    offset);
     case 3:
-      return fit_local_series<K, 5>(ys, t_first, dt, centre, half_width, correlation, stride);
+      return fit_local_series<K, 4>(ys, t_first, dt, centre, half_width, correlation, stride,
+                                    offset);
     case 4:
-      return fit_local_series<K, 6>(ys, t_first, dt, centre, half_width, correlation, stride);
+      return fit_local_series<K, 5>(ys, t_first, dt, centre, half_width, correlation, stride,
+                                    offset);
     case 5:
-      return fit_local_series<K, 7>(ys, t_first, dt, centre, half_width, correlation, stride);
+      return fit_local_series<K, 6>(ys, t_first, dt, centre, half_width, correlation, stride,
+                                    offset);
     default:
       assert(false && "degree must be 1 to 5");
       return {};
@@ -132,16 +178,21 @@ std::array<LocalFit, K> dispatch(const std::array<const Eigen::VectorXd*, K>& ys
 
 LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, double dt,
                    double centre, double half_width, int degree, double correlation,
-                   Eigen::Index stride) {
+                   Eigen::Index stride, double offset) {
+  assert(std::abs(offset) <= 1.0);
   const Eigen::VectorXd copy = y;
-  return dispatch<1>({&copy}, t_first, dt, centre, half_width, degree, correlation, stride)[0];
+  return dispatch<1>({&copy}, t_first, dt, centre, half_width, degree, correlation, stride,
+                     offset)[0];
 }
 
 std::array<LocalFit, 2> fit_local_pair(const Eigen::VectorXd& y1, const Eigen::VectorXd& y2,
                                        double t_first, double dt, double centre, double half_width,
-                                       int degree, double correlation, Eigen::Index stride) {
+                                       int degree, double correlation, Eigen::Index stride,
+                                       double offset) {
   assert(y1.size() == y2.size());
-  return dispatch<2>({&y1, &y2}, t_first, dt, centre, half_width, degree, correlation, stride);
+  assert(std::abs(offset) <= 1.0);
+  return dispatch<2>({&y1, &y2}, t_first, dt, centre, half_width, degree, correlation, stride,
+                     offset);
 }
 
 }  // namespace jointlab::signal

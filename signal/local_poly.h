@@ -7,8 +7,10 @@
 // comes from the weighted residuals through the sandwich formula
 //   Cov(beta) = s^2 (X'WX)^-1 (X'W^2X) (X'WX)^-1,   s^2 = sum w r^2 / sum w,
 // multiplied by `correlation` (how many consecutive samples make one independent
-// one, e.g. the sample rate over the noise bandwidth). The fit is done at degree p
-// and p + 1; the change of slope between the two estimates the model (bias) error.
+// one, e.g. the sample rate over the noise bandwidth). The value's model (bias)
+// error is estimated by refitting at degree p + 1 and the slope's at degree p + 2:
+// in a symmetric window the slope at the centre is set by the odd powers alone,
+// so one more even power would leave it where it is.
 #pragma once
 
 #include <array>
@@ -19,26 +21,30 @@ namespace jointlab::signal {
 
 /// Result of one local fit.
 struct LocalFit {
-  double value = 0.0;         ///< fitted y(c)
-  double value_std = 0.0;     ///< statistical one-sigma of value
-  double value_change = 0.0;  ///< |value(degree p+1) - value(degree p)|: model-error estimate
-  double slope = 0.0;         ///< fitted dy/dt at c (degree p)
-  double slope_std = 0.0;     ///< statistical one-sigma of slope
-  double slope_change = 0.0;  ///< |slope(degree p+1) - slope(degree p)|: model-error estimate
-  double residual_rms = 0.0;  ///< weighted RMS of y - fit
-  int samples = 0;            ///< samples used
+  double value = 0.0;             ///< fitted y(c)
+  double value_std = 0.0;         ///< statistical one-sigma of value
+  double value_change = 0.0;      ///< |value(degree p+1) - value(degree p)|: model-error estimate
+  double slope = 0.0;             ///< fitted dy/dt at c (degree p)
+  double slope_std = 0.0;         ///< statistical one-sigma of slope
+  double slope_change = 0.0;      ///< |slope(degree p+2) - slope(degree p)|: model-error estimate
+  double value_change_std = 0.0;  ///< one-sigma of value_change from noise alone
+  double slope_change_std = 0.0;  ///< one-sigma of slope_change from noise alone
+  double residual_rms = 0.0;      ///< weighted RMS of y - fit
+  int samples = 0;                ///< samples used
 };
 
 /// Fits y(t) on the uniform grid t_i = t_first + i dt around `centre` with half-width h,
-/// using every `stride`-th sample (pass the correlation of the strided samples).
+/// using every `stride`-th sample (pass the correlation of the strided samples), and
+/// evaluates the fit at centre + offset h (|offset| <= 1; off-centre serves record ends).
 /// Requires at least degree + 3 samples inside the window (asserts).
 LocalFit fit_local(const Eigen::Ref<const Eigen::VectorXd>& y, double t_first, double dt,
                    double centre, double half_width, int degree, double correlation,
-                   Eigen::Index stride = 1);
+                   Eigen::Index stride = 1, double offset = 0.0);
 
 /// The same fit of two series on one grid (the design is built once).
 std::array<LocalFit, 2> fit_local_pair(const Eigen::VectorXd& y1, const Eigen::VectorXd& y2,
                                        double t_first, double dt, double centre, double half_width,
-                                       int degree, double correlation, Eigen::Index stride = 1);
+                                       int degree, double correlation, Eigen::Index stride = 1,
+                                       double offset = 0.0);
 
 }  // namespace jointlab::signal
