@@ -30,6 +30,7 @@ struct ProcessArgs {
   double snr_min = modal::RingdownOptions{}.snr_min;
   double max_damping_std = modal::RingdownOptions{}.max_damping_rel_std;
   double coverage_factor = modal::RingdownOptions{}.coverage_factor;
+  double min_share = modal::ProcessOptions{}.min_share;
   unsigned threads = 0;
 };
 
@@ -72,6 +73,7 @@ void run_process(const ProcessArgs& args) {
   opt.ringdown.snr_min = args.snr_min;
   opt.ringdown.max_damping_rel_std = args.max_damping_std;
   opt.ringdown.coverage_factor = args.coverage_factor;
+  opt.min_share = args.min_share;
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
 
   namespace fs = std::filesystem;
@@ -164,6 +166,11 @@ void add_process_command(CLI::App& app) {
   cmd->add_option("--coverage-factor", args->coverage_factor,
                   "k of the reported uncertainties k*sigma (2: about 95 % coverage; 1: one sigma)")
       ->check(CLI::Range(1.0, 10.0));
+  cmd->add_option("--min-share", args->min_share,
+                  "give no backbone from a channel that sees a band's mode at less than this\n"
+                  "fraction of the strongest channel's amplitude (near a node its damping would\n"
+                  "follow the mode shape's change); 0 keeps every channel")
+      ->check(CLI::Range(0.0, 0.99));
   cmd->add_option("--threads", args->threads, "worker threads (default: every core)");
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {

@@ -19,6 +19,7 @@ std::string ProcessOptions::check() const {
     }
   }
   if (quantity == Quantity::kForce) return "--quantity must be a motion quantity";
+  if (!(min_share >= 0 && min_share < 1)) return "--min-share must be in [0, 1)";
   if (std::string r = ringdown.check(); !r.empty()) return r;
   return {};
 }
@@ -160,6 +161,25 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
       if (zc.size() < j1 + 1) continue;
       const std::complex<double> proj = u.dot(zc.segment(j0, j1 - j0 + 1)) / uu;  // u^H z / u^H u
       out.results[i].complex_amplitude = proj * std::abs(u0);
+    }
+    double strongest = 0;
+    for (size_t i = first; i < out.results.size(); ++i) {
+      strongest = std::max(strongest, std::abs(out.results[i].complex_amplitude));
+    }
+    for (size_t i = first; i < out.results.size(); ++i) {
+      ChannelBand& r = out.results[i];
+      const double share = std::abs(r.complex_amplitude) / strongest;
+      if (i == ref || r.ringdown.summary.status != RingdownStatus::kOk ||
+          !(share < options.min_share)) {
+        continue;
+      }
+      r.ringdown.backbone = Backbone{};
+      r.ringdown.summary.status = RingdownStatus::kNoSpan;
+      r.ringdown.summary.message = fmt::format(
+          "sees this mode at {:.1f} % of the strongest channel's amplitude (below --min-share "
+          "{:g} %): near a node the envelope follows the mode shape's change with amplitude, "
+          "so no backbone is given (the shape entry is kept)",
+          100 * share, 100 * options.min_share);
     }
   }
   return out;

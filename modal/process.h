@@ -9,6 +9,12 @@
 // displacement analytic signal onto the reference channel's over the
 // reference's kept span, scaled to the reference's envelope at the span's
 // start (so the reference channel's complex amplitude is real and positive).
+//
+// A channel that sees a band's mode at less than `min_share` of the strongest
+// channel's complex amplitude gives no backbone, only its shape entry: near a
+// node its envelope follows the change of the mode shape with amplitude (and
+// whatever else leaks into the band) as much as the mode's own decay, so its
+// damping would be confidently wrong. Its summary says so.
 #pragma once
 
 #include <complex>
@@ -29,6 +35,7 @@ struct ProcessOptions {
   Quantity quantity = Quantity::kAcceleration;  ///< quantity of channels without a unit
   RingdownOptions ringdown;                     ///< backbone extraction settings
   PrepareOptions prepare;                       ///< onset trimming and continuation
+  double min_share = 0.1;  ///< weakest channel share of a mode that still gives a backbone
   /// Empty if usable, else what is wrong.
   std::string check() const;
 };

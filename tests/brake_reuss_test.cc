@@ -61,32 +61,49 @@ TEST(BrakeReuss, ChannelsAgreeOnTheFirstModeBackbone) {
   EXPECT_LE(worst_f, 2e-4);
   EXPECT_LE(worst_z, 0.05);
 
-  if (r2.summary.status != modal::RingdownStatus::kOk) {
-    EXPECT_FALSE(r2.summary.message.empty());  // a refusal carries its reason
-    return;
-  }
-  const modal::Backbone& b2 = r2.backbone;
-  int outside = 0, inside_span = 0;
+  // acc2 sees mode 1 at about 4 % of acc1's amplitude (its spectrum is dominated by the
+  // 298 Hz mode): by default it gives no backbone, with the reason, and keeps its shape entry.
+  EXPECT_NE(r2.summary.status, modal::RingdownStatus::kOk);
+  EXPECT_NE(r2.summary.message.find("% of the strongest channel"), std::string::npos)
+      << r2.summary.message;
+  EXPECT_EQ(r2.backbone.size(), 0);
+  const double share2 = std::abs(res.results[1].complex_amplitude) /
+                        std::max(std::abs(res.results[0].complex_amplitude),
+                                 std::abs(res.results[2].complex_amplitude));
+  std::printf("acc2 sees mode 1 at %.1f %% of the strongest channel\n", 100 * share2);
+  EXPECT_GT(share2, 0.01);  // a real, small entry of the operating shape
+  EXPECT_LT(share2, 0.1);
+}
+
+// Forced to report (--min-share 0), acc2's damping near the impact reads 1-4 % above
+// acc1's and acc3's (which agree within 1.2 %), several times its stated uncertainty:
+// the confident wrong values the default refusal prevents.
+TEST(BrakeReuss, WeakChannelForcedToReportDisagreesNearTheImpact) {
+  const data::Record rec = data::read_record(testing::source_dir() +
+                                             "/data/examples/brake-reuss-beam/hammer_impact.csv");
+  modal::ProcessOptions opt;
+  opt.bands = {{70, 90}};
+  opt.min_share = 0;
+  signal::FftCache cache;
+  const modal::RecordResult res = modal::process_record(rec, opt, cache);
+  ASSERT_EQ(res.results.size(), 3u);
+  const modal::Backbone& b1 = res.results[0].ringdown.backbone;
+  const modal::Backbone& b2 = res.results[1].ringdown.backbone;
+  ASSERT_GT(b1.size(), 0);
+  ASSERT_GT(b2.size(), 0);
+  int outside = 0, compared = 0;
   for (Eigen::Index i = 0; i < b2.size(); ++i) {
     const double t = b2.time_s(i);
     if (t < b1.time_s(0) || t > b1.time_s(b1.size() - 1)) continue;
-    ++inside_span;
-    const double df = std::abs(b2.frequency_hz(i) - at(b1.time_s, b1.frequency_hz, t));
+    ++compared;
     const double dz = std::abs(b2.damping(i) - at(b1.time_s, b1.damping, t));
-    // acc2's own stated uncertainty, combined with acc1's (both are estimates).
-    const double uf = std::hypot(b2.frequency_std_hz(i), at(b1.time_s, b1.frequency_std_hz, t));
     const double uz = std::hypot(b2.damping_std(i), at(b1.time_s, b1.damping_std, t));
-    outside += (df > uf) || (dz > uz);
+    outside += dz > uz;
   }
-  std::printf("acc2 vs acc1: %d of %d instants outside the stated uncertainty\n", outside,
-              inside_span);
-  // The stated uncertainties are expanded (k = 2, about 95 %). Today 6 of 42
-  // instants fall outside, all in the first 0.4 s after the impact, where acc2's
-  // damping reads 2-3 % above acc1's and acc3's (which agree within 1 %): acc2
-  // sees the mode weakly and the backward continuation of its record is four
-  // times less exact than theirs. Issue 2 asks for none outside; this pins the
-  // present level (at most 15 %) until that start is handled.
-  EXPECT_LE(outside * 100, inside_span * 15);
+  std::printf("acc2 forced: damping outside the combined uncertainty at %d of %d instants\n",
+              outside, compared);
+  EXPECT_GE(compared, 20);
+  EXPECT_GE(outside, 2);
 }
 
 }  // namespace
