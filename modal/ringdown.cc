@@ -1,6 +1,7 @@
 #include "jointlab/modal/ringdown.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -30,13 +31,6 @@ struct Estimate {
   double window = 0;       // window length [s]
 };
 
-// Model error of a fit from the change a higher-degree refit makes, less the
-// part noise alone would make (`change_std`): an estimate of the bias whose
-// square is unbiased, so noise is not counted twice in the uncertainty.
-double model_error(double change, double change_std) {
-  return std::sqrt(std::max(0.0, change * change - change_std * change_std));
-}
-
 // Hilbert estimate at `at` from ln A and theta on the grid t_j = j dt, fitted
 // over a window of length `window` centred at `centre` (at lies in its middle
 // half: off-centre windows serve points near the ends of the span).
@@ -61,14 +55,11 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
   const double floor_rel = noise / (std::sqrt(2.0) * std::exp(fa.value));
   const double scale_a = fa.residual_rms > 0 ? std::max(1.0, floor_rel / fa.residual_rms) : 1.0;
   const double scale_p = fp.residual_rms > 0 ? std::max(1.0, floor_rel / fp.residual_rms) : 1.0;
-  e.log_amp_std = std::hypot(fa.value_std * scale_a,
-                             model_error(fa.value_change, fa.value_change_std * scale_a));
+  e.log_amp_std = std::hypot(fa.value_std * scale_a, fa.value_change);
   e.sigma = -fa.slope;
-  e.sigma_std = std::hypot(fa.slope_std * scale_a,
-                           model_error(fa.slope_change, fa.slope_change_std * scale_a));
+  e.sigma_std = std::hypot(fa.slope_std * scale_a, fa.slope_change);
   e.omega_d = fp.slope;
-  e.omega_d_std = std::hypot(fp.slope_std * scale_p,
-                             model_error(fp.slope_change, fp.slope_change_std * scale_p));
+  e.omega_d_std = std::hypot(fp.slope_std * scale_p, fp.slope_change);
   e.misfit = std::exp(fa.value) * std::hypot(fa.residual_rms, fp.residual_rms);
   e.window = window;
   return e;
@@ -93,15 +84,10 @@ Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& 
       ft.residual_rms > 0 ? std::max(1.0, floor_rel / omega / ft.residual_rms) : 1.0;
   e.t = ft.value;
   e.log_amp = fa.value;
-  e.log_amp_std = std::hypot(fa.value_std * scale_a,
-                             model_error(fa.value_change, fa.value_change_std * scale_a));
+  e.log_amp_std = std::hypot(fa.value_std * scale_a, fa.value_change);
   e.sigma = -fa.slope / half_period;
-  const double rel_t = std::hypot(ft.slope_std * scale_t,
-                                  model_error(ft.slope_change, ft.slope_change_std * scale_t)) /
-                       half_period;
-  e.sigma_std = std::hypot(std::hypot(fa.slope_std * scale_a,
-                                      model_error(fa.slope_change, fa.slope_change_std * scale_a)) /
-                               half_period,
+  const double rel_t = std::hypot(ft.slope_std * scale_t, ft.slope_change) / half_period;
+  e.sigma_std = std::hypot(std::hypot(fa.slope_std * scale_a, fa.slope_change) / half_period,
                            std::abs(e.sigma) * rel_t);
   e.omega_d = omega;
   e.omega_d_std = e.omega_d * rel_t;
@@ -417,20 +403,32 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
                std::isfinite(e.sigma_std) && a >= options.snr_min * sum.noise_floor_m &&
                e.sigma_std <= options.max_damping_rel_std * e.sigma;
   }
-  // Longest contiguous run of valid points.
-  size_t best_begin = 0, best_len = 0;
+  // Longest run of valid points, bridging gaps of at most kMaxGap points: one
+  // point whose uncertainty strays over the limit is dropped on its own rather
+  // than cutting the span in two.
+  constexpr size_t kMaxGap = 2;
+  size_t best_begin = 0, best_end = 0, best_len = 0;  // [begin, end), valid points in it
   for (size_t i = 0; i < est.size();) {
     if (!valid[i]) {
       ++i;
       continue;
     }
-    size_t j = i;
-    while (j < est.size() && valid[j]) ++j;
-    if (j - i > best_len) {
-      best_len = j - i;
-      best_begin = i;
+    size_t j = i, count = 0, last = i;
+    while (j < est.size()) {
+      if (valid[j]) {
+        ++count;
+        last = j;
+      } else if (j - last > kMaxGap) {
+        break;
+      }
+      ++j;
     }
-    i = j;
+    if (count > best_len) {
+      best_len = count;
+      best_begin = i;
+      best_end = last + 1;
+    }
+    i = last + 1;
   }
   if (best_len < 2) {
     const double a_max = amp.maxCoeff();
@@ -450,8 +448,10 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     v->resize(n);
   }
   const int k_out = derivative_order(options.amplitude);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Estimate& e = est[best_begin + static_cast<size_t>(i)];
+  Eigen::Index i = 0;
+  for (size_t k = best_begin; k < best_end; ++k) {
+    if (!valid[k]) continue;
+    const Estimate& e = est[k];
     const double wn = std::hypot(e.omega_d, e.sigma);
     const double a = std::exp(e.log_amp);
     bb.time_s(i) = channel.t0 + e.t;
@@ -466,7 +466,9 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     bb.decay_rate(i) = e.sigma;
     bb.snr(i) = a / sum.noise_floor_m;
     bb.window_s(i) = e.window;
+    ++i;
   }
+  assert(i == n);
   // Reported uncertainties are expanded: coverage factor times one sigma.
   bb.frequency_std_hz *= options.coverage_factor;
   bb.damping_std *= options.coverage_factor;

@@ -21,7 +21,7 @@
 // 4. Uncertainty per point: the larger of the fit's residual-based and the noise
 //    floor's standard deviation of each slope (both corrected for correlated
 //    samples), combined with the change of the slope when the polynomial degree
-//    is raised by two, less its noise part (a model-error estimate), and with the amplitude's own
+//    is raised by two (a model-error estimate), and with the amplitude's own
 //    uncertainty carried along the backbone's slope. Monte Carlo on synthetic ring-downs shows this
 //    one-sigma u matching the RMS error; the reported uncertainty is the expanded k u
 //    (coverage_factor k = 2 by default: about 95 % of errors inside for Gaussian errors, as in the
@@ -56,7 +56,7 @@ struct RingdownOptions {
   double min_periods = 8.0;                  ///< shortest fit window [periods]
   double max_window_s = 8.0;                 ///< longest fit window [s]
   double target_damping_rel_std = 0.005;     ///< window grows until zeta std / zeta <= this
-  double max_damping_rel_std = 0.015;        ///< points with a larger zeta std / zeta are dropped
+  double max_damping_rel_std = 0.01;         ///< points with a larger zeta std / zeta are dropped
   double points_per_window = 3.0;            ///< output points per shortest window
   int degree = 3;                            ///< degree of the local polynomials
   double coverage_factor = 2.0;              ///< k of the reported uncertainty k * sigma

@@ -3,7 +3,6 @@
 #include <array>
 #include <cassert>
 #include <cmath>
-#include <type_traits>
 
 #include <Eigen/Dense>
 
@@ -112,20 +111,6 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
   basis(gv, gs);
   basis(gv1, gs1);
   basis(gv2, gs2);
-  // Statistical spread of the refit changes: each estimate is linear in y,
-  // l = W X A^-1 g, so Var(l_big - l_small) / s^2 = l_big'l_big + l_small'l_small
-  // - 2 l_small'l_big, all from X'W^2X (the pure-noise part of each change).
-  const auto change_var = [&](const auto& ldlt_big, const auto& g_big, const VecQ& g_small) {
-    constexpr int nb = std::remove_cvref_t<decltype(g_big)>::RowsAtCompileTime;
-    const auto a_big = ldlt_big.solve(g_big).eval();
-    const VecQ a_small = ldlt.solve(g_small);
-    const double v_big = a_big.dot(M.template topLeftCorner<nb, nb>() * a_big);
-    const double v_small = a_small.dot(M.template topLeftCorner<q, q>() * a_small);
-    const double cross = a_small.dot(M.template topLeftCorner<q, nb>() * a_big);
-    return std::max(0.0, v_big + v_small - 2 * cross);
-  };
-  const double value_change_var = change_var(ldlt1, gv1, gv);
-  const double slope_change_var = change_var(ldlt2, gs2, gs);
   std::array<LocalFit, K> out;
   for (int k = 0; k < K; ++k) {
     const double s2 = swr2[k] / sw;
@@ -141,8 +126,6 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
     const VecP beta2 = ldlt2.solve(Eigen::Map<const VecP>(sy[k]));
     f.slope_change = std::abs(gs2.dot(beta2) - gs.dot(beta[k])) / half_width;
     f.value_change = std::abs(gv1.dot(beta1) - f.value);
-    f.slope_change_std = std::sqrt(slope_change_var * scale) / half_width;
-    f.value_change_std = std::sqrt(value_change_var * scale);
   }
   return out;
 }

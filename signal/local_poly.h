@@ -21,16 +21,14 @@ namespace jointlab::signal {
 
 /// Result of one local fit.
 struct LocalFit {
-  double value = 0.0;             ///< fitted y(c)
-  double value_std = 0.0;         ///< statistical one-sigma of value
-  double value_change = 0.0;      ///< |value(degree p+1) - value(degree p)|: model-error estimate
-  double slope = 0.0;             ///< fitted dy/dt at c (degree p)
-  double slope_std = 0.0;         ///< statistical one-sigma of slope
-  double slope_change = 0.0;      ///< |slope(degree p+2) - slope(degree p)|: model-error estimate
-  double value_change_std = 0.0;  ///< one-sigma of value_change from noise alone
-  double slope_change_std = 0.0;  ///< one-sigma of slope_change from noise alone
-  double residual_rms = 0.0;      ///< weighted RMS of y - fit
-  int samples = 0;                ///< samples used
+  double value = 0.0;         ///< fitted y(c)
+  double value_std = 0.0;     ///< statistical one-sigma of value
+  double value_change = 0.0;  ///< |value(degree p+1) - value(degree p)|: model-error estimate
+  double slope = 0.0;         ///< fitted dy/dt at c (degree p)
+  double slope_std = 0.0;     ///< statistical one-sigma of slope
+  double slope_change = 0.0;  ///< |slope(degree p+2) - slope(degree p)|: model-error estimate
+  double residual_rms = 0.0;  ///< weighted RMS of y - fit
+  int samples = 0;            ///< samples used
 };
 
 /// Fits y(t) on the uniform grid t_i = t_first + i dt around `centre` with half-width h,

@@ -50,7 +50,8 @@ SlowFlowSignal slow_flow(const SlowFlowMode& mode, double fs, Eigen::Index n) {
   return out;
 }
 
-ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise, unsigned seed) {
+ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise, unsigned seed,
+                                  double higher) {
   ThreeModeRecord r;
   const Eigen::Index n = static_cast<Eigen::Index>(std::round(duration_s * r.fs));
   const double w1 = 2 * std::numbers::pi * f1_hz;
@@ -64,8 +65,10 @@ ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise,
   r.first.zeta = [s](double a) { return 0.001 + 0.0085 * s(a); };
   r.first.a0 = a0;
   r.first.theta0 = 0.3;
-  SlowFlowMode m2{[w1](double) { return 2.7 * w1; }, [](double) { return 0.002; }, 2e-4, 1.0};
-  SlowFlowMode m3{[w1](double) { return 6.1 * w1; }, [](double) { return 0.003; }, 5e-5, 2.0};
+  SlowFlowMode m2{[w1](double) { return 2.7 * w1; }, [](double) { return 0.002; }, 2e-4 * higher,
+                  1.0};
+  SlowFlowMode m3{[w1](double) { return 6.1 * w1; }, [](double) { return 0.003; }, 5e-5 * higher,
+                  2.0};
   const SlowFlowSignal s1 = slow_flow(r.first, r.fs, n);
   const SlowFlowSignal s2 = slow_flow(m2, r.fs, n);
   const SlowFlowSignal s3 = slow_flow(m3, r.fs, n);

@@ -45,7 +45,9 @@ struct ThreeModeRecord {
   Eigen::VectorXd first_amplitude;  ///< the first mode's a(t_k) [m]
 };
 
-/// Builds the three-mode record; `seed` selects the noise realisation.
-ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise, unsigned seed);
+/// Builds the three-mode record; `seed` selects the noise realisation and `higher`
+/// scales the amplitudes of modes 2 and 3 (1: the third mode dominates the acceleration).
+ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise, unsigned seed,
+                                  double higher = 1.0);
 
 }  // namespace jointlab::testing
