@@ -1,6 +1,7 @@
 #include "jointlab/correlate/iwan_update.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -41,6 +42,7 @@ std::string IwanUpdateOptions::error() const {
   if (!(b.chi_min > -1 && b.chi_min < b.chi_max)) return "bounds: -1 < chi_min < chi_max";
   if (!(b.beta_min > 0 && b.beta_min < b.beta_max)) return "bounds: 0 < beta_min < beta_max";
   if (!(fixed_gamma >= 0)) return "fixed_gamma must be >= 0";
+  if (!(fixed_beta >= 0)) return "fixed_beta must be >= 0";
   if (samples < 2) return "samples must be >= 2";
   if (!(contraction > 0 && contraction < 1)) return "contraction must be in (0, 1)";
   if (max_evaluations < samples) return "max_evaluations must be >= samples";
@@ -74,6 +76,7 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
   }
   if (!found) throw InputError(fmt::format("no joint of the model uses the Iwan set '{}'", set_));
   if (targets_.empty()) throw InputError("no measured backbone to update against");
+  int curve_index = 0;
   for (const IwanTarget& t : targets_) {
     if (t.mode < 1) throw InputError(fmt::format("mode {} must be >= 1", t.mode));
     if (t.curves.empty()) throw InputError(fmt::format("mode {}: no measured backbone", t.mode));
@@ -97,6 +100,7 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
                         t.mode, sensors_[c.sensor].channel));
       }
       residual_count_ += 2 * static_cast<int>(n);
+      residual_curve_.insert(residual_curve_.end(), 2 * static_cast<size_t>(n), curve_index++);
     }
   }
 }
@@ -112,6 +116,17 @@ model::Model IwanObjective::apply(const model::IwanParameters& p) const {
 }
 
 bool IwanObjective::residuals(const model::IwanParameters& p, double* r) const {
+  return evaluate(p, r, nullptr);
+}
+
+Eigen::Vector2d IwanObjective::slip_range(const model::IwanParameters& p) const {
+  std::vector<double> r(residual_count_);
+  Eigen::Vector2d slip(INFINITY, 0);
+  return evaluate(p, r.data(), &slip) ? slip : Eigen::Vector2d::Zero();
+}
+
+bool IwanObjective::evaluate(const model::IwanParameters& p, double* r,
+                             Eigen::Vector2d* slip_range) const {
   ++evaluations_;
   if (!model::iwan_parameter_error(p).empty()) return false;
   const int pw = power_of(amplitude_);
@@ -141,7 +156,7 @@ bool IwanObjective::residuals(const model::IwanParameters& p, double* r) const {
       if (curve.size() < 2) return false;
       for (const MeasuredBackbone& c : t.curves) {
         const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
-        std::vector<double> la, f, z;
+        std::vector<double> la, f, z, slip;
         for (const model::QsmaPoint& q : curve) {
           const double w = 2 * std::numbers::pi * q.frequency_hz;
           const double a = q.modal_amplitude * ph * std::pow(w, pw);
@@ -149,8 +164,15 @@ bool IwanObjective::residuals(const model::IwanParameters& p, double* r) const {
           la.push_back(std::log(a));
           f.push_back(q.frequency_hz);
           z.push_back(q.damping_ratio);
+          slip.push_back(q.max_slip);
         }
         if (la.size() < 2) return false;
+        if (slip_range) {
+          (*slip_range)(0) =
+              std::min((*slip_range)(0), interpolate(la, slip, std::log(c.amplitude.minCoeff())));
+          (*slip_range)(1) =
+              std::max((*slip_range)(1), interpolate(la, slip, std::log(c.amplitude.maxCoeff())));
+        }
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
           const double x = std::log(c.amplitude(j));
           const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
@@ -246,6 +268,7 @@ Box initial_box(const IwanUpdateOptions& o) {
   Box box{Vec4(b.Fs_min, b.gamma_min, b.chi_min, b.beta_min),
           Vec4(b.Fs_max, b.gamma_max, b.chi_max, b.beta_max)};
   if (o.fixed_gamma > 0) box.lo(1) = box.hi(1) = o.fixed_gamma;
+  if (o.fixed_beta > 0) box.lo(3) = box.hi(3) = o.fixed_beta;
   return box;
 }
 
@@ -278,7 +301,7 @@ Vec4 to_v(const double* x) { return Vec4(std::exp(x[0]), std::exp(x[1]), x[2], s
 // Residuals with central-difference Jacobians (QSMA is not templated on the scalar).
 class IwanCost : public ceres::CostFunction {
  public:
-  IwanCost(Tracker& tr, bool fixed_gamma) : tr_(tr), fixed_gamma_(fixed_gamma) {
+  IwanCost(Tracker& tr, std::array<bool, 4> held) : tr_(tr), held_(held) {
     set_num_residuals(tr.objective.residual_count());
     mutable_parameter_block_sizes()->push_back(4);
   }
@@ -296,7 +319,7 @@ class IwanCost : public ceres::CostFunction {
     const int m = num_residuals();
     std::vector<double> rp(m), rm(m);
     for (int k = 0; k < 4; ++k) {
-      if (k == 1 && fixed_gamma_) {
+      if (held_[k]) {
         for (int i = 0; i < m; ++i) jac[0][i * 4 + k] = 0;
         continue;
       }
@@ -317,7 +340,7 @@ class IwanCost : public ceres::CostFunction {
 
  private:
   Tracker& tr_;
-  bool fixed_gamma_;
+  std::array<bool, 4> held_;
 };
 
 class BudgetCallback : public ceres::IterationCallback {
@@ -343,7 +366,10 @@ void global_local(Tracker& tr, std::mt19937& rng) {
   }
   std::sort(samples.begin(), samples.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  const bool fixed = o.fixed_gamma > 0;
+  const std::array<bool, 4> held{false, o.fixed_gamma > 0, false, o.fixed_beta > 0};
+  std::vector<int> constant;
+  for (int k = 0; k < 4; ++k)
+    if (held[k]) constant.push_back(k);
   bool converged = true;
   for (int s = 0; s < o.local_starts && s < static_cast<int>(samples.size()); ++s) {
     if (samples[s].first >= kPenalty) break;
@@ -352,13 +378,11 @@ void global_local(Tracker& tr, std::mt19937& rng) {
     const int limit = tr.used() + remaining / (o.local_starts - s);
     Vec4 x = to_x(samples[s].second);
     ceres::Problem problem;
-    problem.AddResidualBlock(new IwanCost(tr, fixed), nullptr, x.data());
+    problem.AddResidualBlock(new IwanCost(tr, held), nullptr, x.data());
     const Vec4 lo = to_x(full.lo), hi = to_x(full.hi);
-    if (fixed) {
-      problem.SetManifold(x.data(), new ceres::SubsetManifold(4, {1}));
-    }
+    if (!constant.empty()) problem.SetManifold(x.data(), new ceres::SubsetManifold(4, constant));
     for (int k = 0; k < 4; ++k) {
-      if (k == 1 && fixed) continue;
+      if (held[k]) continue;
       problem.SetParameterLowerBound(x.data(), k, lo(k));
       problem.SetParameterUpperBound(x.data(), k, hi(k));
     }
@@ -375,6 +399,65 @@ void global_local(Tracker& tr, std::mt19937& rng) {
     if (cs.termination_type != ceres::CONVERGENCE) converged = false;
   }
   tr.summary.status = converged ? IwanUpdateStatus::kConverged : IwanUpdateStatus::kBudget;
+}
+
+// Covariance of x = (ln F_S, ln gamma, chi, ln beta) at v (ln gamma and ln K_T differ by a
+// constant); 0 rows and columns for held parameters, all 0 when unknown.
+// With G >= 3 curves: cluster-robust covariance H^-1 (G/(G-1) sum_c g_c g_c^T) H^-1, H = J^T J,
+// g_c = J_c^T r_c over curve c's residuals: points along one hit's backbone share that hit's
+// offset, so the curves, not the points, are the independent samples. With fewer curves: the
+// Gauss-Newton covariance (J^T J)^-1 / N (residuals are normalised by sigma sqrt(N)).
+Eigen::Matrix4d covariance(const IwanObjective& objective, const IwanUpdateOptions& options,
+                           const Vec4& v) {
+  const std::array<bool, 4> held{false, options.fixed_gamma > 0, false, options.fixed_beta > 0};
+  std::vector<int> free;
+  for (int k = 0; k < 4; ++k)
+    if (!held[k]) free.push_back(k);
+  const int m = objective.residual_count(), nf = static_cast<int>(free.size());
+  const double Ks = objective.reference_stiffness();
+  Eigen::MatrixXd J(m, nf);
+  Eigen::VectorXd r(m);
+  std::vector<double> rp(m), rm(m);
+  if (!objective.residuals(to_params(v, Ks), r.data())) return Eigen::Matrix4d::Zero();
+  const Vec4 x0 = to_x(v);
+  for (int j = 0; j < nf; ++j) {
+    const double h = 1e-4;
+    Vec4 xp = x0, xm = x0;
+    xp(free[j]) += h;
+    xm(free[j]) -= h;
+    if (!objective.residuals(to_params(to_v(xp.data()), Ks), rp.data()) ||
+        !objective.residuals(to_params(to_v(xm.data()), Ks), rm.data())) {
+      return Eigen::Matrix4d::Zero();
+    }
+    for (int i = 0; i < m; ++i) J(i, j) = (rp[i] - rm[i]) / (2 * h);
+  }
+  const Eigen::MatrixXd H = J.transpose() * J;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(H);
+  if (!lu.isInvertible()) return Eigen::Matrix4d::Zero();
+  const Eigen::MatrixXd Hi = lu.inverse();
+  const std::vector<int>& curve = objective.residual_curve();
+  const int n_curves = curve.empty() ? 0 : curve.back() + 1;
+  Eigen::MatrixXd cov;
+  if (n_curves >= 3) {
+    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(nf, n_curves);
+    for (int i = 0; i < m; ++i) g.col(curve[i]) += J.row(i).transpose() * r(i);
+    const Eigen::MatrixXd B = g * g.transpose() * (n_curves / (n_curves - 1.0));
+    cov = Hi * B * Hi;
+  } else {
+    cov = Hi / (m / 2.0);
+  }
+  if (!cov.allFinite()) return Eigen::Matrix4d::Zero();
+  Eigen::Matrix4d out = Eigen::Matrix4d::Zero();
+  for (int i = 0; i < nf; ++i)
+    for (int j = 0; j < nf; ++j) out(free[i], free[j]) = cov(i, j);
+  return out;
+}
+
+void set_slips(const IwanObjective& objective, IwanUpdateSummary& s) {
+  const Eigen::Vector2d slip = objective.slip_range(s.best);
+  s.bottom_slip = slip(0);
+  s.top_slip = slip(1);
+  s.phi_max = model::Iwan(s.best).phi_max();
 }
 
 }  // namespace
@@ -412,53 +495,45 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     s.best = s.start;
     s.final_cost = s.initial_cost;
     s.linear_error = objective.linear_error(s.best);
+    set_slips(objective, s);
     return s.best;
   }
   s.best = to_params(tr.best_v, objective.reference_stiffness());
   s.final_cost = tr.best;
   s.linear_error = objective.linear_error(s.best);
-  // Gauss-Newton covariance in x = (ln F_S, ln K_T, chi, ln beta); residuals are normalised
-  // by sigma sqrt(N), so cov(x) = (J^T J)^-1 / N.
-  const int m = objective.residual_count();
-  Eigen::MatrixXd J(m, 4);
-  std::vector<double> rp(m), rm(m);
-  const Vec4 x0 = to_x(tr.best_v);
-  bool ok = true;
-  for (int k = 0; k < 4 && ok; ++k) {
-    const double h = 1e-4;
-    Vec4 xp = x0, xm = x0;
-    xp(k) += h;
-    xm(k) -= h;
-    ok =
-        objective.residuals(to_params(to_v(xp.data()), objective.reference_stiffness()),
-                            rp.data()) &&
-        objective.residuals(to_params(to_v(xm.data()), objective.reference_stiffness()), rm.data());
-    for (int i = 0; ok && i < m; ++i) J(i, k) = (rp[i] - rm[i]) / (2 * h);
+  s.covariance = covariance(objective, options, tr.best_v);
+  for (int k = 0; k < 4; ++k) {
+    const double sd = std::sqrt(std::max(s.covariance(k, k), 0.0));
+    s.relative_std(k) = k != 2 ? sd : std::abs(s.best.chi) > 0 ? sd / std::abs(s.best.chi) : 0.0;
   }
-  if (ok) {
-    const Eigen::Matrix4d jtj = J.transpose() * J;
-    Eigen::FullPivLU<Eigen::Matrix4d> lu(jtj);
-    if (lu.isInvertible()) {
-      const Eigen::Matrix4d cov = lu.inverse() / (m / 2.0);
-      for (int k = 0; k < 4; ++k) {
-        double v = cov(k, k) > 0 ? std::sqrt(cov(k, k)) : 0;
-        if (k == 2) v = std::abs(s.best.chi) > 0 ? v / std::abs(s.best.chi) : 0;
-        s.relative_std(k) = std::isfinite(v) ? v : 0;
-      }
-    }
-  }
+  set_slips(objective, s);
   return s.best;
 }
 
 std::string IwanUpdateSummary::report() const {
   static const char* names[] = {"converged", "evaluation budget spent", "no valid sample"};
-  return fmt::format(
+  std::string out = fmt::format(
       "Iwan update: {}, {} QSMA evaluations, {} rounds, cost {:.4g} -> {:.4g}, linear frequency "
       "error {:.3g} %\n  Fs {:.6g} -> {:.6g} N, Kt {:.6g} -> {:.6g} N/m, chi {:.4g} -> {:.4g}, "
       "beta {:.4g} -> {:.4g}\n",
       names[static_cast<int>(status)], evaluations, rounds, initial_cost, final_cost,
       100 * linear_error, start.Fs, best.Fs, start.Kt, best.Kt, start.chi, best.chi, start.beta,
       best.beta);
+  if (relative_std.any()) {
+    out += fmt::format(
+        "  one-sigma relative uncertainty: Fs {:.2g} %, Kt {:.2g} %, chi {:.2g} %, beta {:.2g} % "
+        "(0: held or unknown)\n",
+        100 * relative_std(0), 100 * relative_std(1), 100 * relative_std(2), 100 * relative_std(3));
+  }
+  if (top_slip > 0 && phi_max > 0) {
+    out += fmt::format(
+        "  largest joint slip {:.3g} to {:.3g} m over the measured amplitudes, phi_max {:.3g} m: "
+        "{}\n",
+        bottom_slip, top_slip, phi_max,
+        microslip_only() ? "microslip only, Fs and beta are not identified separately"
+                         : "the data reach macroslip");
+  }
+  return out;
 }
 
 std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,

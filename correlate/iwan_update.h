@@ -71,6 +71,7 @@ struct IwanUpdateOptions {
   IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;       ///< method
   IwanBounds bounds;                                           ///< search box
   double fixed_gamma = 0;                                      ///< > 0: gamma held at this value
+  double fixed_beta = 0;                                       ///< > 0: beta held at this value
   AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< measured amplitude quantity
   int samples = 100;                                           ///< samples per Monte Carlo round
   double contraction = 0.03;      ///< Monte Carlo: bounds contract to +-this around the best
@@ -105,6 +106,11 @@ class IwanObjective {
   bool residuals(const model::IwanParameters& p, double* r) const;
   /// Sum of squared residuals at p (a large finite penalty if it cannot be evaluated).
   double cost(const model::IwanParameters& p) const;
+  /// Largest joint slip [m] (QSMA max_slip) at the lowest and at the highest measured amplitude
+  /// over the targets, at p; (0, 0) if the model cannot be evaluated there.
+  Eigen::Vector2d slip_range(const model::IwanParameters& p) const;
+  /// Index of the curve (over every target, in order) each residual belongs to.
+  const std::vector<int>& residual_curve() const { return residual_curve_; }
   /// Relative linear-frequency error of every target at p (0 for targets without one).
   double linear_error(const model::IwanParameters& p) const;
   /// QSMA evaluations so far.
@@ -123,7 +129,9 @@ class IwanObjective {
   double Ks_ = 0;
   model::IwanParameters initial_;
   int residual_count_ = 0;
+  std::vector<int> residual_curve_;
   mutable int evaluations_ = 0;
+  bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip) const;
 };
 
 /// Why update_iwan() stopped.
@@ -150,9 +158,20 @@ struct IwanUpdateSummary {
   double linear_error = 0;  ///< relative linear-frequency error at best
   int evaluations = 0;      ///< QSMA evaluations
   int rounds = 0;           ///< Monte Carlo rounds or local starts
-  Eigen::Vector4d relative_std =
-      Eigen::Vector4d::Zero();            ///< of (F_S, K_T, chi, beta) from
-                                          ///< the Gauss-Newton covariance at best (0 where unknown)
+  /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
+  /// unknown or held): with three or more curves the cluster-robust (sandwich) covariance with
+  /// one cluster per curve, so the scatter between curves, not the number of points along them,
+  /// sets it; with fewer curves the Gauss-Newton covariance.
+  Eigen::Vector4d relative_std = Eigen::Vector4d::Zero();
+  /// Covariance of x = (ln F_S, ln K_T, chi, ln beta) behind relative_std (0 rows and columns
+  /// for held parameters; all 0 when unknown).
+  Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();
+  double bottom_slip = 0;  ///< largest joint slip at the lowest measured amplitude, at best [m]
+  double top_slip = 0;     ///< largest joint slip at the highest measured amplitude, at best [m]
+  double phi_max = 0;      ///< the slip at which an element reaches macroslip, at best [m]
+  /// True when the data stay in microslip at best (top_slip < phi_max): then only K_T, chi and R
+  /// are identified, not F_S and beta separately (docs/update-iwan.md).
+  bool microslip_only() const { return top_slip > 0 && top_slip < phi_max; }
   std::vector<IwanHistoryEntry> history;  ///< every evaluation
   /// One paragraph: optimiser outcome, parameters, cost.
   std::string report() const;
