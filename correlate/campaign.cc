@@ -1,5 +1,6 @@
 #include "jointlab/correlate/campaign.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -95,6 +96,9 @@ CampaignUpdate read_update(const Context& ctx, const toml::node& n, const std::s
     } else if (k == "sets") {
       for (const toml::node& s : array(ctx, value, field + ".sets"))
         u.sets.push_back(text(ctx, s, field + ".sets"));
+    } else if (k == "modes") {
+      for (const toml::node& s : array(ctx, value, field + ".modes"))
+        u.modes.push_back(text(ctx, s, field + ".modes"));
     } else {
       u.settings[k] = number(ctx, value, field + "." + k);
     }
@@ -288,6 +292,15 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
     if (const toml::node* v = t.get("linear"))
       c.linear_update = read_update(ctx, *v, "update.linear");
     if (const toml::node* v = t.get("iwan")) c.iwan_update = read_update(ctx, *v, "update.iwan");
+  }
+  for (const CampaignUpdate* u : {&c.linear_update, &c.iwan_update}) {
+    for (const std::string& name : u->modes) {
+      const bool known = std::any_of(c.modes.begin(), c.modes.end(),
+                                     [&](const CampaignMode& m) { return m.name == name; });
+      if (!known)
+        ctx.fail(fmt::format("{}.modes: '{}' is not the name of a [[mode]]",
+                             u == &c.linear_update ? "update.linear" : "update.iwan", name));
+    }
   }
   const bool has_model = !c.model.file.empty() || !c.model.description.empty();
   if (!has_model && (c.linear_update.enabled || c.iwan_update.enabled))

@@ -49,8 +49,9 @@ struct CampaignModel {
 
 /// One update step and its numeric settings (passed on to the updating library).
 struct CampaignUpdate {
-  bool enabled = false;           ///< run this step
-  std::vector<std::string> sets;  ///< named element sets to update ("spring.kz", "iwan.rivet")
+  bool enabled = false;            ///< run this step
+  std::vector<std::string> sets;   ///< named element sets to update ("spring.kz", "iwan.rivet")
+  std::vector<std::string> modes;  ///< campaign modes (by name) it fits; empty: every mode
   std::map<std::string, double> settings;  ///< every other key of the table
 };
 

@@ -31,6 +31,10 @@ TEST(Campaign, ReadsTheExample) {
   ASSERT_EQ(c.linear_update.sets.size(), 1u);
   EXPECT_EQ(c.linear_update.settings.at("mac_threshold"), 0.5);
   EXPECT_EQ(c.amplitude, Quantity::kVelocity);
+  // The Iwan step fits mode 1 only (mode 3 rings while mode 1 slips the rivets).
+  EXPECT_TRUE(c.iwan_update.enabled);
+  EXPECT_EQ(c.iwan_update.modes, std::vector<std::string>{"mode 1"});
+  EXPECT_EQ(c.iwan_update.settings.count("gamma"), 0u);
 }
 
 // Each defect names the file and line.
@@ -58,6 +62,9 @@ TEST(Campaign, RejectsDefectsNamingTheLine) {
   EXPECT_NE(message("[[group]]\nname = \"g\"\nfiles = [\"missing.csv\"]\n").find("missing.csv"),
             std::string::npos);
   EXPECT_NE(message(head).find("[[mode]]"), std::string::npos);
+  EXPECT_NE(message(head + "[[mode]]\nband = [1.0, 2.0]\n[update.iwan]\nmodes = [\"mode 2\"]\n")
+                .find("'mode 2' is not the name of a [[mode]]"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 
