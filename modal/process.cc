@@ -117,6 +117,11 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     for (const signal::Band& b : out.bands) top = std::max(top, b.hi);
     prepare.lowpass_hz = 1.5 * top;
   }
+  // Continue each end over the slowest band filter's settling time (see
+  // extract_backbone), so that no band loses data to its own transient.
+  for (const signal::Band& b : out.bands) {
+    prepare.extend_s = std::max(prepare.extend_s, 1.1 * band_settling_s(b, options.ringdown.taper));
+  }
   std::vector<ChannelSpectrum> spectra;
   std::vector<Quantity> measured;
   for (const data::Channel* c : chans) {
@@ -124,13 +129,32 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     measured.push_back(c->quantity.value_or(options.quantity));
   }
   for (size_t b = 0; b < out.bands.size(); ++b) {
+    // A heavily damped higher mode can make the shared continuation blow up
+    // within a lower band's settling time: that band then gets its own, low-passed
+    // just above it (every channel alike, so their coarse grids stay aligned).
+    const signal::Band& band = out.bands[b];
+    const double settle = band_settling_s(band, options.ringdown.taper);
+    std::vector<ChannelSpectrum> own;
+    const bool short_continuation =
+        std::any_of(spectra.begin(), spectra.end(), [settle](const ChannelSpectrum& s) {
+          return s.continued_begin_s < settle || s.continued_end_s < settle;
+        });
+    if (short_continuation && options.prepare.lowpass_hz == 0 &&
+        1.5 * band.hi < 0.99 * prepare.lowpass_hz) {
+      PrepareOptions narrow = prepare;
+      narrow.lowpass_hz = 1.5 * band.hi;
+      for (const data::Channel* c : chans) {
+        own.push_back(channel_spectrum(c->samples, record.fs, record.t0, narrow, cache, impact));
+      }
+    }
+    const std::vector<ChannelSpectrum>& used = own.empty() ? spectra : own;
     const size_t first = out.results.size();
     for (size_t c = 0; c < chans.size(); ++c) {
       ChannelBand r;
       r.channel = chans[c]->name;
       r.measured = measured[c];
       r.band_index = static_cast<int>(b) + 1;
-      r.ringdown = extract_backbone(spectra[c], measured[c], out.bands[b], options.ringdown, cache);
+      r.ringdown = extract_backbone(used[c], measured[c], band, options.ringdown, cache);
       out.results.push_back(std::move(r));
     }
     // Reference: the channel with the widest kept span (ties: the largest envelope).
@@ -149,7 +173,7 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     if (rr.summary.status != RingdownStatus::kOk) continue;
     // Complex amplitudes over the reference's kept span (same coarse grid for all channels).
     const double dt = rr.band.dt;
-    const double t_first = spectra[0].t0;
+    const double t_first = used[0].t0;
     const auto j0 = static_cast<Eigen::Index>(std::ceil((rr.summary.span_start_s - t_first) / dt));
     const auto j1 = static_cast<Eigen::Index>(std::floor((rr.summary.span_end_s - t_first) / dt));
     if (j1 <= j0) continue;

@@ -131,6 +131,10 @@ std::string RingdownSummary::report() const {
       linear_damping, message.empty() ? "" : "; ", message);
 }
 
+double band_settling_s(const signal::Band& band, double taper) {
+  return 3.0 / (taper * (band.hi - band.lo));
+}
+
 Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x) {
   const Eigen::VectorXd centred = x.array() - x.mean();
   const Eigen::Index quarter = std::max<Eigen::Index>(1, x.size() / 4);
@@ -164,9 +168,28 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   guard = std::min(guard, y.size() / 4);
   const Eigen::Index ext = static_cast<Eigen::Index>(std::round(options.extend_s * fs));
   const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
-  const signal::Extension e =
-      signal::extend_record(y.segment(guard, y.size() - 2 * guard), ext + guard, ext + guard,
-                            options.ar_order, fit, 1e3, lag);
+  const auto extend = [&](int order) {
+    return signal::extend_record(y.segment(guard, y.size() - 2 * guard), ext + guard, ext + guard,
+                                 order, fit, 1e3, lag);
+  };
+  signal::Extension e = extend(options.ar_order);
+  // A model with more poles than the record has modes fits some to the noise;
+  // run backwards, a heavily damped one of those can blow up within the span the
+  // band filters need. Lower orders (halving, down to 4) then take over that end
+  // if they continue it further.
+  const Eigen::Index wanted = ext + guard;
+  for (int order = options.ar_order / 2;
+       order >= 4 && (e.before_valid < wanted || e.after_valid < wanted); order /= 2) {
+    const signal::Extension f = extend(order);
+    if (f.before_valid > e.before_valid) {
+      e.samples.head(wanted) = f.samples.head(wanted);
+      e.before_valid = f.before_valid;
+    }
+    if (f.after_valid > e.after_valid) {
+      e.samples.tail(wanted) = f.samples.tail(wanted);
+      e.after_valid = f.after_valid;
+    }
+  }
 
   ChannelSpectrum c;
   c.n_record = e.samples.size();
@@ -175,8 +198,8 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   c.t0 = t0 + static_cast<double>(i_begin - e.before + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
-  c.extended_begin = e.before > 0 && e.samples.head(e.before).cwiseAbs().maxCoeff() > 0;
-  c.extended_end = e.after > 0 && e.samples.tail(e.after).cwiseAbs().maxCoeff() > 0;
+  c.continued_begin_s = static_cast<double>(e.before_valid) / fs;
+  c.continued_end_s = static_cast<double>(e.after_valid) / fs;
   c.spectrum = cache.get(c.n_fft).forward(e.samples);
   return c;
 }
@@ -213,15 +236,14 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   }
   sum.carrier_hz = bs.carrier_hz;
 
-  // Settling time of the band filter (its kernel is down to exp(-11) by then).
-  // A continued end needs none: the filter's transient then lies in the
-  // continuation, and the first window already starts at the data.
+  // A faithfully continued end loses only what its continuation does not cover
+  // of the filter's settling time: the transient then lies in the continuation.
   const double edge = options.taper * (band.hi - band.lo);
-  const double settle = 3.0 / edge;
+  const double settle = band_settling_s(band, options.taper);
   const double begin = channel.data_begin_s - channel.t0;
   const double end = channel.data_end_s - channel.t0;
-  const double start = begin + (channel.extended_begin ? 0.0 : settle);
-  const double stop = std::min(duration, end - (channel.extended_end ? 0.0 : settle));
+  const double start = begin + std::max(0.0, settle - channel.continued_begin_s);
+  const double stop = std::min(duration, end - std::max(0.0, settle - channel.continued_end_s));
   sum.peak_time_s = channel.data_begin_s;
 
   const double correlation = std::max(1.0, 1.0 / (dt * bs.noise_bandwidth_hz));

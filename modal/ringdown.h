@@ -104,7 +104,7 @@ struct RingdownSummary {
 struct PrepareOptions {
   double onset_skip_s = 0.002;  ///< data skipped after the impact (see impact_index) [s]
   double extend_s = 0.5;        ///< linear-prediction continuation at each end [s]
-  int ar_order = 32;            ///< order of the continuation model
+  int ar_order = 32;            ///< order of the continuation model (lower if it blows up)
   double ar_fit_s = 0.25;       ///< data the continuation model is fitted on [s]
   double lowpass_hz = 0.0;      ///< content kept for the continuation (0: everything) [Hz]
 };
@@ -120,15 +120,15 @@ struct PrepareOptions {
 /// bound when continued backwards, are not continued at all; the low-pass's own
 /// settling time at each end is continued too and not counted as data.
 struct ChannelSpectrum {
-  Eigen::VectorXcd spectrum;    ///< one-sided spectrum of the zero-padded analysed record
-  Eigen::Index n_record = 0;    ///< samples analysed (continuations included)
-  Eigen::Index n_fft = 0;       ///< padded length (at least twice n_record)
-  double fs = 0.0;              ///< sample rate [Hz]
-  double t0 = 0.0;              ///< time of the analysed record's first sample [s]
-  double data_begin_s = 0.0;    ///< first measured sample used [s]
-  double data_end_s = 0.0;      ///< last measured sample [s]
-  bool extended_begin = false;  ///< the start is a stable continuation
-  bool extended_end = false;    ///< the end is a stable continuation
+  Eigen::VectorXcd spectrum;       ///< one-sided spectrum of the zero-padded analysed record
+  Eigen::Index n_record = 0;       ///< samples analysed (continuations included)
+  Eigen::Index n_fft = 0;          ///< padded length (at least twice n_record)
+  double fs = 0.0;                 ///< sample rate [Hz]
+  double t0 = 0.0;                 ///< time of the analysed record's first sample [s]
+  double data_begin_s = 0.0;       ///< first measured sample used [s]
+  double data_end_s = 0.0;         ///< last measured sample [s]
+  double continued_begin_s = 0.0;  ///< faithful continuation before the data [s]
+  double continued_end_s = 0.0;    ///< faithful continuation after the data [s]
 };
 
 /// Backbone, summary and the band's displacement analytic signal.
@@ -137,6 +137,10 @@ struct Ringdown {
   RingdownSummary summary;  ///< span, noise floor, linear values, status
   signal::BandSignal band;  ///< displacement analytic signal of the band (coarse grid)
 };
+
+/// Settling time of a band's filter [s]: its kernel is down to exp(-11) by then, so
+/// data closer than this to an end that is not faithfully continued are not used.
+double band_settling_s(const signal::Band& band, double taper);
 
 /// Index of the impact: the first sample reaching half the largest |sample| of the record's
 /// first quarter.

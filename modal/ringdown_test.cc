@@ -51,13 +51,16 @@ Ringdown extract(const testing::ThreeModeRecord& rec, double f1, bool from_accel
   signal::FftCache cache;
   const Eigen::VectorXd& x = from_acceleration ? rec.acceleration : rec.displacement;
   PrepareOptions prep;
-  prep.lowpass_hz = 1.5 * 1.2 * f1;  // as process_record sets it for this band
+  const signal::Band band{0.8 * f1, 1.2 * f1};
+  // As process_record sets them for this band.
+  prep.lowpass_hz = 1.5 * band.hi;
+  prep.extend_s = std::max(prep.extend_s, 1.1 * band_settling_s(band, RingdownOptions{}.taper));
   const ChannelSpectrum cs = channel_spectrum(x, rec.fs, 0.0, prep, cache);
   RingdownOptions opt;
   opt.amplitude = Quantity::kDisplacement;
   opt.method = method;
   return extract_backbone(cs, from_acceleration ? Quantity::kAcceleration : Quantity::kDisplacement,
-                          signal::Band{0.8 * f1, 1.2 * f1}, opt, cache);
+                          band, opt, cache);
 }
 
 void print(const char* what, Method method, double f1, bool acc, unsigned seed, const Errors& e) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numbers>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -10,14 +12,20 @@ namespace jointlab::signal {
 
 namespace {
 
-// Forward continuation of y by `count` samples; zeros if unstable.
-Eigen::VectorXd continue_forward(const Eigen::VectorXd& y, Eigen::Index count, int order,
-                                 Eigen::Index fit_length, double max_growth, Eigen::Index lag) {
+// Forward continuation of y by `count` samples. Where it grows past max_growth
+// times the RMS it was fitted on (an unstable or over-damped model run
+// backwards) it is cut: the faithful part before that point is kept, its last
+// half faded out by a half cosine, and zeros follow. Returns the samples and the
+// number of them that are an unfaded continuation.
+std::pair<Eigen::VectorXd, Eigen::Index> continue_forward(const Eigen::VectorXd& y,
+                                                          Eigen::Index count, int order,
+                                                          Eigen::Index fit_length,
+                                                          double max_growth, Eigen::Index lag) {
   const Eigen::Index n = y.size();
   const Eigen::Index len = std::min(fit_length, n);
   const Eigen::Index span = order * lag;  // history one prediction needs
   if (count <= 0 || len < span + 4 * order) {
-    return Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0));
+    return {Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0)), 0};
   }
   const Eigen::Index first = n - len;
   // Neighbouring rows carry nearly the same equation in an oversampled record:
@@ -40,11 +48,20 @@ Eigen::VectorXd continue_forward(const Eigen::VectorXd& y, Eigen::Index count, i
     for (int j = 1; j <= order; ++j) v += c(j - 1) * full(k - j * lag);
     full(k) = v;
   }
-  const Eigen::VectorXd out = full.tail(count);
+  Eigen::VectorXd out = full.tail(count);
+  // The first sample past the limit (a sinusoid of RMS r peaks at r sqrt 2).
   const double ref = std::sqrt(y.tail(len).squaredNorm() / static_cast<double>(len));
-  const double got = std::sqrt(out.squaredNorm() / static_cast<double>(count));
-  if (!std::isfinite(got) || got > max_growth * ref) return Eigen::VectorXd::Zero(count);
-  return out;
+  const double limit = max_growth * ref * std::sqrt(2.0);
+  Eigen::Index keep = 0;
+  while (keep < count && std::isfinite(out(keep)) && std::abs(out(keep)) <= limit) ++keep;
+  if (keep == count) return {out, count};
+  const Eigen::Index faithful = keep / 2;
+  for (Eigen::Index k = faithful; k < keep; ++k) {
+    const double x = static_cast<double>(k - faithful) / static_cast<double>(keep - faithful);
+    out(k) *= 0.5 * (1.0 + std::cos(std::numbers::pi * x));
+  }
+  out.tail(count - keep).setZero();
+  return {out, faithful};
 }
 
 }  // namespace
@@ -59,11 +76,15 @@ Extension extend_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index
   e.after = after;
   e.samples.resize(before + n + after);
   e.samples.segment(before, n) = x;
-  e.samples.tail(after) = continue_forward(x, after, order, fit_length, max_growth, lag);
+  auto [tail, after_valid] = continue_forward(x, after, order, fit_length, max_growth, lag);
+  e.samples.tail(after) = tail;
+  e.after_valid = after_valid;
   // Backward continuation is forward continuation of the time-reversed record.
   const Eigen::VectorXd reversed = x.reverse();
-  e.samples.head(before) =
-      continue_forward(reversed, before, order, fit_length, max_growth, lag).reverse();
+  auto [head, before_valid] =
+      continue_forward(reversed, before, order, fit_length, max_growth, lag);
+  e.samples.head(before) = head.reverse();
+  e.before_valid = before_valid;
   return e;
 }
 

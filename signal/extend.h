@@ -19,16 +19,20 @@ namespace jointlab::signal {
 
 /// What extend_record produced.
 struct Extension {
-  Eigen::VectorXd samples;  ///< before + original + after
-  Eigen::Index before = 0;  ///< samples prepended
-  Eigen::Index after = 0;   ///< samples appended
+  Eigen::VectorXd samples;        ///< before + original + after
+  Eigen::Index before = 0;        ///< samples prepended
+  Eigen::Index after = 0;         ///< samples appended
+  Eigen::Index before_valid = 0;  ///< prepended samples that are a faithful continuation
+  Eigen::Index after_valid = 0;   ///< appended samples that are a faithful continuation
 };
 
 /// Continues x by `before` samples at its start and `after` at its end with AR
 /// models of `order` and sample spacing `lag` fitted over `fit_length` samples at
-/// each end. An extension whose RMS grows beyond `max_growth` times the RMS of the
-/// samples it was fitted on is judged unstable and replaced by zeros (that end is
-/// then not extended).
+/// each end. Where an extension grows beyond `max_growth` times the RMS of the
+/// samples it was fitted on (peak over RMS sqrt 2) it is judged unstable from there
+/// on: the faithful first half of what came before is kept, the second half faded
+/// out by a half cosine, and the rest is zeros (before_valid / after_valid say how
+/// much is faithful).
 Extension extend_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
                         Eigen::Index after, int order, Eigen::Index fit_length,
                         double max_growth = 20.0, Eigen::Index lag = 1);
