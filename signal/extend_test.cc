@@ -23,6 +23,8 @@ TEST(Extend, ContinuesDampedSinusoidsBothWays) {
   for (Eigen::Index k = 0; k < n; ++k) x(k) = two_modes(k / fs);
   const Extension e = extend_record(x, pad, pad, 8, 600);
   ASSERT_EQ(e.samples.size(), n + 2 * pad);
+  EXPECT_EQ(e.before_valid, pad);  // stable both ways: all of it is faithful
+  EXPECT_EQ(e.after_valid, pad);
   double worst = 0;
   for (Eigen::Index k = 0; k < e.samples.size(); ++k) {
     const double t = (k - pad) / fs;
@@ -38,6 +40,35 @@ TEST(Extend, UnstableContinuationIsDropped) {
   const Extension e = extend_record(x, 50, 50, 10, 400, 0.0);
   EXPECT_EQ(e.samples.head(50).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(e.samples.tail(50).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(e.before_valid, 0);
+  EXPECT_EQ(e.after_valid, 0);
+}
+
+TEST(Extend, BlowUpIsCutWhereItHappens) {
+  // The same two modes, the 97 Hz one damped at 60 /s: run backwards it grows by
+  // e^60 per second and passes 20 times the data's RMS after some 60 ms. The
+  // backward continuation keeps the faithful first half of what comes before
+  // that point (exact to 1e-8 of the signal), fades the rest out and is zero
+  // beyond; the forward one (decaying) is kept whole.
+  const auto signal = [](double t) {
+    return std::exp(-2.0 * t) * std::cos(2 * std::numbers::pi * 31 * t + 0.4) +
+           0.3 * std::exp(-60.0 * t) * std::cos(2 * std::numbers::pi * 97 * t);
+  };
+  const double fs = 1000;
+  const Eigen::Index n = 2000, pad = 300;
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) x(k) = signal(k / fs);
+  const Extension e = extend_record(x, pad, pad, 8, 600, 20.0);
+  EXPECT_EQ(e.after_valid, pad);
+  ASSERT_GT(e.before_valid, 10);
+  ASSERT_LT(e.before_valid, pad / 2);
+  for (Eigen::Index j = 1; j <= e.before_valid; ++j) {  // faithful: j samples before the data
+    const double t = -j / fs;
+    EXPECT_NEAR(e.samples(pad - j), signal(t), 1e-8 * std::abs(signal(t)) + 1e-10) << j;
+  }
+  const double rms = std::sqrt(x.head(600).squaredNorm() / 600);  // what it was fitted on
+  EXPECT_LE(e.samples.head(pad).cwiseAbs().maxCoeff(), 20.0 * rms * std::sqrt(2.0));
+  EXPECT_EQ(e.samples.head(pad - 2 * e.before_valid - 1).cwiseAbs().maxCoeff(), 0.0);
 }
 
 }  // namespace
