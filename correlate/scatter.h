@@ -33,6 +33,7 @@ namespace jointlab::correlate {
 struct Curve {
   std::string id;                  ///< the hit (file stem)
   std::string group;               ///< the hit's group (force level)
+  Eigen::VectorXd time_s;          ///< time of each point after the record's start [s]
   Eigen::VectorXd amplitude;       ///< amplitude of each point [SI], > 0
   Eigen::VectorXd frequency_hz;    ///< natural frequency of each point [Hz]
   Eigen::VectorXd damping;         ///< damping ratio of each point
