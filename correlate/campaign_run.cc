@@ -893,12 +893,20 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
       bf.model.push_back(updated.curves[k]);
     const fs::path p = fig / fmt::format("backbone_{}.png", slug(static_cast<int>(k)));
     plot_backbones(bf, p);
+    const bool fitted = c.iwan_update.enabled && c.modes[k].model_mode > 0 &&
+                        (c.iwan_update.modes.empty() ||
+                         std::find(c.iwan_update.modes.begin(), c.iwan_update.modes.end(),
+                                   c.modes[k].name) != c.iwan_update.modes.end());
     figures_backbone.push_back(
         {fmt::format("{}: natural frequency and damping ratio versus {} "
                      "amplitude; every hit faint, the mean over hits per "
                      "bin with its {:g} % confidence interval, and the "
-                     "model's QSMA curve.",
-                     c.modes[k].name, quantity_name(c.amplitude), 100 * c.scatter.confidence),
+                     "model's QSMA curve{}.",
+                     c.modes[k].name, quantity_name(c.amplitude), 100 * c.scatter.confidence,
+                     c.iwan_update.enabled && c.modes[k].model_mode > 0 && !fitted
+                         ? " (a mode the Iwan update does not fit, [update.iwan] modes; its "
+                           "backbone cost is listed with the update)"
+                         : ""),
          p});
   }
   // Spectrum of the first hit of the last group (the strongest level, by convention).
