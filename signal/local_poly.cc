@@ -50,28 +50,32 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
     const double w = u * u;
     double wy[K];
     for (int k = 0; k < K; ++k) wy[k] = w * (*ys[k])(idx);
-    double pw = 1.0;
-    for (int m = 0; m < 2 * p - 1; ++m) {
-      s1[m] += w * pw;
-      s2w[m] += w * w * pw;
-      if (m < p) {
-        for (int k = 0; k < K; ++k) sy[k][m] += wy[k] * pw;
-      }
-      pw *= tau;
+    // Powers of tau: X'WX needs them to 2p - 2, X'Wy to p - 1 and X'W^2X (the
+    // sandwich of the degree-q fit only) to 2q - 2. Separate fixed-count loops
+    // unroll fully.
+    double pw[2 * p - 1];
+    pw[0] = 1.0;
+    for (int m = 1; m < 2 * p - 1; ++m) pw[m] = pw[m - 1] * tau;
+    for (int m = 0; m < 2 * p - 1; ++m) s1[m] += w * pw[m];
+    const double w2 = w * w;
+    for (int m = 0; m < 2 * q - 1; ++m) s2w[m] += w2 * pw[m];
+    for (int k = 0; k < K; ++k) {
+      for (int m = 0; m < p; ++m) sy[k][m] += wy[k] * pw[m];
     }
   }
-  MatP A, M;
+  MatP A;
+  MatQ M;
   for (int j = 0; j < p; ++j) {
-    for (int c = 0; c < p; ++c) {
-      A(j, c) = s1[j + c];
-      M(j, c) = s2w[j + c];
-    }
+    for (int c = 0; c < p; ++c) A(j, c) = s1[j + c];
+  }
+  for (int j = 0; j < q; ++j) {
+    for (int c = 0; c < q; ++c) M(j, c) = s2w[j + c];
   }
   const Eigen::LDLT<MatQ> ldlt(A.template topLeftCorner<q, q>());
   const Eigen::LDLT<MatQ1> ldlt1(A.template topLeftCorner<q + 1, q + 1>());
   const Eigen::LDLT<MatP> ldlt2(A);
   const MatQ Ainv = ldlt.solve(MatQ::Identity());
-  const MatQ sandwich = Ainv * M.template topLeftCorner<q, q>() * Ainv;
+  const MatQ sandwich = Ainv * M * Ainv;
 
   std::array<VecQ, K> beta;
   for (int k = 0; k < K; ++k) beta[k] = ldlt.solve(Eigen::Map<const VecQ>(sy[k]));
