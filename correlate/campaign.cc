@@ -13,6 +13,10 @@
 
 namespace jointlab::correlate {
 
+bool CampaignUpdate::fits(const std::string& mode) const {
+  return modes.empty() || std::find(modes.begin(), modes.end(), mode) != modes.end();
+}
+
 namespace {
 
 namespace fs = std::filesystem;

@@ -53,6 +53,8 @@ struct CampaignUpdate {
   std::vector<std::string> sets;   ///< named element sets to update ("spring.kz", "iwan.rivet")
   std::vector<std::string> modes;  ///< campaign modes (by name) it fits; empty: every mode
   std::map<std::string, double> settings;  ///< every other key of the table
+  /// True if this step fits the campaign mode named `mode` (listed, or no list given).
+  bool fits(const std::string& mode) const;
 };
 
 /// A whole campaign.

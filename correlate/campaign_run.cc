@@ -696,10 +696,7 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
         MeasuredModes fitted;
         std::vector<Eigen::Index> keep;
         for (size_t k = 0; k < nm; ++k)
-          if (c.linear_update.modes.empty() ||
-              std::find(c.linear_update.modes.begin(), c.linear_update.modes.end(),
-                        c.modes[k].name) != c.linear_update.modes.end())
-            keep.push_back(static_cast<Eigen::Index>(k));
+          if (c.linear_update.fits(c.modes[k].name)) keep.push_back(static_cast<Eigen::Index>(k));
         fitted.frequency_hz = measured.frequency_hz(keep);
         fitted.shapes = measured.shapes(Eigen::all, keep);
         for (Eigen::Index k : keep) fitted.labels.push_back(measured.labels[k]);
@@ -757,21 +754,15 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
       // Every kept hit's backbone of each mode that names its model mode.
       std::vector<IwanTarget> targets;
       std::vector<std::pair<size_t, IwanTarget>> every;  // each mode's target, fitted or not
-      const auto selected = [&](const CampaignUpdate& u, size_t k) {
-        return u.modes.empty() ||
-               std::find(u.modes.begin(), u.modes.end(), c.modes[k].name) != u.modes.end();
-      };
       // Each measured mode's joint-slip pattern in the model the update starts from.
-      const model::Model& start_model = have_updated ? model_updated : model;
-      const model::JointCondensation start_jc(start_model);
-      const int power = io.amplitude == AmplitudeQuantity::kDisplacement   ? 0
-                        : io.amplitude == AmplitudeQuantity::kAcceleration ? 2
-                                                                           : 1;
+      const model::Model& base = have_updated ? model_updated : model;
+      const model::JointCondensation start_jc(base);
+      const int power = amplitude_power(io.amplitude);
       std::vector<ModeSlip> slips(nm);
       for (size_t k = 0; k < nm; ++k) {
         const int mm = c.modes[k].model_mode;
         if (mm > 0 && mm <= start_jc.elastic_count() && ref[k] >= 0)
-          slips[k] = mode_slip(start_model, start_jc.modes(), mm, dofs[ref[k]], power);
+          slips[k] = mode_slip(base, start_jc.modes(), mm, dofs[ref[k]], power);
       }
       Eigen::Index interfered = 0;
       for (size_t k = 0; k < nm; ++k) {
@@ -805,7 +796,7 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
           }
           const Eigen::VectorXd share = slip_share(slips, same_hit, k);
           // A mode that is not fitted keeps every point: its fit error is only reported.
-          const bool fitted = selected(c.iwan_update, k);
+          const bool fitted = c.iwan_update.fits(c.modes[k].name);
           std::vector<Eigen::Index> keep;
           for (Eigen::Index j = 0; j < cv.amplitude.size(); ++j) {
             if (!fitted || share(j) <= max_share) keep.push_back(j);
@@ -827,13 +818,12 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
         }
         if (t.curves.empty()) continue;
         every.emplace_back(k, t);
-        if (selected(c.iwan_update, k)) targets.push_back(std::move(t));
+        if (c.iwan_update.fits(c.modes[k].name)) targets.push_back(std::move(t));
       }
       if (targets.empty()) {
         summary.notes.push_back(
             "update.iwan: no mode names its model mode (model_mode); Iwan updating skipped");
       } else {
-        const model::Model& base = have_updated ? model_updated : model;
         const IwanObjective objective(base, set, sensors, targets, io.amplitude, io.qsma_points,
                                       io.frequency_floor, io.damping_floor);
         size_t n_curves = 0;
@@ -865,7 +855,7 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
         for (const auto& [k, t] : every) {
           const IwanObjective one(base, set, sensors, {t}, io.amplitude, io.qsma_points,
                                   io.frequency_floor, io.damping_floor);
-          iwan_mode_costs.push_back({c.modes[k].name, selected(c.iwan_update, k),
+          iwan_mode_costs.push_back({c.modes[k].name, c.iwan_update.fits(c.modes[k].name),
                                      one.cost(iwan_summary.start), one.cost(iwan_summary.best)});
         }
         have_updated = true;
@@ -893,17 +883,14 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
       bf.model.push_back(updated.curves[k]);
     const fs::path p = fig / fmt::format("backbone_{}.png", slug(static_cast<int>(k)));
     plot_backbones(bf, p);
-    const bool fitted = c.iwan_update.enabled && c.modes[k].model_mode > 0 &&
-                        (c.iwan_update.modes.empty() ||
-                         std::find(c.iwan_update.modes.begin(), c.iwan_update.modes.end(),
-                                   c.modes[k].name) != c.iwan_update.modes.end());
     figures_backbone.push_back(
         {fmt::format("{}: natural frequency and damping ratio versus {} "
                      "amplitude; every hit faint, the mean over hits per "
                      "bin with its {:g} % confidence interval, and the "
                      "model's QSMA curve{}.",
                      c.modes[k].name, quantity_name(c.amplitude), 100 * c.scatter.confidence,
-                     c.iwan_update.enabled && c.modes[k].model_mode > 0 && !fitted
+                     c.iwan_update.enabled && c.modes[k].model_mode > 0 &&
+                             !c.iwan_update.fits(c.modes[k].name)
                          ? " (a mode the Iwan update does not fit, [update.iwan] modes; its "
                            "backbone cost is listed with the update)"
                          : ""),

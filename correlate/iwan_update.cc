@@ -29,11 +29,11 @@ double interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[i - 1] + t * (y[i] - y[i - 1]);
 }
 
-int power_of(AmplitudeQuantity q) {
+}  // namespace
+
+int amplitude_power(AmplitudeQuantity q) {
   return q == AmplitudeQuantity::kDisplacement ? 0 : q == AmplitudeQuantity::kVelocity ? 1 : 2;
 }
-
-}  // namespace
 
 std::string IwanUpdateOptions::error() const {
   const IwanBounds& b = bounds;
@@ -129,7 +129,7 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r,
                              Eigen::Vector2d* slip_range) const {
   ++evaluations_;
   if (!model::iwan_parameter_error(p).empty()) return false;
-  const int pw = power_of(amplitude_);
+  const int pw = amplitude_power(amplitude_);
   const double n_total = residual_count_ / 2.0;
   try {
     const model::JointCondensation jc(apply(p));

@@ -38,6 +38,9 @@ namespace jointlab::correlate {
 /// The amplitude quantity of measured backbones (as `process --amplitude`).
 enum class AmplitudeQuantity { kDisplacement, kVelocity, kAcceleration };
 
+/// Power of omega that turns a modal amplitude into this quantity's (0, 1 or 2).
+int amplitude_power(AmplitudeQuantity q);
+
 /// One measured backbone curve: points of one channel (or pooled hits of it).
 struct MeasuredBackbone {
   int sensor = 0;                    ///< index into the sensors: where the amplitude is measured
