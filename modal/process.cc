@@ -110,18 +110,9 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   // One impact instant for all channels keeps their coarse grids aligned.
   Eigen::Index impact = record.size();
   for (const data::Channel* c : chans) impact = std::min(impact, impact_index(c->samples));
-  // Continue only what the bands need: content up to 1.5 times the highest band edge.
-  PrepareOptions prepare = options.prepare;
-  if (prepare.lowpass_hz == 0) {
-    double top = 0;
-    for (const signal::Band& b : out.bands) top = std::max(top, b.hi);
-    prepare.lowpass_hz = 1.5 * top;
-  }
-  // Continue each end over the slowest band filter's settling time (see
-  // extract_backbone), so that no band loses data to its own transient.
-  for (const signal::Band& b : out.bands) {
-    prepare.extend_s = std::max(prepare.extend_s, 1.1 * band_settling_s(b, options.ringdown.taper));
-  }
+  // Continue only what the bands need (content and length).
+  const double taper = options.ringdown.taper;
+  const PrepareOptions prepare = prepare_for(out.bands, taper, options.prepare);
   std::vector<ChannelSpectrum> spectra;
   std::vector<Quantity> measured;
   for (const data::Channel* c : chans) {
@@ -133,16 +124,17 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     // within a lower band's settling time: that band then gets its own, low-passed
     // just above it (every channel alike, so their coarse grids stay aligned).
     const signal::Band& band = out.bands[b];
-    const double settle = band_settling_s(band, options.ringdown.taper);
+    const double settle = band_settling_s(band, taper);
     std::vector<ChannelSpectrum> own;
     const bool short_continuation =
         std::any_of(spectra.begin(), spectra.end(), [settle](const ChannelSpectrum& s) {
           return s.continued_begin_s < settle || s.continued_end_s < settle;
         });
+    const double own_lowpass_hz = prepare_for({band}, taper).lowpass_hz;
     if (short_continuation && options.prepare.lowpass_hz == 0 &&
-        1.5 * band.hi < 0.99 * prepare.lowpass_hz) {
+        own_lowpass_hz < 0.99 * prepare.lowpass_hz) {
       PrepareOptions narrow = prepare;
-      narrow.lowpass_hz = 1.5 * band.hi;
+      narrow.lowpass_hz = own_lowpass_hz;
       for (const data::Channel* c : chans) {
         own.push_back(channel_spectrum(c->samples, record.fs, record.t0, narrow, cache, impact));
       }

@@ -135,6 +135,17 @@ double band_settling_s(const signal::Band& band, double taper) {
   return 3.0 / (taper * (band.hi - band.lo));
 }
 
+PrepareOptions prepare_for(const std::vector<signal::Band>& bands, double taper,
+                           PrepareOptions base) {
+  double top = 0;
+  for (const signal::Band& b : bands) {
+    top = std::max(top, b.hi);
+    base.extend_s = std::max(base.extend_s, 1.1 * band_settling_s(b, taper));
+  }
+  if (base.lowpass_hz == 0) base.lowpass_hz = 1.5 * top;
+  return base;
+}
+
 Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x) {
   const Eigen::VectorXd centred = x.array() - x.mean();
   const Eigen::Index quarter = std::max<Eigen::Index>(1, x.size() / 4);

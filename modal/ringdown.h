@@ -36,6 +36,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -141,6 +142,13 @@ struct Ringdown {
 /// Settling time of a band's filter [s]: its kernel is down to exp(-11) by then, so
 /// data closer than this to an end that is not faithfully continued are not used.
 double band_settling_s(const signal::Band& band, double taper);
+
+/// The continuation settings `bands` need, from `base`: unless base sets a low-pass,
+/// content up to 1.5 times the highest band edge; continued over at least 1.1 times
+/// the slowest band filter's settling time, so that no band loses data to its own
+/// transient (process_record uses these).
+PrepareOptions prepare_for(const std::vector<signal::Band>& bands, double taper,
+                           PrepareOptions base = {});
 
 /// Index of the impact: the first sample reaching half the largest |sample| of the record's
 /// first quarter.

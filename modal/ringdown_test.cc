@@ -50,11 +50,8 @@ Ringdown extract(const testing::ThreeModeRecord& rec, double f1, bool from_accel
                  Method method) {
   signal::FftCache cache;
   const Eigen::VectorXd& x = from_acceleration ? rec.acceleration : rec.displacement;
-  PrepareOptions prep;
   const signal::Band band{0.8 * f1, 1.2 * f1};
-  // As process_record sets them for this band.
-  prep.lowpass_hz = 1.5 * band.hi;
-  prep.extend_s = std::max(prep.extend_s, 1.1 * band_settling_s(band, RingdownOptions{}.taper));
+  const PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);  // as process_record
   const ChannelSpectrum cs = channel_spectrum(x, rec.fs, 0.0, prep, cache);
   RingdownOptions opt;
   opt.amplitude = Quantity::kDisplacement;
