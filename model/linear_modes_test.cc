@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/frame_element.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model {
@@ -24,27 +25,10 @@ Beam free_beam(int elements) {
   const double A = b * h, I = b * h * h * h / 12, le = L / elements;
   const int n = 3 * (elements + 1);
   Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), m = Eigen::MatrixXd::Zero(n, n);
+  const testing::FrameElement f = testing::frame_element(E, A, I, rho, le);
   for (int e = 0; e < elements; ++e) {
-    const int o = 3 * e;
-    const double ka = E * A / le, ma = rho * A * le;
-    k(o, o) += ka, k(o + 3, o + 3) += ka, k(o, o + 3) -= ka, k(o + 3, o) -= ka;
-    m(o, o) += ma / 3, m(o + 3, o + 3) += ma / 3, m(o, o + 3) += ma / 6, m(o + 3, o) += ma / 6;
-    const int d[4] = {o + 1, o + 2, o + 4, o + 5};
-    const double c = E * I / (le * le * le), l = le;
-    const double kb[4][4] = {{12, 6 * l, -12, 6 * l},
-                             {6 * l, 4 * l * l, -6 * l, 2 * l * l},
-                             {-12, -6 * l, 12, -6 * l},
-                             {6 * l, 2 * l * l, -6 * l, 4 * l * l}};
-    const double mb[4][4] = {{156, 22 * l, 54, -13 * l},
-                             {22 * l, 4 * l * l, 13 * l, -3 * l * l},
-                             {54, 13 * l, 156, -22 * l},
-                             {-13 * l, -3 * l * l, -22 * l, 4 * l * l}};
-    for (int i = 0; i < 4; ++i) {
-      for (int j = 0; j < 4; ++j) {
-        k(d[i], d[j]) += c * kb[i][j];
-        m(d[i], d[j]) += ma / 420 * mb[i][j];
-      }
-    }
+    k.block<6, 6>(3 * e, 3 * e) += f.k;
+    m.block<6, 6>(3 * e, 3 * e) += f.m;
   }
   return {m.sparseView(), k.sparseView()};
 }

@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/frame_element.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model {
@@ -229,34 +230,14 @@ Beams stacked_beams(int elements, const IwanParameters& iwan) {
   const double A = b * h, I = b * h * h * h / 12, le = L / elements;
   const int nodes = elements + 1, per_beam = 3 * nodes, n = 2 * per_beam;
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n), M = Eigen::MatrixXd::Zero(n, n);
+  const testing::FrameElement fe = testing::frame_element(E, A, I, rho, le);
   for (int beam = 0; beam < 2; ++beam) {
     const double e = beam == 0 ? h / 2 : -h / 2;  // bottom beam's face is above its centroid
     for (int el = 0; el < elements; ++el) {
-      Eigen::MatrixXd kc = Eigen::MatrixXd::Zero(6, 6), mc = Eigen::MatrixXd::Zero(6, 6);
-      const double ka = E * A / le, ma = rho * A * le, c = E * I / (le * le * le), l = le;
-      kc(0, 0) = kc(3, 3) = ka;
-      kc(0, 3) = kc(3, 0) = -ka;
-      mc(0, 0) = mc(3, 3) = ma / 3;
-      mc(0, 3) = mc(3, 0) = ma / 6;
-      const int d[4] = {1, 2, 4, 5};
-      const double kb[4][4] = {{12, 6 * l, -12, 6 * l},
-                               {6 * l, 4 * l * l, -6 * l, 2 * l * l},
-                               {-12, -6 * l, 12, -6 * l},
-                               {6 * l, 2 * l * l, -6 * l, 4 * l * l}};
-      const double mb[4][4] = {{156, 22 * l, 54, -13 * l},
-                               {22 * l, 4 * l * l, 13 * l, -3 * l * l},
-                               {54, 13 * l, 156, -22 * l},
-                               {-13 * l, -3 * l * l, -22 * l, 4 * l * l}};
-      for (int i = 0; i < 4; ++i) {
-        for (int j = 0; j < 4; ++j) {
-          kc(d[i], d[j]) += c * kb[i][j];
-          mc(d[i], d[j]) += ma / 420 * mb[i][j];
-        }
-      }
       // Centroid DOFs from face DOFs: u_c = u + e theta (theta = dw/dx, u_c - z theta).
       Eigen::MatrixXd T = Eigen::MatrixXd::Identity(6, 6);
       T(0, 2) = T(3, 5) = e;
-      const Eigen::MatrixXd kf = T.transpose() * kc * T, mf = T.transpose() * mc * T;
+      const Eigen::MatrixXd kf = T.transpose() * fe.k * T, mf = T.transpose() * fe.m * T;
       const int o = beam * per_beam + 3 * el;
       K.block(o, o, 6, 6) += kf;
       M.block(o, o, 6, 6) += mf;
