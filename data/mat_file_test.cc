@@ -1,7 +1,5 @@
 #include "jointlab/data/mat_file.h"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -26,9 +24,7 @@ using jointlab::testing::Close;
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("jointlab-mat-test-{}", getpid());
-  fs::create_directories(dir);
-  return dir / name;
+  return testing::scratch_path("jointlab-mat-test", name);
 }
 
 // Writes top-level variables (column vectors of doubles, or char rows) with matio directly.

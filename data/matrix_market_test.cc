@@ -7,18 +7,17 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/test_util.h"
 
 namespace jointlab::data {
 namespace {
 
 namespace fs = std::filesystem;
 
+constexpr const char* kScratch = "jointlab-matrix-market-test";
+
 fs::path scratch(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "jointlab_matrix_market_test";
-  fs::create_directories(dir);
-  const fs::path p = dir / name;
-  std::ofstream(p) << text;
-  return p;
+  return testing::scratch_file(kScratch, name, text);
 }
 
 // The error message of read_matrix_market on `text`, or "" if it reads.
@@ -82,16 +81,14 @@ TEST(MatrixMarket, WriteReadRoundTripIsExact) {
   m.insert(2, 2) = 6.02214076e23;
   m.insert(2, 1) = 0.1;
   m.insert(1, 2) = 0.1;
-  const fs::path dir = fs::temp_directory_path() / "jointlab_matrix_market_test";
-  fs::create_directories(dir);
   for (bool symmetric : {true, false}) {
-    const fs::path p = dir / (symmetric ? "rs.mtx" : "rg.mtx");
+    const fs::path p = testing::scratch_path(kScratch, symmetric ? "rs.mtx" : "rg.mtx");
     write_matrix_market(p, m, symmetric);
     const auto r = read_matrix_market(p);
     // 17 significant digits reproduce every double exactly.
     EXPECT_EQ((Eigen::MatrixXd(r) - Eigen::MatrixXd(m)).cwiseAbs().maxCoeff(), 0.0);
   }
-  std::ifstream in(dir / "rs.mtx");
+  std::ifstream in(testing::scratch_path(kScratch, "rs.mtx"));
   std::string banner, size;
   std::getline(in, banner);
   std::getline(in, size);

@@ -1,7 +1,5 @@
 #include "jointlab/data/read_record.h"
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -22,9 +20,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("jointlab-read-record-{}", getpid());
-  fs::create_directories(dir);
-  return dir / name;
+  return testing::scratch_path("jointlab-read-record", name);
 }
 
 Record sample() {

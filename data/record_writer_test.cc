@@ -1,7 +1,5 @@
 #include "jointlab/data/record_writer.h"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -24,9 +22,7 @@ using jointlab::testing::Close;
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("jointlab-writer-test-{}", getpid());
-  fs::create_directories(dir);
-  return dir / name;
+  return testing::scratch_path("jointlab-writer-test", name);
 }
 
 // A CSV test file as a data-acquisition front end writes it: units in g and N, a time column.

@@ -8,6 +8,7 @@
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
+#include "jointlab/tests/test_util.h"
 
 namespace jointlab::data {
 namespace {
@@ -22,9 +23,7 @@ std::string slurp(const fs::path& p) {
 }
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / "jointlab_writers_test";
-  fs::create_directories(dir);
-  return dir / name;
+  return testing::scratch_path("jointlab-writers-test", name);
 }
 
 TEST(AtomicFile, UncommittedLeavesNothing) {

@@ -7,8 +7,12 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <string>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -47,6 +51,23 @@ inline std::string input_error_of(const std::function<void()>& f) {
   }
   ADD_FAILURE() << "no InputError";
   return "";
+}
+
+/// A path for a test's file `name` in its own temporary folder `folder`, made per
+/// process (ctest runs the cases of one program side by side).
+inline std::filesystem::path scratch_path(const std::string& folder, const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / (folder + "-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+/// scratch_path() with `text` written to it.
+inline std::filesystem::path scratch_file(const std::string& folder, const std::string& name,
+                                          const std::string& text) {
+  const std::filesystem::path p = scratch_path(folder, name);
+  std::ofstream(p) << text;
+  return p;
 }
 
 /// The source tree root (set by CMake for every test).

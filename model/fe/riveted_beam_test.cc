@@ -17,11 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "jointlab_riveted_beam_test";
-  fs::create_directories(dir);
-  const fs::path p = dir / name;
-  std::ofstream(p) << text;
-  return p;
+  return testing::scratch_file("jointlab-riveted-beam-test", name, text);
 }
 
 std::string error_of(const std::string& text) {
