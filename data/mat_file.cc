@@ -904,20 +904,8 @@ std::atomic<unsigned> g_tmp_counter{0};
 
 void write_mat(const std::filesystem::path& path, const Record& record, MatVersion version) {
   const std::string file = path.string();
-  if (record.channels.empty()) throw InputError(where(file, 0, "record has no channels to write"));
-  if (!(record.fs > 0) || !std::isfinite(record.fs) || !std::isfinite(record.t0)) {
-    throw InputError(where(
-        file, 0,
-        fmt::format("sampling rate {} Hz or t0 {} s cannot be written", record.fs, record.t0)));
-  }
+  check_writable(record, file);
   const auto n = static_cast<size_t>(record.size());
-  for (const Channel& ch : record.channels) {
-    if (static_cast<size_t>(ch.samples.size()) != n) {
-      throw InputError(where(file, 0,
-                             fmt::format("channel '{}' has {} samples, channel '{}' {}", ch.name,
-                                         ch.samples.size(), record.channels[0].name, n)));
-    }
-  }
   quiet_matio();
 
   std::vector<std::string> fields = {"fs", "t0", "time"};

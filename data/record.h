@@ -38,4 +38,8 @@ struct Record {
   const Channel* find(const std::string& name) const;
 };
 
+/// Throws InputError naming `name` unless a writer can represent the record: at least one
+/// channel, a finite positive sampling rate, a finite t0, every channel equally long.
+void check_writable(const Record& record, const std::string& name);
+
 }  // namespace jointlab::data

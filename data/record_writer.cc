@@ -36,12 +36,7 @@ bool printable_line(const std::string& s) { return s.find_first_of("\r\n") == st
 }  // namespace
 
 std::string format_csv_record(const Record& record, const std::string& name) {
-  if (record.channels.empty()) throw InputError(where(name, 0, "record has no channels to write"));
-  if (!(record.fs > 0) || !std::isfinite(record.fs) || !std::isfinite(record.t0)) {
-    throw InputError(where(
-        name, 0,
-        fmt::format("sampling rate {} Hz or t0 {} s cannot be written", record.fs, record.t0)));
-  }
+  check_writable(record, name);
   const Eigen::Index n = record.size();
   std::string out = fmt::format("# fs: {}\n# t0: {}\n", record.fs, record.t0);
   for (const auto& [key, value] : record.metadata) {
@@ -64,11 +59,6 @@ std::string format_csv_record(const Record& record, const std::string& name) {
                                          "brackets, tab, semicolon, line break, leading"
                                          " '#' or outer blanks; not 'time')",
                                          ch.name)));
-    }
-    if (ch.samples.size() != n) {
-      throw InputError(where(name, 0,
-                             fmt::format("channel '{}' has {} samples, channel '{}' {}", ch.name,
-                                         ch.samples.size(), record.channels[0].name, n)));
     }
     if (!ch.samples.allFinite()) {
       throw InputError(where(name, 0, fmt::format("channel '{}' holds NaN or Inf", ch.name)));

@@ -749,22 +749,12 @@ std::string axis_line(long type, int length_exp, int force_exp, const std::strin
 }  // namespace
 
 std::string format_uff58(const Record& record, bool binary, const std::string& name) {
-  if (record.channels.empty()) throw InputError(where(name, 0, "record has no channels to write"));
-  if (!(record.fs > 0) || !std::isfinite(record.fs) || !std::isfinite(record.t0)) {
-    throw InputError(where(
-        name, 0,
-        fmt::format("sampling rate {} Hz or t0 {} s cannot be written", record.fs, record.t0)));
-  }
+  check_writable(record, name);
   const Eigen::Index n = record.size();
   std::string out;
   const std::string date = record.metadata.count("date") ? record.metadata.at("date") : "NONE";
   for (size_t c = 0; c < record.channels.size(); ++c) {
     const Channel& ch = record.channels[c];
-    if (ch.samples.size() != n) {
-      throw InputError(where(name, 0,
-                             fmt::format("channel '{}' has {} samples, channel '{}' {}", ch.name,
-                                         ch.samples.size(), record.channels[0].name, n)));
-    }
     if (!ch.samples.allFinite()) {
       throw InputError(where(name, 0, fmt::format("channel '{}' holds NaN or Inf", ch.name)));
     }
