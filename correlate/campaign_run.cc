@@ -998,12 +998,13 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
     const ScatterOptions& so = c.scatter;
     s.paragraphs.push_back(fmt::format(
         "Processing: jointlab process defaults (Hilbert envelope and phase, local fits, "
-        "uncertainties at k = 2). Scatter: {} bins per decade of amplitude, {:g} % Student-t "
+        "uncertainties at k = {:g}). Scatter: {} bins per decade of amplitude, {:g} % Student-t "
         "confidence intervals of the mean, bins need {} curves; a hit is flagged when a robust "
         "z-score (median/MAD of its mean relative deviation from the per-bin medians, and of its "
         "linear frequency and damping) exceeds {:g} (spread floors {:g} in frequency, {:g} in "
         "damping); flagged hits are {} the bins. QSMA: {} points per curve.",
-        so.bins_per_decade, 100 * so.confidence, so.min_curves, so.outlier_threshold,
+        modal::RingdownOptions{}.coverage_factor, so.bins_per_decade, 100 * so.confidence,
+        so.min_curves, so.outlier_threshold,
         so.frequency_floor, so.damping_floor, so.exclude_outliers ? "left out of" : "kept in",
         c.qsma_points));
     report.sections.push_back(s);

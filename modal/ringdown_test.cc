@@ -76,15 +76,14 @@ using Case = std::tuple<double, bool, Method>;
 // at a tenth of their stress-test amplitude). Every record: at least 1.5 decades
 // (1.4 for peak fitting, which has about half as many independent points), every
 // frequency within 0.05 %, every damping within 3 %, median damping within 1 %.
-// Coverage of the stated (expanded, k = 2) uncertainties: 90 % of the points of
-// three records pooled. The points of one record share their noise over a window
-// (up to several seconds), so one record's coverage is a handful of independent
-// draws: over 8 seeds single records range 0.84-1.0, pooled 0.95-0.99.
+// Coverage of the stated (expanded, k = 3) uncertainties: at least 90 % of the
+// points of every record. The points of one record share their noise over a
+// window (up to several seconds), so one record's coverage is a handful of
+// independent draws; k = 3 is what makes single records hold (see ringdown.h).
 class RingdownAcceptance : public ::testing::TestWithParam<Case> {};
 
 TEST_P(RingdownAcceptance, MeetsTheIssueOnThreeRecords) {
   const auto [f1, acc, method] = GetParam();
-  double covered_f = 0, covered_z = 0, points = 0;
   for (const unsigned seed : {11u, 12u, 13u}) {
     const testing::ThreeModeRecord rec = testing::three_mode_record(f1, 6.0, 1e-3, seed, 0.1);
     const Ringdown r = extract(rec, f1, acc, method);
@@ -95,13 +94,9 @@ TEST_P(RingdownAcceptance, MeetsTheIssueOnThreeRecords) {
     EXPECT_LE(e.max_f, 5e-4) << "seed " << seed;
     EXPECT_LE(e.max_z, 0.03) << "seed " << seed;
     EXPECT_LE(e.median_z, 0.01) << "seed " << seed;
-    covered_f += e.coverage_f * e.points;
-    covered_z += e.coverage_z * e.points;
-    points += e.points;
+    EXPECT_GE(e.coverage_f, 0.9) << "seed " << seed;
+    EXPECT_GE(e.coverage_z, 0.9) << "seed " << seed;
   }
-  std::printf("pooled coverage f %.3f z %.3f\n", covered_f / points, covered_z / points);
-  EXPECT_GE(covered_f / points, 0.9);
-  EXPECT_GE(covered_z / points, 0.9);
 }
 
 INSTANTIATE_TEST_SUITE_P(Issue, RingdownAcceptance,
@@ -115,7 +110,7 @@ INSTANTIATE_TEST_SUITE_P(Issue, RingdownAcceptance,
 // decades from displacement; from acceleration 1.41-1.55 at 40 Hz, 1.34-1.50 at
 // 80 Hz and 1.12-1.31 at 150 Hz (this seed: 1.50, 1.44, 1.24). Required here: 1.5
 // and 1.2 decades (1.4 and 0.8 for peak fitting), worst damping error 4 %,
-// frequency 0.05 %, median damping 1 %, coverage 80 % (75 % for peak fitting).
+// frequency 0.05 %, median damping 1 %, coverage 90 %.
 class RingdownStress : public ::testing::TestWithParam<Case> {};
 
 TEST_P(RingdownStress, RecoversPrescribedBackbone) {
@@ -130,9 +125,8 @@ TEST_P(RingdownStress, RecoversPrescribedBackbone) {
   EXPECT_LE(e.max_f, 5e-4);
   EXPECT_LE(e.max_z, 0.04);
   EXPECT_LE(e.median_z, 0.01);
-  const double coverage = hilbert ? 0.8 : 0.75;
-  EXPECT_GE(e.coverage_f, coverage);
-  EXPECT_GE(e.coverage_z, coverage);
+  EXPECT_GE(e.coverage_f, 0.9);
+  EXPECT_GE(e.coverage_z, 0.9);
 }
 
 INSTANTIATE_TEST_SUITE_P(Harsh, RingdownStress,
