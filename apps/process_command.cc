@@ -163,9 +163,10 @@ void add_process_command(CLI::App& app) {
          "--max-damping-std", args->max_damping_std,
          "drop points whose one-sigma damping uncertainty exceeds this fraction of the damping")
       ->check(CLI::Range(1e-6, 10.0));
-  cmd->add_option("--coverage-factor", args->coverage_factor,
-                  "k of the reported uncertainties k*sigma (1: one sigma; 3 makes one record's\n"
-                  "uncertainties cover at least 90 % of its points, where its errors move together)")
+  cmd->add_option(
+         "--coverage-factor", args->coverage_factor,
+         "k of the reported uncertainties k*sigma (1: one sigma; 3 makes one record's\n"
+         "uncertainties cover at least 90 % of its points, where its errors move together)")
       ->check(CLI::Range(1.0, 10.0));
   cmd->add_option("--min-share", args->min_share,
                   "give no backbone from a channel that sees a band's mode at less than this\n"
