@@ -277,20 +277,28 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     return out;
   }
 
-  // Noise floor: residual RMS about fits spanning 16 independent noise samples,
-  // lower quartile over the record (robust to windows the fit cannot follow),
-  // divided by 0.9 (the quartile of a chi distribution with ~32 degrees of
-  // freedom) and corrected for the 3 + 3 parameters the two fits absorb.
-  const double w_noise =
-      std::min(std::max(w_min, 16.0 / bs.noise_bandwidth_hz), std::max(w_min, (stop - start) / 2));
+  // Noise floor: residual RMS about fits spanning kNoiseSamples independent
+  // noise samples, lower quartile over the record (robust to windows the fit
+  // cannot follow). A window's squared misfit is noise^2 chi^2_k / dof, with dof
+  // = 2 w B real noise samples and k = dof less the parameters the two fits
+  // absorb; the chi^2 quartile is the Wilson-Hilferty approximation. The fits
+  // have the backbone's degree: for a narrow band the windows take seconds, over
+  // which a quadratic cannot follow ln A and would count model error as noise
+  // (a 36-44 Hz band read a floor nearly 4 times too high that way).
+  constexpr double kNoiseSamples = 12.0;
+  const double w_noise = std::min(std::max(w_min, kNoiseSamples / bs.noise_bandwidth_hz),
+                                  std::max(w_min, (stop - start) / 2));
   std::vector<double> misfits;
   for (double c = start + w_noise / 2; c <= stop - w_noise / 2; c += w_noise / 4) {
     misfits.push_back(
-        estimate_hilbert(log_amp, theta, dt, c, c, w_noise, correlation, 0.0, 2).misfit);
+        estimate_hilbert(log_amp, theta, dt, c, c, w_noise, correlation, 0.0, options.degree)
+            .misfit);
   }
-  const double dof = std::max(2.0, 2.0 * w_noise * bs.noise_bandwidth_hz);
-  sum.noise_floor_m =
-      std::max(quantile(misfits, 0.25) / 0.9 / std::sqrt(std::max(0.25, 1.0 - 6.0 / dof)), 1e-300);
+  const double dof = std::max(4.0, 2.0 * w_noise * bs.noise_bandwidth_hz);
+  const double k = std::max(2.0, dof - 2.0 * (options.degree + 1));
+  const double wh = 1.0 - 2.0 / (9.0 * k) - 0.6745 * std::sqrt(2.0 / (9.0 * k));
+  const double quartile_ratio = std::sqrt(k * wh * wh * wh / dof);
+  sum.noise_floor_m = std::max(quantile(misfits, 0.25) / quartile_ratio, 1e-300);
   const double noise = sum.noise_floor_m;
 
   // Local estimates along the span.
