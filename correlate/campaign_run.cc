@@ -1004,9 +1004,8 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
         "linear frequency and damping) exceeds {:g} (spread floors {:g} in frequency, {:g} in "
         "damping); flagged hits are {} the bins. QSMA: {} points per curve.",
         modal::RingdownOptions{}.coverage_factor, so.bins_per_decade, 100 * so.confidence,
-        so.min_curves, so.outlier_threshold,
-        so.frequency_floor, so.damping_floor, so.exclude_outliers ? "left out of" : "kept in",
-        c.qsma_points));
+        so.min_curves, so.outlier_threshold, so.frequency_floor, so.damping_floor,
+        so.exclude_outliers ? "left out of" : "kept in", c.qsma_points));
     report.sections.push_back(s);
   }
   for (size_t k = 0; k < nm; ++k) {
