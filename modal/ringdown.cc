@@ -413,62 +413,54 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     }
   }
 
-  // A point's amplitude is uncertain too; along a backbone that bends, that
-  // moves where the point belongs: add (d sigma / d ln A) std(ln A) to sigma's
-  // uncertainty and (d omega_d / d ln A) std(ln A) to omega_d's, with the slopes
-  // taken across one window of neighbouring estimates.
-  {
-    const size_t ne = est.size();
-    std::vector<double> add_s(ne, 0.0), add_w(ne, 0.0);
-    for (size_t i = 0; i < ne; ++i) {
-      const double spacing = ne > 1 ? (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1) : 1;
-      const auto reach =
-          static_cast<size_t>(std::ceil(est[i].window / 2 / std::max(1e-12, spacing)));
-      const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
-      const double dl = est[hi].log_amp - est[lo].log_amp;
-      if (hi == lo || !(std::abs(dl) > 0)) continue;
-      add_s[i] = (est[hi].sigma - est[lo].sigma) / dl * est[i].log_amp_std;
-      add_w[i] = (est[hi].omega_d - est[lo].omega_d) / dl * est[i].log_amp_std;
-    }
-    for (size_t i = 0; i < ne; ++i) {
-      est[i].sigma_std = std::hypot(est[i].sigma_std, add_s[i]);
-      est[i].omega_d_std = std::hypot(est[i].omega_d_std, add_w[i]);
-    }
-  }
-
-  // The envelope is read through the band's gain G(f). A linear mode keeps its
-  // decay rate through any gain (a decaying exponential passes a linear filter
-  // unchanged but for a constant factor), but where the frequency drifts across
-  // a sloping part of G (a band's edge) ln A picks up d ln G/df * df/dt, and the
-  // decay rate is biased by as much. That is counted as model error, so a point
-  // in an edge is dropped rather than reported wrong; one outside the band's
-  // half-gain points is dropped outright. (A first-order estimate: on a band
-  // too narrow for the mode's drift the first kept points can still be off by
-  // several per cent; process.md asks for bands whose flat middle holds the drift.)
+  // Two model errors taken across one window of neighbouring estimates:
+  // - A point's amplitude is uncertain too; along a backbone that bends, that
+  //   moves where the point belongs: add (d sigma / d ln A) std(ln A) to sigma's
+  //   uncertainty and (d omega_d / d ln A) std(ln A) to omega_d's.
+  // - The envelope is read through the band's gain G(f). A linear mode keeps its
+  //   decay rate through any gain (a decaying exponential passes a linear filter
+  //   unchanged but for a constant factor), but where the frequency drifts across
+  //   a sloping part of G (a band's edge) ln A picks up d ln G/df * df/dt, and the
+  //   decay rate is biased by as much. That is added to sigma's uncertainty, so a
+  //   point in an edge is dropped rather than reported wrong; one outside the
+  //   band's half-gain points is dropped outright. (A first-order estimate: on a
+  //   band too narrow for the mode's drift the first kept points can still be off
+  //   by several per cent; process.md asks for bands whose flat middle holds the
+  //   drift.)
   std::vector<char> in_edge(est.size(), 0);
   {
-    const auto gain = [&](double f) { return signal::band_gain(band, options.taper, f); };
     const size_t ne = est.size();
     const double spacing = ne > 1 ? (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1) : 1;
+    const auto gain = [&](double f) { return signal::band_gain(band, options.taper, f); };
     const double df = 1e-3 * edge;
+    std::vector<double> add_s(ne, 0.0), add_w(ne, 0.0), add_g(ne, 0.0);
     for (size_t i = 0; i < ne; ++i) {
-      Estimate& e = est[i];
+      const Estimate& e = est[i];
+      const auto reach = static_cast<size_t>(std::ceil(e.window / 2 / std::max(1e-12, spacing)));
+      const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
+      const double dl = est[hi].log_amp - est[lo].log_amp;
+      if (hi != lo && std::abs(dl) > 0) {
+        add_s[i] = (est[hi].sigma - est[lo].sigma) / dl * e.log_amp_std;
+        add_w[i] = (est[hi].omega_d - est[lo].omega_d) / dl * e.log_amp_std;
+      }
       const double f = e.omega_d / kTwoPi;
       const double g = gain(f);
       if (!(g > 0.5)) {
-        e.sigma_std = std::numeric_limits<double>::infinity();
+        add_g[i] = std::numeric_limits<double>::infinity();
         in_edge[i] = 1;
         continue;
       }
-      const auto reach = static_cast<size_t>(std::ceil(e.window / 2 / std::max(1e-12, spacing)));
-      const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
       if (hi == lo || !(est[hi].t > est[lo].t)) continue;
       const double dfdt = (est[hi].omega_d - est[lo].omega_d) / kTwoPi / (est[hi].t - est[lo].t);
       const double dlng = (gain(f + df) - gain(f - df)) / (2 * df) / g;
       const double term = std::abs(dlng * dfdt);
       if (!std::isfinite(term)) continue;
-      e.sigma_std = std::hypot(e.sigma_std, term);
+      add_g[i] = term;
       in_edge[i] = term > options.max_damping_rel_std * std::abs(e.sigma);
+    }
+    for (size_t i = 0; i < ne; ++i) {
+      est[i].sigma_std = std::hypot(std::hypot(est[i].sigma_std, add_s[i]), add_g[i]);
+      est[i].omega_d_std = std::hypot(est[i].omega_d_std, add_w[i]);
     }
   }
 

@@ -47,19 +47,25 @@ Errors score(const Ringdown& r, const testing::SlowFlowMode& truth) {
   return e;
 }
 
-// Runs one synthetic record (`higher` scales modes 2 and 3) through the extraction.
-Ringdown extract(const testing::ThreeModeRecord& rec, double f1, bool from_acceleration,
-                 Method method) {
+// Runs one record of `measured` through the extraction in `band`, reporting
+// displacement amplitude, with the record preparation process_record uses.
+Ringdown extract_band(const Eigen::VectorXd& x, double fs, Quantity measured,
+                      const signal::Band& band, Method method = Method::kHilbert) {
   signal::FftCache cache;
-  const Eigen::VectorXd& x = from_acceleration ? rec.acceleration : rec.displacement;
-  const signal::Band band{0.8 * f1, 1.2 * f1};
-  const PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);  // as process_record
-  const ChannelSpectrum cs = channel_spectrum(x, rec.fs, 0.0, prep, cache);
+  const PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);
+  const ChannelSpectrum cs = channel_spectrum(x, fs, 0.0, prep, cache);
   RingdownOptions opt;
   opt.amplitude = Quantity::kDisplacement;
   opt.method = method;
-  return extract_backbone(cs, from_acceleration ? Quantity::kAcceleration : Quantity::kDisplacement,
-                          band, opt, cache);
+  return extract_backbone(cs, measured, band, opt, cache);
+}
+
+// Runs one synthetic record (`higher` scales modes 2 and 3) through the extraction.
+Ringdown extract(const testing::ThreeModeRecord& rec, double f1, bool from_acceleration,
+                 Method method) {
+  return extract_band(from_acceleration ? rec.acceleration : rec.displacement, rec.fs,
+                      from_acceleration ? Quantity::kAcceleration : Quantity::kDisplacement,
+                      {0.8 * f1, 1.2 * f1}, method);
 }
 
 void print(const char* what, Method method, double f1, bool acc, unsigned seed, const Errors& e) {
@@ -93,13 +99,8 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
           const double t = static_cast<double>(k) / fs;
           x(k) = a0 * std::exp(-zeta * w * t) * std::cos(w * t + 0.4) + g(rng);
         }
-        signal::FftCache cache;
-        const signal::Band band{(1 - half) * f1, (1 + half) * f1};
-        const PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);
-        const ChannelSpectrum cs = channel_spectrum(x, fs, 0.0, prep, cache);
-        RingdownOptions opt;
-        opt.amplitude = Quantity::kDisplacement;
-        const Ringdown r = extract_backbone(cs, Quantity::kDisplacement, band, opt, cache);
+        const Ringdown r =
+            extract_band(x, fs, Quantity::kDisplacement, {(1 - half) * f1, (1 + half) * f1});
         const double expected = 2 * s * std::sqrt(r.band.noise_bandwidth_hz / fs);
         const double ratio = r.summary.noise_floor_m / expected;
         std::printf("noise floor f1 %.0f band +-%.0f %% seed %u: %.3f of the closed form\n", f1,
@@ -121,13 +122,8 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
 TEST(RingdownBandEdge, LeavesOutPointsInTheEdgeAndSaysSo) {
   for (const unsigned seed : {11u, 12u, 13u}) {
     const testing::ThreeModeRecord rec = testing::three_mode_record(80.0, 6.0, 1e-3, seed, 0.1);
-    signal::FftCache cache;
-    const signal::Band band{77.0, 85.0};
-    const PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);
-    const ChannelSpectrum cs = channel_spectrum(rec.displacement, rec.fs, 0.0, prep, cache);
-    RingdownOptions opt;
-    opt.amplitude = Quantity::kDisplacement;
-    const Ringdown r = extract_backbone(cs, Quantity::kDisplacement, band, opt, cache);
+    const Ringdown r =
+        extract_band(rec.displacement, rec.fs, Quantity::kDisplacement, {77.0, 85.0});
     ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
     EXPECT_NE(r.summary.message.find("sloping edge"), std::string::npos) << r.summary.message;
     EXPECT_NE(r.summary.message.find("widen the band"), std::string::npos) << r.summary.message;
