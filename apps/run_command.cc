@@ -1,5 +1,5 @@
 // `jointlab run CAMPAIGN --out DIR`: a whole test campaign, from hammer-test files to the
-// report (correlate/campaign_run.h).
+// report (campaign/campaign_run.h).
 #include <chrono>
 #include <memory>
 #include <string>
@@ -8,8 +8,8 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
-#include "jointlab/correlate/campaign.h"
-#include "jointlab/correlate/campaign_run.h"
+#include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/campaign_run.h"
 
 namespace jointlab::apps {
 namespace {
@@ -24,8 +24,8 @@ struct RunArgs {
 
 void run_run(const RunArgs& args) {
   const auto t0 = std::chrono::steady_clock::now();
-  const correlate::Campaign c = correlate::read_campaign(args.campaign);
-  correlate::RunOptions o;
+  const campaign::Campaign c = campaign::read_campaign(args.campaign);
+  campaign::RunOptions o;
   o.out = args.out;
   o.force = args.force;
   o.threads = args.threads;
@@ -35,7 +35,7 @@ void run_run(const RunArgs& args) {
       fmt::print(stderr, "[{:6.1f} s] {}\n", t, s);
     };
   }
-  const correlate::RunSummary s = correlate::run_campaign(c, o);
+  const campaign::RunSummary s = campaign::run_campaign(c, o);
   fmt::print("jointlab run: {}\n", s.report());
 }
 

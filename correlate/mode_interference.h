@@ -15,7 +15,7 @@
 
 #include <Eigen/Core>
 
-#include "jointlab/correlate/scatter.h"
+#include "jointlab/correlate/curve.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/figures.h"
+#include "jointlab/campaign/figures.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 
 #include "jointlab/core/error.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 namespace {
 
@@ -494,4 +494,4 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
   plot.finish();
 }
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "jointlab/correlate/campaign.h"
+#include "jointlab/campaign/campaign.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 /// Settings of run_campaign().
 struct RunOptions {
@@ -56,4 +56,4 @@ bool up_to_date(const std::filesystem::path& output,
 /// Runs the whole campaign into options.out; InputError for bad input (files, DOFs, bands).
 RunSummary run_campaign(const Campaign& campaign, const RunOptions& options);
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

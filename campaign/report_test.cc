@@ -1,4 +1,4 @@
-#include "jointlab/correlate/report.h"
+#include "jointlab/campaign/report.h"
 
 #include <filesystem>
 #include <fstream>
@@ -8,7 +8,7 @@
 
 #include "jointlab/core/error.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 namespace {
 
 namespace fs = std::filesystem;
@@ -62,4 +62,4 @@ TEST(Report, HtmlIsSelfContainedAndEscaped) {
 }
 
 }  // namespace
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/scatter.h"
+#include "jointlab/campaign/scatter.h"
 
 #include <cmath>
 #include <filesystem>
@@ -11,7 +11,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/tests/test_util.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 namespace {
 
 // "h" followed by a number (fmt avoids a GCC 12 -Wrestrict false positive).
@@ -200,4 +200,4 @@ TEST(Scatter, RejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

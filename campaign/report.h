@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 /// A table of text cells.
 struct ReportTable {
@@ -51,4 +51,4 @@ void write_report_html(const Report& report, const std::filesystem::path& path);
 /// Writes the report as Markdown, atomically; figures are linked relative to the file.
 void write_report_markdown(const Report& report, const std::filesystem::path& path);
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

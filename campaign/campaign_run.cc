@@ -1,4 +1,4 @@
-#include "jointlab/correlate/campaign_run.h"
+#include "jointlab/campaign/campaign_run.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,15 +10,15 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "jointlab/campaign/figures.h"
+#include "jointlab/campaign/report.h"
+#include "jointlab/campaign/scatter.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
-#include "jointlab/correlate/figures.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/mode_interference.h"
-#include "jointlab/correlate/report.h"
-#include "jointlab/correlate/scatter.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/data/table_writer.h"
@@ -31,7 +31,26 @@
 #include "jointlab/model/sim/simulated_record.h"
 #include "jointlab/signal/spectrum.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
+
+using correlate::amplitude_power;
+using correlate::AmplitudeQuantity;
+using correlate::IwanObjective;
+using correlate::IwanTarget;
+using correlate::IwanUpdateOptions;
+using correlate::IwanUpdateSummary;
+using correlate::LinearUpdateOptions;
+using correlate::LinearUpdateSummary;
+using correlate::mac_matrix;
+using correlate::MeasuredBackbone;
+using correlate::MeasuredModes;
+using correlate::mode_slip;
+using correlate::ModeSlip;
+using correlate::Sensor;
+using correlate::slip_share;
+using correlate::StiffnessSets;
+using correlate::update_iwan;
+using correlate::update_linear;
 
 namespace {
 
@@ -1157,4 +1176,4 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
   return summary;
 }
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

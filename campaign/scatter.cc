@@ -1,4 +1,4 @@
-#include "jointlab/correlate/scatter.h"
+#include "jointlab/campaign/scatter.h"
 
 #include <algorithm>
 #include <array>
@@ -14,7 +14,7 @@
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 namespace {
 
@@ -425,4 +425,4 @@ void write_scatter_json(const std::filesystem::path& path, const std::string& mo
   data::write_file_atomically(path, j.str() + "\n");
 }
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/figures.h"
+#include "jointlab/campaign/figures.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -11,7 +11,7 @@
 
 #include "jointlab/core/error.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 namespace {
 
 // "h" followed by a number (fmt avoids a GCC 12 -Wrestrict false positive).
@@ -116,4 +116,4 @@ TEST(Figures, RejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/campaign.h"
+#include "jointlab/campaign/campaign.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "jointlab/core/error.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 bool CampaignUpdate::fits(const std::string& mode) const {
   return modes.empty() || std::find(modes.begin(), modes.end(), mode) != modes.end();
@@ -325,4 +325,4 @@ Campaign read_campaign(const fs::path& path) {
   return parse_campaign(ss.str(), path);
 }
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/campaign.h"
+#include "jointlab/campaign/campaign.h"
 
 #include <filesystem>
 #include <fstream>
@@ -8,7 +8,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/tests/test_util.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 namespace {
 
 namespace fs = std::filesystem;
@@ -69,4 +69,4 @@ TEST(Campaign, RejectsDefectsNamingTheLine) {
 }
 
 }  // namespace
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -14,9 +14,9 @@
 
 #include <Eigen/Core>
 
-#include "jointlab/correlate/scatter.h"
+#include "jointlab/campaign/scatter.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 /// Size of a figure.
 struct FigureSize {
@@ -85,4 +85,4 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
                            const std::vector<ErrorSeries>& series, const std::string& title,
                            const std::filesystem::path& file, const FigureSize& size = {});
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "jointlab/campaign/scatter.h"
 #include "jointlab/core/units.h"
-#include "jointlab/correlate/scatter.h"
 #include "jointlab/signal/band_analytic.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 /// Hits at one force level.
 struct CampaignGroup {
@@ -85,4 +85,4 @@ Campaign read_campaign(const std::filesystem::path& path);
 /// Parses campaign text as if read from `path` (relative paths resolve against its folder).
 Campaign parse_campaign(const std::string& text, const std::filesystem::path& path);
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/report.h"
+#include "jointlab/campaign/report.h"
 
 #include <fstream>
 #include <sstream>
@@ -8,7 +8,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 
 namespace {
 
@@ -158,4 +158,4 @@ void write_report_markdown(const Report& r, const fs::path& path) {
   data::write_file_atomically(path, m);
 }
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign

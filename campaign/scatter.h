@@ -27,20 +27,11 @@
 
 #include <Eigen/Core>
 
-namespace jointlab::correlate {
+#include "jointlab/correlate/curve.h"
 
-/// One backbone of one mode from one hit.
-struct Curve {
-  std::string id;                  ///< the hit (file stem)
-  std::string group;               ///< the hit's group (force level)
-  Eigen::VectorXd time_s;          ///< time of each point after the record's start [s]
-  Eigen::VectorXd amplitude;       ///< amplitude of each point [SI], > 0
-  Eigen::VectorXd frequency_hz;    ///< natural frequency of each point [Hz]
-  Eigen::VectorXd damping;         ///< damping ratio of each point
-  bool has_linear = false;         ///< the linear values below are set
-  double linear_frequency_hz = 0;  ///< the hit's low-amplitude frequency [Hz]
-  double linear_damping = 0;       ///< the hit's low-amplitude damping ratio
-};
+namespace jointlab::campaign {
+
+using correlate::Curve;
 
 /// Settings of summarize_scatter().
 struct ScatterOptions {
@@ -129,4 +120,4 @@ void write_scatter_hits_csv(const std::filesystem::path& path, const ScatterSumm
 void write_scatter_json(const std::filesystem::path& path, const std::string& mode,
                         const ScatterSummary& s);
 
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign
