@@ -1,3 +1,5 @@
+include(GNUInstallDirs)
+
 # Warnings as errors on our own code only (dependencies are SYSTEM includes).
 function(jointlab_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Werror)
@@ -7,23 +9,34 @@ function(jointlab_warnings target)
   endif()
 endfunction()
 
-# jointlab_add_library(<folder> SOURCES ... DEPENDS ...): one target per folder,
-# alias jointlab::<folder>, headers installed under include/jointlab/<folder>.
+# jointlab_add_library(<name> SOURCES ... DEPENDS ... [PRIVATE_DEPENDS ...]
+#                      [FOLDER <path>] [INTERNAL_HEADERS ...]):
+# one target per folder, exported and aliased as jointlab::<name>. Its headers are
+# included as <jointlab/<folder>/<header>.h> in the tree and once installed; every header
+# of the folder is installed except the INTERNAL_HEADERS, which only the project's own
+# sources include. C++20 is a PUBLIC requirement: the headers use it.
 function(jointlab_add_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS;PRIVATE_DEPENDS" ${ARGN})
+  cmake_parse_arguments(ARG "" "FOLDER" "SOURCES;DEPENDS;PRIVATE_DEPENDS;INTERNAL_HEADERS" ${ARGN})
+  if(NOT ARG_FOLDER)
+    set(ARG_FOLDER ${name})
+  endif()
   add_library(jointlab_${name} ${ARG_SOURCES})
   add_library(jointlab::${name} ALIAS jointlab_${name})
   set_target_properties(jointlab_${name} PROPERTIES OUTPUT_NAME jointlab_${name}
-    POSITION_INDEPENDENT_CODE ON)
+    EXPORT_NAME ${name} POSITION_INDEPENDENT_CODE ON)
+  target_compile_features(jointlab_${name} PUBLIC cxx_std_20)
   target_include_directories(jointlab_${name} PUBLIC
-    $<BUILD_INTERFACE:${CMAKE_BINARY_DIR}/include>
-    $<INSTALL_INTERFACE:include>)
+    $<BUILD_INTERFACE:${PROJECT_BINARY_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(jointlab_${name} PUBLIC ${ARG_DEPENDS} PRIVATE ${ARG_PRIVATE_DEPENDS})
   jointlab_warnings(jointlab_${name})
   install(TARGETS jointlab_${name} EXPORT jointlabTargets
-    ARCHIVE DESTINATION lib LIBRARY DESTINATION lib)
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
   file(GLOB headers RELATIVE ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/*.h)
-  install(FILES ${headers} DESTINATION include/jointlab/${name})
+  if(ARG_INTERNAL_HEADERS)
+    list(REMOVE_ITEM headers ${ARG_INTERNAL_HEADERS})
+  endif()
+  install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/jointlab/${ARG_FOLDER})
 endfunction()
 
 # jointlab_add_test(<name> <source> [libraries...]): one GoogleTest program,
@@ -35,8 +48,8 @@ function(jointlab_add_test name source)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE ${ARGN} jointlab::testing GTest::gtest_main)
   jointlab_warnings(${name})
-  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
-  gtest_discover_tests(${name} WORKING_DIRECTORY ${CMAKE_BINARY_DIR}
-    PROPERTIES ENVIRONMENT "JOINTLAB_SOURCE_DIR=${CMAKE_SOURCE_DIR};JOINTLAB_BINARY_DIR=${CMAKE_BINARY_DIR}"
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
+  gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
+    PROPERTIES ENVIRONMENT "JOINTLAB_SOURCE_DIR=${PROJECT_SOURCE_DIR};JOINTLAB_BINARY_DIR=${PROJECT_BINARY_DIR}"
     DISCOVERY_TIMEOUT 60)
 endfunction()
