@@ -1,5 +1,6 @@
 #include "jointlab/model/model_file_writer.h"
 
+#include <cassert>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -17,12 +18,6 @@ namespace {
 namespace fs = std::filesystem;
 
 // Shortest round-trip text of x as a TOML float ("5e+05" -> "500000.0" stays a float).
-std::string toml_float(double x) {
-  if (!std::isfinite(x)) throw std::logic_error("model file writer: non-finite number");
-  std::string s = fmt::format("{}", x);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
-  return s;
-}
 
 bool bare_key(const std::string& k) {
   if (k.empty()) return false;
@@ -72,9 +67,21 @@ std::string path_from(const fs::path& dir, const fs::path& target) {
 
 }  // namespace
 
+std::string toml_float(double x) {
+  if (!std::isfinite(x)) throw std::logic_error("model file writer: non-finite number");
+  std::string s = fmt::format("{}", x);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
 std::string model_file_text(const Model& model, const std::string& mass_path,
-                            const std::string& stiffness_path, const std::string& labels_path) {
-  std::string t = "# Written by jointlab.\n[matrices]\n";
+                            const std::string& stiffness_path, const std::string& labels_path,
+                            const ModelFileComments& comments) {
+  assert(comments.joints.empty() || comments.joints.size() == model.joints.size());
+  std::string t;
+  for (const std::string& line : comments.header) t += "# " + line + "\n";
+  if (comments.header.empty()) t += "# Written by jointlab.\n";
+  t += "[matrices]\n";
   t += fmt::format("mass = {}\nstiffness = {}\n", quoted(mass_path), quoted(stiffness_path));
   if (!model.dof_labels.empty()) t += fmt::format("dof_labels = {}\n", quoted(labels_path));
   std::map<std::string, const Joint*> iwans, springs;  // first joint of each element name
@@ -103,14 +110,18 @@ std::string model_file_text(const Model& model, const std::string& mass_path,
       t += fmt::format("{} = {}\n", key(suffix(name, "spring.")), toml_float(j->stiffness));
     }
   }
-  for (const Joint& j : model.joints) {
-    t += fmt::format("\n[[joint]]\na = {}\nb = {}\nelement = {}\n", end_text(model, j.a),
+  for (size_t i = 0; i < model.joints.size(); ++i) {
+    const Joint& j = model.joints[i];
+    const std::string note =
+        comments.joints.empty() || comments.joints[i].empty() ? "" : "  # " + comments.joints[i];
+    t += fmt::format("\n[[joint]]{}\na = {}\nb = {}\nelement = {}\n", note, end_text(model, j.a),
                      end_text(model, j.b), quoted(j.element));
   }
   return t;
 }
 
-void write_model_file(const fs::path& path, const Model& model, const ModelFileMatrices& files) {
+void write_model_file(const fs::path& path, const Model& model, const ModelFileMatrices& files,
+                      const ModelFileComments& comments) {
   const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
   auto matrix = [&](const fs::path& given, const char* name,
                     const Eigen::SparseMatrix<double>& m) -> std::string {
@@ -136,7 +147,7 @@ void write_model_file(const fs::path& path, const Model& model, const ModelFileM
       data::write_file_atomically(dir / labels, text);
     }
   }
-  data::write_file_atomically(path, model_file_text(model, mass, stiffness, labels));
+  data::write_file_atomically(path, model_file_text(model, mass, stiffness, labels, comments));
 }
 
 }  // namespace jointlab::model

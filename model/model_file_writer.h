@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "jointlab/model/model_file.h"
 
@@ -26,13 +27,24 @@ struct ModelFileMatrices {
                                      ///< (only when the model has labels)
 };
 
+/// Comments a model file carries for a person (they do not change what it describes).
+struct ModelFileComments {
+  std::vector<std::string> header;  ///< lines before [matrices], each written as "# <line>"
+  std::vector<std::string> joints;  ///< per joint (model.joints order) a note, or empty
+};
+
+/// `x` as a TOML float: the shortest representation that reads back exactly, never an
+/// integer literal; logic_error for a non-finite number (the format has none for a model).
+std::string toml_float(double x);
+
 /// The model file text for `model`, with the matrix paths as given (written verbatim).
 std::string model_file_text(const Model& model, const std::string& mass_path,
-                            const std::string& stiffness_path, const std::string& labels_path);
+                            const std::string& stiffness_path, const std::string& labels_path,
+                            const ModelFileComments& comments = {});
 
 /// Writes `model` as a model file at `path` (and its matrices, where `files` leaves them empty);
 /// InputError if a file cannot be written or an element name cannot be expressed in the format.
 void write_model_file(const std::filesystem::path& path, const Model& model,
-                      const ModelFileMatrices& files = {});
+                      const ModelFileMatrices& files = {}, const ModelFileComments& comments = {});
 
 }  // namespace jointlab::model

@@ -12,6 +12,7 @@
 #include "jointlab/data/matrix_market.h"
 #include "jointlab/model/fe/hcb.h"
 #include "jointlab/model/fe/sparse_eigen.h"
+#include "jointlab/model/model_file_writer.h"
 
 namespace jointlab::model::fe {
 namespace {
@@ -25,13 +26,6 @@ double seconds_since(Clock::time_point t0) {
 const char* component_name(int c) {
   static const char* const names[6] = {"x", "y", "z", "rx", "ry", "rz"};
   return names[c - 1];
-}
-
-// A TOML float (never an integer literal): shortest round-trip digits plus ".0" if needed.
-std::string toml_float(double v) {
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
-  return s;
 }
 
 void add_spring(std::vector<Eigen::Triplet<double>>& t, int a, int b, double k) {
@@ -141,37 +135,43 @@ void write_model_directory(const std::filesystem::path& dir, const ReducedModel&
         fmt::format("{}: cannot create the output directory: {}", dir.string(), ec.message()));
   data::write_matrix_market(dir / "M.mtx", m.mass, true);
   data::write_matrix_market(dir / "K.mtx", m.stiffness, true);
-
   std::string csv = "node,component\n";
   for (const DofLabel& l : m.labels) csv += fmt::format("{},{}\n", l.node, l.component);
   data::write_file_atomically(dir / "dofs.csv", csv);
 
+  // The model file itself is written by the one model-file writer (model_file_writer.h).
   const RivetedBeamDescription& d = m.description;
-  std::string toml = fmt::format(
-      "# Riveted beam reduced by Hurty/Craig-Bampton (jointlab build-model).\n"
-      "# Description: {}\n"
-      "# Full {} model: {} elements, {} DOFs. Reduced: {} DOFs = {} boundary + {} "
-      "fixed-interface modes.\n"
-      "# dofs.csv labels: node 1000*s + r = reference node of rivet r on strip s (components\n"
-      "# 1..6 = x, y, z, rx, ry, rz); other nonzero nodes = sensors; node 0 = modal coordinate\n"
-      "# (component = mode number). K is the structure WITHOUT its joints.\n\n"
-      "[matrices]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\ndof_labels = \"dofs.csv\"\n\n"
-      "# x and y of every rivet: the 4-parameter Iwan element\n"
-      "[iwan.rivet]\nFs = {}\nKt = {}\nchi = {}\nbeta = {}\n\n"
-      "# z of every rivet [N/m]; rx and ry [N*m/rad]; rz [N*m/rad]\n"
-      "[spring]\nkz = {}\nrxy = {}\nrz = {}\n",
-      d.source, d.shell ? "shell" : "beam", m.summary.elements, m.summary.full_dofs,
-      m.stiffness.rows(), m.summary.boundary_dofs, m.summary.modes, toml_float(d.fs),
-      toml_float(d.kt), toml_float(d.chi), toml_float(d.beta), toml_float(d.kz), toml_float(d.rxy),
-      toml_float(d.rz));
+  Model model;
+  model.mass = m.mass;
+  model.stiffness = m.stiffness;
+  for (const DofLabel& l : m.labels)
+    model.dof_labels.push_back(fmt::format("{}:{}", l.node, l.component));
+  ModelFileComments comments;
+  comments.header = {
+      "Riveted beam reduced by Hurty/Craig-Bampton (jointlab build-model).",
+      "Description: " + d.source,
+      fmt::format("Full {} model: {} elements, {} DOFs. Reduced: {} DOFs = {} boundary + {} "
+                  "fixed-interface modes.",
+                  d.shell ? "shell" : "beam", m.summary.elements, m.summary.full_dofs,
+                  m.stiffness.rows(), m.summary.boundary_dofs, m.summary.modes),
+      "dofs.csv labels: node 1000*s + r = reference node of rivet r on strip s (components",
+      "1..6 = x, y, z, rx, ry, rz); other nonzero nodes = sensors; node 0 = modal coordinate",
+      "(component = mode number). K is the structure WITHOUT its joints.",
+      "iwan.rivet: x and y of every rivet; spring.kz: z [N/m]; spring.rxy: rx and ry, spring.rz:",
+      "rz [N*m/rad]."};
+  const Iwan rivet(IwanParameters{d.fs, d.kt, d.chi, d.beta});
   for (const ReducedJoint& j : m.joints) {
-    const DofLabel& la = m.labels[j.a];
-    const DofLabel& lb = m.labels[j.b];
-    toml +=
-        fmt::format("\n[[joint]]  # {}: {}:{} - {}:{}\na = {}\nb = {}\nelement = \"{}\"\n",
-                    j.comment, la.node, la.component, lb.node, lb.component, j.a, j.b, j.element);
+    Joint joint;
+    joint.a = j.a;
+    joint.b = j.b;
+    joint.element = j.element;
+    joint.stiffness = joint_stiffness(d, j.element);
+    if (j.element.starts_with("iwan.")) joint.iwan = rivet;
+    model.joints.push_back(std::move(joint));
+    comments.joints.push_back(j.comment);
   }
-  data::write_file_atomically(dir / "model.toml", toml);
+  write_model_file(dir / "model.toml", model, {dir / "M.mtx", dir / "K.mtx", dir / "dofs.csv"},
+                   comments);
 }
 
 }  // namespace jointlab::model::fe
