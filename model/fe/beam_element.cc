@@ -114,11 +114,7 @@ ElementMatrices beam_element(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
           xz);
 
   // u_local = R u_global per 3-vector.
-  Eigen::Matrix3d r;
-  r.row(0) = e1;
-  r.row(1) = e2;
-  r.row(2) = e3;
-  return to_global<12>(kl, ml, r);
+  return to_global<12>(kl, ml, e1, e2, e3);
 }
 
 }  // namespace jointlab::model::fe

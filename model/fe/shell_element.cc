@@ -161,11 +161,7 @@ ElementMatrices shell_element(const std::array<Eigen::Vector3d, 4>& p, const She
   k -= k_ci * k_ii.ldlt().solve(k_ci.transpose());
   k = 0.5 * (k + k.transpose()).eval();
 
-  Eigen::Matrix3d r;
-  r.row(0) = e1;
-  r.row(1) = e2;
-  r.row(2) = e3;
-  return to_global<24>(k, m, r);
+  return to_global<24>(k, m, e1, e2, e3);
 }
 
 }  // namespace jointlab::model::fe
