@@ -9,6 +9,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/tests/frame_element.h"
+#include "jointlab/tests/iwan_cycle_quadrature.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model {
@@ -20,13 +21,19 @@ constexpr double kTwoPi = 2 * std::numbers::pi;
 Eigen::SparseMatrix<double> sparse(const Eigen::MatrixXd& m) { return m.sparseView(); }
 
 // The closed form of method.md section 3 for a mass (or reduced mass) mu on a spring k0 in
-// parallel with an Iwan element, at joint amplitude x: omega^2 and zeta.
+// parallel with an Iwan element, at joint amplitude x: the secant omega^2 and zeta; what a
+// ring-down shows, omega_1^2 = (k0 + k_1) / mu and zeta = D / (2 pi x dE/dx) with
+// dE/dx = x (k0 + F'(x)) (energy form, exact); what a steady state shows,
+// zeta = D / (2 pi (k0 + k_1) x^2). k_1 is the first-harmonic stiffness of the Iwan element
+// by independent quadrature of its Masing loop (tests/iwan_cycle_quadrature.h, ~1e-9).
 struct ClosedForm {
-  double omega2, zeta;
+  double omega2, zeta, ringdown_omega2, ringdown_zeta, harmonic_zeta;
 };
 ClosedForm closed_form(const Iwan& iwan, double k0, double mu, double x) {
-  const double force = k0 * x + iwan.force(x);
-  return {force / (mu * x), iwan.dissipation(x) / (kTwoPi * force * x)};
+  const double force = k0 * x + iwan.force(x), d = iwan.dissipation(x);
+  const double k1 = k0 + testing::first_harmonic_by_quadrature(iwan, x);
+  return {force / (mu * x), d / (kTwoPi * force * x), k1 / mu,
+          d / (kTwoPi * x * x * (k0 + iwan.tangent(x))), d / (kTwoPi * k1 * x * x)};
 }
 
 // Frequency and damping at every point against the closed form. The curve's points come
@@ -42,6 +49,9 @@ void expect_closed_form(const std::vector<QsmaPoint>& curve, const Iwan& iwan, d
     const ClosedForm cf = closed_form(iwan, k0, mu, x);
     EXPECT_TRUE(Close(p.frequency_hz, std::sqrt(cf.omega2) / kTwoPi, 1e-6)) << i;
     EXPECT_TRUE(Close(p.damping_ratio, cf.zeta, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.ringdown_frequency_hz, std::sqrt(cf.ringdown_omega2) / kTwoPi, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.ringdown_damping_ratio, cf.ringdown_zeta, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.harmonic_damping_ratio, cf.harmonic_zeta, 1e-6)) << i;
     if (i > 0) {
       EXPECT_GT(p.modal_amplitude, curve[i - 1].modal_amplitude);
     }
