@@ -1,6 +1,7 @@
 // `jointlab qsma MODEL --mode R [--points N] [--qmin Q] [--qmax Q] --out FILE`: Quasi-Static
 // Modal Analysis of elastic mode R of a model file, as CSV
-// force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip.
+// force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip,ringdown_frequency_hz,
+// ringdown_damping_ratio,harmonic_damping_ratio.
 #include <memory>
 #include <string>
 
@@ -38,17 +39,22 @@ void run_qsma(const QsmaArgs& args) {
   if (curve.empty()) throw InputError(fmt::format("qsma: {}", summary.message));
   data::Table table;
   const auto n = static_cast<Eigen::Index>(curve.size());
-  Eigen::VectorXd f(n), q(n), hz(n), zeta(n), slip(n);
+  Eigen::VectorXd f(n), q(n), hz(n), zeta(n), slip(n), rd_hz(n), rd_zeta(n), h_zeta(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const model::QsmaPoint& p = curve[static_cast<size_t>(i)];
     f(i) = p.force_amplitude, q(i) = p.modal_amplitude, hz(i) = p.frequency_hz;
     zeta(i) = p.damping_ratio, slip(i) = p.max_slip;
+    rd_hz(i) = p.ringdown_frequency_hz, rd_zeta(i) = p.ringdown_damping_ratio;
+    h_zeta(i) = p.harmonic_damping_ratio;
   }
   table.add("force_amplitude", f);
   table.add("modal_amplitude", q);
   table.add("frequency_hz", hz);
   table.add("damping_ratio", zeta);
   table.add("max_slip", slip);
+  table.add("ringdown_frequency_hz", rd_hz);
+  table.add("ringdown_damping_ratio", rd_zeta);
+  table.add("harmonic_damping_ratio", h_zeta);
   data::write_table(args.out, table);
   if (summary.termination == model::QsmaTermination::kLimitLoad) {
     fmt::print(stderr, "jointlab qsma: {}\n", summary.message);
@@ -63,9 +69,11 @@ void add_qsma_command(CLI::App& app) {
       "qsma",
       "Quasi-Static Modal Analysis of elastic mode R (numbered as in 'modes'): frequency and\n"
       "damping versus amplitude from static solutions K u + F_J(u) = alpha M phi_R.\n"
-      "Writes CSV force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip with\n"
-      "amplitude increasing. Without --qmin/--qmax the curve runs from microslip to full\n"
-      "macroslip or to the largest load the joints carry (then reported on stderr).");
+      "Writes CSV force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip,\n"
+      "ringdown_frequency_hz,ringdown_damping_ratio,harmonic_damping_ratio with amplitude\n"
+      "increasing (secant values, what a ring-down shows, what a steady state shows).\n"
+      "Without --qmin/--qmax the curve runs from microslip to full macroslip of the joints\n"
+      "carrying the mode's slip or to the largest load the joints carry (then on stderr).");
   cmd->add_option("MODEL", args->model, "model file (TOML)")->required();
   cmd->add_option("--mode", args->mode, "elastic mode, from 1")
       ->required()

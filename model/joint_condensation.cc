@@ -51,7 +51,9 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   const int nj = size();
   const Eigen::Index n = model.size();
   laws_.resize(nj);
+  cycles_.resize(nj);
   phi_max_.resize(nj);
+  kt_ = Eigen::VectorXd::Zero(nj);
   phi_max_min_ = INFINITY;
   chi1_min_ = INFINITY;
   for (int j = 0; j < nj; ++j) {
@@ -61,6 +63,8 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
       laws_[j].push_back({e.stiffness(), e.slip_force(), e.phi_max(), chi1, R / chi1,
                           R / (chi1 * (chi1 + 1)), R / (chi1 * (chi1 + 1) * (chi1 + 2)),
                           e.energy(e.phi_max())});
+      cycles_[j].emplace_back(e);
+      kt_(j) += e.stiffness();
       phi_max_(j) = std::max(phi_max_(j), e.phi_max());
       phi_max_min_ = std::min(phi_max_min_, e.phi_max());
       chi1_min_ = std::min(chi1_min_, chi1);
@@ -138,6 +142,43 @@ Eigen::VectorXd JointCondensation::softening(const Eigen::Ref<const Eigen::Vecto
   double energy;
   evaluate(r, h, dh, energy);
   return h;
+}
+
+Eigen::VectorXd JointCondensation::softening_tangent(
+    const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  Eigen::VectorXd h(size()), dh(size());
+  double energy;
+  evaluate(r, h, dh, energy);
+  return dh;
+}
+
+Eigen::VectorXd JointCondensation::first_harmonic_stiffness(
+    const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  Eigen::VectorXd k(size());
+  for (int j = 0; j < size(); ++j) {
+    k(j) = 0;
+    for (const IwanCycle& c : cycles_[j]) k(j) += c.first_harmonic_stiffness(r(j));
+  }
+  return k;
+}
+
+double JointCondensation::turning_point_energy(const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  double e = 0;
+  for (int j = 0; j < size(); ++j) {
+    for (const IwanCycle& c : cycles_[j]) e += c.turning_point_energy(r(j));
+  }
+  return e;
+}
+
+Eigen::VectorXd JointCondensation::tangent(const Eigen::Ref<const Eigen::VectorXd>& g,
+                                           const Eigen::Ref<const Eigen::VectorXd>& r) const {
+  Eigen::MatrixXd hessian = stiffness_;
+  hessian.diagonal() -= softening_tangent(r);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(hessian);
+  if (ldlt.info() != Eigen::Success) return {};
+  Eigen::VectorXd t = ldlt.solve(g);
+  if (!t.allFinite()) return {};
+  return t;
 }
 
 double JointCondensation::dissipation(const Eigen::Ref<const Eigen::VectorXd>& r) const {
@@ -220,7 +261,8 @@ StaticSolve JointCondensation::solve(const Eigen::Ref<const Eigen::VectorXd>& g,
       break;
     }
   }
-  if (tangent && llt.info() == Eigen::Success && out.iterations > 0) *tangent = llt.solve(g);
+  // llt holds a factorization only when an iteration ran: ask it nothing otherwise.
+  if (tangent && out.iterations > 0 && llt.info() == Eigen::Success) *tangent = llt.solve(g);
   if (tangent && out.iterations == 0) {
     hessian = stiffness_;
     evaluate(r, h, dh, energy);

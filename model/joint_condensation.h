@@ -24,6 +24,7 @@
 #include <Eigen/Core>
 
 #include "jointlab/model/iwan.h"
+#include "jointlab/model/iwan_cycle.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 
@@ -72,8 +73,22 @@ class JointCondensation {
   /// Smallest chi + 1 over every element (slowest microslip power law).
   double smallest_chi_plus_one() const { return chi1_min_; }
 
+  /// Linear (zero-load) stiffness of coordinate j: the sum of its elements' K_T [N/m].
+  double linear_stiffness(int j) const { return kt_(j); }
+
   /// Softening h_j(r_j) of every coordinate [N].
   Eigen::VectorXd softening(const Eigen::Ref<const Eigen::VectorXd>& r) const;
+  /// Its derivative h'_j(r_j) in [0, K_T] [N/m].
+  Eigen::VectorXd softening_tangent(const Eigen::Ref<const Eigen::VectorXd>& r) const;
+  /// In-phase first-harmonic stiffness of each coordinate in a steady cycle of amplitude
+  /// |r_j| (iwan_cycle.h), summed over its elements [N/m].
+  Eigen::VectorXd first_harmonic_stiffness(const Eigen::Ref<const Eigen::VectorXd>& r) const;
+  /// Energy the Iwan elements store at the turning point of cycles of amplitudes |r| [J].
+  double turning_point_energy(const Eigen::Ref<const Eigen::VectorXd>& r) const;
+  /// dr/dalpha = (K_c - diag h'(r))^{-1} g at r (LDLT: finite also at a limit point where
+  /// the Hessian is only semidefinite); empty when it is singular.
+  Eigen::VectorXd tangent(const Eigen::Ref<const Eigen::VectorXd>& g,
+                          const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// Energy dissipated in one Masing cycle with joint amplitudes |r| [J].
   double dissipation(const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// True when every Iwan element is at or past its phi_max.
@@ -98,8 +113,9 @@ class JointCondensation {
   LinearModes modes_;
   std::vector<JointCoordinate> coords_;
   std::vector<std::vector<Law>> laws_;
+  std::vector<std::vector<IwanCycle>> cycles_;
   Eigen::MatrixXd flexibility_, stiffness_, joint_shapes_;
-  Eigen::VectorXd phi_max_;
+  Eigen::VectorXd phi_max_, kt_;
   double phi_max_min_ = 0, chi1_min_ = 1;
 };
 

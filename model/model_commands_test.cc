@@ -101,7 +101,9 @@ void write_pair(const std::string& stem, double m1, double m2, double k0) {
 void expect_closed_form_csv(const fs::path& csv, double k0, double mu) {
   std::string header;
   const auto rows = read_csv(csv, &header);
-  EXPECT_EQ(header, "force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip");
+  EXPECT_EQ(header,
+            "force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip,"
+            "ringdown_frequency_hz,ringdown_damping_ratio,harmonic_damping_ratio");
   ASSERT_GE(rows.size(), 10u);
   const Iwan iwan(kRivet);
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -110,6 +112,10 @@ void expect_closed_form_csv(const fs::path& csv, double k0, double mu) {
     EXPECT_TRUE(Close(rows[i][2], std::sqrt(force / (mu * x)) / kTwoPi, 1e-6)) << i;
     EXPECT_TRUE(Close(rows[i][3], iwan.dissipation(x) / (kTwoPi * force * x), 1e-6)) << i;
     EXPECT_TRUE(Close(rows[i][1], std::sqrt(mu) * x, 1e-6)) << i;
+    // What a ring-down shows: D / (2 pi x dE/dx), dE/dx = x (k0 + F'(x)) (energy form).
+    EXPECT_TRUE(
+        Close(rows[i][6], iwan.dissipation(x) / (kTwoPi * x * x * (k0 + iwan.tangent(x))), 1e-6))
+        << i;
     if (i > 0) {
       EXPECT_GT(rows[i][1], rows[i - 1][1]);
     }

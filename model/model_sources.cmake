@@ -2,6 +2,7 @@
 list(APPEND JOINTLAB_MODEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/iwan.cc
   ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis.cc
+  ${CMAKE_CURRENT_LIST_DIR}/iwan_cycle.cc
   ${CMAKE_CURRENT_LIST_DIR}/model_file.cc
   ${CMAKE_CURRENT_LIST_DIR}/linear_modes.cc
   ${CMAKE_CURRENT_LIST_DIR}/joint_condensation.cc
@@ -10,6 +11,7 @@ list(APPEND JOINTLAB_MODEL_SOURCES
 list(APPEND JOINTLAB_MODEL_TESTS
   ${CMAKE_CURRENT_LIST_DIR}/iwan_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis_test.cc
+  ${CMAKE_CURRENT_LIST_DIR}/iwan_cycle_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/model_file_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/linear_modes_test.cc
   ${CMAKE_CURRENT_LIST_DIR}/qsma_test.cc

@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -33,15 +35,26 @@ class Problem {
     p_ = m.joint_shapes().col(column);
     c_ = p_ / omega2_;
     g_ = m.condensed_stiffness() * c_;
-    // Coordinates the mode's linear motion moves; the others (by symmetry, say) never
-    // reach macroslip and do not count for full macroslip.
-    loaded_ = (c_.cwiseAbs().array() > 1e-6 * c_.lpNorm<Eigen::Infinity>()).cast<double>();
+    phi_max_all_.resize(m.size());
+    for (int j = 0; j < m.size(); ++j) phi_max_all_(j) = m.phi_max(j);
+    // Coordinates that carry the mode's joint slip: at least 1 % of the largest linear
+    // slip. The others (left still by symmetry, or barely moved) would reach macroslip only
+    // at absurd amplitudes and do not count for full macroslip.
+    loaded_ = (c_.cwiseAbs().array() >= 0.01 * c_.lpNorm<Eigen::Infinity>()).cast<double>();
   }
 
-  // Every loaded coordinate past its phi_max.
+  // True when coordinate j carries the mode's joint slip at r: at least 1 % of the largest
+  // slip both in the linear mode and at r (once the others slide, a coordinate whose slip
+  // they relieve stays bounded and stops counting).
+  bool carries(const Eigen::VectorXd& r, int j, double largest) const {
+    return loaded_(j) > 0 && std::abs(r(j)) >= 0.01 * largest;
+  }
+
+  // Every coordinate carrying the mode's joint slip is past its phi_max.
   bool full_macroslip(const Eigen::VectorXd& r) const {
+    const double largest = r.lpNorm<Eigen::Infinity>();
     for (int j = 0; j < m_.size(); ++j) {
-      if (loaded_(j) > 0 && std::abs(r(j)) < m_.phi_max(j)) return false;
+      if (carries(r, j, largest) && std::abs(r(j)) < m_.phi_max(j)) return false;
     }
     return true;
   }
@@ -91,9 +104,32 @@ class Problem {
     pt.force_amplitude = s.alpha;
     pt.modal_amplitude = s.q;
     pt.frequency_hz = std::sqrt(s.alpha / s.q) / kTwoPi;
-    pt.damping_ratio = m_.dissipation(s.r) / (kTwoPi * s.alpha * s.q);
+    const double d = m_.dissipation(s.r);
+    pt.damping_ratio = d / (kTwoPi * s.alpha * s.q);
     pt.max_slip = s.r.cwiseAbs().maxCoeff();
+    // First-harmonic modal stiffness (qsma.h): omega_1^2 = omega_r^2 - p^T diag(K_T - k_1) r / q.
+    const Eigen::VectorXd k1 = m_.first_harmonic_stiffness(s.r);
+    double w1 = omega2_;
+    for (int j = 0; j < m_.size(); ++j) {
+      w1 -= p_(j) * (m_.linear_stiffness(j) - k1(j)) * s.r(j) / s.q;
+    }
+    w1 = std::max(w1, 0.0);
+    pt.ringdown_frequency_hz = std::sqrt(w1) / kTwoPi;
+    pt.harmonic_damping_ratio = d / (kTwoPi * w1 * s.q * s.q);
+    pt.ringdown_damping_ratio = d / (kTwoPi * s.q * stored_energy_slope(s));
     return pt;
+  }
+
+  // dE/dq along the curve (qsma.h): alpha + sum_j (dr_j/dq) (h_j - r_j h'_j), with
+  // dr/dalpha = (K_c - diag h')^{-1} g and dq/dalpha = (1 + p^T diag(h') dr/dalpha) / omega_r^2.
+  double stored_energy_slope(const State& s) const {
+    Eigen::VectorXd t = m_.tangent(g_, s.r);
+    if (t.size() == 0) t = s.tangent;  // singular exactly at a limit point: the solver's own
+    if (t.size() == 0) t = s.r / s.alpha;
+    const Eigen::VectorXd h = m_.softening(s.r), dh = m_.softening_tangent(s.r);
+    const double dq = (1 + p_.dot(dh.cwiseProduct(t))) / omega2_;
+    const Eigen::VectorXd w = h - s.r.cwiseProduct(dh);
+    return s.alpha + t.dot(w) / dq;
   }
 
   // |zeta / zeta_0 - 1| at a solution: zeta_0 is the damping of the linear joint motion
@@ -109,10 +145,21 @@ class Problem {
   // full macroslip.
   double macroslip_margin(const State& s) const {
     double m = INFINITY;
+    const double largest = s.r.lpNorm<Eigen::Infinity>();
     for (int j = 0; j < m_.size(); ++j) {
-      if (loaded_(j) > 0) m = std::min(m, std::abs(s.r(j)) / m_.phi_max(j));
+      if (carries(s.r, j, largest)) m = std::min(m, std::abs(s.r(j)) / m_.phi_max(j));
     }
     return std::log(m);
+  }
+
+  // ln of the largest |r_j| / phi_max_j: >= 0 once the first element is in macroslip.
+  double onset_margin(const State& s) const {
+    return std::log((s.r.cwiseAbs().array() / phi_max_all_.array()).maxCoeff());
+  }
+
+  // The first element's onset of macroslip between a (before it) and b (past it).
+  State find_onset(const State& a, const State& b) {
+    return find_root([&](const State& s) { return onset_margin(s); }, a, b);
   }
 
   // Finds the state with q = target between a (q <= target) and b (q >= target).
@@ -165,7 +212,7 @@ class Problem {
   QsmaOptions opt_;
   QsmaSummary* sum_;
   double omega2_;
-  Eigen::VectorXd p_, c_, g_, loaded_;
+  Eigen::VectorXd p_, c_, g_, loaded_, phi_max_all_;
 };
 
 std::vector<double> log_grid(double lo, double hi, int n, bool include_hi) {
@@ -176,6 +223,269 @@ std::vector<double> log_grid(double lo, double hi, int n, bool include_hi) {
   }
   if (include_hi && n > 1) out.back() = hi;
   return out;
+}
+
+// n load levels from lo to end (both included): log-spaced, or, below a limit load,
+// log-spaced to 0.9 end and then clustered 10 %, ..., 0.1 % under it.
+std::vector<double> grid_to_end(double lo, double end, int n, bool cluster) {
+  if (!cluster || n < 6 || lo >= 0.8 * end) return log_grid(lo, end, n, true);
+  const int m = std::clamp(n / 4, 3, 8);
+  std::vector<double> alphas = log_grid(lo, 0.9 * end, n - m, false);
+  for (int i = 0; i < m - 1; ++i) {
+    alphas.push_back(end * (1 - 0.1 * std::pow(0.01, static_cast<double>(i) / (m - 2))));
+  }
+  alphas.push_back(end);
+  return alphas;
+}
+
+// The linear curve of a mode that moves no Iwan joint (only with q_max).
+std::vector<QsmaPoint> linear_curve(double omega2, int mode, const QsmaOptions& options,
+                                    QsmaSummary* summary) {
+  std::vector<QsmaPoint> curve;
+  summary->termination = QsmaTermination::kJointsNotLoaded;
+  if (options.q_max <= 0) {
+    summary->message = fmt::format(
+        "mode {} does not move any Iwan joint: its QSMA curve is linear (give q_max)", mode);
+    return curve;
+  }
+  const double lo = options.q_min > 0 ? options.q_min : options.q_max / 1e3;
+  const double hz = std::sqrt(omega2) / kTwoPi;
+  for (double q : log_grid(lo, options.q_max, options.points, true)) {
+    curve.push_back({omega2 * q, q, hz, 0.0, 0.0, hz, 0.0, 0.0});
+  }
+  summary->end_force = curve.back().force_amplitude;
+  summary->end_modal_amplitude = curve.back().modal_amplitude;
+  summary->message = fmt::format("mode {} does not move any Iwan joint: linear curve", mode);
+  return curve;
+}
+
+// Step 1: a start well inside microslip (damping within microslip_deviation / 5 ... of its
+// power law), moved down to q_min when that lies lower. alpha = 0 when no load is carried.
+State find_start(Problem& problem, const JointCondensation& model, const QsmaOptions& options) {
+  const State zero = problem.zero();
+  double alpha = 1e-3 * model.smallest_phi_max() / problem.c().lpNorm<Eigen::Infinity>();
+  const double target = options.microslip_deviation;
+  State best;
+  bool have_best = false;
+  for (int it = 0; it < 40; ++it) {
+    State s;
+    if (!problem.solve(alpha, zero, s)) {
+      alpha /= 10;
+      continue;
+    }
+    const double dev = problem.microslip_deviation(s);
+    if (dev <= target) {
+      if (!have_best || s.alpha > best.alpha) best = s;
+      have_best = true;
+      if (dev >= 0.2 * target) break;
+    }
+    // dev grows as alpha^(chi+1): aim at half the allowed deviation.
+    const double factor =
+        dev > 0 ? std::pow(0.5 * target / dev, 1 / model.smallest_chi_plus_one()) : 10.0;
+    alpha *= std::clamp(factor, 1e-8, 1e8);
+  }
+  if (!have_best && !problem.solve(alpha, zero, best)) best = zero;  // no microslip start
+  if (options.q_min > 0) {
+    for (int it = 0; it < 200 && best.alpha > 0 && best.q > options.q_min; ++it) {
+      State s;
+      if (problem.solve(best.alpha / 4, zero, s)) best = s;
+    }
+  }
+  return best;
+}
+
+// Step 2's outcome: every converged level, the last one, and the doubling step that
+// crosses full macroslip (with q_max the curve may run past it).
+struct March {
+  std::vector<State> levels;
+  State end;
+  bool crossed = false;
+  State before_macroslip, after_macroslip;
+};
+
+// Step 2: march up by doubling until the curve must stop, then bracket the end.
+March march_to_end(Problem& problem, const QsmaOptions& options, const State& start, int mode,
+                   QsmaSummary* summary) {
+  March m;
+  m.levels.push_back(start);
+  State hi;
+  Stop reason = Stop::kNone;
+  for (int it = 0; it < 200; ++it) {
+    State next;
+    const bool ok = problem.solve(2 * m.levels.back().alpha, m.levels.back(), next);
+    if (ok && !m.crossed && problem.macroslip_margin(next) >= 0 &&
+        problem.macroslip_margin(m.levels.back()) < 0) {
+      m.crossed = true;
+      m.before_macroslip = m.levels.back();
+      m.after_macroslip = next;
+    }
+    reason = problem.classify(ok, next);
+    if (reason != Stop::kNone) {
+      hi = next;
+      break;
+    }
+    m.levels.push_back(next);
+  }
+  m.end = m.levels.back();
+  if (reason == Stop::kNone) {
+    summary->termination = QsmaTermination::kFullMacroslip;
+    summary->message = fmt::format(
+        "mode {}: not every Iwan element reached macroslip within 2^200 of the starting load",
+        mode);
+    return m;
+  }
+  while (hi.alpha / m.end.alpha - 1 > options.limit_tolerance) {
+    State mid;
+    const bool ok = problem.solve(std::sqrt(m.end.alpha * hi.alpha), m.end, mid);
+    const Stop why = problem.classify(ok, mid);
+    if (why == Stop::kNone) {
+      m.end = mid;
+      m.levels.push_back(mid);
+    } else {
+      hi = mid;
+      reason = why;
+    }
+  }
+  if (reason == Stop::kNoSolution) {
+    summary->termination = QsmaTermination::kLimitLoad;
+  } else if (reason == Stop::kQmax) {
+    m.end = problem.find_q(options.q_max, m.end, hi);
+    summary->termination = QsmaTermination::kReachedQmax;
+  } else {
+    m.end = hi;
+    summary->termination = QsmaTermination::kFullMacroslip;
+  }
+  std::sort(m.levels.begin(), m.levels.end(),
+            [](const State& x, const State& y) { return x.alpha < y.alpha; });
+  return m;
+}
+
+// The converged level bracketing a root of an increasing f along the march: the states
+// just before (f < 0) and at or past (f >= 0) it; false when f changes sign nowhere.
+template <class F>
+bool bracket(const March& m, F f, State* below, State* above) {
+  std::vector<const State*> all;
+  for (const State& s : m.levels) all.push_back(&s);
+  all.push_back(&m.end);
+  for (size_t i = 1; i < all.size(); ++i) {
+    if (f(*all[i - 1]) < 0 && f(*all[i]) >= 0) {
+      *below = *all[i - 1];
+      *above = *all[i];
+      return true;
+    }
+  }
+  return false;
+}
+
+// Step 3: the first point, the automatic start or q = q_min; false (with the summary
+// saying why) when q_min lies past the end of the curve.
+bool find_first(Problem& problem, const QsmaOptions& options, const March& m, const State& start,
+                int mode, QsmaSummary* summary, State* first) {
+  *first = start;
+  if (options.q_min <= 0 || start.q >= options.q_min) return true;
+  if (m.end.q < options.q_min) {
+    summary->termination = QsmaTermination::kEmptyRange;
+    summary->message = fmt::format(
+        "mode {}: q_min = {:.6g} lies beyond the end of the curve (q = {:.6g} at force "
+        "amplitude {:.6g})",
+        mode, options.q_min, m.end.q, m.end.alpha);
+    return false;
+  }
+  State a, b;
+  const auto f = [&](const State& s) { return std::log(s.q / options.q_min); };
+  *first = bracket(m, f, &a, &b) ? problem.find_q(options.q_min, a, b) : m.end;
+  return true;
+}
+
+// Step 4: the load levels of the output and the states pinned on some of them (the
+// first, the last, and the onset of full macroslip on a curve continued past it).
+struct Grid {
+  std::vector<double> alphas;
+  std::vector<std::pair<size_t, State>> pinned;
+};
+
+// Without q_max the points sit densely through the transition: 30 % log-spaced from the
+// start to the first element's onset of macroslip, the rest from there to the end
+// (clustered below a limit load). With q_max, log-spaced, and the grid point nearest the
+// onset of full macroslip moves onto it, so that interpolating the curve never straddles
+// its kink (the tangent of the last elements to slip drops from S to 0).
+Grid output_grid(Problem& problem, const QsmaOptions& options, const March& m, const State& first,
+                 QsmaTermination termination) {
+  Grid g;
+  const int n = options.points;
+  const bool cluster = termination == QsmaTermination::kLimitLoad;
+  State onset, a, b;
+  const auto margin = [&](const State& s) { return problem.onset_margin(s); };
+  const bool split = options.q_max <= 0 && n >= 6 && margin(first) < 0 &&
+                     bracket(m, margin, &a, &b) &&
+                     (onset = problem.find_onset(a, b)).alpha < 0.99 * m.end.alpha;
+  if (split) {
+    const int micro = std::max(2, static_cast<int>(std::lround(0.3 * n)));
+    g.alphas = log_grid(first.alpha, onset.alpha, micro, false);
+    const std::vector<double> rest = grid_to_end(onset.alpha, m.end.alpha, n - micro, cluster);
+    g.alphas.insert(g.alphas.end(), rest.begin(), rest.end());
+    g.pinned.emplace_back(static_cast<size_t>(micro), onset);
+  } else {
+    g.alphas = grid_to_end(first.alpha, m.end.alpha, n, cluster);
+  }
+  g.pinned.emplace_back(0, first);
+  g.pinned.emplace_back(g.alphas.size() - 1, m.end);
+  if (m.crossed && options.q_max > 0 && g.alphas.size() > 2) {
+    const State full = problem.find_macroslip(m.before_macroslip, m.after_macroslip);
+    const double x = std::log(full.alpha);
+    size_t best = 1;
+    for (size_t i = 2; i + 1 < g.alphas.size(); ++i) {
+      if (std::abs(std::log(g.alphas[i]) - x) < std::abs(std::log(g.alphas[best]) - x)) best = i;
+    }
+    if (g.alphas[best - 1] < full.alpha && full.alpha < g.alphas[best + 1]) {
+      g.alphas[best] = full.alpha;
+      g.pinned.emplace_back(best, full);
+    }
+  }
+  return g;
+}
+
+// Step 5: solve at every grid level, continuing from the previous one, and evaluate it.
+std::vector<QsmaPoint> evaluate_grid(Problem& problem, const Grid& g) {
+  std::vector<QsmaPoint> curve;
+  State cur;
+  for (size_t i = 0; i < g.alphas.size(); ++i) {
+    State s;
+    const auto pin =
+        std::find_if(g.pinned.begin(), g.pinned.end(), [&](const auto& p) { return p.first == i; });
+    if (pin != g.pinned.end()) {
+      s = pin->second;
+    } else if (!problem.solve(g.alphas[i], cur, s)) {
+      break;  // cannot happen below a converged end level; keep the curve consistent
+    }
+    curve.push_back(problem.point(s));
+    cur = s;
+  }
+  return curve;
+}
+
+// Step 6: the summary's end point and message.
+void finish_summary(const std::vector<QsmaPoint>& curve, int mode, const QsmaOptions& options,
+                    QsmaSummary* summary) {
+  summary->end_force = curve.back().force_amplitude;
+  summary->end_modal_amplitude = curve.back().modal_amplitude;
+  if (!summary->message.empty()) return;
+  switch (summary->termination) {
+    case QsmaTermination::kLimitLoad:
+      summary->message = fmt::format(
+          "mode {}: no static solution past force amplitude {:.6g} (modal amplitude {:.6g}): "
+          "the joints slide freely; the curve stops there",
+          mode, summary->end_force, summary->end_modal_amplitude);
+      break;
+    case QsmaTermination::kFullMacroslip:
+      summary->message = fmt::format(
+          "mode {}: every Iwan element carrying the mode's joint slip is in macroslip from "
+          "force amplitude {:.6g}",
+          mode, summary->end_force);
+      break;
+    default:
+      summary->message = fmt::format("mode {}: reached q_max = {:.6g}", mode, options.q_max);
+  }
 }
 
 }  // namespace
@@ -225,8 +535,10 @@ std::string QsmaSummary::report() const {
 
 std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const QsmaOptions& options,
                             QsmaSummary* summary) {
-  assert(options.error().empty());
-  assert(summary);
+  if (!summary) throw std::invalid_argument("qsma: summary must not be null");
+  if (const std::string e = options.error(); !e.empty()) {
+    throw InputError(fmt::format("qsma: {}", e));
+  }
   *summary = QsmaSummary{};
   if (mode < 1 || mode > model.elastic_count()) {
     throw InputError(
@@ -236,207 +548,22 @@ std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const Qsma
   }
   const int column = model.modes().rigid_count + mode - 1;
   Problem problem(model, column, options, summary);
-  const double omega2 = problem.omega2();
-  std::vector<QsmaPoint> curve;
-
-  // A mode that does not move any joint has a linear curve.
   const double shape_scale = model.joint_shapes().cwiseAbs().maxCoeff();
-  if (problem.c().lpNorm<Eigen::Infinity>() * omega2 <= 1e-9 * shape_scale) {
-    summary->termination = QsmaTermination::kJointsNotLoaded;
-    if (options.q_max > 0) {
-      const double lo = options.q_min > 0 ? options.q_min : options.q_max / 1e3;
-      for (double q : log_grid(lo, options.q_max, options.points, true)) {
-        curve.push_back({omega2 * q, q, std::sqrt(omega2) / kTwoPi, 0.0, 0.0});
-      }
-      summary->end_force = curve.back().force_amplitude;
-      summary->end_modal_amplitude = curve.back().modal_amplitude;
-      summary->message = fmt::format("mode {} does not move any Iwan joint: linear curve", mode);
-    } else {
-      summary->message = fmt::format(
-          "mode {} does not move any Iwan joint: its QSMA curve is linear (give q_max)", mode);
-    }
-    return curve;
+  if (problem.c().lpNorm<Eigen::Infinity>() * problem.omega2() <= 1e-9 * shape_scale) {
+    return linear_curve(problem.omega2(), mode, options, summary);
   }
-
-  // 1. Start: well inside microslip (or below q_min).
-  const State zero = problem.zero();
-  State start;
-  {
-    double alpha = 1e-3 * model.smallest_phi_max() / problem.c().lpNorm<Eigen::Infinity>();
-    const double target = options.microslip_deviation;
-    State best;
-    bool have_best = false;
-    for (int it = 0; it < 40; ++it) {
-      State s;
-      if (!problem.solve(alpha, zero, s)) {
-        alpha /= 10;
-        continue;
-      }
-      const double dev = problem.microslip_deviation(s);
-      if (dev <= target) {
-        if (!have_best || s.alpha > best.alpha) best = s;
-        have_best = true;
-        if (dev >= 0.2 * target) break;
-      }
-      // dev grows as alpha^(chi+1): aim at half the allowed deviation.
-      const double factor =
-          dev > 0 ? std::pow(0.5 * target / dev, 1 / model.smallest_chi_plus_one()) : 10.0;
-      alpha *= std::clamp(factor, 1e-8, 1e8);
-    }
-    if (!have_best) {
-      if (!problem.solve(alpha, zero, best)) best = zero;  // no microslip start found
-    }
-    start = best;
-    if (options.q_min > 0) {
-      for (int it = 0; it < 200 && start.q > options.q_min; ++it) {
-        State s;
-        if (problem.solve(start.alpha / 4, zero, s)) start = s;
-      }
-    }
-  }
+  const State start = find_start(problem, model, options);
   if (start.alpha <= 0) {
     summary->termination = QsmaTermination::kLimitLoad;
     summary->message = fmt::format("mode {}: no static solution even at the smallest load", mode);
-    return curve;
+    return {};
   }
-
-  // 2. March up by doubling until the curve must stop, then bracket the end.
-  // With q_max the march may cross full macroslip: remember the doubling step that does.
-  std::vector<State> marched{start};
-  State hi, before_macroslip, after_macroslip;
-  bool crossed = false;
-  Stop reason = Stop::kNone;
-  for (int it = 0; it < 200; ++it) {
-    State next;
-    const bool ok = problem.solve(2 * marched.back().alpha, marched.back(), next);
-    if (ok && !crossed && problem.macroslip_margin(next) >= 0 &&
-        problem.macroslip_margin(marched.back()) < 0) {
-      crossed = true;
-      before_macroslip = marched.back();
-      after_macroslip = next;
-    }
-    reason = problem.classify(ok, next);
-    if (reason != Stop::kNone) {
-      hi = next;
-      break;
-    }
-    marched.push_back(next);
-  }
-  State end = marched.back();
-  if (reason == Stop::kNone) {
-    summary->termination = QsmaTermination::kFullMacroslip;
-    summary->message = fmt::format(
-        "mode {}: not every Iwan element reached macroslip within 2^200 of the starting load",
-        mode);
-  } else {
-    while (hi.alpha / end.alpha - 1 > options.limit_tolerance) {
-      State mid;
-      const bool ok = problem.solve(std::sqrt(end.alpha * hi.alpha), end, mid);
-      const Stop why = problem.classify(ok, mid);
-      if (why == Stop::kNone) {
-        end = mid;
-        marched.push_back(mid);
-      } else {
-        hi = mid;
-        reason = why;
-      }
-    }
-    if (reason == Stop::kNoSolution) {
-      summary->termination = QsmaTermination::kLimitLoad;
-    } else if (reason == Stop::kQmax) {
-      end = problem.find_q(options.q_max, end, hi);
-      summary->termination = QsmaTermination::kReachedQmax;
-    } else {
-      end = hi;
-      summary->termination = QsmaTermination::kFullMacroslip;
-    }
-  }
-
-  // 3. The first point: the automatic start or q = q_min.
-  State first = start;
-  if (options.q_min > 0 && start.q < options.q_min) {
-    if (end.q < options.q_min) {
-      summary->termination = QsmaTermination::kEmptyRange;
-      summary->message = fmt::format(
-          "mode {}: q_min = {:.6g} lies beyond the end of the curve (q = {:.6g} at force "
-          "amplitude {:.6g})",
-          mode, options.q_min, end.q, end.alpha);
-      return curve;
-    }
-    std::sort(marched.begin(), marched.end(),
-              [](const State& x, const State& y) { return x.alpha < y.alpha; });
-    size_t i = 0;
-    while (i < marched.size() && marched[i].q < options.q_min) ++i;
-    first = i < marched.size() ? problem.find_q(options.q_min, marched[i - 1], marched[i])
-                               : problem.find_q(options.q_min, marched.back(), end);
-  }
-
-  // 4. The output grid: log-spaced in alpha, clustered below a limit load.
-  std::vector<double> alphas;
-  const int n = options.points;
-  const bool cluster = summary->termination == QsmaTermination::kLimitLoad && n >= 6 &&
-                       first.alpha < 0.8 * end.alpha;
-  if (cluster) {
-    const int m = std::clamp(n / 4, 3, 8);
-    alphas = log_grid(first.alpha, 0.9 * end.alpha, n - m, false);
-    for (int i = 0; i < m - 1; ++i) {
-      const double delta = 0.1 * std::pow(0.01, static_cast<double>(i) / (m - 2));
-      alphas.push_back(end.alpha * (1 - delta));
-    }
-    alphas.push_back(end.alpha);
-  } else {
-    alphas = log_grid(first.alpha, end.alpha, n, true);
-  }
-  // A curve continued past full macroslip has a kink there (the tangent of the last
-  // elements to slip drops from S to 0): the interior grid point nearest to its onset
-  // moves onto it, so that interpolating the curve never straddles the kink.
-  State onset;
-  size_t onset_index = 0;
-  if (crossed && options.q_max > 0 && alphas.size() > 2) {
-    onset = problem.find_macroslip(before_macroslip, after_macroslip);
-    const double x = std::log(onset.alpha);
-    size_t best = 1;
-    for (size_t i = 2; i + 1 < alphas.size(); ++i) {
-      if (std::abs(std::log(alphas[i]) - x) < std::abs(std::log(alphas[best]) - x)) best = i;
-    }
-    if (alphas[best - 1] < onset.alpha && onset.alpha < alphas[best + 1]) {
-      alphas[best] = onset.alpha;
-      onset_index = best;
-    }
-  }
-  State cur = first;
-  curve.push_back(problem.point(first));
-  for (size_t i = 1; i < alphas.size(); ++i) {
-    State s;
-    if (i + 1 == alphas.size()) {
-      s = end;
-    } else if (onset_index == i) {
-      s = onset;
-    } else if (!problem.solve(alphas[i], cur, s)) {
-      break;  // cannot happen below a converged end level; keep the curve consistent
-    }
-    curve.push_back(problem.point(s));
-    cur = s;
-  }
-  summary->end_force = curve.back().force_amplitude;
-  summary->end_modal_amplitude = curve.back().modal_amplitude;
-  if (summary->message.empty()) {
-    switch (summary->termination) {
-      case QsmaTermination::kLimitLoad:
-        summary->message = fmt::format(
-            "mode {}: no static solution past force amplitude {:.6g} (modal amplitude {:.6g}): "
-            "the joints slide freely; the curve stops there",
-            mode, summary->end_force, summary->end_modal_amplitude);
-        break;
-      case QsmaTermination::kFullMacroslip:
-        summary->message =
-            fmt::format("mode {}: every Iwan element is in macroslip from force amplitude {:.6g}",
-                        mode, summary->end_force);
-        break;
-      default:
-        summary->message = fmt::format("mode {}: reached q_max = {:.6g}", mode, options.q_max);
-    }
-  }
+  const March march = march_to_end(problem, options, start, mode, summary);
+  State first;
+  if (!find_first(problem, options, march, start, mode, summary, &first)) return {};
+  const Grid grid = output_grid(problem, options, march, first, summary->termination);
+  std::vector<QsmaPoint> curve = evaluate_grid(problem, grid);
+  finish_summary(curve, mode, options, summary);
   return curve;
 }
 

@@ -46,11 +46,14 @@ struct QsmaOptions {
 
 /// One point of a QSMA curve.
 struct QsmaPoint {
-  double force_amplitude = 0;  ///< load level alpha
-  double modal_amplitude = 0;  ///< q = phi_r^T M u
-  double frequency_hz = 0;     ///< sqrt(alpha/q) / (2 pi)
-  double damping_ratio = 0;    ///< D / (2 pi alpha q)
-  double max_slip = 0;         ///< largest |relative displacement| over the Iwan joints [m]
+  double force_amplitude = 0;         ///< load level alpha
+  double modal_amplitude = 0;         ///< q = phi_r^T M u
+  double frequency_hz = 0;            ///< sqrt(alpha/q) / (2 pi)
+  double damping_ratio = 0;           ///< D / (2 pi alpha q)
+  double max_slip = 0;                ///< largest |relative displacement| over the Iwan joints [m]
+  double ringdown_frequency_hz = 0;   ///< first-harmonic frequency of the deflection [Hz]
+  double ringdown_damping_ratio = 0;  ///< D / (2 pi q dE/dq): a ring-down's envelope decay
+  double harmonic_damping_ratio = 0;  ///< D / (2 pi k_1 q^2): a steady state at amplitude q
 };
 
 /// Why a QSMA curve ends.

@@ -8,7 +8,10 @@
 #include <Eigen/LU>
 
 #include "jointlab/core/error.h"
+#include "jointlab/model/iwan_cycle.h"
+#include "jointlab/tests/all_dof_newton.h"
 #include "jointlab/tests/frame_element.h"
+#include "jointlab/tests/iwan_cycle_quadrature.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model {
@@ -20,13 +23,19 @@ constexpr double kTwoPi = 2 * std::numbers::pi;
 Eigen::SparseMatrix<double> sparse(const Eigen::MatrixXd& m) { return m.sparseView(); }
 
 // The closed form of method.md section 3 for a mass (or reduced mass) mu on a spring k0 in
-// parallel with an Iwan element, at joint amplitude x: omega^2 and zeta.
+// parallel with an Iwan element, at joint amplitude x: the secant omega^2 and zeta; what a
+// ring-down shows, omega_1^2 = (k0 + k_1) / mu and zeta = D / (2 pi x dE/dx) with
+// dE/dx = x (k0 + F'(x)) (energy form, exact); what a steady state shows,
+// zeta = D / (2 pi (k0 + k_1) x^2). k_1 is the first-harmonic stiffness of the Iwan element
+// by independent quadrature of its Masing loop (tests/iwan_cycle_quadrature.h, ~1e-9).
 struct ClosedForm {
-  double omega2, zeta;
+  double omega2, zeta, ringdown_omega2, ringdown_zeta, harmonic_zeta;
 };
 ClosedForm closed_form(const Iwan& iwan, double k0, double mu, double x) {
-  const double force = k0 * x + iwan.force(x);
-  return {force / (mu * x), iwan.dissipation(x) / (kTwoPi * force * x)};
+  const double force = k0 * x + iwan.force(x), d = iwan.dissipation(x);
+  const double k1 = k0 + testing::first_harmonic_by_quadrature(iwan, x);
+  return {force / (mu * x), d / (kTwoPi * force * x), k1 / mu,
+          d / (kTwoPi * x * x * (k0 + iwan.tangent(x))), d / (kTwoPi * k1 * x * x)};
 }
 
 // Frequency and damping at every point against the closed form. The curve's points come
@@ -42,6 +51,9 @@ void expect_closed_form(const std::vector<QsmaPoint>& curve, const Iwan& iwan, d
     const ClosedForm cf = closed_form(iwan, k0, mu, x);
     EXPECT_TRUE(Close(p.frequency_hz, std::sqrt(cf.omega2) / kTwoPi, 1e-6)) << i;
     EXPECT_TRUE(Close(p.damping_ratio, cf.zeta, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.ringdown_frequency_hz, std::sqrt(cf.ringdown_omega2) / kTwoPi, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.ringdown_damping_ratio, cf.ringdown_zeta, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.harmonic_damping_ratio, cf.harmonic_zeta, 1e-6)) << i;
     if (i > 0) {
       EXPECT_GT(p.modal_amplitude, curve[i - 1].modal_amplitude);
     }
@@ -225,7 +237,7 @@ struct Beams {
   std::vector<Eigen::Index> top_u;  // axial DOFs of the top beam
 };
 
-Beams stacked_beams(int elements, const IwanParameters& iwan) {
+Beams stacked_beams(int elements, const IwanParameters& iwan, double parallel_spring = 0) {
   const double L = 0.6, E = 70e9, rho = 2700, b = 0.025, h = 0.005;
   const double A = b * h, I = b * h * h * h / 12, le = L / elements;
   const int nodes = elements + 1, per_beam = 3 * nodes, n = 2 * per_beam;
@@ -252,114 +264,14 @@ Beams stacked_beams(int elements, const IwanParameters& iwan) {
     const int node = static_cast<int>(std::lround((k + 0.5) * nodes / rivets - 0.5));
     const Eigen::Index bot = 3 * node, top = per_beam + 3 * node;
     out.model.joints.push_back({top, bot, "iwan.x", iwan.Kt, Iwan(iwan)});
+    if (parallel_spring > 0) {
+      out.model.joints.push_back({top, bot, "spring.x", parallel_spring, std::nullopt});
+    }
     out.model.joints.push_back({top + 1, bot + 1, "spring.z", 1e9, std::nullopt});
     out.model.joints.push_back({top + 2, bot + 2, "spring.r", 1e3, std::nullopt});
   }
   return out;
 }
-
-// The all-DOF reference: Newton on K_lin u - B^T h(B u) = alpha M phi with
-// Phi_rb^T M u = 0 by Lagrange multipliers, dense LU of the bordered tangent, backtracking
-// on the residual norm. Independent of the condensation (no flexibility, no Schur step).
-class AllDofNewton {
- public:
-  AllDofNewton(const Model& model, const LinearModes& modes, int column)
-      : k_(Eigen::MatrixXd(model.linear_stiffness())), m_(Eigen::MatrixXd(model.mass)) {
-    for (const Joint& j : model.joints) {
-      if (j.iwan) joints_.push_back(j);
-    }
-    rb_ = m_ * modes.shapes.leftCols(modes.rigid_count);
-    load_ = m_ * modes.shapes.col(column);
-    phi_ = modes.shapes.col(column);
-    u_ = Eigen::VectorXd::Zero(k_.rows());
-  }
-
-  // Solves at alpha from the current state; false if Newton does not converge.
-  bool solve(double alpha) {
-    const Eigen::Index n = k_.rows(), nr = rb_.cols();
-    Eigen::VectorXd u = u_;
-    for (int it = 0; it < 400; ++it) {
-      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n + nr, n + nr);
-      a.topLeftCorner(n, n) = k_;
-      a.topRightCorner(n, nr) = rb_;
-      a.bottomLeftCorner(nr, n) = rb_.transpose();
-      const Eigen::VectorXd res = residual(u, alpha, &a);
-      // Converged at 1e-12 of the forces involved, or when a Newton step changes u by
-      // less than 1e-13 (rounding in K u of the stiff beams limits the residual).
-      const double scale = alpha * load_.norm() + (k_.cwiseAbs() * u.cwiseAbs()).norm();
-      if (res.norm() <= 1e-12 * scale) {
-        u_ = u;
-        return true;
-      }
-      const Eigen::VectorXd step = a.partialPivLu().solve(-res);
-      if (step.head(n).lpNorm<Eigen::Infinity>() <= 1e-13 * u.lpNorm<Eigen::Infinity>()) {
-        u_ = u + step.head(n);
-        return true;
-      }
-      // Backtracking on the potential energy (the force balance is its gradient).
-      const double pi0 = potential(u, alpha), slope = res.head(n).dot(step.head(n));
-      // Step control: a step at most |u| (a near-singular tangent past the
-      // rivets' slip points otherwise throws the iterate far away), then backtracking.
-      const double len = step.head(n).lpNorm<Eigen::Infinity>();
-      double t = std::min(1.0, std::max(u.lpNorm<Eigen::Infinity>(), 1e-9) / len);
-      Eigen::VectorXd trial;
-      for (int k = 0; k < 100; ++k, t /= 2) {
-        trial = u + t * step.head(n);
-        // Steps below 1e-6 of |u| are in Newton's quadratic range, where differences of
-        // the potential are rounding noise: take them as they are.
-        if (potential(trial, alpha) <= pi0 + 1e-4 * t * slope ||
-            t * step.head(n).lpNorm<Eigen::Infinity>() <= 1e-6 * u.lpNorm<Eigen::Infinity>()) {
-          break;
-        }
-      }
-      u = trial;
-      if (!u.allFinite() || u.lpNorm<Eigen::Infinity>() > 1e3) return false;  // ran away
-    }
-    return false;
-  }
-
-  double q() const { return phi_.dot(m_ * u_); }
-  const Eigen::VectorXd& u() const { return u_; }
-  void set(const Eigen::VectorXd& u) { u_ = u; }
-  bool full_macroslip() const {
-    for (const Joint& j : joints_) {
-      if (std::abs(u_(j.a) - u_(j.b)) < j.iwan->phi_max()) return false;
-    }
-    return true;
-  }
-
- private:
-  double potential(const Eigen::VectorXd& u, double alpha) const {
-    double pi = 0.5 * u.dot(k_ * u) - alpha * load_.dot(u);
-    for (const Joint& j : joints_) pi -= j.iwan->softening_energy(u(j.a) - u(j.b));
-    return pi;
-  }
-
-  // Residual of force balance and constraints; with `a`, adds -B^T h' B to its K block.
-  Eigen::VectorXd residual(const Eigen::VectorXd& u, double alpha, Eigen::MatrixXd* a) const {
-    const Eigen::Index n = k_.rows(), nr = rb_.cols();
-    Eigen::VectorXd res(n + nr);
-    res.head(n) = k_ * u - alpha * load_;
-    res.tail(nr) = rb_.transpose() * u;
-    for (const Joint& j : joints_) {
-      const double r = u(j.a) - u(j.b);
-      const double h = j.iwan->softening(r), dh = j.iwan->softening_tangent(r);
-      res(j.a) -= h;
-      res(j.b) += h;
-      if (a) {
-        (*a)(j.a, j.a) -= dh;
-        (*a)(j.b, j.b) -= dh;
-        (*a)(j.a, j.b) += dh;
-        (*a)(j.b, j.a) += dh;
-      }
-    }
-    return res;
-  }
-
-  Eigen::MatrixXd k_, m_, rb_;
-  Eigen::VectorXd load_, phi_, u_;
-  std::vector<Joint> joints_;
-};
 
 // Index (1-based elastic) of the mode whose joint motion is most uniform: the two beams
 // sliding against each other.
@@ -374,6 +286,62 @@ int sliding_mode(const JointCondensation& c) {
   return best;
 }
 
+// Energy stored at a turning point of the all-DOF solution u (qsma.h): the elastic energy
+// of the structure and its springs, 1/2 u^T K_lin u - sum_j K_T,j r_j^2 / 2, plus each Iwan
+// element's stored energy at its slip amplitude.
+double stored_energy(const Model& model, const Eigen::VectorXd& u) {
+  double e = 0.5 * u.dot(model.linear_stiffness() * u);
+  for (const Joint& j : model.joints) {
+    if (!j.iwan) continue;
+    const double r = u(j.a) - u(j.b);
+    e += IwanCycle(*j.iwan).turning_point_energy(r) - 0.5 * j.iwan->stiffness() * r * r;
+  }
+  return e;
+}
+
+// The ring-down columns of point i against their definitions evaluated on all DOFs:
+// omega_1^2 = phi^T (K_lin u - sum_j B_j^T (K_T - k_1(r_j)) r_j) / q (the first-harmonic
+// joint forces, Galerkin on phi), and D / (2 pi q dE/dq) with dE/dq by central differences
+// of the reference at alpha (1 -+ 1e-5) (truncation ~1e-10, solver noise ~1e-12 / 1e-5:
+// 1e-5 relative), skipped where an element crosses phi_max inside the difference.
+void expect_ringdown_columns(const Model& model, const JointCondensation& condensed, int column,
+                             testing::AllDofNewton& ref, const QsmaPoint& p, size_t i) {
+  const Eigen::VectorXd u = ref.u(), phi = condensed.modes().shapes.col(column);
+  const double q = ref.q();
+  double w1 = phi.dot(model.linear_stiffness() * u);
+  for (const Joint& j : model.joints) {
+    if (!j.iwan) continue;
+    const double r = u(j.a) - u(j.b);
+    const double k1 = IwanCycle(*j.iwan).first_harmonic_stiffness(r);
+    w1 -= (phi(j.a) - phi(j.b)) * (j.iwan->stiffness() - k1) * r;
+  }
+  w1 /= q;
+  EXPECT_TRUE(Close(p.ringdown_frequency_hz, std::sqrt(w1) / kTwoPi, 1e-6)) << i;
+  if (i % 4 != 2) return;  // the differences cost two solves: every fourth point
+  const double delta = 1e-5;
+  double e[2], qs[2];
+  Eigen::VectorXd us[2];
+  for (int side = 0; side < 2; ++side) {
+    const double f = side == 0 ? 1 - delta : 1 + delta;
+    ref.set(u * f);
+    ASSERT_TRUE(ref.solve(p.force_amplitude * f));
+    us[side] = ref.u();
+    e[side] = stored_energy(model, ref.u());
+    qs[side] = ref.q();
+  }
+  ref.set(u);
+  for (const Joint& j : model.joints) {
+    if (!j.iwan) continue;
+    const double pm = j.iwan->phi_max();
+    if ((std::abs(us[0](j.a) - us[0](j.b)) < pm) != (std::abs(us[1](j.a) - us[1](j.b)) < pm)) {
+      return;
+    }
+  }
+  const double slope = (e[1] - e[0]) / (qs[1] - qs[0]);
+  const double d = condensed.dissipation(condensed.joint_motion(u));
+  EXPECT_TRUE(Close(p.ringdown_damping_ratio, d / (kTwoPi * q * slope), 1e-5)) << i;
+}
+
 // Runs the reference along the condensed curve's load levels and returns its own end
 // load, found by the same predicate (no solution, or full macroslip) bracketed to 1e-4.
 void compare_with_all_dofs(const Beams& beams, const JointCondensation& condensed, int mode,
@@ -383,7 +351,7 @@ void compare_with_all_dofs(const Beams& beams, const JointCondensation& condense
   const auto curve = qsma(condensed, mode, options, &summary);
   ASSERT_EQ(summary.termination, expected_end) << summary.report();
   const int column = condensed.modes().rigid_count + mode - 1;
-  AllDofNewton ref(beams.model, condensed.modes(), column);
+  testing::AllDofNewton ref(beams.model, condensed.modes(), column);
   const double omega2 = condensed.modes().omega2(column);
   for (size_t i = 0; i < curve.size(); ++i) {
     const QsmaPoint& p = curve[i];
@@ -400,7 +368,9 @@ void compare_with_all_dofs(const Beams& beams, const JointCondensation& condense
     EXPECT_TRUE(Close(p.damping_ratio, zeta, 1e-6, 1e-15)) << i;
     EXPECT_TRUE(Close(p.max_slip, r.cwiseAbs().maxCoeff(), 1e-6)) << i;
     (void)omega2;
+    expect_ringdown_columns(beams.model, condensed, column, ref, p, i);
   }
+  if (expected_end == QsmaTermination::kFullMacroslip) return;  // the range rule is checked apart
   // The reference's own end: march up by 2 % from the condensed curve's tenth-to-last
   // point, then bisect to 1e-4.
   ASSERT_GE(curve.size(), 10u);
@@ -468,6 +438,32 @@ TEST(Qsma, TenRivetBeamsSlidingModeHasTheLimitLoadOfLimitAnalysis) {
   for (Eigen::Index i : beams.top_u) d(i) = 1;
   const double work = std::abs(condensed.modes().shapes.col(column).dot(beams.model.mass * d));
   EXPECT_TRUE(Close(curve.back().force_amplitude, 10 * kBeamRivet.Fs / work, 2e-4));
+}
+
+TEST(Qsma, DefaultRangeOnStackedBeamsWithSpringsInParallelEndsAtTheJointsFullMacroslip) {
+  // A spring in parallel with every Iwan element carries load past macroslip: the default
+  // curve ends at full macroslip of the rivets carrying the mode's joint slip, not at the
+  // absurd amplitudes where the rivets next to the middle (hardly moved by the bending
+  // mode) would slide too.
+  const Beams beams = stacked_beams(20, kBeamRivet, 2.0e6);
+  const JointCondensation condensed(beams.model);
+  QsmaOptions options;
+  options.points = 40;
+  QsmaSummary summary;
+  const auto curve = qsma(condensed, 1, options, &summary);
+  ASSERT_EQ(curve.size(), 40u);
+  EXPECT_EQ(summary.termination, QsmaTermination::kFullMacroslip) << summary.report();
+  const double pm = Iwan(kBeamRivet).phi_max();
+  EXPECT_GE(curve.back().max_slip, pm);
+  EXPECT_LE(curve.back().max_slip, 100 * pm);
+  // Most points between the onset of macroslip (the first rivet at phi_max) and the end;
+  // one sits on the onset (found to 1e-13 in ln(slip / phi_max)).
+  int transition = 0;
+  for (const QsmaPoint& p : curve) transition += p.max_slip >= pm * (1 - 1e-11) ? 1 : 0;
+  EXPECT_GT(transition, 20) << "of 40";
+  RecordProperty("end_slip_over_phi_max", std::to_string(curve.back().max_slip / pm));
+  RecordProperty("points_in_transition", transition);
+  compare_with_all_dofs(beams, condensed, 1, QsmaTermination::kFullMacroslip, options);
 }
 
 }  // namespace

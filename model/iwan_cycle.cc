@@ -1,0 +1,81 @@
+#include "jointlab/model/iwan_cycle.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+
+namespace jointlab::model {
+namespace {
+
+constexpr int kNodes = 48;
+
+// Gauss-Legendre nodes and weights on [0, 1] (Golub-Welsch: eigenvalues of the Jacobi
+// matrix of the Legendre recurrence); Eigen has no quadrature module.
+struct GaussLegendre {
+  std::array<double, kNodes> x{}, w{};
+  GaussLegendre() {
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(kNodes, kNodes);
+    for (int i = 1; i < kNodes; ++i) {
+      jac(i, i - 1) = jac(i - 1, i) = i / std::sqrt(4.0 * i * i - 1);
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(jac);
+    for (int i = 0; i < kNodes; ++i) {
+      x[i] = 0.5 * (es.eigenvalues()(i) + 1);
+      w[i] = es.eigenvectors()(0, i) * es.eigenvectors()(0, i);  // sums to 1 on [0, 1]
+    }
+  }
+};
+
+const GaussLegendre& rule() {
+  static const GaussLegendre r;
+  return r;
+}
+
+// g(s) with cos t = 1 - 2 s, as a function of t in [0, pi].
+double slip_fraction_stiffness(double t) {
+  return (t - std::sin(t) * std::cos(t)) / std::numbers::pi;
+}
+
+double g_of_ratio(double s) { return s >= 1 ? 1.0 : slip_fraction_stiffness(std::acos(1 - 2 * s)); }
+
+// J(b) = int_0^b s^chi g(s) ds = int_0^T sin^(2 chi)(t/2) g(t) sin(t)/2 dt, t = T u^3.
+double slip_integral(double chi, double b) {
+  const double big_t = std::acos(1 - 2 * std::min(b, 1.0));
+  double sum = 0;
+  for (int i = 0; i < kNodes; ++i) {
+    const double u = rule().x[i], t = big_t * u * u * u;
+    const double dt = 3 * big_t * u * u;
+    sum += rule().w[i] * std::pow(std::sin(t / 2), 2 * chi) * slip_fraction_stiffness(t) *
+           std::sin(t) / 2 * dt;
+  }
+  return sum;
+}
+
+}  // namespace
+
+IwanCycle::IwanCycle(const Iwan& iwan) : iwan_(iwan), j1_(slip_integral(iwan.chi(), 1.0)) {}
+
+double IwanCycle::first_harmonic_stiffness(double amplitude) const {
+  const double a = std::abs(amplitude);
+  const double chi1 = iwan_.chi() + 1, pm = iwan_.phi_max(), R = iwan_.R(), S = iwan_.S();
+  if (a == 0) return iwan_.stiffness();
+  if (a < pm) {
+    return R * std::pow(a, chi1) * j1_ + R * (std::pow(pm, chi1) - std::pow(a, chi1)) / chi1 + S;
+  }
+  const double b = pm / a;
+  return R * std::pow(a, chi1) * slip_integral(iwan_.chi(), b) + S * g_of_ratio(b);
+}
+
+double IwanCycle::turning_point_energy(double amplitude) const {
+  const double a = std::abs(amplitude);
+  const double chi = iwan_.chi(), pm = iwan_.phi_max(), R = iwan_.R();
+  if (a < pm) {
+    return iwan_.stiffness() * a * a / 2 - R * std::pow(a, chi + 3) / ((chi + 1) * (chi + 3));
+  }
+  return R * std::pow(pm, chi + 3) / (2 * (chi + 3)) + iwan_.S() * pm * pm / 2;
+}
+
+}  // namespace jointlab::model
