@@ -9,6 +9,9 @@ namespace jointlab::apps {
 /// `jointlab process`: ring-down files -> frequency and damping versus amplitude.
 void add_process_command(CLI::App& app);
 
+/// `jointlab stepped-sine`: stepped-sine sweeps -> one backbone point per level.
+void add_stepped_sine_command(CLI::App& app);
+
 /// `jointlab build-model`: riveted beam description -> reduced (Craig-Bampton) model directory.
 void add_build_model_command(CLI::App& app);
 

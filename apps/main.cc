@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "jointlab 0.1.0");
   jointlab::apps::add_process_command(app);
+  jointlab::apps::add_stepped_sine_command(app);
   jointlab::apps::add_build_model_command(app);
   jointlab::apps::add_modes_command(app);
   jointlab::apps::add_qsma_command(app);

@@ -1,0 +1,138 @@
+// `jointlab stepped-sine`: stepped-sine sweeps -> one backbone point per level.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "jointlab/apps/commands.h"
+#include "jointlab/core/error.h"
+#include "jointlab/data/stepped_sine.h"
+#include "jointlab/modal/stepped_sine.h"
+#include "jointlab/modal/stepped_sine_output.h"
+
+namespace jointlab::apps {
+
+namespace {
+
+struct SteppedSineArgs {
+  std::vector<std::string> files;
+  std::string amplitude = "velocity";
+  std::string quantity;
+  std::string damping = "hysteretic";
+  int residual_terms = modal::SteppedSineOptions{}.residual_terms;
+  double coverage_factor = modal::SteppedSineOptions{}.coverage_factor;
+  std::string out;
+};
+
+Quantity motion_quantity(const std::string& option, const std::string& value) {
+  const auto q = parse_quantity(value);
+  if (!q || *q == Quantity::kForce) {
+    throw InputError(
+        fmt::format("{} {}: expected displacement, velocity or acceleration", option, value));
+  }
+  return *q;
+}
+
+void run_stepped_sine(const SteppedSineArgs& args) {
+  modal::SteppedSineOptions opt;
+  opt.amplitude = motion_quantity("--amplitude", args.amplitude);
+  opt.damping =
+      args.damping == "viscous" ? modal::SineDamping::kViscous : modal::SineDamping::kHysteretic;
+  opt.residual_terms = args.residual_terms;
+  opt.coverage_factor = args.coverage_factor;
+  if (const std::string why = opt.check(); !why.empty()) throw InputError(why);
+  std::optional<Quantity> quantity;
+  if (!args.quantity.empty()) quantity = motion_quantity("--quantity", args.quantity);
+
+  namespace fs = std::filesystem;
+  for (size_t i = 0; i < args.files.size(); ++i) {
+    for (size_t k = 0; k < i; ++k) {
+      if (fs::path(args.files[i]).stem() == fs::path(args.files[k]).stem()) {
+        throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
+                                     args.files[k], args.files[i],
+                                     fs::path(args.files[i]).stem().string()));
+      }
+    }
+  }
+  // Read and extract everything first: a bad file stops the run before any output exists.
+  std::vector<modal::SteppedSineFileResult> results;
+  for (const std::string& f : args.files) {
+    modal::SteppedSineFileResult r;
+    r.source = f;
+    r.tables = data::read_stepped_sine(f, quantity);
+    for (const data::SteppedSineTable& t : r.tables) {
+      r.points.push_back(modal::extract_backbone_point(t, opt));
+      fmt::print(stderr, "{} {}: {}\n", f, t.label, r.points.back().report());
+    }
+    results.push_back(std::move(r));
+  }
+  const fs::path out(args.out);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (!fs::is_directory(out))
+    throw InputError(where(args.out, 0, "cannot create output directory"));
+  int written = 0;
+  for (const auto& r : results) {
+    modal::write_sine_backbone(out, r);
+    written += modal::usable_points(r) > 0;
+  }
+  modal::write_sine_summary(out, results, opt);
+  fmt::print("jointlab stepped-sine: {} backbone file(s) and summary.json written to {}\n", written,
+             out.string());
+}
+
+}  // namespace
+
+void add_stepped_sine_command(CLI::App& app) {
+  auto args = std::make_shared<SteppedSineArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "stepped-sine",
+      "Turn stepped-sine sweeps into backbone points: one per level.\n\n"
+      "Each FILE holds one or more sweeps (levels) around one mode: frequency, force and\n"
+      "response amplitudes and the response's phase relative to the force (CSV, see\n"
+      "docs/stepped-sine-table.md, or the .mat struct layout of the Brake-Reuss data).\n"
+      "Response-controlled sweeps hold the response amplitude, so the structure is\n"
+      "quasi-linear at that level: a single-mode FRF\n"
+      "  H(w) = Q / (w_n^2 - w^2 + 2 i zeta w_n^2) + R0 + R1 (w - w_c)/w_c\n"
+      "is fitted (Ceres) and its f_n and zeta, with uncertainties from the fit, are the point,\n"
+      "at the response amplitude at f_n. Force-controlled sweeps give their phase resonance\n"
+      "(response in quadrature with the force, interpolated between steps) and the damping\n"
+      "of the energy balance there with the fitted |Q| -- less direct, flagged as such.\n"
+      "Writes OUT/<file stem>.backbone.csv (columns amplitude, frequency_hz, damping_ratio,\n"
+      "frequency_std_hz, damping_std as 'process' writes them, then level,\n"
+      "response_controlled, points, fit_rms, displacement_m, force_n, damping_direct) and\n"
+      "OUT/summary.json.\n\n"
+      "Example:\n"
+      "  jointlab stepped-sine data/examples/brake-reuss-beam/forced_frequency_responses.mat \\\n"
+      "      --out sine\n"
+      "  jointlab stepped-sine sweep20.csv sweep40.csv --amplitude displacement --out sine");
+  cmd->option_defaults()->always_capture_default();
+  cmd->add_option("FILE", args->files,
+                  "stepped-sine files: CSV (docs/stepped-sine-table.md) or .mat")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option(
+      "--amplitude", args->amplitude,
+      "amplitude column: velocity (default, m/s), displacement (m) or acceleration (m/s^2),\n"
+      "each at the natural frequency");
+  cmd->add_option("--quantity", args->quantity,
+                  "what a response column without a [unit] measures (SI assumed): acceleration,\n"
+                  "velocity or displacement; without it such a column is an error");
+  cmd->add_option("--damping-model", args->damping,
+                  "damping term of the fitted mode: hysteretic (default; rate-independent joint\n"
+                  "friction) or viscous; both give zeta = D / (2 pi k1 A^2) at f_n")
+      ->check(CLI::IsMember({"hysteretic", "viscous"}));
+  cmd->add_option("--residual-terms", args->residual_terms,
+                  "other modes' share in the band: 0 none, 1 a complex constant, 2 constant and\n"
+                  "slope (default)")
+      ->check(CLI::Range(0, 2));
+  cmd->add_option("--coverage-factor", args->coverage_factor,
+                  "k of the reported uncertainties k*sigma (default 3, as 'process'; 1: one sigma)")
+      ->check(CLI::Range(1.0, 10.0));
+  cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
+  cmd->callback([args] { run_stepped_sine(*args); });
+}
+
+}  // namespace jointlab::apps

@@ -1,0 +1,595 @@
+#include "jointlab/data/stepped_sine.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <numbers>
+#include <numeric>
+#include <sstream>
+
+#include <csv.h>
+#include <fmt/format.h>
+#include <matio.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
+#include "jointlab/data/atomic_file.h"
+#include "jointlab/data/read_record.h"
+
+namespace jointlab::data {
+
+std::string control_name(SineControl c) {
+  return c == SineControl::kResponse ? "response" : "force";
+}
+
+namespace {
+
+constexpr Eigen::Index kMinRows = 5;
+
+std::optional<double> to_double(std::string_view s) {
+  s = trim(s);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  double v = 0;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+std::optional<SineControl> parse_control(std::string_view text) {
+  const std::string t = lower(trim(text));
+  if (t == "response" || t == "response-controlled" || t == "response controlled") {
+    return SineControl::kResponse;
+  }
+  if (t == "force" || t == "force-controlled" || t == "force controlled")
+    return SineControl::kForce;
+  return std::nullopt;
+}
+
+// Phase unit factor to radians; nullopt if unknown.
+std::optional<double> phase_factor(std::string_view unit) {
+  const std::string u = lower(trim(unit));
+  if (u == "rad") return 1.0;
+  if (u == "deg" || u == "degree" || u == "degrees") return std::numbers::pi / 180.0;
+  return std::nullopt;
+}
+
+// The raw columns of one table before checking.
+struct Raw {
+  std::string label;
+  std::optional<SineControl> control;
+  std::vector<double> f, force, response, phase;
+  std::vector<long> lines;  // CSV line of each row (0 for .mat)
+};
+
+// Checks the values and sorts the rows by frequency; `field` names the place for messages.
+SteppedSineTable finish(Raw raw, const std::string& file, const std::string& field,
+                        SineControl control, Quantity quantity, double force_si, double response_si,
+                        double phase_si) {
+  auto fail = [&](long line, const std::string& what) {
+    throw InputError(line > 0 ? where(file, line, what)
+                              : where(file, 0, fmt::format("{}: {}", field, what)));
+  };
+  const size_t n = raw.f.size();
+  if (static_cast<Eigen::Index>(n) < kMinRows) {
+    fail(0, fmt::format("{} frequencies; a stepped-sine table needs at least {}", n, kMinRows));
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const long line = raw.lines.empty() ? 0 : raw.lines[i];
+    const std::string at = line > 0 ? std::string() : fmt::format(" (row {})", i + 1);
+    if (!std::isfinite(raw.f[i]) || raw.f[i] <= 0) {
+      fail(line, fmt::format("frequency {} Hz is not positive{}", raw.f[i], at));
+    }
+    if (!std::isfinite(raw.force[i]) || raw.force[i] <= 0) {
+      fail(line, fmt::format("force amplitude {} is not positive{}", raw.force[i], at));
+    }
+    if (!std::isfinite(raw.response[i]) || raw.response[i] <= 0) {
+      fail(line, fmt::format("response amplitude {} is not positive{}", raw.response[i], at));
+    }
+    if (!std::isfinite(raw.phase[i])) fail(line, fmt::format("phase is not finite{}", at));
+  }
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return raw.f[a] < raw.f[b]; });
+  for (size_t k = 1; k < n; ++k) {
+    if (raw.f[order[k]] == raw.f[order[k - 1]]) {
+      const long line = raw.lines.empty() ? 0 : raw.lines[order[k]];
+      fail(line, fmt::format("frequency {} Hz appears twice", raw.f[order[k]]));
+    }
+  }
+  SteppedSineTable t;
+  t.source = file;
+  t.label = raw.label;
+  t.control = control;
+  t.response_quantity = quantity;
+  t.frequency_hz.resize(static_cast<Eigen::Index>(n));
+  t.force.resizeLike(t.frequency_hz);
+  t.response.resizeLike(t.frequency_hz);
+  t.phase_rad.resizeLike(t.frequency_hz);
+  for (size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    t.frequency_hz(i) = raw.f[order[k]];
+    t.force(i) = raw.force[order[k]] * force_si;
+    t.response(i) = raw.response[order[k]] * response_si;
+    t.phase_rad(i) = raw.phase[order[k]] * phase_si;
+  }
+  return t;
+}
+
+// ---------------------------------------------------------------------------------------------
+// CSV
+
+struct RowCollector {
+  std::vector<std::string> fields;
+  static void on_field(void* data, size_t len, void* self) {
+    static_cast<RowCollector*>(self)->fields.emplace_back(
+        data ? static_cast<const char*>(data) : "", data ? len : 0);
+  }
+  static void on_row(int, void*) {}
+};
+
+// Splits one line into fields with libcsv (quotes handled by the library).
+std::vector<std::string> split_line(std::string_view line, char delim) {
+  csv_parser p{};
+  csv_init(&p, CSV_APPEND_NULL);
+  csv_set_delim(&p, static_cast<unsigned char>(delim));
+  RowCollector row;
+  csv_parse(&p, line.data(), line.size(), RowCollector::on_field, RowCollector::on_row, &row);
+  csv_fini(&p, RowCollector::on_field, RowCollector::on_row, &row);
+  csv_free(&p);
+  if (row.fields.size() > 1 && trim(row.fields.back()).empty()) row.fields.pop_back();
+  return row.fields;
+}
+
+char detect_delimiter(std::string_view header) {
+  char best = ',';
+  long best_count = 0;
+  for (char c : {',', ';', '\t'}) {
+    const long n = std::count(header.begin(), header.end(), c);
+    if (n > best_count) best = c, best_count = n;
+  }
+  return best;
+}
+
+// "name [unit]" -> name, unit (empty when none).
+std::pair<std::string, std::string> split_header(std::string_view field, const std::string& file,
+                                                 long line) {
+  field = trim(field);
+  const auto open = field.find('[');
+  if (open == std::string_view::npos) return {lower(field), ""};
+  const auto close = field.find(']', open);
+  if (close == std::string_view::npos || !trim(field.substr(close + 1)).empty()) {
+    throw InputError(
+        where(file, line,
+              fmt::format("header '{}': unit must be written as 'name [unit]'", printable(field))));
+  }
+  return {lower(trim(field.substr(0, open))),
+          std::string(trim(field.substr(open + 1, close - open - 1)))};
+}
+
+}  // namespace
+
+std::vector<SteppedSineTable> parse_stepped_sine_csv(const std::string& text_in,
+                                                     const std::string& name,
+                                                     std::optional<Quantity> quantity) {
+  std::string_view text = text_in;
+  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  if (trim(text).empty()) throw InputError(where(name, 0, "empty file"));
+  if (text.find('\0') != std::string_view::npos) {
+    throw InputError(where(name, 0, "binary data, not a CSV text file"));
+  }
+  std::map<std::string, std::string> metadata;
+  std::optional<SineControl> file_control;
+  size_t pos = 0;
+  long line_no = 0;
+  std::string_view line;
+  auto next_line = [&] {
+    if (pos >= text.size()) return false;
+    const size_t end = text.find('\n', pos);
+    const size_t stop = end == std::string_view::npos ? text.size() : end;
+    line = text.substr(pos, stop - pos);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos = stop + 1;
+    ++line_no;
+    return true;
+  };
+  bool have_header = false;
+  while (next_line()) {
+    const std::string_view t = trim(line);
+    if (t.empty()) continue;
+    if (t.front() == '#') {
+      const std::string_view body = trim(t.substr(1));
+      const auto colon = body.find(':');
+      if (colon == std::string_view::npos) continue;
+      const std::string key = lower(trim(body.substr(0, colon)));
+      const std::string value(trim(body.substr(colon + 1)));
+      if (key.empty()) continue;
+      metadata[key] = value;
+      if (key == "control") {
+        file_control = parse_control(value);
+        if (!file_control) {
+          throw InputError(
+              where(name, line_no,
+                    fmt::format("control '{}' is not 'response' or 'force'", printable(value))));
+        }
+      }
+      continue;
+    }
+    have_header = true;
+    break;
+  }
+  if (!have_header) throw InputError(where(name, line_no, "no header row"));
+  const long header_line = line_no;
+  const char delim = detect_delimiter(line);
+  const std::vector<std::string> header = split_line(line, delim);
+  int c_f = -1, c_force = -1, c_resp = -1, c_phase = -1, c_level = -1, c_control = -1;
+  double force_si = 1, response_si = 1, phase_si = 1;
+  Quantity resp_q = Quantity::kAcceleration;
+  for (size_t i = 0; i < header.size(); ++i) {
+    const auto [col, unit] = split_header(header[i], name, header_line);
+    const int c = static_cast<int>(i);
+    auto take = [&](int& slot) {
+      if (slot >= 0) {
+        throw InputError(where(name, header_line, fmt::format("two '{}' columns", col)));
+      }
+      slot = c;
+    };
+    if (col == "frequency_hz" || (col == "frequency" && lower(unit) == "hz")) {
+      take(c_f);
+    } else if (col == "frequency") {
+      throw InputError(
+          where(name, header_line, fmt::format("column 'frequency': unit '{}' is not Hz", unit)));
+    } else if (col == "force") {
+      take(c_force);
+      if (!unit.empty()) {
+        const auto u = parse_unit(unit);
+        if (!u || u->quantity != Quantity::kForce) {
+          throw InputError(
+              where(name, header_line,
+                    fmt::format("column 'force': '{}' is not a force unit (N, kN, lbf)",
+                                printable(unit))));
+        }
+        force_si = u->to_si;
+      }
+    } else if (col == "response") {
+      take(c_resp);
+      if (unit.empty()) {
+        if (!quantity) {
+          throw InputError(where(name, header_line,
+                                 "column 'response' has no unit: write e.g. 'response [m/s^2]' "
+                                 "(or give --quantity)"));
+        }
+        resp_q = *quantity;
+      } else {
+        const auto u = parse_unit(unit);
+        if (!u || u->quantity == Quantity::kForce) {
+          throw InputError(
+              where(name, header_line,
+                    fmt::format("column 'response': '{}' is not a displacement, "
+                                "velocity or acceleration unit (m, mm, m/s, m/s^2, g, ...)",
+                                printable(unit))));
+        }
+        resp_q = u->quantity;
+        response_si = u->to_si;
+      }
+    } else if (col == "phase") {
+      take(c_phase);
+      const auto f = phase_factor(unit);
+      if (!f) {
+        throw InputError(where(name, header_line,
+                               fmt::format("column 'phase': unit '{}' is not deg or rad (write "
+                                           "'phase [deg]' or 'phase [rad]')",
+                                           printable(unit))));
+      }
+      phase_si = *f;
+    } else if (col == "level") {
+      take(c_level);
+    } else if (col == "control") {
+      take(c_control);
+    }
+  }
+  const std::pair<int, const char*> required[] = {
+      {c_f, "frequency_hz"}, {c_force, "force"}, {c_resp, "response"}, {c_phase, "phase"}};
+  for (const auto& [c, what] : required) {
+    if (c < 0) {
+      throw InputError(where(name, header_line,
+                             fmt::format("no '{}' column (need frequency_hz, force [N], "
+                                         "response [unit], phase [deg|rad])",
+                                         what)));
+    }
+  }
+
+  // Rows, grouped by level in order of first appearance.
+  std::vector<Raw> raws;
+  std::vector<std::string> level_keys;
+  const size_t width = header.size();
+  while (next_line()) {
+    const std::string_view t = trim(line);
+    if (t.empty() || t.front() == '#') continue;
+    const std::vector<std::string> cells = split_line(line, delim);
+    if (cells.size() != width) {
+      throw InputError(where(
+          name, line_no, fmt::format("{} fields where the header has {}", cells.size(), width)));
+    }
+    auto number = [&](int c) {
+      const auto v = to_double(cells[static_cast<size_t>(c)]);
+      if (!v || !std::isfinite(*v)) {
+        throw InputError(where(name, line_no,
+                               fmt::format("column '{}': '{}' is not a finite number",
+                                           printable(trim(header[static_cast<size_t>(c)])),
+                                           printable(cells[static_cast<size_t>(c)]))));
+      }
+      return *v;
+    };
+    const std::string key =
+        c_level >= 0 ? std::string(trim(cells[static_cast<size_t>(c_level)])) : "";
+    if (c_level >= 0 && key.empty()) throw InputError(where(name, line_no, "empty level"));
+    size_t k = std::find(level_keys.begin(), level_keys.end(), key) - level_keys.begin();
+    if (k == level_keys.size()) {
+      level_keys.push_back(key);
+      raws.emplace_back();
+      raws.back().label = c_level >= 0              ? "level " + key
+                          : metadata.count("level") ? "level " + metadata["level"]
+                                                    : "level 1";
+    }
+    Raw& r = raws[k];
+    if (c_control >= 0) {
+      const auto c = parse_control(cells[static_cast<size_t>(c_control)]);
+      if (!c) {
+        throw InputError(where(name, line_no,
+                               fmt::format("control '{}' is not 'response' or 'force'",
+                                           printable(cells[static_cast<size_t>(c_control)]))));
+      }
+      if (r.control && *r.control != *c) {
+        throw InputError(
+            where(name, line_no, fmt::format("{} changes control within the level", r.label)));
+      }
+      r.control = c;
+    }
+    r.f.push_back(number(c_f));
+    r.force.push_back(number(c_force));
+    r.response.push_back(number(c_resp));
+    r.phase.push_back(number(c_phase));
+    r.lines.push_back(line_no);
+  }
+  if (raws.empty()) throw InputError(where(name, line_no, "no data rows"));
+  std::vector<SteppedSineTable> out;
+  for (size_t k = 0; k < raws.size(); ++k) {
+    const std::optional<SineControl> control = raws[k].control ? raws[k].control : file_control;
+    if (!control) {
+      throw InputError(where(name, header_line,
+                             "control not given: add '# control: response' (or force) or a "
+                             "'control' column"));
+    }
+    const std::string label = raws[k].label;
+    out.push_back(
+        finish(std::move(raws[k]), name, label, *control, resp_q, force_si, response_si, phase_si));
+    out.back().index = static_cast<int>(k) + 1;
+    out.back().metadata = metadata;
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// MATLAB
+
+namespace {
+
+struct MatCloser {
+  void operator()(mat_t* m) const { Mat_Close(m); }
+};
+struct VarFreer {
+  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+};
+
+size_t element_count(const matvar_t* v) {
+  if (!v || v->rank < 0 || v->rank > 8 || (v->rank > 0 && !v->dims)) return 0;
+  size_t n = 1;
+  for (int i = 0; i < v->rank; ++i) n *= v->dims[i];
+  return n;
+}
+
+// A real double (or single) vector field; InputError naming it otherwise.
+std::vector<double> vector_field(const matvar_t* v, const std::string& file,
+                                 const std::string& field) {
+  const size_t n = element_count(v);
+  const bool vec = v && v->rank == 2 && (v->dims[0] == 1 || v->dims[1] == 1);
+  const bool ok_class = v && (v->class_type == MAT_C_DOUBLE || v->class_type == MAT_C_SINGLE);
+  if (!vec || !ok_class || v->isComplex || !v->data ||
+      v->nbytes < n * (v->class_type == MAT_C_DOUBLE ? sizeof(double) : sizeof(float))) {
+    throw InputError(where(file, 0, fmt::format("field '{}' is not a real numeric vector", field)));
+  }
+  std::vector<double> out(n);
+  for (size_t i = 0; i < n; ++i) {
+    out[i] = v->class_type == MAT_C_DOUBLE ? static_cast<const double*>(v->data)[i]
+                                           : static_cast<const float*>(v->data)[i];
+  }
+  return out;
+}
+
+std::optional<std::string> char_row(const matvar_t* v) {
+  if (!v || v->class_type != MAT_C_CHAR || !v->data) return std::nullopt;
+  const size_t n = element_count(v);
+  const size_t size = Mat_SizeOf(v->data_type);
+  if ((size != 1 && size != 2 && size != 4) || v->nbytes < n * size) return std::nullopt;
+  std::string out;
+  for (size_t i = 0; i < n; ++i) {
+    uint32_t code = 0;
+    if (size == 1) code = static_cast<const uint8_t*>(v->data)[i];
+    if (size == 2) code = static_cast<const uint16_t*>(v->data)[i];
+    if (size == 4) code = static_cast<const uint32_t*>(v->data)[i];
+    out += code >= 0x20 && code < 0x7f ? static_cast<char>(code) : '?';
+  }
+  return out;
+}
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.emplace_back(trim(item));
+  return out;
+}
+
+matvar_t* field_of(matvar_t* st, const char* name, size_t index) {
+  const unsigned nf = Mat_VarGetNumberOfFields(st);
+  char* const* names = Mat_VarGetStructFieldnames(st);
+  for (unsigned i = 0; names && i < nf; ++i) {
+    if (names[i] && lower(names[i]) == name) return Mat_VarGetStructFieldByIndex(st, i, index);
+  }
+  return nullptr;
+}
+
+// Whether a struct array holds stepped-sine tables (frequency, force, phase fields).
+bool is_table_array(matvar_t* v) {
+  if (!v || v->class_type != MAT_C_STRUCT || element_count(v) == 0) return false;
+  return field_of(v, "frequency", 0) && field_of(v, "force", 0) && field_of(v, "phase", 0);
+}
+
+void read_table_array(matvar_t* arr, const std::string& path_name, const std::string& file,
+                      std::vector<SteppedSineTable>& out) {
+  const std::string l = lower(path_name);
+  const bool resp = l.find("response") != std::string::npos;
+  const bool force = l.find("force") != std::string::npos;
+  const size_t n = element_count(arr);
+  for (size_t e = 0; e < n; ++e) {
+    const std::string base = fmt::format("{}({})", path_name, e + 1);
+    std::optional<SineControl> control;
+    if (auto c = char_row(field_of(arr, "control", e))) control = parse_control(*c);
+    if (!control && resp != force) control = resp ? SineControl::kResponse : SineControl::kForce;
+    if (!control) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}': cannot tell response from force control "
+                                         "(name the array ...ResponseControl or ...ForceControl, "
+                                         "or give a 'control' field)",
+                                         base)));
+    }
+    Raw raw;
+    raw.label = base;
+    raw.f = vector_field(field_of(arr, "frequency", e), file, base + ".frequency");
+    raw.force = vector_field(field_of(arr, "force", e), file, base + ".force");
+    matvar_t* resp_var = field_of(arr, "amplitude", e);
+    std::string resp_name = "amplitude";
+    if (!resp_var) resp_var = field_of(arr, "response", e), resp_name = "response";
+    if (!resp_var) {
+      throw InputError(
+          where(file, 0, fmt::format("field '{}' has no 'amplitude' or 'response'", base)));
+    }
+    raw.response = vector_field(resp_var, file, base + "." + resp_name);
+    raw.phase = vector_field(field_of(arr, "phase", e), file, base + ".phase");
+    if (raw.force.size() != raw.f.size() || raw.response.size() != raw.f.size() ||
+        raw.phase.size() != raw.f.size()) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}': frequency, force, {} and phase differ in "
+                                         "length ({}, {}, {}, {})",
+                                         base, resp_name, raw.f.size(), raw.force.size(),
+                                         raw.response.size(), raw.phase.size())));
+    }
+    const auto units_text = char_row(field_of(arr, "units", e));
+    if (!units_text) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}.units' missing or not text (expected e.g. "
+                                         "'Hz, N, m/s^2, rad')",
+                                         base)));
+    }
+    const std::vector<std::string> units = split_commas(*units_text);
+    auto bad_units = [&](const std::string& what) {
+      throw InputError(
+          where(file, 0, fmt::format("field '{}.units' ('{}'): {}", base, *units_text, what)));
+    };
+    if (units.size() != 4) bad_units("expected 4 entries: frequency, force, response, phase");
+    if (lower(units[0]) != "hz") bad_units("frequency unit is not Hz");
+    const auto fu = parse_unit(units[1]);
+    if (!fu || fu->quantity != Quantity::kForce) bad_units("second entry is not a force unit");
+    const auto ru = parse_unit(units[2]);
+    if (!ru || ru->quantity == Quantity::kForce) bad_units("third entry is not a motion unit");
+    const auto pu = phase_factor(units[3]);
+    if (!pu) bad_units("fourth entry is not deg or rad");
+    SteppedSineTable t =
+        finish(std::move(raw), file, base, *control, ru->quantity, fu->to_si, ru->to_si, *pu);
+    t.index = static_cast<int>(out.size()) + 1;
+    t.metadata["format"] = "mat";
+    out.push_back(std::move(t));
+  }
+}
+
+void walk(matvar_t* v, const std::string& path_name, const std::string& file, int depth,
+          std::vector<SteppedSineTable>& out) {
+  if (!v || v->class_type != MAT_C_STRUCT || depth > 4) return;
+  if (is_table_array(v)) {
+    read_table_array(v, path_name, file, out);
+    return;
+  }
+  if (element_count(v) != 1) return;
+  const unsigned nf = Mat_VarGetNumberOfFields(v);
+  char* const* names = Mat_VarGetStructFieldnames(v);
+  for (unsigned i = 0; names && i < nf; ++i) {
+    if (!names[i]) continue;
+    walk(Mat_VarGetStructFieldByIndex(v, i, 0), path_name + "." + names[i], file, depth + 1, out);
+  }
+}
+
+std::vector<SteppedSineTable> read_mat_tables(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  std::unique_ptr<mat_t, MatCloser> mat(Mat_Open(file.c_str(), MAT_ACC_RDONLY));
+  if (!mat) throw InputError(where(file, 0, "not a MATLAB .mat file that matio can open"));
+  std::vector<SteppedSineTable> out;
+  while (true) {
+    std::unique_ptr<matvar_t, VarFreer> v(Mat_VarReadNext(mat.get()));
+    if (!v) break;
+    if (v->name) walk(v.get(), v->name, file, 0, out);
+  }
+  if (out.empty()) {
+    throw InputError(where(file, 0,
+                           "no stepped-sine tables: expected a struct array with fields "
+                           "frequency, force, amplitude, phase, units (e.g. "
+                           "FRdata.ResponseControl)"));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<SteppedSineTable> read_stepped_sine(const std::filesystem::path& path,
+                                                std::optional<Quantity> quantity) {
+  const FileFormat format = detect_format(path);
+  if (format == FileFormat::kMat) return read_mat_tables(path);
+  if (format != FileFormat::kCsv) {
+    throw InputError(
+        where(path.string(), 0, "stepped-sine tables are read from CSV or .mat files"));
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(where(path.string(), 0, "cannot open file"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return parse_stepped_sine_csv(text, path.string(), quantity);
+}
+
+void write_stepped_sine_csv(const std::filesystem::path& path,
+                            const std::vector<SteppedSineTable>& tables,
+                            const std::vector<std::string>& comments) {
+  if (tables.empty()) throw InputError(where(path.string(), 0, "no table to write"));
+  const Quantity q = tables.front().response_quantity;
+  for (const SteppedSineTable& t : tables) {
+    if (t.response_quantity != q) {
+      throw InputError(where(path.string(), 0,
+                             "tables measure different response quantities; write them apart"));
+    }
+  }
+  std::string text;
+  for (const std::string& c : comments) text += "# " + c + "\n";
+  text +=
+      fmt::format("level,control,frequency_hz,force [N],response [{}],phase [deg]\n", si_unit(q));
+  for (const SteppedSineTable& t : tables) {
+    for (Eigen::Index i = 0; i < t.size(); ++i) {
+      text += fmt::format("{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", t.index,
+                          control_name(t.control), t.frequency_hz(i), t.force(i), t.response(i),
+                          t.phase_rad(i) * 180.0 / std::numbers::pi);
+    }
+  }
+  write_file_atomically(path, text);
+}
+
+}  // namespace jointlab::data

@@ -1,0 +1,137 @@
+#include "jointlab/data/stepped_sine.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::data {
+namespace {
+
+using testing::input_error_of;
+
+const char kTable[] =
+    "# test: bench\n"
+    "# control: response\n"
+    "# level: 2 g\n"
+    "frequency_hz,force [N],response [g],phase [deg]\n"
+    "79.2,0.5,2,-10\n"
+    "79.0,0.6,2,-5\n"  // out of order: sorted on reading
+    "79.4,0.4,2,-30\n"
+    "79.6,0.3,2,-90\n"
+    "79.8,0.4,2,-150\n";
+
+TEST(SteppedSineCsv, ReadsOneTableWithUnitsAndMetadata) {
+  const auto tables = parse_stepped_sine_csv(kTable, "t.csv");
+  ASSERT_EQ(tables.size(), 1u);
+  const SteppedSineTable& t = tables[0];
+  EXPECT_EQ(t.control, SineControl::kResponse);
+  EXPECT_EQ(t.response_quantity, Quantity::kAcceleration);
+  EXPECT_EQ(t.label, "level 2 g");
+  EXPECT_EQ(t.index, 1);
+  EXPECT_EQ(t.metadata.at("test"), "bench");
+  ASSERT_EQ(t.size(), 5);
+  EXPECT_EQ(t.frequency_hz(0), 79.0);
+  EXPECT_EQ(t.force(0), 0.6);
+  EXPECT_DOUBLE_EQ(t.response(0), 2 * 9.80665);  // g to m/s^2
+  EXPECT_DOUBLE_EQ(t.phase_rad(3), -std::numbers::pi / 2);
+}
+
+TEST(SteppedSineCsv, SplitsLevelsAndControlsByColumn) {
+  const std::string text =
+      "level;control;frequency [Hz];force [N];response [mm/s];phase [rad]\n"
+      "a;force;1;1;1;0\na;force;2;1;1;0\na;force;3;1;1;0\na;force;4;1;1;0\na;force;5;1;1;0\n"
+      "b;response;1;2;1;0\nb;response;2;2;1;0\nb;response;3;2;1;0\nb;response;4;2;1;0\n"
+      "b;response;5;2;1;0\n";
+  const auto tables = parse_stepped_sine_csv(text, "t.csv");
+  ASSERT_EQ(tables.size(), 2u);
+  EXPECT_EQ(tables[0].control, SineControl::kForce);
+  EXPECT_EQ(tables[1].control, SineControl::kResponse);
+  EXPECT_EQ(tables[1].label, "level b");
+  EXPECT_EQ(tables[1].index, 2);
+  EXPECT_EQ(tables[1].response_quantity, Quantity::kVelocity);
+  EXPECT_DOUBLE_EQ(tables[1].response(0), 1e-3);
+}
+
+TEST(SteppedSineCsv, WriteThenReadGivesTheSameTables) {
+  const auto tables = parse_stepped_sine_csv(kTable, "t.csv");
+  const auto path = testing::scratch_path("stepped_sine_test", "round.csv");
+  write_stepped_sine_csv(path, tables, {"source: test"});
+  const auto back = read_stepped_sine(path);
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_EQ(back[0].control, SineControl::kResponse);
+  for (Eigen::Index i = 0; i < 5; ++i) {
+    EXPECT_TRUE(testing::Close(back[0].response(i), tables[0].response(i), 1e-9));
+    EXPECT_TRUE(testing::Close(back[0].phase_rad(i), tables[0].phase_rad(i), 1e-9, 1e-12));
+  }
+}
+
+TEST(SteppedSineCsv, BadInputNamesFileAndLine) {
+  auto err = [](const std::string& text) {
+    return input_error_of([&] { parse_stepped_sine_csv(text, "s.csv"); });
+  };
+  const std::string head =
+      "# control: force\nfrequency_hz,force [N],response [m/s^2],phase [deg]\n";
+  const std::string rows = "1,1,1,0\n2,1,1,0\n3,1,1,0\n4,1,1,0\n";
+  EXPECT_NE(err(head + rows + "5,1,x,0\n").find("s.csv:7: column 'response [m/s^2]': 'x'"),
+            std::string::npos);
+  EXPECT_NE(err(head + rows + "5,-1,1,0\n").find("s.csv:7: force amplitude -1"), std::string::npos);
+  EXPECT_NE(err(head + rows + "4,1,1,0\n").find("s.csv:7: frequency 4 Hz appears twice"),
+            std::string::npos);
+  EXPECT_NE(err(head + rows).find("4 frequencies; a stepped-sine table needs at least 5"),
+            std::string::npos);
+  EXPECT_NE(err(head + rows + "5,1,1\n").find("s.csv:7: 3 fields where the header has 4"),
+            std::string::npos);
+  EXPECT_NE(err("frequency_hz,force [N],response [m/s^2],phase [deg]\n" + rows + "5,1,1,0\n")
+                .find("control not given"),
+            std::string::npos);
+  EXPECT_NE(err("# control: both\n").find("s.csv:1: control 'both'"), std::string::npos);
+  EXPECT_NE(err("# control: force\nfrequency_hz,force [N],response [m/s^2],phase [grad]\n")
+                .find("s.csv:2: column 'phase': unit 'grad' is not deg or rad"),
+            std::string::npos);
+  EXPECT_NE(err("# control: force\nfrequency_hz,force [N],response,phase [deg]\n")
+                .find("column 'response' has no unit"),
+            std::string::npos);
+  EXPECT_NE(
+      err("# control: force\nfrequency_hz,force [N],phase [deg]\n").find("no 'response' column"),
+      std::string::npos);
+  EXPECT_NE(err("").find("s.csv: empty file"), std::string::npos);
+  // A response without a unit is SI of the quantity given.
+  const auto t = parse_stepped_sine_csv(
+      "# control: force\nfrequency_hz,force [N],response,phase [deg]\n" + rows + "5,1,1,0\n",
+      "s.csv", Quantity::kDisplacement);
+  EXPECT_EQ(t[0].response_quantity, Quantity::kDisplacement);
+}
+
+TEST(SteppedSineMat, ReadsTheBrakeReussStructLayout) {
+  const auto tables = read_stepped_sine(
+      testing::source_dir() + "/data/examples/brake-reuss-beam/forced_frequency_responses.mat");
+  ASSERT_EQ(tables.size(), 12u);
+  int force = 0, response = 0;
+  for (const SteppedSineTable& t : tables) {
+    (t.control == SineControl::kForce ? force : response)++;
+    EXPECT_EQ(t.size(), 41);
+    EXPECT_EQ(t.response_quantity, Quantity::kAcceleration);
+    EXPECT_GE(t.frequency_hz(0), 79.0);
+    EXPECT_LE(t.frequency_hz(t.size() - 1), 81.2);
+  }
+  EXPECT_EQ(force, 4);
+  EXPECT_EQ(response, 8);
+  EXPECT_EQ(tables[0].label, "FRdata.ForceControl(1)");
+  EXPECT_EQ(tables[4].label, "FRdata.ResponseControl(1)");
+  // The first response-controlled level holds about 5 m/s^2 (as the file's README says).
+  EXPECT_NEAR(tables[4].response.mean(), 4.987, 0.01);
+  EXPECT_NEAR(tables[4].phase_rad(0), -0.110716, 1e-6);
+}
+
+TEST(SteppedSineMat, RefusesARecordWithoutTables) {
+  const std::string m = input_error_of([] {
+    read_stepped_sine(testing::source_dir() + "/data/examples/brake-reuss-beam/no-such.mat");
+  });
+  EXPECT_NE(m.find("no-such.mat"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace jointlab::data
