@@ -67,7 +67,7 @@ void add_build_model_command(CLI::App& app) {
   cmd->add_option("--out", args->out, "output model directory (created if missing)")->required();
   cmd->add_option("--modes", args->modes,
                   "fixed-interface modes kept (overrides reduction.fixed_interface_modes)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd->add_flag("--quiet", args->quiet, "no progress messages on stderr");
   cmd->callback([args] { run_build_model(*args); });
 }

@@ -2,9 +2,53 @@
 // and runs library code; no numerics live in apps/.
 #pragma once
 
+#include <limits>
+#include <string>
+
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 namespace jointlab::apps {
+
+/// Option check: a number in [lo, hi], refused as "V is not between LO and HI" (readable
+/// bounds, unlike CLI::Range's fixed six decimals and 309-digit maximum).
+inline CLI::Validator in_range(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v)) return fmt::format("{} is not a number", text);
+        if (!(v >= lo && v <= hi))
+          return fmt::format("{} is not between {:g} and {:g}", text, lo, hi);
+        return {};
+      },
+      fmt::format("in [{:g}, {:g}]", lo, hi));
+}
+
+/// Option check: a number > 0 (and finite).
+inline CLI::Validator positive() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v)) return fmt::format("{} is not a number", text);
+        if (!(v > 0 && v <= std::numeric_limits<double>::max()))
+          return fmt::format("{} is not a positive number", text);
+        return {};
+      },
+      "> 0");
+}
+
+/// Option check: a number >= 0 (and finite).
+inline CLI::Validator non_negative() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v)) return fmt::format("{} is not a number", text);
+        if (!(v >= 0 && v <= std::numeric_limits<double>::max()))
+          return fmt::format("{} is negative or not finite", text);
+        return {};
+      },
+      ">= 0");
+}
 
 /// `jointlab process`: ring-down files -> frequency and damping versus amplitude.
 void add_process_command(CLI::App& app);

@@ -1,13 +1,16 @@
 // jointlab: amplitude-dependent frequency and damping of jointed structures,
 // from hammer tests and from reduced FE models with Iwan joints.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -26,10 +29,27 @@ int main(int argc, char** argv) {
   jointlab::apps::add_simulate_command(app);
   jointlab::apps::add_update_commands(app);
   jointlab::apps::add_run_command(app);
+  // A mistyped command name would otherwise be reported as a missing one.
+  bool known = argc < 2 || argv[1][0] == '-';
+  std::string names;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    known = known || sub->check_name(argv[1]);
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+  }
+  if (!known) {
+    fmt::print(stderr, "jointlab: error: unknown command '{}' (commands: {})\n",
+               jointlab::shorten(argv[1]), names);
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0 as CLI11 prints them; an argument error is one line, status 2.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::string message = e.what();
+    std::replace(message.begin(), message.end(), '\n', ' ');
+    fmt::print(stderr, "jointlab: error: {} (see --help)\n", jointlab::shorten(message, 400));
+    return 2;
   } catch (const jointlab::InputError& e) {
     fmt::print(stderr, "jointlab: error: {}\n", e.what());
     return 2;

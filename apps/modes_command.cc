@@ -46,7 +46,7 @@ void add_modes_command(CLI::App& app) {
       "numbered 0 (kind 'rigid', frequency 0), elastic modes from 1.");
   cmd->add_option("MODEL", args->model, "model file (TOML)")->required();
   cmd->add_option("--count", args->count, "number of modes, lowest first (default 20)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--out", args->out, "output CSV file")->required();
   cmd->callback([args] { run_modes(*args); });
 }

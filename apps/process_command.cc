@@ -4,12 +4,14 @@
 #include <exception>
 #include <filesystem>
 #include <mutex>
+#include <regex>
 
 #include <fmt/format.h>
 
 #include "jointlab/apps/commands.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
+#include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/modal/process.h"
 #include "jointlab/modal/process_output.h"
@@ -62,6 +64,12 @@ Quantity parse_quantity_arg(const std::string& option, const std::string& value)
   return *q;
 }
 
+// Names of the files `process` writes: summary.json and "<stem>.<channel>.band<k>.csv".
+bool is_process_output(const std::string& name) {
+  static const std::regex backbone(R"(.*\.band[0-9]+\.csv)");
+  return name == "summary.json" || std::regex_match(name, backbone);
+}
+
 void run_process(const ProcessArgs& args) {
   modal::ProcessOptions opt;
   for (const std::string& b : args.bands) opt.bands.push_back(parse_band(b));
@@ -77,11 +85,6 @@ void run_process(const ProcessArgs& args) {
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
 
   namespace fs = std::filesystem;
-  const fs::path out(args.out);
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (!fs::is_directory(out))
-    throw InputError(where(args.out, 0, "cannot create output directory"));
   // Two inputs with one stem would write over each other's outputs.
   for (size_t i = 0; i < args.files.size(); ++i) {
     for (size_t k = 0; k < i; ++k) {
@@ -93,6 +96,9 @@ void run_process(const ProcessArgs& args) {
     }
   }
 
+  // Backbones and summary.json appear together, replacing the previous run's as a set.
+  data::OutputStage stage(args.out, "process", is_process_output);
+  const fs::path& out = stage.path();
   // Files are independent: one worker per core, each with its own FFT plans.
   std::vector<modal::RecordResult> results(args.files.size());
   std::mutex print;
@@ -109,13 +115,14 @@ void run_process(const ProcessArgs& args) {
         }
       });
   modal::write_summary(out, results, opt);
+  stage.commit();
   size_t written = 0;
   for (const auto& r : results) {
     for (const auto& c : r.results)
       written += c.ringdown.summary.status == modal::RingdownStatus::kOk;
   }
   fmt::print("jointlab process: {} backbone file(s) and summary.json written to {}\n", written,
-             out.string());
+             args.out);
 }
 
 }  // namespace
@@ -145,7 +152,7 @@ void add_process_command(CLI::App& app) {
   auto* band = cmd->add_option("--band", args->bands, "band LO:HI in Hz around one mode (repeat)");
   auto* modes =
       cmd->add_option("--modes", args->modes, "use the N strongest spectral peaks as bands instead")
-          ->check(CLI::PositiveNumber);
+          ->check(positive());
   band->excludes(modes);
   cmd->add_option("--quantity", args->quantity,
                   "what channels without a [unit] measure: acceleration (default), velocity, "
@@ -158,21 +165,21 @@ void add_process_command(CLI::App& app) {
       ->check(CLI::IsMember({"hilbert", "pff"}));
   cmd->add_option("--snr-min", args->snr_min,
                   "keep points whose envelope is at least this many times the noise floor")
-      ->check(CLI::Range(1.0, 1e6));
+      ->check(in_range(1.0, 1e6));
   cmd->add_option(
          "--max-damping-std", args->max_damping_std,
          "drop points whose one-sigma damping uncertainty exceeds this fraction of the damping")
-      ->check(CLI::Range(1e-6, 10.0));
+      ->check(in_range(1e-6, 10.0));
   cmd->add_option(
          "--coverage-factor", args->coverage_factor,
          "k of the reported uncertainties k*sigma (1: one sigma; 3 makes one record's\n"
          "uncertainties cover at least 90 % of its points, where its errors move together)")
-      ->check(CLI::Range(1.0, 10.0));
+      ->check(in_range(1.0, 10.0));
   cmd->add_option("--min-share", args->min_share,
                   "give no backbone from a channel that sees a band's mode at less than this\n"
                   "fraction of the strongest channel's amplitude (near a node its damping would\n"
                   "follow the mode shape's change); 0 keeps every channel")
-      ->check(CLI::Range(0.0, 0.99));
+      ->check(in_range(0.0, 0.99));
   cmd->add_option("--threads", args->threads, "worker threads (default: every core)");
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {

@@ -75,15 +75,11 @@ void add_qsma_command(CLI::App& app) {
       "Without --qmin/--qmax the curve runs from microslip to full macroslip of the joints\n"
       "carrying the mode's slip or to the largest load the joints carry (then on stderr).");
   cmd->add_option("MODEL", args->model, "model file (TOML)")->required();
-  cmd->add_option("--mode", args->mode, "elastic mode, from 1")
-      ->required()
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--mode", args->mode, "elastic mode, from 1")->required()->check(positive());
   cmd->add_option("--points", args->options.points, "number of points (default 50)")
-      ->check(CLI::Range(2, 100000));
-  cmd->add_option("--qmin", args->options.q_min, "first modal amplitude q")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--qmax", args->options.q_max, "last modal amplitude q")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(2, 100000));
+  cmd->add_option("--qmin", args->options.q_min, "first modal amplitude q")->check(positive());
+  cmd->add_option("--qmax", args->options.q_max, "last modal amplitude q")->check(positive());
   cmd->add_option("--out", args->out, "output CSV file")->required();
   cmd->callback([args] { run_qsma(*args); });
 }

@@ -84,39 +84,39 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--force", args->options.pulse.force, "peak force of the pulse [N]")->required();
   cmd->add_option("--duration", args->options.duration, "record length [s]")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--fs", args->options.fs, "sample rate of the record [Hz]")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--sensors", args->sensors,
                   "recorded DOFs (indices or node:component; default: the impact DOF)");
   cmd->add_option("--out", args->out, "output test file (.csv, .uff, .mat)")->required();
   cmd->add_option("--pulse", args->options.pulse.duration, "pulse length [s] (default 0.0005)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   cmd->add_option("--pulse-start", args->options.pulse.start,
                   "time the pulse starts (pre-trigger) [s] (default 0.01)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd->add_option("--substeps", args->options.substeps,
                   "integration steps per sample (default 0: automatic, Newmark period error "
                   "of the first elastic mode below 1e-5, at least 4)")
-      ->check(CLI::Range(0, 100000));
+      ->check(in_range(0, 100000));
   cmd->add_option("--modal-damping", args->options.modal_damping,
                   "damping ratio of every elastic mode (linear part; default 0)")
-      ->check(CLI::Range(0.0, 0.999));
+      ->check(in_range(0.0, 0.999));
   cmd->add_option("--rayleigh-mass", args->options.rayleigh_mass,
                   "alpha of C = alpha M + beta K [1/s] (default 0)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd->add_option("--rayleigh-stiffness", args->options.rayleigh_stiffness,
                   "beta of C = alpha M + beta K [s] (default 0)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd->add_option("--cutoff", args->options.output_cutoff_hz,
                   "modes above this frequency are left out of the recorded signals [Hz] "
                   "(default 0.45 fs)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative());
   cmd->add_option("--noise", args->record.noise,
                   "white noise standard deviation as a fraction of each channel's peak "
                   "(default 0)")
-      ->check(CLI::Range(0.0, 9.99));
+      ->check(in_range(0.0, 9.99));
   cmd->add_option("--seed", args->record.seed, "noise seed (default 1)");
   cmd->add_flag("--force-channel", args->record.include_force,
                 "also write the hammer force as channel 'hammer [N]'");

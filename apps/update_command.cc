@@ -18,6 +18,7 @@
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/update_files.h"
+#include "jointlab/model/iwan.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/model_file_writer.h"
 
@@ -73,6 +74,30 @@ struct IwanArgs {
   correlate::IwanUpdateOptions options;
 };
 
+// Refuses a LO:HI range that is not inside the parameter's domain (model/iwan.h).
+void check_range(const char* option, const std::vector<double>& r, const char* parameter,
+                 const char* shown) {
+  if (r.size() != 2) return;
+  const model::ParameterDomain d = model::iwan_parameter_domain(parameter);
+  if (!(d.contains(r[0]) && d.contains(r[1]) && r[0] < r[1])) {
+    throw InputError(
+        fmt::format("{} {}:{}: need LO < HI with both {} {}", option, r[0], r[1], shown, d.text()));
+  }
+}
+
+void check_iwan_args(const IwanArgs& a) {
+  check_range("--fs-range", a.fs_range, "Fs", "Fs");
+  check_range("--gamma-range", a.gamma_range, "Kt", "Kt/Ks");
+  check_range("--chi-range", a.chi_range, "chi", "chi");
+  check_range("--beta-range", a.beta_range, "beta", "beta");
+  if (a.set.find('.') != std::string::npos && !a.set.starts_with("iwan.")) {
+    throw InputError(fmt::format(
+        "--set {}: update-iwan updates an Iwan set (iwan.<name> or <name>); springs are "
+        "updated by update-linear",
+        a.set));
+  }
+}
+
 // The search box: the given LO:HI ranges; Fs by default within a factor 30 of the start.
 correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjective& obj) {
   correlate::IwanBounds b;
@@ -88,6 +113,7 @@ correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjectiv
 }
 
 void run_update_iwan(const IwanArgs& a) {
+  check_iwan_args(a);
   const model::Model m = model::read_model(a.model);
   const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
   const correlate::ProcessRun run = correlate::read_process_run(a.measured);
@@ -215,7 +241,7 @@ void add_update_commands(CLI::App& app) {
   iw->add_option("--optimizer", ia->optimizer, "paper, paper-log or global-local (default)")
       ->check(CLI::IsMember({"paper", "paper-log", "global-local"}));
   iw->add_option("--gamma", ia->options.fixed_gamma, "hold Kt / Ks at this value")
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")
       ->delimiter(',');
   iw->add_option("--evaluations", ia->options.max_evaluations,

@@ -2,13 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
-#include <random>
 
 #include <fmt/format.h>
 #include <plplot.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/atomic_file.h"
 
 namespace jointlab::campaign {
 
@@ -32,6 +33,24 @@ enum Colour : PLINT {
   kChannel2 = 11  // dark orange
 };
 
+// True when `file` ends as a complete file of its format does (PNG's IEND chunk, SVG's closing
+// tag, PDF's %%EOF): the cairo drivers report no write errors, a full disk truncates the file.
+bool figure_complete(const fs::path& file, const std::string& ext) {
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
+  const std::streamoff size = in ? static_cast<std::streamoff>(in.tellg()) : 0;
+  if (size <= 0) return false;
+  const std::streamoff n = std::min<std::streamoff>(size, 1024);
+  std::string tail(static_cast<size_t>(n), '\0');
+  in.seekg(size - n);
+  if (!in.read(tail.data(), n)) return false;
+  if (ext == ".png") {
+    static const std::string iend("\0\0\0\0IEND\xae\x42\x60\x82", 12);
+    return tail.size() >= iend.size() && tail.compare(tail.size() - 12, 12, iend) == 0;
+  }
+  if (ext == ".svg") return tail.find("</svg>") != std::string::npos;
+  return tail.find("%%EOF") != std::string::npos;
+}
+
 // One PLplot stream on a temporary file, renamed into place by finish().
 class Plot {
  public:
@@ -53,8 +72,11 @@ class Plot {
     fs::create_directories(dir, ec);
     if (!fs::is_directory(dir))
       throw InputError(fmt::format("{}: cannot create the directory", dir.string()));
-    std::random_device rd;
-    tmp_ = dir / fmt::format(".{}.tmp-{:08x}{}", file.filename().string(), rd(), ext);
+    const std::string prefix = fmt::format(".{}.tmp-", file.filename().string());
+    data::remove_stale_temporaries(dir, prefix);
+    tmp_ = data::temporary_name(dir, prefix, ext);
+    claim_ = data::TemporaryClaim(tmp_);
+    ext_ = ext;
     plgstrm(&previous_);
     plmkstrm(&stream_);
     plsdev(device);
@@ -97,6 +119,9 @@ class Plot {
     std::error_code ec;
     if (!fs::exists(tmp_))
       throw InputError(fmt::format("{}: the plot driver wrote no file", file_.string()));
+    if (!figure_complete(tmp_, ext_))
+      throw InputError(
+          fmt::format("{}: the figure was written incomplete (disk full?)", file_.string()));
     fs::rename(tmp_, file_, ec);
     if (ec) throw InputError(fmt::format("{}: cannot write: {}", file_.string(), ec.message()));
     finished_ = true;
@@ -104,6 +129,8 @@ class Plot {
 
  private:
   fs::path file_, tmp_;
+  std::string ext_;
+  data::TemporaryClaim claim_;
   PLINT previous_ = 0, stream_ = 0;
   bool ended_ = false, finished_ = false;
 };

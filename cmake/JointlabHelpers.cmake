@@ -49,7 +49,11 @@ function(jointlab_add_test name source)
   target_link_libraries(${name} PRIVATE ${ARGN} jointlab::testing GTest::gtest_main)
   jointlab_warnings(${name})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
+  set(env "JOINTLAB_SOURCE_DIR=${PROJECT_SOURCE_DIR};JOINTLAB_BINARY_DIR=${PROJECT_BINARY_DIR}")
+  if(JOINTLAB_SANITIZE)  # leaks inside third-party libraries (fontconfig under PLplot) only
+    list(APPEND env "LSAN_OPTIONS=suppressions=${PROJECT_SOURCE_DIR}/fuzz/lsan.supp")
+  endif()
   gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
-    PROPERTIES ENVIRONMENT "JOINTLAB_SOURCE_DIR=${PROJECT_SOURCE_DIR};JOINTLAB_BINARY_DIR=${PROJECT_BINARY_DIR}"
+    PROPERTIES ENVIRONMENT "${env}"
     DISCOVERY_TIMEOUT 60)
 endfunction()

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstddef>
 #include <string>
 #include <string_view>
 
@@ -32,6 +33,15 @@ inline std::string printable(std::string_view s) {
     out.push_back(u >= 0x20 && u < 0x7f ? c : '?');
   }
   return out;
+}
+
+/// `s` cut for a message: at most `max` bytes (never inside a UTF-8 character), then
+/// "... (N bytes)" when cut, so a huge name cannot make a huge message.
+inline std::string shorten(std::string_view s, size_t max = 80) {
+  if (s.size() <= max) return std::string(s);
+  size_t n = max;
+  while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;
+  return std::string(s.substr(0, n)) + "... (" + std::to_string(s.size()) + " bytes)";
 }
 
 }  // namespace jointlab

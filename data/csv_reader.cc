@@ -2,19 +2,24 @@
 
 #include "jointlab/core/text.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <iterator>
+#include <functional>
 #include <optional>
-#include <sstream>
+#include <unordered_set>
 #include <vector>
 
 #include <csv.h>
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/memory.h"
 
 namespace jointlab::data {
 
@@ -119,13 +124,13 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
       throw InputError(where(file, line,
                              fmt::format("header '{}': unit must be written as "
                                          "'name [unit]'",
-                                         field)));
+                                         shorten(field))));
     }
     name = trim(field.substr(0, open));
     spec.unit_text = std::string(trim(field.substr(open + 1, close - open - 1)));
   }
   if (name.empty())
-    throw InputError(where(file, line, fmt::format("header '{}' has no name", field)));
+    throw InputError(where(file, line, fmt::format("header '{}' has no name", shorten(field))));
   spec.name = std::string(name);
   if (lower(name) == "time") {
     spec.is_time = true;
@@ -135,7 +140,8 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
       spec.time_scale = 1e-3;
     } else {
       throw InputError(
-          where(file, line, fmt::format("time column unit '{}' is not s or ms", spec.unit_text)));
+          where(file, line,
+                fmt::format("time column unit '{}' is not s or ms", shorten(spec.unit_text))));
     }
     return spec;
   }
@@ -146,7 +152,7 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
                              fmt::format("column '{}': unknown unit '{}' (known: m, "
                                          "mm, um, in, m/s, mm/s, in/s, m/s^2, mm/s^2, "
                                          "g, mg, N, kN, lbf)",
-                                         spec.name, spec.unit_text)));
+                                         shorten(spec.name), shorten(spec.unit_text))));
     }
   }
   return spec;
@@ -159,15 +165,18 @@ double parse_fs(const std::string& value, const std::string& file, long line) {
   std::string_view rest = space == std::string_view::npos ? "" : trim(v.substr(space));
   const auto fs = to_double(number);
   if (!fs || !std::isfinite(*fs) || *fs <= 0 || !(rest.empty() || lower(rest) == "hz")) {
-    throw InputError(
-        where(file, line, fmt::format("fs '{}' is not a positive sample rate in Hz", value)));
+    throw InputError(where(
+        file, line, fmt::format("fs '{}' is not a positive sample rate in Hz", shorten(value))));
   }
   return *fs;
 }
 
 }  // namespace
 
-Record parse_csv(std::string_view text, const std::string& name) {
+// The parser behind parse_csv and read_csv; `consumed(pos)` says the text before `pos` may be
+// dropped from memory (read_csv's mapping reads such pages back from the file if needed).
+Record parse_csv_text(std::string_view text, const std::string& name,
+                      const std::function<void(size_t)>& consumed) {
   if (trim(text).empty()) throw InputError(where(name, 0, "empty file"));
   if (looks_binary(text)) throw InputError(where(name, 0, "binary data, not a CSV text file"));
   if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
@@ -223,7 +232,10 @@ Record parse_csv(std::string_view text, const std::string& name) {
   LineSplitter splitter(delim);
   std::vector<std::string> fields;
   splitter.split(line, fields);
-  if (fields.size() > 1 && trim(fields.back()).empty()) fields.pop_back();  // trailing delimiter
+  // A trailing delimiter on the header allows one on every row (some exports end every line
+  // with it); otherwise an empty last field is a missing value.
+  const bool trailing = fields.size() > 1 && trim(fields.back()).empty();
+  if (trailing) fields.pop_back();
 
   std::vector<ColumnSpec> cols;
   int time_col = -1;
@@ -234,12 +246,11 @@ Record parse_csv(std::string_view text, const std::string& name) {
       time_col = static_cast<int>(cols.size()) - 1;
     }
   }
-  for (size_t i = 0; i < cols.size(); ++i) {
-    for (size_t j = 0; j < i; ++j) {
-      if (cols[i].name == cols[j].name) {
-        throw InputError(
-            where(name, header_line, fmt::format("two channels named '{}'", cols[i].name)));
-      }
+  std::unordered_set<std::string_view> seen;
+  for (const ColumnSpec& c : cols) {
+    if (!seen.insert(c.name).second) {
+      throw InputError(
+          where(name, header_line, fmt::format("two channels named '{}'", shorten(c.name))));
     }
   }
   if (time_col < 0 && !fs_meta) {
@@ -249,12 +260,29 @@ Record parse_csv(std::string_view text, const std::string& name) {
     throw InputError(where(name, header_line, "no channel columns"));
   }
 
+  // Price the samples before allocating: at most one row per remaining line, 8 bytes a
+  // value, reserved exactly so the columns never grow by doubling.
+  const size_t data_start = pos;
+  size_t max_rows = 0;
+  for (size_t at = data_start; at < text.size();) {
+    const size_t chunk = std::min<size_t>(text.size() - at, size_t{1} << 26);
+    max_rows += static_cast<size_t>(std::count(text.data() + at, text.data() + at + chunk, '\n'));
+    at += chunk;
+    consumed(at);
+  }
+  ++max_rows;  // a last line without a line end
+  check_memory(fmt::format("{}: {} rows x {} columns", name, max_rows, cols.size()),
+               8.0 * static_cast<double>(max_rows) * static_cast<double>(cols.size()));
   std::vector<std::vector<double>> values(cols.size());
-  std::vector<long> row_lines;
+  for (auto& v : values) v.reserve(max_rows);
+  const auto is_row = [&](std::string_view l) {
+    return !trim(l).empty() && splitter.split(l, fields);
+  };
+  size_t n = 0;
   while (next_line(line)) {
-    if (trim(line).empty()) continue;
-    if (!splitter.split(line, fields)) continue;
-    if (fields.size() == cols.size() + 1 && trim(fields.back()).empty()) fields.pop_back();
+    if (!is_row(line)) continue;
+    if (trailing && fields.size() == cols.size() + 1 && trim(fields.back()).empty())
+      fields.pop_back();
     if (fields.size() != cols.size()) {
       throw InputError(
           where(name, line_no,
@@ -263,30 +291,40 @@ Record parse_csv(std::string_view text, const std::string& name) {
     for (size_t c = 0; c < cols.size(); ++c) {
       const auto v = to_double(fields[c]);
       if (!v) {
-        throw InputError(
-            where(name, line_no,
-                  fmt::format("column '{}': '{}' is not a number", cols[c].name, trim(fields[c]))));
+        throw InputError(where(name, line_no,
+                               fmt::format("column '{}': '{}' is not a number",
+                                           shorten(cols[c].name), shorten(trim(fields[c])))));
       }
       if (!std::isfinite(*v)) {
         throw InputError(where(name, line_no,
                                fmt::format("column '{}': {} sample (NaN and Inf "
                                            "are not allowed)",
-                                           cols[c].name, trim(fields[c]))));
+                                           shorten(cols[c].name), shorten(trim(fields[c])))));
       }
       values[c].push_back(*v);
     }
-    row_lines.push_back(line_no);
+    ++n;
+    if ((n & 0xffff) == 0) consumed(pos);
   }
-  const size_t n = row_lines.size();
   if (n < 2)
     throw InputError(where(name, line_no, fmt::format("{} data rows; need at least 2", n)));
+  // The line of data row k, found again for a message (not kept: it would cost a column).
+  const auto row_line = [&](size_t k) {
+    pos = data_start;
+    line_no = header_line;
+    size_t row = 0;
+    while (next_line(line)) {
+      if (is_row(line) && row++ == k) break;
+    }
+    return line_no;
+  };
 
   if (time_col >= 0) {
     std::vector<double>& t = values[time_col];
     for (double& v : t) v *= cols[time_col].time_scale;
     for (size_t k = 1; k < n; ++k) {
       if (!(t[k] > t[k - 1])) {
-        throw InputError(where(name, row_lines[k],
+        throw InputError(where(name, row_line(k),
                                fmt::format("time {} does not increase (previous"
                                            " {})",
                                            t[k], t[k - 1])));
@@ -299,7 +337,7 @@ Record parse_csv(std::string_view text, const std::string& name) {
     const double typical = steps[(n - 1) / 2];
     for (size_t k = 1; k < n; ++k) {
       if (std::abs(t[k] - t[k - 1] - typical) > 0.25 * typical) {
-        throw InputError(where(name, row_lines[k],
+        throw InputError(where(name, row_line(k),
                                fmt::format("time step is not uniform: {} s after {} s steps",
                                            t[k] - t[k - 1], typical)));
       }
@@ -310,7 +348,7 @@ Record parse_csv(std::string_view text, const std::string& name) {
     for (size_t k = 0; k < n; ++k) {
       const double expected = t[0] + static_cast<double>(k) * dt;
       if (std::abs(t[k] - expected) > 0.1 * dt) {
-        throw InputError(where(name, row_lines[k],
+        throw InputError(where(name, row_line(k),
                                fmt::format("time step is not uniform: t = {} where {} was expected "
                                            "(dt = {})",
                                            t[k], expected, dt)));
@@ -343,17 +381,51 @@ Record parse_csv(std::string_view text, const std::string& name) {
     const double scale = cols[c].unit ? cols[c].unit->to_si : 1.0;
     ch.samples =
         Eigen::Map<const Eigen::VectorXd>(values[c].data(), static_cast<Eigen::Index>(n)) * scale;
+    std::vector<double>().swap(values[c]);  // one column at a time: peak = samples + 1 column
     rec.channels.push_back(std::move(ch));
   }
   return rec;
 }
 
+Record parse_csv(std::string_view text, const std::string& name) {
+  return parse_csv_text(text, name, [](size_t) {});
+}
+
 Record read_csv(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(where(path.string(), 0, "cannot open file"));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError(where(path.string(), 0, "read error"));
-  return parse_csv(text, path.string());
+  // Mapped rather than read into a string: pages already parsed are dropped as the parser
+  // moves on, so the text never costs memory on top of the samples.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(where(path.string(), 0, "cannot open file"));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw InputError(where(path.string(), 0, "not a regular file"));
+  }
+  const auto size = static_cast<size_t>(st.st_size);
+  if (size == 0) {
+    ::close(fd);
+    return parse_csv("", path.string());
+  }
+  void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+  ::close(fd);
+  if (map == MAP_FAILED) throw InputError(where(path.string(), 0, "cannot read file"));
+  struct Unmap {
+    void* p;
+    size_t n;
+    ~Unmap() { ::munmap(p, n); }
+  } unmap{map, size};
+  ::madvise(map, size, MADV_SEQUENTIAL);
+  const long page = ::sysconf(_SC_PAGESIZE);
+  size_t dropped = 0;
+  const auto consumed = [&](size_t pos) {
+    const size_t upto = pos / static_cast<size_t>(page) * static_cast<size_t>(page);
+    if (upto > dropped + (size_t{1} << 24)) {
+      ::madvise(static_cast<char*>(map) + dropped, upto - dropped, MADV_DONTNEED);
+      dropped = upto;
+    }
+  };
+  return parse_csv_text(std::string_view(static_cast<const char*>(map), size), path.string(),
+                        consumed);
 }
 
 }  // namespace jointlab::data

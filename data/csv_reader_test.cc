@@ -1,6 +1,7 @@
 #include "jointlab/data/csv_reader.h"
 
 #include <cstdio>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -88,6 +89,55 @@ TEST(CsvReader, BadInputsGiveOneLineErrors) {
   expect_error("# fs: 0\nx\n1\n2\n", {"hit.csv:1", "fs"});
   expect_error("time,x\n0,1\n", {"hit.csv", "need at least 2"});
   expect_error("# only a comment\n", {"hit.csv", "no header"});
+  // A trailing delimiter on one row is an empty field, not a style.
+  expect_error("time,x\n0,1\n0.1,2,\n0.2,3\n", {"hit.csv:3", "3 fields where the header has 2"});
+  expect_error("time,x,\n0,1,\n0.1,2,3\n", {"hit.csv:3", "3 fields where the header has 2"});
+  // Names and values in messages are cut (a 1 MB channel name gives a short message).
+  try {
+    parse_csv("time," + std::string(1 << 20, 'a') + "\n0,1\n0.1,x\n", "hit.csv");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 300u);
+    EXPECT_NE(std::string(e.what()).find("... (1048576 bytes)"), std::string::npos);
+  }
+}
+
+TEST(CsvReader, TrailingDelimiterOnEveryLine) {
+  const Record r = parse_csv("time,x,\n0,1,\n0.1,2,\n0.2,3,\n", "hit.csv");
+  ASSERT_EQ(r.channels.size(), 1u);
+  EXPECT_EQ(r.channels[0].samples, Eigen::Vector3d(1, 2, 3));
+}
+
+TEST(CsvReader, ManyChannels) {
+  // 20 000 channels, 2 rows; the last name repeats the first, found in one pass.
+  std::string header = "time", row0 = "0", row1 = "0.1";
+  for (int c = 0; c < 20000; ++c) {
+    const std::string k = std::to_string(c);
+    header.append(",c").append(k);
+    row0.append(",").append(k);
+    row1 += ",1";
+  }
+  const Record r = parse_csv(header + "\n" + row0 + "\n" + row1 + "\n", "hit.csv");
+  ASSERT_EQ(r.channels.size(), 20000u);
+  EXPECT_EQ(r.channels[12345].name, "c12345");
+  EXPECT_EQ(r.channels[12345].samples(0), 12345);
+  expect_error(header + ",c0\n" + row0 + ",1\n" + row1 + ",1\n",
+               {"hit.csv:1", "two channels named 'c0'"});
+}
+
+TEST(CsvReader, ReadsFromAFileAsFromText) {
+  const std::string text = "# fs: 10\nx [mm]\n1\n2\n3\n";
+  const std::string path = ::testing::TempDir() + "/jointlab_csv_reader_test.csv";
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(text.data(), 1, text.size(), f);
+  std::fclose(f);
+  const Record a = read_csv(path), b = parse_csv(text, path);
+  ASSERT_EQ(a.channels.size(), 1u);
+  EXPECT_EQ(a.channels[0].samples, b.channels[0].samples);
+  EXPECT_EQ(a.channels[0].samples, Eigen::Vector3d(1e-3, 2e-3, 3e-3));
+  EXPECT_EQ(a.fs, 10);
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -2,7 +2,9 @@
 //
 // Written here rather than taken from a library because the fixed Debian stack
 // has no JSON library and jointlab only ever writes JSON (never parses it).
-// Numbers print with 12 significant digits; a non-finite number throws
+// Strings are escaped, and bytes that are not valid UTF-8 become U+FFFD (input files may
+// name channels in any encoding; JSON must be UTF-8). Numbers print with 12 significant
+// digits; a non-finite number throws
 // std::logic_error (results never contain NaN).
 #pragma once
 

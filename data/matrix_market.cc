@@ -7,7 +7,9 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,6 +17,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/memory.h"
 #include "jointlab/data/atomic_file.h"
 
 namespace jointlab::data {
@@ -38,7 +41,13 @@ class Reader {
  public:
   explicit Reader(const std::filesystem::path& path) : path_(path.string()), in_(path) {
     if (!in_) throw InputError(where(path_, 0, "cannot open Matrix Market file"));
+    std::error_code ec;
+    bytes_ = std::filesystem::file_size(path, ec);
+    if (ec) bytes_ = 0;
   }
+
+  // Size of the file in bytes (bounds how many entries it can hold).
+  std::uintmax_t bytes() const { return bytes_; }
 
   [[noreturn]] void fail(const std::string& message) const {
     throw InputError(where(path_, line_no_, message));
@@ -65,7 +74,7 @@ class Reader {
     long value = 0;
     const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
     if (ec != std::errc() || ptr != token.data() + token.size()) {
-      fail(fmt::format("{} '{}' is not an integer", what, token));
+      fail(fmt::format("{} '{}' is not an integer", what, shorten(token)));
     }
     return value;
   }
@@ -76,9 +85,9 @@ class Reader {
     double value = 0;
     const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
     if (ec != std::errc() || ptr != token.data() + token.size()) {
-      fail(fmt::format("value '{}' is not a number", token));
+      fail(fmt::format("value '{}' is not a number", shorten(token)));
     }
-    if (!std::isfinite(value)) fail(fmt::format("value '{}' is not finite", token));
+    if (!std::isfinite(value)) fail(fmt::format("value '{}' is not finite", shorten(token)));
     return value;
   }
 
@@ -88,12 +97,14 @@ class Reader {
   std::string path_;
   std::ifstream in_;
   std::string current_;
+  std::uintmax_t bytes_ = 0;
   long line_no_ = 0;
 };
 
 }  // namespace
 
-Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path) {
+Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path,
+                                               long max_dimension) {
   Reader reader(path);
   std::string banner;
   if (!reader.raw_line(banner)) reader.fail("empty file, expected a %%MatrixMarket banner");
@@ -102,18 +113,20 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path
     reader.fail(
         "expected banner '%%MatrixMarket matrix <coordinate|array> real <general|symmetric>'");
   }
-  if (lower(head[1]) != "matrix") reader.fail(fmt::format("object '{}' is not 'matrix'", head[1]));
+  if (lower(head[1]) != "matrix")
+    reader.fail(fmt::format("object '{}' is not 'matrix'", shorten(head[1])));
   const std::string format = lower(head[2]);
   const std::string field = lower(head[3]);
   const std::string symmetry = lower(head[4]);
   if (format != "coordinate" && format != "array") {
-    reader.fail(fmt::format("format '{}' is neither 'coordinate' nor 'array'", head[2]));
+    reader.fail(fmt::format("format '{}' is neither 'coordinate' nor 'array'", shorten(head[2])));
   }
   if (field != "real" && field != "double" && field != "integer") {
-    reader.fail(fmt::format("field '{}' is not supported (only real matrices)", head[3]));
+    reader.fail(fmt::format("field '{}' is not supported (only real matrices)", shorten(head[3])));
   }
   if (symmetry != "general" && symmetry != "symmetric") {
-    reader.fail(fmt::format("symmetry '{}' is not supported (general or symmetric)", head[4]));
+    reader.fail(
+        fmt::format("symmetry '{}' is not supported (general or symmetric)", shorten(head[4])));
   }
   const bool symmetric = symmetry == "symmetric";
   const bool coordinate = format == "coordinate";
@@ -130,6 +143,15 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path
   if (symmetric && rows != cols) {
     reader.fail(fmt::format("symmetric matrix must be square, got {} x {}", rows, cols));
   }
+  // Sizes are checked against what they cost before anything is allocated: the dimensions
+  // against the caller's limit (and Eigen's int indices), the entries against what the
+  // file's bytes can hold ("i j v" is at least 6 bytes, an array value 2) and the memory.
+  const long dim_limit = std::min<long>(max_dimension, std::numeric_limits<int>::max() - 1);
+  if (rows > dim_limit || cols > dim_limit) {
+    reader.fail(fmt::format("size {} x {} exceeds the limit of {} rows and columns", rows, cols,
+                            dim_limit));
+  }
+  const double room = static_cast<double>(reader.bytes());
 
   std::vector<Eigen::Triplet<double>> triplets;
   auto add = [&](long i, long j, double v) {  // 0-based
@@ -140,6 +162,12 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path
   if (coordinate) {
     const long entries = reader.index(size[2], "entry count");
     if (entries < 0) reader.fail("entry count must not be negative");
+    if (static_cast<double>(entries) > room / 6) {
+      reader.fail(fmt::format("size line declares {} entries; the file's {} bytes hold at most {}",
+                              entries, reader.bytes(), static_cast<long>(room / 6)));
+    }
+    check_memory(fmt::format("{}: {} x {} with {} entries", path.string(), rows, cols, entries),
+                 4.0 * cols + (symmetric ? 2 : 1) * 28.0 * static_cast<double>(entries));
     triplets.reserve(static_cast<size_t>(symmetric ? 2 * entries : entries));
     for (long k = 0; k < entries; ++k) {
       const auto t = reader.next();
@@ -162,6 +190,13 @@ Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path
       add(i - 1, j - 1, reader.number(t[2]));
     }
   } else {
+    const double values = symmetric ? 0.5 * static_cast<double>(rows) * (rows + 1.0)
+                                    : static_cast<double>(rows) * static_cast<double>(cols);
+    if (values > room / 2) {
+      reader.fail(
+          fmt::format("size {} x {} needs {:.0f} values; the file's {} bytes hold at most {}", rows,
+                      cols, values, reader.bytes(), static_cast<long>(room / 2)));
+    }
     for (long j = 0; j < cols; ++j) {
       for (long i = symmetric ? j : 0; i < rows; ++i) {
         const auto t = reader.next();

@@ -9,6 +9,9 @@
 // mirrors it. Duplicate coordinate entries are summed, as the format specifies.
 // Lines starting with '%' after the banner are comments. Values are dimensionless
 // to this layer; the caller knows their units (kg, N/m for M and K in SI).
+// Every size the file declares is checked against what it costs before allocating.
+// Own reader rather than CHOLMOD's cholmod_read_sparse (linked): that one allocates the
+// declared entry count before reading and reports defects without file, line or field.
 #pragma once
 
 #include <filesystem>
@@ -18,8 +21,10 @@
 namespace jointlab::data {
 
 /// Reads a real Matrix Market file (coordinate or array; general or symmetric) into a sparse
-/// matrix; InputError naming file and line on any defect.
-Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path);
+/// matrix; InputError naming file and line on any defect, or on more than `max_dimension`
+/// rows or columns (refused before anything is allocated).
+Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path,
+                                               long max_dimension = 100'000'000);
 
 /// Writes a sparse matrix in coordinate format (symmetric: lower triangle only, with the
 /// 'symmetric' qualifier), atomically, 17 significant digits.

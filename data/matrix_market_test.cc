@@ -119,6 +119,14 @@ TEST(MatrixMarket, DefectsNameFileAndLine) {
        ":3: entry (1, 2) above the diagonal"},
       {"%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n",
        "file ends before every array value"},
+      // Sizes are checked before anything is allocated (each entry line takes 6 bytes or
+      // more, an array value 2; the file below is 70 bytes).
+      {co + "2 2 1000000000000\n1 1 1\n",
+       ":2: size line declares 1000000000000 entries; the file's 70 bytes hold at most 11"},
+      {"%%MatrixMarket matrix array real general\n100000 100000\n1\n",
+       ":2: size 100000 x 100000 needs 10000000000 values; the file's"},
+      {co + "3000000000 3000000000 0\n", ":2: size 3000000000 x 3000000000 exceeds the limit"},
+      {co + "2 2 1\n1 1 " + std::string(100000, '9') + "x\n", "... (100001 bytes)"},
   };
   for (const auto& c : cases) {
     const std::string message = error_of(c.text);
@@ -127,6 +135,23 @@ TEST(MatrixMarket, DefectsNameFileAndLine) {
     EXPECT_NE(message.find("bad.mtx"), std::string::npos) << message;
   }
   EXPECT_THROW(read_matrix_market("/nonexistent/dir/m.mtx"), InputError);
+}
+
+TEST(MatrixMarket, DimensionLimitOfTheCaller) {
+  const fs::path p = scratch("big.mtx",
+                             "%%MatrixMarket matrix coordinate real general\n"
+                             "2000000000 2000000000 1\n1 1 1\n");
+  const std::string m = testing::input_error_of([&] { read_matrix_market(p, 1000); });
+  EXPECT_NE(m.find("big.mtx:2: size 2000000000 x 2000000000 exceeds the limit of 1000 rows and "
+                   "columns"),
+            std::string::npos)
+      << m;
+  EXPECT_EQ(read_matrix_market(scratch("ok.mtx",
+                                       "%%MatrixMarket matrix coordinate real general\n"
+                                       "1000 1000 1\n1 1 1\n"),
+                               1000)
+                .rows(),
+            1000);
 }
 
 }  // namespace

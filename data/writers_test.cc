@@ -75,5 +75,16 @@ TEST(JsonWriter, NestedDocument) {
   EXPECT_THROW(bad.value(std::numeric_limits<double>::infinity()), std::logic_error);
 }
 
+TEST(JsonWriter, BytesThatAreNotUtf8BecomeReplacementCharacters) {
+  JsonWriter w;
+  // Latin-1 "acc\xb5" (a lone continuation byte), a truncated 3-byte sequence, an overlong
+  // '/', a surrogate; then valid 2-, 3- and 4-byte characters, kept as they are.
+  w.value(std::string_view(
+      "acc\xb5|\xe2\x82|\xc0\xaf|\xed\xa0\x80|\xc2\xb5\xe2\x82\xac\xf0\x9f\x98\x80"));
+  EXPECT_EQ(w.str(),
+            "\"acc\\ufffd|\\ufffd\\ufffd|\\ufffd\\ufffd|\\ufffd\\ufffd\\ufffd|"
+            "\xc2\xb5\xe2\x82\xac\xf0\x9f\x98\x80\"");
+}
+
 }  // namespace
 }  // namespace jointlab::data

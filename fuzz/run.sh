@@ -5,16 +5,17 @@
 # input that caused it is left in <build>/findings/. Past findings, fixed, live in
 # fuzz/regressions/<reader>/ (also read by the unit tests) and seed every run.
 #
-#   fuzz/run.sh [seconds per target, default 30] [target ...]   (targets: csv uff58 mat abaqus)
+#   fuzz/run.sh [seconds per target, default 20] [target ...]
+#     (targets: csv uff58 mat abaqus matrix_market model campaign summary)
 #   JOINTLAB_FUZZ_BUILD=<dir> selects the build directory (default build-fuzz/ in the repo).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
 build="${JOINTLAB_FUZZ_BUILD:-$root/build-fuzz}"
-seconds="${1:-30}"
+seconds="${1:-20}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(csv uff58 mat abaqus)
+[ ${#targets[@]} -eq 0 ] && targets=(csv uff58 mat abaqus matrix_market model campaign summary)
 
 if ! command -v clang++ >/dev/null 2>&1; then
   echo "fuzz: clang++ not found (Debian package clang-14)" >&2

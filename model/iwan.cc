@@ -1,16 +1,34 @@
 #include "jointlab/model/iwan.h"
 
+#include <cassert>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include <fmt/format.h>
 
 namespace jointlab::model {
 
+std::string ParameterDomain::text() const {
+  if (std::isinf(hi)) return fmt::format("{} {}", lo_open ? ">" : ">=", lo);
+  return fmt::format("in {}{}, {}{}", lo_open ? "(" : "[", lo, hi, hi_open ? ")" : "]");
+}
+
+ParameterDomain iwan_parameter_domain(const std::string& name) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  if (name == "Fs" || name == "Kt") return {0, inf, true, true};
+  if (name == "chi") return {-1, 0, true, false};
+  assert(name == "beta");
+  return {0, inf, false, true};
+}
+
 std::string iwan_parameter_error(const IwanParameters& p) {
-  if (!std::isfinite(p.Fs) || p.Fs <= 0) return fmt::format("Fs = {} must be > 0", p.Fs);
-  if (!std::isfinite(p.Kt) || p.Kt <= 0) return fmt::format("Kt = {} must be > 0", p.Kt);
-  if (!std::isfinite(p.chi) || p.chi <= -1) return fmt::format("chi = {} must be > -1", p.chi);
-  if (!std::isfinite(p.beta) || p.beta < 0) return fmt::format("beta = {} must be >= 0", p.beta);
+  const std::pair<const char*, double> fields[] = {
+      {"Fs", p.Fs}, {"Kt", p.Kt}, {"chi", p.chi}, {"beta", p.beta}};
+  for (const auto& [name, value] : fields) {
+    const ParameterDomain d = iwan_parameter_domain(name);
+    if (!d.contains(value)) return fmt::format("{} = {} must be {}", name, value, d.text());
+  }
   return "";
 }
 

@@ -35,7 +35,26 @@ struct IwanParameters {
   double beta = 0;  ///< weight of the macroslip delta, >= 0
 };
 
-/// What is unphysical about a parameter set ("chi = -1 must be > -1"), or "" if valid.
+/// The physical domain of one Iwan parameter: an interval with open or closed ends.
+struct ParameterDomain {
+  double lo = 0;         ///< lower end
+  double hi = 0;         ///< upper end (infinity: unbounded above, values must still be finite)
+  bool lo_open = false;  ///< lo itself excluded
+  bool hi_open = false;  ///< hi itself excluded
+  /// True when x is finite and inside.
+  bool contains(double x) const {
+    return std::isfinite(x) && (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
+  }
+  /// The domain as a phrase: "> 0", ">= 0", "in (-1, 0]".
+  std::string text() const;
+};
+
+/// The domain of the Iwan parameter `name` ("Fs", "Kt", "chi" or "beta"): Fs > 0, Kt > 0,
+/// chi in (-1, 0], beta >= 0 (method.md); the one place every reader and updater checks.
+ParameterDomain iwan_parameter_domain(const std::string& name);
+
+/// What is unphysical about a parameter set ("chi = 0.5 must be in (-1, 0]"), or "" if valid;
+/// the message starts with the field's name.
 std::string iwan_parameter_error(const IwanParameters& p);
 
 /// A 4-parameter Iwan element with scalar type T (double or ceres::Jet).

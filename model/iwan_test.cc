@@ -149,7 +149,13 @@ TEST(Iwan, ParameterErrorsNameTheField) {
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, 0}), "");
   EXPECT_EQ(iwan_parameter_error({0, 2e6, -0.5, 1}), "Fs = 0 must be > 0");
   EXPECT_EQ(iwan_parameter_error({40, -1, -0.5, 1}), "Kt = -1 must be > 0");
-  EXPECT_EQ(iwan_parameter_error({40, 2e6, -1, 1}), "chi = -1 must be > -1");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, -1, 1}), "chi = -1 must be in (-1, 0]");
+  // chi above 0 would make the slider density grow with slip displacement (method.md).
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, 0.5, 1}), "chi = 0.5 must be in (-1, 0]");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, 1, 1}), "chi = 1 must be in (-1, 0]");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, 0, 1}), "");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, INFINITY}), "beta = inf must be >= 0");
+  EXPECT_EQ(iwan_parameter_domain("Kt").text(), "> 0");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, -0.1}), "beta = -0.1 must be >= 0");
 }
 

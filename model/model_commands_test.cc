@@ -211,7 +211,7 @@ TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
        model(mass, stiff, kIwanTable, "\n[[joint]]\na = 0\nb = 1\nelement = \"iwan.bolt\"\n"),
        "joint 1: unknown element 'iwan.bolt'"},
       {"chi", model(mass, stiff, iwan_with("chi = -0.5", "chi = -1.0"), joint),
-       "iwan.rivet: chi = -1 must be > -1"},
+       "iwan.rivet: chi = -1 must be in (-1, 0]"},
       {"fs", model(mass, stiff, iwan_with("Fs = 40.0", "Fs = 0.0"), joint),
        "iwan.rivet: Fs = 0 must be > 0"},
       {"kt", model(mass, stiff, iwan_with("Kt = 2.0e6", "Kt = -5.0"), joint),

@@ -12,6 +12,7 @@
 #include <Eigen/SparseCholesky>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/memory.h"
 #include "jointlab/data/matrix_market.h"
 
 namespace jointlab::model {
@@ -248,8 +249,11 @@ Model read_model(const fs::path& path) {
   Model model;
   const fs::path mass_path = *file_field("mass", true);
   const fs::path stiff_path = *file_field("stiffness", true);
-  model.mass = data::read_matrix_market(mass_path);
-  model.stiffness = data::read_matrix_market(stiff_path);
+  // Every command solves the model dense (about six n x n double matrices at once), so the
+  // matrices are refused at the size line when those would not fit in memory_limit().
+  const auto max_dofs = static_cast<long>(std::sqrt(memory_limit() / 48));
+  model.mass = data::read_matrix_market(mass_path, max_dofs);
+  model.stiffness = data::read_matrix_market(stiff_path, max_dofs);
   const std::string mass_name = mass_path.filename().string();
   const std::string stiff_name = stiff_path.filename().string();
   check_square(ctx, field_line("mass"), "matrices.mass", mass_name, model.mass);

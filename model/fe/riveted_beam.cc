@@ -11,6 +11,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/model/fe/strip_mesh.h"
+#include "jointlab/model/iwan.h"
 
 namespace jointlab::model::fe {
 namespace {
@@ -253,11 +254,16 @@ void validate(const RivetedBeamDescription& d) {
   if (d.element_size > d.length / 4) fail("field 'mesh.size' must be at most strips.length / 4");
   if (d.shell && (d.length / d.element_size) * (d.width / d.element_size) > 2e6)
     fail("field 'mesh.size' is too small: more than 2 million elements per strip");
+  // The reduction holds dense columns as long as the model (6 DOFs per beam node) for every
+  // interface DOF and kept mode: 1e5 elements per strip keep that below about 0.5 GB.
+  if (!d.shell && d.length / d.element_size > 1e5)
+    fail(
+        fmt::format("field 'mesh.size' = {} m is too small: {:.3g} beam elements per strip, "
+                    "the limit is 100000",
+                    d.element_size, d.length / d.element_size));
   positive(d.coupling_radius, "rivets.coupling_radius");
-  positive(d.kt, "joints.Kt");
-  positive(d.fs, "joints.Fs");
-  if (!(d.chi > -1 && d.chi < 1)) fail("field 'joints.chi' must be in (-1, 1)");
-  if (!(d.beta >= 0)) fail("field 'joints.beta' must be >= 0");
+  if (const std::string e = model::iwan_parameter_error({d.fs, d.kt, d.chi, d.beta}); !e.empty())
+    fail(fmt::format("field 'joints.{}'{}", e.substr(0, e.find(' ')), e.substr(e.find(' '))));
   positive(d.kz, "joints.kz");
   positive(d.rxy, "joints.rxy");
   positive(d.rz, "joints.rz");

@@ -37,7 +37,15 @@ std::string SimulationOptions::error(Eigen::Index size) const {
   if (!(fs > 0 && std::isfinite(fs))) return "sample rate must be > 0";
   if (!(duration > 0 && std::isfinite(duration))) return "duration must be > 0";
   if (duration * fs < 16) return "the record must hold at least 16 samples";
-  if (duration * fs > 1e9) return "the record would exceed 1e9 samples";
+  // Three response arrays (and the written record) hold samples x sensors numbers each:
+  // 5e7 values are 1.2 GB in memory, beyond any ring-down test's need.
+  if (const double values = std::floor(duration * fs) * static_cast<double>(sensors.size());
+      values > 5e7) {
+    return fmt::format(
+        "the record would hold {:.3g} samples x {} sensor(s) = {:.3g} values; the limit is 5e7 "
+        "(lower --fs or --duration)",
+        std::floor(duration * fs), sensors.size(), values);
+  }
   if (pulse.start + pulse.duration >= duration) return "the pulse must end inside the record";
   if (substeps < 0 || substeps > 100000) return "substeps must be in 0..100000 (0: automatic)";
   if (!(frequency_error > 0 && frequency_error < 0.1)) return "frequency error must be in (0, 0.1)";

@@ -1,0 +1,128 @@
+#include "jointlab/data/output_stage.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <fstream>
+#include <set>
+#include <system_error>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+
+namespace jointlab::data {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Serialises the commits (and their recovery) of concurrent runs into one folder.
+class FolderLock {
+ public:
+  explicit FolderLock(const fs::path& dir)
+      : fd_(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC)) {
+    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
+      throw InputError(where(dir.string(), 0, "cannot lock the output folder"));
+  }
+  ~FolderLock() { ::close(fd_); }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_;
+};
+
+std::set<std::string> read_list(const fs::path& file) {
+  std::set<std::string> names;
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) names.insert(line);
+  return names;
+}
+
+// Completes a commit whose staging folder was renamed to `commit_dir` (idempotent, so a
+// commit killed half-way is finished by the next run).
+void roll_forward(const fs::path& dir, const fs::path& commit_dir, const std::string& command,
+                  const std::function<bool(const std::string&)>& owned) {
+  const fs::path manifest = commit_dir / ".manifest";
+  const fs::path record = dir / fmt::format(".{}.outputs", command);
+  const std::set<std::string> fresh = read_list(manifest);
+  std::set<std::string> old = read_list(record);
+  std::error_code ec;
+  if (owned) {
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (it->is_regular_file() && owned(name)) old.insert(name);
+    }
+  }
+  for (const std::string& name : old) {
+    if (!fresh.count(name) && name.find('/') == std::string::npos) fs::remove(dir / name, ec);
+  }
+  for (const std::string& name : fresh) {
+    if (fs::exists(commit_dir / name)) {
+      fs::rename(commit_dir / name, dir / name, ec);
+      if (ec)
+        throw InputError(
+            where((dir / name).string(), 0, "cannot move the output into place: " + ec.message()));
+    }
+  }
+  fs::rename(manifest, record, ec);
+  fs::remove_all(commit_dir, ec);
+}
+
+}  // namespace
+
+OutputStage::OutputStage(fs::path dir, std::string command,
+                         std::function<bool(const std::string&)> owned)
+    : dir_(std::move(dir)), command_(std::move(command)), owned_(std::move(owned)) {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (!fs::is_directory(dir_))
+    throw InputError(where(dir_.string(), 0, "cannot create output directory"));
+  {
+    FolderLock lock(dir_);
+    const fs::path pending = dir_ / fmt::format(".{}.commit", command_);
+    if (fs::exists(pending)) roll_forward(dir_, pending, command_, owned_);
+    remove_stale_temporaries(dir_);
+  }
+  stage_ = temporary_name(dir_, fmt::format(".{}.stage-", command_));
+  claim_ = TemporaryClaim(stage_, true);
+}
+
+OutputStage::~OutputStage() {
+  if (!committed_) {
+    std::error_code ec;
+    fs::remove_all(stage_, ec);
+  }
+}
+
+void OutputStage::commit() {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (fs::directory_iterator it(stage_, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (!it->is_regular_file() || is_temporary_name(name))
+      throw InputError(where((stage_ / name).string(), 0, "unfinished output"));
+    names.push_back(name);
+  }
+  if (ec) throw InputError(where(stage_.string(), 0, "cannot list the outputs: " + ec.message()));
+  std::sort(names.begin(), names.end());
+  std::string list;
+  for (const std::string& n : names) list += n + "\n";
+  write_file_atomically(stage_ / ".manifest", list);
+
+  FolderLock lock(dir_);
+  const fs::path pending = dir_ / fmt::format(".{}.commit", command_);
+  if (fs::exists(pending)) roll_forward(dir_, pending, command_, owned_);
+  fs::rename(stage_, pending, ec);  // the commit point
+  if (ec) throw InputError(where(dir_.string(), 0, "cannot commit the outputs: " + ec.message()));
+  committed_ = true;
+  claim_.release();
+  roll_forward(dir_, pending, command_, owned_);
+}
+
+}  // namespace jointlab::data

@@ -1,0 +1,51 @@
+// A command's output files, which appear in their folder together or not at all.
+//
+// The command writes every output into a staging folder inside the output folder
+// (DIR/.<command>.stage-XXXXXXXX, claimed while the command runs); commit() lists them
+// in a manifest and renames the staging folder to DIR/.<command>.commit, the one atomic
+// step that decides between the old and the new set. It then removes the previous
+// outputs of the command that the new set does not replace, moves the new files into
+// place and keeps the manifest as DIR/.<command>.outputs. A failure before that step
+// leaves the previous outputs untouched; a run killed after it is completed by the next
+// OutputStage on the folder, which also removes staging folders and temporaries that
+// killed runs left behind.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "jointlab/data/atomic_file.h"
+
+namespace jointlab::data {
+
+/// Staging folder for one command's outputs into one folder, committed as a set.
+class OutputStage {
+ public:
+  /// Prepares `dir` (created if missing) for the outputs of `command`; `owned` says which
+  /// file names the command writes, so outputs of earlier runs without a manifest are
+  /// replaced as well (none when empty). Throws InputError if `dir` cannot be made.
+  OutputStage(std::filesystem::path dir, std::string command,
+              std::function<bool(const std::string&)> owned = {});
+  /// Removes the staging folder and everything in it unless committed.
+  ~OutputStage();
+  OutputStage(const OutputStage&) = delete;
+  OutputStage& operator=(const OutputStage&) = delete;
+
+  /// The folder to write the outputs into, under the names they get in dir().
+  const std::filesystem::path& path() const { return stage_; }
+  /// The output folder.
+  const std::filesystem::path& dir() const { return dir_; }
+  /// Makes the staged files the command's outputs in dir(), replacing the previous ones as a
+  /// set; throws InputError if that cannot start (the previous outputs stay).
+  void commit();
+
+ private:
+  std::filesystem::path dir_, stage_;
+  std::string command_;
+  std::function<bool(const std::string&)> owned_;
+  TemporaryClaim claim_;
+  bool committed_ = false;
+};
+
+}  // namespace jointlab::data

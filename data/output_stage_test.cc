@@ -1,0 +1,170 @@
+// OutputStage and AtomicFile: outputs appear as a set or not at all, a failed write leaves
+// nothing, and what a killed run left is completed or removed by the next one.
+#include "jointlab/data/output_stage.h"
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/data/atomic_file.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::data {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void put(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir))
+    files[e.path().filename().string()] = e.is_directory() ? "<dir>" : slurp(e.path());
+  return files;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = testing::scratch_path("jointlab-stage-test", name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+bool is_csv(const std::string& name) { return name.ends_with(".csv"); }
+
+TEST(OutputStage, CommitReplacesThePreviousSetAsAWhole) {
+  const fs::path dir = fresh_dir("replace");
+  put(dir / "keep.txt", "not an output");
+  {
+    OutputStage s(dir, "cmd", is_csv);
+    put(s.path() / "a.csv", "a1");
+    put(s.path() / "b.csv", "b1");
+    EXPECT_FALSE(fs::exists(dir / "a.csv"));  // nothing appears before commit
+    s.commit();
+  }
+  EXPECT_EQ(snapshot(dir), (std::map<std::string, std::string>{{".cmd.outputs", "a.csv\nb.csv\n"},
+                                                               {"a.csv", "a1"},
+                                                               {"b.csv", "b1"},
+                                                               {"keep.txt", "not an output"}}));
+  put(dir / "legacy.csv", "from an older version, before outputs were recorded");
+  {
+    OutputStage s(dir, "cmd", is_csv);
+    put(s.path() / "b.csv", "b2");
+    s.commit();
+  }
+  EXPECT_EQ(snapshot(dir),
+            (std::map<std::string, std::string>{
+                {".cmd.outputs", "b.csv\n"}, {"b.csv", "b2"}, {"keep.txt", "not an output"}}));
+}
+
+TEST(OutputStage, AFailureBeforeCommitLeavesThePreviousOutputs) {
+  const fs::path dir = fresh_dir("fail");
+  {
+    OutputStage s(dir, "cmd");
+    put(s.path() / "a.csv", "old");
+    s.commit();
+  }
+  const auto before = snapshot(dir);
+  try {
+    OutputStage s(dir, "cmd");
+    put(s.path() / "a.csv", "new");
+    write_file_atomically(s.path() / "b.csv", "new");
+    throw InputError("the next input is bad");
+  } catch (const InputError&) {
+  }
+  EXPECT_EQ(snapshot(dir), before);
+}
+
+TEST(OutputStage, KilledRunsAreCleanedUpOrCompletedByTheNext) {
+  const fs::path dir = fresh_dir("killed");
+  {
+    OutputStage s(dir, "cmd");
+    put(s.path() / "a.csv", "old");
+    s.commit();
+  }
+  const auto before = snapshot(dir);
+  // A run killed while writing: its staging folder and a temporary stay behind.
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    OutputStage s(dir, "cmd");
+    put(s.path() / "a.csv", "half");
+    AtomicFile f(dir / "other.txt");
+    f.stream() << "half";
+    f.stream().flush();
+    kill(getpid(), SIGKILL);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  EXPECT_GT(snapshot(dir).size(), before.size());  // the leftovers are there ...
+  auto after_kill = snapshot(dir);
+  for (const auto& [name, text] : before)
+    EXPECT_EQ(after_kill.at(name), text);  // ... beside the old set
+
+  // A run killed after its commit point (staging folder renamed, files not yet moved).
+  fs::create_directory(dir / ".cmd.commit");
+  put(dir / ".cmd.commit" / ".manifest", "b.csv\n");
+  put(dir / ".cmd.commit" / "b.csv", "new");
+  {
+    OutputStage next(dir, "cmd");  // completes the commit and removes the leftovers
+    EXPECT_EQ(snapshot(dir),
+              (std::map<std::string, std::string>{{".cmd.outputs", "b.csv\n"},
+                                                  {next.path().filename().string(), "<dir>"},
+                                                  {"b.csv", "new"}}));
+  }
+  EXPECT_EQ(snapshot(dir),
+            (std::map<std::string, std::string>{{".cmd.outputs", "b.csv\n"}, {"b.csv", "new"}}));
+}
+
+TEST(OutputStage, ARunningWritersFilesAreSpared) {
+  const fs::path dir = fresh_dir("running");
+  OutputStage running(dir, "cmd");
+  AtomicFile writing(dir / "x.csv");
+  writing.stream() << "in progress";
+  put(dir / "y.csv.tmp-0123abcd", "stale");
+  OutputStage other(dir, "cmd");
+  EXPECT_TRUE(fs::is_directory(running.path()));
+  EXPECT_FALSE(fs::exists(dir / "y.csv.tmp-0123abcd"));
+  writing.commit();
+  EXPECT_EQ(slurp(dir / "x.csv"), "in progress");
+}
+
+TEST(AtomicFile, AFailedWriteLeavesNothing) {
+  const fs::path dir = fresh_dir("atomic");
+  put(dir / "r.txt", "previous");
+  AtomicFile f(dir / "r.txt");
+  f.stream() << "new";
+  f.stream().setstate(std::ios::badbit);  // what a write on a full disk does to the stream
+  const std::string m = testing::input_error_of([&] { f.commit(); });
+  EXPECT_NE(m.find("r.txt: write failed (disk full?)"), std::string::npos) << m;
+  EXPECT_EQ(snapshot(dir), (std::map<std::string, std::string>{{"r.txt", "previous"}}));
+}
+
+TEST(AtomicFile, TemporaryNames) {
+  EXPECT_TRUE(is_temporary_name("a.csv.tmp-0123abcd"));
+  EXPECT_TRUE(is_temporary_name(".fig.png.tmp-0123abcd.png"));
+  EXPECT_TRUE(is_temporary_name(".process.stage-89abcdef"));
+  EXPECT_FALSE(is_temporary_name("a.csv"));
+  EXPECT_FALSE(is_temporary_name("a.tmp-xyz"));
+  EXPECT_FALSE(is_temporary_name("process.stage-89abcdef"));
+}
+
+}  // namespace
+}  // namespace jointlab::data

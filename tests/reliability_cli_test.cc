@@ -1,0 +1,257 @@
+// The command under hostile input and failing disks: every error is one line with exit
+// status 2; sizes are refused before they are allocated; a command's outputs replace the
+// previous ones as a set or not at all, and temporaries of killed runs are removed.
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "jointlab/data/json_reader.h"
+#include "jointlab/tests/cli.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Every entry of `dir` (hidden ones too) with its contents; folders as "<dir>".
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir))
+    files[e.path().filename().string()] = e.is_directory() ? "<dir>" : slurp(e.path());
+  return files;
+}
+
+// Two decaying modes (80 Hz on acc1, 150 Hz on acc2), 4 s at 1 kHz.
+std::string ringdown_csv(const std::string& header = "time,acc1 [m/s^2],acc2 [m/s^2]") {
+  std::string s = header + "\n";
+  for (int k = 0; k < 4000; ++k) {
+    const double t = k * 1e-3;
+    s += fmt::format("{},{},{}\n", t, std::exp(-t) * std::sin(2 * M_PI * 80 * t),
+                     std::exp(-2 * t) * std::sin(2 * M_PI * 150 * t));
+  }
+  return s;
+}
+
+// Exit status 2 and one error line, the last on stderr (progress lines may precede it),
+// holding `fragment`.
+void expect_error(const CommandResult& r, const std::string& fragment) {
+  EXPECT_EQ(r.status, 2) << r.err.substr(0, 500);
+  std::string err = r.err;
+  while (!err.empty() && err.back() == '\n') err.pop_back();
+  const std::string msg =
+      err.substr(err.rfind('\n') == std::string::npos ? 0 : err.rfind('\n') + 1);
+  EXPECT_EQ(msg.rfind("jointlab: error: ", 0), 0u) << msg.substr(0, 500);
+  EXPECT_EQ(err.find("jointlab: error: "), err.rfind("jointlab: error: ")) << "two error lines";
+  EXPECT_NE(msg.find(fragment), std::string::npos) << msg.substr(0, 500);
+}
+
+TEST(ArgumentErrors, OneLineWithReadableBoundsAndStatus2) {
+  const std::string dir = scratch_dir("rel_args");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  const std::string p = "process " + dir + "/hit.csv ";
+  expect_error(run_jointlab(p + "--modes 0 --out " + dir + "/o"),
+               "--modes: 0 is not a positive number");
+  expect_error(run_jointlab(p + "--band 70:90 --snr-min 0.5 --out " + dir + "/o"),
+               "--snr-min: 0.5 is not between 1 and 1e+06");
+  expect_error(run_jointlab(p + "--band 70:90 --min-share 2 --out " + dir + "/o"),
+               "2 is not between 0 and 0.99");
+  expect_error(run_jointlab(p + "--band 70:90 --out"), "--out");
+  expect_error(run_jointlab(p + "--band 70:90 --colour red --out " + dir + "/o"), "red");
+  expect_error(run_jointlab("frobnicate"), "unknown command 'frobnicate' (commands: process,");
+  expect_error(run_jointlab(""), "subcommand");
+  EXPECT_EQ(run_jointlab("--version").status, 0);
+  EXPECT_EQ(run_jointlab("process --help").status, 0);
+  EXPECT_FALSE(fs::exists(dir + "/o"));
+}
+
+class ProcessOutputs : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // ctest runs the cases side by side: one folder each.
+    dir_ = scratch_dir(std::string("rel_outputs_") +
+                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    out_ = dir_ + "/out";
+    write_text(dir_ + "/good.csv", ringdown_csv());
+    write_text(dir_ + "/other.csv", ringdown_csv());
+    write_text(dir_ + "/bad.csv", "time,acc1\n0,1\n0.001,abc\n");
+    const CommandResult r = run_jointlab("process " + dir_ + "/good.csv --band 70:90 --band " +
+                                         "140:160 --out " + out_);
+    ASSERT_EQ(r.status, 0) << r.err;
+    before_ = snapshot(out_);
+    ASSERT_TRUE(before_.count("summary.json"));
+    ASSERT_TRUE(before_.count("good.acc1.band1.csv"));
+    ASSERT_TRUE(before_.count("good.acc2.band2.csv"));
+  }
+  std::string dir_, out_;
+  std::map<std::string, std::string> before_;
+};
+
+TEST_F(ProcessOutputs, AFailingInputLeavesThePreviousOutputs) {
+  // other.csv processes fine, bad.csv fails: nothing of other.csv may appear.
+  expect_error(run_jointlab("process " + dir_ + "/other.csv " + dir_ + "/bad.csv --band 70:90 " +
+                            "--out " + out_),
+               "bad.csv:3: column 'acc1': 'abc' is not a number");
+  EXPECT_EQ(snapshot(out_), before_);
+}
+
+TEST_F(ProcessOutputs, AFullDiskLeavesThePreviousOutputs) {
+  // The backbones are written, then summary.json fails as on a full disk.
+  const std::string shim = binary_dir() + "/tests/libjointlab_fail_writes.so";
+  ASSERT_TRUE(fs::exists(shim));
+  const std::string env = "LD_PRELOAD=" + shim +
+                          " ASAN_OPTIONS=verify_asan_link_order=0 JOINTLAB_FAIL_WRITES_TO=summary";
+  const std::string cmd = env + " " + binary_dir() + "/bin/jointlab process " + dir_ +
+                          "/other.csv --band 70:90 --out " + out_ + " 2> " + dir_ + "/err.txt";
+  const int raw = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(raw));
+  CommandResult r;
+  r.status = WEXITSTATUS(raw);
+  r.err = slurp(dir_ + "/err.txt");
+  expect_error(r, "out/summary.json: write failed (disk full?)");
+  EXPECT_EQ(snapshot(out_), before_);
+}
+
+TEST_F(ProcessOutputs, ANewRunReplacesTheOldSetAndRemovesLeftovers) {
+  // What killed runs leave: an unclaimed temporary and a staging folder.
+  write_text(out_ + "/good.acc1.band1.csv.tmp-0123abcd", "half");
+  fs::create_directory(out_ + "/.process.stage-89abcdef");
+  write_text(out_ + "/.process.stage-89abcdef/good.acc1.band1.csv", "half");
+  write_text(out_ + "/notes.txt", "mine");
+  const CommandResult r =
+      run_jointlab("process " + dir_ + "/other.csv --band 140:160 --out " + out_);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto after = snapshot(out_);
+  std::map<std::string, std::string> names;
+  for (const auto& [name, text] : after) names[name] = "";
+  EXPECT_EQ(names, (std::map<std::string, std::string>{{".process.outputs", ""},
+                                                       {"notes.txt", ""},
+                                                       {"other.acc2.band1.csv", ""},
+                                                       {"summary.json", ""}}));
+  EXPECT_EQ(after.at("notes.txt"), "mine");
+  EXPECT_EQ(after.at("summary.json").find("good.csv"), std::string::npos);
+}
+
+TEST_F(ProcessOutputs, OutputsOfAnOlderVersionAreReplacedToo) {
+  // A folder written before outputs were recorded: process's own file names identify them.
+  fs::remove(out_ + "/.process.outputs");
+  const CommandResult r = run_jointlab("process " + dir_ + "/other.csv --band 70:90 --out " + out_);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto after = snapshot(out_);
+  EXPECT_FALSE(after.count("good.acc1.band1.csv"));
+  EXPECT_FALSE(after.count("good.acc2.band2.csv"));
+  EXPECT_TRUE(after.count("other.acc1.band1.csv"));
+}
+
+TEST(Readers, NonUtf8HeaderGivesValidJson) {
+  const std::string dir = scratch_dir("rel_utf8");
+  write_text(dir + "/hit.csv", ringdown_csv("time,acc\xff\xfe [m/s^2],caf\xc3\xa9 [m/s^2]"));
+  const CommandResult r =
+      run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir + "/o");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string json = slurp(dir + "/o/summary.json");
+  EXPECT_NE(json.find("acc\\ufffd\\ufffd"), std::string::npos);
+  EXPECT_NE(json.find("caf\xc3\xa9"), std::string::npos);  // valid UTF-8 stays as it is
+  EXPECT_NO_THROW(data::parse_json(json, "summary.json"));
+}
+
+TEST(Readers, TrailingCommaOnOneRowIsAnError) {
+  const std::string dir = scratch_dir("rel_comma");
+  write_text(dir + "/hit.csv", "time,x\n0,1\n0.001,2,\n0.002,3\n");
+  expect_error(run_jointlab("process " + dir + "/hit.csv --band 10:20 --out " + dir + "/o"),
+               "hit.csv:3: 3 fields where the header has 2");
+}
+
+TEST(Readers, HugeNamesAreCutInMessages) {
+  const std::string dir = scratch_dir("rel_long");
+  const std::string name(1 << 20, 'a');
+  write_text(dir + "/hit.csv", "time," + name + "\n0,1\n0.001,x\n");
+  const CommandResult r =
+      run_jointlab("process " + dir + "/hit.csv --band 10:20 --out " + dir + "/o");
+  expect_error(r, "... (1048576 bytes)");
+  EXPECT_LT(r.err.size(), 500u);
+}
+
+// A two-DOF model file with one Iwan joint; `chi` and the matrices as given.
+std::string write_model(const std::string& dir, const std::string& chi,
+                        const std::string& mass =
+                            "%%MatrixMarket matrix coordinate real "
+                            "symmetric\n2 2 2\n1 1 1\n2 2 1\n") {
+  write_text(dir + "/M.mtx", mass);
+  write_text(dir + "/K.mtx",
+             "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n1 1 2e4\n2 1 -1e4\n2 2 "
+             "1e4\n");
+  write_text(dir + "/model.toml",
+             "[matrices]\nmass = \"M.mtx\"\nstiffness = \"K.mtx\"\n\n"
+             "[iwan.rivet]\nFs = 40.0\nKt = 2.0e4\nchi = " +
+                 chi +
+                 "\nbeta = 1.0\n\n[spring]\nkz = 1e4\n\n"
+                 "[[joint]]\na = 0\nb = \"ground\"\nelement = \"iwan.rivet\"\n");
+  return dir + "/model.toml";
+}
+
+TEST(ModelDomains, ChiAboveZeroIsRefusedByEveryReader) {
+  const std::string dir = scratch_dir("rel_chi");
+  for (const char* chi : {"0.5", "1.0", "5.0"}) {
+    const std::string model = write_model(dir, chi);
+    expect_error(run_jointlab("modes " + model + " --out " + dir + "/modes.csv"),
+                 fmt::format("iwan.rivet: chi = {} must be in (-1, 0]", std::stod(chi)));
+  }
+  write_text(dir + "/beam.toml", "[joints]\nchi = 0.5\n");
+  expect_error(run_jointlab("build-model " + dir + "/beam.toml --out " + dir + "/m"),
+               "field 'joints.chi' = 0.5 must be in (-1, 0]");
+  const std::string model = write_model(dir, "-0.5");
+  EXPECT_EQ(run_jointlab("modes " + model + " --out " + dir + "/modes.csv").status, 0);
+  const std::string iwan = "update-iwan " + model + " --measured " + dir + " --sensors " + dir +
+                           "/s.csv --mode 1 --out " + dir + "/u ";
+  expect_error(run_jointlab(iwan + "--set rivet --chi-range 0.1:0.5"),
+               "--chi-range 0.1:0.5: need LO < HI with both chi in (-1, 0]");
+  expect_error(run_jointlab(iwan + "--set rivet --fs-range 0:10"),
+               "--fs-range 0:10: need LO < HI with both Fs > 0");
+  expect_error(run_jointlab(iwan + "--set spring.kz"), "--set spring.kz: update-iwan updates");
+}
+
+TEST(Limits, SizesAreRefusedBeforeAllocating) {
+  const std::string dir = scratch_dir("rel_sizes");
+  // A Matrix Market size line declaring 1e12 entries in a file of a few bytes.
+  std::string model = write_model(
+      dir, "-0.5", "%%MatrixMarket matrix coordinate real symmetric\n2 2 1000000000000\n1 1 1\n");
+  expect_error(run_jointlab("modes " + model + " --out " + dir + "/m.csv"),
+               "M.mtx:2: size line declares 1000000000000 entries; the file's");
+  // 2e9 x 2e9: the model is solved dense, far beyond memory.
+  model = write_model(
+      dir, "-0.5",
+      "%%MatrixMarket matrix coordinate real symmetric\n2000000000 2000000000 1\n1 1 1\n");
+  expect_error(run_jointlab("modes " + model + " --out " + dir + "/m.csv"),
+               "M.mtx:2: size 2000000000 x 2000000000 exceeds the limit of");
+  model = write_model(dir, "-0.5");
+  expect_error(run_jointlab("simulate " + model + " --impact 1 --force 1 --duration 1 --fs 1e9 " +
+                            "--out " + dir + "/sim.csv"),
+               "simulate: the record would hold 1e+09 samples x 1 sensor(s) = 1e+09 values; the "
+               "limit is 5e7");
+  EXPECT_FALSE(fs::exists(dir + "/sim.csv"));
+  write_text(dir + "/beam.toml", "[mesh]\nelement = \"beam\"\nsize = 1e-7\n");
+  expect_error(run_jointlab("build-model " + dir + "/beam.toml --out " + dir + "/m"),
+               "field 'mesh.size' = 1e-07 m is too small: 5e+06 beam elements per strip, the "
+               "limit is 100000");
+  EXPECT_FALSE(fs::exists(dir + "/m/model.toml"));
+}
+
+}  // namespace
+}  // namespace jointlab::testing
