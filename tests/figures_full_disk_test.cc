@@ -13,10 +13,10 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
-#include "jointlab/correlate/figures.h"
+#include "jointlab/campaign/figures.h"
 #include "jointlab/tests/test_util.h"
 
-namespace jointlab::correlate {
+namespace jointlab::campaign {
 namespace {
 
 namespace fs = std::filesystem;
@@ -63,4 +63,4 @@ TEST(Figures, AFullDiskLeavesNoFigure) {
 }
 
 }  // namespace
-}  // namespace jointlab::correlate
+}  // namespace jointlab::campaign
