@@ -53,17 +53,6 @@ std::complex<double> band_gain(const Band& band, double taper, std::complex<doub
          normal_cdf((f.real() - band.hi + 0.5 * w) / sd, y);
 }
 
-std::complex<double> band_gain_curvature(const Band& band, double taper, std::complex<double> f) {
-  const double w = taper * (band.hi - band.lo);
-  const double sd = w / 4;
-  // G = Phi(u_a) - Phi(u_b), u = (f - edge) / sd: G'' = -(u_a phi(u_a) - u_b phi(u_b)) / sd^2.
-  const auto u_phi = [&](double edge) {
-    const std::complex<double> u = (f - edge) / sd;
-    return u * std::exp(-u * u / 2.0) / std::sqrt(2 * std::numbers::pi);
-  };
-  return -(u_phi(band.lo + 0.5 * w) - u_phi(band.hi - 0.5 * w)) / (sd * sd);
-}
-
 Fft& FftCache::get(Eigen::Index n) {
   auto it = ffts_.find(n);
   if (it == ffts_.end()) it = ffts_.emplace(n, Fft(n)).first;

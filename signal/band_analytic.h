@@ -58,9 +58,6 @@ double band_gain(const Band& band, double taper, double f);
 /// which the band passes exp(2 pi i f t), a sinusoid of frequency f_r decaying at 2 pi d.
 std::complex<double> band_gain(const Band& band, double taper, std::complex<double> f);
 
-/// Second derivative of G with respect to f, at the complex frequency f [1/Hz^2].
-std::complex<double> band_gain_curvature(const Band& band, double taper, std::complex<double> f);
-
 /// Reusable FFT plans keyed by transform size, and the last filter gain computed
 /// (every channel of a record shares it); one workspace per thread.
 class FftCache {
