@@ -189,6 +189,96 @@ TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
   }
 }
 
+// A linear mode (80 Hz, damping 0.2 %, noise 1e-3 of the peak): the linear values, the
+// zero-amplitude limit of the fit of the backbone's lower half, must hold the truth
+// within their stated (k = 3) uncertainty, which must be below 1e-4 in frequency and
+// 5 % in damping; the fit spans amplitudes inside the kept span.
+TEST(RingdownLinearValues, ZeroAmplitudeLimitHoldsTheTruth) {
+  const double fs = 5120, f0 = 80.0, zeta = 0.002;
+  const Eigen::Index n = static_cast<Eigen::Index>(6 * fs);
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 1e-6);
+    const double w = 2 * std::numbers::pi * f0 * std::sqrt(1 - zeta * zeta);
+    Eigen::VectorXd x(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / fs;
+      x(k) = 1e-3 * std::exp(-zeta * 2 * std::numbers::pi * f0 * t) * std::cos(w * t) + g(rng);
+    }
+    const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {64, 96});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const RingdownSummary& s = r.summary;
+    std::printf("linear seed %u: %.5f +- %.1e Hz, %.6f +- %.1e over %.3g to %.3g\n", seed,
+                s.linear_frequency_hz, s.linear_frequency_std_hz, s.linear_damping,
+                s.linear_damping_std, s.linear_fit_min, s.linear_fit_max);
+    EXPECT_LE(std::abs(s.linear_frequency_hz - f0), s.linear_frequency_std_hz);
+    EXPECT_LE(std::abs(s.linear_damping - zeta), s.linear_damping_std);
+    EXPECT_GT(s.linear_frequency_std_hz, 0);
+    EXPECT_LT(s.linear_frequency_std_hz, 1e-4 * f0);
+    EXPECT_LT(s.linear_damping_std, 0.05 * zeta);
+    EXPECT_LT(s.linear_fit_min, s.linear_fit_max);
+    EXPECT_GE(s.linear_fit_min, r.backbone.amplitude.minCoeff());
+  }
+}
+
+// A band that follows twice a stronger mode's frequency: mode 1 at 122 Hz (softening,
+// as three_mode_record's first mode) plus a locked second harmonic at a twentieth of
+// its amplitude, read in 230:260 Hz. At least three quarters of the kept points of that
+// band must be flagged harmonic 2 (measured 19 of 24: the flag needs twice the
+// sub-band's frequency within the point's uncertainty, and a few points miss it) and
+// the summary must say so; an independent mode at 250 Hz of the same size (twice the
+// first mode's frequency stays at or below 244 Hz) must not be flagged.
+TEST(RingdownSuperharmonic, FlagsABandFollowingTwiceAStrongerMode) {
+  const testing::ThreeModeRecord rec = testing::three_mode_record(122.0, 6.0, 1e-4, 7, 0.0);
+  const Eigen::Index n = rec.displacement.size();
+  Eigen::VectorXd locked = rec.displacement, free = rec.displacement;
+  // The first mode's phase, from its analytic signal: cos(2 theta) = 2 cos^2 - 1 of
+  // the normalised displacement (the record holds mode 1 and noise 1e-4 of the peak).
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double a = rec.first_amplitude(k);
+    const double c = std::clamp(rec.displacement(k) / a, -1.0, 1.0);
+    locked(k) += 0.05 * a * (2 * c * c - 1);
+    const double t = static_cast<double>(k) / rec.fs;
+    free(k) += 0.05 * 1e-3 * std::exp(-0.002 * 2 * std::numbers::pi * 250 * t) *
+               std::cos(2 * std::numbers::pi * 250 * t);
+  }
+  const Ringdown rl = extract_band(locked, rec.fs, Quantity::kDisplacement, {230, 260});
+  ASSERT_EQ(rl.summary.status, RingdownStatus::kOk) << rl.summary.message;
+  std::printf("locked: %ld points, %d flagged; %s\n", long(rl.backbone.size()),
+              rl.summary.superharmonic_points, rl.summary.message.c_str());
+  EXPECT_GE(rl.summary.superharmonic_points, 0.75 * static_cast<double>(rl.backbone.size()));
+  EXPECT_NE(rl.summary.message.find("superharmonic"), std::string::npos);
+  const Ringdown rf = extract_band(free, rec.fs, Quantity::kDisplacement, {230, 260});
+  ASSERT_EQ(rf.summary.status, RingdownStatus::kOk) << rf.summary.message;
+  std::printf("free: %ld points, %d flagged\n", long(rf.backbone.size()),
+              rf.summary.superharmonic_points);
+  EXPECT_EQ(rf.summary.superharmonic_points, 0);
+}
+
+// A band with no mode in it says what the spectrum shows instead: the strongest peak
+// near the band (a linear mode at 80 Hz, band 90:110 Hz).
+TEST(RingdownAdvice, NoModeInTheBandNamesThePeakNearIt) {
+  const double fs = 2048, f0 = 80.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(4 * fs);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1e-6);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) = 1e-3 * std::exp(-0.003 * 2 * std::numbers::pi * f0 * t) *
+               std::cos(2 * std::numbers::pi * f0 * t) +
+           g(rng);
+  }
+  const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {90, 110});
+  std::printf("advice: %s\n", r.summary.report().c_str());
+  ASSERT_NE(r.summary.status, RingdownStatus::kOk);
+  EXPECT_NE(r.summary.message.find("no mode in the band"), std::string::npos);
+  // The peak's bin is within 0.05 Hz of 80 Hz (4 s record, Hann window).
+  EXPECT_TRUE(r.summary.message.find("at 79.9") != std::string::npos ||
+              r.summary.message.find("at 80.0") != std::string::npos)
+      << r.summary.message;
+}
+
 using Case = std::tuple<double, bool, Method>;
 
 // Issue 2's acceptance as written: fs 5120 Hz, 6 s, three modes, the first
