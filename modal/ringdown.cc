@@ -742,9 +742,19 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   };
   const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
   if (k1 <= k0 + 2) return {};
-  Eigen::Index kp = k0;
-  for (Eigen::Index k = k0; k <= k1; ++k) {
-    if (std::abs(channel.spectrum(k)) > std::abs(channel.spectrum(kp))) kp = k;
+  // The highest local maximum (a rising or falling edge of the range is not a peak).
+  Eigen::Index kp = -1;
+  for (Eigen::Index k = std::max<Eigen::Index>(k0, 1); k <= k1; ++k) {
+    const double v = std::abs(channel.spectrum(k));
+    if (k + 1 >= channel.spectrum.size() || !(v > std::abs(channel.spectrum(k - 1))) ||
+        !(v >= std::abs(channel.spectrum(k + 1)))) {
+      continue;
+    }
+    if (kp < 0 || v > std::abs(channel.spectrum(kp))) kp = k;
+  }
+  if (kp < 0) {
+    return fmt::format("no mode in the band and no spectral peak from {:.2f} to {:.2f} Hz",
+                       static_cast<double>(k0) * df, static_cast<double>(k1) * df);
   }
   const double fp = static_cast<double>(kp) * df;
   const double edge = taper * width;
@@ -896,10 +906,12 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
   const BandSetting s = band_setting(channel, band, options, bs, ep);
   if (s.stop - s.start < 2 * s.w_min) {
+    // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
+    const std::string advice = spectral_advice(channel, band, options.taper);
     sum.message = fmt::format(
-        "record too short for this band: {:.3f} s usable after the filter's "
-        "settling time, {:.3f} s needed",
-        std::max(0.0, s.stop - s.start), 2 * s.w_min);
+        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
+        "time, {:.3f} s needed",
+        advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
     return out;
   }
   sum.noise_floor_m = noise_floor(ep, s);

@@ -279,6 +279,25 @@ TEST(RingdownAdvice, NoModeInTheBandNamesThePeakNearIt) {
       << r.summary.message;
 }
 
+// A band narrower than its mode: 79:81 Hz around a mode at 80 Hz with 3 % damping
+// (half-power width 4.8 Hz). The reason must say the band is narrower than 4 times the
+// mode's half-power width rather than only that the record is too short.
+TEST(RingdownAdvice, ABandNarrowerThanItsModeSaysSo) {
+  const double fs = 1000, f0 = 80.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(10 * fs);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) =
+        std::exp(-0.03 * 2 * std::numbers::pi * f0 * t) * std::cos(2 * std::numbers::pi * f0 * t);
+  }
+  const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {79, 81});
+  std::printf("advice: %s\n", r.summary.report().c_str());
+  ASSERT_NE(r.summary.status, RingdownStatus::kOk);
+  EXPECT_NE(r.summary.message.find("narrower than 4 times the half-power width"), std::string::npos)
+      << r.summary.message;
+}
+
 using Case = std::tuple<double, bool, Method>;
 
 // Issue 2's acceptance as written: fs 5120 Hz, 6 s, three modes, the first
