@@ -530,8 +530,8 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
       hi = std::max(hi, lr.real());
     }
   }
-  // Below 1e-5 over the span, r moves a decay rate by less than 1e-5 / span.
-  g.active = hi - lo > 1e-5;
+  // Below 1e-4 over the span, r moves a decay rate by less than 1e-4 over a window.
+  g.active = hi - lo > 1e-4;
   return g;
 }
 
