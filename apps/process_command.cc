@@ -25,7 +25,7 @@ struct ProcessArgs {
   std::vector<std::string> channels;
   std::vector<std::string> bands;
   int modes = 0;
-  std::string quantity = "acceleration";
+  std::string quantity;
   std::string amplitude = "velocity";
   std::string method = "hilbert";
   std::string out;
@@ -75,7 +75,7 @@ void run_process(const ProcessArgs& args) {
   for (const std::string& b : args.bands) opt.bands.push_back(parse_band(b));
   opt.modes = args.modes;
   opt.channels = args.channels;
-  opt.quantity = parse_quantity_arg("--quantity", args.quantity);
+  if (!args.quantity.empty()) opt.quantity = parse_quantity_arg("--quantity", args.quantity);
   opt.ringdown.amplitude = parse_quantity_arg("--amplitude", args.amplitude);
   opt.ringdown.method = args.method == "pff" ? modal::Method::kPeaks : modal::Method::kHilbert;
   opt.ringdown.snr_min = args.snr_min;
@@ -136,7 +136,8 @@ void add_process_command(CLI::App& app) {
       "band-passed (zero phase), converted to displacement, Hilbert-transformed, and\n"
       "its phase and log-envelope are fitted locally and differentiated:\n"
       "  omega_d = dtheta/dt, sigma = -dlnA/dt, f_n = sqrt(omega_d^2 + sigma^2)/2pi,\n"
-      "  zeta = sigma/omega_n, each with an uncertainty (2 sigma by default).\n"
+      "  zeta = sigma/omega_n, each with an expanded uncertainty k*sigma (coverage factor\n"
+      "  k = 3 by default, --coverage-factor).\n"
       "Only the span well above the noise floor and clear of the impact is kept.\n"
       "Writes OUT/<file stem>.<channel>.band<k>.csv and OUT/summary.json.\n\n"
       "Example:\n"
@@ -155,8 +156,8 @@ void add_process_command(CLI::App& app) {
           ->check(positive());
   band->excludes(modes);
   cmd->add_option("--quantity", args->quantity,
-                  "what channels without a [unit] measure: acceleration (default), velocity, "
-                  "displacement (SI units assumed)");
+                  "what channels without a [unit] measure: acceleration, velocity or\n"
+                  "displacement (SI units assumed); required when a channel has no unit");
   cmd->add_option(
       "--amplitude", args->amplitude,
       "amplitude column: velocity (default, m/s), displacement (m) or acceleration (m/s^2)");

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -9,6 +11,107 @@
 #include "jointlab/signal/spectrum.h"
 
 namespace jointlab::modal {
+
+namespace {
+
+// Below this coherence another channel's band signal is not the same mode (a
+// corrupted sample, another source) and does not count in the nodal test.
+constexpr double kMinCoherence = 0.5;
+
+// Most samples one continued record may take (its spectrum then takes about 1.5 GB).
+constexpr double kMaxSamples = 5e7;
+
+// The band's analytic signal z of channel `channel` at absolute time t, by cubic
+// (Lagrange) interpolation of its baseband: the coarse grid samples the baseband at
+// 8 times its width, where the cubic's error is below 1e-3.
+std::complex<double> band_value(const signal::BandSignal& z, const ChannelSpectrum& channel,
+                                double t) {
+  const double x = (t - channel.t0) / z.dt;
+  const Eigen::Index n = z.baseband.size();
+  if (n < 4) return 0.0;
+  const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(x)) - 1, 0, n - 4);
+  const double u = x - static_cast<double>(j);
+  std::complex<double> v = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    double w = 1;
+    for (int l = 0; l < 4; ++l) {
+      if (l != k) w *= (u - l) / (k - l);
+    }
+    v += w * z.baseband(j + k);
+  }
+  return v * std::polar(1.0, 2 * std::numbers::pi * z.carrier_hz * (t - channel.t0));
+}
+
+// Channel b's band signal against channel a's over [t1, t2] (a's coarse grid):
+// ratio = a^H b / a^H a, coherence = |a^H b|^2 / (|a|^2 |b|^2), and b's complex
+// amplitude scaled to a's envelope at t1.
+struct Projection {
+  std::complex<double> ratio = 0.0;
+  double coherence = 0.0;
+  std::complex<double> amplitude = 0.0;
+};
+
+Projection projection(const signal::BandSignal& za, const ChannelSpectrum& ca,
+                      const signal::BandSignal& zb, const ChannelSpectrum& cb, double t1,
+                      double t2) {
+  Projection p;
+  std::complex<double> ab = 0.0;
+  double aa = 0, bb = 0;
+  for (double t = t1; t <= t2 + 1e-12; t += za.dt) {
+    const std::complex<double> a = band_value(za, ca, t), b = band_value(zb, cb, t);
+    ab += std::conj(a) * b;
+    aa += std::norm(a);
+    bb += std::norm(b);
+  }
+  if (!(aa > 0) || !(bb > 0) || !std::isfinite(aa) || !std::isfinite(bb)) return p;
+  p.ratio = ab / aa;
+  p.coherence = std::norm(ab) / (aa * bb);
+  p.amplitude = p.ratio * std::abs(band_value(za, ca, t1));
+  return p;
+}
+
+// Refuses, before anything is allocated, what cannot be processed: a continued record
+// too large for memory, a band whose filter cannot settle within the record, and a
+// requested channel whose quantity is unknown.
+void check_processable(const data::Record& record, const std::vector<signal::Band>& bands,
+                       const std::vector<const data::Channel*>& chans,
+                       const ProcessOptions& options) {
+  // Sizes before anything is allocated: the continued record must fit in memory, and
+  // each band's filter must settle within the record.
+  const double duration = static_cast<double>(record.size() - 1) / record.fs;
+  const auto samples_for = [&](double extend_s) { return (duration + 2 * extend_s) * record.fs; };
+  if (!(samples_for(options.prepare.extend_s) <= kMaxSamples)) {
+    throw InputError(
+        where(record.source, 0,
+              fmt::format("sample rate {:.3g} Hz: analysing this record would take {:.3g} "
+                          "samples (at most {:.3g}); check the file's time column or fs",
+                          record.fs, samples_for(options.prepare.extend_s), kMaxSamples)));
+  }
+  for (const signal::Band& b : bands) {
+    const double settle = band_settling_s(b, options.ringdown.taper);
+    const double samples =
+        samples_for(prepare_for({b}, options.ringdown.taper, options.prepare).extend_s);
+    if (!(settle <= duration) || !(samples <= kMaxSamples)) {
+      throw InputError(where(
+          record.source, 0,
+          fmt::format("band {}:{} Hz is too narrow for this {:.3g} s record: its filter takes "
+                      "{:.3g} s to settle; give a band at least {:.3g} Hz wide",
+                      b.lo, b.hi, duration, settle, 3.0 / (options.ringdown.taper * duration))));
+    }
+  }
+  // A channel without a unit measures what the user says, or nothing can be assumed.
+  for (const data::Channel* c : chans) {
+    if (c->quantity || options.quantity) continue;
+    throw InputError(where(
+        record.source, 0,
+        fmt::format("channel '{}' has no unit and no --quantity was given: give its unit in the "
+                    "header (e.g. '{} [m/s^2]', '{} [m/s]') or --quantity "
+                    "acceleration|velocity|displacement",
+                    c->name, c->name, c->name)));
+  }
+}
+
+}  // namespace
 
 std::string ProcessOptions::check() const {
   if (modes < 0) return "--modes must be positive";
@@ -107,88 +210,84 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     }
   }
 
-  // One impact instant for all channels keeps their coarse grids aligned.
-  Eigen::Index impact = record.size();
-  for (const data::Channel* c : chans) impact = std::min(impact, impact_index(c->samples));
-  // Continue only what the bands need (content and length).
+  check_processable(record, out.bands, chans, options);
+  // Every band, channel and file is processed on its own: each channel from its own
+  // impact, each band with the continuation and low-pass it alone needs (bands that
+  // need the same share one). The nodal test below compares a channel with every
+  // response channel of the file, requested or not.
   const double taper = options.ringdown.taper;
-  const PrepareOptions prepare = prepare_for(out.bands, taper, options.prepare);
-  std::vector<ChannelSpectrum> spectra;
-  std::vector<Quantity> measured;
-  for (const data::Channel* c : chans) {
-    spectra.push_back(channel_spectrum(c->samples, record.fs, record.t0, prepare, cache, impact));
-    measured.push_back(c->quantity.value_or(options.quantity));
+  std::vector<const data::Channel*> all;
+  for (const data::Channel& c : record.channels) {
+    // Channels whose quantity is unknown cannot be compared (requested ones have one).
+    if (c.quantity != Quantity::kForce && (c.quantity || options.quantity)) all.push_back(&c);
   }
+  std::vector<Eigen::Index> impact(all.size());
+  for (size_t c = 0; c < all.size(); ++c) impact[c] = impact_index(all[c]->samples);
+  const auto index_of = [&](const data::Channel* ch) {
+    return static_cast<size_t>(std::find(all.begin(), all.end(), ch) - all.begin());
+  };
   for (size_t b = 0; b < out.bands.size(); ++b) {
-    // A heavily damped higher mode can make the shared continuation blow up
-    // within a lower band's settling time: that band then gets its own, low-passed
-    // just above it (every channel alike, so their coarse grids stay aligned).
     const signal::Band& band = out.bands[b];
-    const double settle = band_settling_s(band, taper);
-    std::vector<ChannelSpectrum> own;
-    const bool short_continuation =
-        std::any_of(spectra.begin(), spectra.end(), [settle](const ChannelSpectrum& s) {
-          return s.continued_begin_s < settle || s.continued_end_s < settle;
-        });
-    const double own_lowpass_hz = prepare_for({band}, taper).lowpass_hz;
-    if (short_continuation && options.prepare.lowpass_hz == 0 &&
-        own_lowpass_hz < 0.99 * prepare.lowpass_hz) {
-      PrepareOptions narrow = prepare;
-      narrow.lowpass_hz = own_lowpass_hz;
-      for (const data::Channel* c : chans) {
-        own.push_back(channel_spectrum(c->samples, record.fs, record.t0, narrow, cache, impact));
-      }
+    const PrepareOptions prepare = prepare_for({band}, taper, options.prepare);
+    // Band signals of every response channel (for the nodal test and the shape).
+    std::vector<Ringdown> others(all.size());
+    std::vector<ChannelSpectrum> spectra(all.size());
+    for (size_t c = 0; c < all.size(); ++c) {
+      spectra[c] =
+          channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
     }
-    const std::vector<ChannelSpectrum>& used = own.empty() ? spectra : own;
     const size_t first = out.results.size();
-    for (size_t c = 0; c < chans.size(); ++c) {
+    for (const data::Channel* ch : chans) {
+      const size_t c = index_of(ch);
       ChannelBand r;
-      r.channel = chans[c]->name;
-      r.measured = measured[c];
+      r.channel = ch->name;
+      r.measured = ch->quantity ? *ch->quantity : *options.quantity;
       r.band_index = static_cast<int>(b) + 1;
-      r.ringdown = extract_backbone(used[c], measured[c], band, options.ringdown, cache);
+      r.ringdown = extract_backbone(spectra[c], r.measured, band, options.ringdown, cache);
       out.results.push_back(std::move(r));
     }
-    // Reference: the channel with the widest kept span (ties: the largest envelope).
+    for (size_t c = 0; c < all.size(); ++c) {
+      others[c].band =
+          band_signal(spectra[c], all[c]->quantity ? *all[c]->quantity : *options.quantity, band,
+                      options.ringdown, cache);
+    }
+    // Reference: the channel with the widest kept span (ties: the first).
     size_t ref = first;
     for (size_t i = first; i < out.results.size(); ++i) {
-      const auto& s = out.results[i].ringdown;
-      const auto& best = out.results[ref].ringdown;
-      const double span =
-          s.summary.status == RingdownStatus::kOk ? s.summary.amplitude_decades : -1;
-      const double best_span =
-          best.summary.status == RingdownStatus::kOk ? best.summary.amplitude_decades : -1;
-      if (span > best_span) ref = i;
+      const auto span = [](const Ringdown& r) {
+        return r.summary.status == RingdownStatus::kOk ? r.summary.amplitude_decades : -1.0;
+      };
+      if (span(out.results[i].ringdown) > span(out.results[ref].ringdown)) ref = i;
     }
     out.reference.push_back(out.results[ref].channel);
     const Ringdown& rr = out.results[ref].ringdown;
-    if (rr.summary.status != RingdownStatus::kOk) continue;
-    // Complex amplitudes over the reference's kept span (same coarse grid for all channels).
-    const double dt = rr.band.dt;
-    const double t_first = used[0].t0;
-    const auto j0 = static_cast<Eigen::Index>(std::ceil((rr.summary.span_start_s - t_first) / dt));
-    const auto j1 = static_cast<Eigen::Index>(std::floor((rr.summary.span_end_s - t_first) / dt));
-    if (j1 <= j0) continue;
-    const Eigen::VectorXcd u = rr.band.baseband.segment(j0, j1 - j0 + 1);
-    const std::complex<double> u0 = u(0);
-    const double uu = u.squaredNorm();
-    for (size_t i = first; i < out.results.size(); ++i) {
-      const Eigen::VectorXcd& zc = out.results[i].ringdown.band.baseband;
-      if (zc.size() < j1 + 1) continue;
-      const std::complex<double> proj = u.dot(zc.segment(j0, j1 - j0 + 1)) / uu;  // u^H z / u^H u
-      out.results[i].complex_amplitude = proj * std::abs(u0);
+    if (rr.summary.status == RingdownStatus::kOk) {
+      const size_t rc = index_of(record.find(out.results[ref].channel));
+      for (size_t i = first; i < out.results.size(); ++i) {
+        const size_t c = index_of(record.find(out.results[i].channel));
+        out.results[i].complex_amplitude =
+            projection(others[rc].band, spectra[rc], others[c].band, spectra[c],
+                       rr.summary.span_start_s, rr.summary.span_end_s)
+                .amplitude;
+      }
     }
-    double strongest = 0;
-    for (size_t i = first; i < out.results.size(); ++i) {
-      strongest = std::max(strongest, std::abs(out.results[i].complex_amplitude));
-    }
+    // A channel near a node: some coherent channel of the file sees the mode over
+    // this channel's own span more than 1 / min_share times as strongly.
     for (size_t i = first; i < out.results.size(); ++i) {
       ChannelBand& r = out.results[i];
-      const double share = std::abs(r.complex_amplitude) / strongest;
-      if (i == ref || r.ringdown.summary.status != RingdownStatus::kOk ||
-          !(share < options.min_share)) {
-        continue;
+      if (r.ringdown.summary.status != RingdownStatus::kOk || options.min_share == 0) continue;
+      const size_t c = index_of(record.find(r.channel));
+      double share = 1.0;
+      for (size_t d = 0; d < all.size(); ++d) {
+        if (d == c) continue;
+        const Projection p =
+            projection(others[c].band, spectra[c], others[d].band, spectra[d],
+                       r.ringdown.summary.span_start_s, r.ringdown.summary.span_end_s);
+        if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
+          share = std::min(share, 1.0 / std::abs(p.ratio));
+        }
       }
+      if (!(share < options.min_share)) continue;
       r.ringdown.backbone = Backbone{};
       r.ringdown.summary.status = RingdownStatus::kNoSpan;
       r.ringdown.summary.message = fmt::format(

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <complex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,12 +30,12 @@ namespace jointlab::modal {
 
 /// What to process in a record.
 struct ProcessOptions {
-  std::vector<signal::Band> bands;              ///< explicit bands (used when modes == 0)
-  int modes = 0;                                ///< number of spectral peaks to use as bands
-  std::vector<std::string> channels;            ///< channels to process (empty: all non-force)
-  Quantity quantity = Quantity::kAcceleration;  ///< quantity of channels without a unit
-  RingdownOptions ringdown;                     ///< backbone extraction settings
-  PrepareOptions prepare;                       ///< onset trimming and continuation
+  std::vector<signal::Band> bands;    ///< explicit bands (used when modes == 0)
+  int modes = 0;                      ///< number of spectral peaks to use as bands
+  std::vector<std::string> channels;  ///< channels to process (empty: all non-force)
+  std::optional<Quantity> quantity;   ///< quantity of channels without a unit
+  RingdownOptions ringdown;           ///< backbone extraction settings
+  PrepareOptions prepare;             ///< onset trimming and continuation
   double min_share = 0.1;  ///< weakest channel share of a mode that still gives a backbone
   /// Empty if usable, else what is wrong.
   std::string check() const;
@@ -62,7 +63,8 @@ std::vector<signal::Band> bands_from_peaks(const data::Record& record,
                                            const std::vector<const data::Channel*>& channels,
                                            int count, signal::FftCache& cache);
 
-/// Processes a record; throws InputError for unknown channels or bands outside (0, fs/2).
+/// Processes a record; throws InputError for unknown channels, bands outside (0, fs/2), or a
+/// requested channel without a unit when options.quantity is not given.
 RecordResult process_record(const data::Record& record, const ProcessOptions& options,
                             signal::FftCache& cache);
 

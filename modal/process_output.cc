@@ -28,9 +28,26 @@ void write_backbones(const std::filesystem::path& dir, const RecordResult& resul
     t.add("displacement_m", b.displacement);
     t.add("snr", b.snr);
     t.add("window_s", b.window_s);
+    t.add("harmonic", b.harmonic.cast<double>());
     data::write_table(dir / backbone_file_name(result.source, r.channel, r.band_index), t);
   }
 }
+
+namespace {
+
+// The linear values: the zero-amplitude limit of the fit of the backbone's lower half,
+// its expanded uncertainty and the amplitudes the fit spans.
+void write_linear(data::JsonWriter& j, const RingdownSummary& s) {
+  j.key("linear_frequency_hz").value(s.linear_frequency_hz);
+  j.key("linear_frequency_std_hz").value(s.linear_frequency_std_hz);
+  j.key("linear_damping_ratio").value(s.linear_damping);
+  j.key("linear_damping_std").value(s.linear_damping_std);
+  j.key("linear_reference_amplitude").value(0.0);
+  j.key("linear_fit_amplitude_min").value(s.linear_fit_min);
+  j.key("linear_fit_amplitude_max").value(s.linear_fit_max);
+}
+
+}  // namespace
 
 void write_summary(const std::filesystem::path& dir, const std::vector<RecordResult>& results,
                    const ProcessOptions& options) {
@@ -40,6 +57,8 @@ void write_summary(const std::filesystem::path& dir, const std::vector<RecordRes
   j.key("method").value(options.ringdown.method == Method::kHilbert ? "hilbert" : "pff");
   j.key("amplitude_quantity").value(quantity_name(options.ringdown.amplitude));
   j.key("amplitude_unit").value(si_unit(options.ringdown.amplitude));
+  // The *_std columns and values are expanded uncertainties: coverage_factor times sigma.
+  j.key("coverage_factor").value(options.ringdown.coverage_factor);
   j.key("files").begin_array();
   for (const RecordResult& rec : results) {
     j.begin_object();
@@ -55,10 +74,7 @@ void write_summary(const std::filesystem::path& dir, const std::vector<RecordRes
       for (const ChannelBand& r : rec.results) {
         if (r.band_index != static_cast<int>(b) + 1 || r.channel != rec.reference[b]) continue;
         const RingdownSummary& s = r.ringdown.summary;
-        if (s.status == RingdownStatus::kOk) {
-          j.key("linear_frequency_hz").value(s.linear_frequency_hz);
-          j.key("linear_damping_ratio").value(s.linear_damping);
-        }
+        if (s.status == RingdownStatus::kOk) write_linear(j, s);
       }
       j.key("operating_shape").begin_array();
       for (const ChannelBand& r : rec.results) {
@@ -87,8 +103,8 @@ void write_summary(const std::filesystem::path& dir, const std::vector<RecordRes
         j.key("span_start_s").value(s.span_start_s);
         j.key("span_end_s").value(s.span_end_s);
         j.key("amplitude_decades").value(s.amplitude_decades);
-        j.key("linear_frequency_hz").value(s.linear_frequency_hz);
-        j.key("linear_damping_ratio").value(s.linear_damping);
+        write_linear(j, s);
+        j.key("superharmonic_points").value(s.superharmonic_points);
         if (!s.message.empty()) j.key("note").value(s.message);
       } else {
         j.key("file").null();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <numbers>
 #include <vector>
@@ -30,6 +31,7 @@ struct Estimate {
   double misfit = 0;       // RMS of the signal about the fit [m]
   double log_amp_std = 0;  // one-sigma of ln A
   double window = 0;       // window length [s]
+  double centre = 0;       // window centre [s from record start]
 };
 
 // Hilbert estimate at `at` from ln A and theta on the grid t_j = j dt, fitted
@@ -63,6 +65,7 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
   e.omega_d_std = std::hypot(fp.slope_std * scale_p, fp.slope_change);
   e.misfit = std::exp(fa.value) * std::hypot(fa.residual_rms, fp.residual_rms);
   e.window = window;
+  e.centre = centre;
   return e;
 }
 
@@ -94,6 +97,7 @@ Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& 
   e.omega_d_std = e.omega_d * rel_t;
   e.misfit = std::exp(fa.value) * fa.residual_rms;
   e.window = 2 * half_count * half_period;
+  e.centre = e.t;
   return e;
 }
 
@@ -103,8 +107,6 @@ double quantile(std::vector<double> v, double q) {
   std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
   return v[k];
 }
-
-double median(std::vector<double> v) { return quantile(std::move(v), 0.5); }
 
 }  // namespace
 
@@ -127,9 +129,11 @@ std::string RingdownSummary::report() const {
   if (status != RingdownStatus::kOk) return "no backbone: " + message;
   return fmt::format(
       "kept {:.4f} s to {:.4f} s ({:.2f} decades of amplitude); noise floor {:.3e} m; "
-      "low-amplitude frequency {:.4f} Hz, damping ratio {:.5f}{}{}",
-      span_start_s, span_end_s, amplitude_decades, noise_floor_m, linear_frequency_hz,
-      linear_damping, message.empty() ? "" : "; ", message);
+      "linear (zero-amplitude limit of the fit over amplitudes {:.3g} to {:.3g}): frequency "
+      "{:.4f} +- {:.2g} Hz, damping ratio {:.4g} +- {:.2g}{}{}",
+      span_start_s, span_end_s, amplitude_decades, noise_floor_m, linear_fit_min, linear_fit_max,
+      linear_frequency_hz, linear_frequency_std_hz, linear_damping, linear_damping_std,
+      message.empty() ? "" : "; ", message);
 }
 
 double band_settling_s(const signal::Band& band, double taper) {
@@ -216,275 +220,393 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   return c;
 }
 
-Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
-                          const signal::Band& band, const RingdownOptions& options,
-                          signal::FftCache& cache) {
-  Ringdown out;
-  RingdownSummary& sum = out.summary;
-  signal::BandOptions bo;
-  bo.taper = options.taper;
-  bo.order = derivative_order(measured);
-  out.band = signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs,
-                                   band, bo, cache);
-  const signal::BandSignal& bs = out.band;
-  const Eigen::Index m = bs.baseband.size();
-  const double dt = bs.dt;
-  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
+namespace {
 
-  // Envelope and unwrapped phase on the coarse grid.
-  Eigen::VectorXd amp(m), log_amp(m), theta(m);
+// Envelope, its logarithm and the unwrapped phase (carrier restored) of a band
+// signal z(t_j) = baseband_j exp(2 pi i carrier t_j).
+struct EnvelopePhase {
+  Eigen::VectorXd amp, log_amp, theta;
+};
+
+EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz, double dt) {
+  const Eigen::Index m = baseband.size();
+  EnvelopePhase ep{Eigen::VectorXd(m), Eigen::VectorXd(m), Eigen::VectorXd(m)};
   double prev = 0, offset = 0;
   for (Eigen::Index j = 0; j < m; ++j) {
-    amp(j) = std::abs(bs.baseband(j));
-    log_amp(j) = std::log(std::max(amp(j), 1e-300));
-    double ph = std::arg(bs.baseband(j));
+    ep.amp(j) = std::abs(baseband(j));
+    ep.log_amp(j) = std::log(std::max(ep.amp(j), 1e-300));
+    const double ph = std::arg(baseband(j));
     if (j > 0) {
       const double d = ph - prev;
       if (d > std::numbers::pi) offset -= kTwoPi;
       if (d < -std::numbers::pi) offset += kTwoPi;
     }
     prev = ph;
-    theta(j) = ph + offset + kTwoPi * bs.carrier_hz * static_cast<double>(j) * dt;
+    ep.theta(j) = ph + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
   }
-  sum.carrier_hz = bs.carrier_hz;
+  return ep;
+}
 
+// What the steps of one band's extraction share.
+struct BandSetting {
+  BandSetting(const ChannelSpectrum& c, const signal::Band& b, const RingdownOptions& o)
+      : channel(c), band(b), options(o) {}
+  const ChannelSpectrum& channel;
+  const signal::Band& band;
+  const RingdownOptions& options;
+  double dt = 0;           // coarse grid step [s]
+  double begin = 0;        // first measured sample used [s from channel.t0]
+  double start = 0;        // first usable time [s from channel.t0]
+  double stop = 0;         // last usable time [s from channel.t0]
+  double edge = 0;         // band edge width [Hz]
+  double f_guess = 0;      // carrier frequency from the phase [Hz]
+  double period = 0;       // 1 / f_guess [s]
+  double w_min = 0;        // shortest fit window [s]
+  double correlation = 0;  // coarse samples per independent noise sample
+  double noise_bandwidth_hz = 0;
+};
+
+// The band's effect on the mode, divided out: z_band(t) = r(t) z_mode(t). A mode
+// whose frequency and decay rate change slowly passes the band multiplied by the
+// gain at its complex frequency, G(f + i sigma / 2 pi); where they change within the
+// filter's response time the factor differs from that. r is taken exactly instead:
+// the mode as the local estimates describe it, m(t) = exp(int (-sigma + 2 pi i f) dt),
+// is filtered by the band's gain and r = band(m) / m (a linear filter: m's scale
+// cancels). Stored as ln r on the coarse grid.
+struct GainCorrection {
+  double dt = 0;           // grid step [s]
+  Eigen::VectorXcd log_r;  // ln r(t_j), t_j = j dt from the channel's t0
+  bool active = false;     // r changes along the span
+  std::complex<double> log_at(double at) const {
+    if (!active) return 0.0;
+    const double x = std::clamp(at / dt, 0.0, static_cast<double>(log_r.size() - 1));
+    const auto j = std::min<Eigen::Index>(static_cast<Eigen::Index>(x), log_r.size() - 2);
+    const double w = x - static_cast<double>(j);
+    return (1 - w) * log_r(j) + w * log_r(j + 1);
+  }
+  double abs_at(double at) const { return std::exp(log_at(at).real()); }
+};
+
+// Band signal, noise floor, span and windows of one band (the set-up of the steps).
+BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& band,
+                         const RingdownOptions& options, const signal::BandSignal& bs,
+                         const EnvelopePhase& ep) {
+  BandSetting s(channel, band, options);
+  s.dt = bs.dt;
+  const Eigen::Index m = bs.baseband.size();
+  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
   // A faithfully continued end loses only what its continuation does not cover
   // of the filter's settling time: the transient then lies in the continuation.
-  const double edge = options.taper * (band.hi - band.lo);
+  s.edge = options.taper * (band.hi - band.lo);
   const double settle = band_settling_s(band, options.taper);
   const double begin = channel.data_begin_s - channel.t0;
   const double end = channel.data_end_s - channel.t0;
-  const double start = begin + std::max(0.0, settle - channel.continued_begin_s);
-  const double stop = std::min(duration, end - std::max(0.0, settle - channel.continued_end_s));
-  sum.peak_time_s = channel.data_begin_s;
-
-  const double correlation = std::max(1.0, 1.0 / (dt * bs.noise_bandwidth_hz));
+  s.begin = begin;
+  s.start = begin + std::max(0.0, settle - channel.continued_begin_s);
+  s.stop = std::min(duration, end - std::max(0.0, settle - channel.continued_end_s));
+  s.noise_bandwidth_hz = bs.noise_bandwidth_hz;
+  s.correlation = std::max(1.0, 1.0 / (s.dt * bs.noise_bandwidth_hz));
   // Period from the phase over the first part of the usable span.
-  const double f_guess = [&] {
-    const Eigen::Index a = std::min<Eigen::Index>(m - 1, static_cast<Eigen::Index>(start / dt));
-    const Eigen::Index b = std::min<Eigen::Index>(m - 1, a + std::max<Eigen::Index>(4, m / 20));
-    return b > a ? (theta(b) - theta(a)) / (kTwoPi * static_cast<double>(b - a) * dt)
-                 : bs.carrier_hz;
-  }();
-  const double period = 1.0 / std::max(f_guess, band.lo);
-  const double w_min =
-      std::max({options.min_periods * period, 4.0 / bs.noise_bandwidth_hz, 6.0 * dt});
+  const Eigen::Index a = std::min<Eigen::Index>(m - 1, static_cast<Eigen::Index>(s.start / s.dt));
+  const Eigen::Index b = std::min<Eigen::Index>(m - 1, a + std::max<Eigen::Index>(4, m / 20));
+  s.f_guess = b > a ? (ep.theta(b) - ep.theta(a)) / (kTwoPi * static_cast<double>(b - a) * s.dt)
+                    : bs.carrier_hz;
+  s.period = 1.0 / std::max(s.f_guess, band.lo);
+  s.w_min = std::max({options.min_periods * s.period, 4.0 / bs.noise_bandwidth_hz, 6.0 * s.dt});
+  return s;
+}
 
-  if (stop - start < 2 * w_min) {
-    sum.message = fmt::format(
-        "record too short for this band: {:.3f} s usable after the filter's "
-        "settling time, {:.3f} s needed",
-        std::max(0.0, stop - start), 2 * w_min);
-    return out;
-  }
-
-  // Noise floor: residual RMS about fits spanning kNoiseSamples independent
-  // noise samples, lower quartile over the record (robust to windows the fit
-  // cannot follow). A window's squared misfit is noise^2 chi^2_k / dof, with dof
-  // = 2 w B real noise samples and k = dof less the parameters the two fits
-  // absorb; the chi^2 quartile is the Wilson-Hilferty approximation. The fits
-  // have the backbone's degree: for a narrow band the windows take seconds, over
-  // which a quadratic cannot follow ln A and would count model error as noise
-  // (a 36-44 Hz band read a floor nearly 4 times too high that way).
+// Noise floor: residual RMS about fits spanning kNoiseSamples independent noise
+// samples, lower quartile over the record (robust to windows the fit cannot
+// follow). A window's squared misfit is noise^2 chi^2_k / dof, with dof = 2 w B
+// real noise samples and k = dof less the parameters the two fits absorb; the
+// chi^2 quartile is the Wilson-Hilferty approximation. The fits have the
+// backbone's degree: for a narrow band the windows take seconds, over which a
+// quadratic cannot follow ln A and would count model error as noise (a 36-44 Hz
+// band read a floor nearly 4 times too high that way).
+double noise_floor(const EnvelopePhase& ep, const BandSetting& s) {
   constexpr double kNoiseSamples = 12.0;
-  const double w_noise = std::min(std::max(w_min, kNoiseSamples / bs.noise_bandwidth_hz),
-                                  std::max(w_min, (stop - start) / 2));
+  const int degree = s.options.degree;
+  const double w_noise = std::min(std::max(s.w_min, kNoiseSamples / s.noise_bandwidth_hz),
+                                  std::max(s.w_min, (s.stop - s.start) / 2));
   std::vector<double> misfits;
-  for (double c = start + w_noise / 2; c <= stop - w_noise / 2; c += w_noise / 4) {
+  for (double c = s.start + w_noise / 2; c <= s.stop - w_noise / 2; c += w_noise / 4) {
     misfits.push_back(
-        estimate_hilbert(log_amp, theta, dt, c, c, w_noise, correlation, 0.0, options.degree)
+        estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, c, w_noise, s.correlation, 0.0, degree)
             .misfit);
   }
-  const double dof = std::max(4.0, 2.0 * w_noise * bs.noise_bandwidth_hz);
-  const double k = std::max(2.0, dof - 2.0 * (options.degree + 1));
+  const double dof = std::max(4.0, 2.0 * w_noise * s.noise_bandwidth_hz);
+  const double k = std::max(2.0, dof - 2.0 * (degree + 1));
   const double wh = 1.0 - 2.0 / (9.0 * k) - 0.6745 * std::sqrt(2.0 / (9.0 * k));
   const double quartile_ratio = std::sqrt(k * wh * wh * wh / dof);
-  sum.noise_floor_m = std::max(quantile(misfits, 0.25) / quartile_ratio, 1e-300);
-  const double noise = sum.noise_floor_m;
+  return std::max(quantile(misfits, 0.25) / quartile_ratio, 1e-300);
+}
 
-  // Local estimates along the span.
+// Hilbert estimates along the span, each with the window that determines its decay
+// rate best. `noise` is the floor of the band signal; divided by the gain correction
+// it is the floor of the corrected signal at each point.
+std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetting& s, double noise,
+                                        const GainCorrection& gain) {
+  const RingdownOptions& options = s.options;
+  const double start = s.start, stop = s.stop, w_min = s.w_min;
   std::vector<Estimate> est;
-  if (options.method == Method::kHilbert) {
-    const double step = w_min / options.points_per_window;
-    // A window holds its point in its middle half: centred where the span allows,
-    // pushed inside it near the span's ends (the evaluation then sits off-centre,
-    // at most kMaxOffset half-widths, where the fit's slope is still well determined).
-    constexpr double kMaxOffset = 0.5;
-    const auto window_centre = [&](double c, double w) {
-      return std::clamp(c, start + w / 2, std::max(start + w / 2, stop - w / 2));
+  const double step = w_min / options.points_per_window;
+  // A window holds its point in its middle half: centred where the span allows,
+  // pushed inside it near the span's ends (the evaluation then sits off-centre,
+  // at most kMaxOffset half-widths, where the fit's slope is still well determined).
+  constexpr double kMaxOffset = 0.5;
+  const auto window_centre = [&](double c, double w) {
+    return std::clamp(c, start + w / 2, std::max(start + w / 2, stop - w / 2));
+  };
+  const double margin = w_min / 2 * (1 - kMaxOffset);
+  double previous_window = w_min;
+  for (double c = start + margin; c <= stop - margin + 1e-12; c += step) {
+    const double allowed = std::min(
+        {options.max_window_s, stop - start, 2 * std::min(c - start, stop - c) / (1 - kMaxOffset)});
+    const double noise_c = noise / gain.abs_at(c);
+    const auto fit = [&](double w) {
+      return estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, window_centre(c, w), w, s.correlation,
+                              noise_c, options.degree);
     };
-    const double margin = w_min / 2 * (1 - kMaxOffset);
-    double previous_window = w_min;
-    for (double c = start + margin; c <= stop - margin + 1e-12; c += step) {
-      const double allowed = std::min({options.max_window_s, stop - start,
-                                       2 * std::min(c - start, stop - c) / (1 - kMaxOffset)});
-      // Longer windows average noise (std ~ W^-1.5) but bend less with the
-      // backbone (model error ~ W^2): take the window with the smallest total
-      // uncertainty, stopping early once it meets the target.
-      // The slope and the envelope each take the window that determines them
-      // best: longer windows average noise (std ~ W^-1.5 for the slope) but bend
-      // less with the backbone (model error ~ W^2).
-      Estimate best = estimate_hilbert(log_amp, theta, dt, c, window_centre(c, w_min), w_min,
-                                       correlation, noise, options.degree);
-      Estimate best_amp = best;
-      // Below the noise threshold a point is dropped whatever its window.
-      const bool buried = std::exp(best.log_amp) < options.snr_min * noise;
-      // The best window changes slowly along the record: start the search two
-      // steps below the previous point's choice rather than at the shortest.
-      double w_first = w_min * std::sqrt(2.0);
-      while (w_first * 2.0 < previous_window) w_first *= std::sqrt(2.0);
-      for (double w = w_first; !buried && w <= allowed; w *= std::sqrt(2.0)) {
-        if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
-        const Estimate next = estimate_hilbert(log_amp, theta, dt, c, window_centre(c, w), w,
-                                               correlation, noise, options.degree);
-        if (next.log_amp_std < best_amp.log_amp_std) best_amp = next;
-        if (next.sigma_std < best.sigma_std) {
-          best = next;
-        } else if (next.sigma_std > 1.5 * best.sigma_std) {
-          break;  // clearly past the minimum: model error now dominates
-        }
+    // The slope and the envelope each take the window that determines them
+    // best: longer windows average noise (std ~ W^-1.5 for the slope) but bend
+    // less with the backbone (model error ~ W^2); the search stops once the
+    // damping meets its target or the uncertainty clearly grows again.
+    Estimate best = fit(w_min);
+    Estimate best_amp = best;
+    // Below the noise threshold a point is dropped whatever its window.
+    const bool buried = std::exp(best.log_amp) < options.snr_min * noise_c;
+    // The best window changes slowly along the record: start the search two
+    // steps below the previous point's choice rather than at the shortest.
+    double w_first = w_min * std::sqrt(2.0);
+    while (w_first * 2.0 < previous_window) w_first *= std::sqrt(2.0);
+    for (double w = w_first; !buried && w <= allowed; w *= std::sqrt(2.0)) {
+      if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
+      const Estimate next = fit(w);
+      if (next.log_amp_std < best_amp.log_amp_std) best_amp = next;
+      if (next.sigma_std < best.sigma_std) {
+        best = next;
+      } else if (next.sigma_std > 1.5 * best.sigma_std) {
+        break;  // clearly past the minimum: model error now dominates
       }
-      best.log_amp = best_amp.log_amp;
-      best.log_amp_std = best_amp.log_amp_std;
-      if (!buried) previous_window = best.window;
-      est.push_back(best);
     }
-  } else {
-    // Extrema of the band-passed displacement at full rate, refined by parabolas.
-    signal::BandOptions full = bo;
-    full.full_rate = true;
-    const signal::BandSignal fr = signal::band_analytic(
-        channel.spectrum, channel.n_record, channel.n_fft, channel.fs, band, full, cache);
-    const Eigen::VectorXd y = fr.baseband.real();
-    const double ts = 1.0 / channel.fs;
-    std::vector<double> tk, lk;
-    const Eigen::Index j0 = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(start / ts));
-    const Eigen::Index j1 =
-        std::min<Eigen::Index>(y.size() - 2, static_cast<Eigen::Index>(stop / ts));
-    for (Eigen::Index j = j0; j <= j1; ++j) {
-      const bool is_max = y(j) > y(j - 1) && y(j) >= y(j + 1) && y(j) > 0;
-      const bool is_min = y(j) < y(j - 1) && y(j) <= y(j + 1) && y(j) < 0;
-      if (!is_max && !is_min) continue;
-      const double ym = y(j - 1), y0 = y(j), yp = y(j + 1);
-      const double den = ym - 2 * y0 + yp;
-      const double d = den != 0 ? 0.5 * (ym - yp) / den : 0.0;
-      if (std::abs(d) > 1) continue;
-      const double peak = y0 - 0.25 * (ym - yp) * d;
-      // Successive extrema alternate in sign; a repeated sign is noise: keep the larger.
-      if (!tk.empty() && ((peak > 0) == (lk.back() > 0))) {
-        if (std::abs(peak) > std::abs(lk.back())) {
-          tk.back() = (static_cast<double>(j) + d) * ts;
-          lk.back() = peak;
-        }
-        continue;
+    best.log_amp = best_amp.log_amp;
+    best.log_amp_std = best_amp.log_amp_std;
+    if (!buried) previous_window = best.window;
+    est.push_back(best);
+  }
+  return est;
+}
+
+// Peak-fitting estimates from the extrema of the (full-rate, gain-corrected)
+// band-passed displacement y, each refined by a parabola.
+std::vector<Estimate> peak_estimates(const Eigen::VectorXd& y, const BandSetting& s, double noise) {
+  const RingdownOptions& options = s.options;
+  const double ts = 1.0 / s.channel.fs;
+  std::vector<double> tk, lk;
+  const Eigen::Index j0 = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(s.start / ts));
+  const Eigen::Index j1 =
+      std::min<Eigen::Index>(y.size() - 2, static_cast<Eigen::Index>(s.stop / ts));
+  for (Eigen::Index j = j0; j <= j1; ++j) {
+    const bool is_max = y(j) > y(j - 1) && y(j) >= y(j + 1) && y(j) > 0;
+    const bool is_min = y(j) < y(j - 1) && y(j) <= y(j + 1) && y(j) < 0;
+    if (!is_max && !is_min) continue;
+    const double ym = y(j - 1), y0 = y(j), yp = y(j + 1);
+    const double den = ym - 2 * y0 + yp;
+    const double d = den != 0 ? 0.5 * (ym - yp) / den : 0.0;
+    if (std::abs(d) > 1) continue;
+    const double peak = y0 - 0.25 * (ym - yp) * d;
+    // Successive extrema alternate in sign; a repeated sign is noise: keep the larger.
+    if (!tk.empty() && ((peak > 0) == (lk.back() > 0))) {
+      if (std::abs(peak) > std::abs(lk.back())) {
+        tk.back() = (static_cast<double>(j) + d) * ts;
+        lk.back() = peak;
       }
-      tk.push_back((static_cast<double>(j) + d) * ts);
-      lk.push_back(peak);
+      continue;
     }
-    const Eigen::Index np = static_cast<Eigen::Index>(tk.size());
-    Eigen::VectorXd tpk(np), lpk(np);
-    for (Eigen::Index k = 0; k < np; ++k) {
-      tpk(k) = tk[k];
-      lpk(k) = std::log(std::abs(lk[k]));
-    }
-    const double half_count = std::max(3.0, std::ceil(w_min / period));  // extrema per half window
-    // Extrema per correlation length of the band-passed noise.
-    const double peak_correlation = std::max(1.0, 2.0 * f_guess / bs.noise_bandwidth_hz);
-    for (double k = half_count; k + half_count < static_cast<double>(np);
-         k += std::max(1.0, 2 * half_count / options.points_per_window)) {
-      // The same search as above: the window with the smallest uncertainty,
-      // stopping once it meets the target or is clearly past the minimum.
-      Estimate best =
-          estimate_peaks(lpk, tpk, k, half_count, options.degree, peak_correlation, noise);
-      for (double wider = half_count * std::sqrt(2.0);
-           best.sigma_std > options.target_damping_rel_std * std::abs(best.sigma) &&
-           k - wider >= 0 && k + wider <= static_cast<double>(np - 1) &&
-           wider * period <= options.max_window_s;
-           wider *= std::sqrt(2.0)) {
-        const Estimate next =
-            estimate_peaks(lpk, tpk, k, wider, options.degree, peak_correlation, noise);
-        if (next.sigma_std < best.sigma_std) {
-          best = next;
-        } else if (next.sigma_std > 1.5 * best.sigma_std) {
-          break;
-        }
+    tk.push_back((static_cast<double>(j) + d) * ts);
+    lk.push_back(peak);
+  }
+  const Eigen::Index np = static_cast<Eigen::Index>(tk.size());
+  Eigen::VectorXd tpk(np), lpk(np);
+  for (Eigen::Index k = 0; k < np; ++k) {
+    tpk(k) = tk[k];
+    lpk(k) = std::log(std::abs(lk[k]));
+  }
+  const double half_count = std::max(3.0, std::ceil(s.w_min / s.period));  // per half window
+  // Extrema per correlation length of the band-passed noise.
+  const double peak_correlation = std::max(1.0, 2.0 * s.f_guess / s.noise_bandwidth_hz);
+  std::vector<Estimate> est;
+  for (double k = half_count; k + half_count < static_cast<double>(np);
+       k += std::max(1.0, 2 * half_count / options.points_per_window)) {
+    // The same search as for the Hilbert estimates.
+    Estimate best =
+        estimate_peaks(lpk, tpk, k, half_count, options.degree, peak_correlation, noise);
+    for (double wider = half_count * std::sqrt(2.0);
+         best.sigma_std > options.target_damping_rel_std * std::abs(best.sigma) && k - wider >= 0 &&
+         k + wider <= static_cast<double>(np - 1) && wider * s.period <= options.max_window_s;
+         wider *= std::sqrt(2.0)) {
+      const Estimate next =
+          estimate_peaks(lpk, tpk, k, wider, options.degree, peak_correlation, noise);
+      if (next.sigma_std < best.sigma_std) {
+        best = next;
+      } else if (next.sigma_std > 1.5 * best.sigma_std) {
+        break;
       }
-      est.push_back(best);
+    }
+    est.push_back(best);
+  }
+  return est;
+}
+
+// Whether an estimate is usable: finite, decaying, above the noise threshold.
+bool usable(const Estimate& e, double noise, double snr_min) {
+  return std::isfinite(e.sigma) && std::isfinite(e.omega_d) && e.omega_d > 0 && e.sigma > 0 &&
+         std::isfinite(e.sigma_std) && std::exp(e.log_amp) >= snr_min * noise;
+}
+
+// The band gain along the first pass's usable estimates (see GainCorrection).
+// Inactive where ln G varies by less than 1e-9 over them (the mode in the flat part).
+GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetting& s, double noise,
+                               Eigen::Index grid, double carrier_hz, signal::FftCache& cache) {
+  GainCorrection g;
+  g.dt = s.dt;
+  std::vector<double> t, f, d;
+  for (const Estimate& e : est) {
+    if (!usable(e, noise, s.options.snr_min)) continue;
+    t.push_back(e.t);
+    f.push_back(e.omega_d / kTwoPi);
+    d.push_back(e.sigma / kTwoPi);
+  }
+  if (t.size() < 2 || grid < 4) return g;
+  // The model's frequency and decay rate: interpolated between the estimates, held
+  // beyond them for one settling time (all the filter reaches), then a steady tone.
+  const double reach = band_settling_s(s.band, s.options.taper);
+  const auto at = [&](const std::vector<double>& v, double x) {
+    if (x <= t.front()) return v.front();
+    if (x >= t.back()) return v.back();
+    const size_t k = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
+    const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
+    return (1 - w) * v[k - 1] + w * v[k];
+  };
+  const Eigen::Index n = signal::fast_size(2 * grid);
+  Eigen::VectorXd log_m(n);
+  Eigen::VectorXd phase(n);
+  double la = 0, ph = 0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double x = static_cast<double>(j) * s.dt;
+    const bool near = x > t.front() - reach && x < t.back() + reach;
+    log_m(j) = la;
+    phase(j) = ph;
+    la -= (near ? kTwoPi * at(d, x) : 0.0) * s.dt;
+    ph += kTwoPi * (at(f, x) - carrier_hz) * s.dt;
+  }
+  const double top = log_m.head(grid).maxCoeff();
+  Eigen::VectorXcd m(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    m(j) = j < grid ? std::polar(std::exp(std::max(-700.0, log_m(j) - top)), phase(j)) : 0.0;
+  }
+  // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)).
+  signal::Fft& fft = cache.get(n);
+  Eigen::VectorXcd spec = fft.inverse_complex(m.conjugate()).conjugate() * static_cast<double>(n);
+  const double df = 1.0 / (static_cast<double>(n) * s.dt);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double fk = carrier_hz + static_cast<double>(k < n / 2 ? k : k - n) * df;
+    spec(k) *= fk > 0 ? signal::band_gain(s.band, s.options.taper, fk) : 0.0;
+  }
+  const Eigen::VectorXcd filtered = fft.inverse_complex(spec);
+  g.log_r.resize(grid);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (Eigen::Index j = 0; j < grid; ++j) {
+    const std::complex<double> r = std::abs(m(j)) > 1e-250 ? filtered(j) / m(j) : 1.0;
+    std::complex<double> lr = std::abs(r) > 1e-12 ? std::log(r) : std::log(1e-12);
+    if (j > 0) {  // unwrap the phase
+      lr.imag(lr.imag() + kTwoPi * std::round((g.log_r(j - 1).imag() - lr.imag()) / kTwoPi));
+    }
+    g.log_r(j) = lr;
+    const double x = static_cast<double>(j) * s.dt;
+    if (x >= s.start && x <= s.stop) {
+      lo = std::min(lo, lr.real());
+      hi = std::max(hi, lr.real());
     }
   }
+  // Below 1e-4 over the span, r moves a decay rate by less than 1e-4 over a window.
+  g.active = hi - lo > 1e-4;
+  return g;
+}
 
-  // Two model errors taken across one window of neighbouring estimates:
-  // - A point's amplitude is uncertain too; along a backbone that bends, that
-  //   moves where the point belongs: add (d sigma / d ln A) std(ln A) to sigma's
-  //   uncertainty and (d omega_d / d ln A) std(ln A) to omega_d's.
-  // - The envelope is read through the band's gain G(f). A linear mode keeps its
-  //   decay rate through any gain (a decaying exponential passes a linear filter
-  //   unchanged but for a constant factor), but where the frequency drifts across
-  //   a sloping part of G (a band's edge) ln A picks up d ln G/df * df/dt, and the
-  //   decay rate is biased by as much. That is added to sigma's uncertainty, so a
-  //   point in an edge is dropped rather than reported wrong; one outside the
-  //   band's half-gain points is dropped outright. (A first-order estimate: on a
-  //   band too narrow for the mode's drift the first kept points can still be off
-  //   by several per cent; process.md asks for bands whose flat middle holds the
-  //   drift.)
-  std::vector<char> in_edge(est.size(), 0);
-  {
-    const size_t ne = est.size();
-    const double spacing = ne > 1 ? (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1) : 1;
-    const auto gain = [&](double f) { return signal::band_gain(band, options.taper, f); };
-    const double df = 1e-3 * edge;
-    std::vector<double> add_s(ne, 0.0), add_w(ne, 0.0), add_g(ne, 0.0);
-    for (size_t i = 0; i < ne; ++i) {
-      const Estimate& e = est[i];
-      const auto reach = static_cast<size_t>(std::ceil(e.window / 2 / std::max(1e-12, spacing)));
-      const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
-      const double dl = est[hi].log_amp - est[lo].log_amp;
-      if (hi != lo && std::abs(dl) > 0) {
-        add_s[i] = (est[hi].sigma - est[lo].sigma) / dl * e.log_amp_std;
-        add_w[i] = (est[hi].omega_d - est[lo].omega_d) / dl * e.log_amp_std;
-      }
-      const double f = e.omega_d / kTwoPi;
-      const double g = gain(f);
-      if (!(g > 0.5)) {
-        add_g[i] = std::numeric_limits<double>::infinity();
-        in_edge[i] = 1;
-        continue;
-      }
-      if (hi == lo || !(est[hi].t > est[lo].t)) continue;
-      const double dfdt = (est[hi].omega_d - est[lo].omega_d) / kTwoPi / (est[hi].t - est[lo].t);
-      const double dlng = (gain(f + df) - gain(f - df)) / (2 * df) / g;
-      const double term = std::abs(dlng * dfdt);
-      if (!std::isfinite(term)) continue;
-      add_g[i] = term;
-      in_edge[i] = term > options.max_damping_rel_std * std::abs(e.sigma);
-    }
-    for (size_t i = 0; i < ne; ++i) {
-      est[i].sigma_std = std::hypot(std::hypot(est[i].sigma_std, add_s[i]), add_g[i]);
-      est[i].omega_d_std = std::hypot(est[i].omega_d_std, add_w[i]);
+// Model errors taken across one window of neighbouring estimates, added to each
+// estimate's uncertainty:
+// - A point's amplitude is uncertain too; along a backbone that bends, that moves
+//   where the point belongs: (d sigma / d ln A) std(ln A) for sigma and
+//   (d omega_d / d ln A) std(ln A) for omega_d.
+// - The gain correction rests on estimates it corrects: the change of ln r between
+//   its last two iterations, fitted over the point's window as the signal was and
+//   scaled by `tail` (what a geometric series of such changes still adds), is the
+//   slope error still left.
+// Returns, per estimate, what the gain correction adds to sigma's uncertainty.
+std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorrection& gain,
+                                     const GainCorrection& previous, double tail, double dt,
+                                     Eigen::Index grid, int degree) {
+  const size_t ne = est.size();
+  std::vector<double> gain_term(ne, 0.0);
+  if (ne < 2) return gain_term;
+  const double spacing = (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1);
+  Eigen::VectorXd step_re(grid), step_im(grid);
+  if (gain.active) {
+    for (Eigen::Index j = 0; j < grid; ++j) {
+      const double t = static_cast<double>(j) * dt;
+      const std::complex<double> step = gain.log_at(t) - previous.log_at(t);
+      step_re(j) = step.real();
+      step_im(j) = step.imag();
     }
   }
-
-  // Valid points: envelope well above the noise floor, finite, positive decay rate.
-  std::vector<char> valid(est.size());
-  for (size_t i = 0; i < est.size(); ++i) {
+  std::vector<double> add_s(ne, 0.0), add_w(ne, 0.0);
+  for (size_t i = 0; i < ne; ++i) {
     const Estimate& e = est[i];
-    const double a = std::exp(e.log_amp);
-    valid[i] = std::isfinite(e.sigma) && std::isfinite(e.omega_d) && e.omega_d > 0 && e.sigma > 0 &&
-               std::isfinite(e.sigma_std) && a >= options.snr_min * sum.noise_floor_m &&
-               e.sigma_std <= options.max_damping_rel_std * e.sigma;
+    const auto reach = static_cast<size_t>(std::ceil(e.window / 2 / std::max(1e-12, spacing)));
+    const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
+    const double dl = est[hi].log_amp - est[lo].log_amp;
+    if (hi != lo && std::abs(dl) > 0) {
+      add_s[i] = (est[hi].sigma - est[lo].sigma) / dl * e.log_amp_std;
+      add_w[i] = (est[hi].omega_d - est[lo].omega_d) / dl * e.log_amp_std;
+    }
+    if (!gain.active) continue;
+    const double half = e.window / 2;
+    const double offset = std::clamp((e.t - e.centre) / half, -1.0, 1.0);
+    const Eigen::Index stride =
+        std::max<Eigen::Index>(1, static_cast<Eigen::Index>(e.window / dt) / 48);
+    const auto slope = [&](const Eigen::VectorXd& y) {
+      return signal::fit_local(y, 0.0, dt, e.centre, half, degree, 1.0, stride, offset).slope;
+    };
+    const auto scaled = [tail](double x) { return x == 0 ? 0.0 : tail * std::abs(x); };
+    gain_term[i] = scaled(slope(step_re));
+    add_w[i] = std::hypot(add_w[i], scaled(slope(step_im)));
   }
-  // Longest run of valid points, bridging gaps of at most kMaxGap points: one
-  // point whose uncertainty strays over the limit is dropped on its own rather
-  // than cutting the span in two.
+  for (size_t i = 0; i < ne; ++i) {
+    est[i].sigma_std = std::hypot(std::hypot(est[i].sigma_std, add_s[i]), gain_term[i]);
+    est[i].omega_d_std = std::hypot(est[i].omega_d_std, add_w[i]);
+  }
+  return gain_term;
+}
+
+// The kept points: the longest run of valid estimates, bridging gaps of at most
+// kMaxGap points (one point whose uncertainty strays over the limit is dropped on
+// its own rather than cutting the span in two). Returns [begin, end) and the count.
+struct Run {
+  size_t begin = 0, end = 0, count = 0;
+};
+
+Run longest_run(const std::vector<char>& valid) {
   constexpr size_t kMaxGap = 2;
-  size_t best_begin = 0, best_end = 0, best_len = 0;  // [begin, end), valid points in it
-  for (size_t i = 0; i < est.size();) {
+  Run best;
+  for (size_t i = 0; i < valid.size();) {
     if (!valid[i]) {
       ++i;
       continue;
     }
     size_t j = i, count = 0, last = i;
-    while (j < est.size()) {
+    while (j < valid.size()) {
       if (valid[j]) {
         ++count;
         last = j;
@@ -493,40 +615,17 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       }
       ++j;
     }
-    if (count > best_len) {
-      best_len = count;
-      best_begin = i;
-      best_end = last + 1;
-    }
+    if (count > best.count) best = {i, last + 1, count};
     i = last + 1;
   }
-  // The band's flat part: the gain is within 1e-4 of 1 from 1.43 edge widths
-  // inside each nominal edge (the half-gain point at 0.5 w plus 3.72 standard
-  // deviations of the Gaussian, sqrt(2) w / 4).
-  const double flat_lo = band.lo + 1.43 * edge, flat_hi = band.hi - 1.43 * edge;
-  const auto edge_note = [&](size_t count) {
-    return fmt::format(
-        "{} points left out where the mode's frequency crossed the band's sloping edge "
-        "(flat from {:.2f} to {:.2f} Hz); widen the band",
-        count, flat_lo, flat_hi);
-  };
-  if (best_len < 2) {
-    const size_t edged = static_cast<size_t>(std::count(in_edge.begin(), in_edge.end(), 1));
-    if (edged > 0) {
-      sum.message = "no span: " + edge_note(edged);
-      return out;
-    }
-    const double a_max = amp.maxCoeff();
-    sum.message = fmt::format(
-        "no span of the envelope stays above {} x the noise floor with a "
-        "decaying fit whose damping is known to {:.0f} % (peak envelope "
-        "{:.3e} m, noise floor {:.3e} m)",
-        options.snr_min, 100 * options.max_damping_rel_std, a_max, sum.noise_floor_m);
-    return out;
-  }
+  return best;
+}
 
-  Backbone& bb = out.backbone;
-  const Eigen::Index n = static_cast<Eigen::Index>(best_len);
+// The backbone of the valid estimates in `run`, uncertainties expanded.
+Backbone backbone_of(const std::vector<Estimate>& est, const std::vector<char>& valid, Run run,
+                     double t0, double noise, const RingdownOptions& options) {
+  Backbone bb;
+  const auto n = static_cast<Eigen::Index>(run.count);
   for (Eigen::VectorXd* v : {&bb.time_s, &bb.amplitude, &bb.frequency_hz, &bb.damping,
                              &bb.frequency_std_hz, &bb.damping_std, &bb.damped_frequency_hz,
                              &bb.decay_rate, &bb.displacement, &bb.snr, &bb.window_s}) {
@@ -534,12 +633,12 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   }
   const int k_out = derivative_order(options.amplitude);
   Eigen::Index i = 0;
-  for (size_t k = best_begin; k < best_end; ++k) {
+  for (size_t k = run.begin; k < run.end; ++k) {
     if (!valid[k]) continue;
     const Estimate& e = est[k];
     const double wn = std::hypot(e.omega_d, e.sigma);
     const double a = std::exp(e.log_amp);
-    bb.time_s(i) = channel.t0 + e.t;
+    bb.time_s(i) = t0 + e.t;
     bb.displacement(i) = a;
     bb.amplitude(i) = a * std::pow(wn, k_out);
     bb.frequency_hz(i) = wn / kTwoPi;
@@ -549,7 +648,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     bb.damping_std(i) = e.sigma_std / wn;
     bb.damped_frequency_hz(i) = e.omega_d / kTwoPi;
     bb.decay_rate(i) = e.sigma;
-    bb.snr(i) = a / sum.noise_floor_m;
+    bb.snr(i) = a / noise;
     bb.window_s(i) = e.window;
     ++i;
   }
@@ -557,27 +656,379 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   // Reported uncertainties are expanded: coverage factor times one sigma.
   bb.frequency_std_hz *= options.coverage_factor;
   bb.damping_std *= options.coverage_factor;
+  return bb;
+}
+
+// Local estimates of the band signal z (coarse grid, or full rate for peak fitting).
+std::vector<Estimate> estimates_of(const Eigen::VectorXcd& z, double carrier_hz,
+                                   const BandSetting& s, double noise, const GainCorrection& gain) {
+  if (s.options.method == Method::kHilbert) {
+    return hilbert_estimates(envelope_phase(z, carrier_hz, s.dt), s, noise, gain);
+  }
+  return peak_estimates(z.real(), s, noise);
+}
+
+// z divided by the gain correction at each sample (grid step dt from channel.t0).
+Eigen::VectorXcd corrected(const Eigen::VectorXcd& z, double dt, const GainCorrection& gain) {
+  Eigen::VectorXcd out(z.size());
+  for (Eigen::Index j = 0; j < z.size(); ++j) {
+    out(j) = z(j) * std::exp(-gain.log_at(static_cast<double>(j) * dt));
+  }
+  return out;
+}
+
+// Low-amplitude limit of y(A): a weighted straight line y = y0 + c A through the
+// lower half of the kept span (in log amplitude, at least 4 points, superharmonic
+// points left out); y0 and its one-sigma from the points' one-sigma, inflated by the
+// square root of the points per window (neighbouring points share their data).
+struct Limit {
+  double value = 0, std = 0;
+  Eigen::Index lo = -1, hi = -1;  // lowest- and highest-amplitude points fitted
+};
+
+Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Eigen::VectorXd& u,
+                          double inflate) {
+  Limit out;
+  const Eigen::Index n = bb.size();
+  std::vector<Eigen::Index> order;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (bb.harmonic(i) == 0) order.push_back(i);
+  }
+  if (order.empty()) return out;
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
+    return bb.displacement(a) < bb.displacement(b);
+  });
+  const double l0 = std::log(bb.displacement(order.front()));
+  const double l1 = std::log(bb.displacement(order.back()));
+  size_t used = 0;
+  while (used < order.size() &&
+         (used < 4 || std::log(bb.displacement(order[used])) <= 0.5 * (l0 + l1))) {
+    ++used;
+  }
+  double sw = 0, swa = 0, swaa = 0, swy = 0, sway = 0;
+  for (size_t k = 0; k < used; ++k) {
+    const Eigen::Index i = order[k];
+    const double w = 1.0 / std::max(1e-300, u(i) * u(i));
+    const double a = bb.displacement(i);
+    sw += w;
+    swa += w * a;
+    swaa += w * a * a;
+    swy += w * y(i);
+    sway += w * a * y(i);
+  }
+  const double det = sw * swaa - swa * swa;
+  if (used >= 3 && det > 1e-12 * sw * swaa) {
+    out.value = (swaa * swy - swa * sway) / det;
+    out.std = std::sqrt(swaa / det) * inflate;
+  } else {
+    out.value = swy / sw;
+    out.std = std::sqrt(1.0 / sw) * inflate;
+  }
+  out.lo = order.front();
+  out.hi = order[used - 1];
+  return out;
+}
+
+// What the channel's spectrum shows around a band with no span: the strongest peak
+// near it, or that the band is narrower than kWidths half-power widths of its mode.
+std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& band,
+                            double taper) {
+  constexpr double kWidths = 4.0;
+  const double df = channel.fs / static_cast<double>(channel.n_fft);
+  const double width = band.hi - band.lo;
+  const auto bin = [&](double f) {
+    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1,
+                                    channel.spectrum.size() - 1);
+  };
+  const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
+  if (k1 <= k0 + 2) return {};
+  // The highest local maximum (a rising or falling edge of the range is not a peak).
+  Eigen::Index kp = -1;
+  for (Eigen::Index k = std::max<Eigen::Index>(k0, 1); k <= k1; ++k) {
+    const double v = std::abs(channel.spectrum(k));
+    if (k + 1 >= channel.spectrum.size() || !(v > std::abs(channel.spectrum(k - 1))) ||
+        !(v >= std::abs(channel.spectrum(k + 1)))) {
+      continue;
+    }
+    if (kp < 0 || v > std::abs(channel.spectrum(kp))) kp = k;
+  }
+  if (kp < 0) {
+    return fmt::format("no mode in the band and no spectral peak from {:.2f} to {:.2f} Hz",
+                       static_cast<double>(k0) * df, static_cast<double>(k1) * df);
+  }
+  const double fp = static_cast<double>(kp) * df;
+  const double edge = taper * width;
+  if (fp < band.lo + edge / 2 || fp > band.hi - edge / 2) {
+    return fmt::format(
+        "no mode in the band: the strongest spectral peak near it is at {:.2f} Hz, outside the "
+        "band's half-gain points {:.2f} to {:.2f} Hz",
+        fp, band.lo + edge / 2, band.hi - edge / 2);
+  }
+  const double half = std::abs(channel.spectrum(kp)) / std::sqrt(2.0);
+  Eigen::Index kl = kp, kr = kp;
+  while (kl > 1 && std::abs(channel.spectrum(kl)) > half) --kl;
+  while (kr + 1 < channel.spectrum.size() && std::abs(channel.spectrum(kr)) > half) ++kr;
+  const double hp = static_cast<double>(kr - kl) * df;
+  if (width < kWidths * hp) {
+    return fmt::format(
+        "the band ({:.3g} Hz wide) is narrower than {:g} times the half-power width of its mode "
+        "({:.3g} Hz at {:.2f} Hz): widen it to at least {:.3g} Hz",
+        width, kWidths, hp, fp, kWidths * hp);
+  }
+  return fmt::format("the strongest spectral peak in the band is at {:.2f} Hz", fp);
+}
+
+// Marks the points of `bb` that follow n times (n = 2, 3) the frequency of a stronger
+// mode: the channel's own band [lo/n, hi/n] carries a larger displacement envelope
+// there and n times its frequency is within the point's frequency uncertainty.
+// Uses this band and channel alone.
+void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity measured,
+                         const signal::Band& band, const RingdownOptions& options,
+                         signal::FftCache& cache) {
+  bb.harmonic = Eigen::VectorXi::Zero(bb.size());
+  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
+  for (int n = 2; n <= 3; ++n) {
+    const signal::Band sub{band.lo / n, band.hi / n};
+    if (band_settling_s(sub, options.taper) > duration) continue;
+    const signal::BandSignal zs = band_signal(channel, measured, sub, options, cache);
+    const EnvelopePhase ep = envelope_phase(zs.baseband, zs.carrier_hz, zs.dt);
+    const double correlation = std::max(1.0, 1.0 / (zs.dt * zs.noise_bandwidth_hz));
+    const double span = static_cast<double>(zs.baseband.size() - 1) * zs.dt;
+    for (Eigen::Index i = 0; i < bb.size(); ++i) {
+      if (bb.harmonic(i) != 0) continue;
+      const double t = bb.time_s(i) - channel.t0;
+      const double w = std::min(bb.window_s(i), span);
+      const double c = std::clamp(t, w / 2, span - w / 2);
+      if (static_cast<Eigen::Index>(w / zs.dt) < options.degree + 4) continue;
+      const auto [fa, fp] =
+          signal::fit_local_pair(ep.log_amp, ep.theta, 0.0, zs.dt, c, w / 2, options.degree,
+                                 correlation, 1, std::clamp((t - c) / (w / 2), -1.0, 1.0));
+      const double f_sub = fp.slope / kTwoPi;
+      const double u_sub = std::hypot(fp.slope_std, fp.slope_change) / kTwoPi;
+      const double tol = std::hypot(bb.frequency_std_hz(i), options.coverage_factor * n * u_sub);
+      if (std::exp(fa.value) > bb.displacement(i) &&
+          std::abs(bb.damped_frequency_hz(i) - n * f_sub) <= tol) {
+        bb.harmonic(i) = n;
+      }
+    }
+  }
+}
+
+// Linear values: the zero-amplitude limit of the backbone's lower half.
+void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownOptions& options) {
+  const double k = options.coverage_factor;
+  const double inflate = std::sqrt(options.points_per_window);
+  const Limit lf = low_amplitude_limit(bb, bb.frequency_hz, bb.frequency_std_hz / k, inflate);
+  const Limit lz = low_amplitude_limit(bb, bb.damping, bb.damping_std / k, inflate);
+  sum.linear_frequency_hz = lf.value;
+  sum.linear_frequency_std_hz = k * lf.std;
+  sum.linear_damping = lz.value;
+  sum.linear_damping_std = k * lz.std;
+  if (lf.lo >= 0) {
+    sum.linear_fit_min = bb.amplitude(lf.lo);
+    sum.linear_fit_max = bb.amplitude(lf.hi);
+  }
+}
+
+// Notes for the summary: what was left out at the start and why, and superharmonic points.
+std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Estimate>& est,
+                                    const Run& run, const GainCorrection& applied, double noise,
+                                    const RingdownSummary& sum) {
+  const ChannelSpectrum& channel = s.channel;
+  const signal::Band& band = s.band;
+  const RingdownOptions& options = s.options;
+  const GainCorrection& previous = applied;  // the correction the estimates carry
+  std::vector<std::string> notes;
+  if (s.start > s.begin + 1e-9) {
+    notes.push_back(fmt::format(
+        "the first {:.3f} s after the impact are not used: the band's filter settles in "
+        "{:.3f} s and the record's backward continuation holds for {:.3f} s",
+        s.start - s.begin, band_settling_s(band, options.taper), channel.continued_begin_s));
+  }
+  if (run.begin > 0) {
+    size_t over = 0, other = 0;
+    double worst = 0;
+    for (size_t i = 0; i < run.begin; ++i) {
+      const Estimate& e = est[i];
+      if (usable(e, noise / previous.abs_at(e.t), options.snr_min)) {
+        ++over;
+        worst = std::max(worst, e.sigma_std / e.sigma);
+      } else {
+        ++other;
+      }
+    }
+    notes.push_back(fmt::format(
+        "{} points from {:.4f} s to {:.4f} s dropped before the span: {} with a damping "
+        "uncertainty over the {:.1f} % limit (up to {:.1f} %) or read through less than half "
+        "the band's gain, {} not decaying or below the noise threshold",
+        run.begin, channel.t0 + est.front().t, channel.t0 + est[run.begin - 1].t, over,
+        100 * options.max_damping_rel_std, 100 * worst, other));
+  }
+  if (sum.superharmonic_points > 0) {
+    notes.push_back(fmt::format(
+        "{} points follow an integer multiple of a stronger mode's frequency (superharmonic, "
+        "column harmonic); left out of the linear values",
+        sum.superharmonic_points));
+  }
+  return notes;
+}
+
+}  // namespace
+
+signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
+                               const signal::Band& band, const RingdownOptions& options,
+                               signal::FftCache& cache) {
+  signal::BandOptions bo;
+  bo.taper = options.taper;
+  bo.order = derivative_order(measured);
+  return signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs, band,
+                               bo, cache);
+}
+
+Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
+                          const signal::Band& band, const RingdownOptions& options,
+                          signal::FftCache& cache) {
+  Ringdown out;
+  RingdownSummary& sum = out.summary;
+  signal::BandOptions bo;
+  bo.taper = options.taper;
+  bo.order = derivative_order(measured);
+  out.band = band_signal(channel, measured, band, options, cache);
+  const signal::BandSignal& bs = out.band;
+  sum.carrier_hz = bs.carrier_hz;
+  sum.peak_time_s = channel.data_begin_s;
+  if (!bs.baseband.allFinite()) {
+    sum.message =
+        "the band signal is not finite: the record holds samples too large to process "
+        "(check the channel for corrupted samples)";
+    return out;
+  }
+  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
+  const BandSetting s = band_setting(channel, band, options, bs, ep);
+  if (s.stop - s.start < 2 * s.w_min) {
+    // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
+    const std::string advice = spectral_advice(channel, band, options.taper);
+    sum.message = fmt::format(
+        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
+        "time, {:.3f} s needed",
+        advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
+    return out;
+  }
+  sum.noise_floor_m = noise_floor(ep, s);
+  const double noise = sum.noise_floor_m;
+
+  // Local estimates along the span: a first pass on the band signal, then, where the
+  // band's effect on the mode changes along the span (the mode on a sloping part of
+  // the gain), passes on the band signal divided by that effect (GainCorrection).
+  signal::BandSignal full;
+  if (options.method == Method::kPeaks) {
+    signal::BandOptions fo = bo;
+    fo.full_rate = true;
+    full = signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs,
+                                 band, fo, cache);
+  }
+  const signal::BandSignal& z = options.method == Method::kPeaks ? full : bs;
+  const auto correct = [&](const std::vector<Estimate>& from) {
+    return gain_correction(from, s, noise, bs.baseband.size(), bs.carrier_hz, cache);
+  };
+  const auto redo = [&](const GainCorrection& g) {
+    return estimates_of(corrected(z.baseband, z.dt, g), z.carrier_hz, s, noise, g);
+  };
+  std::vector<Estimate> est = estimates_of(z.baseband, z.carrier_hz, s, noise, {});
+  GainCorrection previous;
+  GainCorrection gain = correct(est);
+  // Iterated until ln r changes by less than kConverged anywhere in the span (each
+  // pass's estimates describe the mode better, and r with them; the error shrinks by
+  // about half per pass where the mode's own width is comparable to the band's edge).
+  // The estimates kept are those of the last pass, made with `previous`; what is left
+  // to the fixed point is about the last change times 1 / (1 - q), q the ratio of the
+  // last two changes (a geometric tail), and unbounded if the changes do not shrink.
+  constexpr int kMaxPasses = 12;
+  constexpr double kConverged = 1e-4;
+  double change = std::numeric_limits<double>::infinity(), tail = 1.0;
+  for (int pass = 0; pass < kMaxPasses && gain.active; ++pass) {
+    est = redo(gain);
+    previous = gain;
+    gain = correct(est);
+    if (!gain.active) break;
+    const auto j0 = static_cast<Eigen::Index>(s.start / s.dt);
+    const auto j1 =
+        std::min<Eigen::Index>(gain.log_r.size(), static_cast<Eigen::Index>(s.stop / s.dt) + 1);
+    double now = 0;
+    for (Eigen::Index j = j0; j < j1; ++j) {
+      now = std::max(now, std::abs(gain.log_r(j) - previous.log_r(j)));
+    }
+    const double q = pass > 0 ? now / change : 0.0;
+    tail = q < 0.9 ? 1.0 / (1.0 - q) : std::numeric_limits<double>::infinity();
+    change = now;
+    if (change < kConverged) break;
+  }
+  const std::vector<double> gain_term =
+      add_model_errors(est, gain, previous, tail, bs.dt, bs.baseband.size(), options.degree);
+
+  // Valid points: envelope well above the noise floor, finite, positive decay rate,
+  // damping known to max_damping_rel_std.
+  std::vector<char> valid(est.size()), gain_limited(est.size(), 0);
+  size_t weak = 0;
+  for (size_t i = 0; i < est.size(); ++i) {
+    const Estimate& e = est[i];
+    const double noise_i = noise / previous.abs_at(e.t);  // the correction est carries
+    const double limit = options.max_damping_rel_std * e.sigma;
+    // Where the band passes less than kMinPassed of the mode, dividing by r lifts the
+    // noise and whatever else the band holds above the mode's own share ...
+    constexpr double kMinPassed = 0.5;
+    // ... anywhere in the point's fit window (its data come from all of it).
+    bool passed = true;
+    for (double t = e.centre - e.window / 2; previous.active && t <= e.centre + e.window / 2;
+         t += s.dt) {
+      passed = passed && previous.abs_at(t) >= kMinPassed;
+    }
+    weak += usable(e, noise_i, options.snr_min) && !passed;
+    valid[i] = usable(e, noise_i, options.snr_min) && passed && e.sigma_std <= limit;
+    gain_limited[i] =
+        usable(e, noise_i, options.snr_min) && !valid[i] &&
+        std::sqrt(std::max(0.0, e.sigma_std * e.sigma_std - gain_term[i] * gain_term[i])) <= limit;
+  }
+  const Run run = longest_run(valid);
+  const size_t limited =
+      static_cast<size_t>(std::count(gain_limited.begin(), gain_limited.end(), 1));
+  const std::string weak_note =
+      weak == 0 ? std::string()
+                : fmt::format(
+                      "{} points left out where the band passes less than half of the "
+                      "mode (the mode's frequency outside the band's half-gain points)",
+                      weak);
+  const std::string gain_note =
+      limited == 0 ? std::string()
+                   : fmt::format(
+                         "{} points left out where the correction for the band's gain was not "
+                         "known to the damping limit (the mode on the band's steep edge)",
+                         limited);
+  if (run.count < 2) {
+    const std::string advice = spectral_advice(channel, band, options.taper);
+    sum.message = fmt::format(
+        "no span of the envelope stays above {} x the noise floor with a "
+        "decaying fit whose damping is known to {:.0f} % (peak envelope "
+        "{:.3e} m, noise floor {:.3e} m){}{}{}{}",
+        options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff(), noise,
+        advice.empty() ? "" : "; ", advice, gain_note.empty() ? "" : "; ",
+        gain_note + (weak_note.empty() ? "" : (gain_note.empty() ? "" : "; ") + weak_note));
+    return out;
+  }
+  out.backbone = backbone_of(est, valid, run, channel.t0, noise, options);
+  Backbone& bb = out.backbone;
+  mark_superharmonics(bb, channel, measured, band, options, cache);
+  const Eigen::Index n = bb.size();
   sum.status = RingdownStatus::kOk;
   sum.span_start_s = bb.time_s(0);
   sum.span_end_s = bb.time_s(n - 1);
   sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
-  // Low-amplitude (linear) values: medians over the lowest-amplitude fifth of the span.
-  const Eigen::Index tail = std::max<Eigen::Index>(1, n / 5);
-  std::vector<double> f_low, z_low;
-  for (Eigen::Index i = n - tail; i < n; ++i) {
-    f_low.push_back(bb.frequency_hz(i));
-    z_low.push_back(bb.damping(i));
-  }
-  sum.linear_frequency_hz = median(f_low);
-  sum.linear_damping = median(z_low);
-  if (sum.linear_frequency_hz < band.lo + edge || sum.linear_frequency_hz > band.hi - edge) {
-    sum.message = fmt::format("the mode at {:.3f} Hz lies in the band's edge; widen the band",
-                              sum.linear_frequency_hz);
-  }
-  size_t edged = 0;
-  for (size_t k = 0; k < in_edge.size(); ++k)
-    edged += in_edge[k] && (k < best_begin || k >= best_end);
-  if (edged > 0) sum.message += (sum.message.empty() ? "" : "; ") + edge_note(edged);
+  sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
+  set_linear_values(sum, bb, options);
+  std::vector<std::string> notes = span_notes(s, est, run, previous, noise, sum);
+  if (!gain_note.empty()) notes.push_back(gain_note);
+  if (!weak_note.empty()) notes.push_back(weak_note);
+  for (const std::string& note : notes) sum.message += (sum.message.empty() ? "" : "; ") + note;
   return out;
 }
 

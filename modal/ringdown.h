@@ -82,6 +82,7 @@ struct Backbone {
   Eigen::VectorXd displacement;         ///< displacement amplitude A [m]
   Eigen::VectorXd snr;                  ///< envelope / noise floor
   Eigen::VectorXd window_s;             ///< fit window used [s]
+  Eigen::VectorXi harmonic;  ///< n > 1 where the point follows n times a stronger mode, else 0
   /// Number of points.
   Eigen::Index size() const { return time_s.size(); }
 };
@@ -93,14 +94,19 @@ enum class RingdownStatus { kOk, kNoSpan };
 struct RingdownSummary {
   RingdownStatus status = RingdownStatus::kNoSpan;  ///< kOk when a span was kept
   std::string message;                              ///< why no span was kept, or notes
-  double noise_floor_m = 0.0;        ///< noise floor of the displacement envelope [m]
-  double peak_time_s = 0.0;          ///< time of the envelope maximum [s]
-  double span_start_s = 0.0;         ///< first kept point [s]
-  double span_end_s = 0.0;           ///< last kept point [s]
-  double amplitude_decades = 0.0;    ///< log10(max/min amplitude) over the span
-  double linear_frequency_hz = 0.0;  ///< low-amplitude natural frequency [Hz]
-  double linear_damping = 0.0;       ///< low-amplitude damping ratio
-  double carrier_hz = 0.0;           ///< dominant frequency in the band [Hz]
+  double noise_floor_m = 0.0;            ///< noise floor of the displacement envelope [m]
+  double peak_time_s = 0.0;              ///< time of the envelope maximum [s]
+  double span_start_s = 0.0;             ///< first kept point [s]
+  double span_end_s = 0.0;               ///< last kept point [s]
+  double amplitude_decades = 0.0;        ///< log10(max/min amplitude) over the span
+  double linear_frequency_hz = 0.0;      ///< natural frequency in the limit of zero amplitude [Hz]
+  double linear_frequency_std_hz = 0.0;  ///< its expanded uncertainty (k sigma) [Hz]
+  double linear_damping = 0.0;           ///< damping ratio in the limit of zero amplitude
+  double linear_damping_std = 0.0;       ///< its expanded uncertainty (k sigma)
+  double linear_fit_min = 0.0;   ///< lowest amplitude of the fit behind the linear values [SI]
+  double linear_fit_max = 0.0;   ///< highest amplitude of that fit [SI]
+  int superharmonic_points = 0;  ///< points following a multiple of a stronger mode
+  double carrier_hz = 0.0;       ///< dominant frequency in the band [Hz]
   /// One paragraph for a person.
   std::string report() const;
 };
@@ -163,6 +169,11 @@ Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x);
 ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
                                  const PrepareOptions& options, signal::FftCache& cache,
                                  Eigen::Index impact = -1);
+
+/// The displacement analytic signal of `band` from a channel measuring `measured`.
+signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
+                               const signal::Band& band, const RingdownOptions& options,
+                               signal::FftCache& cache);
 
 /// Extracts the backbone of the mode in `band` from a channel measuring `measured`.
 Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,

@@ -113,25 +113,189 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
 }
 
 // A band too narrow for the mode's drift: 77-85 Hz around a mode that falls from
-// 80 to 77.2 Hz as the amplitude grows. Its flat part is 79.9-82.1 Hz; below it
-// the envelope is read through the sloping edge. Points whose decay rate that
-// edge biases by more than the damping limit must be left out, with a note that
-// says to widen the band. The kept points' frequencies must stay within 0.05 %;
-// their damping within 10 % only: the first-order edge estimate leaves the first
-// kept points up to 8 % off here.
-TEST(RingdownBandEdge, LeavesOutPointsInTheEdgeAndSaysSo) {
+// 80 to 77.2 Hz as the amplitude grows (half-gain points 78 and 84 Hz). The band's
+// gain is divided out where the band passes at least half of the mode; points where
+// it passes less, or where the correction is not known to the damping limit, are left
+// out. Measured: 0.42-1.57 decades (before: 0.64-0.99), median damping errors 0.6-0.9 %,
+// worst 1.6-1.7 % on two seeds; on the third (seed 11) the first points, whose mode lies
+// below the half-gain point 78 Hz, are read pulled into the band and the iteration
+// settles there: 12.1 % (before: 7.8 % as the worst of the three). Required: every
+// frequency within 0.05 %, the median damping within 1 %, every damping within 13 %.
+TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
   for (const unsigned seed : {11u, 12u, 13u}) {
     const testing::ThreeModeRecord rec = testing::three_mode_record(80.0, 6.0, 1e-3, seed, 0.1);
     const Ringdown r =
         extract_band(rec.displacement, rec.fs, Quantity::kDisplacement, {77.0, 85.0});
     ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
-    EXPECT_NE(r.summary.message.find("sloping edge"), std::string::npos) << r.summary.message;
-    EXPECT_NE(r.summary.message.find("widen the band"), std::string::npos) << r.summary.message;
     const Errors e = score(r, rec.first);
     print("band edge", Method::kHilbert, 80.0, false, seed, e);
-    EXPECT_LE(e.max_z, 0.10) << "seed " << seed;
+    std::printf("  note: %s\n", r.summary.message.c_str());
+    EXPECT_GE(e.decades, 0.4) << "seed " << seed;
+    EXPECT_LE(e.median_z, 0.01) << "seed " << seed;
+    EXPECT_LE(e.max_z, 0.13) << "seed " << seed;
     EXPECT_LE(e.max_f, 5e-4) << "seed " << seed;
   }
+}
+
+// A mode on the sloping part of the band a user typed: the band 148.9:158.9 Hz around a
+// mode that drifts from 150.3 Hz (damping 0.6 %) to 151.0 Hz (0.2 %) as it decays, from
+// acceleration; the band's half-gain point is at 150.15 Hz, so the mode sits on the edge,
+// where its own half-power width (up to 1.8 Hz) exceeds the edge's. The band's effect,
+// divided out, must leave at least 1.2 decades with median errors within 0.05 % in
+// frequency and 10 % in damping (the acceptance of a real record read this way) and every
+// damping within 10 %; the same record in the wide band 130:175 Hz is the reference
+// (measured 2.07-2.15 decades, median damping error 0.2-0.4 %). Measured here: 1.56-1.92
+// decades, median errors at most 4e-5 and 1.2 %, worst damping 5.8 %.
+TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
+  const double fs = 5120, f1 = 151.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(4.0 * fs);
+  const double w1 = 2 * std::numbers::pi * f1, a_ref = 2e-5;
+  const auto slip = [a_ref](double a) {
+    const double x = std::pow(a / a_ref, 0.9);
+    return x / (1 + x);
+  };
+  testing::SlowFlowMode m;
+  m.omega_n = [=](double a) { return w1 * (1.0 - 0.006 * slip(a)); };
+  m.zeta = [=](double a) { return 0.002 + 0.004 * slip(a); };
+  m.a0 = 1e-4;
+  const testing::SlowFlowSignal sf = testing::slow_flow(m, fs, n);
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 1e-3 * sf.acceleration.cwiseAbs().maxCoeff());
+    Eigen::VectorXd x = sf.acceleration;
+    for (Eigen::Index k = 0; k < n; ++k) x(k) += g(rng);
+    for (const signal::Band band : {signal::Band{148.9, 158.9}, signal::Band{130, 175}}) {
+      const Ringdown r = extract_band(x, fs, Quantity::kAcceleration, band);
+      ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+      const Backbone& b = r.backbone;
+      std::vector<double> ef, ez;
+      for (Eigen::Index i = 0; i < b.size(); ++i) {
+        const double a = b.displacement(i);
+        ef.push_back(std::abs(b.frequency_hz(i) / (m.omega_n(a) / (2 * std::numbers::pi)) - 1));
+        ez.push_back(std::abs(b.damping(i) / m.zeta(a) - 1));
+      }
+      std::sort(ef.begin(), ef.end());
+      std::sort(ez.begin(), ez.end());
+      std::printf(
+          "band %.1f:%.1f seed %u: %ld points, %.2f decades from %.2f s, median f err %.1e, "
+          "median z err %.3f, max z err %.3f\n",
+          band.lo, band.hi, seed, long(b.size()), r.summary.amplitude_decades,
+          r.summary.span_start_s, ef[ef.size() / 2], ez[ez.size() / 2], ez.back());
+      EXPECT_GE(r.summary.amplitude_decades, 1.2) << band.lo << " seed " << seed;
+      EXPECT_LE(ef[ef.size() / 2], 5e-4) << band.lo << " seed " << seed;
+      EXPECT_LE(ez[ez.size() / 2], 0.10) << band.lo << " seed " << seed;
+      EXPECT_LE(ez.back(), 0.10) << band.lo << " seed " << seed;
+    }
+  }
+}
+
+// A linear mode (80 Hz, damping 0.2 %, noise 1e-3 of the peak): the linear values, the
+// zero-amplitude limit of the fit of the backbone's lower half, must hold the truth
+// within their stated (k = 3) uncertainty, which must be below 1e-4 in frequency and
+// 5 % in damping; the fit spans amplitudes inside the kept span.
+TEST(RingdownLinearValues, ZeroAmplitudeLimitHoldsTheTruth) {
+  const double fs = 5120, f0 = 80.0, zeta = 0.002;
+  const Eigen::Index n = static_cast<Eigen::Index>(6 * fs);
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 1e-6);
+    const double w = 2 * std::numbers::pi * f0 * std::sqrt(1 - zeta * zeta);
+    Eigen::VectorXd x(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / fs;
+      x(k) = 1e-3 * std::exp(-zeta * 2 * std::numbers::pi * f0 * t) * std::cos(w * t) + g(rng);
+    }
+    const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {64, 96});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const RingdownSummary& s = r.summary;
+    std::printf("linear seed %u: %.5f +- %.1e Hz, %.6f +- %.1e over %.3g to %.3g\n", seed,
+                s.linear_frequency_hz, s.linear_frequency_std_hz, s.linear_damping,
+                s.linear_damping_std, s.linear_fit_min, s.linear_fit_max);
+    EXPECT_LE(std::abs(s.linear_frequency_hz - f0), s.linear_frequency_std_hz);
+    EXPECT_LE(std::abs(s.linear_damping - zeta), s.linear_damping_std);
+    EXPECT_GT(s.linear_frequency_std_hz, 0);
+    EXPECT_LT(s.linear_frequency_std_hz, 1e-4 * f0);
+    EXPECT_LT(s.linear_damping_std, 0.05 * zeta);
+    EXPECT_LT(s.linear_fit_min, s.linear_fit_max);
+    EXPECT_GE(s.linear_fit_min, r.backbone.amplitude.minCoeff());
+  }
+}
+
+// A band that follows twice a stronger mode's frequency: mode 1 at 122 Hz (softening,
+// as three_mode_record's first mode) plus a locked second harmonic at a twentieth of
+// its amplitude, read in 230:260 Hz. At least three quarters of the kept points of that
+// band must be flagged harmonic 2 (measured 19 of 24: the flag needs twice the
+// sub-band's frequency within the point's uncertainty, and a few points miss it) and
+// the summary must say so; an independent mode at 250 Hz of the same size (twice the
+// first mode's frequency stays at or below 244 Hz) must not be flagged.
+TEST(RingdownSuperharmonic, FlagsABandFollowingTwiceAStrongerMode) {
+  const testing::ThreeModeRecord rec = testing::three_mode_record(122.0, 6.0, 1e-4, 7, 0.0);
+  const Eigen::Index n = rec.displacement.size();
+  Eigen::VectorXd locked = rec.displacement, free = rec.displacement;
+  // The first mode's phase, from its analytic signal: cos(2 theta) = 2 cos^2 - 1 of
+  // the normalised displacement (the record holds mode 1 and noise 1e-4 of the peak).
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double a = rec.first_amplitude(k);
+    const double c = std::clamp(rec.displacement(k) / a, -1.0, 1.0);
+    locked(k) += 0.05 * a * (2 * c * c - 1);
+    const double t = static_cast<double>(k) / rec.fs;
+    free(k) += 0.05 * 1e-3 * std::exp(-0.002 * 2 * std::numbers::pi * 250 * t) *
+               std::cos(2 * std::numbers::pi * 250 * t);
+  }
+  const Ringdown rl = extract_band(locked, rec.fs, Quantity::kDisplacement, {230, 260});
+  ASSERT_EQ(rl.summary.status, RingdownStatus::kOk) << rl.summary.message;
+  std::printf("locked: %ld points, %d flagged; %s\n", long(rl.backbone.size()),
+              rl.summary.superharmonic_points, rl.summary.message.c_str());
+  EXPECT_GE(rl.summary.superharmonic_points, 0.75 * static_cast<double>(rl.backbone.size()));
+  EXPECT_NE(rl.summary.message.find("superharmonic"), std::string::npos);
+  const Ringdown rf = extract_band(free, rec.fs, Quantity::kDisplacement, {230, 260});
+  ASSERT_EQ(rf.summary.status, RingdownStatus::kOk) << rf.summary.message;
+  std::printf("free: %ld points, %d flagged\n", long(rf.backbone.size()),
+              rf.summary.superharmonic_points);
+  EXPECT_EQ(rf.summary.superharmonic_points, 0);
+}
+
+// A band with no mode in it says what the spectrum shows instead: the strongest peak
+// near the band (a linear mode at 80 Hz, band 90:110 Hz).
+TEST(RingdownAdvice, NoModeInTheBandNamesThePeakNearIt) {
+  const double fs = 2048, f0 = 80.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(4 * fs);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1e-6);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) = 1e-3 * std::exp(-0.003 * 2 * std::numbers::pi * f0 * t) *
+               std::cos(2 * std::numbers::pi * f0 * t) +
+           g(rng);
+  }
+  const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {90, 110});
+  std::printf("advice: %s\n", r.summary.report().c_str());
+  ASSERT_NE(r.summary.status, RingdownStatus::kOk);
+  EXPECT_NE(r.summary.message.find("no mode in the band"), std::string::npos);
+  // The peak's bin is within 0.05 Hz of 80 Hz (4 s record, Hann window).
+  EXPECT_TRUE(r.summary.message.find("at 79.9") != std::string::npos ||
+              r.summary.message.find("at 80.0") != std::string::npos)
+      << r.summary.message;
+}
+
+// A band narrower than its mode: 79:81 Hz around a mode at 80 Hz with 3 % damping
+// (half-power width 4.8 Hz). The reason must say the band is narrower than 4 times the
+// mode's half-power width rather than only that the record is too short.
+TEST(RingdownAdvice, ABandNarrowerThanItsModeSaysSo) {
+  const double fs = 1000, f0 = 80.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(10 * fs);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) =
+        std::exp(-0.03 * 2 * std::numbers::pi * f0 * t) * std::cos(2 * std::numbers::pi * f0 * t);
+  }
+  const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {79, 81});
+  std::printf("advice: %s\n", r.summary.report().c_str());
+  ASSERT_NE(r.summary.status, RingdownStatus::kOk);
+  EXPECT_NE(r.summary.message.find("narrower than 4 times the half-power width"), std::string::npos)
+      << r.summary.message;
 }
 
 using Case = std::tuple<double, bool, Method>;

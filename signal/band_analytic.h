@@ -20,6 +20,7 @@
 // Time t is measured from the record's first sample.
 #pragma once
 
+#include <complex>
 #include <map>
 
 #include <Eigen/Core>
@@ -52,6 +53,10 @@ struct BandSignal {
 
 /// Band gain G(f): a box of [lo + w/2, hi - w/2] smoothed by a Gaussian of std w/4.
 double band_gain(const Band& band, double taper, double f);
+
+/// G continued to the complex frequency f = f_r + i d, 0 <= d <= 5 w/4: the factor by
+/// which the band passes exp(2 pi i f t), a sinusoid of frequency f_r decaying at 2 pi d.
+std::complex<double> band_gain(const Band& band, double taper, std::complex<double> f);
 
 /// Reusable FFT plans keyed by transform size, and the last filter gain computed
 /// (every channel of a record shares it); one workspace per thread.

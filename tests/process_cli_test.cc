@@ -91,6 +91,34 @@ TEST(ProcessArguments, BadArgumentsAreRefused) {
   r = run_jointlab("process " + file + " --out " + dir + "/o");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.err.find("--band"), std::string::npos) << r.err;
+  // A channel without a unit and no --quantity: refused, naming the channel and both fixes.
+  r = run_jointlab("process " + file + " --band 40:55 --out " + dir + "/o");
+  EXPECT_EQ(r.status, 2);
+  for (const char* f : {"'x'", "no unit", "--quantity", "header"}) {
+    EXPECT_NE(r.err.find(f), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/o/summary.json"));
+  // With --quantity it is processed.
+  r = run_jointlab("process " + file + " --band 40:55 --quantity velocity --out " + dir + "/o");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/o/summary.json"));
+  // Sizes are checked before anything is allocated: a band too narrow for the record,
+  // and sample rates whose continuation would not fit in memory (dt 1e-30 once overflowed
+  // a cast, fs 1e12 ran out of memory).
+  r = run_jointlab("process " + file + " --band 40:40.0001 --quantity velocity --out " + dir +
+                   "/o2");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("too narrow"), std::string::npos) << r.err;
+  for (const double dt : {1e-30, 1e-12}) {
+    std::string rows;
+    for (int k = 0; k < 4000; ++k) rows += fmt::format("{:.17g},{}\n", k * dt, std::sin(k * 0.3));
+    const std::string fast = dir + "/fast.csv";
+    write_text(fast, "time,x [m/s]\n" + rows);
+    r = run_jointlab("process " + fast + " --band 40:55 --out " + dir + "/o3");
+    EXPECT_EQ(r.status, 2) << dt;
+    EXPECT_NE(r.err.find("sample rate"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+  }
   r = run_jointlab("process --help");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.out.find("--amplitude"), std::string::npos);
