@@ -87,7 +87,7 @@ ReportSection settings_section(const Campaign& c) {
       "confidence intervals of the mean, bins need {} curves; a hit is flagged when a robust "
       "z-score (median/MAD of its mean relative deviation from the per-bin medians, and of its "
       "linear frequency and damping) exceeds {:g} (spread floors {:g} in frequency, {:g} in "
-      " damping); flagged hits are {} the bins.{}",
+      "damping); flagged hits are {} the bins.{}",
       modal::RingdownOptions{}.coverage_factor, so.bins_per_decade, 100 * so.confidence,
       so.min_curves, so.outlier_threshold, so.frequency_floor, so.damping_floor,
       so.exclude_outliers ? "left out of" : "kept in",

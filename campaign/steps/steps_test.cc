@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -39,7 +41,8 @@ constexpr double kPi = 3.14159265358979323846;
 class Steps : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const fs::path dir = testing::scratch_dir("campaign_steps");
+    // One folder per process: ctest runs each test of the suite in its own process, in parallel.
+    const fs::path dir = testing::scratch_dir(fmt::format("campaign_steps_{}", ::getpid()));
     small_ = std::make_unique<testing::SmallCampaign>(testing::make_small_campaign(
         dir,
         "[update.linear]\nsets = [\"iwan.rivet\"]\n\n[update.iwan]\nenabled = true\n"
@@ -53,6 +56,8 @@ class Steps : public ::testing::Test {
         summarise_measured(*campaign_, *hits_, o.out / "scatter", nullptr));
   }
   static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(small_->dir, ec);
     small_.reset();
     campaign_.reset();
     first_.reset();
