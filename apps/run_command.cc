@@ -5,11 +5,13 @@
 #include <string>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
+#include "jointlab/core/error.h"
 
 namespace jointlab::apps {
 namespace {
@@ -37,6 +39,12 @@ void run_run(const RunArgs& args) {
   }
   const campaign::RunSummary s = campaign::run_campaign(c, o);
   fmt::print("jointlab run: {}\n", s.report());
+  if (!s.no_backbone.empty()) {
+    throw InputError(
+        fmt::format("{}: no backbone in any hit for {}; everything else is written, "
+                    "the report says why: {}",
+                    args.campaign, fmt::join(s.no_backbone, ", "), s.report_markdown.string()));
+  }
 }
 
 }  // namespace
@@ -49,7 +57,8 @@ void add_run_command(CLI::App& app) {
       "every hit, summarise the scatter between hits per mode (log-amplitude bins, mean,\n"
       "standard deviation, Student-t interval, flagged hits), run QSMA of the model's modes\n"
       "and the updates, draw the figures and write OUT/report.html and OUT/report.md.\n"
-      "Restartable: the model and hits whose outputs are newer than their inputs are reused.\n\n"
+      "Restartable: the model and hits are reused while their input files, settings and the\n"
+      "program version are unchanged.\n\n"
       "Example:\n"
       "  jointlab run data/examples/riveted-campaign/campaign.toml --out out/campaign");
   cmd->add_option("CAMPAIGN", args->campaign, "campaign file (TOML)")

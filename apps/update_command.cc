@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
@@ -119,7 +120,7 @@ void run_update_iwan(const IwanArgs& a) {
   const correlate::ProcessRun run = correlate::read_process_run(a.measured);
   std::vector<int> bands;
   const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
-  std::vector<correlate::IwanTarget> targets;
+  std::vector<campaign::ModeBackbones> modes;
   for (const std::string& spec : a.modes) {
     correlate::IwanTarget t;
     int band = 0;
@@ -152,10 +153,18 @@ void run_update_iwan(const IwanArgs& a) {
         if (bands[i] == band) col = static_cast<int>(i);
       }
     }
-    if (col >= 0) t.linear_frequency_hz = measured.frequency_hz(col);
-    t.curves = correlate::measured_backbones(run, sensors, band, a.channels);
-    targets.push_back(std::move(t));
+    // Every band's backbones with their scatter summary; targets built as `run` builds them.
+    campaign::ModeBackbones mb =
+        campaign::process_run_backbones(run, sensors, band, a.channels, campaign::ScatterOptions{});
+    mb.name = spec;
+    mb.model_mode = t.mode;
+    if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
+    modes.push_back(std::move(mb));
   }
+  campaign::IwanTargetOptions target_options;
+  target_options.amplitude = run.amplitude;
+  std::vector<correlate::IwanTarget> targets =
+      campaign::iwan_targets(m, sensors, modes, target_options).fitted;
   correlate::IwanUpdateOptions o = a.options;
   o.amplitude = run.amplitude;
   o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper

@@ -124,21 +124,10 @@ const CampaignChannel* Campaign::channel(const std::string& name) const {
   return nullptr;
 }
 
-Campaign parse_campaign(const std::string& content, const fs::path& path) {
-  Context ctx{path.string(), fs::absolute(path).parent_path()};
-  toml::table doc;
-  try {
-    doc = toml::parse(content, path.string());
-  } catch (const toml::parse_error& e) {
-    throw InputError(where(path.string(), static_cast<long>(e.source().begin.line),
-                           std::string(e.description())));
-  }
-  reject_unknown(ctx, doc, "campaign file",
-                 {"campaign", "model", "group", "channel", "mode", "scatter", "qsma", "update"});
-  Campaign c;
-  c.file = fs::absolute(path).lexically_normal();
-  c.name = path.stem().string();
+namespace {
 
+// [campaign]: name, quantities and the truth file.
+void read_campaign_table(const Context& ctx, const toml::table& doc, Campaign& c) {
   if (const toml::node* n = doc.get("campaign")) {
     const toml::table& t = table(ctx, *n, "[campaign]");
     reject_unknown(ctx, t, "[campaign]", {"name", "quantity", "amplitude", "truth"});
@@ -153,7 +142,10 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
         ctx.fail(*v, fmt::format("campaign.truth: no file {}", c.truth.string()));
     }
   }
+}
 
+// [model]: a model file or a description to build.
+void read_model_table(const Context& ctx, const toml::table& doc, Campaign& c) {
   if (const toml::node* n = doc.get("model")) {
     const toml::table& t = table(ctx, *n, "[model]");
     reject_unknown(ctx, t, "[model]", {"file", "description", "fixed_interface_modes"});
@@ -174,7 +166,10 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
         ctx.fail(*v, "model.fixed_interface_modes must be >= 0");
     }
   }
+}
 
+// [[group]]: the hits, with unique group names and file stems.
+void read_groups(const Context& ctx, const toml::table& doc, Campaign& c) {
   const toml::node* groups = doc.get("group");
   if (!groups) ctx.fail("no [[group]] of test files");
   std::set<std::string> group_names, stems;
@@ -206,7 +201,10 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
     if (g.files.empty()) ctx.fail(*files, fmt::format("group '{}': no files", g.name));
     c.groups.push_back(std::move(g));
   }
+}
 
+// [[channel]]: names, DOFs and signs.
+void read_channels(const Context& ctx, const toml::table& doc, Campaign& c) {
   const toml::node* channels = doc.get("channel");
   if (!channels) ctx.fail("no [[channel]]");
   for (const toml::node& item : array(ctx, *channels, "[[channel]]")) {
@@ -230,7 +228,10 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
     }
     c.channels.push_back(ch);
   }
+}
 
+// [[mode]]: names (unique), bands, model modes and reference channels.
+void read_modes(const Context& ctx, const toml::table& doc, Campaign& c) {
   const toml::node* modes = doc.get("mode");
   if (!modes) ctx.fail("no [[mode]]");
   for (const toml::node& item : array(ctx, *modes, "[[mode]]")) {
@@ -238,7 +239,12 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
     reject_unknown(ctx, t, "[[mode]]", {"name", "band", "model_mode", "reference"});
     CampaignMode m;
     m.name = fmt::format("mode {}", c.modes.size() + 1);
-    if (const toml::node* v = t.get("name")) m.name = text(ctx, *v, "mode.name");
+    if (const toml::node* v = t.get("name")) {
+      m.name = text(ctx, *v, "mode.name");
+      for (const CampaignMode& other : c.modes)
+        if (other.name == m.name)
+          ctx.fail(*v, fmt::format("mode.name: '{}' names two [[mode]] tables", m.name));
+    }
     const toml::node* band = t.get("band");
     if (!band) ctx.fail(item, fmt::format("{}: missing 'band = [LO, HI]' (Hz)", m.name));
     const toml::array& b = array(ctx, *band, "mode.band");
@@ -259,7 +265,10 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
     c.modes.push_back(m);
   }
   if (c.modes.empty()) ctx.fail(*modes, "no [[mode]]");
+}
 
+// [scatter], [qsma] and [update].
+void read_settings(const Context& ctx, const toml::table& doc, Campaign& c) {
   if (const toml::node* n = doc.get("scatter")) {
     const toml::table& t = table(ctx, *n, "[scatter]");
     reject_unknown(ctx, t, "[scatter]",
@@ -297,6 +306,10 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
       c.linear_update = read_update(ctx, *v, "update.linear");
     if (const toml::node* v = t.get("iwan")) c.iwan_update = read_update(ctx, *v, "update.iwan");
   }
+}
+
+// What one table says about another: update modes, a model for updates, DOFs.
+void check_cross_references(const Context& ctx, const toml::table&, const Campaign& c) {
   for (const CampaignUpdate* u : {&c.linear_update, &c.iwan_update}) {
     for (const std::string& name : u->modes) {
       const bool known = std::any_of(c.modes.begin(), c.modes.end(),
@@ -314,6 +327,32 @@ Campaign parse_campaign(const std::string& content, const fs::path& path) {
       if (ch.dof.empty())
         ctx.fail(fmt::format("channel '{}': 'dof' is needed with a [model]", ch.name));
   }
+}
+
+}  // namespace
+
+Campaign parse_campaign(const std::string& content, const fs::path& path) {
+  Context ctx{path.string(), fs::absolute(path).parent_path()};
+  toml::table doc;
+  try {
+    doc = toml::parse(content, path.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(where(path.string(), static_cast<long>(e.source().begin.line),
+                           std::string(e.description())));
+  }
+  reject_unknown(ctx, doc, "campaign file",
+                 {"campaign", "model", "group", "channel", "mode", "scatter", "qsma", "update"});
+  Campaign c;
+  c.file = fs::absolute(path).lexically_normal();
+  c.name = path.stem().string();
+
+  read_campaign_table(ctx, doc, c);
+  read_model_table(ctx, doc, c);
+  read_groups(ctx, doc, c);
+  read_channels(ctx, doc, c);
+  read_modes(ctx, doc, c);
+  read_settings(ctx, doc, c);
+  check_cross_references(ctx, doc, c);
   return c;
 }
 

@@ -10,9 +10,11 @@
 //   qsma/mode<k>.start.csv, mode<k>.updated.csv  model curves in the measured amplitude
 //   figures/*.png                spectrum, backbones per mode, MAC, frequency errors
 //   report.html, report.md       the report (report.h)
-// Restart: the model and each hit are recomputed only when missing or older than their
-// inputs (the description or test file, and the campaign file); everything after them is
-// cheap and always rewritten. QSMA amplitudes are converted to the measured quantity at the
+// Restart: the model and each hit are recomputed only when missing or when their stamp (the
+// content of their input file, every setting they depend on and the program's version,
+// steps/stamp.h) differs; everything after them is cheap and always rewritten. Before any hit
+// is processed the whole campaign is checked (update settings, model, DOFs, model modes,
+// element sets). QSMA amplitudes are converted to the measured quantity at the
 // reference channel: displacement x = |phi_r[d]| q, velocity omega x, acceleration omega^2 x,
 // omega = 2 pi f(q) along the curve.
 #pragma once
@@ -43,17 +45,16 @@ struct RunSummary {
   bool model_reused = false;              ///< the built model was up to date
   int flagged_hits = 0;                   ///< hits flagged in any mode
   std::vector<std::string> notes;         ///< skipped steps and other remarks
+  std::vector<std::string> no_backbone;   ///< modes no hit gave a backbone for (report: why)
   std::filesystem::path report_html;      ///< the HTML report
   std::filesystem::path report_markdown;  ///< the Markdown report
   /// A few lines for a person.
   std::string report() const;
 };
 
-/// True when `output` exists and is newer than every input (missing inputs are ignored).
-bool up_to_date(const std::filesystem::path& output,
-                const std::vector<std::filesystem::path>& inputs);
-
 /// Runs the whole campaign into options.out; InputError for bad input (files, DOFs, bands).
+/// A mode no hit gives a backbone for is no error here: everything else is written, the
+/// report says so at its top and RunSummary::no_backbone lists it.
 RunSummary run_campaign(const Campaign& campaign, const RunOptions& options);
 
 }  // namespace jointlab::campaign

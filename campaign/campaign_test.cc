@@ -65,6 +65,11 @@ TEST(Campaign, RejectsDefectsNamingTheLine) {
   EXPECT_NE(message(head + "[[mode]]\nband = [1.0, 2.0]\n[update.iwan]\nmodes = [\"mode 2\"]\n")
                 .find("'mode 2' is not the name of a [[mode]]"),
             std::string::npos);
+  // Two modes of one name: the second is refused at its line.
+  EXPECT_NE(message(head + "[[mode]]\nname = \"m\"\nband = [1.0, 2.0]\n[[mode]]\nname = \"m\"\n"
+                           "band = [3.0, 4.0]\n")
+                .find(":10:"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 

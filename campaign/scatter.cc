@@ -8,6 +8,7 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <boost/math/distributions/students_t.hpp>
 
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
@@ -17,51 +18,6 @@
 namespace jointlab::campaign {
 
 namespace {
-
-// Continued fraction of the regularized incomplete beta function (modified Lentz).
-double beta_fraction(double a, double b, double x) {
-  constexpr double tiny = 1e-300;
-  double c = 1.0, d = 1.0 - (a + b) * x / (a + 1.0);
-  if (std::abs(d) < tiny) d = tiny;
-  d = 1.0 / d;
-  double h = d;
-  for (int m = 1; m <= 500; ++m) {
-    const double m2 = 2.0 * m;
-    double aa = m * (b - m) * x / ((a + m2 - 1.0) * (a + m2));
-    d = 1.0 + aa * d;
-    if (std::abs(d) < tiny) d = tiny;
-    c = 1.0 + aa / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    h *= d * c;
-    aa = -(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1.0));
-    d = 1.0 + aa * d;
-    if (std::abs(d) < tiny) d = tiny;
-    c = 1.0 + aa / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1.0) < 1e-15) break;
-  }
-  return h;
-}
-
-// I_x(a, b).
-double incomplete_beta(double a, double b, double x) {
-  if (x <= 0) return 0;
-  if (x >= 1) return 1;
-  const double front = std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) +
-                                a * std::log(x) + b * std::log1p(-x));
-  if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_fraction(a, b, x) / a;
-  return 1.0 - front * beta_fraction(b, a, 1.0 - x) / b;
-}
-
-// P(T <= t) for t >= 0.
-double t_cdf(double t, int dof) {
-  const double v = dof;
-  return 1.0 - 0.5 * incomplete_beta(v / 2.0, 0.5, v / (v + t * t));
-}
 
 double median(std::vector<double> v) {
   assert(!v.empty());
@@ -80,6 +36,23 @@ std::vector<double> robust_z(const std::vector<double>& x, double floor) {
   const double scale = std::max(1.4826 * median(dev), floor);
   for (size_t i = 0; i < x.size(); ++i) z[i] = (x[i] - med) / scale;
   return z;
+}
+
+// Flags each hit with any |z| above the threshold, naming the z-scores that did.
+void flag_outliers(std::vector<HitDeviation>& hits, double thr) {
+  for (HitDeviation& h : hits) {
+    const std::pair<double, const char*> tests[] = {{h.frequency_z, "frequency"},
+                                                    {h.damping_z, "damping"},
+                                                    {h.linear_frequency_z, "linear frequency"},
+                                                    {h.linear_damping_z, "linear damping"}};
+    for (const auto& [z, name] : tests) {
+      if (std::abs(z) > thr) {
+        h.outlier = true;
+        if (!h.reason.empty()) h.reason += ", ";
+        h.reason += fmt::format("{} z = {:+.1f}", name, z);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -129,16 +102,7 @@ double student_t_quantile(double p, int dof) {
         fmt::format("Student t quantile: need 0 < p < 1 and dof >= 1 (p = {}, "
                     "dof = {})",
                     p, dof));
-  if (p < 0.5) return -student_t_quantile(1.0 - p, dof);
-  if (p == 0.5) return 0.0;
-  // Bracket, then bisect: the CDF is monotonic; 200 halvings reach double precision.
-  double lo = 0.0, hi = 1.0;
-  while (t_cdf(hi, dof) < p) hi *= 2.0;
-  for (int i = 0; i < 200 && hi - lo > 1e-14 * hi; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (t_cdf(mid, dof) < p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  return boost::math::quantile(boost::math::students_t(dof), p);
 }
 
 Statistic describe(const std::vector<double>& values, double confidence) {
@@ -262,20 +226,7 @@ ScatterSummary summarize_scatter(const std::vector<Curve>& curves, const Scatter
       out.hits[with_linear[i]].linear_damping_z = zlz[i];
     }
   }
-  const double thr = options.outlier_threshold;
-  for (HitDeviation& h : out.hits) {
-    const std::pair<double, const char*> tests[] = {{h.frequency_z, "frequency"},
-                                                    {h.damping_z, "damping"},
-                                                    {h.linear_frequency_z, "linear frequency"},
-                                                    {h.linear_damping_z, "linear damping"}};
-    for (const auto& [z, name] : tests) {
-      if (std::abs(z) > thr) {
-        h.outlier = true;
-        if (!h.reason.empty()) h.reason += ", ";
-        h.reason += fmt::format("{} z = {:+.1f}", name, z);
-      }
-    }
-  }
+  flag_outliers(out.hits, options.outlier_threshold);
 
   // Bins over the curves kept.
   const auto kept = [&](size_t c) { return !(options.exclude_outliers && out.hits[c].outlier); };

@@ -97,7 +97,8 @@ struct ScatterSummary {
   std::string report() const;
 };
 
-/// Quantile t_(p, dof) of Student's t distribution (0 < p < 1, dof >= 1).
+/// Quantile t_(p, dof) of Student's t distribution (Boost.Math); InputError unless 0 < p < 1
+/// and dof >= 1.
 double student_t_quantile(double p, int dof);
 
 /// Mean, standard deviation and confidence interval at `confidence` of the values.

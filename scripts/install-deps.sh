@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libfftw3-dev libceres-dev libspectra-dev libsuitesparse-dev
   libtomlplusplus-dev libcli11-dev libfmt-dev libcsv-dev libmatio-dev
   libplplot-dev plplot-driver-cairo libgtest-dev libbenchmark-dev
+  libboost-dev
   python3-scipy
   clang libclang-rt-14-dev
 )

@@ -1,0 +1,194 @@
+#include "jointlab/campaign/iwan_targets.h"
+
+#include <algorithm>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "jointlab/campaign/steps/numeric_table.h"
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/mode_interference.h"
+#include "jointlab/model/joint_condensation.h"
+
+namespace jointlab::campaign {
+
+namespace fs = std::filesystem;
+using correlate::IwanTarget;
+using correlate::MeasuredBackbone;
+using correlate::ModeSlip;
+
+namespace {
+
+// Each mode's joint-slip pattern seen at a sensor, computed once per (mode, sensor).
+class SlipPatterns {
+ public:
+  SlipPatterns(const model::Model& m, const std::vector<correlate::Sensor>& sensors,
+               const std::vector<ModeBackbones>& modes, int power)
+      : model_(m), jc_(m), sensors_(sensors), modes_(modes), power_(power) {}
+  const ModeSlip& at(size_t mode, int sensor) {
+    const auto key = std::make_pair(mode, sensor);
+    auto it = cache_.find(key);
+    if (it != cache_.end()) return it->second;
+    ModeSlip s;
+    const int mm = modes_[mode].model_mode;
+    if (mm > 0 && mm <= jc_.elastic_count())
+      s = correlate::mode_slip(model_, jc_.modes(), mm, sensors_[static_cast<size_t>(sensor)].dof,
+                               power_);
+    return cache_.emplace(key, std::move(s)).first->second;
+  }
+
+ private:
+  const model::Model& model_;
+  const model::JointCondensation jc_;
+  const std::vector<correlate::Sensor>& sensors_;
+  const std::vector<ModeBackbones>& modes_;
+  int power_;
+  std::map<std::pair<size_t, int>, ModeSlip> cache_;
+};
+
+// Curves a bin needs for its standard deviation to weigh the points in it.
+constexpr int kSpreadCurves = 3;
+
+// sigma of frequency or damping in the scatter bin holding amplitude a (bins of at least
+// kSpreadCurves curves), else -1: not known there.
+double bin_std(const ScatterSummary& s, double a, bool frequency) {
+  for (const ScatterBin& b : s.bins) {
+    if (a >= b.amplitude_low && a < b.amplitude_high && b.curves >= kSpreadCurves)
+      return frequency ? b.frequency_hz.std : b.damping.std;
+  }
+  return -1.0;
+}
+
+// Point i's own uncertainty on curve c, or 0 where not known.
+double own_std(const std::vector<Eigen::VectorXd>& stds, size_t c, Eigen::Index i) {
+  if (c >= stds.size() || i >= stds[c].size()) return 0.0;
+  return stds[c](i);
+}
+
+bool flagged(const ScatterSummary& s, const std::string& id) {
+  return std::any_of(s.hits.begin(), s.hits.end(),
+                     [&](const HitDeviation& d) { return d.outlier && d.id == id; });
+}
+
+// Other modes' share of the joint slip at each point of curve c of mode k.
+Eigen::VectorXd share_of_others(const std::vector<ModeBackbones>& modes, size_t k, size_t c,
+                                SlipPatterns& slips) {
+  const Curve& own = modes[k].curves[c];
+  std::vector<ModeSlip> pattern(modes.size());
+  std::vector<const Curve*> same_hit(modes.size(), nullptr);
+  for (size_t j = 0; j < modes.size(); ++j) {
+    if (j == k) {
+      same_hit[j] = &own;
+      pattern[j] = slips.at(k, modes[k].sensors[c]);
+      continue;
+    }
+    for (size_t i = 0; i < modes[j].curves.size(); ++i) {
+      const Curve& o = modes[j].curves[i];
+      if (o.id != own.id || o.time_s.size() == 0) continue;
+      same_hit[j] = &o;
+      pattern[j] = slips.at(j, modes[j].sensors[i]);
+      break;
+    }
+  }
+  return correlate::slip_share(pattern, same_hit, k);
+}
+
+}  // namespace
+
+size_t IwanTargets::curves() const {
+  size_t n = 0;
+  for (const IwanTarget& t : fitted) n += t.curves.size();
+  return n;
+}
+
+IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sensor>& sensors,
+                         const std::vector<ModeBackbones>& modes, const IwanTargetOptions& o) {
+  for (const ModeBackbones& mb : modes) {
+    if (mb.sensors.size() != mb.curves.size())
+      throw InputError(fmt::format("{}: one sensor per backbone expected", mb.name));
+    for (const int s : mb.sensors)
+      if (s < 0 || s >= static_cast<int>(sensors.size()))
+        throw InputError(fmt::format("{}: sensor index {} out of range", mb.name, s));
+  }
+  SlipPatterns slips(m, sensors, modes, correlate::amplitude_power(o.amplitude));
+  IwanTargets out;
+  for (size_t k = 0; k < modes.size(); ++k) {
+    const ModeBackbones& mode = modes[k];
+    if (mode.model_mode <= 0) continue;
+    IwanTarget t;
+    t.mode = mode.model_mode;
+    t.linear_frequency_hz = mode.linear_frequency_hz;
+    for (size_t c = 0; c < mode.curves.size(); ++c) {
+      const Curve& cv = mode.curves[c];
+      if (mode.scatter.options.exclude_outliers && flagged(mode.scatter, cv.id)) continue;
+      const Eigen::VectorXd share = share_of_others(modes, k, c, slips);
+      std::vector<Eigen::Index> keep;
+      for (Eigen::Index j = 0; j < cv.amplitude.size(); ++j)
+        if (!mode.fitted || share(j) <= o.max_slip_share) keep.push_back(j);
+      out.screened += cv.amplitude.size() - static_cast<Eigen::Index>(keep.size());
+      if (keep.size() < 2) continue;
+      const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
+      MeasuredBackbone mb;
+      mb.sensor = mode.sensors[c];
+      mb.amplitude.resize(n);
+      mb.frequency_hz.resize(n);
+      mb.damping_ratio.resize(n);
+      mb.frequency_std_hz.resize(n);
+      mb.damping_std.resize(n);
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const Eigen::Index i = keep[static_cast<size_t>(j)];
+        mb.amplitude(j) = cv.amplitude(i);
+        mb.frequency_hz(j) = cv.frequency_hz(i);
+        mb.damping_ratio(j) = cv.damping(i);
+        const double bf = bin_std(mode.scatter, cv.amplitude(i), true);
+        const double bz = bin_std(mode.scatter, cv.amplitude(i), false);
+        mb.frequency_std_hz(j) = bf >= 0 ? bf : own_std(mode.frequency_std_hz, c, i);
+        mb.damping_std(j) = bz >= 0 ? bz : own_std(mode.damping_std, c, i);
+      }
+      t.curves.push_back(std::move(mb));
+    }
+    if (t.curves.empty()) continue;
+    out.every.emplace_back(k, t);
+    if (mode.fitted) out.fitted.push_back(std::move(t));
+  }
+  return out;
+}
+
+ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
+                                    const std::vector<correlate::Sensor>& sensors, int band,
+                                    const std::vector<std::string>& channels,
+                                    const ScatterOptions& scatter) {
+  for (const std::string& c : channels) {
+    if (correlate::find_sensor(sensors, c) < 0)
+      throw InputError(fmt::format("channel '{}' is not in the sensors file", c));
+  }
+  ModeBackbones mb;
+  mb.name = fmt::format("band {}", band);
+  for (const correlate::ProcessOutput& o : run.outputs) {
+    if (o.band != band || o.file.empty()) continue;
+    bool selected = false;
+    if (channels.empty()) {
+      for (const correlate::ProcessBand& b : run.bands)
+        selected = selected ||
+                   (b.source == o.source && b.band == band && b.reference_channel == o.channel);
+    } else {
+      selected = std::find(channels.begin(), channels.end(), o.channel) != channels.end();
+    }
+    const int s = correlate::find_sensor(sensors, o.channel);
+    if (!selected || s < 0) continue;
+    BackboneFile bf = read_backbone_file(run.dir / o.file, fs::path(o.source).stem().string(), "");
+    mb.curves.push_back(std::move(bf.curve));
+    mb.frequency_std_hz.push_back(std::move(bf.frequency_std_hz));
+    mb.damping_std.push_back(std::move(bf.damping_std));
+    mb.sensors.push_back(s);
+  }
+  if (mb.curves.empty()) {
+    throw InputError(fmt::format(
+        "{}: no backbone of band {} on {}", (run.dir / "summary.json").string(), band,
+        channels.empty() ? "a reference channel that is a sensor" : "the selected channels"));
+  }
+  mb.scatter = summarize_scatter(mb.curves, scatter);
+  return mb;
+}
+
+}  // namespace jointlab::campaign

@@ -1,0 +1,110 @@
+// Tests of iwan_targets(): the weights from the scatter between hits and the points' own
+// uncertainty, flagged hits left out, and the joint-slip screen.
+#include "jointlab/campaign/iwan_targets.h"
+
+#include <gtest/gtest.h>
+
+#include "jointlab/correlate/two_chain.h"
+#include "jointlab/model/linear_modes.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::campaign {
+namespace {
+
+using testing::Close;
+
+// A backbone of hit `id`: amplitudes 1e-3 .. 1.9e-3 (one bin at 5 per decade), constant
+// frequency f and damping z, at times 0.1, 0.2, ... (amplitude falling).
+Curve flat(const std::string& id, double f, double z, double scale = 1.0) {
+  Curve c;
+  c.id = id;
+  const int n = 10;
+  c.time_s = Eigen::VectorXd::LinSpaced(n, 0.1, 1.0);
+  c.amplitude = scale * Eigen::VectorXd::LinSpaced(n, 1.9e-3, 1.0e-3);
+  c.frequency_hz = Eigen::VectorXd::Constant(n, f);
+  c.damping = Eigen::VectorXd::Constant(n, z);
+  return c;
+}
+
+// Three hits at 100, 101 and 102 Hz (sample std 1 Hz) and damping 0.010, 0.012, 0.014 (std
+// 0.002): sigma is the bin's std, whatever the points' own; with one hit left out the bins
+// hold two curves and each point keeps its own uncertainty (0 where unknown: the floor).
+TEST(IwanTargets, WeightsFromTheScatterOrTheOwnUncertainty) {
+  const model::Model m = correlate::two_chain_structure({.iwan = true});
+  const std::vector<correlate::Sensor> sensors{{"s", 5, 1.0}};
+  ModeBackbones mb;
+  mb.name = "mode 1";
+  mb.model_mode = 1;
+  mb.curves = {flat("a", 100, 0.010), flat("b", 101, 0.012), flat("c", 102, 0.014)};
+  mb.sensors = {0, 0, 0};
+  mb.frequency_std_hz = {Eigen::VectorXd::Constant(10, 0.5), Eigen::VectorXd::Constant(10, 3.0),
+                         Eigen::VectorXd()};
+  mb.damping_std = {Eigen::VectorXd::Constant(10, 1e-4), Eigen::VectorXd::Constant(10, 1e-3),
+                    Eigen::VectorXd()};
+  ScatterOptions so;
+  so.outlier_threshold = 100;  // nobody flagged
+  mb.scatter = summarize_scatter(mb.curves, so);
+  const IwanTargets t = iwan_targets(m, sensors, {mb}, {});
+  ASSERT_EQ(t.fitted.size(), 1u);
+  ASSERT_EQ(t.fitted[0].curves.size(), 3u);
+  EXPECT_EQ(t.screened, 0);
+  for (const correlate::MeasuredBackbone& c : t.fitted[0].curves) {
+    EXPECT_TRUE(Close(c.frequency_std_hz(3), 1.0, 1e-12));
+    EXPECT_TRUE(Close(c.damping_std(3), 0.002, 1e-9));
+  }
+  // Hit b flagged and left out: two curves per bin.
+  mb.scatter.hits[1].outlier = true;
+  for (ScatterBin& b : mb.scatter.bins) b.curves = 2;  // as the bins without hit b
+  const IwanTargets two = iwan_targets(m, sensors, {mb}, {});
+  ASSERT_EQ(two.fitted[0].curves.size(), 2u);
+  EXPECT_EQ(two.fitted[0].curves[0].frequency_std_hz(3), 0.5);
+  EXPECT_EQ(two.fitted[0].curves[0].damping_std(3), 1e-4);
+  EXPECT_EQ(two.fitted[0].curves[1].frequency_std_hz(3), 0.0);
+  mb.scatter.options.exclude_outliers = false;
+  EXPECT_EQ(iwan_targets(m, sensors, {mb}, {}).fitted[0].curves.size(), 3u);
+}
+
+// The screen: another mode of the same model that slips the same joint, ringing in the same
+// hit at a hundred times the amplitude, carries far more than 5 % of the slip, so every point
+// goes; the same curve from another hit, or a mode that is not fitted, leaves them all.
+TEST(IwanTargets, PointsWhereAnotherModeSlipsTheJointsAreLeftOut) {
+  const model::Model m = correlate::two_chain_structure({.iwan = true});
+  const model::LinearModes lm = model::linear_modes(m.mass, m.linear_stiffness());
+  // Chain A's first two modes: both slip the A1-A2 joint.
+  std::vector<int> chain_a;
+  for (int j = lm.rigid_count; j < lm.size() && chain_a.size() < 2; ++j)
+    if (lm.shapes.col(j).head(6).norm() > lm.shapes.col(j).tail(6).norm())
+      chain_a.push_back(j - lm.rigid_count + 1);
+  ASSERT_EQ(chain_a.size(), 2u);
+  const std::vector<correlate::Sensor> sensors{{"s", 5, 1.0}};
+  const auto mode = [&](int model_mode, const Curve& c) {
+    ModeBackbones mb;
+    mb.name = std::to_string(model_mode);
+    mb.model_mode = model_mode;
+    mb.curves = {c};
+    mb.sensors = {0};
+    mb.scatter = summarize_scatter(mb.curves, {});
+    return mb;
+  };
+  const ModeBackbones first = mode(chain_a[0], flat("hit", 50, 0.01));
+  const IwanTargets alone = iwan_targets(m, sensors, {first}, {});
+  EXPECT_EQ(alone.screened, 0);
+  const IwanTargets loud =
+      iwan_targets(m, sensors, {first, mode(chain_a[1], flat("hit", 150, 0.01, 100))}, {});
+  EXPECT_EQ(loud.screened, 10);
+  for (const correlate::IwanTarget& t : loud.fitted) EXPECT_NE(t.mode, chain_a[0]);
+  const IwanTargets other_hit =
+      iwan_targets(m, sensors, {first, mode(chain_a[1], flat("other", 150, 0.01, 100))}, {});
+  EXPECT_EQ(other_hit.screened, 0);
+  ModeBackbones reported = first;
+  reported.fitted = false;
+  const IwanTargets kept =
+      iwan_targets(m, sensors, {reported, mode(chain_a[1], flat("hit", 150, 0.01, 100))}, {});
+  ASSERT_FALSE(kept.every.empty());
+  EXPECT_EQ(kept.every.front().first, 0u);
+  ASSERT_EQ(kept.every.front().second.curves.size(), 1u);
+  EXPECT_EQ(kept.every.front().second.curves[0].amplitude.size(), 10);
+}
+
+}  // namespace
+}  // namespace jointlab::campaign

@@ -1,0 +1,302 @@
+#include "jointlab/campaign/steps/campaign_report.h"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "jointlab/campaign/steps/known_parameters.h"
+#include "jointlab/modal/ringdown.h"
+
+namespace jointlab::campaign {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string g6(double v) { return fmt::format("{:.6g}", v); }
+// A damping ratio or its spread to significant digits (a fixed number of decimals prints
+// 0.00057 - 0.00057 for an interval of 5.68e-4 - 5.74e-4).
+std::string zeta(double v) { return fmt::format("{:.3g}", v); }
+std::string pct(double v) { return fmt::format("{:+.3f} %", v); }
+
+// At the top of the report: each mode no hit gave a backbone for, and every hit's reason.
+ReportSection no_backbone_section(const Campaign& c, const MeasuredSide& m) {
+  ReportSection s;
+  s.heading = "Modes without a backbone";
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    if (!m.curves[k].empty()) continue;
+    s.paragraphs.push_back(fmt::format(
+        "{} ({:g} - {:g} Hz band, channel {}): no backbone in any hit; its results are left out.",
+        c.modes[k].name, c.modes[k].band.lo, c.modes[k].band.hi, c.modes[k].reference));
+    ReportTable t{fmt::format("{}: why each hit gave no backbone", c.modes[k].name),
+                  {"hit", "group", "reason"},
+                  {}};
+    for (const HitSpan& h : m.spans[k])
+      t.rows.push_back({h.hit, h.group, h.ok ? "backbone kept" : "no backbone: " + h.reason});
+    s.tables.push_back(t);
+  }
+  return s;
+}
+
+ReportSection data_section(const Campaign& c, const RunSummary& summary,
+                           const CampaignFigures& figures) {
+  ReportSection s;
+  s.heading = "Data processed";
+  const bool has_model = !c.model.file.empty() || !c.model.description.empty();
+  std::string channels;
+  for (const CampaignChannel& ch : c.channels) {
+    if (!channels.empty()) channels += ", ";
+    channels += ch.name;
+    if (!ch.dof.empty() && has_model) channels += fmt::format(" (model DOF {})", ch.dof);
+  }
+  s.paragraphs.push_back(fmt::format(
+      "Campaign file {}. {} hit(s) in {} group(s); channels {}; {} mode(s). Channels without a "
+      "unit measure {}; backbone amplitudes are {} amplitudes [{}].",
+      c.file.string(), summary.hits, c.groups.size(), channels, c.modes.size(),
+      quantity_name(c.quantity), quantity_name(c.amplitude), si_unit(c.amplitude)));
+  ReportTable t{"Groups", {"group", "level", "hits", "files"}, {}};
+  for (const CampaignGroup& g : c.groups) {
+    std::string files;
+    for (const fs::path& f : g.files) {
+      if (!files.empty()) files += ' ';
+      files += f.filename().string();
+    }
+    t.rows.push_back({g.name, g.level, std::to_string(g.files.size()), files});
+  }
+  s.tables.push_back(t);
+  ReportTable mt{"Modes", {"mode", "band [Hz]", "reference channel"}, {}};
+  if (has_model) mt.header.push_back("model mode");
+  for (const CampaignMode& m : c.modes) {
+    mt.rows.push_back({m.name, fmt::format("{:g} - {:g}", m.band.lo, m.band.hi), m.reference});
+    if (has_model) mt.rows.back().push_back(m.model_mode ? std::to_string(m.model_mode) : "-");
+  }
+  s.tables.push_back(mt);
+  s.figures.push_back(figures.spectrum);
+  return s;
+}
+
+ReportSection settings_section(const Campaign& c) {
+  ReportSection s;
+  s.heading = "Settings";
+  const ScatterOptions& so = c.scatter;
+  s.paragraphs.push_back(fmt::format(
+      "Processing: jointlab process defaults (Hilbert envelope and phase, local fits, "
+      "uncertainties at k = {:g}). Scatter: {} bins per decade of amplitude, {:g} % Student-t "
+      "confidence intervals of the mean, bins need {} curves; a hit is flagged when a robust "
+      "z-score (median/MAD of its mean relative deviation from the per-bin medians, and of its "
+      "linear frequency and damping) exceeds {:g} (spread floors {:g} in frequency, {:g} in "
+      "damping); flagged hits are {} the bins.{}",
+      modal::RingdownOptions{}.coverage_factor, so.bins_per_decade, 100 * so.confidence,
+      so.min_curves, so.outlier_threshold, so.frequency_floor, so.damping_floor,
+      so.exclude_outliers ? "left out of" : "kept in",
+      c.model.file.empty() && c.model.description.empty()
+          ? ""
+          : fmt::format(" QSMA: {} points per curve.", c.qsma_points)));
+  return s;
+}
+
+ReportSection scatter_section(const Campaign& c, const MeasuredSide& m, size_t k,
+                              const CampaignFigures& figures) {
+  ReportSection s;
+  s.heading = fmt::format("Scatter summary: {}", c.modes[k].name);
+  const ScatterSummary& sc = m.scatter[k];
+  ReportTable spans{"Kept span of each hit at the reference channel",
+                    {"hit", "group", "from [s]", "to [s]", "decades"},
+                    {}};
+  for (const HitSpan& h : m.spans[k]) {
+    if (h.ok)
+      spans.rows.push_back({h.hit, h.group, fmt::format("{:.3f}", h.start_s),
+                            fmt::format("{:.3f}", h.end_s), fmt::format("{:.2f}", h.decades)});
+    else
+      spans.rows.push_back({h.hit, h.group, "-", "-", "no backbone: " + h.reason});
+  }
+  if (m.curves[k].empty()) {
+    s.paragraphs.push_back(
+        fmt::format("No backbone at channel {} in any hit.", c.modes[k].reference));
+    s.tables.push_back(spans);
+    return s;
+  }
+  s.paragraphs.push_back(fmt::format("{} curve(s) at channel {}. {}", m.curves[k].size(),
+                                     c.modes[k].reference, sc.report()));
+  s.tables.push_back(spans);
+  ReportTable bt{"Bins (frequency and damping: mean, standard deviation, confidence interval)",
+                 {"amplitude", "curves", "f mean [Hz]", "f std [Hz]", "f interval [Hz]",
+                  "zeta mean", "zeta std", "zeta interval"},
+                 {}};
+  for (const ScatterBin& b : sc.bins) {
+    bt.rows.push_back(
+        {fmt::format("{:.3g}", b.amplitude_center), std::to_string(b.curves),
+         fmt::format("{:.4f}", b.frequency_hz.mean), fmt::format("{:.4f}", b.frequency_hz.std),
+         fmt::format("{:.4f} - {:.4f}", b.frequency_hz.ci_low, b.frequency_hz.ci_high),
+         zeta(b.damping.mean), zeta(b.damping.std),
+         fmt::format("{} - {}", zeta(b.damping.ci_low), zeta(b.damping.ci_high))});
+  }
+  s.tables.push_back(bt);
+  ReportTable ht{"Hits (robust z-scores; |z| > threshold is flagged)",
+                 {"hit", "group", "f dev", "zeta dev", "z f", "z zeta", "linear f [Hz]",
+                  "linear zeta", "flagged"},
+                 {}};
+  for (const HitDeviation& h : sc.hits) {
+    ht.rows.push_back({h.id, h.group, fmt::format("{:+.2e}", h.frequency_deviation),
+                       fmt::format("{:+.3f}", h.damping_deviation),
+                       fmt::format("{:+.1f}", h.frequency_z), fmt::format("{:+.1f}", h.damping_z),
+                       h.has_linear ? fmt::format("{:.4f}", h.linear_frequency_hz) : "-",
+                       h.has_linear ? zeta(h.linear_damping) : "-",
+                       h.outlier ? "yes: " + h.reason : "no"});
+  }
+  s.tables.push_back(ht);
+  s.paragraphs.push_back(fmt::format(
+      "Linear (low-amplitude) values over {} hit(s): frequency {:.4f} Hz, standard deviation "
+      "{:.4f} Hz, interval {:.4f} - {:.4f} Hz; damping ratio {}, standard deviation {}.",
+      sc.linear_count, sc.linear_frequency_hz.mean, sc.linear_frequency_hz.std,
+      sc.linear_frequency_hz.ci_low, sc.linear_frequency_hz.ci_high, zeta(sc.linear_damping.mean),
+      zeta(sc.linear_damping.std)));
+  s.figures.push_back(figures.backbone[k]);
+  return s;
+}
+
+ReportTable frequency_table(const Campaign& c, const MeasuredSide& m, const ModelResults& r) {
+  ReportTable ft{"Linear frequencies, test versus model",
+                 {"mode", "test [Hz]", "test std [Hz]", "model start [Hz]", "error start",
+                  "model updated [Hz]", "error updated"},
+                 {}};
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    if (r.start.frequency_hz[k] <= 0 || m.scatter[k].linear_count == 0) continue;
+    const double fe = m.scatter[k].linear_frequency_hz.mean;
+    ft.rows.push_back({c.modes[k].name, fmt::format("{:.4f}", fe),
+                       fmt::format("{:.4f}", m.scatter[k].linear_frequency_hz.std),
+                       fmt::format("{:.4f}", r.start.frequency_hz[k]),
+                       pct(100 * (r.start.frequency_hz[k] - fe) / fe),
+                       r.have_updated ? fmt::format("{:.4f}", r.after.frequency_hz[k]) : "-",
+                       r.have_updated ? pct(100 * (r.after.frequency_hz[k] - fe) / fe) : "-"});
+  }
+  return ft;
+}
+
+double spring_value(const model::Model& m, const std::string& element) {
+  for (const model::Joint& j : m.joints)
+    if (j.element == element) return j.stiffness;
+  return 0;
+}
+
+// True when the linear update changed `element`.
+bool linearly_updated(const Campaign& c, const ModelResults& r, const std::string& element) {
+  return r.have_updated && std::find(c.linear_update.sets.begin(), c.linear_update.sets.end(),
+                                     element) != c.linear_update.sets.end();
+}
+
+// The joint parameters before and after, with the known values of a simulated campaign.
+ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Truth& truth) {
+  model::IwanParameters p0, p1;
+  std::string set;
+  const bool has_iwan = first_iwan(r.data.model, p0, set);
+  p1 = p0;
+  if (r.have_updated) first_iwan(r.updated, p1, set);
+  ReportTable pt{
+      "Joint parameters", {"parameter", "start", "updated", "known", "updated / known"}, {}};
+  const auto row = [&](const std::string& name, double a, double b, double known,
+                       bool updated_here) {
+    pt.rows.push_back(
+        {name, g6(a), updated_here ? g6(b) : "(not updated)",
+         truth.present && known != 0 ? g6(known) : "-",
+         truth.present && known != 0 && updated_here ? fmt::format("{:.4f}", b / known) : "-"});
+  };
+  const bool iwan_ran = r.iwan.ran;
+  if (has_iwan) {
+    row(set + " Kt [N/m]", p0.Kt, p1.Kt, truth.iwan.Kt, linearly_updated(c, r, set) || iwan_ran);
+    row(set + " Fs [N]", p0.Fs, p1.Fs, truth.iwan.Fs, iwan_ran);
+    if (iwan_ran && r.iwan.summary.microslip_only())
+      pt.rows.back()[2] += " (not identified: microslip data)";
+    row(set + " chi", p0.chi, p1.chi, truth.iwan.chi, iwan_ran);
+    row(set + " beta", p0.beta, p1.beta, truth.iwan.beta, iwan_ran);
+    if (iwan_ran && r.iwan.beta_held) pt.rows.back()[2] += " (held)";
+  }
+  for (const std::string& name : c.linear_update.sets) {
+    if (name.rfind("spring.", 0) != 0) continue;
+    const double a = spring_value(r.data.model, name);
+    const double b = r.have_updated ? spring_value(r.updated, name) : a;
+    row(name, a, b, 0, linearly_updated(c, r, name));
+  }
+  return pt;
+}
+
+ReportSection model_section(const Campaign& c, const MeasuredSide& m, const ModelResults& r,
+                            const CampaignFigures& figures) {
+  ReportSection s;
+  s.heading = "Model";
+  const model::Model& model = r.data.model;
+  s.paragraphs.push_back(fmt::format("Model file {} ({} DOFs, {} joint elements, {} Iwan).",
+                                     r.data.file.string(), model.size(), model.joints.size(),
+                                     model.iwan_count()));
+  for (const std::string& n : r.start.qsma_notes) s.paragraphs.push_back("QSMA " + n);
+  s.tables.push_back(frequency_table(c, m, r));
+  const Truth truth = read_truth(c.truth);
+  s.tables.push_back(parameter_table(c, r, truth));
+  if (r.linear.ran) s.paragraphs.push_back("Linear updating: " + r.linear.summary.report());
+  if (r.iwan.ran) {
+    s.paragraphs.push_back("Iwan identification: " + r.iwan.summary.report());
+    ReportTable mc{
+        "Backbone cost per mode (mean squared error in units of the scatter between "
+        "hits: about 2 when the model lies within it)",
+        {"mode", "fitted", "cost, start", "cost, updated"},
+        {}};
+    for (const ModeCost& mcost : r.iwan.mode_costs)
+      mc.rows.push_back({mcost.mode, mcost.fitted ? "yes" : "no",
+                         fmt::format("{:.3g}", mcost.start), fmt::format("{:.3g}", mcost.updated)});
+    s.tables.push_back(mc);
+  }
+  model::IwanParameters p0, p1;
+  std::string set;
+  if (truth.present && first_iwan(model, p0, set)) {
+    p1 = p0;
+    if (r.have_updated) first_iwan(r.updated, p1, set);
+    KnownComparison kc;
+    kc.truth = truth;
+    kc.updated = p1;
+    kc.kt_updated = linearly_updated(c, r, set) || r.iwan.ran;
+    kc.iwan_ran = r.iwan.ran;
+    kc.beta_held = r.iwan.beta_held;
+    kc.curves = r.iwan.curves;
+    kc.iwan = r.iwan.summary;
+    kc.cost_known = r.iwan.cost_known;
+    compare_with_known(kc, c.truth.filename().string(), s);
+  }
+  s.figures = figures.model;
+  return s;
+}
+
+ReportSection notes_section(const Campaign& c, const RunSummary& summary) {
+  ReportSection s;
+  s.heading = "Notes and errors";
+  if (summary.notes.empty()) s.paragraphs.push_back("No step was skipped.");
+  for (const std::string& n : summary.notes) s.paragraphs.push_back(n);
+  const bool has_model = !c.model.file.empty() || !c.model.description.empty();
+  s.paragraphs.push_back(
+      fmt::format("This run: {} hit(s) processed, {} reused from earlier runs{}.",
+                  summary.hits_processed, summary.hits_reused,
+                  !has_model             ? ""
+                  : summary.model_built  ? "; model built"
+                  : summary.model_reused ? "; model reused"
+                                         : "; model given as a file"));
+  return s;
+}
+
+}  // namespace
+
+Report campaign_report(const Campaign& c, const RunSummary& summary, const MeasuredSide& measured,
+                       const ModelResults* model, const CampaignFigures& figures) {
+  Report report;
+  report.title = fmt::format("Test campaign: {}", c.name);
+  if (!summary.no_backbone.empty()) report.sections.push_back(no_backbone_section(c, measured));
+  report.sections.push_back(data_section(c, summary, figures));
+  report.sections.push_back(settings_section(c));
+  for (size_t k = 0; k < c.modes.size(); ++k)
+    report.sections.push_back(scatter_section(c, measured, k, figures));
+  if (model) report.sections.push_back(model_section(c, measured, *model, figures));
+  report.sections.push_back(notes_section(c, summary));
+  return report;
+}
+
+}  // namespace jointlab::campaign

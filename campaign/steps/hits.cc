@@ -1,0 +1,189 @@
+#include "jointlab/campaign/steps/hits.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "jointlab/campaign/steps/numeric_table.h"
+#include "jointlab/campaign/steps/stamp.h"
+#include "jointlab/core/error.h"
+#include "jointlab/core/parallel.h"
+#include "jointlab/data/atomic_file.h"
+#include "jointlab/data/read_record.h"
+#include "jointlab/data/table_writer.h"
+#include "jointlab/modal/process.h"
+#include "jointlab/modal/process_output.h"
+
+namespace jointlab::campaign {
+
+namespace fs = std::filesystem;
+
+fs::path hit_dir(const fs::path& out, const std::string& group) { return out / "hits" / group; }
+
+void process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
+                 signal::FftCache& cache) {
+  const data::Record rec = data::read_record(file);
+  modal::ProcessOptions opt;
+  for (const CampaignMode& m : c.modes) opt.bands.push_back(m.band);
+  for (const CampaignChannel& ch : c.channels) opt.channels.push_back(ch.name);
+  opt.quantity = c.quantity;
+  opt.ringdown.amplitude = c.amplitude;
+  if (const std::string why = opt.check(); !why.empty())
+    throw InputError(fmt::format("{}: {}", c.file.string(), why));
+  const modal::RecordResult r = modal::process_record(rec, opt, cache);
+  fs::create_directories(dir);
+  modal::write_backbones(dir, r, opt.ringdown);
+  data::Table t;
+  const Eigen::Index n = static_cast<Eigen::Index>(r.results.size());
+  Eigen::VectorXd band(n), chan(n), ok(n), f(n), z(n), re(n), im(n), t0(n), t1(n), dec(n);
+  std::string reasons;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const modal::ChannelBand& cb = r.results[i];
+    band(i) = cb.band_index;
+    chan(i) = 0;
+    for (size_t k = 0; k < c.channels.size(); ++k)
+      if (c.channels[k].name == cb.channel) chan(i) = static_cast<double>(k);
+    const bool good = cb.ringdown.summary.status == modal::RingdownStatus::kOk;
+    ok(i) = good;
+    f(i) = good ? cb.ringdown.summary.linear_frequency_hz : 0.0;
+    z(i) = good ? cb.ringdown.summary.linear_damping : 0.0;
+    re(i) = std::isfinite(cb.complex_amplitude.real()) ? cb.complex_amplitude.real() : 0.0;
+    im(i) = std::isfinite(cb.complex_amplitude.imag()) ? cb.complex_amplitude.imag() : 0.0;
+    const modal::RingdownSummary& rs = cb.ringdown.summary;
+    t0(i) = good ? rs.span_start_s : 0.0;
+    t1(i) = good ? rs.span_end_s : 0.0;
+    dec(i) = good ? rs.amplitude_decades : 0.0;
+    if (!good) {
+      std::string why = rs.message.empty() ? "no span kept" : rs.message;
+      std::replace(why.begin(), why.end(), '\n', ' ');
+      reasons += fmt::format("{} {} {}\n", cb.band_index, static_cast<int>(chan(i)), why);
+    }
+  }
+  t.add("band", band);
+  t.add("channel", chan);
+  t.add("ok", ok);
+  t.add("linear_frequency_hz", f);
+  t.add("linear_damping", z);
+  t.add("amplitude_re_m", re);
+  t.add("amplitude_im_m", im);
+  t.add("span_start_s", t0);
+  t.add("span_end_s", t1);
+  t.add("decades", dec);
+  data::write_file_atomically(dir / (file.stem().string() + ".reasons.txt"), reasons);
+  // Written last: its presence marks the hit as complete.
+  data::write_table(dir / (file.stem().string() + ".linear.csv"), t);
+}
+
+HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file,
+                 const fs::path& dir) {
+  HitData h;
+  h.group = g.name;
+  h.stem = file.stem().string();
+  h.file = file;
+  const size_t nb = c.modes.size(), nc = c.channels.size();
+  h.linear.assign(nb, std::vector<LinearEntry>(nc));
+  h.curves.assign(nb, std::vector<correlate::Curve>(nc));
+  h.point_std.assign(nb, std::vector<PointStd>(nc));
+  const fs::path lin = dir / (h.stem + ".linear.csv");
+  const NumericTable t = read_numeric_table(lin);
+  const auto& band = t.column("band", lin);
+  const auto& chan = t.column("channel", lin);
+  const auto& ok = t.column("ok", lin);
+  const auto& f = t.column("linear_frequency_hz", lin);
+  const auto& z = t.column("linear_damping", lin);
+  const auto& re = t.column("amplitude_re_m", lin);
+  const auto& im = t.column("amplitude_im_m", lin);
+  const auto& t0 = t.column("span_start_s", lin);
+  const auto& t1 = t.column("span_end_s", lin);
+  const auto& dec = t.column("decades", lin);
+  for (size_t i = 0; i < band.size(); ++i) {
+    const int b = static_cast<int>(band[i]) - 1, ch = static_cast<int>(chan[i]);
+    if (b < 0 || b >= static_cast<int>(nb) || ch < 0 || ch >= static_cast<int>(nc)) continue;
+    h.linear[b][ch] = {ok[i] > 0.5, f[i], z[i], {re[i], im[i]}, t0[i], t1[i], dec[i], ""};
+  }
+  std::ifstream reasons(dir / (h.stem + ".reasons.txt"));
+  int rb = 0, rc = 0;
+  std::string why;
+  while (reasons >> rb >> rc && std::getline(reasons, why)) {
+    if (rb < 1 || rb > static_cast<int>(nb) || rc < 0 || rc >= static_cast<int>(nc)) continue;
+    h.linear[rb - 1][rc].reason = why.empty() ? why : why.substr(1);
+  }
+  for (size_t b = 0; b < nb; ++b) {
+    for (size_t ch = 0; ch < nc; ++ch) {
+      const LinearEntry& le = h.linear[b][ch];
+      const fs::path p = dir / modal::backbone_file_name(file.string(), c.channels[ch].name,
+                                                         static_cast<int>(b) + 1);
+      correlate::Curve& cv = h.curves[b][ch];
+      if (le.ok && fs::exists(p)) {
+        BackboneFile bf = read_backbone_file(p, h.stem, g.name);
+        cv = std::move(bf.curve);
+        h.point_std[b][ch] = {std::move(bf.frequency_std_hz), std::move(bf.damping_std)};
+      }
+      cv.id = h.stem;
+      cv.group = g.name;
+      cv.has_linear = le.ok;
+      cv.linear_frequency_hz = le.frequency_hz;
+      cv.linear_damping = le.damping;
+    }
+  }
+  return h;
+}
+
+std::string hit_settings(const Campaign& c) {
+  std::string s = fmt::format("quantity {} amplitude {};", quantity_name(c.quantity),
+                              quantity_name(c.amplitude));
+  for (const CampaignMode& m : c.modes)
+    s += fmt::format(" band {:.17g}:{:.17g};", m.band.lo, m.band.hi);
+  for (const CampaignChannel& ch : c.channels) s += fmt::format(" channel '{}';", ch.name);
+  return s;
+}
+
+std::vector<HitData> process_hits(const Campaign& c, const fs::path& out, const RunOptions& o,
+                                  RunSummary& summary) {
+  struct Job {
+    const CampaignGroup* group;
+    fs::path file;
+  };
+  std::vector<Job> jobs;
+  std::vector<size_t> todo;
+  for (const CampaignGroup& g : c.groups)
+    for (const fs::path& f : g.files) jobs.push_back({&g, f});
+  const std::string settings = hit_settings(c);
+  std::vector<std::string> stamps;
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const Job& j = jobs[i];
+    const fs::path marker = hit_dir(out, j.group->name) / (j.file.stem().string() + ".stamp");
+    stamps.push_back(input_stamp({j.file}, settings));
+    if (!o.force && stamp_matches(marker, stamps.back())) {
+      ++summary.hits_reused;
+    } else {
+      todo.push_back(i);
+    }
+  }
+  const auto say = [&](const std::string& s) {
+    if (o.progress) o.progress(s);
+  };
+  if (!todo.empty()) {
+    say(fmt::format("process: {} hit(s) to process, {} up to date", todo.size(),
+                    summary.hits_reused));
+    parallel_for(
+        todo.size(), o.threads, [] { return signal::FftCache{}; },
+        [&](size_t i, signal::FftCache& cache) {
+          const Job& j = jobs[todo[i]];
+          const fs::path dir = hit_dir(out, j.group->name);
+          process_hit(c, j.file, dir, cache);
+          write_stamp(dir / (j.file.stem().string() + ".stamp"), stamps[todo[i]]);
+        });
+    summary.hits_processed = static_cast<int>(todo.size());
+  } else {
+    say(fmt::format("process: all {} hit(s) up to date", jobs.size()));
+  }
+  std::vector<HitData> hits;
+  for (const Job& j : jobs)
+    hits.push_back(load_hit(c, *j.group, j.file, hit_dir(out, j.group->name)));
+  return hits;
+}
+
+}  // namespace jointlab::campaign

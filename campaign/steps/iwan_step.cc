@@ -1,0 +1,137 @@
+#include "jointlab/campaign/steps/iwan_step.h"
+
+#include <fmt/format.h>
+
+#include "jointlab/campaign/steps/known_parameters.h"
+#include "jointlab/core/error.h"
+
+namespace jointlab::campaign {
+
+using correlate::AmplitudeQuantity;
+using correlate::IwanObjective;
+using correlate::IwanUpdateOptions;
+using correlate::IwanUpdateSummary;
+
+void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOptions& to) {
+  io.amplitude = c.amplitude == Quantity::kDisplacement   ? AmplitudeQuantity::kDisplacement
+                 : c.amplitude == Quantity::kAcceleration ? AmplitudeQuantity::kAcceleration
+                                                          : AmplitudeQuantity::kVelocity;
+  to.amplitude = io.amplitude;
+  for (const auto& [key, value] : c.iwan_update.settings) {
+    if (key == "max_evaluations")
+      io.max_evaluations = static_cast<int>(value);
+    else if (key == "gamma")
+      io.fixed_gamma = value;
+    else if (key == "beta")
+      io.fixed_beta = value;
+    else if (key == "qsma_points")
+      io.qsma_points = static_cast<int>(value);
+    else if (key == "samples")
+      io.samples = static_cast<int>(value);
+    else if (key == "local_starts")
+      io.local_starts = static_cast<int>(value);
+    else if (key == "seed")
+      io.seed = static_cast<unsigned>(value);
+    else if (key == "max_slip_share")
+      to.max_slip_share = value;
+    else
+      throw InputError(
+          where(c.file.string(), 0, fmt::format("update.iwan: unknown setting '{}'", key)));
+  }
+  if (const std::string e = io.error(); !e.empty())
+    throw InputError(where(c.file.string(), 0, "update.iwan: " + e));
+}
+
+std::string iwan_set(const Campaign& c, const model::Model& m) {
+  if (!c.iwan_update.sets.empty()) return c.iwan_update.sets.front();
+  model::IwanParameters first;
+  std::string set;
+  if (!first_iwan(m, first, set))
+    throw InputError(where(c.file.string(), 0, "update.iwan: the model has no Iwan joint"));
+  return set;
+}
+
+std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredSide& m) {
+  std::vector<ModeBackbones> modes(c.modes.size());
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    ModeBackbones& mb = modes[k];
+    mb.name = c.modes[k].name;
+    mb.model_mode = c.modes[k].model_mode;
+    mb.fitted = c.iwan_update.fits(c.modes[k].name);
+    mb.linear_frequency_hz = m.modes.frequency_hz(static_cast<Eigen::Index>(k));
+    mb.curves = m.curves[k];
+    mb.sensors.assign(mb.curves.size(), m.reference[k]);
+    for (const PointStd& p : m.point_std[k]) {
+      mb.frequency_std_hz.push_back(p.frequency_hz);
+      mb.damping_std.push_back(p.damping);
+    }
+    mb.scatter = m.scatter[k];
+  }
+  return modes;
+}
+
+namespace {
+
+// The fit itself: beta held first, freed when the data reach macroslip; the better kept.
+IwanUpdateSummary fit(const IwanObjective& objective, const IwanUpdateOptions& io,
+                      const std::function<void(const std::string&)>& say) {
+  IwanUpdateSummary best;
+  IwanUpdateOptions held = io;
+  if (held.fixed_beta == 0) held.fixed_beta = objective.initial().beta;
+  correlate::update_iwan(objective, held, &best);
+  if (io.fixed_beta == 0 && !best.microslip_only()) {
+    say("update: " + best.report() +
+        "update: the data reach macroslip; Iwan identification with beta free");
+    IwanUpdateSummary full;
+    correlate::update_iwan(objective, io, &full);
+    full.evaluations += best.evaluations;
+    if (full.final_cost < best.final_cost) best = full;
+  }
+  return best;
+}
+
+}  // namespace
+
+IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
+                          const std::vector<correlate::Sensor>& sensors, const MeasuredSide& m,
+                          const std::function<void(const std::string&)>& progress) {
+  const auto say = [&](const std::string& s) {
+    if (progress) progress(s);
+  };
+  IwanStep step;
+  if (!c.iwan_update.enabled) return step;
+  step.set = iwan_set(c, base);
+  IwanUpdateOptions io;
+  IwanTargetOptions to;
+  iwan_update_options(c, io, to);
+  const IwanTargets targets = iwan_targets(base, sensors, campaign_backbones(c, m), to);
+  if (targets.fitted.empty()) {
+    step.note = "update.iwan: no mode names its model mode (model_mode); Iwan updating skipped";
+    return step;
+  }
+  const IwanObjective objective(base, step.set, sensors, targets.fitted, io.amplitude,
+                                io.qsma_points, io.frequency_floor, io.damping_floor);
+  say(
+      fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
+                  "left out where other modes carry over {:g} % of the joint slip)",
+                  step.set, targets.fitted.size(), targets.curves(), targets.screened,
+                  100 * to.max_slip_share));
+  step.summary = fit(objective, io, say);
+  step.beta_held = step.summary.microslip_only() || io.fixed_beta > 0;
+  step.curves = static_cast<int>(targets.curves());
+  step.updated = objective.apply(step.summary.best);
+  if (!c.truth.empty()) step.cost_known = objective.cost(read_truth(c.truth).iwan);
+  // Each mode's backbone cost at the start and at the result, fitted or not: a mode the
+  // one-mode QSMA cannot describe (its joints moved by another mode) stands out.
+  for (const auto& [k, t] : targets.every) {
+    const IwanObjective one(base, step.set, sensors, {t}, io.amplitude, io.qsma_points,
+                            io.frequency_floor, io.damping_floor);
+    step.mode_costs.push_back({c.modes[k].name, c.iwan_update.fits(c.modes[k].name),
+                               one.cost(step.summary.start), one.cost(step.summary.best)});
+  }
+  step.ran = true;
+  say("update: " + step.summary.report());
+  return step;
+}
+
+}  // namespace jointlab::campaign

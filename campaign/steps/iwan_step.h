@@ -1,0 +1,63 @@
+// Step "Iwan update" of a campaign run (method.md Figure 1): [update.iwan] identifies one Iwan
+// set's F_S, K_T, chi and beta from the kept hits' backbones (iwan_targets.h) of the modes
+// that name their model mode, starting from the linearly updated model. Below phi_max the
+// backbones depend on K_T, chi and R only, so the first fit holds beta at its starting value
+// (unless the campaign holds it); only when that fit puts the top of the data past phi_max
+// is beta freed for a second fit, and the better of the two is kept.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/campaign/steps/measured_side.h"
+#include "jointlab/campaign/steps/model_side.h"
+#include "jointlab/correlate/iwan_update.h"
+
+namespace jointlab::campaign {
+
+/// The updating options and target settings of [update.iwan]'s settings; InputError naming
+/// the campaign file for an unknown setting or a value out of range.
+void iwan_update_options(const Campaign& campaign, correlate::IwanUpdateOptions& options,
+                         IwanTargetOptions& targets);
+
+/// The Iwan set [update.iwan] updates: the one named in 'sets', else the model's first Iwan
+/// set; InputError when the model has none.
+std::string iwan_set(const Campaign& campaign, const model::Model& model);
+
+/// The campaign's modes as the Iwan update sees them: each mode's backbones at its reference
+/// channel, its scatter summary and measured linear frequency.
+std::vector<ModeBackbones> campaign_backbones(const Campaign& campaign,
+                                              const MeasuredSide& measured);
+
+/// One mode's backbone cost at the start and at the result.
+struct ModeCost {
+  std::string mode;    ///< the campaign mode
+  bool fitted = true;  ///< the update fitted it
+  double start = 0;    ///< cost at the starting parameters
+  double updated = 0;  ///< cost at the result
+};
+
+/// What the Iwan update did.
+struct IwanStep {
+  bool ran = false;                      ///< the update ran
+  std::string note;                      ///< why it was skipped ("" when it ran or was off)
+  std::string set;                       ///< the updated set
+  correlate::IwanUpdateSummary summary;  ///< its outcome (the better fit)
+  bool beta_held = false;                ///< beta held: microslip data, or by the campaign
+  int curves = 0;                        ///< backbones fitted
+  std::vector<ModeCost> mode_costs;      ///< per mode with a target, fitted or not
+  double cost_known = 0;                 ///< cost at the known parameters (0: none given)
+  model::Model updated;                  ///< the updated model (when it ran)
+};
+
+/// The step: runs [update.iwan] from `base` (the linearly updated model, else the campaign's)
+/// against the measured side; skipped when off or without targets.
+IwanStep iwan_update_step(const Campaign& campaign, const model::Model& base,
+                          const std::vector<correlate::Sensor>& sensors,
+                          const MeasuredSide& measured,
+                          const std::function<void(const std::string&)>& progress);
+
+}  // namespace jointlab::campaign

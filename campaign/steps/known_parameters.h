@@ -1,0 +1,52 @@
+// Known parameters of a simulated campaign (the campaign's `truth` file: [iwan] Kt Fs chi
+// beta, [scatter] Kt Fs planted relative scatter) and the report's comparison of the updated
+// parameters with them: per quantity the updated and the known value, the difference, the
+// tolerance (twice the planted one-sigma scatter where scatter was planted, else twice the
+// update's own one-sigma uncertainty from the scatter between hits) and whether the update
+// recovers it. Parameters the data cannot identify are said to be so.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "jointlab/campaign/report.h"
+#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/model/iwan.h"
+#include "jointlab/model/model_file.h"
+
+namespace jointlab::campaign {
+
+/// Known parameters of a simulated campaign.
+struct Truth {
+  bool present = false;        ///< a truth file was given
+  model::IwanParameters iwan;  ///< the Iwan set's parameters
+  double scatter_kt = 0;       ///< planted relative hit-to-hit scatter of K_T
+  double scatter_fs = 0;       ///< planted relative hit-to-hit scatter of F_S
+};
+
+/// Reads a truth file (empty path: none); InputError naming the file and field.
+Truth read_truth(const std::filesystem::path& path);
+
+/// The parameters and element name of the model's first Iwan joint; false when it has none.
+bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set);
+
+/// The slip force that, with `beta`, keeps p's K_T, chi and R (the microslip response).
+double slip_force_for(const model::IwanParameters& p, double beta);
+
+/// What the report compares with the known parameters.
+struct KnownComparison {
+  Truth truth;                        ///< the known parameters
+  model::IwanParameters updated;      ///< the updated model's Iwan set
+  bool kt_updated = false;            ///< K_T changed by the linear or the Iwan update
+  bool iwan_ran = false;              ///< the Iwan update ran
+  bool beta_held = false;             ///< beta held (microslip data, or by the campaign)
+  int curves = 0;                     ///< backbones the Iwan update fitted
+  correlate::IwanUpdateSummary iwan;  ///< the Iwan update's outcome
+  double cost_known = 0;              ///< the Iwan update's cost at the known parameters
+};
+
+/// Adds the "Updated versus known" table and its paragraph to `section`.
+void compare_with_known(const KnownComparison& k, const std::string& truth_name,
+                        ReportSection& section);
+
+}  // namespace jointlab::campaign

@@ -1,0 +1,36 @@
+// Step "linear update" of a campaign run (method.md Figure 1): [update.linear] tunes the named
+// stiffness sets so the model's linear frequencies match the measured mean linear
+// frequencies of the modes it fits (correlate/linear_update.h, MAC pairing at every step).
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/steps/model_side.h"
+#include "jointlab/correlate/linear_update.h"
+
+namespace jointlab::campaign {
+
+/// The updating options of [update.linear]'s settings; InputError naming the campaign file
+/// for an unknown setting or a value out of range.
+correlate::LinearUpdateOptions linear_update_options(const Campaign& campaign);
+
+/// What the linear update did.
+struct LinearStep {
+  bool ran = false;                        ///< the update ran
+  std::string note;                        ///< why it was skipped ("" when it ran or was off)
+  correlate::LinearUpdateSummary summary;  ///< its outcome
+  model::Model updated;                    ///< the updated model (when it ran)
+};
+
+/// The step: runs [update.linear] on the model against `measured` (every campaign mode, in
+/// order; modes without a measured linear frequency, 0, are left out); skipped when off,
+/// without sets or without a mode to fit.
+LinearStep linear_update_step(const Campaign& campaign, const CampaignModelData& model,
+                              const correlate::MeasuredModes& measured,
+                              const std::function<void(const std::string&)>& progress);
+
+}  // namespace jointlab::campaign

@@ -1,0 +1,81 @@
+#include "jointlab/campaign/steps/numeric_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+
+namespace jointlab::campaign {
+
+namespace fs = std::filesystem;
+
+const std::vector<double>& NumericTable::column(const std::string& name,
+                                                const fs::path& file) const {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return columns[i];
+  throw InputError(
+      fmt::format("{}: no column '{}' (delete the file to recompute it)", file.string(), name));
+}
+
+NumericTable read_numeric_table(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(fmt::format("{}: cannot read", path.string()));
+  NumericTable t;
+  std::string line;
+  if (!std::getline(in, line)) throw InputError(fmt::format("{}: empty", path.string()));
+  std::stringstream hs(line);
+  for (std::string name; std::getline(hs, name, ',');) t.names.push_back(name);
+  t.columns.resize(t.names.size());
+  long row = 1;
+  while (std::getline(in, line)) {
+    ++row;
+    if (line.empty()) continue;
+    std::stringstream rs(line);
+    size_t c = 0;
+    for (std::string cell; std::getline(rs, cell, ','); ++c) {
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      if (c >= t.columns.size() || end == cell.c_str() || !std::isfinite(v))
+        throw InputError(where(path.string(), row,
+                               "not a row of numbers (delete the file to "
+                               "recompute it)"));
+      t.columns[c].push_back(v);
+    }
+    if (c != t.columns.size()) throw InputError(where(path.string(), row, "wrong number of cells"));
+  }
+  return t;
+}
+
+namespace {
+Eigen::VectorXd vec(const std::vector<double>& v) {
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+}  // namespace
+
+BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
+                                const std::string& group) {
+  const NumericTable bt = read_numeric_table(path);
+  BackboneFile file;
+  correlate::Curve& cv = file.curve;
+  cv.id = id;
+  cv.group = group;
+  cv.time_s = vec(bt.column("time_s", path));
+  cv.amplitude = vec(bt.column("amplitude", path));
+  cv.frequency_hz = vec(bt.column("frequency_hz", path));
+  cv.damping = vec(bt.column("damping_ratio", path));
+  const auto has = [&](const char* name) {
+    return std::find(bt.names.begin(), bt.names.end(), name) != bt.names.end();
+  };
+  if (has("frequency_std_hz") && has("damping_std")) {
+    file.frequency_std_hz = vec(bt.column("frequency_std_hz", path));
+    file.damping_std = vec(bt.column("damping_std", path));
+  }
+  return file;
+}
+
+}  // namespace jointlab::campaign

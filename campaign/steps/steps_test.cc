@@ -1,0 +1,232 @@
+// Tests of the named steps of a campaign run (campaign_run.h) on the small simulated campaign
+// (tests/small_campaign.h) and on hand-made data with known answers.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/campaign/steps/campaign_figures.h"
+#include "jointlab/campaign/steps/campaign_report.h"
+#include "jointlab/campaign/steps/hits.h"
+#include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/steps/linear_step.h"
+#include "jointlab/campaign/steps/measured_side.h"
+#include "jointlab/campaign/steps/model_side.h"
+#include "jointlab/campaign/steps/numeric_table.h"
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/mac.h"
+#include "jointlab/model/linear_modes.h"
+#include "jointlab/tests/cli.h"
+#include "jointlab/tests/small_campaign.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::campaign {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::Close;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The small campaign, its hits processed once for every test.
+class Steps : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // One folder per process: ctest runs each test of the suite in its own process, in parallel.
+    const fs::path dir = testing::scratch_dir(fmt::format("campaign_steps_{}", ::getpid()));
+    small_ = std::make_unique<testing::SmallCampaign>(testing::make_small_campaign(
+        dir,
+        "[update.linear]\nsets = [\"iwan.rivet\"]\n\n[update.iwan]\nenabled = true\n"
+        "max_evaluations = 60\nsamples = 20\nqsma_points = 15\n"));
+    campaign_ = std::make_unique<Campaign>(read_campaign(small_->campaign));
+    RunOptions o;
+    o.out = dir / "out";
+    first_ = std::make_unique<RunSummary>();
+    hits_ = std::make_unique<std::vector<HitData>>(process_hits(*campaign_, o.out, o, *first_));
+    measured_ = std::make_unique<MeasuredSide>(
+        summarise_measured(*campaign_, *hits_, o.out / "scatter", nullptr));
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(small_->dir, ec);
+    small_.reset();
+    campaign_.reset();
+    first_.reset();
+    hits_.reset();
+    measured_.reset();
+  }
+  static fs::path out() { return small_->dir / "out"; }
+  static model::Model truth() { return correlate::two_chain_structure(small_->truth); }
+  static inline std::unique_ptr<testing::SmallCampaign> small_;
+  static inline std::unique_ptr<Campaign> campaign_;
+  static inline std::unique_ptr<RunSummary> first_;
+  static inline std::unique_ptr<std::vector<HitData>> hits_;
+  static inline std::unique_ptr<MeasuredSide> measured_;
+};
+
+// Every hit gives a backbone at both channels whose low-amplitude frequency lies just below
+// the truth's linear frequency (microslip softens it, by about 1 % here; never above it by
+// more than the processing's accuracy); a second call reuses every hit unchanged.
+TEST_F(Steps, ProcessHitsThenReuseThem) {
+  EXPECT_EQ(first_->hits_processed, 3);
+  ASSERT_EQ(hits_->size(), 3u);
+  for (const HitData& h : *hits_) {
+    for (int ch = 0; ch < 2; ++ch) {
+      EXPECT_GE(h.curves[0][ch].amplitude.size(), 3) << h.stem;
+      ASSERT_TRUE(h.linear[0][ch].ok) << h.stem;
+      const double r = h.linear[0][ch].frequency_hz / small_->frequency_hz;
+      EXPECT_LT(r, 1.0005) << h.stem;
+      EXPECT_GT(r, 0.97) << h.stem;
+      EXPECT_EQ(h.point_std[0][ch].frequency_hz.size(), h.curves[0][ch].amplitude.size());
+    }
+  }
+  RunOptions o;
+  o.out = out();
+  RunSummary again;
+  const std::vector<HitData> reused = process_hits(*campaign_, o.out, o, again);
+  EXPECT_EQ(again.hits_processed, 0);
+  EXPECT_EQ(again.hits_reused, 3);
+  ASSERT_EQ(reused.size(), 3u);
+  EXPECT_EQ(reused[2].curves[0][1].frequency_hz, (*hits_)[2].curves[0][1].frequency_hz);
+}
+
+// The measured mode: the mean linear frequency of the kept hits, recomputed here, and an
+// operating shape that matches the truth's mode shape at the sensors (MAC).
+TEST_F(Steps, SummariseMeasuredModes) {
+  const MeasuredSide& m = *measured_;
+  ASSERT_EQ(m.curves.size(), 1u);
+  EXPECT_EQ(m.curves[0].size(), 3u);
+  EXPECT_EQ(m.reference[0], 1);
+  double sum = 0;
+  int n = 0;
+  for (size_t h = 0; h < hits_->size(); ++h) {
+    if (m.flagged[h]) continue;
+    sum += (*hits_)[h].linear[0][1].frequency_hz;
+    ++n;
+  }
+  ASSERT_GT(n, 0);
+  EXPECT_TRUE(Close(m.modes.frequency_hz(0), sum / n, 1e-12));
+  const model::Model t = truth();
+  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
+  const int col = lm.rigid_count + small_->model_mode - 1;
+  Eigen::MatrixXd phi(2, 1);
+  phi << lm.shapes(1, col), lm.shapes(5, col);
+  EXPECT_GT(correlate::mac_matrix(m.modes.shapes, phi)(0, 0), 0.999);
+  for (const char* f : {"mode1.json", "mode1.bins.csv", "mode1.hits.csv"})
+    EXPECT_TRUE(fs::exists(out() / "scatter" / f)) << f;
+}
+
+// The model's linear frequency is its eigenfrequency; QSMA starts at it; the curve's amplitude
+// is the velocity at the reference channel, |phi_r| q omega, recomputed from the QSMA file.
+TEST_F(Steps, EvaluateModelInTheMeasuredAmplitude) {
+  const model::Model t = truth();
+  const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
+  EXPECT_EQ(d.dofs, (std::vector<Eigen::Index>{1, 5}));
+  const ModelSide s = evaluate_model(*campaign_, t, d.dofs, "truth", out() / "qsma", "truth");
+  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
+  const int col = lm.rigid_count + small_->model_mode - 1;
+  ASSERT_EQ(s.frequency_hz.size(), 1u);
+  EXPECT_TRUE(Close(s.frequency_hz[0], lm.frequency_hz(col), 1e-9));
+  const ModelCurve& c = s.curves[0];
+  ASSERT_GT(c.amplitude.size(), 5);
+  // Lowest QSMA amplitude: the joint barely slips, the frequency is the linear one (0.1 %).
+  EXPECT_TRUE(Close(c.frequency_hz(0), lm.frequency_hz(col), 1e-3));
+  const NumericTable q = read_numeric_table(out() / "qsma" / "mode1.truth.csv");
+  const auto& qa = q.column("modal_amplitude", "");
+  const double phi = std::abs(lm.shapes(5, col));
+  for (Eigen::Index i = 0; i < c.amplitude.size(); ++i)
+    EXPECT_TRUE(Close(c.amplitude(i), phi * qa[i] * 2 * kPi * c.frequency_hz(i), 1e-8)) << i;
+}
+
+// Against the truth's exact linear frequency and shape the linear update recovers K_T from a
+// start 20 % low (the one frequency fixes the one parameter: to the solver's tolerance).
+TEST_F(Steps, LinearUpdateRecoversTheStiffness) {
+  const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
+  const model::Model t = truth();
+  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
+  const int col = lm.rigid_count + small_->model_mode - 1;
+  correlate::MeasuredModes exact;
+  exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
+  exact.shapes.resize(2, 1);
+  exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
+  exact.labels = {"mode A1"};
+  const LinearStep step = linear_update_step(*campaign_, d, exact, nullptr);
+  ASSERT_TRUE(step.ran);
+  double ka = 0;
+  for (const model::Joint& j : step.updated.joints)
+    if (j.element == "iwan.rivet") ka = j.stiffness;
+  EXPECT_TRUE(Close(ka, small_->truth.ka, 1e-3));
+  Campaign off = *campaign_;
+  off.linear_update.sets.clear();
+  EXPECT_FALSE(linear_update_step(off, d, exact, nullptr).ran);
+  EXPECT_NE(linear_update_step(off, d, exact, nullptr).note.find("no 'sets'"), std::string::npos);
+  off.linear_update.settings["mac_treshold"] = 0.5;
+  off.linear_update.sets = {"iwan.rivet"};
+  EXPECT_NE(testing::input_error_of([&] { linear_update_options(off); }).find("mac_treshold"),
+            std::string::npos);
+}
+
+// From the truth model the Iwan update fits the one mode's three backbones and does not end
+// above its start; unknown settings are refused by name.
+TEST_F(Steps, IwanUpdateFromTheTruth) {
+  const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
+  const IwanStep step = iwan_update_step(*campaign_, truth(), d.sensors, *measured_, nullptr);
+  ASSERT_TRUE(step.ran);
+  EXPECT_EQ(step.set, "iwan.rivet");
+  EXPECT_EQ(step.curves, 3);
+  ASSERT_EQ(step.mode_costs.size(), 1u);
+  EXPECT_TRUE(step.mode_costs[0].fitted);
+  EXPECT_LE(step.summary.final_cost, step.summary.initial_cost);
+  EXPECT_GT(step.summary.evaluations, 0);
+  Campaign bad = *campaign_;
+  bad.iwan_update.settings["gama"] = 1;
+  correlate::IwanUpdateOptions io;
+  IwanTargetOptions to;
+  EXPECT_NE(testing::input_error_of([&] { iwan_update_options(bad, io, to); }).find("gama"),
+            std::string::npos);
+}
+
+// Figures: one PNG per mode and the spectrum; the model's two only with a model.
+TEST_F(Steps, FiguresWithAndWithoutAModel) {
+  const CampaignFigures none = draw_figures(*campaign_, *measured_, nullptr, out() / "fig0");
+  ASSERT_EQ(none.backbone.size(), 1u);
+  EXPECT_TRUE(none.model.empty());
+  EXPECT_GT(fs::file_size(none.backbone[0].image), 1000u);
+  EXPECT_GT(fs::file_size(none.spectrum.image), 1000u);
+  ModelResults r;
+  r.data = read_campaign_model(*campaign_, small_->model);
+  r.start = evaluate_model(*campaign_, r.data.model, r.data.dofs, "start", out() / "q1", "start");
+  const CampaignFigures with = draw_figures(*campaign_, *measured_, &r, out() / "fig1");
+  ASSERT_EQ(with.model.size(), 2u);
+  for (const ReportFigure& f : with.model) EXPECT_GT(fs::file_size(f.image), 1000u);
+}
+
+// The report: a model section only with a model, with the linear frequency per mode.
+TEST_F(Steps, ReportSections) {
+  const CampaignFigures figures = draw_figures(*campaign_, *measured_, nullptr, out() / "fig2");
+  const Report without = campaign_report(*campaign_, *first_, *measured_, nullptr, figures);
+  for (const ReportSection& s : without.sections) EXPECT_NE(s.heading, "Model");
+  ModelResults r;
+  r.data = read_campaign_model(*campaign_, small_->model);
+  r.start = evaluate_model(*campaign_, r.data.model, r.data.dofs, "start", out() / "q2", "start");
+  const CampaignFigures f2 = draw_figures(*campaign_, *measured_, &r, out() / "fig3");
+  const Report with = campaign_report(*campaign_, *first_, *measured_, &r, f2);
+  const auto model = std::find_if(with.sections.begin(), with.sections.end(),
+                                  [](const ReportSection& s) { return s.heading == "Model"; });
+  ASSERT_NE(model, with.sections.end());
+  ASSERT_FALSE(model->tables.empty());
+  ASSERT_EQ(model->tables[0].rows.size(), 1u);
+  EXPECT_EQ(model->tables[0].rows[0][3], fmt::format("{:.4f}", r.start.frequency_hz[0]));
+}
+
+}  // namespace
+}  // namespace jointlab::campaign

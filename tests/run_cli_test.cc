@@ -1,0 +1,283 @@
+// End-to-end tests of `jointlab run` on a small simulated campaign (small_campaign.h): the
+// whole chain from test files to the report, the restart, and the Iwan targets that `run`
+// and `update-iwan` build from the same hits.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/campaign/steps/hits.h"
+#include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/steps/measured_side.h"
+#include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/sensors.h"
+#include "jointlab/model/model_file.h"
+#include "jointlab/tests/cli.h"
+#include "jointlab/tests/small_campaign.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The first data row's value in column `name` of a numeric CSV.
+double first_value(const fs::path& p, const std::string& name) {
+  std::ifstream in(p);
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  std::stringstream hs(header), rs(row);
+  std::string h, cell;
+  while (std::getline(hs, h, ',') && std::getline(rs, cell, ','))
+    if (h == name) return std::stod(cell);
+  ADD_FAILURE() << p << ": no column " << name;
+  return 0;
+}
+
+constexpr const char* kUpdates =
+    "[update.linear]\nsets = [\"iwan.rivet\"]\n\n"
+    "[update.iwan]\nenabled = true\nmax_evaluations = 150\nqsma_points = 15\n";
+
+// The whole run: exit 0, every output, a linear update that moves the model's frequency onto
+// the measured one, and a second run that reuses the hits.
+TEST(RunCli, SmallCampaignEndToEnd) {
+  const fs::path dir = testing::scratch_dir("run_cli_e2e");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, kUpdates);
+  const fs::path out = dir / "out";
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
+  ASSERT_EQ(r.status, 0) << r.err;
+  RecordProperty("summary", r.out);
+  for (const char* f : {"report.html", "report.md", "scatter/mode1.json", "scatter/mode1.bins.csv",
+                        "qsma/mode1.start.csv", "qsma/mode1.updated.csv", "figures/spectrum.png",
+                        "figures/backbone_mode1.png", "figures/mac.png"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  for (int h = 1; h <= 3; ++h)
+    EXPECT_TRUE(fs::exists(out / "hits/all" / fmt::format("hit{}.linear.csv", h))) << h;
+  const std::string report = read_text(out / "report.md");
+  EXPECT_NE(report.find("Scatter summary: mode A1"), std::string::npos);
+  EXPECT_NE(report.find("Iwan identification"), std::string::npos);
+  // The lowest-amplitude QSMA point is the model's linear frequency. The start model's K_T is
+  // 20 % low (the frequency about 2 % low); the linear update fits the measured low-amplitude
+  // frequency and the Iwan update the backbone, which together bring K_T within a few percent
+  // of the truth (the frequency's sensitivity to K_T is about 0.13): 0.5 % in frequency.
+  const double f_start = first_value(out / "qsma/mode1.start.csv", "frequency_hz");
+  const double f_updated = first_value(out / "qsma/mode1.updated.csv", "frequency_hz");
+  EXPECT_GT(std::abs(f_start / s.frequency_hz - 1), 0.01) << f_start;
+  EXPECT_LT(std::abs(f_updated / s.frequency_hz - 1), 0.005) << f_updated << " " << s.frequency_hz;
+  // The Iwan update fits the backbones better than the linearly updated start.
+  const size_t at = report.find("Iwan identification: ");
+  ASSERT_NE(at, std::string::npos);
+  double before = 0, after = 0;
+  ASSERT_EQ(std::sscanf(report.c_str() + report.find(", cost ", at), ", cost %lf -> %lf", &before,
+                        &after),
+            2);
+  EXPECT_LT(after, 0.5 * before);
+  // Again: the hits are up to date.
+  const testing::CommandResult again = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.out.find("3 up to date"), std::string::npos) << again.out;
+}
+
+// A campaign run into a folder that holds another campaign's results (the same hits, another
+// band) gives the same results as a fresh run: the cached hits are stamped with their settings.
+TEST(RunCli, RunIntoAnotherCampaignsFolderEqualsAFreshRun) {
+  const fs::path dir = testing::scratch_dir("run_cli_other");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, "");
+  const auto run = [&](const fs::path& out) {
+    const testing::CommandResult r = testing::run_jointlab(
+        fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
+    EXPECT_EQ(r.status, 0) << r.err;
+    return r.out;
+  };
+  run(dir / "shared");
+  // The other campaign: the band narrowed to +-8 % (the file keeps its name and folder).
+  std::string text = read_text(s.campaign);
+  const std::string band = fmt::format("band = [{:.3f}, {:.3f}]", s.band[0], s.band[1]);
+  ASSERT_NE(text.find(band), std::string::npos);
+  text.replace(
+      text.find(band), band.size(),
+      fmt::format("band = [{:.3f}, {:.3f}]", 0.92 * s.frequency_hz, 1.08 * s.frequency_hz));
+  testing::write_text(s.campaign.string(), text);
+  const std::string second = run(dir / "shared");
+  EXPECT_NE(second.find("3 processed, 0 up to date"), std::string::npos) << second;
+  run(dir / "fresh");
+  for (const char* f : {"scatter/mode1.bins.csv", "scatter/mode1.hits.csv", "scatter/mode1.json",
+                        "qsma/mode1.start.csv", "hits/all/hit2.acc_5.band1.csv"})
+    EXPECT_EQ(read_text(dir / "shared" / f), read_text(dir / "fresh" / f)) << f;
+}
+
+// The whole campaign is checked before any hit is processed: a typo in an update table, a
+// model_mode beyond the model, an Iwan set the model lacks. One line, exit status 2, no hit.
+TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"[update.linear]\nsets = [\"iwan.rivet\"]\nmac_treshold = 0.5\n", "mac_treshold"},
+      {"[update.linear]\nsets = [\"spring.nope\"]\n", "update.linear.sets"},
+      {"[update.iwan]\nenabled = true\nsets = [\"iwan.nope\"]\n", "update.iwan.sets"},
+      {"[update.iwan]\nenabled = true\ngama = 1\n", "gama"}};
+  int k = 0;
+  for (const auto& [extra, says] : cases) {
+    const fs::path dir = testing::scratch_dir(fmt::format("run_cli_bad{}", k++));
+    const testing::SmallCampaign s = testing::make_small_campaign(dir, extra, {10});
+    const testing::CommandResult r = testing::run_jointlab(
+        fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "out").string()));
+    EXPECT_EQ(r.status, 2) << extra;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out" / "hits")) << extra;
+  }
+  // model_mode beyond the model's size.
+  const fs::path dir = testing::scratch_dir("run_cli_bad_mode");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10});
+  std::string text = read_text(s.campaign);
+  const std::string mm = fmt::format("model_mode = {}", s.model_mode);
+  text.replace(text.find(mm), mm.size(), "model_mode = 9999");
+  testing::write_text(s.campaign.string(), text);
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "out").string()));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("model_mode 9999"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "hits"));
+}
+
+// A band with no mode in it: everything else is written, the report's top says "no backbone"
+// with each hit's reason, no 0 Hz value and no empty plot appear, the exit status is 2; a
+// model-less report mentions no model.
+TEST(RunCli, AModeWithoutABackboneIsReportedAndFails) {
+  const fs::path dir = testing::scratch_dir("run_cli_nothing");
+  const testing::SmallCampaign s = testing::make_small_campaign(
+      dir, "[[mode]]\nname = \"nothing\"\nband = [20.0, 30.0]\nreference = \"acc_5\"\n");
+  std::string text = read_text(s.campaign);
+  const std::string model = "[model]\nfile = \"model.toml\"\n";
+  ASSERT_NE(text.find(model), std::string::npos);
+  text.erase(text.find(model), model.size());
+  const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
+  text.erase(text.find(mm), mm.size());
+  testing::write_text(s.campaign.string(), text);
+  const fs::path out = dir / "out";
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("nothing"), std::string::npos) << r.err;
+  const std::string report = read_text(out / "report.md");
+  const size_t top = report.find("## ");
+  ASSERT_NE(top, std::string::npos);
+  EXPECT_EQ(report.compare(top, 28, "## Modes without a backbone\n"), 0) << report.substr(0, 300);
+  size_t reasons = 0;
+  for (size_t at = report.find("| no backbone: "); at != std::string::npos;
+       at = report.find("| no backbone: ", at + 1))
+    ++reasons;
+  EXPECT_EQ(reasons, 2 * s.hits.size());  // at the top and in the mode's section
+  EXPECT_EQ(report.find("0.0000 Hz"), std::string::npos);
+  EXPECT_EQ(report.find("| 0.0000 |"), std::string::npos);
+  EXPECT_EQ(report.find("No step was skipped"), std::string::npos);
+  for (const char* word : {"model", "Model", "QSMA"})
+    EXPECT_EQ(report.find(word), std::string::npos) << word;
+  EXPECT_TRUE(fs::exists(out / "figures/backbone_mode1.png"));
+  EXPECT_FALSE(fs::exists(out / "figures/backbone_mode2.png"));
+  EXPECT_TRUE(fs::exists(out / "scatter/mode2.json"));
+}
+
+// `run` and `update-iwan` build their Iwan targets with one function: from the same hits
+// (processed by `run` into its cache, and by `process` into a folder `update-iwan` reads) and
+// the same settings, the targets agree point for point, weights and screening included, and
+// so does the update from them.
+TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
+  const fs::path dir = testing::scratch_dir("run_cli_targets");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, kUpdates);
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "run").string()));
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::string files;
+  for (const fs::path& h : s.hits) {
+    files += ' ';
+    files += h.string();
+  }
+  const testing::CommandResult p = testing::run_jointlab(
+      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
+                  s.band[1], (dir / "process").string()));
+  ASSERT_EQ(p.status, 0) << p.err;
+
+  // The campaign's side, from run's cache.
+  const campaign::Campaign c = campaign::read_campaign(s.campaign);
+  campaign::RunOptions o;
+  o.out = dir / "run";
+  campaign::RunSummary summary;
+  const auto hits = campaign::process_hits(c, o.out, o, summary);
+  EXPECT_EQ(summary.hits_reused, 3);
+  const campaign::MeasuredSide measured =
+      campaign::summarise_measured(c, hits, dir / "scatter", nullptr);
+  const model::Model start = model::read_model(s.model);
+  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(s.sensors, start);
+  campaign::IwanTargetOptions to;
+  const campaign::IwanTargets from_run =
+      campaign::iwan_targets(start, sensors, campaign::campaign_backbones(c, measured), to);
+  // update-iwan's side, from the process folder (--mode R:1 --channel acc_5).
+  const correlate::ProcessRun run = correlate::read_process_run(dir / "process");
+  campaign::ModeBackbones mb =
+      campaign::process_run_backbones(run, sensors, 1, {"acc_5"}, campaign::ScatterOptions{});
+  mb.model_mode = s.model_mode;
+  const campaign::IwanTargets from_process = campaign::iwan_targets(start, sensors, {mb}, to);
+
+  ASSERT_EQ(from_run.fitted.size(), 1u);
+  ASSERT_EQ(from_process.fitted.size(), 1u);
+  EXPECT_EQ(from_run.screened, from_process.screened);
+  const auto& a = from_run.fitted[0].curves;
+  const auto& b = from_process.fitted[0].curves;
+  ASSERT_EQ(a.size(), 3u);
+  ASSERT_EQ(b.size(), a.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].sensor, b[i].sensor);
+    EXPECT_EQ(a[i].amplitude, b[i].amplitude) << i;
+    EXPECT_EQ(a[i].frequency_hz, b[i].frequency_hz) << i;
+    EXPECT_EQ(a[i].damping_ratio, b[i].damping_ratio) << i;
+    EXPECT_EQ(a[i].frequency_std_hz, b[i].frequency_std_hz) << i;
+    EXPECT_EQ(a[i].damping_std, b[i].damping_std) << i;
+  }
+  // The same update (few evaluations: the targets decide, the budget does not matter here).
+  correlate::IwanUpdateOptions io;
+  io.max_evaluations = 40;
+  io.samples = 20;
+  io.qsma_points = 15;
+  const auto fit = [&](const campaign::IwanTargets& t) {
+    const correlate::IwanObjective obj(start, "iwan.rivet", sensors, t.fitted, io.amplitude,
+                                       io.qsma_points, io.frequency_floor, io.damping_floor);
+    correlate::IwanUpdateSummary sum;
+    return correlate::update_iwan(obj, io, &sum);
+  };
+  const model::IwanParameters pa = fit(from_run), pb = fit(from_process);
+  EXPECT_EQ(pa.Fs, pb.Fs);
+  EXPECT_EQ(pa.Kt, pb.Kt);
+  EXPECT_EQ(pa.chi, pb.chi);
+  EXPECT_EQ(pa.beta, pb.beta);
+  // And the command itself runs on them.
+  const testing::CommandResult u = testing::run_jointlab(fmt::format(
+      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "
+      "--evaluations 150 --out {}",
+      s.model.string(), (dir / "process").string(), s.sensors.string(), s.model_mode,
+      (dir / "iwan").string()));
+  EXPECT_EQ(u.status, 0) << u.err;
+}
+
+}  // namespace
+}  // namespace jointlab
