@@ -164,8 +164,16 @@ LinearModes sparse_modes(const Model& model, const Eigen::SparseMatrix<double>& 
   // vector's error by (lambda_i - sigma) / (lambda_{nev+1} - sigma); components along stiff
   // joint modes by far more), then Rayleigh-Ritz with K_lin applied element by element, so
   // that a rigid-body shape stretches no stiff joint beyond rounding.
+  // The subspace steps only where a joint is far stiffer (1e6) than the structure at its
+  // ends: elsewhere Lanczos' shapes are already accurate and the steps cost solves.
+  bool stiff_joint = false;
+  for (const Joint& j : model.joints) {
+    double local = model.stiffness.coeff(j.a, j.a);
+    if (j.b != kGround) local = std::max(local, model.stiffness.coeff(j.b, j.b));
+    stiff_joint = stiff_joint || j.stiffness > 1e6 * local;
+  }
   Eigen::MatrixXd v = solver.eigenvectors();
-  for (int it = 0; it < 3; ++it) {
+  for (int it = 0; stiff_joint && it < 3; ++it) {
     const Eigen::MatrixXd mv = model.mass * v;
     for (int k = 0; k < nev; ++k) op.perform_op(mv.col(k).data(), v.col(k).data());
     v = Eigen::HouseholderQR<Eigen::MatrixXd>(v).householderQ() * Eigen::MatrixXd::Identity(n, nev);
