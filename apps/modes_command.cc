@@ -24,7 +24,7 @@ void run_modes(const ModesArgs& args) {
   const model::Model m = model::read_model(args.model);
   model::ModesOptions options;
   options.count = args.count;
-  const model::LinearModes modes = model::linear_modes(m.mass, m.linear_stiffness(), options);
+  const model::LinearModes modes = model::linear_modes(m, options);
   std::string text = "mode,frequency_hz,kind\n";
   int elastic = 0;
   for (int i = 0; i < modes.size(); ++i) {

@@ -33,7 +33,10 @@ void run_qsma(const QsmaArgs& args) {
   if (m.iwan_count() == 0) {
     throw InputError(where(args.model, 0, "the model has no Iwan joint; QSMA needs one"));
   }
-  const model::JointCondensation condensed(m);
+  // Only the modes up to R: sparse shift-invert on models of more than 100 DOFs.
+  model::ModesOptions modes;
+  modes.elastic_count = args.mode;
+  const model::JointCondensation condensed(m, modes);
   model::QsmaSummary summary;
   const auto curve = model::qsma(condensed, args.mode, args.options, &summary);
   if (curve.empty()) throw InputError(fmt::format("qsma: {}", summary.message));

@@ -8,7 +8,10 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/QR>
+
 #include "jointlab/core/error.h"
+#include "jointlab/model/fe/sparse_cholesky.h"
 
 namespace jointlab::model {
 
@@ -32,11 +35,7 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   if (model.iwan_count() == 0) {
     throw InputError("QSMA: the model has no Iwan joint (every joint is a linear spring)");
   }
-  const Eigen::SparseMatrix<double> k_lin = model.linear_stiffness();
-  ModesOptions all = modes_options;
-  all.count = 0;
-  modes_ = linear_modes(model.mass, k_lin, all);
-
+  modes_ = linear_modes(model, modes_options);
   // Group Iwan elements by unordered pair of ends: one coordinate each. An element with
   // swapped ends sees -r, which leaves its energy (even) and generalized force unchanged.
   std::map<std::pair<Eigen::Index, Eigen::Index>, int> index;
@@ -60,6 +59,17 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
     phi_max_(j) = 0;
     for (const Iwan& e : coords_[j].elements) {
       const double chi1 = e.chi() + 1, R = e.R();
+      // The solver works with forces, displacements and energies of the element's own
+      // scale: refuse parameters whose products leave double precision.
+      const double work = e.slip_force() * e.phi_max();
+      if (!(e.phi_max() > 0) || !std::isfinite(e.phi_max()) || !std::isfinite(R) || !(R > 0) ||
+          !std::isfinite(e.S()) || !std::isfinite(work) || !(work > 0)) {
+        throw InputError(fmt::format(
+            "QSMA: the Iwan element between DOFs {} and {} (Fs = {:g}, Kt = {:g}, chi = {:g}) "
+            "has phi_max = {:.3g} m and Fs phi_max = {:.3g} J beyond double precision; state "
+            "the model in other units",
+            coords_[j].a, coords_[j].b, e.slip_force(), e.stiffness(), e.chi(), e.phi_max(), work));
+      }
       laws_[j].push_back({e.stiffness(), e.slip_force(), e.phi_max(), chi1, R / chi1,
                           R / (chi1 * (chi1 + 1)), R / (chi1 * (chi1 + 1) * (chi1 + 2)),
                           e.energy(e.phi_max())});
@@ -79,22 +89,50 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   }
   joint_shapes_ = bt.transpose() * modes_.shapes;
 
-  // G B^T from the shifted, positive definite K_lin + M Phi_rb Phi_rb^T M: for a load
-  // f orthogonal to the rigid-body modes its solution is the elastic one (Phi_rb^T M u = 0).
-  const Eigen::MatrixXd mass = Eigen::MatrixXd(model.mass);
-  Eigen::MatrixXd shifted = Eigen::MatrixXd(k_lin);
+  // G B^T with rigid-body motion suppressed by clamping n_rb statically determinate DOFs
+  // (those where the rigid-body shapes are best conditioned, by QR with column pivoting):
+  // a load orthogonal to the rigid-body modes (every column of B^T is) needs no reaction
+  // there, so the clamped solution solves K_lin x = f exactly, up to a rigid motion the
+  // joints do not see. One sparse Cholesky factorization (CHOLMOD).
+  const Eigen::SparseMatrix<double> k_lin = model.linear_stiffness();
+  std::vector<bool> clamped(static_cast<size_t>(n), false);
   if (modes_.rigid_count > 0) {
-    const Eigen::MatrixXd mphi = mass * modes_.shapes.leftCols(modes_.rigid_count);
-    shifted += mphi * mphi.transpose();
+    const Eigen::MatrixXd rigid_t = modes_.shapes.leftCols(modes_.rigid_count).transpose();
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(rigid_t);
+    for (int i = 0; i < modes_.rigid_count; ++i) {
+      clamped[static_cast<size_t>(qr.colsPermutation().indices()(i))] = true;
+    }
   }
-  const Eigen::LLT<Eigen::MatrixXd> llt(shifted);
-  if (llt.info() != Eigen::Success) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int c = 0; c < k_lin.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(k_lin, c); it; ++it) {
+      if (!clamped[static_cast<size_t>(it.row())] && !clamped[static_cast<size_t>(it.col())]) {
+        entries.emplace_back(it.row(), it.col(), it.value());
+      }
+    }
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (clamped[static_cast<size_t>(i)]) entries.emplace_back(i, i, 1.0);
+  }
+  Eigen::SparseMatrix<double> k_clamped(n, n);
+  k_clamped.setFromTriplets(entries.begin(), entries.end());
+  fe::SparseCholesky factor;
+  if (!factor.factorize(k_clamped)) {
     throw InputError(
         "QSMA: the stiffness with joints at linear stiffness is not positive "
         "semidefinite");
   }
-  const Eigen::MatrixXd gbt = llt.solve(bt);
+  Eigen::MatrixXd rhs = bt;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (clamped[static_cast<size_t>(i)]) rhs.row(i).setZero();
+  }
+  const Eigen::MatrixXd gbt = factor.solve(rhs);
   flexibility_ = bt.transpose() * gbt;
+  if (!flexibility_.allFinite()) {
+    throw InputError(
+        "QSMA: the joints' flexibility B K_lin^-1 B^T is not finite (stiffness entries beyond "
+        "double precision); state the model in other units");
+  }
   flexibility_ = 0.5 * (flexibility_ + flexibility_.transpose()).eval();
   const Eigen::LLT<Eigen::MatrixXd> cl(flexibility_);
   const Eigen::VectorXd d = flexibility_.diagonal();

@@ -14,8 +14,9 @@
 // structure with the Iwan elements at their current tangent (>= 0: K_c - diag(K_T) is
 // the condensed stiffness without the Iwan elements). A load past the largest the joints
 // can carry leaves Pi unbounded below: no static solution exists.
-// C is built once per model (one dense Cholesky of K_lin + M Phi_rb Phi_rb^T M); each
-// solve is a Newton iteration of size n_J with a line search on Pi.
+// C is built once per model (one sparse Cholesky of K_lin with n_rb statically determinate
+// DOFs clamped, see the constructor); each solve is a Newton iteration of size n_J with a
+// line search on Pi.
 #pragma once
 
 #include <vector>
@@ -46,13 +47,14 @@ struct StaticSolve {
 /// The model condensed to its Iwan coordinates; built once, then solved at any load.
 class JointCondensation {
  public:
-  /// Computes all linear modes, the joint coordinates and C = B G B^T; InputError if the
-  /// model has no Iwan element or its Iwan coordinates are linearly dependent.
+  /// Computes the linear modes `modes` asks for (every mode by default; elastic_count = R
+  /// for QSMA of mode R), the joint coordinates and C = B G B^T; InputError if the model
+  /// has no Iwan element or its Iwan coordinates are linearly dependent.
   explicit JointCondensation(const Model& model, const ModesOptions& modes = {});
 
-  /// Every linear mode of the model with joints at linear stiffness.
+  /// The linear modes computed (rigid-body modes first) with joints at linear stiffness.
   const LinearModes& modes() const { return modes_; }
-  /// Number of elastic modes.
+  /// Number of elastic modes computed.
   int elastic_count() const { return modes_.size() - modes_.rigid_count; }
   /// The joint coordinates (n_J of them).
   const std::vector<JointCoordinate>& coordinates() const { return coords_; }

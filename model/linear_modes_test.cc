@@ -104,5 +104,66 @@ TEST(LinearModes, IndefiniteStiffnessIsAnInputError) {
   EXPECT_EQ(ModesOptions{}.error(), "");
 }
 
+// The free beam as a model file would give it, with joint springs added.
+Model beam_model(int elements, const std::vector<Joint>& joints) {
+  const Beam beam = free_beam(elements);
+  Model model;
+  model.mass = beam.M;
+  model.stiffness = beam.K;
+  model.joints = joints;
+  return model;
+}
+
+TEST(LinearModes, AStiffSpringLeavesTheRigidBodyModesAndTheBendingModesAlone) {
+  // A 1e20 N/m spring on the axial DOFs of the beam's two ends leaves its three rigid-body
+  // modes (axial and transverse translation, rotation about the centroid, none stretches
+  // it) and its bending modes exactly as they were. On the matrices alone omega_max^2 is
+  // ~1e24 and every bending mode falls under 1e-9 of it; on the structure's own scale
+  // (strain energy element by element) they stay elastic. A dense solve of every mode
+  // cannot resolve them at all (its absolute rounding eps omega_max^2 ~ 1e8 exceeds
+  // omega_1^2 ~ 3e4): the lowest modes by shift-invert Lanczos on CHOLMOD can.
+  const int elements = 40, last = 3 * elements;  // 123 DOFs: the sparse path with a count
+  const Model plain = beam_model(elements, {});
+  const Model stiff = beam_model(elements, {{0, last, "spring.axial", 1e20, std::nullopt}});
+  const LinearModes matrices_only = linear_modes(stiff.mass, stiff.linear_stiffness());
+  EXPECT_GT(matrices_only.rigid_count, 3);  // the old rule: bending modes called rigid
+  const LinearModes reference = linear_modes(plain);
+  ASSERT_EQ(reference.rigid_count, 3);
+  ModesOptions o;
+  o.count = 8;
+  const LinearModes modes = linear_modes(stiff, o);
+  ASSERT_EQ(modes.rigid_count, 3);
+  // The first three bending modes: Lanczos converges to 1e-10; 1e-8 allows for the
+  // factorization of K_lin - sigma M with its 1e20 entries.
+  for (int i = 3; i < 6; ++i) {
+    EXPECT_TRUE(Close(modes.omega2(i), reference.omega2(i), 1e-8)) << i;
+  }
+}
+
+TEST(LinearModes, ShiftInvertLanczosAgreesWithTheDenseSolve) {
+  // Two methods on one model: the lowest 10 modes of a 123-DOF free beam with a grounded
+  // spring (no rigid axial translation left): eigenvalues to 1e-9, shapes to 1e-6 (the
+  // Ritz vectors' accuracy is the square root of the values').
+  const Model model = beam_model(40, {{0, kGround, "spring.ground", 1e5, std::nullopt}});
+  const LinearModes dense = linear_modes(model);
+  ModesOptions o;
+  o.count = 10;
+  const LinearModes sparse = linear_modes(model, o);
+  ASSERT_EQ(sparse.size(), 10);
+  EXPECT_EQ(sparse.rigid_count, 2);
+  EXPECT_EQ(dense.rigid_count, 2);
+  for (int i = sparse.rigid_count; i < 10; ++i) {
+    EXPECT_TRUE(Close(sparse.omega2(i), dense.omega2(i), 1e-9)) << i;
+    EXPECT_TRUE(
+        Close(std::abs(sparse.shapes.col(i).dot(model.mass * dense.shapes.col(i))), 1.0, 1e-6))
+        << i;
+  }
+  ModesOptions elastic;
+  elastic.elastic_count = 4;
+  const LinearModes four = linear_modes(model, elastic);
+  EXPECT_EQ(four.size(), 6);
+  EXPECT_TRUE(Close(four.omega2(5), dense.omega2(5), 1e-9));
+}
+
 }  // namespace
 }  // namespace jointlab::model

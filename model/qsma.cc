@@ -312,7 +312,8 @@ March march_to_end(Problem& problem, const QsmaOptions& options, const State& st
   Stop reason = Stop::kNone;
   for (int it = 0; it < 200; ++it) {
     State next;
-    const bool ok = problem.solve(2 * m.levels.back().alpha, m.levels.back(), next);
+    const double alpha = 2 * m.levels.back().alpha;
+    const bool ok = std::isfinite(alpha) && problem.solve(alpha, m.levels.back(), next);
     if (ok && !m.crossed && problem.macroslip_margin(next) >= 0 &&
         problem.macroslip_margin(m.levels.back()) < 0) {
       m.crossed = true;
@@ -334,9 +335,13 @@ March march_to_end(Problem& problem, const QsmaOptions& options, const State& st
         mode);
     return m;
   }
-  while (hi.alpha / m.end.alpha - 1 > options.limit_tolerance) {
+  // Bisection in ln alpha: a finite bracket closes to limit_tolerance in well under 200
+  // halvings; the bound keeps an overflowing one from running on.
+  for (int it = 0; it < 200 && hi.alpha / m.end.alpha - 1 > options.limit_tolerance; ++it) {
     State mid;
-    const bool ok = problem.solve(std::sqrt(m.end.alpha * hi.alpha), m.end, mid);
+    const double alpha = std::sqrt(m.end.alpha) * std::sqrt(hi.alpha);
+    if (!std::isfinite(alpha)) break;
+    const bool ok = problem.solve(alpha, m.end, mid);
     const Stop why = problem.classify(ok, mid);
     if (why == Stop::kNone) {
       m.end = mid;
@@ -458,7 +463,15 @@ std::vector<QsmaPoint> evaluate_grid(Problem& problem, const Grid& g) {
     } else if (!problem.solve(g.alphas[i], cur, s)) {
       break;  // cannot happen below a converged end level; keep the curve consistent
     }
-    curve.push_back(problem.point(s));
+    const QsmaPoint pt = problem.point(s);
+    // Never a non-finite number in a curve: end it before (cannot happen for joints the
+    // structure lets move, see the check in qsma()).
+    if (!std::isfinite(pt.frequency_hz) || !std::isfinite(pt.damping_ratio) ||
+        !std::isfinite(pt.ringdown_frequency_hz) || !std::isfinite(pt.ringdown_damping_ratio) ||
+        !std::isfinite(pt.harmonic_damping_ratio) || !std::isfinite(pt.max_slip)) {
+      break;
+    }
+    curve.push_back(pt);
     cur = s;
   }
   return curve;
@@ -551,6 +564,19 @@ std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const Qsma
   const double shape_scale = model.joint_shapes().cwiseAbs().maxCoeff();
   if (problem.c().lpNorm<Eigen::Infinity>() * problem.omega2() <= 1e-9 * shape_scale) {
     return linear_curve(problem.omega2(), mode, options, summary);
+  }
+  // K_T,j C_jj is the share of coordinate j's linear flexibility its Iwan elements give
+  // (K_T C_jj = 1: nothing else holds it). Below 1e-12 everywhere the structure holds the
+  // joints so stiffly that their slip is rounding noise of its deflection.
+  double share = 0;
+  for (int j = 0; j < model.size(); ++j) {
+    share = std::max(share, model.linear_stiffness(j) * model.flexibility()(j, j));
+  }
+  if (!(share > 1e-12)) {
+    throw InputError(fmt::format(
+        "qsma: mode {}: the structure holds the Iwan joints {:.3g} times more stiffly than "
+        "they hold themselves: their slip is below rounding (check the stiffness units)",
+        mode, 1 / share));
   }
   const State start = find_start(problem, model, options);
   if (start.alpha <= 0) {

@@ -9,19 +9,48 @@
 // The problem is condensed to the joint coordinates (joint_condensation.h): each load
 // level is a Newton solve of size n_J, continued from the previous level.
 //
+// What a test measures (method.md, "What a ring-down would show"). The secant pair above is
+// the paper's. A ring-down at amplitude q rings at the first-harmonic frequency and decays
+// by the energy lost per cycle against the energy stored at its turning point; a steady
+// state at amplitude q balances that loss against the first-harmonic stiffness. Assume, as
+// QSMA does, that the motion keeps the shape of the static deflection u(q) (one nonlinear
+// mode, light damping, Masing elements): r_j(t) = r_j cos(theta) at each joint coordinate.
+// - Turning point: the velocity vanishes and the deflection is the QSMA solution, so the
+//   energy stored is E(q) = 1/2 u^T K_s u + sum_j E_j(|r_j|), K_s = K_lin - sum_j K_T,j
+//   b_j b_j^T (the structure and its springs), E_j the element's turning-point energy
+//   (iwan_cycle.h: sliders that slipped store k phi^2 / 2, an element past phi_max stores
+//   its sliders at phi). With K_s u = alpha M phi_r - B^T F(r), F = K_T r - h, and
+//   E_j'(r) = r F_j'(r):
+//     dE/dq = alpha + sum_j (dr_j/dq) (h_j - r_j h'_j),
+//   dr/dq = (dr/dalpha) / (dq/dalpha), dr/dalpha = (K_c - diag h')^{-1} K_c c (c = B phi_r /
+//   omega_r^2), dq/dalpha = (1 + p^T diag(h') dr/dalpha) / omega_r^2, p = B phi_r.
+//   One cycle loses D(q), so dq/dt = -D omega / (2 pi dE/dq) and
+//     ringdown_damping_ratio = D / (2 pi q dE/dq).
+// - First harmonic: over a cycle each element's force has the in-phase first harmonic
+//   k_1,j(|r_j|) r_j cos(theta) (iwan_cycle.h) instead of its static F_j(r_j). Projecting the
+//   first-harmonic restoring force K_s u + B^T (k_1 r) on phi_r (Galerkin, one mode):
+//     omega_1^2 = (alpha + p^T (k_1 r - F(r))) / q = omega_r^2 - p^T diag(K_T - k_1) r / q,
+//   ringdown_frequency_hz = omega_1 / (2 pi) (the damping is too light to shift it), and
+//     harmonic_damping_ratio = D / (2 pi omega_1^2 q^2) = D / (2 pi k_1 q^2),
+//   k_1 = omega_1^2 the first-harmonic modal stiffness (unit modal mass).
+// For one mass on a spring k0 with an Iwan element these are exactly (k0 + k_1)/m,
+// D / (2 pi x^2 (k0 + F'(x))) and D / (2 pi (k0 + k_1) x^2) (model/qsma_test.cc).
+//
 // Range: without q_min, the curve starts where the damping is within
 // microslip_deviation of its microslip power law zeta_0(q) = D(q B phi_r) /
 // (2 pi omega_r^2 q^2) (the damping of the linear joint motion). Without q_max it ends at
-// full macroslip (every Iwan element the mode moves past phi_max; elements its linear
-// motion leaves still, |B phi_r| below 1e-6 of the largest, never slip) or at the largest
-// load the structure carries (past it no static solution exists: the joints slide
-// freely), whichever comes first; that load is bracketed to limit_tolerance and the
-// last points cluster below it (10 %, ..., 0.1 % under it, then the last converged level).
-// With q_max it ends at q_max or at that limit load: past full macroslip each element
-// carries F(r) = F_S and dissipates D(A) = 8 (E_max + F_S (A - phi_max)) - 4 A F_S
-// (iwan.h) while the rest of the structure (springs in parallel) carries the load
-// increase; without such a load path the limit load is the full-macroslip load.
-// Points are log-spaced in alpha, so amplitude increases along the curve.
+// full macroslip of the coordinates that carry the mode's joint slip (at least 1 % of the
+// largest slip, both in the linear mode and at the current load, past their phi_max) or at
+// the largest load the structure carries (past it no static solution exists: the joints
+// slide freely), whichever comes first; the end is bracketed to limit_tolerance. Its points
+// sit densely through the transition: 30 % log-spaced in alpha up to the first element's
+// onset of macroslip (one point on it), the rest from there to the end (log-spaced; below a
+// limit load the last ones cluster 10 %, ..., 0.1 % under it, then the last converged
+// level). With q_max it ends at q_max or at that limit load, log-spaced: past full
+// macroslip each element carries F(r) = F_S and dissipates
+// D(A) = 8 (E_max + F_S (A - phi_max)) - 4 A F_S (iwan.h) while the rest of the structure
+// (springs in parallel) carries the load increase; without such a load path the limit load
+// is the full-macroslip load. Amplitude increases along the curve.
 #pragma once
 
 #include <string>
@@ -79,7 +108,8 @@ struct QsmaSummary {
 };
 
 /// QSMA curve of elastic mode `mode` (1-based, as numbered by `jointlab modes`); InputError if no
-/// such mode.
+/// such mode or the options are invalid (checked always), std::invalid_argument without a
+/// summary.
 std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const QsmaOptions& options,
                             QsmaSummary* summary);
 

@@ -227,6 +227,28 @@ TEST(Qsma, BadModeAndOptions) {
   EXPECT_THROW(JointCondensation{linear}, InputError);
 }
 
+TEST(Qsma, ExtremeParametersFinishQuicklyOrAreRefusedWithAMessage) {
+  // chi = 5: a legal, steep power law; the curve follows the closed form as any other.
+  const IwanParameters steep{40.0, 2.0e6, 5.0, 1.0};
+  const JointCondensation model(sdof(0.5, 1e6, steep));
+  QsmaOptions options;
+  options.points = 12;
+  QsmaSummary summary;
+  expect_closed_form(qsma(model, 1, options, &summary), Iwan(steep), 1e6, 0.5);
+  // Kt = 1e-300 (R underflows to 0) and Fs = 1e250 (Fs phi_max overflows): refused with a
+  // message naming the element, not solved for minutes.
+  for (const IwanParameters& p :
+       {IwanParameters{40.0, 1e-300, -0.5, 1.0}, IwanParameters{1e250, 2.0e6, -0.5, 1.0}}) {
+    const std::string m = testing::input_error_of([&] { JointCondensation{sdof(0.5, 1e6, p)}; });
+    EXPECT_NE(m.find("beyond double precision"), std::string::npos) << m;
+  }
+  // A structure of 1e200 N/m holds the joint 5e193 times more stiffly than its Kt: its slip
+  // is rounding noise, refused with a message.
+  const JointCondensation rigid(sdof(0.5, 1e200, kRivet));
+  const std::string m = testing::input_error_of([&] { qsma(rigid, 1, options, &summary); });
+  EXPECT_NE(m.find("below rounding"), std::string::npos) << m;
+}
+
 // ---------------------------------------------------------------------------------------
 // Multi-rivet model: two stacked free-free planar beams, each with DOFs (u, w, theta) per
 // node where u is the axial displacement of its contact face (a rigid offset e from the
