@@ -56,6 +56,20 @@ TEST(SteppedSineCli, BrakeReussMatGivesOneBackboneInProcessFormat) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir + "/summary.json"));
   EXPECT_NE(r.err.find("FRdata.ResponseControl(8): response-controlled"), std::string::npos);
+  // The figure, with this run's own backbone as a ring-down curve (any process-format CSV).
+  const CommandResult f = run_jointlab(
+      "stepped-sine " + source_dir() +
+      "/data/examples/brake-reuss-beam/forced_frequency_responses.mat --ringdown " + dir +
+      "/forced_frequency_responses.backbone.csv --figure " + dir + "/f.png --out " + dir + "/2");
+  ASSERT_EQ(f.status, 0) << f.err;
+  EXPECT_GT(std::filesystem::file_size(dir + "/f.png"), 1000u);
+  const CommandResult bad = run_jointlab("stepped-sine " + source_dir() +
+                                         "/data/examples/brake-reuss-beam/"
+                                         "forced_frequency_responses.mat --figure " +
+                                         dir + "/f.gif --out " + dir + "/3");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--figure"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/3/summary.json"));
 }
 
 // A linear hysteretic mode (f_n 80 Hz, zeta 0.3 %) held at 20 mm/s: the point is the mode at
