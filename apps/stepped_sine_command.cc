@@ -120,9 +120,19 @@ void run_stepped_sine(const SteppedSineArgs& args) {
     modal::SteppedSineFileResult r;
     r.source = f;
     r.tables = data::read_stepped_sine(f, quantity);
-    for (const data::SteppedSineTable& t : r.tables) {
-      r.points.push_back(modal::extract_backbone_point(t, opt));
-      fmt::print(stderr, "{} {}: {}\n", f, t.label, r.points.back().report());
+    // Response-controlled levels first: their modal constant serves the force-controlled ones.
+    r.points.resize(r.tables.size());
+    for (size_t i = 0; i < r.tables.size(); ++i) {
+      if (r.tables[i].control == data::SineControl::kResponse) {
+        r.points[i] = modal::extract_backbone_point(r.tables[i], opt);
+      }
+    }
+    const modal::ModalConstant q = modal::response_modal_constant(r.points);
+    for (size_t i = 0; i < r.tables.size(); ++i) {
+      if (r.tables[i].control == data::SineControl::kForce) {
+        r.points[i] = modal::extract_backbone_point(r.tables[i], opt, q);
+      }
+      fmt::print(stderr, "{} {}: {}\n", f, r.tables[i].label, r.points[i].report());
     }
     results.push_back(std::move(r));
   }
