@@ -7,7 +7,9 @@
 #include <fmt/format.h>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/stepped_sine_figure.h"
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/measured_data.h"
 #include "jointlab/data/stepped_sine.h"
 #include "jointlab/modal/stepped_sine.h"
 #include "jointlab/modal/stepped_sine_output.h"
@@ -23,8 +25,55 @@ struct SteppedSineArgs {
   std::string damping = "hysteretic";
   int residual_terms = modal::SteppedSineOptions{}.residual_terms;
   double coverage_factor = modal::SteppedSineOptions{}.coverage_factor;
+  std::vector<std::string> ringdowns;
+  std::string figure;
   std::string out;
 };
+
+// The figure's series: each file's response- and force-controlled points, then the
+// ring-down backbones.
+std::vector<FigureSeries> figure_series(const std::vector<modal::SteppedSineFileResult>& results,
+                                        const std::vector<correlate::MeasuredBackbone>& ring,
+                                        const std::vector<std::string>& ring_files) {
+  namespace fs = std::filesystem;
+  std::vector<FigureSeries> out;
+  for (const auto& r : results) {
+    for (const auto control : {data::SineControl::kResponse, data::SineControl::kForce}) {
+      std::vector<size_t> rows;
+      for (size_t i = 0; i < r.points.size(); ++i) {
+        if (r.points[i].status == modal::SineStatus::kOk && r.tables[i].control == control) {
+          rows.push_back(i);
+        }
+      }
+      if (rows.empty()) continue;
+      FigureSeries s;
+      s.label = results.size() > 1
+                    ? fmt::format("{}: {} control", fs::path(r.source).stem().string(),
+                                  data::control_name(control))
+                    : fmt::format("stepped sine, {} control", data::control_name(control));
+      const auto n = static_cast<Eigen::Index>(rows.size());
+      s.amplitude.resize(n), s.frequency_hz.resize(n), s.damping.resize(n);
+      s.frequency_std_hz.resize(n), s.damping_std.resize(n);
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const modal::SineBackbonePoint& p = r.points[rows[static_cast<size_t>(k)]];
+        s.amplitude(k) = p.amplitude, s.frequency_hz(k) = p.frequency_hz;
+        s.damping(k) = p.damping_ratio, s.frequency_std_hz(k) = p.frequency_std_hz;
+        s.damping_std(k) = p.damping_std;
+      }
+      out.push_back(std::move(s));
+    }
+  }
+  for (size_t i = 0; i < ring.size(); ++i) {
+    FigureSeries s;
+    s.label = "ring-down " + fs::path(ring_files[i]).stem().string();
+    s.amplitude = ring[i].amplitude, s.frequency_hz = ring[i].frequency_hz;
+    s.damping = ring[i].damping_ratio, s.frequency_std_hz = ring[i].frequency_std_hz;
+    s.damping_std = ring[i].damping_std;
+    s.points = false;
+    out.push_back(std::move(s));
+  }
+  return out;
+}
 
 Quantity motion_quantity(const std::string& option, const std::string& value) {
   const auto q = parse_quantity(value);
@@ -57,14 +106,33 @@ void run_stepped_sine(const SteppedSineArgs& args) {
     }
   }
   // Read and extract everything first: a bad file stops the run before any output exists.
+  std::vector<correlate::MeasuredBackbone> ring;
+  for (const std::string& f : args.ringdowns) ring.push_back(correlate::read_backbone_csv(f, 0));
+  if (!args.figure.empty()) {
+    const std::string ext = fs::path(args.figure).extension().string();
+    if (ext != ".png" && ext != ".svg" && ext != ".pdf") {
+      throw InputError(
+          fmt::format("--figure {}: the extension must be .png, .svg or .pdf", args.figure));
+    }
+  }
   std::vector<modal::SteppedSineFileResult> results;
   for (const std::string& f : args.files) {
     modal::SteppedSineFileResult r;
     r.source = f;
     r.tables = data::read_stepped_sine(f, quantity);
-    for (const data::SteppedSineTable& t : r.tables) {
-      r.points.push_back(modal::extract_backbone_point(t, opt));
-      fmt::print(stderr, "{} {}: {}\n", f, t.label, r.points.back().report());
+    // Response-controlled levels first: their modal constant serves the force-controlled ones.
+    r.points.resize(r.tables.size());
+    for (size_t i = 0; i < r.tables.size(); ++i) {
+      if (r.tables[i].control == data::SineControl::kResponse) {
+        r.points[i] = modal::extract_backbone_point(r.tables[i], opt);
+      }
+    }
+    const modal::ModalConstant q = modal::response_modal_constant(r.points);
+    for (size_t i = 0; i < r.tables.size(); ++i) {
+      if (r.tables[i].control == data::SineControl::kForce) {
+        r.points[i] = modal::extract_backbone_point(r.tables[i], opt, q);
+      }
+      fmt::print(stderr, "{} {}: {}\n", f, r.tables[i].label, r.points[i].report());
     }
     results.push_back(std::move(r));
   }
@@ -79,6 +147,13 @@ void run_stepped_sine(const SteppedSineArgs& args) {
     written += modal::usable_points(r) > 0;
   }
   modal::write_sine_summary(out, results, opt);
+  if (!args.figure.empty()) {
+    plot_sine_figure(
+        figure_series(results, ring, args.ringdowns),
+        "stepped sine (points, k sigma bars) and ring-down backbones",
+        fmt::format("{} amplitude [{}]", quantity_name(opt.amplitude), si_unit(opt.amplitude)),
+        args.figure);
+  }
   fmt::print("jointlab stepped-sine: {} backbone file(s) and summary.json written to {}\n", written,
              out.string());
 }
@@ -99,7 +174,12 @@ void add_stepped_sine_command(CLI::App& app) {
       "is fitted (Ceres) and its f_n and zeta, with uncertainties from the fit, are the point,\n"
       "at the response amplitude at f_n. Force-controlled sweeps give their phase resonance\n"
       "(response in quadrature with the force, interpolated between steps) and the damping\n"
-      "of the energy balance there with the fitted |Q| -- less direct, flagged as such.\n"
+      "of the energy balance there, zeta = |Q| F / (2 w^2 X), with the modal constant |Q| of\n"
+      "the file's response-controlled levels (or of the sweep's own fit when it has none) --\n"
+      "less direct, flagged as such (damping_direct 0). Uncertainties are k*sigma.\n"
+      "A sweep that holds acceleration (or velocity) lets the displacement vary as w^-2 (w^-1):\n"
+      "zeta then comes out as zeta / (1 + s), s = dln k1/dln A < 0 for softening joints\n"
+      "(docs/stepped-sine.md).\n"
       "Writes OUT/<file stem>.backbone.csv (columns amplitude, frequency_hz, damping_ratio,\n"
       "frequency_std_hz, damping_std as 'process' writes them, then level,\n"
       "response_controlled, points, fit_rms, displacement_m, force_n, damping_direct) and\n"
@@ -131,6 +211,13 @@ void add_stepped_sine_command(CLI::App& app) {
   cmd->add_option("--coverage-factor", args->coverage_factor,
                   "k of the reported uncertainties k*sigma (default 3, as 'process'; 1: one sigma)")
       ->check(CLI::Range(1.0, 10.0));
+  cmd->add_option("--ringdown", args->ringdowns,
+                  "ring-down backbone CSVs of 'process' to draw in the figure (repeat; their\n"
+                  "amplitude must be the same quantity as --amplitude)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--figure", args->figure,
+                  "draw the points (with k sigma bars) and the --ringdown curves: frequency and\n"
+                  "damping versus amplitude, into FILE (.png, .svg or .pdf)");
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] { run_stepped_sine(*args); });
 }

@@ -1,6 +1,8 @@
 #include "jointlab/data/stepped_sine.h"
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -124,6 +126,19 @@ TEST(SteppedSineMat, ReadsTheBrakeReussStructLayout) {
   // The first response-controlled level holds about 5 m/s^2 (as the file's README says).
   EXPECT_NEAR(tables[4].response.mean(), 4.987, 0.01);
   EXPECT_NEAR(tables[4].phase_rad(0), -0.110716, 1e-6);
+}
+
+// A truncated copy is refused as a damaged file (matio alone would read the levels before
+// the cut and stop), naming the file.
+TEST(SteppedSineMat, RefusesATruncatedFile) {
+  std::ifstream in(
+      testing::source_dir() + "/data/examples/brake-reuss-beam/forced_frequency_responses.mat",
+      std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto path =
+      testing::scratch_file("stepped_sine_test", "cut.mat", bytes.substr(0, bytes.size() / 2));
+  const std::string m = input_error_of([&] { read_stepped_sine(path); });
+  EXPECT_NE(m.find("cut.mat: not a valid MATLAB v5 file"), std::string::npos) << m;
 }
 
 TEST(SteppedSineMat, RefusesARecordWithoutTables) {

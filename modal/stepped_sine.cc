@@ -81,7 +81,11 @@ std::string SineBackbonePoint::report() const {
       "{}-controlled: f = {:.5f} Hz +/- {:.2g}, zeta = {:.4g} % +/- {:.2g} %{} at amplitude {:.4g} "
       "(fit misfit {:.2g} %){}",
       data::control_name(control), frequency_hz, frequency_std_hz, 100 * damping_ratio,
-      100 * damping_std, damping_direct ? "" : " (energy balance with the fitted modal constant)",
+      100 * damping_std,
+      damping_direct ? ""
+      : own_modal_constant
+          ? " (energy balance with this sweep's own modal constant)"
+          : " (energy balance with the response-controlled levels' modal constant)",
       amplitude, 100 * fit.rms, message.empty() ? "" : "; " + message);
 }
 
@@ -200,8 +204,27 @@ SineFit fit_single_mode(const Eigen::Ref<const Eigen::VectorXd>& frequency_hz,
   return fit;
 }
 
+ModalConstant response_modal_constant(const std::vector<SineBackbonePoint>& points) {
+  std::vector<double> q;
+  double rel = 0;
+  for (const SineBackbonePoint& p : points) {
+    if (p.status != SineStatus::kOk || p.control != data::SineControl::kResponse) continue;
+    q.push_back(std::abs(p.fit.modal_constant));
+    rel = std::max(rel, p.fit.modal_constant_rel_sigma);
+  }
+  if (q.empty()) return {};
+  std::sort(q.begin(), q.end());
+  const size_t n = q.size();
+  const double median = n % 2 ? q[n / 2] : 0.5 * (q[n / 2 - 1] + q[n / 2]);
+  // The spread between levels is part of |Q|'s uncertainty.
+  double spread = 0;
+  for (double v : q) spread = std::max(spread, std::abs(v / median - 1));
+  return {median, std::max(rel, n > 1 ? spread / 2 : 0.0)};
+}
+
 SineBackbonePoint extract_backbone_point(const data::SteppedSineTable& t,
-                                         const SteppedSineOptions& options) {
+                                         const SteppedSineOptions& options,
+                                         const ModalConstant& modal_constant) {
   if (const std::string why = options.check(); !why.empty()) throw InputError(why);
   SineBackbonePoint pt;
   pt.control = t.control;
@@ -288,7 +311,12 @@ SineBackbonePoint extract_backbone_point(const data::SteppedSineTable& t,
   pt.displacement_m = best_y / std::pow(w, p);
   pt.amplitude = pt.displacement_m * std::pow(w, out);
   pt.force_n = interpolate(t.frequency_hz, t.force, best_f);
-  pt.damping_ratio = std::abs(fit.modal_constant) * pt.force_n / (2 * w * w * pt.displacement_m);
+  pt.own_modal_constant = !(modal_constant.magnitude > 0);
+  const double q_abs =
+      pt.own_modal_constant ? std::abs(fit.modal_constant) : modal_constant.magnitude;
+  const double q_rel =
+      pt.own_modal_constant ? fit.modal_constant_rel_sigma : modal_constant.rel_sigma;
+  pt.damping_ratio = q_abs * pt.force_n / (2 * w * w * pt.displacement_m);
   pt.damping_direct = false;
 
   // Frequency uncertainty: the phase noise about a local quadratic through the crossing
@@ -315,7 +343,10 @@ SineBackbonePoint extract_backbone_point(const data::SteppedSineTable& t,
   }
   const double sigma_f = std::hypot(sigma_theta / std::abs(slope), f_quad - best_f);
   pt.frequency_std_hz = k * sigma_f;
-  pt.damping_std = k * pt.damping_ratio * std::hypot(fit.modal_constant_rel_sigma, sigma_theta);
+  pt.damping_std = k * pt.damping_ratio * std::hypot(q_rel, sigma_theta);
+  if (pt.own_modal_constant) {
+    pt.message = "damping from the sweep's own modal constant (no response-controlled level)";
+  }
   pt.status = SineStatus::kOk;
   return pt;
 }

@@ -23,8 +23,10 @@
 // phase resonance, where the response is in quadrature with the force (arg(H / Q) = -pi/2,
 // Q's phase rounded to 0 or pi), linearly interpolated between steps; it lies on the
 // first-harmonic backbone exactly. Its damping is less direct: the energy balance there,
-// zeta = |Q| F / (2 w^2 X) (X displacement amplitude), needs |Q| from the fit of the whole
-// sweep, whose amplitude varies.
+// zeta = |Q| F / (2 w^2 X) (X displacement amplitude), needs the modal constant |Q|: from
+// response-controlled levels of the same mode and sensor when there are (it does not depend
+// on amplitude), else from the fit of the force-controlled sweep itself, whose amplitude
+// varies (then biased: by 8-70 % on the Iwan oscillator of the tests).
 #pragma once
 
 #include <complex>
@@ -75,15 +77,16 @@ struct SineBackbonePoint {
   SineStatus status = SineStatus::kFitFailed;                ///< kOk when the point is usable
   std::string message;                                       ///< why not, or a note
   data::SineControl control = data::SineControl::kResponse;  ///< the sweep's control
-  double amplitude = 0;         ///< amplitude of options.amplitude at f_n, SI
-  double displacement_m = 0;    ///< displacement amplitude at f_n [m]
-  double force_n = 0;           ///< force amplitude at f_n [N]
-  double frequency_hz = 0;      ///< backbone frequency
-  double damping_ratio = 0;     ///< backbone damping ratio
-  double frequency_std_hz = 0;  ///< k * sigma
-  double damping_std = 0;       ///< k * sigma
-  bool damping_direct = true;   ///< false: from energy balance with the fitted |Q|
-  SineFit fit;                  ///< the single-mode fit of the sweep
+  double amplitude = 0;             ///< amplitude of options.amplitude at f_n, SI
+  double displacement_m = 0;        ///< displacement amplitude at f_n [m]
+  double force_n = 0;               ///< force amplitude at f_n [N]
+  double frequency_hz = 0;          ///< backbone frequency
+  double damping_ratio = 0;         ///< backbone damping ratio
+  double frequency_std_hz = 0;      ///< k * sigma
+  double damping_std = 0;           ///< k * sigma
+  bool damping_direct = true;       ///< false: from energy balance with a modal constant
+  bool own_modal_constant = false;  ///< the energy balance used the sweep's own |Q|
+  SineFit fit;                      ///< the single-mode fit of the sweep
   /// One line: level, f, zeta and their uncertainties, or the reason there is none.
   std::string report() const;
 };
@@ -96,8 +99,20 @@ SineFit fit_single_mode(const Eigen::Ref<const Eigen::VectorXd>& frequency_hz,
                         const Eigen::Ref<const Eigen::VectorXcd>& h,
                         const SteppedSineOptions& options);
 
+/// A modal constant measured elsewhere (a response-controlled level of the same mode and
+/// sensor) for the energy balance of force-controlled levels.
+struct ModalConstant {
+  double magnitude = 0;  ///< |Q| [m/N s^-2]; 0: use the sweep's own fit
+  double rel_sigma = 0;  ///< one-sigma relative uncertainty of |Q|
+};
+
 /// The backbone point of one level (response- or force-controlled as the table says).
 SineBackbonePoint extract_backbone_point(const data::SteppedSineTable& table,
-                                         const SteppedSineOptions& options);
+                                         const SteppedSineOptions& options,
+                                         const ModalConstant& modal_constant = {});
+
+/// |Q| of the response-controlled points that have one (the median, with the largest of their
+/// relative uncertainties), or magnitude 0 when none does.
+ModalConstant response_modal_constant(const std::vector<SineBackbonePoint>& points);
 
 }  // namespace jointlab::modal

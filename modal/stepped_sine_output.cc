@@ -98,9 +98,13 @@ void write_sine_summary(const std::filesystem::path& dir,
             .value(t.control == data::SineControl::kResponse ? "single-mode fit"
                                                              : "phase resonance");
         j.key("damping_method")
-            .value(p.damping_direct ? "single-mode fit"
-                                    : "energy balance at phase resonance with the fitted "
-                                      "modal constant (less direct)");
+            .value(p.damping_direct       ? "single-mode fit"
+                   : p.own_modal_constant ? "energy balance at phase resonance with this "
+                                            "sweep's own modal constant (less direct; biased "
+                                            "when the amplitude varies much)"
+                                          : "energy balance at phase resonance with the "
+                                            "response-controlled levels' modal constant "
+                                            "(less direct)");
         if (!p.message.empty()) j.key("note").value(p.message);
       } else {
         j.key("reason").value(p.message);

@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <complex>
-#include <numbers>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>
