@@ -35,14 +35,15 @@ void write_backbones(const std::filesystem::path& dir, const RecordResult& resul
 
 namespace {
 
-// The linear values: the zero-amplitude limit of the fit of the backbone's lower half,
-// its expanded uncertainty and the amplitudes the fit spans.
+// The linear values: a straight-line fit of the backbone's lower half evaluated at its
+// lowest amplitude (linear_reference_amplitude), its expanded uncertainty and the amplitudes
+// the fit spans.
 void write_linear(data::JsonWriter& j, const RingdownSummary& s) {
   j.key("linear_frequency_hz").value(s.linear_frequency_hz);
   j.key("linear_frequency_std_hz").value(s.linear_frequency_std_hz);
   j.key("linear_damping_ratio").value(s.linear_damping);
   j.key("linear_damping_std").value(s.linear_damping_std);
-  j.key("linear_reference_amplitude").value(0.0);
+  j.key("linear_reference_amplitude").value(s.linear_fit_min);
   j.key("linear_fit_amplitude_min").value(s.linear_fit_min);
   j.key("linear_fit_amplitude_max").value(s.linear_fit_max);
 }

@@ -129,7 +129,7 @@ std::string RingdownSummary::report() const {
   if (status != RingdownStatus::kOk) return "no backbone: " + message;
   return fmt::format(
       "kept {:.4f} s to {:.4f} s ({:.2f} decades of amplitude); noise floor {:.3e} m; "
-      "linear (zero-amplitude limit of the fit over amplitudes {:.3g} to {:.3g}): frequency "
+      "linear (at amplitude {:.3g}, the lowest of a straight-line fit up to {:.3g}): frequency "
       "{:.4f} +- {:.2g} Hz, damping ratio {:.4g} +- {:.2g}{}{}",
       span_start_s, span_end_s, amplitude_decades, noise_floor_m, linear_fit_min, linear_fit_max,
       linear_frequency_hz, linear_frequency_std_hz, linear_damping, linear_damping_std,
@@ -718,8 +718,13 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
   }
   const double det = sw * swaa - swa * swa;
   if (used >= 3 && det > 1e-12 * sw * swaa) {
-    out.value = (swaa * swy - swa * sway) / det;
-    out.std = std::sqrt(swaa / det) * inflate;
+    // The line at the lowest fitted amplitude, not its intercept: extrapolating a straight
+    // line to zero amplitude moves with the range each hit happens to span (a microslip
+    // backbone bends as A^(chi+1) there), which reads as hit-to-hit scatter.
+    const double a0 = bb.displacement(order.front());
+    const double c0 = (swaa * swy - swa * sway) / det, c1 = (sw * sway - swa * swy) / det;
+    out.value = c0 + c1 * a0;
+    out.std = std::sqrt((swaa - 2 * a0 * swa + a0 * a0 * sw) / det) * inflate;
   } else {
     out.value = swy / sw;
     out.std = std::sqrt(1.0 / sw) * inflate;
@@ -814,7 +819,7 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
   }
 }
 
-// Linear values: the zero-amplitude limit of the backbone's lower half.
+// Linear values: the straight-line fit of the backbone's lower half, at its lowest amplitude.
 void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownOptions& options) {
   const double k = options.coverage_factor;
   const double inflate = std::sqrt(options.points_per_window);

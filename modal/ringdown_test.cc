@@ -190,7 +190,7 @@ TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
 }
 
 // A linear mode (80 Hz, damping 0.2 %, noise 1e-3 of the peak): the linear values, the
-// zero-amplitude limit of the fit of the backbone's lower half, must hold the truth
+// straight-line fit of the backbone's lower half at its lowest amplitude, must hold the truth
 // within their stated (k = 3) uncertainty, which must be below 1e-4 in frequency and
 // 5 % in damping; the fit spans amplitudes inside the kept span.
 TEST(RingdownLinearValues, ZeroAmplitudeLimitHoldsTheTruth) {

@@ -11,7 +11,7 @@
 #include <Eigen/QR>
 
 #include "jointlab/core/error.h"
-#include "jointlab/model/fe/sparse_cholesky.h"
+#include "jointlab/model/sparse_cholesky.h"
 
 namespace jointlab::model {
 
@@ -116,7 +116,7 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   }
   Eigen::SparseMatrix<double> k_clamped(n, n);
   k_clamped.setFromTriplets(entries.begin(), entries.end());
-  fe::SparseCholesky factor;
+  SparseCholesky factor;
   if (!factor.factorize(k_clamped)) {
     throw InputError(
         "QSMA: the stiffness with joints at linear stiffness is not positive "

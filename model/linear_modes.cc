@@ -13,7 +13,7 @@
 #include <Eigen/QR>
 
 #include "jointlab/core/error.h"
-#include "jointlab/model/fe/sparse_cholesky.h"
+#include "jointlab/model/sparse_cholesky.h"
 
 namespace jointlab::model {
 
@@ -116,7 +116,7 @@ Eigen::VectorXd apply_stiffness(const Model& model, const Eigen::Ref<const Eigen
 class RefinedShiftInvert {
  public:
   using Scalar = double;
-  RefinedShiftInvert(const Model& model, const fe::SparseCholesky& factor, double shift)
+  RefinedShiftInvert(const Model& model, const SparseCholesky& factor, double shift)
       : model_(model), factor_(factor), shift_(shift) {}
   Eigen::Index rows() const { return factor_.size(); }
   Eigen::Index cols() const { return factor_.size(); }
@@ -133,7 +133,7 @@ class RefinedShiftInvert {
 
  private:
   const Model& model_;
-  const fe::SparseCholesky& factor_;
+  const SparseCholesky& factor_;
   double shift_;
 };
 
@@ -143,7 +143,7 @@ LinearModes sparse_modes(const Model& model, const Eigen::SparseMatrix<double>& 
   const int n = static_cast<int>(model.size());
   const int nev = std::min(count, n - 1);
   const int ncv = std::min(n, std::max(2 * nev + 1, nev + 20));
-  fe::SparseCholesky factor;
+  SparseCholesky factor;
   if (!factor.factorize(k_lin - shift * model.mass)) {
     throw InputError(
         "linear modes: the stiffness matrix with joints at linear stiffness is not positive "

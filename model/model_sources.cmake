@@ -1,6 +1,8 @@
 # Model files, Iwan joints, linear modes and QSMA (issue 3).
 list(APPEND JOINTLAB_MODEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/iwan.cc
+  ${CMAKE_CURRENT_LIST_DIR}/sparse_cholesky.cc
+  ${CMAKE_CURRENT_LIST_DIR}/sparse_eigen.cc
   ${CMAKE_CURRENT_LIST_DIR}/iwan_hysteresis.cc
   ${CMAKE_CURRENT_LIST_DIR}/iwan_cycle.cc
   ${CMAKE_CURRENT_LIST_DIR}/model_file.cc

@@ -9,8 +9,8 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/model/fe/fe_model.h"
-#include "jointlab/model/fe/sparse_eigen.h"
 #include "jointlab/model/fe/strip_mesh.h"
+#include "jointlab/model/sparse_eigen.h"
 
 namespace jointlab::model::fe {
 namespace {

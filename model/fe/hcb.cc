@@ -5,8 +5,8 @@
 #include <fmt/format.h>
 #include <Eigen/Dense>
 
-#include "jointlab/model/fe/sparse_cholesky.h"
-#include "jointlab/model/fe/sparse_eigen.h"
+#include "jointlab/model/sparse_cholesky.h"
+#include "jointlab/model/sparse_eigen.h"
 
 namespace jointlab::model::fe {
 namespace {

@@ -7,8 +7,8 @@
 #include <Eigen/Dense>
 
 #include "jointlab/model/fe/fe_model.h"
-#include "jointlab/model/fe/sparse_eigen.h"
 #include "jointlab/model/fe/strip_mesh.h"
+#include "jointlab/model/sparse_eigen.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {

@@ -11,8 +11,8 @@
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/matrix_market.h"
 #include "jointlab/model/fe/hcb.h"
-#include "jointlab/model/fe/sparse_eigen.h"
 #include "jointlab/model/model_file_writer.h"
+#include "jointlab/model/sparse_eigen.h"
 
 namespace jointlab::model::fe {
 namespace {

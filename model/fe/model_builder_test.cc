@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
 
-#include "jointlab/model/fe/sparse_eigen.h"
 #include "jointlab/model/model_file.h"
+#include "jointlab/model/sparse_eigen.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {

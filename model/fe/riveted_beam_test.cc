@@ -8,7 +8,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/model/fe/model_builder.h"
-#include "jointlab/model/fe/sparse_eigen.h"
+#include "jointlab/model/sparse_eigen.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {

@@ -12,9 +12,9 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
-#include "jointlab/model/fe/sparse_cholesky.h"
+#include "jointlab/model/sparse_cholesky.h"
 
-namespace jointlab::model::fe {
+namespace jointlab::model {
 
 /// Settings of the shift-invert eigen-solve.
 struct EigenOptions {
@@ -62,4 +62,4 @@ EigenResult lowest_modes(const SparseCholesky& factor, const Eigen::SparseMatrix
 /// Natural frequencies f = √λ / 2π [Hz]; eigenvalues below zero (round-off) give 0.
 Eigen::VectorXd frequencies_hz(const Eigen::VectorXd& eigenvalues);
 
-}  // namespace jointlab::model::fe
+}  // namespace jointlab::model

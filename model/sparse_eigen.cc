@@ -1,4 +1,4 @@
-#include "jointlab/model/fe/sparse_eigen.h"
+#include "jointlab/model/sparse_eigen.h"
 
 #include <algorithm>
 #include <cassert>
@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 #include <Eigen/Dense>
 
-namespace jointlab::model::fe {
+namespace jointlab::model {
 namespace {
 
 // y = (K − σM)⁻¹ x through a prepared factorisation; the shift is fixed at construction.
@@ -126,4 +126,4 @@ Eigen::VectorXd frequencies_hz(const Eigen::VectorXd& eigenvalues) {
       [](double l) { return l > 0 ? std::sqrt(l) / (2 * 3.14159265358979323846) : 0.0; });
 }
 
-}  // namespace jointlab::model::fe
+}  // namespace jointlab::model

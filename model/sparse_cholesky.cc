@@ -1,10 +1,10 @@
-#include "jointlab/model/fe/sparse_cholesky.h"
+#include "jointlab/model/sparse_cholesky.h"
 
 #include <cassert>
 
 #include <Eigen/CholmodSupport>
 
-namespace jointlab::model::fe {
+namespace jointlab::model {
 
 struct SparseCholesky::Impl {
   Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
@@ -35,4 +35,4 @@ Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& b) const {
 
 Eigen::Index SparseCholesky::size() const { return impl_->n; }
 
-}  // namespace jointlab::model::fe
+}  // namespace jointlab::model

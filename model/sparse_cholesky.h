@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
-namespace jointlab::model::fe {
+namespace jointlab::model {
 
 /// A CHOLMOD factorisation of a sparse symmetric positive definite matrix.
 class SparseCholesky {
@@ -33,4 +33,4 @@ class SparseCholesky {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace jointlab::model::fe
+}  // namespace jointlab::model
