@@ -5,8 +5,9 @@
 // Model curve: QSMA of elastic mode R (qsma.h) gives q, omega(q), zeta(q). The measuring
 // sensor (dof d, sign s) sees the displacement amplitude x = |q phi_R[d]|; the amplitude of
 // the quantity `process` reported is a = x omega^p (p = 0, 1, 2 for displacement, velocity,
-// acceleration), omega the QSMA frequency at that point. The model frequency and damping at
-// each measured amplitude a_j are interpolated linearly in ln a (held at the curve's ends).
+// acceleration), omega the QSMA frequency at that point. The model frequency and damping are
+// evaluated exactly at each measured amplitude a_j (qsma_at.h: one static solve per secant
+// step, no grid), so the macroslip knee is where the model puts it.
 // Residuals, over the N measured points of every curve, weighted by the measured scatter:
 //     r_f,j = (f_model(a_j) - f_j) / (sigma_f,j sqrt(N)),  r_z,j = (zeta_model(a_j) - zeta_j)
 //                                                                   / (sigma_z,j sqrt(N)),
@@ -80,7 +81,7 @@ struct IwanUpdateOptions {
   double contraction = 0.03;      ///< Monte Carlo: bounds contract to +-this around the best
   int max_evaluations = 1500;     ///< budget of QSMA evaluations
   int local_starts = 3;           ///< global-local: Ceres starts from the best samples
-  int qsma_points = 30;           ///< QSMA points per curve
+  int qsma_points = 30;           ///< unused: the model is evaluated at each measured amplitude
   double frequency_floor = 1e-4;  ///< sigma_f at least this times f
   double damping_floor = 0.02;    ///< sigma_z at least this times zeta
   unsigned seed = 1;              ///< random seed
@@ -94,7 +95,8 @@ struct IwanUpdateOptions {
 class IwanObjective {
  public:
   /// Prepares the objective; InputError if the set is not an Iwan set of the model, a mode or
-  /// sensor is out of range, or a curve is empty or not positive.
+  /// sensor is out of range, or a curve is empty or not positive. qsma_points is unused (the
+  /// model is evaluated at each measured amplitude, qsma_at.h).
   IwanObjective(const model::Model& model, const std::string& set,
                 const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
                 AmplitudeQuantity amplitude, int qsma_points, double frequency_floor,
@@ -127,7 +129,6 @@ class IwanObjective {
   std::vector<Sensor> sensors_;
   std::vector<IwanTarget> targets_;
   AmplitudeQuantity amplitude_;
-  int points_;
   double f_floor_, z_floor_;
   double Ks_ = 0;
   model::IwanParameters initial_;
