@@ -195,6 +195,29 @@ double IwanObjective::linear_error(const model::IwanParameters& p) const {
   return e;
 }
 
+void IwanObjective::set_linear_modes(const MeasuredModes& measured, double mac_threshold) {
+  if (measured.shapes.rows() != static_cast<Eigen::Index>(sensors_.size()) ||
+      measured.shapes.cols() != measured.frequency_hz.size()) {
+    throw InputError("measured linear modes: shapes do not match the sensors and frequencies");
+  }
+  linear_modes_ = measured;
+  linear_mac_ = mac_threshold;
+}
+
+std::vector<std::optional<double>> IwanObjective::linear_errors(
+    const model::IwanParameters& p) const {
+  std::vector<std::optional<double>> out;
+  if (linear_modes_.frequency_hz.size() == 0) return out;
+  const model::Model m = apply(p);
+  const StiffnessSets none(m, {});
+  const LinearEvaluation e =
+      evaluate_linear(none, m, sensors_, linear_modes_, Eigen::VectorXd::Zero(0), linear_mac_);
+  out.resize(static_cast<size_t>(linear_modes_.frequency_hz.size()));
+  for (const ModePair& q : e.pairing.pairs)
+    out[static_cast<size_t>(q.measured)] = e.residuals(q.measured);
+  return out;
+}
+
 namespace {
 
 // The search vector v = (F_S, gamma, chi, beta).
@@ -279,7 +302,10 @@ void monte_carlo(Tracker& tr, bool log_scale, std::mt19937& rng) {
 Vec4 to_x(const Vec4& v) { return Vec4(std::log(v(0)), std::log(v(1)), v(2), std::log(v(3))); }
 Vec4 to_v(const double* x) { return Vec4(std::exp(x[0]), std::exp(x[1]), x[2], std::exp(x[3])); }
 
-// Residuals with central-difference Jacobians (QSMA is not templated on the scalar).
+// Residuals with central-difference Jacobians (QSMA is not templated on the scalar). Not
+// ceres::NumericDiffCostFunction: its step is |x| times a relative size, which vanishes for
+// ln gamma and ln beta near 0, where the 1e-10 accuracy of qsma_at would swamp the difference;
+// a fixed step of 1e-4 in x keeps that error near 1e-6 of the derivative.
 class IwanCost : public ceres::CostFunction {
  public:
   IwanCost(Tracker& tr, std::array<bool, 4> held) : tr_(tr), held_(held) {
@@ -460,6 +486,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   IwanUpdateSummary local;
   IwanUpdateSummary& s = summary ? *summary : local;
   s = IwanUpdateSummary{};
+  s.optimizer = options.optimizer;
   s.start = objective.initial();
   Tracker tr{objective, options, s, objective.evaluations()};
   s.initial_cost = objective.cost(s.start);
@@ -476,16 +503,23 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
       break;
   }
   s.evaluations = tr.used();
+  // The start with the held parameters at their held values: K_T = gamma K_s as asked.
+  model::IwanParameters start = s.start;
+  if (options.fixed_gamma > 0) start.Kt = options.fixed_gamma * objective.reference_stiffness();
+  if (options.fixed_beta > 0) start.beta = options.fixed_beta;
   if (!(tr.best < kPenalty)) {
     s.status = IwanUpdateStatus::kNoValidPoint;
-    s.best = s.start;
-    s.final_cost = s.initial_cost;
-    return s.start;
+    s.best = start;
+    s.final_cost = objective.cost(start);
+    return start;
   }
   // The start is a candidate too: never hand back parameters that fit worse.
-  if (s.initial_cost <= tr.best) {
-    s.best = s.start;
-    s.final_cost = s.initial_cost;
+  const double start_cost =
+      start.Kt == s.start.Kt && start.beta == s.start.beta ? s.initial_cost : objective.cost(start);
+  if (start_cost <= tr.best) {
+    s.improved = false;
+    s.best = start;
+    s.final_cost = start_cost;
     s.linear_error = objective.linear_error(s.best);
     set_slips(objective, s);
     return s.best;
@@ -511,6 +545,15 @@ std::string IwanUpdateSummary::report() const {
       names[static_cast<int>(status)], evaluations, rounds, initial_cost, final_cost,
       100 * linear_error, start.Fs, best.Fs, start.Kt, best.Kt, start.chi, best.chi, start.beta,
       best.beta);
+  if (!improved || status == IwanUpdateStatus::kNoValidPoint) {
+    out += fmt::format(
+        "  no sample improved on the start: the result is the start{}. {}\n",
+        status == IwanUpdateStatus::kNoValidPoint ? " (no sample could be evaluated)" : "",
+        optimizer == IwanOptimizer::kGlobalLocal
+            ? "Widen the bounds or give a better start."
+            : "The Monte Carlo's uniform samples rarely land near the optimum in wide bounds: "
+              "use the global-local optimiser (--optimizer global-local).");
+  }
   if (relative_std.any()) {
     out += fmt::format(
         "  one-sigma relative uncertainty: Fs {:.2g} %, Kt {:.2g} %, chi {:.2g} %, beta {:.2g} % "
@@ -540,7 +583,14 @@ std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,
     ParetoPoint p;
     p.gamma = g;
     p.params = update_iwan(objective, o, &s);
+    if (s.status == IwanUpdateStatus::kNoValidPoint) {
+      throw InputError(fmt::format(
+          "Pareto front: at gamma {} (K_T = {:.6g} N/m) no parameter set in the bounds gives a "
+          "QSMA curve over the measured amplitudes",
+          g, g * objective.reference_stiffness()));
+    }
     p.linear_error = s.linear_error;
+    p.mode_errors = objective.linear_errors(p.params);
     p.backbone_cost = s.final_cost;
     out.push_back(p);
   }
