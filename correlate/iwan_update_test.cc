@@ -247,6 +247,29 @@ TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   EXPECT_LT(front[1].linear_error, 0.01);
 }
 
+// Started at the truth with a box that excludes it, no Monte Carlo sample beats the start: the
+// summary says so and names the working method. With gamma held the result holds it too.
+TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
+  Synthetic s;
+  const model::Model m = two_chain_structure(s.truth);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 20, 1e-4,
+                          0.02);
+  IwanUpdateOptions o;
+  o.optimizer = IwanOptimizer::kPaper;
+  o.bounds = {60, 80, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
+  o.max_evaluations = 200;
+  IwanUpdateSummary sum;
+  const model::IwanParameters p = update_iwan(obj, o, &sum);
+  EXPECT_FALSE(sum.improved);
+  EXPECT_EQ(p.Fs, 20.0);
+  EXPECT_NE(sum.report().find("no sample improved"), std::string::npos) << sum.report();
+  EXPECT_NE(sum.report().find("global-local"), std::string::npos) << sum.report();
+  // gamma held at 0.8 while the start is at 1: never the start's K_T.
+  o.fixed_gamma = 0.8;
+  const model::IwanParameters q = update_iwan(obj, o, &sum);
+  EXPECT_DOUBLE_EQ(q.Kt, 0.8 * obj.reference_stiffness());
+}
+
 TEST(IwanUpdate, BadInputIsReported) {
   const model::Model m = two_chain_structure();
   Synthetic s;
