@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/campaign/figures.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
@@ -29,10 +30,32 @@ namespace {
 namespace fs = std::filesystem;
 
 struct LinearArgs {
-  std::string model, measured, sensors, out;
-  std::vector<std::string> sets;
+  std::string model, measured, modes_table, sensors, out, rule = "least-squares";
+  std::vector<std::string> sets, bounds;
+  std::vector<double> bound_factors;
   correlate::LinearUpdateOptions options;
 };
+
+// --bound NAME=LO:HI, absolute stiffness bounds of one set.
+correlate::ParameterBound parse_bound(const std::string& spec) {
+  const size_t eq = spec.rfind('='), colon = spec.rfind(':');
+  correlate::ParameterBound b;
+  try {
+    if (eq == std::string::npos || colon == std::string::npos || colon < eq) {
+      throw std::invalid_argument(spec);
+    }
+    b.name = spec.substr(0, eq);
+    size_t used = 0;
+    const std::string lo = spec.substr(eq + 1, colon - eq - 1), hi = spec.substr(colon + 1);
+    b.lower = std::stod(lo, &used);
+    if (used != lo.size()) throw std::invalid_argument(spec);
+    b.upper = std::stod(hi, &used);
+    if (used != hi.size()) throw std::invalid_argument(spec);
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("--bound {}: expected NAME=LO:HI (stiffness values)", spec));
+  }
+  return b;
+}
 
 void make_out_dir(const std::string& out) {
   std::error_code ec;
@@ -43,27 +66,58 @@ void make_out_dir(const std::string& out) {
 }
 
 void run_update_linear(const LinearArgs& a) {
-  if (const std::string e = a.options.error(); !e.empty()) {
+  correlate::LinearUpdateOptions options = a.options;
+  for (const std::string& b : a.bounds) options.bounds.push_back(parse_bound(b));
+  if (a.bound_factors.size() == 2) {
+    options.lower_factor = a.bound_factors[0];
+    options.upper_factor = a.bound_factors[1];
+  }
+  if (a.rule == "smallest") {
+    options.rule = correlate::LinearRule::kSmallest;
+    if (options.smallest_set.empty()) {
+      throw InputError("update-linear: --rule smallest needs --minimize NAME (the set minimised)");
+    }
+    if (!(options.tolerance > 0)) options.tolerance = 0.01;  // the paper's 1 %
+  }
+  if (const std::string e = options.error(); !e.empty()) {
     throw InputError(fmt::format("update-linear: {}", e));
+  }
+  if (a.measured.empty() == a.modes_table.empty()) {
+    throw InputError("update-linear: give either --measured DIR or --modes-table FILE");
   }
   const model::Model m = model::read_model(a.model);
   const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
-  const correlate::ProcessRun run = correlate::read_process_run(a.measured);
-  const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors);
+  const correlate::MeasuredModes measured =
+      a.modes_table.empty()
+          ? correlate::measured_modes(correlate::read_process_run(a.measured), sensors)
+          : correlate::read_modes_table(a.modes_table, sensors, nullptr);
   correlate::LinearUpdateSummary summary;
   const Eigen::VectorXd theta =
-      correlate::update_linear(m, a.sets, sensors, measured, a.options, &summary);
+      correlate::update_linear(m, a.sets, sensors, measured, options, &summary);
   if (summary.status == correlate::LinearUpdateStatus::kTooFewPairs) {
     throw InputError(
         fmt::format("update-linear: no measured mode of {} pairs with a model mode (MAC >= {})",
-                    a.measured, a.options.mac_threshold));
+                    a.measured.empty() ? a.modes_table : a.measured, options.mac_threshold));
   }
   const model::Model updated = correlate::StiffnessSets(m, a.sets).apply(theta);
   make_out_dir(a.out);
-  model::write_model_file(fs::path(a.out) / "model.toml", updated);
-  correlate::write_linear_parameters(fs::path(a.out) / "parameters.csv", summary);
-  correlate::write_linear_history(fs::path(a.out) / "history.csv", summary);
+  const fs::path out(a.out);
+  model::write_model_file(out / "model.toml", updated);
+  correlate::write_linear_parameters(out / "parameters.csv", summary);
+  correlate::write_linear_history(out / "history.csv", summary);
+  correlate::write_linear_modes(out / "modes.csv", summary);
+  correlate::write_mac_matrix(out / "mac.csv", summary);
+  correlate::write_linear_sweeps(out / "sweeps.csv", summary);
+  {
+    const Eigen::MatrixXd& mac = summary.final.mac;
+    const int cols = correlate::mac_columns(summary);
+    std::vector<std::string> rows, columns;
+    for (Eigen::Index i = 0; i < mac.rows(); ++i) rows.push_back(fmt::format("test {}", i + 1));
+    for (int j = 0; j < cols; ++j) columns.push_back(fmt::format("FE {}", j + 1));
+    campaign::plot_mac(mac.leftCols(cols), rows, columns, "MAC at the result", out / "mac.png");
+  }
   fmt::print("{}", summary.report());
+  for (const std::string& w : summary.warnings) fmt::print(stderr, "warning: {}\n", w);
 }
 
 struct IwanArgs {
@@ -170,8 +224,9 @@ void run_update_iwan(const IwanArgs& a) {
   o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
                 : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
                                              : correlate::IwanOptimizer::kGlobalLocal;
-  const correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
-                                           o.qsma_points, o.frequency_floor, o.damping_floor);
+  correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
+                                     o.qsma_points, o.frequency_floor, o.damping_floor);
+  objective.set_linear_modes(measured, 0.6);  // every paired mode's error on the Pareto front
   o.bounds = bounds_of(a, objective);
   if (const std::string e = o.error(); !e.empty()) {
     throw InputError(fmt::format("update-iwan: {}", e));
@@ -183,8 +238,12 @@ void run_update_iwan(const IwanArgs& a) {
   if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
     throw InputError(fmt::format(
         "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
-        "amplitudes of {}",
-        a.measured));
+        "amplitudes of {}{}",
+        a.measured,
+        o.fixed_gamma > 0
+            ? fmt::format(" with K_T held at --gamma {} x K_s = {:.6g} N/m", o.fixed_gamma,
+                          o.fixed_gamma * objective.reference_stiffness())
+            : std::string()));
   }
   make_out_dir(a.out);
   model::write_model_file(fs::path(a.out) / "model.toml", objective.apply(best));
@@ -194,10 +253,16 @@ void run_update_iwan(const IwanArgs& a) {
   fmt::print("{}", summary.report());
   for (const correlate::ParetoPoint& p : front) {
     fmt::print(
-        "  Pareto gamma {:.4g}: Fs {:.6g} N, chi {:.4g}, beta {:.4g}, linear error {:.3g} %, "
-        "backbone cost {:.4g}{}\n",
-        p.gamma, p.params.Fs, p.params.chi, p.params.beta, 100 * p.linear_error, p.backbone_cost,
-        p.dominated ? " (dominated)" : "");
+        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
+        "error {:.3g} %, backbone cost {:.4g}{}\n",
+        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
+        p.backbone_cost, p.dominated ? " (dominated)" : "");
+    std::string modes = "    linear error per measured mode [%]:";
+    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
+      modes += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
+                                : fmt::format(" {}: unpaired", i + 1);
+    }
+    if (!p.mode_errors.empty()) fmt::print("{}\n", modes);
   }
 }
 
@@ -217,15 +282,34 @@ void add_update_commands(CLI::App& app) {
       "Reads DIR/summary.json of 'jointlab process'; writes OUTDIR/model.toml (with its\n"
       "matrices), parameters.csv and history.csv, and prints a report.");
   lin->add_option("MODEL", la->model, "model file (TOML)")->required();
-  lin->add_option("--measured", la->measured, "output directory of 'jointlab process'")->required();
+  lin->add_option("--measured", la->measured, "output directory of 'jointlab process'");
+  lin->add_option("--modes-table", la->modes_table,
+                  "measured modes as a table: mode,frequency_hz[,<channel>...] (instead of "
+                  "--measured)");
   lin->add_option("--sensors", la->sensors, "sensors file: channel,dof[,sign]")->required();
   lin->add_option("--set", la->sets, "element name to update (repeat for more)")->required();
   lin->add_option("--out", la->out, "output directory")->required();
+  lin->add_option("--rule", la->rule,
+                  "least-squares (default) or smallest: the paper's rule, the smallest "
+                  "--minimize set with every paired frequency error within --tolerance")
+      ->check(CLI::IsMember({"least-squares", "smallest"}));
+  lin->add_option("--minimize", la->options.smallest_set,
+                  "the set the smallest rule minimises (e.g. spring.kx)");
   lin->add_option("--tolerance", la->options.tolerance,
-                  "lower flat parameters to the smallest value with every frequency error "
-                  "within this fraction (default 0: off)");
+                  "largest frequency error as a fraction: the smallest rule's bound (default "
+                  "0.01); with least-squares, flat sets are lowered to the smallest value "
+                  "within it (default 0: off)");
+  lin->add_option("--bound", la->bounds,
+                  "NAME=LO:HI: absolute stiffness bounds of one set (repeatable)");
+  range_option(lin, "--bound-factors", la->bound_factors,
+               "bounds of every other set as factors of its start LO:HI (default 1e-3:1e3)");
   lin->add_option("--mac-threshold", la->options.mac_threshold,
                   "smallest MAC of a mode pair (default 0.6)");
+  lin->add_option("--frequency-window", la->options.frequency_window,
+                  "pairs also need |f_model / f_test - 1| within this (default 0: off)");
+  lin->add_option("--alias-mac", la->options.alias_mac,
+                  "warn when two model modes have an auto-MAC at the sensors above this "
+                  "(default 0.9)");
   lin->callback([la] { run_update_linear(*la); });
 
   auto ia = std::make_shared<IwanArgs>();

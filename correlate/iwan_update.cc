@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/qsma_at.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/qsma.h"
@@ -18,16 +19,6 @@ namespace jointlab::correlate {
 namespace {
 
 constexpr double kPenalty = 1e6;  // cost of a parameter set the model cannot evaluate
-
-// Linear interpolation of y(x) at x0, held at the ends; x ascending.
-double interpolate(const std::vector<double>& x, const std::vector<double>& y, double x0) {
-  if (x0 <= x.front()) return y.front();
-  if (x0 >= x.back()) return y.back();
-  const auto it = std::upper_bound(x.begin(), x.end(), x0);
-  const size_t i = static_cast<size_t>(it - x.begin());
-  const double t = (x0 - x[i - 1]) / (x[i] - x[i - 1]);
-  return y[i - 1] + t * (y[i] - y[i - 1]);
-}
 
 }  // namespace
 
@@ -54,14 +45,13 @@ std::string IwanUpdateOptions::error() const {
 
 IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
                              const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
-                             AmplitudeQuantity amplitude, int qsma_points, double frequency_floor,
-                             double damping_floor)
+                             AmplitudeQuantity amplitude, int /*qsma_points*/,
+                             double frequency_floor, double damping_floor)
     : model_(&model),
       set_(set.starts_with("iwan.") ? set : "iwan." + set),
       sensors_(sensors),
       targets_(std::move(targets)),
       amplitude_(amplitude),
-      points_(qsma_points),
       f_floor_(frequency_floor),
       z_floor_(damping_floor) {
   bool found = false;
@@ -138,48 +128,39 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r,
     for (const IwanTarget& t : targets_) {
       if (t.mode > jc.elastic_count()) return false;
       const int col = modes.rigid_count + t.mode - 1;
-      const double w_lin = std::sqrt(modes.omega2(col));
-      double q_lo = INFINITY, q_hi = 0;
-      for (const MeasuredBackbone& c : t.curves) {
+      // Every point of every curve of this target on one QSMA curve: s = a / |phi_R[d]|.
+      std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>> order;
+      for (size_t ci = 0; ci < t.curves.size(); ++ci) {
+        const MeasuredBackbone& c = t.curves[ci];
         const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
         if (!(ph > 0)) return false;
-        const double scale = ph * std::pow(w_lin, pw);
-        q_lo = std::min(q_lo, c.amplitude.minCoeff() / scale);
-        q_hi = std::max(q_hi, c.amplitude.maxCoeff() / scale);
+        for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
+          order.push_back({c.amplitude(j) / ph, {ci, j}});
       }
-      model::QsmaOptions qo;
-      qo.points = points_;
-      qo.q_min = 0.5 * q_lo;
-      qo.q_max = 2.0 * q_hi;  // the frequency falls with amplitude: a / omega^p grows
-      model::QsmaSummary qs;
-      const std::vector<model::QsmaPoint> curve = model::qsma(jc, t.mode, qo, &qs);
-      if (curve.size() < 2) return false;
-      for (const MeasuredBackbone& c : t.curves) {
-        const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
-        std::vector<double> la, f, z, slip;
-        for (const model::QsmaPoint& q : curve) {
-          const double w = 2 * std::numbers::pi * q.frequency_hz;
-          const double a = q.modal_amplitude * ph * std::pow(w, pw);
-          if (!(a > 0) || (!la.empty() && std::log(a) <= la.back())) continue;
-          la.push_back(std::log(a));
-          f.push_back(q.frequency_hz);
-          z.push_back(q.damping_ratio);
-          slip.push_back(q.max_slip);
-        }
-        if (la.size() < 2) return false;
-        if (slip_range) {
-          (*slip_range)(0) =
-              std::min((*slip_range)(0), interpolate(la, slip, std::log(c.amplitude.minCoeff())));
-          (*slip_range)(1) =
-              std::max((*slip_range)(1), interpolate(la, slip, std::log(c.amplitude.maxCoeff())));
-        }
+      std::sort(order.begin(), order.end());
+      std::vector<double> s(order.size());
+      for (size_t i = 0; i < order.size(); ++i) s[i] = order[i].first;
+      const std::vector<QsmaAtPoint> at = qsma_at(jc, t.mode, pw, s);
+      if (at.size() != s.size()) return false;
+      if (slip_range) {
+        (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);
+        (*slip_range)(1) = std::max((*slip_range)(1), at.back().point.max_slip);
+      }
+      // Residuals in the order of the curves and their points.
+      std::vector<std::vector<const model::QsmaPoint*>> model_at(t.curves.size());
+      for (size_t ci = 0; ci < t.curves.size(); ++ci)
+        model_at[ci].resize(static_cast<size_t>(t.curves[ci].amplitude.size()));
+      for (size_t i = 0; i < order.size(); ++i)
+        model_at[order[i].second.first][static_cast<size_t>(order[i].second.second)] = &at[i].point;
+      for (size_t ci = 0; ci < t.curves.size(); ++ci) {
+        const MeasuredBackbone& c = t.curves[ci];
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
-          const double x = std::log(c.amplitude(j));
+          const model::QsmaPoint& q = *model_at[ci][static_cast<size_t>(j)];
           const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
           const double sz = std::max(c.damping_std(j), z_floor_ * std::abs(c.damping_ratio(j)));
-          r[k++] = (interpolate(la, f, x) - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
-          r[k++] = sz > 0 ? (interpolate(la, z, x) - c.damping_ratio(j)) / (sz * std::sqrt(n_total))
-                          : 0.0;
+          r[k++] = (q.frequency_hz - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
+          r[k++] =
+              sz > 0 ? (q.damping_ratio - c.damping_ratio(j)) / (sz * std::sqrt(n_total)) : 0.0;
         }
       }
     }
@@ -212,6 +193,29 @@ double IwanObjective::linear_error(const model::IwanParameters& p) const {
                  std::abs(modes.frequency_hz(col) - t.linear_frequency_hz) / t.linear_frequency_hz);
   }
   return e;
+}
+
+void IwanObjective::set_linear_modes(const MeasuredModes& measured, double mac_threshold) {
+  if (measured.shapes.rows() != static_cast<Eigen::Index>(sensors_.size()) ||
+      measured.shapes.cols() != measured.frequency_hz.size()) {
+    throw InputError("measured linear modes: shapes do not match the sensors and frequencies");
+  }
+  linear_modes_ = measured;
+  linear_mac_ = mac_threshold;
+}
+
+std::vector<std::optional<double>> IwanObjective::linear_errors(
+    const model::IwanParameters& p) const {
+  std::vector<std::optional<double>> out;
+  if (linear_modes_.frequency_hz.size() == 0) return out;
+  const model::Model m = apply(p);
+  const StiffnessSets none(m, {});
+  const LinearEvaluation e =
+      evaluate_linear(none, m, sensors_, linear_modes_, Eigen::VectorXd::Zero(0), linear_mac_);
+  out.resize(static_cast<size_t>(linear_modes_.frequency_hz.size()));
+  for (const ModePair& q : e.pairing.pairs)
+    out[static_cast<size_t>(q.measured)] = e.residuals(q.measured);
+  return out;
 }
 
 namespace {
@@ -298,7 +302,10 @@ void monte_carlo(Tracker& tr, bool log_scale, std::mt19937& rng) {
 Vec4 to_x(const Vec4& v) { return Vec4(std::log(v(0)), std::log(v(1)), v(2), std::log(v(3))); }
 Vec4 to_v(const double* x) { return Vec4(std::exp(x[0]), std::exp(x[1]), x[2], std::exp(x[3])); }
 
-// Residuals with central-difference Jacobians (QSMA is not templated on the scalar).
+// Residuals with central-difference Jacobians (QSMA is not templated on the scalar). Not
+// ceres::NumericDiffCostFunction: its step is |x| times a relative size, which vanishes for
+// ln gamma and ln beta near 0, where the 1e-10 accuracy of qsma_at would swamp the difference;
+// a fixed step of 1e-4 in x keeps that error near 1e-6 of the derivative.
 class IwanCost : public ceres::CostFunction {
  public:
   IwanCost(Tracker& tr, std::array<bool, 4> held) : tr_(tr), held_(held) {
@@ -403,10 +410,12 @@ void global_local(Tracker& tr, std::mt19937& rng) {
 
 // Covariance of x = (ln F_S, ln gamma, chi, ln beta) at v (ln gamma and ln K_T differ by a
 // constant); 0 rows and columns for held parameters, all 0 when unknown.
-// With G >= 3 curves: cluster-robust covariance H^-1 (G/(G-1) sum_c g_c g_c^T) H^-1, H = J^T J,
-// g_c = J_c^T r_c over curve c's residuals: points along one hit's backbone share that hit's
-// offset, so the curves, not the points, are the independent samples. With fewer curves: the
-// Gauss-Newton covariance (J^T J)^-1 / N (residuals are normalised by sigma sqrt(N)).
+// Gauss-Newton: (J^T J)^-1 / N (residuals are normalised by sigma sqrt(N)) times the reduced
+// chi-square. With G >= 3 curves also the cluster-robust covariance H^-1 (G/(G-1) sum_c g_c
+// g_c^T) H^-1, H = J^T J, g_c = J_c^T r_c over curve c's residuals: points along one hit's
+// backbone share that hit's offset, so the curves, not the points, are the independent samples;
+// each variance is then the larger of the two (G - 1 degrees of freedom estimate the spread
+// between curves poorly when G is small), with the cluster-robust correlations.
 Eigen::Matrix4d covariance(const IwanObjective& objective, const IwanUpdateOptions& options,
                            const Vec4& v) {
   const std::array<bool, 4> held{false, options.fixed_gamma > 0, false, options.fixed_beta > 0};
@@ -437,14 +446,23 @@ Eigen::Matrix4d covariance(const IwanObjective& objective, const IwanUpdateOptio
   const Eigen::MatrixXd Hi = lu.inverse();
   const std::vector<int>& curve = objective.residual_curve();
   const int n_curves = curve.empty() ? 0 : curve.back() + 1;
-  Eigen::MatrixXd cov;
+  // Gauss-Newton: (J^T J)^-1 / N scaled by the reduced chi-square (about 1 in the scatter).
+  const double chi2 = r.squaredNorm() * (m / 2.0) / std::max(1, m - nf);
+  Eigen::MatrixXd cov = Hi / (m / 2.0) * chi2;
   if (n_curves >= 3) {
     Eigen::MatrixXd g = Eigen::MatrixXd::Zero(nf, n_curves);
     for (int i = 0; i < m; ++i) g.col(curve[i]) += J.row(i).transpose() * r(i);
     const Eigen::MatrixXd B = g * g.transpose() * (n_curves / (n_curves - 1.0));
-    cov = Hi * B * Hi;
-  } else {
-    cov = Hi / (m / 2.0);
+    const Eigen::MatrixXd robust = Hi * B * Hi;
+    // Few curves estimate the scatter between them poorly (G - 1 degrees of freedom): each
+    // variance is the larger of the two, with the cluster-robust correlations.
+    Eigen::VectorXd d(nf);
+    bool usable = true;
+    for (int k = 0; k < nf; ++k) {
+      usable = usable && robust(k, k) > 0;
+      d(k) = robust(k, k) > 0 ? std::sqrt(std::max(1.0, cov(k, k) / robust(k, k))) : 0.0;
+    }
+    if (usable) cov = d.asDiagonal() * robust * d.asDiagonal();
   }
   if (!cov.allFinite()) return Eigen::Matrix4d::Zero();
   Eigen::Matrix4d out = Eigen::Matrix4d::Zero();
@@ -468,6 +486,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   IwanUpdateSummary local;
   IwanUpdateSummary& s = summary ? *summary : local;
   s = IwanUpdateSummary{};
+  s.optimizer = options.optimizer;
   s.start = objective.initial();
   Tracker tr{objective, options, s, objective.evaluations()};
   s.initial_cost = objective.cost(s.start);
@@ -484,16 +503,23 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
       break;
   }
   s.evaluations = tr.used();
+  // The start with the held parameters at their held values: K_T = gamma K_s as asked.
+  model::IwanParameters start = s.start;
+  if (options.fixed_gamma > 0) start.Kt = options.fixed_gamma * objective.reference_stiffness();
+  if (options.fixed_beta > 0) start.beta = options.fixed_beta;
   if (!(tr.best < kPenalty)) {
     s.status = IwanUpdateStatus::kNoValidPoint;
-    s.best = s.start;
-    s.final_cost = s.initial_cost;
-    return s.start;
+    s.best = start;
+    s.final_cost = objective.cost(start);
+    return start;
   }
   // The start is a candidate too: never hand back parameters that fit worse.
-  if (s.initial_cost <= tr.best) {
-    s.best = s.start;
-    s.final_cost = s.initial_cost;
+  const double start_cost =
+      start.Kt == s.start.Kt && start.beta == s.start.beta ? s.initial_cost : objective.cost(start);
+  if (start_cost <= tr.best) {
+    s.improved = false;
+    s.best = start;
+    s.final_cost = start_cost;
     s.linear_error = objective.linear_error(s.best);
     set_slips(objective, s);
     return s.best;
@@ -519,6 +545,15 @@ std::string IwanUpdateSummary::report() const {
       names[static_cast<int>(status)], evaluations, rounds, initial_cost, final_cost,
       100 * linear_error, start.Fs, best.Fs, start.Kt, best.Kt, start.chi, best.chi, start.beta,
       best.beta);
+  if (!improved || status == IwanUpdateStatus::kNoValidPoint) {
+    out += fmt::format(
+        "  no sample improved on the start: the result is the start{}. {}\n",
+        status == IwanUpdateStatus::kNoValidPoint ? " (no sample could be evaluated)" : "",
+        optimizer == IwanOptimizer::kGlobalLocal
+            ? "Widen the bounds or give a better start."
+            : "The Monte Carlo's uniform samples rarely land near the optimum in wide bounds: "
+              "use the global-local optimiser (--optimizer global-local).");
+  }
   if (relative_std.any()) {
     out += fmt::format(
         "  one-sigma relative uncertainty: Fs {:.2g} %, Kt {:.2g} %, chi {:.2g} %, beta {:.2g} % "
@@ -548,7 +583,14 @@ std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,
     ParetoPoint p;
     p.gamma = g;
     p.params = update_iwan(objective, o, &s);
+    if (s.status == IwanUpdateStatus::kNoValidPoint) {
+      throw InputError(fmt::format(
+          "Pareto front: at gamma {} (K_T = {:.6g} N/m) no parameter set in the bounds gives a "
+          "QSMA curve over the measured amplitudes",
+          g, g * objective.reference_stiffness()));
+    }
     p.linear_error = s.linear_error;
+    p.mode_errors = objective.linear_errors(p.params);
     p.backbone_cost = s.final_cost;
     out.push_back(p);
   }

@@ -5,8 +5,9 @@
 // Model curve: QSMA of elastic mode R (qsma.h) gives q, omega(q), zeta(q). The measuring
 // sensor (dof d, sign s) sees the displacement amplitude x = |q phi_R[d]|; the amplitude of
 // the quantity `process` reported is a = x omega^p (p = 0, 1, 2 for displacement, velocity,
-// acceleration), omega the QSMA frequency at that point. The model frequency and damping at
-// each measured amplitude a_j are interpolated linearly in ln a (held at the curve's ends).
+// acceleration), omega the QSMA frequency at that point. The model frequency and damping are
+// evaluated exactly at each measured amplitude a_j (qsma_at.h: one static solve per secant
+// step, no grid), so the macroslip knee is where the model puts it.
 // Residuals, over the N measured points of every curve, weighted by the measured scatter:
 //     r_f,j = (f_model(a_j) - f_j) / (sigma_f,j sqrt(N)),  r_z,j = (zeta_model(a_j) - zeta_j)
 //                                                                   / (sigma_z,j sqrt(N)),
@@ -24,11 +25,13 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/model_file.h"
@@ -80,7 +83,7 @@ struct IwanUpdateOptions {
   double contraction = 0.03;      ///< Monte Carlo: bounds contract to +-this around the best
   int max_evaluations = 1500;     ///< budget of QSMA evaluations
   int local_starts = 3;           ///< global-local: Ceres starts from the best samples
-  int qsma_points = 30;           ///< QSMA points per curve
+  int qsma_points = 30;           ///< unused: the model is evaluated at each measured amplitude
   double frequency_floor = 1e-4;  ///< sigma_f at least this times f
   double damping_floor = 0.02;    ///< sigma_z at least this times zeta
   unsigned seed = 1;              ///< random seed
@@ -94,7 +97,8 @@ struct IwanUpdateOptions {
 class IwanObjective {
  public:
   /// Prepares the objective; InputError if the set is not an Iwan set of the model, a mode or
-  /// sensor is out of range, or a curve is empty or not positive.
+  /// sensor is out of range, or a curve is empty or not positive. qsma_points is unused (the
+  /// model is evaluated at each measured amplitude, qsma_at.h).
   IwanObjective(const model::Model& model, const std::string& set,
                 const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
                 AmplitudeQuantity amplitude, int qsma_points, double frequency_floor,
@@ -116,6 +120,11 @@ class IwanObjective {
   const std::vector<int>& residual_curve() const { return residual_curve_; }
   /// Relative linear-frequency error of every target at p (0 for targets without one).
   double linear_error(const model::IwanParameters& p) const;
+  /// Gives the measured linear modes (shapes at the sensors) for linear_errors().
+  void set_linear_modes(const MeasuredModes& measured, double mac_threshold);
+  /// (f_model - f_exp) / f_exp of every measured linear mode at p, MAC-paired (empty:
+  /// unpaired); empty without set_linear_modes().
+  std::vector<std::optional<double>> linear_errors(const model::IwanParameters& p) const;
   /// QSMA evaluations so far.
   int evaluations() const { return evaluations_; }
   /// A copy of the model with the set at p.
@@ -127,12 +136,13 @@ class IwanObjective {
   std::vector<Sensor> sensors_;
   std::vector<IwanTarget> targets_;
   AmplitudeQuantity amplitude_;
-  int points_;
   double f_floor_, z_floor_;
   double Ks_ = 0;
   model::IwanParameters initial_;
   int residual_count_ = 0;
   std::vector<int> residual_curve_;
+  MeasuredModes linear_modes_;
+  double linear_mac_ = 0.6;
   mutable int evaluations_ = 0;
   bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip) const;
 };
@@ -161,6 +171,8 @@ struct IwanUpdateSummary {
   double linear_error = 0;  ///< relative linear-frequency error at best
   int evaluations = 0;      ///< QSMA evaluations
   int rounds = 0;           ///< Monte Carlo rounds or local starts
+  IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;  ///< the method used
+  bool improved = true;  ///< false: no sample beat the start (held parameters at their values)
   /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
   /// unknown or held): with three or more curves the cluster-robust (sandwich) covariance with
   /// one cluster per curve, so the scatter between curves, not the number of points along them,
@@ -180,7 +192,9 @@ struct IwanUpdateSummary {
   std::string report() const;
 };
 
-/// Updates the Iwan set against the objective; returns the best parameters.
+/// Updates the Iwan set against the objective; returns the best parameters. Held parameters
+/// (fixed_gamma, fixed_beta) are held at their values in every candidate, the start included;
+/// status kNoValidPoint when no candidate could be evaluated.
 model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
                                   IwanUpdateSummary* summary);
 
@@ -190,10 +204,14 @@ struct ParetoPoint {
   model::IwanParameters params;  ///< the best parameters at this gamma
   double linear_error = 0;       ///< relative linear-frequency error
   double backbone_cost = 0;      ///< the backbone cost
-  bool dominated = false;        ///< another point is better in both
+  /// Linear-frequency error of every measured linear mode (IwanObjective::set_linear_modes),
+  /// (f_model - f_exp) / f_exp of its MAC-paired model mode; empty entries: unpaired.
+  std::vector<std::optional<double>> mode_errors;
+  bool dominated = false;  ///< another point is better in both
 };
 
-/// Updates (F_S, chi, beta) at each gamma and marks the non-dominated points.
+/// Updates (F_S, chi, beta) at each gamma and marks the non-dominated points; InputError when
+/// no parameter set can be evaluated at one of the gammas.
 std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,
                                       const std::vector<double>& gammas,
                                       const IwanUpdateOptions& options);

@@ -85,17 +85,36 @@ double LinearEvaluation::max_error() const {
 LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
                                  const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                                  const Eigen::Ref<const Eigen::VectorXd>& theta,
-                                 double mac_threshold) {
+                                 double mac_threshold, double frequency_window) {
   const model::LinearModes modes = model::linear_modes(model.mass, sets.stiffness(theta));
   const int elastic = modes.size() - modes.rigid_count;
   const Eigen::MatrixXd phi = modes.shapes.rightCols(elastic);
-  const Eigen::MatrixXd at_sensors = shapes_at_sensors(sensors, phi);
   LinearEvaluation e;
-  e.pairing = pair_modes(mac_matrix(measured.shapes, at_sensors), mac_threshold);
+  e.model_at_sensors = shapes_at_sensors(sensors, phi);
+  e.mac = mac_matrix(measured.shapes, e.model_at_sensors);
   const int m = static_cast<int>(measured.frequency_hz.size());
   e.all_model_frequency_hz.resize(elastic);
   for (int j = 0; j < elastic; ++j)
     e.all_model_frequency_hz(j) = modes.frequency_hz(modes.rigid_count + j);
+  Eigen::MatrixXd candidates = e.mac;
+  // A measured mode without a shape pairs with the nearest model frequency.
+  for (int i = 0; i < m; ++i) {
+    if (measured.shapes.col(i).squaredNorm() > 0 || elastic == 0) continue;
+    Eigen::Index nearest = 0;
+    (e.all_model_frequency_hz.array() - measured.frequency_hz(i)).abs().minCoeff(&nearest);
+    candidates.row(i).setZero();
+    candidates(i, nearest) = 1;
+  }
+  if (frequency_window > 0) {
+    for (int i = 0; i < m; ++i) {
+      for (int j = 0; j < elastic; ++j) {
+        const double d = e.all_model_frequency_hz(j) / measured.frequency_hz(i) - 1;
+        if (std::abs(d) > frequency_window) candidates(i, j) = 0;
+      }
+    }
+  }
+  e.pairing = pair_modes(candidates, mac_threshold);
+  e.measured_frequency_hz = measured.frequency_hz;
   e.model_frequency_hz = Eigen::VectorXd::Zero(m);
   e.residuals = Eigen::VectorXd::Zero(m);
   e.jacobian = Eigen::MatrixXd::Zero(m, sets.size());
@@ -125,6 +144,17 @@ std::string LinearUpdateOptions::error() const {
   if (!(frequency_std > 0)) return "frequency_std must be > 0";
   if (!(sweep_decades > 0)) return "sweep_decades must be > 0";
   if (sweep_points < 2) return "sweep_points must be >= 2";
+  if (!(frequency_window >= 0)) return "frequency_window must be >= 0";
+  if (!(alias_mac > 0 && alias_mac <= 1)) return "alias_mac must be in (0, 1]";
+  for (const ParameterBound& b : bounds) {
+    if (!(b.lower > 0 && b.lower < b.upper) || !std::isfinite(b.upper)) {
+      return fmt::format("bounds of '{}': need 0 < lower < upper", b.name);
+    }
+  }
+  if (rule == LinearRule::kSmallest) {
+    if (!(tolerance > 0)) return "the smallest rule needs a tolerance > 0";
+    if (smallest_set.empty()) return "the smallest rule needs the set to minimise";
+  }
   return "";
 }
 
@@ -134,8 +164,14 @@ namespace {
 class LinearCost : public ceres::CostFunction {
  public:
   LinearCost(const StiffnessSets& sets, const model::Model& model,
-             const std::vector<Sensor>& sensors, const MeasuredModes& measured, double threshold)
-      : sets_(sets), model_(model), sensors_(sensors), measured_(measured), threshold_(threshold) {
+             const std::vector<Sensor>& sensors, const MeasuredModes& measured, double threshold,
+             double window)
+      : sets_(sets),
+        model_(model),
+        sensors_(sensors),
+        measured_(measured),
+        threshold_(threshold),
+        window_(window) {
     set_num_residuals(static_cast<int>(measured.frequency_hz.size()));
     mutable_parameter_block_sizes()->push_back(sets.size());
   }
@@ -145,7 +181,7 @@ class LinearCost : public ceres::CostFunction {
     for (int k = 0; k < n; ++k) theta(k) = std::exp(x[0][k]);
     LinearEvaluation e;
     try {
-      e = evaluate_linear(sets_, model_, sensors_, measured_, theta, threshold_);
+      e = evaluate_linear(sets_, model_, sensors_, measured_, theta, threshold_, window_);
     } catch (const InputError&) {
       return false;  // an indefinite K at this step: the optimiser shrinks its step
     }
@@ -164,19 +200,28 @@ class LinearCost : public ceres::CostFunction {
   const model::Model& model_;
   const std::vector<Sensor>& sensors_;
   const MeasuredModes& measured_;
-  double threshold_;
+  double threshold_, window_;
 };
 
+// Records the objective and every stiffness after each iteration (the paper's Table 1).
 class ProgressCallback : public ceres::IterationCallback {
  public:
-  explicit ProgressCallback(const std::function<void(int, double)>& f) : f_(f) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (f_) f_(s.iteration, s.cost);
+  ProgressCallback(const std::function<void(int, double)>& f, const Eigen::VectorXd& x,
+                   LinearUpdateSummary* s)
+      : f_(f), x_(x), s_(s) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
+    if (s_) {
+      s_->history.push_back(it.cost);
+      s_->theta_history.push_back(x_.array().exp());
+    }
+    if (f_) f_(it.iteration, it.cost);
     return ceres::SOLVER_CONTINUE;
   }
 
  private:
   const std::function<void(int, double)>& f_;
+  const Eigen::VectorXd& x_;
+  LinearUpdateSummary* s_;
 };
 
 double rms_error(const LinearEvaluation& e) {
@@ -185,6 +230,21 @@ double rms_error(const LinearEvaluation& e) {
 }
 
 }  // namespace
+
+std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>& at_sensors,
+                                        double threshold) {
+  std::vector<AliasedModes> out;
+  for (Eigen::Index a = 0; a < at_sensors.cols(); ++a) {
+    for (Eigen::Index b = a + 1; b < at_sensors.cols(); ++b) {
+      const double na = at_sensors.col(a).squaredNorm(), nb = at_sensors.col(b).squaredNorm();
+      if (!(na > 0 && nb > 0)) continue;
+      const double d = at_sensors.col(a).dot(at_sensors.col(b));
+      const double v = d * d / (na * nb);
+      if (v >= threshold) out.push_back({static_cast<int>(a), static_cast<int>(b), v});
+    }
+  }
+  return out;
+}
 
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
                               const std::vector<Sensor>& sensors, const MeasuredModes& measured,
@@ -209,51 +269,83 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
       throw InputError(fmt::format("parameter set '{}': starting stiffness must be > 0", names[k]));
     }
   }
+  const Eigen::VectorXd start = sets.initial();
+  Eigen::VectorXd lower = start * options.lower_factor, upper = start * options.upper_factor;
+  for (const ParameterBound& b : options.bounds) {
+    const auto it = std::find(names.begin(), names.end(), b.name);
+    if (it == names.end()) {
+      throw InputError(fmt::format("bounds of '{}': not one of the sets updated", b.name));
+    }
+    lower(it - names.begin()) = b.lower;
+    upper(it - names.begin()) = b.upper;
+  }
+  int minimised = -1;
+  if (options.rule == LinearRule::kSmallest) {
+    const auto it = std::find(names.begin(), names.end(), options.smallest_set);
+    if (it == names.end()) {
+      throw InputError(fmt::format("the smallest rule: '{}' is not one of the sets updated",
+                                   options.smallest_set));
+    }
+    minimised = static_cast<int>(it - names.begin());
+  }
   LinearUpdateSummary local;
   LinearUpdateSummary& s = summary ? *summary : local;
   s = LinearUpdateSummary{};
+  const double window = options.frequency_window;
+  auto evaluate = [&](const Eigen::VectorXd& theta) {
+    return evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold, window);
+  };
 
-  const Eigen::VectorXd start = sets.initial();
-  Eigen::VectorXd x = start.array().log();
-  const LinearEvaluation first =
-      evaluate_linear(sets, model, sensors, measured, start, options.mac_threshold);
+  // The start, clamped into the bounds.
+  const Eigen::VectorXd begin = start.cwiseMax(lower).cwiseMin(upper);
+  const LinearEvaluation first = evaluate(begin);
   s.initial_cost = first.cost();
   if (first.pairing.pairs.empty()) {
     s.status = LinearUpdateStatus::kTooFewPairs;
     s.final_cost = s.initial_cost;
     s.final = first;
-    return start;
+    return begin;
   }
 
-  ceres::Problem problem;
-  problem.AddResidualBlock(new LinearCost(sets, model, sensors, measured, options.mac_threshold),
-                           nullptr, x.data());
-  for (int k = 0; k < n; ++k) {
-    problem.SetParameterLowerBound(x.data(), k, x(k) + std::log(options.lower_factor));
-    problem.SetParameterUpperBound(x.data(), k, x(k) + std::log(options.upper_factor));
-  }
-  ceres::Solver::Options so;
-  so.max_num_iterations = options.max_iterations;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.function_tolerance = 1e-12;
-  so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-10;
-  ProgressCallback cb(options.progress);
-  so.callbacks.push_back(&cb);
-  ceres::Solver::Summary cs;
-  ceres::Solve(so, &problem, &cs);
-  for (const ceres::IterationSummary& it : cs.iterations) s.history.push_back(it.cost);
-  s.iterations = static_cast<int>(cs.iterations.size()) - 1;
-  if (cs.termination_type == ceres::CONVERGENCE) {
+  // Least squares over the sets not held, from x (ln theta), in the bounds.
+  auto fit = [&](Eigen::VectorXd& x, int held, LinearUpdateSummary* record) {
+    ceres::Problem problem;
+    problem.AddResidualBlock(
+        new LinearCost(sets, model, sensors, measured, options.mac_threshold, window), nullptr,
+        x.data());
+    for (int k = 0; k < n; ++k) {
+      problem.SetParameterLowerBound(x.data(), k, std::log(lower(k)));
+      problem.SetParameterUpperBound(x.data(), k, std::log(upper(k)));
+    }
+    if (held >= 0) {
+      if (n == 1) return ceres::CONVERGENCE;
+      problem.SetManifold(x.data(), new ceres::SubsetManifold(n, {held}));
+    }
+    ceres::Solver::Options so;
+    so.max_num_iterations = options.max_iterations;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.function_tolerance = 1e-12;
+    so.gradient_tolerance = 1e-14;
+    so.parameter_tolerance = 1e-10;
+    so.update_state_every_iteration = true;
+    ProgressCallback cb(options.progress, x, record);
+    so.callbacks.push_back(&cb);
+    ceres::Solver::Summary cs;
+    ceres::Solve(so, &problem, &cs);
+    if (record) record->iterations += static_cast<int>(cs.iterations.size()) - 1;
+    return cs.termination_type;
+  };
+  Eigen::VectorXd x = begin.array().log();
+  const ceres::TerminationType tt = fit(x, -1, &s);
+  if (tt == ceres::CONVERGENCE) {
     s.status = LinearUpdateStatus::kConverged;
-  } else if (cs.termination_type == ceres::NO_CONVERGENCE) {
+  } else if (tt == ceres::NO_CONVERGENCE) {
     s.status = LinearUpdateStatus::kIterationLimit;
   } else {
     s.status = LinearUpdateStatus::kFailed;
   }
   Eigen::VectorXd theta = x.array().exp();
-  LinearEvaluation at =
-      evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold);
+  LinearEvaluation at = evaluate(theta);
 
   // Identifiability at the optimum.
   s.parameters.resize(n);
@@ -262,6 +354,8 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     ParameterReport& p = s.parameters[k];
     p.name = names[k];
     p.start = start(k);
+    p.lower = lower(k);
+    p.upper = upper(k);
     p.sensitivity = at.jacobian.col(k).cwiseAbs().maxCoeff();
     p.flat = p.sensitivity < options.flat_sensitivity;
     if (!p.flat) identifiable.push_back(k);
@@ -279,25 +373,69 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     }
   }
 
-  // The smallest stiffness within the tolerance, for the flat parameters.
-  if (options.tolerance > 0) {
+  // Within the tolerance: every pair kept, every paired error at most the tolerance.
+  const size_t pairs = at.pairing.pairs.size();
+  auto within = [&](const LinearEvaluation& e) {
+    return e.pairing.pairs.size() == pairs && e.max_error() <= options.tolerance;
+  };
+
+  if (options.rule == LinearRule::kSmallest) {
+    // The paper's rule: the smallest theta_m with the others fitted and every error within.
+    const int k = minimised;
+    if (!within(at)) {
+      s.tolerance_met = false;
+      s.warnings.push_back(fmt::format(
+          "the tolerance {:.3g} % cannot be met: the least-squares fit leaves a largest "
+          "frequency error of {:.3g} %; kept the least-squares result",
+          100 * options.tolerance, 100 * at.max_error()));
+    } else {
+      // feasible(v): fit the others at theta_k = v from the last feasible point.
+      Eigen::VectorXd best = x;
+      auto feasible = [&](double v) {
+        Eigen::VectorXd trial = best;
+        trial(k) = v;
+        fit(trial, k, nullptr);
+        try {
+          if (!within(evaluate(trial.array().exp()))) return false;
+        } catch (const InputError&) {
+          return false;
+        }
+        best = trial;
+        s.history.push_back(evaluate(trial.array().exp()).cost());
+        s.theta_history.push_back(trial.array().exp());
+        return true;
+      };
+      double hi = x(k), lo = std::log(lower(k));
+      if (feasible(lo)) {
+        hi = lo;
+      } else {
+        // ln theta to 1e-3: theta_m within 0.1 % of the smallest feasible value.
+        for (int it = 0; it < 60 && hi - lo > 1e-3; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (feasible(mid) ? hi : lo) = mid;
+        }
+      }
+      x = best;
+      theta = x.array().exp();
+      s.parameters[k].smallest_within_tolerance = theta(k);
+      at = evaluate(theta);
+    }
+  } else if (options.tolerance > 0) {
+    // The smallest stiffness within the tolerance, for the flat parameters.
     for (int k = 0; k < n; ++k) {
       if (!s.parameters[k].flat) continue;
       auto ok = [&](double v) {
         Eigen::VectorXd t = theta;
         t(k) = v;
         try {
-          const LinearEvaluation e =
-              evaluate_linear(sets, model, sensors, measured, t, options.mac_threshold);
-          return e.pairing.pairs.size() == at.pairing.pairs.size() &&
-                 e.max_error() <= options.tolerance;
+          return within(evaluate(t));
         } catch (const InputError&) {
           return false;
         }
       };
       if (!ok(theta(k))) continue;
       double hi = std::log(theta(k));
-      double lo = std::log(start(k) * options.lower_factor);
+      double lo = std::log(lower(k));
       if (ok(std::exp(lo))) {
         hi = lo;
       } else {
@@ -309,7 +447,35 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
       theta(k) = std::exp(hi);
       s.parameters[k].smallest_within_tolerance = theta(k);
     }
-    at = evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold);
+    at = evaluate(theta);
+  }
+
+  // Bounds reached.
+  for (int k = 0; k < n; ++k) {
+    ParameterReport& p = s.parameters[k];
+    const double lx = std::log(theta(k));
+    if (lx <= std::log(lower(k)) + 1e-6) p.at_bound = -1;
+    if (lx >= std::log(upper(k)) - 1e-6) p.at_bound = 1;
+    if (p.at_bound != 0) {
+      s.warnings.push_back(
+          fmt::format("{} ends at its {} bound {:.6g}: widen the bounds or hold it", p.name,
+                      p.at_bound < 0 ? "lower" : "upper", p.at_bound < 0 ? lower(k) : upper(k)));
+    }
+  }
+
+  // Model modes the sensors cannot tell apart (among modes up to 1.5 x the highest measured).
+  {
+    const double f_top = 1.5 * measured.frequency_hz.maxCoeff();
+    Eigen::Index count = 0;
+    while (count < at.all_model_frequency_hz.size() && at.all_model_frequency_hz(count) <= f_top)
+      ++count;
+    for (const AliasedModes& a :
+         aliased_modes(at.model_at_sensors.leftCols(count), options.alias_mac)) {
+      s.warnings.push_back(fmt::format(
+          "model modes {} ({:.4g} Hz) and {} ({:.4g} Hz) look alike at the sensors (auto-MAC "
+          "{:.3f}): MAC cannot tell them apart, the frequency window must",
+          a.a + 1, at.all_model_frequency_hz(a.a), a.b + 1, at.all_model_frequency_hz(a.b), a.mac));
+    }
   }
 
   // One-at-a-time sweeps around the result.
@@ -323,15 +489,16 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
       Eigen::VectorXd t = theta;
       t(k) *= f;
       try {
-        const LinearEvaluation e =
-            evaluate_linear(sets, model, sensors, measured, t, options.mac_threshold);
+        const LinearEvaluation e = evaluate(t);
         p.sweep_factor.push_back(f);
         p.sweep_rms.push_back(rms_error(e));
+        p.sweep_errors.push_back(e.residuals);
       } catch (const InputError&) {
       }
     }
   }
   s.final_cost = at.cost();
+  s.final_mac = at.mac;
   s.final = std::move(at);
   return theta;
 }
@@ -343,7 +510,18 @@ std::string LinearUpdateSummary::report() const {
       "largest frequency error {:.3g} %\n",
       names[static_cast<int>(status)], iterations, initial_cost, final_cost,
       final.pairing.pairs.size(), final.residuals.size(), 100 * final.max_error());
-  out += final.pairing.report();
+  out += "  measured  f_exp [Hz]  model mode  f_model [Hz]  error [%]    MAC\n";
+  for (Eigen::Index i = 0; i < final.residuals.size(); ++i) {
+    const int j = final.pairing.model_for(static_cast<int>(i));
+    const double fe = final.measured_frequency_hz(i);
+    if (j < 0) {
+      out += fmt::format("  {:>8}  {:>10.5g}  unpaired\n", i + 1, fe);
+      continue;
+    }
+    out += fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {:.3f}\n", i + 1, fe,
+                       j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
+                       final.mac.size() > 0 ? final.mac(i, j) : 0.0);
+  }
   for (const ParameterReport& p : parameters) {
     out += fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}", p.name, p.start, p.value,
                        p.sensitivity,
@@ -352,6 +530,7 @@ std::string LinearUpdateSummary::report() const {
     if (p.smallest_within_tolerance > 0) out += "  (smallest within tolerance)";
     out += "\n";
   }
+  for (const std::string& w : warnings) out += fmt::format("  WARNING: {}\n", w);
   return out;
 }
 

@@ -20,6 +20,14 @@
 // Smallest stiffness: with tolerance > 0, each flat parameter is then lowered to the
 // smallest value (bisection in ln theta) at which every paired |r_i| is within the
 // tolerance, instead of drifting to its upper bound.
+// The paper's rule (LinearRule::kSmallest): minimise theta_m of one named set subject to every
+// paired |r_i| <= tolerance. Bisection on ln theta_m between its lower bound and the
+// least-squares value; at each trial theta_m the other sets are fitted by least squares (held
+// theta_m) and the trial is feasible when every paired error is within the tolerance and no
+// pair is lost. When even the least-squares fit exceeds the tolerance the rule says so and
+// keeps the least-squares result. A parameter that ends at a bound is reported with a warning.
+// Pairing may also require |f_model - f_exp| <= frequency_window f_exp; at the result the
+// auto-MAC of the model shapes at the sensors flags model modes the sensors cannot tell apart.
 #pragma once
 
 #include <functional>
@@ -75,6 +83,9 @@ struct LinearEvaluation {
   Eigen::VectorXd residuals;           ///< r_i
   Eigen::MatrixXd jacobian;            ///< d r_i / d ln theta_k
   Eigen::VectorXd all_model_frequency_hz;  ///< every elastic model frequency
+  Eigen::VectorXd measured_frequency_hz;   ///< the measured frequencies
+  Eigen::MatrixXd mac;                     ///< MAC, measured x elastic model modes
+  Eigen::MatrixXd model_at_sensors;        ///< elastic model shapes at the sensors
   /// 1/2 sum r_i^2.
   double cost() const { return 0.5 * residuals.squaredNorm(); }
   /// Largest |r_i| over paired modes.
@@ -82,18 +93,37 @@ struct LinearEvaluation {
 };
 
 /// Evaluates pairing, residuals and their analytic Jacobian at theta.
+/// With frequency_window > 0 a pair also needs |f_model / f_exp - 1| <= frequency_window.
 LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
                                  const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                                  const Eigen::Ref<const Eigen::VectorXd>& theta,
-                                 double mac_threshold);
+                                 double mac_threshold, double frequency_window = 0);
+
+/// The stop rule of update_linear().
+enum class LinearRule {
+  kLeastSquares,  ///< least-squares frequency errors (flat sets lowered with tolerance > 0)
+  kSmallest,      ///< the paper's: smallest `smallest_set` with every error within tolerance
+};
+
+/// Absolute bounds of one named set (overriding lower_factor and upper_factor).
+struct ParameterBound {
+  std::string name;  ///< element name ("spring.kx")
+  double lower = 0;  ///< smallest stiffness, > 0
+  double upper = 0;  ///< largest stiffness, > lower
+};
 
 /// Settings of update_linear().
 struct LinearUpdateOptions {
   double mac_threshold = 0.6;  ///< pairs below this MAC are not made
   double lower_factor = 1e-3;  ///< bounds: theta_k in [start * lower_factor, start * upper_factor]
   double upper_factor = 1e3;   ///< (both > 0, lower_factor < 1 < upper_factor)
-  int max_iterations = 100;    ///< Ceres iterations
-  double tolerance = 0;        ///< > 0: flat parameters lowered to the smallest within it
+  std::vector<ParameterBound> bounds;  ///< absolute bounds of named sets (override the factors)
+  LinearRule rule = LinearRule::kLeastSquares;  ///< stop rule
+  std::string smallest_set;     ///< kSmallest: the set minimised (a name of the sets)
+  double frequency_window = 0;  ///< > 0: pairs also need |f_model/f_exp - 1| <= this
+  double alias_mac = 0.9;       ///< auto-MAC of two model modes at the sensors above: warned
+  int max_iterations = 100;     ///< Ceres iterations
+  double tolerance = 0;  ///< > 0: flat sets lowered to the smallest within it; kSmallest's bound
   double flat_sensitivity = 1e-3;  ///< s_k below this: flat
   double frequency_std = 1e-3;     ///< relative frequency uncertainty for confidence
   double sweep_decades = 2;        ///< one-at-a-time sweep over theta * 10^[-d, d]
@@ -112,9 +142,12 @@ struct ParameterReport {
   double sensitivity = 0;   ///< s_k at the solution
   bool flat = false;        ///< s_k < flat_sensitivity
   double relative_std = 0;  ///< one-sigma relative uncertainty (0 when flat: unbounded)
-  double smallest_within_tolerance = 0;  ///< set when the tolerance formulation lowered it
-  std::vector<double> sweep_factor;      ///< theta_k multipliers of the sweep
-  std::vector<double> sweep_rms;         ///< RMS relative frequency error at each multiplier
+  double smallest_within_tolerance = 0;       ///< set when the tolerance formulation lowered it
+  double lower = 0, upper = 0;                ///< its bounds
+  int at_bound = 0;                           ///< -1: ends at its lower bound, +1: upper, 0: inside
+  std::vector<double> sweep_factor;           ///< theta_k multipliers of the sweep
+  std::vector<double> sweep_rms;              ///< RMS relative frequency error at each multiplier
+  std::vector<Eigen::VectorXd> sweep_errors;  ///< r_i of every measured mode at each multiplier
 };
 
 /// Why update_linear() stopped.
@@ -131,12 +164,26 @@ struct LinearUpdateSummary {
   double initial_cost = 0;                                  ///< objective at the start
   double final_cost = 0;                                    ///< objective at the result
   int iterations = 0;                                       ///< optimiser iterations
-  std::vector<double> history;              ///< objective after each iteration (first: start)
+  std::vector<double> history;                 ///< objective after each iteration (first: start)
+  std::vector<Eigen::VectorXd> theta_history;  ///< every set's stiffness at each history entry
+  bool tolerance_met = true;          ///< kSmallest: false when no stiffness meets the tolerance
+  Eigen::MatrixXd final_mac;          ///< MAC (measured x elastic model modes) at the result
+  std::vector<std::string> warnings;  ///< parameters at bounds, aliased modes, unmet tolerance
   std::vector<ParameterReport> parameters;  ///< per parameter
   LinearEvaluation final;                   ///< pairing and residuals at the result
-  /// One paragraph: status, cost, pairs, parameters.
+  /// One paragraph: status, cost, pairs, per-mode errors, parameters, warnings.
   std::string report() const;
 };
+
+/// Pairs of model modes (columns of shapes at the sensors) whose auto-MAC is at least
+/// threshold: the sensors cannot tell them apart. Each entry (j, k, MAC), j < k.
+struct AliasedModes {
+  int a = 0, b = 0;  ///< model columns
+  double mac = 0;    ///< their auto-MAC at the sensors
+};
+/// Every aliased pair among the given model shapes at the sensors.
+std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>& at_sensors,
+                                        double threshold);
 
 /// Updates the named sets of `model` to the measured frequencies; returns theta.
 /// InputError for bad options, unknown sets or inconsistent sensors/measured shapes.

@@ -281,6 +281,99 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
   return out;
 }
 
+MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& sensors,
+                               std::vector<int>* modes) {
+  std::ifstream in(path);
+  const std::string name = path.string();
+  if (!in) throw InputError(fmt::format("{}: cannot open the modes table", name));
+  std::vector<int> row_of_column;  // sensor row of each shape column
+  std::vector<int> numbers;
+  std::vector<double> freq;
+  std::vector<std::vector<double>> shape;
+  std::string line;
+  long n = 0;
+  bool header = false;
+  size_t width = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    line = trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::vector<std::string> cells = split(line);
+    if (!header) {
+      if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
+        throw InputError(where(name, n, "the header must begin with mode,frequency_hz"));
+      }
+      for (size_t c = 2; c < cells.size(); ++c) {
+        int row = -1;
+        for (size_t s = 0; s < sensors.size(); ++s) {
+          if (sensors[s].channel == cells[c]) row = static_cast<int>(s);
+        }
+        if (row < 0) {
+          throw InputError(
+              where(name, n, fmt::format("column '{}' is not a sensor channel", cells[c])));
+        }
+        for (int r : row_of_column) {
+          if (r == row)
+            throw InputError(where(name, n, fmt::format("column '{}' twice", cells[c])));
+        }
+        row_of_column.push_back(row);
+      }
+      header = true;
+      width = cells.size();
+      continue;
+    }
+    if (cells.size() != width) {
+      throw InputError(
+          where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
+    }
+    auto number = [&](size_t c, const char* what) {
+      double x = 0;
+      size_t used = 0;
+      try {
+        x = std::stod(cells[c], &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != cells[c].size() || !std::isfinite(x)) {
+        throw InputError(where(name, n, fmt::format("{} '{}' is not a number", what, cells[c])));
+      }
+      return x;
+    };
+    const double mode = number(0, "mode");
+    if (mode != std::floor(mode) || mode < 1) {
+      throw InputError(where(name, n, fmt::format("mode '{}' must be an integer >= 1", cells[0])));
+    }
+    for (int m : numbers) {
+      if (m == static_cast<int>(mode)) {
+        throw InputError(where(name, n, fmt::format("mode {} twice", m)));
+      }
+    }
+    const double f = number(1, "frequency_hz");
+    if (!(f > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
+    std::vector<double> v(sensors.size(), 0.0);
+    for (size_t c = 2; c < width; ++c) {
+      if (!cells[c].empty())
+        v[static_cast<size_t>(row_of_column[c - 2])] = number(c, "shape entry");
+    }
+    numbers.push_back(static_cast<int>(mode));
+    freq.push_back(f);
+    shape.push_back(std::move(v));
+  }
+  if (freq.empty()) throw InputError(fmt::format("{}: no mode in the table", name));
+  MeasuredModes out;
+  const auto count = static_cast<Eigen::Index>(freq.size());
+  out.frequency_hz.resize(count);
+  out.shapes = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(sensors.size()), count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    out.frequency_hz(i) = freq[static_cast<size_t>(i)];
+    for (size_t s = 0; s < sensors.size(); ++s)
+      out.shapes(static_cast<Eigen::Index>(s), i) = shape[static_cast<size_t>(i)][s];
+    out.labels.push_back(fmt::format("mode {}", numbers[static_cast<size_t>(i)]));
+  }
+  if (modes) *modes = numbers;
+  return out;
+}
+
 int measured_mode_of(const model::Model& model, const std::vector<Sensor>& sensors,
                      const MeasuredModes& measured, int mode, double mac_threshold) {
   const model::LinearModes modes = model::linear_modes(model.mass, model.linear_stiffness());

@@ -73,6 +73,14 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
                                                  const std::vector<std::string>& channels);
 
+/// Measured linear modes from a plain table: header `mode,frequency_hz[,<channel>...]`, one
+/// row per mode, optional real shape entries per channel (every channel a sensor; empty cells
+/// and sensors without a column are 0). `modes` (if given) receives the mode numbers. A mode
+/// without any shape entry is paired by frequency alone (linear_update.h). InputError naming
+/// the file, line and cell.
+MeasuredModes read_modes_table(const std::filesystem::path& path,
+                               const std::vector<Sensor>& sensors, std::vector<int>* modes);
+
 /// The measured column MAC-paired (mac.h) with elastic mode `mode` of the model at its linear
 /// stiffness, or -1 when that mode pairs with none.
 int measured_mode_of(const model::Model& model, const std::vector<Sensor>& sensors,

@@ -1,5 +1,6 @@
 #include "jointlab/correlate/measured_data.h"
 
+#include <complex>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -129,6 +130,43 @@ TEST(MeasuredData, DefectsNameFileAndField) {
             std::string::npos);
   write(d / "b.csv", std::string(kBackbone) + "0.3,0.01,nan,0.003,0.01,0.0001,20\n");
   EXPECT_NE(testing::input_error_of([&] { read_backbone_csv(d / "b.csv", 0); }).find("b.csv:4:"),
+            std::string::npos);
+}
+
+TEST(MeasuredData, ReadsAPlainModesTable) {
+  const fs::path d = fresh("table");
+  const std::vector<Sensor> sensors{{"b2", 7, 1.0}, {"a5", 5, -1.0}, {"a1", 1, 1.0}};
+  write(d / "modes.csv", "# two modes\nmode,frequency_hz,a5,b2\n1,57.9,0.5,-0.25\n3,120,,1\n");
+  std::vector<int> numbers;
+  const MeasuredModes m = read_modes_table(d / "modes.csv", sensors, &numbers);
+  ASSERT_EQ(m.frequency_hz.size(), 2);
+  EXPECT_EQ(numbers, (std::vector<int>{1, 3}));
+  EXPECT_EQ(m.frequency_hz(1), 120.0);
+  ASSERT_EQ(m.shapes.rows(), 3);
+  // Sensor order (b2, a5, a1); empty cells and sensors without a column are 0.
+  EXPECT_EQ(m.shapes(0, 0), std::complex<double>(-0.25, 0));
+  EXPECT_EQ(m.shapes(1, 0), std::complex<double>(0.5, 0));
+  EXPECT_EQ(m.shapes(2, 0), std::complex<double>(0, 0));
+  EXPECT_EQ(m.shapes(1, 1), std::complex<double>(0, 0));
+  write(d / "bad1.csv", "mode,f\n1,2\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_modes_table(d / "bad1.csv", sensors, nullptr);
+            }).find("bad1.csv:1"),
+            std::string::npos);
+  write(d / "bad2.csv", "mode,frequency_hz,zz\n1,2,3\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_modes_table(d / "bad2.csv", sensors, nullptr);
+            }).find("'zz' is not a sensor channel"),
+            std::string::npos);
+  write(d / "bad3.csv", "mode,frequency_hz\n1,2\n1,3\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_modes_table(d / "bad3.csv", sensors, nullptr);
+            }).find("bad3.csv:3: mode 1 twice"),
+            std::string::npos);
+  write(d / "bad4.csv", "mode,frequency_hz\n1,-2\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_modes_table(d / "bad4.csv", sensors, nullptr);
+            }).find("bad4.csv:2"),
             std::string::npos);
 }
 

@@ -1,5 +1,6 @@
 #include "jointlab/correlate/update_files.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -38,8 +39,77 @@ void write_linear_parameters(const std::filesystem::path& path, const LinearUpda
 }
 
 void write_linear_history(const std::filesystem::path& path, const LinearUpdateSummary& s) {
-  std::string t = "iteration,objective\n";
-  for (size_t i = 0; i < s.history.size(); ++i) t += fmt::format("{},{}\n", i, num(s.history[i]));
+  std::string t = "iteration,objective";
+  for (const ParameterReport& p : s.parameters) t += fmt::format(",{}", cell(p.name));
+  t += "\n";
+  for (size_t i = 0; i < s.history.size(); ++i) {
+    t += fmt::format("{},{}", i, num(s.history[i]));
+    if (i < s.theta_history.size()) {
+      for (Eigen::Index k = 0; k < s.theta_history[i].size(); ++k)
+        t += fmt::format(",{}", num(s.theta_history[i](k)));
+    }
+    t += "\n";
+  }
+  data::write_file_atomically(path, t);
+}
+
+void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+  const LinearEvaluation& e = s.final;
+  std::string t = "measured,frequency_hz,model_mode,model_frequency_hz,error,mac\n";
+  for (Eigen::Index i = 0; i < e.measured_frequency_hz.size(); ++i) {
+    const int j = e.pairing.model_for(static_cast<int>(i));
+    if (j < 0) {
+      t += fmt::format("{},{},,,,\n", i + 1, num(e.measured_frequency_hz(i)));
+    } else {
+      t += fmt::format("{},{},{},{},{},{}\n", i + 1, num(e.measured_frequency_hz(i)), j + 1,
+                       num(e.model_frequency_hz(i)), num(e.residuals(i)), num(e.mac(i, j)));
+    }
+  }
+  data::write_file_atomically(path, t);
+}
+
+int mac_columns(const LinearUpdateSummary& s) {
+  const LinearEvaluation& e = s.final;
+  int cols = 0;
+  for (const ModePair& p : e.pairing.pairs) cols = std::max(cols, p.model + 3);
+  const double top = e.measured_frequency_hz.size() ? 1.5 * e.measured_frequency_hz.maxCoeff() : 0;
+  for (Eigen::Index j = 0; j < e.all_model_frequency_hz.size(); ++j) {
+    if (e.all_model_frequency_hz(j) <= top) cols = std::max(cols, static_cast<int>(j) + 1);
+  }
+  return std::min(cols, static_cast<int>(e.mac.cols()));
+}
+
+void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+  const Eigen::MatrixXd& mac = s.final.mac;
+  const int cols = mac_columns(s);
+  std::string t = "measured";
+  for (int j = 0; j < cols; ++j) t += fmt::format(",model{}", j + 1);
+  t += "\n";
+  for (Eigen::Index i = 0; i < mac.rows(); ++i) {
+    t += fmt::format("{}", i + 1);
+    for (int j = 0; j < cols; ++j) t += fmt::format(",{}", num(mac(i, j)));
+    t += "\n";
+  }
+  data::write_file_atomically(path, t);
+}
+
+void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+  const Eigen::Index m = s.final.measured_frequency_hz.size();
+  std::string t = "set,factor,stiffness,rms_error";
+  for (Eigen::Index i = 0; i < m; ++i) t += fmt::format(",error{}", i + 1);
+  t += "\n";
+  for (const ParameterReport& p : s.parameters) {
+    for (size_t k = 0; k < p.sweep_factor.size(); ++k) {
+      t += fmt::format("{},{},{},{}", cell(p.name), num(p.sweep_factor[k]),
+                       num(p.sweep_factor[k] * p.value), num(p.sweep_rms[k]));
+      for (Eigen::Index i = 0; i < m; ++i) {
+        t += ',';
+        if (k < p.sweep_errors.size() && i < p.sweep_errors[k].size())
+          t += num(p.sweep_errors[k](i));
+      }
+      t += "\n";
+    }
+  }
   data::write_file_atomically(path, t);
 }
 
@@ -66,11 +136,20 @@ void write_iwan_history(const std::filesystem::path& path, const IwanUpdateSumma
 }
 
 void write_pareto(const std::filesystem::path& path, const std::vector<ParetoPoint>& front) {
-  std::string t = "gamma,Fs,Kt,chi,beta,linear_error,backbone_cost,dominated\n";
+  size_t modes = 0;
+  for (const ParetoPoint& p : front) modes = std::max(modes, p.mode_errors.size());
+  std::string t = "gamma,Fs,Kt,chi,beta,linear_error,backbone_cost,dominated";
+  for (size_t i = 0; i < modes; ++i) t += fmt::format(",linear_error{}", i + 1);
+  t += "\n";
   for (const ParetoPoint& p : front) {
-    t += fmt::format("{},{},{},{},{},{},{},{}\n", num(p.gamma), num(p.params.Fs), num(p.params.Kt),
+    t += fmt::format("{},{},{},{},{},{},{},{}", num(p.gamma), num(p.params.Fs), num(p.params.Kt),
                      num(p.params.chi), num(p.params.beta), num(p.linear_error),
                      num(p.backbone_cost), p.dominated ? 1 : 0);
+    for (size_t i = 0; i < modes; ++i) {
+      t += ',';
+      if (i < p.mode_errors.size() && p.mode_errors[i]) t += num(*p.mode_errors[i]);
+    }
+    t += "\n";
   }
   data::write_file_atomically(path, t);
 }

@@ -7,9 +7,17 @@
 //   Iwan:   name,initial,final,relative_std,identifiable  for Fs [N], Kt [N/m], chi, beta
 //     (relative_std from the Gauss-Newton covariance, 0 where unknown; identifiable 1 when
 //     0 < relative_std <= identifiable_std).
-// history.csv: linear  iteration,objective  (iteration 0: the start);
+// history.csv: linear  iteration,objective,<set>...  (iteration 0: the start; every set's
+//                      stiffness after each iteration, then each feasible step of the
+//                      smallest rule);
 //              Iwan    evaluation,objective,best.
-// pareto.csv (Iwan, --pareto): gamma,Fs,Kt,chi,beta,linear_error,backbone_cost,dominated.
+// modes.csv (linear): measured,frequency_hz,model_mode,model_frequency_hz,error,mac per
+//   measured mode (error relative, model columns empty when unpaired).
+// mac.csv (linear): measured,model1,...: the MAC matrix at the result (model modes up to 1.5x
+//   the highest measured frequency, and two past the highest paired one).
+// sweeps.csv (linear): set,factor,stiffness,rms_error,error1,...: the one-at-a-time sweeps.
+// pareto.csv (Iwan, --pareto): gamma,Fs,Kt,chi,beta,linear_error,backbone_cost,dominated,
+//   linear_error1,...: every measured linear mode's relative error (empty: unpaired).
 // Numbers print with 10 significant digits; a non-finite number is a bug upstream and
 // throws std::logic_error (never written as NaN).
 #pragma once
@@ -27,6 +35,19 @@ void write_linear_parameters(const std::filesystem::path& path, const LinearUpda
 
 /// Writes the linear update's history.csv.
 void write_linear_history(const std::filesystem::path& path, const LinearUpdateSummary& s);
+
+/// Writes the linear update's modes.csv (per-mode frequency errors).
+void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSummary& s);
+
+/// Model columns mac.csv shows: two past the highest paired model mode, and every model mode up
+/// to 1.5 times the highest measured frequency.
+int mac_columns(const LinearUpdateSummary& s);
+
+/// Writes the linear update's mac.csv (the MAC matrix at the result).
+void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSummary& s);
+
+/// Writes the linear update's sweeps.csv (one-at-a-time sweeps, every mode's error).
+void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSummary& s);
 
 /// Writes the Iwan update's parameters.csv; a parameter is identifiable when its relative
 /// standard deviation is known and at most identifiable_std.

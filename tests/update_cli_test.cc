@@ -209,7 +209,7 @@ TEST(UpdateCli, LinearRecoversIdentifiableStiffnessesAndReportsTheFlatOne) {
   std::ifstream history(dir / "out" / "history.csv");
   std::string header;
   std::getline(history, header);
-  EXPECT_EQ(header, "iteration,objective");
+  EXPECT_EQ(header, "iteration,objective,spring.ka,spring.kb,spring.kflat");
 
   // Bad input: one line, non-zero exit.
   expect_one_line_error(fmt::format("update-linear {}/none.toml {} --set spring.ka --out {}",
@@ -236,6 +236,97 @@ TEST(UpdateCli, LinearRecoversIdentifiableStiffnessesAndReportsTheFlatOne) {
                   (dir / "nothing").string(), (dir / "sensors.csv").string(),
                   (dir / "bad").string()),
       "nothing");
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// CSV file as rows of cells (header included).
+std::vector<std::vector<std::string>> read_csv_cells(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string c;
+    while (std::getline(ss, c, ',')) cells.push_back(c);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    out.push_back(cells);
+  }
+  return out;
+}
+
+// The paper's rule from the command line, and the same update from a plain modes table made
+// from the process run: the table carries the run's frequencies and its shapes made real
+// (the run's complex scaling divided out), so the two updates must agree to solver precision.
+TEST(UpdateCli, SmallestRuleWritesThePapersTablesAndAModesTableGivesTheSameUpdate) {
+  const fs::path dir = testing::scratch_dir("update_linear_smallest_cli");
+  correlate::TwoChainParameters truth;
+  truth.kflat = 3e9;
+  const Hit hit = linear_hit(correlate::two_chain_structure(truth), 6);
+  write_process_output(dir / "measured", {hit});
+  testing::write_text((dir / "sensors.csv").string(), sensors_text());
+  std::string table = "mode,frequency_hz";
+  for (const Sensor& s : kSensors) table += fmt::format(",{}", s.channel);
+  table += "\n";
+  const std::complex<double> phase = std::polar(1.0, -std::arg(std::complex<double>(2e-3, 5e-4)));
+  for (size_t k = 0; k < hit.frequency_hz.size(); ++k) {
+    table += fmt::format("{},{:.17g}", k + 1, hit.frequency_hz[k]);
+    for (Eigen::Index i = 0; i < hit.shape[k].size(); ++i)
+      table += fmt::format(",{:.17g}", (hit.shape[k](i) * phase).real());
+    table += "\n";
+  }
+  testing::write_text((dir / "modes.csv").string(), table);
+  correlate::TwoChainParameters start = truth;
+  start.ka *= 2;
+  start.kb /= 2;
+  start.kflat = 1e9;
+  const std::string model = write_model(dir, correlate::two_chain_structure(start), "start.toml");
+  const std::string args = fmt::format(
+      "--sensors {} --set spring.ka --set spring.kb --set spring.kflat --rule smallest "
+      "--minimize spring.kflat --tolerance 0.01 --bound-factors 1e-4:1e3",
+      (dir / "sensors.csv").string());
+  const testing::CommandResult r =
+      testing::run_jointlab(fmt::format("update-linear {} --measured {} {} --out {}", model,
+                                        (dir / "measured").string(), args, (dir / "run").string()));
+  ASSERT_EQ(r.status, 0) << r.err;
+  SCOPED_TRACE(r.out);
+  for (const char* f : {"modes.csv", "mac.csv", "mac.png", "sweeps.csv", "history.csv"})
+    EXPECT_TRUE(fs::exists(dir / "run" / f)) << f;
+  const auto modes = read_csv_cells(dir / "run" / "modes.csv");
+  ASSERT_EQ(modes.size(), 7u);
+  EXPECT_EQ(modes[0][4], "error");
+  for (size_t i = 1; i < modes.size(); ++i) EXPECT_LE(std::abs(std::stod(modes[i][4])), 0.01);
+  const auto mac = read_csv_cells(dir / "run" / "mac.csv");
+  ASSERT_EQ(mac.size(), 7u);
+  EXPECT_GE(mac[0].size(), 7u);
+  const auto sweeps = read_csv_cells(dir / "run" / "sweeps.csv");
+  EXPECT_EQ(sweeps[0].size(), 4u + 6u);
+  EXPECT_EQ(sweeps.size(), 1u + 3u * 9u);
+
+  const testing::CommandResult t = testing::run_jointlab(
+      fmt::format("update-linear {} --modes-table {} {} --out {}", model,
+                  (dir / "modes.csv").string(), args, (dir / "table").string()));
+  ASSERT_EQ(t.status, 0) << t.err;
+  const auto a = read_parameters(dir / "run" / "parameters.csv");
+  const auto b = read_parameters(dir / "table" / "parameters.csv");
+  for (const char* name : {"spring.ka", "spring.kb", "spring.kflat"}) {
+    EXPECT_TRUE(testing::Close(std::stod(b.at(name).at(2)), std::stod(a.at(name).at(2)), 1e-6))
+        << name;
+  }
+
+  // A lower bound above the smallest feasible value: the set ends there, with a warning.
+  const testing::CommandResult w = testing::run_jointlab(
+      fmt::format("update-linear {} --measured {} {} --bound spring.kflat=2e9:1e11 --out {}", model,
+                  (dir / "measured").string(), args, (dir / "bound").string()));
+  ASSERT_EQ(w.status, 0) << w.err;
+  EXPECT_NE(w.err.find("spring.kflat ends at its lower bound"), std::string::npos) << w.err;
+  expect_one_line_error(fmt::format("update-linear {} --modes-table {} {} --out {}", model,
+                                    (dir / "sensors.csv").string(), args, (dir / "bad").string()),
+                        "sensors.csv:1");
+  expect_one_line_error(
+      fmt::format("update-linear {} --measured {} {} --bound spring.kflat=3 --out {}", model,
+                  (dir / "measured").string(), args, (dir / "bad").string()),
+      "--bound spring.kflat=3");
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
@@ -284,6 +375,26 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   std::string header;
   std::getline(history, header);
   EXPECT_EQ(header, "evaluation,objective,best");
+
+  // --gamma holds K_T at gamma K_s (K_s = the start's 1.5e6); the Pareto table carries both
+  // measured linear modes' errors.
+  const testing::CommandResult g = testing::run_jointlab(fmt::format(
+      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode 1:1 --gamma 0.1 "
+      "--pareto 0.1,0.3333333333 --evaluations 300 --out {}",
+      model, (dir / "measured").string(), (dir / "sensors.csv").string(),
+      (dir / "gamma").string()));
+  ASSERT_EQ(g.status, 0) << g.err;
+  const auto pg = read_parameters(dir / "gamma" / "parameters.csv");
+  EXPECT_TRUE(testing::Close(std::stod(pg.at("Kt").at(2)), 0.1 * 3 * truth.ka, 1e-9));
+  const auto pareto = read_csv_cells(dir / "gamma" / "pareto.csv");
+  ASSERT_EQ(pareto.size(), 3u);
+  ASSERT_EQ(pareto[0].size(), 10u);
+  EXPECT_EQ(pareto[0][8], "linear_error1");
+  EXPECT_TRUE(testing::Close(std::stod(pareto[1][2]), 0.1 * 3 * truth.ka, 1e-9));
+  // gamma 1/3 is the truth: mode 1 (the Iwan joint's) within 0.1 %, mode 2 (chain B) exact.
+  EXPECT_LT(std::abs(std::stod(pareto[2][8])), 1e-3);
+  EXPECT_LT(std::abs(std::stod(pareto[2][9])), 1e-6);
+  EXPECT_GT(std::abs(std::stod(pareto[1][8])), 0.05);  // gamma 0.1: mode 1 far off
 
   expect_one_line_error(
       fmt::format("update-iwan {} --measured {} --sensors {} --set iwan.none --mode 1:1 --out {}",

@@ -127,6 +127,19 @@ Eigen::VectorXd reduced_frequencies_hz(const ReducedModel& m) {
   return frequencies_hz(es.eigenvalues());
 }
 
+Eigen::VectorXd full_elastic_frequencies_hz(const RivetedBeamDescription& d, int n) {
+  const RivetedBeam b = build_riveted_beam(d);
+  const AssembledModel a = b.fe.assemble();
+  const Eigen::SparseMatrix<double> k =
+      with_joints(a.stiffness, b.joints, d, [&](int node, int c) { return a.dof(node, c - 1); });
+  EigenOptions o;
+  o.count = n + 6;
+  o.shift = -1.0;
+  const EigenResult r = lowest_modes(k, a.mass, o);
+  if (!r.summary.ok()) throw InputError("full model eigenvalues: " + r.summary.report);
+  return frequencies_hz(r.eigenvalues.tail(n));
+}
+
 void write_model_directory(const std::filesystem::path& dir, const ReducedModel& m) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);

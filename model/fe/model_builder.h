@@ -83,6 +83,10 @@ Eigen::SparseMatrix<double> with_joints(const ReducedModel& m);
 /// ascending (rigid-body modes near 0); a dense solve of the small reduced problem.
 Eigen::VectorXd reduced_frequencies_hz(const ReducedModel& m);
 
+/// The lowest n elastic natural frequencies [Hz] of the full (unreduced) model with every joint
+/// at its linear stiffness: what the reduction approximates (a sparse shift-invert solve).
+Eigen::VectorXd full_elastic_frequencies_hz(const RivetedBeamDescription& d, int n);
+
 /// Writes M.mtx, K.mtx, dofs.csv and model.toml into dir (created if missing), each file
 /// atomically; InputError when the directory cannot be written.
 void write_model_directory(const std::filesystem::path& dir, const ReducedModel& m);

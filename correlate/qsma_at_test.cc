@@ -1,0 +1,99 @@
+#include "jointlab/correlate/qsma_at.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/two_chain.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::correlate {
+namespace {
+
+double amplitude(const model::QsmaPoint& p, int power) {
+  return p.modal_amplitude * std::pow(2 * std::numbers::pi * p.frequency_hz, power);
+}
+
+// Second method: qsma() marches up in load; its points, converted to amplitudes s = q omega^p,
+// must come back from qsma_at() with the same load, frequency and damping. The curve runs to
+// three times the full-macroslip amplitude, across the knee. Both solve the same static problem
+// to 1e-12 of the forces and qsma_at() places s to 1e-10, so they agree to about 1e-9.
+TEST(QsmaAt, ReproducesQsmaPointsAcrossTheMacroslipKnee) {
+  TwoChainParameters p;
+  p.iwan = true;
+  const model::JointCondensation jc(two_chain_structure(p));
+  model::QsmaSummary qs;
+  const auto automatic = model::qsma(jc, 1, {}, &qs);
+  ASSERT_EQ(qs.termination, model::QsmaTermination::kFullMacroslip);
+  model::QsmaOptions o;
+  o.points = 40;
+  o.q_max = 3 * automatic.back().modal_amplitude;
+  const auto curve = model::qsma(jc, 1, o, &qs);
+  ASSERT_GE(curve.size(), 40u);
+  const double phi_max = jc.phi_max(0);
+  for (int power = 0; power <= 2; ++power) {
+    std::vector<double> s;
+    for (const auto& c : curve) s.push_back(amplitude(c, power));
+    const auto at = qsma_at(jc, 1, power, s);
+    ASSERT_EQ(at.size(), curve.size());
+    int past_knee = 0;
+    for (size_t i = 0; i < curve.size(); ++i) {
+      SCOPED_TRACE(::testing::Message() << "power " << power << ", point " << i);
+      EXPECT_TRUE(at[i].reached);
+      EXPECT_TRUE(testing::Close(amplitude(at[i].point, power), s[i], 1e-9));
+      EXPECT_TRUE(testing::Close(at[i].point.force_amplitude, curve[i].force_amplitude, 1e-8));
+      EXPECT_TRUE(testing::Close(at[i].point.frequency_hz, curve[i].frequency_hz, 1e-9));
+      EXPECT_TRUE(testing::Close(at[i].point.damping_ratio, curve[i].damping_ratio, 1e-8));
+      EXPECT_TRUE(testing::Close(at[i].point.max_slip, curve[i].max_slip, 1e-8));
+      past_knee += curve[i].max_slip > phi_max;
+    }
+    EXPECT_GE(past_knee, 3);  // the comparison covers macroslip
+  }
+}
+
+// A single mass on an Iwan element to ground (and nothing else): the load cannot exceed F_S, so
+// the amplitudes grow without bound as alpha approaches it. Below they are exact.
+TEST(QsmaAt, AmplitudesUpToTheLimitLoad) {
+  model::Model m;
+  m.mass.resize(1, 1);
+  m.stiffness.resize(1, 1);
+  m.mass.insert(0, 0) = 1.0;
+  model::Joint j;
+  j.a = 0;
+  j.element = "iwan.rivet";
+  j.stiffness = 1e6;
+  j.iwan = model::Iwan(10.0, 1e6, -0.5, 1.0);
+  m.joints.push_back(j);
+  model::validate_model(m);
+  const model::JointCondensation jc(m);
+  const int mode = 1;
+  const double phi_max = jc.phi_max(0);
+  const double omega2 = jc.modes().omega2(0);
+  const double ph = std::abs(jc.modes().shapes(0, 0));
+  // Displacement amplitude s = q: deep in microslip (stiffness within (1e-8)^(chi+1) = 1e-4 of
+  // K_T), at phi_max, and 1e6 phi_max.
+  const std::vector<double> s{1e-8 * phi_max / ph, phi_max / ph, 1e6 * phi_max / ph};
+  const auto at = qsma_at(jc, mode, 0, s);
+  ASSERT_EQ(at.size(), 3u);
+  EXPECT_TRUE(at[0].reached);
+  EXPECT_TRUE(testing::Close(at[0].point.modal_amplitude, s[0], 1e-9));
+  EXPECT_TRUE(testing::Close(at[0].point.frequency_hz, std::sqrt(omega2) / (2 * std::numbers::pi),
+                             1e-3));  // microslip: the linear frequency
+  EXPECT_TRUE(at[1].reached);
+  EXPECT_TRUE(testing::Close(at[1].point.max_slip, phi_max, 1e-9));
+  // At phi_max the element carries F_S: alpha phi[0] = F_S.
+  EXPECT_TRUE(testing::Close(at[1].point.force_amplitude * ph, 10.0, 1e-8));
+  // With beta > 0 the force is exactly F_S past phi_max: at alpha phi[0] = F_S every larger
+  // slip is an equilibrium. The far amplitude is either found on that plateau or flagged. (The
+  // static solve balances forces to 1e-12 of K_T u, here 1e6 F_S: the load to about 1e-6.)
+  EXPECT_TRUE(testing::Close(at[2].point.force_amplitude * ph, 10.0, 1e-5));
+  if (at[2].reached) {
+    EXPECT_TRUE(testing::Close(at[2].point.modal_amplitude, s[2], 1e-9));
+  }
+  EXPECT_THROW(qsma_at(jc, 3, 0, s), InputError);
+}
+
+}  // namespace
+}  // namespace jointlab::correlate
