@@ -2,6 +2,7 @@
 // temporary directory, the built program run on them, its CSV, stderr and exit status
 // checked against closed forms and the contract's error rules.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -27,7 +28,9 @@ using testing::Close;
 constexpr double kTwoPi = 2 * std::numbers::pi;
 
 fs::path dir() {
-  const fs::path d = fs::temp_directory_path() / "jointlab_model_commands_test";
+  // One folder per process: ctest runs these tests side by side in separate processes.
+  const fs::path d =
+      fs::temp_directory_path() / ("jointlab_model_commands_test-" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
 }

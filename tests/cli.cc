@@ -22,7 +22,10 @@ std::string slurp(const std::string& path) {
 
 std::string scratch_dir(const std::string& name) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("jointlab_test_" + name);
+  // One folder per process: ctest runs the tests of one program side by side, each in its own
+  // process, and a shared folder would be cleared under another test's feet.
+  const fs::path dir =
+      fs::temp_directory_path() / ("jointlab_test_" + name + "-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();
