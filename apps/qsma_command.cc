@@ -10,10 +10,10 @@
 
 #include "jointlab/apps/commands.h"
 #include "jointlab/core/error.h"
-#include "jointlab/data/table_writer.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/qsma.h"
+#include "jointlab/model/qsma_output.h"
 
 namespace jointlab::apps {
 namespace {
@@ -40,25 +40,7 @@ void run_qsma(const QsmaArgs& args) {
   model::QsmaSummary summary;
   const auto curve = model::qsma(condensed, args.mode, args.options, &summary);
   if (curve.empty()) throw InputError(fmt::format("qsma: {}", summary.message));
-  data::Table table;
-  const auto n = static_cast<Eigen::Index>(curve.size());
-  Eigen::VectorXd f(n), q(n), hz(n), zeta(n), slip(n), rd_hz(n), rd_zeta(n), h_zeta(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const model::QsmaPoint& p = curve[static_cast<size_t>(i)];
-    f(i) = p.force_amplitude, q(i) = p.modal_amplitude, hz(i) = p.frequency_hz;
-    zeta(i) = p.damping_ratio, slip(i) = p.max_slip;
-    rd_hz(i) = p.ringdown_frequency_hz, rd_zeta(i) = p.ringdown_damping_ratio;
-    h_zeta(i) = p.harmonic_damping_ratio;
-  }
-  table.add("force_amplitude", f);
-  table.add("modal_amplitude", q);
-  table.add("frequency_hz", hz);
-  table.add("damping_ratio", zeta);
-  table.add("max_slip", slip);
-  table.add("ringdown_frequency_hz", rd_hz);
-  table.add("ringdown_damping_ratio", rd_zeta);
-  table.add("harmonic_damping_ratio", h_zeta);
-  data::write_table(args.out, table);
+  model::write_qsma_csv(args.out, curve);
   if (summary.termination == model::QsmaTermination::kLimitLoad) {
     fmt::print(stderr, "jointlab qsma: {}\n", summary.message);
   }

@@ -29,12 +29,12 @@
 
 #include <benchmark/benchmark.h>
 
-#include "jointlab/data/table_writer.h"
 #include "jointlab/model/fe/model_builder.h"
 #include "jointlab/model/fe/riveted_beam.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/qsma.h"
+#include "jointlab/model/qsma_output.h"
 #include "jointlab/tests/all_dof_newton.h"
 
 namespace {
@@ -86,25 +86,7 @@ std::vector<model::QsmaPoint> qsma_command() {
   options.points = kPoints;
   model::QsmaSummary summary;
   std::vector<model::QsmaPoint> curve = model::qsma(condensed, 1, options, &summary);
-  data::Table table;
-  const auto n = static_cast<Eigen::Index>(curve.size());
-  Eigen::VectorXd f(n), q(n), hz(n), zeta(n), slip(n), rd_hz(n), rd_zeta(n), h_zeta(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const model::QsmaPoint& p = curve[static_cast<size_t>(i)];
-    f(i) = p.force_amplitude, q(i) = p.modal_amplitude, hz(i) = p.frequency_hz;
-    zeta(i) = p.damping_ratio, slip(i) = p.max_slip;
-    rd_hz(i) = p.ringdown_frequency_hz, rd_zeta(i) = p.ringdown_damping_ratio;
-    h_zeta(i) = p.harmonic_damping_ratio;
-  }
-  table.add("force_amplitude", f);
-  table.add("modal_amplitude", q);
-  table.add("frequency_hz", hz);
-  table.add("damping_ratio", zeta);
-  table.add("max_slip", slip);
-  table.add("ringdown_frequency_hz", rd_hz);
-  table.add("ringdown_damping_ratio", rd_zeta);
-  table.add("harmonic_damping_ratio", h_zeta);
-  data::write_table(work_dir() / "qsma.csv", table);
+  model::write_qsma_csv(work_dir() / "qsma.csv", curve);
   return curve;
 }
 

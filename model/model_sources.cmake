@@ -9,6 +9,7 @@ list(APPEND JOINTLAB_MODEL_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/linear_modes.cc
   ${CMAKE_CURRENT_LIST_DIR}/joint_condensation.cc
   ${CMAKE_CURRENT_LIST_DIR}/qsma.cc
+  ${CMAKE_CURRENT_LIST_DIR}/qsma_output.cc
 )
 list(APPEND JOINTLAB_MODEL_TESTS
   ${CMAKE_CURRENT_LIST_DIR}/iwan_test.cc

@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include "jointlab/core/error.h"
 #include "jointlab/campaign/figures.h"
+#include "jointlab/core/error.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::campaign {
