@@ -3,13 +3,13 @@
 #include <cstdint>
 #include <string>
 
+#include "jointlab/campaign/campaign.h"
 #include "jointlab/core/error.h"
-#include "jointlab/correlate/campaign.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    jointlab::correlate::parse_campaign(std::string(reinterpret_cast<const char*>(data), size),
-                                        "/nonexistent/campaign.toml");
+    jointlab::campaign::parse_campaign(std::string(reinterpret_cast<const char*>(data), size),
+                                       "/nonexistent/campaign.toml");
   } catch (const jointlab::InputError&) {
   }
   return 0;
