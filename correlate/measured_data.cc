@@ -66,6 +66,39 @@ std::vector<std::string> split(const std::string& line) {
   return cells;
 }
 
+// Calls on_header(cells, line) for the first non-empty, non-comment line of a small CSV file
+// and on_row(cells, line) for each later one, after checking it has the header's width;
+// returns whether a header was seen. InputError naming the file ("cannot open the <what>").
+template <typename OnHeader, typename OnRow>
+bool for_each_csv_row(const fs::path& path, const std::string& what, OnHeader on_header,
+                      OnRow on_row) {
+  std::ifstream in(path);
+  const std::string name = path.string();
+  if (!in) throw InputError(fmt::format("{}: cannot open the {}", name, what));
+  std::string line;
+  long n = 0;
+  bool header = false;
+  size_t width = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    line = trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::vector<std::string> cells = split(line);
+    if (!header) {
+      on_header(cells, n);
+      header = true;
+      width = cells.size();
+      continue;
+    }
+    if (cells.size() != width) {
+      throw InputError(
+          where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
+    }
+    on_row(cells, n);
+  }
+  return header;
+}
+
 }  // namespace
 
 ProcessRun read_process_run(const fs::path& dir) {
@@ -182,38 +215,21 @@ MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& s
 }
 
 MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
-  std::ifstream in(path);
   const std::string name = path.string();
-  if (!in) throw InputError(fmt::format("{}: cannot open the backbone file", name));
   const char* wanted[] = {"amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
                           "damping_std"};
   int column[5] = {-1, -1, -1, -1, -1};
   std::vector<double> values[5];
-  std::string line;
-  long n = 0;
-  bool header = false;
-  size_t width = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    line = trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    const std::vector<std::string> cells = split(line);
-    if (!header) {
-      for (int k = 0; k < 5; ++k) {
-        for (size_t c = 0; c < cells.size(); ++c) {
-          if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
-        }
-        if (column[k] < 0)
-          throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
+  const auto on_header = [&](const std::vector<std::string>& cells, long n) {
+    for (int k = 0; k < 5; ++k) {
+      for (size_t c = 0; c < cells.size(); ++c) {
+        if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
       }
-      header = true;
-      width = cells.size();
-      continue;
+      if (column[k] < 0)
+        throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
     }
-    if (cells.size() != width) {
-      throw InputError(
-          where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
-    }
+  };
+  const auto on_row = [&](const std::vector<std::string>& cells, long n) {
     for (int k = 0; k < 5; ++k) {
       const std::string& cell = cells[static_cast<size_t>(column[k])];
       double x = 0;
@@ -233,7 +249,8 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
         throw InputError(where(name, n, fmt::format("{} must be >= 0", wanted[k])));
       values[k].push_back(x);
     }
-  }
+  };
+  const bool header = for_each_csv_row(path, "backbone file", on_header, on_row);
   if (!header) throw InputError(where(name, 0, "empty file, expected a backbone header"));
   if (values[0].empty()) throw InputError(where(name, 0, "no backbone point"));
   MeasuredBackbone b;
@@ -283,49 +300,31 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
 
 MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& sensors,
                                std::vector<int>* modes) {
-  std::ifstream in(path);
   const std::string name = path.string();
-  if (!in) throw InputError(fmt::format("{}: cannot open the modes table", name));
   std::vector<int> row_of_column;  // sensor row of each shape column
   std::vector<int> numbers;
   std::vector<double> freq;
   std::vector<std::vector<double>> shape;
-  std::string line;
-  long n = 0;
-  bool header = false;
-  size_t width = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    line = trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    const std::vector<std::string> cells = split(line);
-    if (!header) {
-      if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
-        throw InputError(where(name, n, "the header must begin with mode,frequency_hz"));
-      }
-      for (size_t c = 2; c < cells.size(); ++c) {
-        int row = -1;
-        for (size_t s = 0; s < sensors.size(); ++s) {
-          if (sensors[s].channel == cells[c]) row = static_cast<int>(s);
-        }
-        if (row < 0) {
-          throw InputError(
-              where(name, n, fmt::format("column '{}' is not a sensor channel", cells[c])));
-        }
-        for (int r : row_of_column) {
-          if (r == row)
-            throw InputError(where(name, n, fmt::format("column '{}' twice", cells[c])));
-        }
-        row_of_column.push_back(row);
-      }
-      header = true;
-      width = cells.size();
-      continue;
+  const auto on_header = [&](const std::vector<std::string>& cells, long n) {
+    if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
+      throw InputError(where(name, n, "the header must begin with mode,frequency_hz"));
     }
-    if (cells.size() != width) {
-      throw InputError(
-          where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
+    for (size_t c = 2; c < cells.size(); ++c) {
+      int row = -1;
+      for (size_t s = 0; s < sensors.size(); ++s) {
+        if (sensors[s].channel == cells[c]) row = static_cast<int>(s);
+      }
+      if (row < 0) {
+        throw InputError(
+            where(name, n, fmt::format("column '{}' is not a sensor channel", cells[c])));
+      }
+      for (int r : row_of_column) {
+        if (r == row) throw InputError(where(name, n, fmt::format("column '{}' twice", cells[c])));
+      }
+      row_of_column.push_back(row);
     }
+  };
+  const auto on_row = [&](const std::vector<std::string>& cells, long n) {
     auto number = [&](size_t c, const char* what) {
       double x = 0;
       size_t used = 0;
@@ -351,14 +350,15 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
     const double f = number(1, "frequency_hz");
     if (!(f > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
     std::vector<double> v(sensors.size(), 0.0);
-    for (size_t c = 2; c < width; ++c) {
+    for (size_t c = 2; c < cells.size(); ++c) {
       if (!cells[c].empty())
         v[static_cast<size_t>(row_of_column[c - 2])] = number(c, "shape entry");
     }
     numbers.push_back(static_cast<int>(mode));
     freq.push_back(f);
     shape.push_back(std::move(v));
-  }
+  };
+  for_each_csv_row(path, "modes table", on_header, on_row);
   if (freq.empty()) throw InputError(fmt::format("{}: no mode in the table", name));
   MeasuredModes out;
   const auto count = static_cast<Eigen::Index>(freq.size());
