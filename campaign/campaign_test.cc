@@ -39,7 +39,7 @@ TEST(Campaign, ReadsTheExample) {
 
 // Each defect names the file and line.
 TEST(Campaign, RejectsDefectsNamingTheLine) {
-  const fs::path dir = fs::temp_directory_path() / "jointlab_campaign_test";
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_campaign_test");
   fs::create_directories(dir);
   std::ofstream(dir / "a.csv") << "# fs: 100\nx\n1\n";
   const fs::path file = dir / "c.toml";

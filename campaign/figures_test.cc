@@ -10,6 +10,7 @@
 #include <plplot.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/test_util.h"
 
 namespace jointlab::campaign {
 namespace {
@@ -29,7 +30,7 @@ std::string head(const fs::path& p, size_t n) {
 }
 
 fs::path scratch() {
-  const fs::path d = fs::temp_directory_path() / "jointlab_figures_test";
+  const fs::path d = jointlab::testing::scratch_folder("jointlab_figures_test");
   fs::create_directories(d);
   return d;
 }

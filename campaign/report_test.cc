@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/test_util.h"
 
 namespace jointlab::campaign {
 namespace {
@@ -33,7 +34,7 @@ TEST(Report, Base64MatchesRfc4648) {
 }
 
 TEST(Report, HtmlIsSelfContainedAndEscaped) {
-  const fs::path dir = fs::temp_directory_path() / "jointlab_report_test";
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_report_test");
   fs::create_directories(dir);
   const std::string png("\x89PNG\r\n\x1a\nfake", 12);
   std::ofstream(dir / "f.png", std::ios::binary) << png;

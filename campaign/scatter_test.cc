@@ -175,7 +175,7 @@ TEST(Scatter, WritesFilesWithoutNaN) {
   std::vector<Curve> curves = {flat_curve("a", 1e-3, 1e-2, 10, 0.01),
                                flat_curve("b", 1e-3, 1e-2, 10.1, 0.011)};
   const ScatterSummary s = summarize_scatter(curves, {});
-  const auto dir = std::filesystem::temp_directory_path() / "jointlab_scatter_test";
+  const auto dir = jointlab::testing::scratch_folder("jointlab_scatter_test");
   std::filesystem::create_directories(dir);
   write_scatter_bins_csv(dir / "bins.csv", s);
   write_scatter_hits_csv(dir / "hits.csv", s);

@@ -15,7 +15,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path dir() {
-  const fs::path d = fs::temp_directory_path() / "jointlab_model_file_test";
+  const fs::path d = jointlab::testing::scratch_folder("jointlab_model_file_test");
   fs::create_directories(d);
   return d;
 }

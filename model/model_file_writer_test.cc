@@ -16,7 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("jointlab_model_file_writer_test_" + name);
+  const fs::path d = jointlab::testing::scratch_folder("jointlab_model_file_writer_test_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

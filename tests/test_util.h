@@ -53,13 +53,18 @@ inline std::string input_error_of(const std::function<void()>& f) {
   return "";
 }
 
-/// A path for a test's file `name` in its own temporary folder `folder`, made per
-/// process (ctest runs the cases of one program side by side).
-inline std::filesystem::path scratch_path(const std::string& folder, const std::string& name) {
+/// A temporary folder named after `folder`, made per process (ctest runs the cases
+/// of one program side by side, so a shared folder would be cleared under them).
+inline std::filesystem::path scratch_folder(const std::string& folder) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / (folder + "-" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  return dir / name;
+  return dir;
+}
+
+/// A path for a test's file `name` in scratch_folder(folder).
+inline std::filesystem::path scratch_path(const std::string& folder, const std::string& name) {
+  return scratch_folder(folder) / name;
 }
 
 /// scratch_path() with `text` written to it.

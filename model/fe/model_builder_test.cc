@@ -73,7 +73,7 @@ TEST(ModelBuilder, WritesAModelDirectoryThatReadsBack) {
   d.source = "coarse.toml";
   const ReducedModel r = build_reduced_model(d, {});
   ASSERT_TRUE(r.summary.ok);
-  const fs::path dir = fs::temp_directory_path() / "jointlab_model_builder_test";
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_model_builder_test");
   fs::remove_all(dir);
   write_model_directory(dir, r);
   const Model m = read_model(dir / "model.toml");
