@@ -419,6 +419,7 @@ Record read_csv(const std::filesystem::path& path) {
   size_t dropped = 0;
   const auto consumed = [&](size_t pos) {
     const size_t upto = pos / static_cast<size_t>(page) * static_cast<size_t>(page);
+    if (upto < dropped) dropped = 0;  // the parser went back for its next pass
     if (upto > dropped + (size_t{1} << 24)) {
       ::madvise(static_cast<char*>(map) + dropped, upto - dropped, MADV_DONTNEED);
       dropped = upto;

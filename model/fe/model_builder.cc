@@ -10,6 +10,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/matrix_market.h"
+#include "jointlab/data/output_stage.h"
 #include "jointlab/model/fe/hcb.h"
 #include "jointlab/model/fe/sparse_eigen.h"
 
@@ -133,12 +134,12 @@ Eigen::VectorXd reduced_frequencies_hz(const ReducedModel& m) {
   return frequencies_hz(es.eigenvalues());
 }
 
-void write_model_directory(const std::filesystem::path& dir, const ReducedModel& m) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec)
-    throw InputError(
-        fmt::format("{}: cannot create the output directory: {}", dir.string(), ec.message()));
+void write_model_directory(const std::filesystem::path& out, const ReducedModel& m) {
+  // The four files appear together, replacing a previous model as a set.
+  data::OutputStage stage(out, "build-model", [](const std::string& name) {
+    return name == "M.mtx" || name == "K.mtx" || name == "dofs.csv" || name == "model.toml";
+  });
+  const std::filesystem::path& dir = stage.path();
   data::write_matrix_market(dir / "M.mtx", m.mass, true);
   data::write_matrix_market(dir / "K.mtx", m.stiffness, true);
 
@@ -172,6 +173,7 @@ void write_model_directory(const std::filesystem::path& dir, const ReducedModel&
                     j.comment, la.node, la.component, lb.node, lb.component, j.a, j.b, j.element);
   }
   data::write_file_atomically(dir / "model.toml", toml);
+  stage.commit();
 }
 
 }  // namespace jointlab::model::fe

@@ -83,8 +83,8 @@ Eigen::SparseMatrix<double> with_joints(const ReducedModel& m);
 /// ascending (rigid-body modes near 0); a dense solve of the small reduced problem.
 Eigen::VectorXd reduced_frequencies_hz(const ReducedModel& m);
 
-/// Writes M.mtx, K.mtx, dofs.csv and model.toml into dir (created if missing), each file
-/// atomically; InputError when the directory cannot be written.
+/// Writes M.mtx, K.mtx, dofs.csv and model.toml into dir (created if missing), together or
+/// not at all (data/output_stage.h); InputError when the directory cannot be written.
 void write_model_directory(const std::filesystem::path& dir, const ReducedModel& m);
 
 }  // namespace jointlab::model::fe
