@@ -265,7 +265,7 @@ Record parse_csv_text(std::string_view text, const std::string& name,
   const size_t data_start = pos;
   size_t max_rows = 0;
   for (size_t at = data_start; at < text.size();) {
-    const size_t chunk = std::min<size_t>(text.size() - at, size_t{1} << 26);
+    const size_t chunk = std::min<size_t>(text.size() - at, size_t{1} << 24);
     max_rows += static_cast<size_t>(std::count(text.data() + at, text.data() + at + chunk, '\n'));
     at += chunk;
     consumed(at);
