@@ -51,10 +51,11 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "jointlab: error: {} (see --help)\n", jointlab::shorten(message, 400));
     return 2;
   } catch (const jointlab::InputError& e) {
-    fmt::print(stderr, "jointlab: error: {}\n", e.what());
+    // Readers cut names in their messages; this bounds whatever else a message quotes.
+    fmt::print(stderr, "jointlab: error: {}\n", jointlab::shorten(e.what(), 2000));
     return 2;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "jointlab: internal error: {}\n", e.what());
+    fmt::print(stderr, "jointlab: internal error: {}\n", jointlab::shorten(e.what(), 2000));
     return 3;
   }
   return 0;

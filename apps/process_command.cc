@@ -3,6 +3,7 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <regex>
 
@@ -97,7 +98,11 @@ void run_process(const ProcessArgs& args) {
   }
 
   // Backbones and summary.json appear together, replacing the previous run's as a set.
-  data::OutputStage stage(args.out, "process", is_process_output);
+  // Backbone-like names count as old outputs only in a folder holding an old summary.json.
+  const bool old_outputs = fs::exists(fs::path(args.out) / "summary.json");
+  data::OutputStage stage(
+      args.out, "process",
+      old_outputs ? is_process_output : std::function<bool(const std::string&)>{});
   const fs::path& out = stage.path();
   // Files are independent: one worker per core, each with its own FFT plans.
   std::vector<modal::RecordResult> results(args.files.size());

@@ -265,7 +265,7 @@ Record parse_csv_text(std::string_view text, const std::string& name,
   const size_t data_start = pos;
   size_t max_rows = 0;
   for (size_t at = data_start; at < text.size();) {
-    const size_t chunk = std::min<size_t>(text.size() - at, size_t{1} << 26);
+    const size_t chunk = std::min<size_t>(text.size() - at, size_t{1} << 24);
     max_rows += static_cast<size_t>(std::count(text.data() + at, text.data() + at + chunk, '\n'));
     at += chunk;
     consumed(at);
@@ -419,6 +419,7 @@ Record read_csv(const std::filesystem::path& path) {
   size_t dropped = 0;
   const auto consumed = [&](size_t pos) {
     const size_t upto = pos / static_cast<size_t>(page) * static_cast<size_t>(page);
+    if (upto < dropped) dropped = 0;  // the parser went back for its next pass
     if (upto > dropped + (size_t{1} << 24)) {
       ::madvise(static_cast<char*>(map) + dropped, upto - dropped, MADV_DONTNEED);
       dropped = upto;

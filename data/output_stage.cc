@@ -53,7 +53,7 @@ void roll_forward(const fs::path& dir, const fs::path& commit_dir, const std::st
   const std::set<std::string> fresh = read_list(manifest);
   std::set<std::string> old = read_list(record);
   std::error_code ec;
-  if (owned) {
+  if (owned && !fs::exists(record)) {  // a folder written before outputs were recorded
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
       if (it->is_regular_file() && owned(name)) old.insert(name);

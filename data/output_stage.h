@@ -23,8 +23,9 @@ namespace jointlab::data {
 class OutputStage {
  public:
   /// Prepares `dir` (created if missing) for the outputs of `command`; `owned` says which
-  /// file names the command writes, so outputs of earlier runs without a manifest are
-  /// replaced as well (none when empty). Throws InputError if `dir` cannot be made.
+  /// file names the command writes, so that in a folder written before outputs were
+  /// recorded (no DIR/.<command>.outputs) the old ones are replaced as well (none when
+  /// empty). Throws InputError if `dir` cannot be made.
   OutputStage(std::filesystem::path dir, std::string command,
               std::function<bool(const std::string&)> owned = {});
   /// Removes the staging folder and everything in it unless committed.

@@ -62,15 +62,27 @@ TEST(OutputStage, CommitReplacesThePreviousSetAsAWhole) {
                                                                {"a.csv", "a1"},
                                                                {"b.csv", "b1"},
                                                                {"keep.txt", "not an output"}}));
-  put(dir / "legacy.csv", "from an older version, before outputs were recorded");
+  put(dir / "mine.csv", "written by the user after the run");
   {
     OutputStage s(dir, "cmd", is_csv);
     put(s.path() / "b.csv", "b2");
     s.commit();
   }
+  EXPECT_EQ(snapshot(dir), (std::map<std::string, std::string>{
+                               {".cmd.outputs", "b.csv\n"},
+                               {"b.csv", "b2"},
+                               {"keep.txt", "not an output"},
+                               {"mine.csv", "written by the user after the run"}}));
+  // A folder of an older version (no record): the command's own names identify its outputs.
+  fs::remove(dir / ".cmd.outputs");
+  {
+    OutputStage s(dir, "cmd", is_csv);
+    put(s.path() / "c.csv", "c3");
+    s.commit();
+  }
   EXPECT_EQ(snapshot(dir),
             (std::map<std::string, std::string>{
-                {".cmd.outputs", "b.csv\n"}, {"b.csv", "b2"}, {"keep.txt", "not an output"}}));
+                {".cmd.outputs", "c.csv\n"}, {"c.csv", "c3"}, {"keep.txt", "not an output"}}));
 }
 
 TEST(OutputStage, AFailureBeforeCommitLeavesThePreviousOutputs) {

@@ -159,6 +159,17 @@ TEST_F(ProcessOutputs, OutputsOfAnOlderVersionAreReplacedToo) {
   EXPECT_TRUE(after.count("other.acc1.band1.csv"));
 }
 
+TEST(ProcessOutputsInAForeignFolder, FilesOfOthersAreKept) {
+  // No summary.json: nothing there was written by process, whatever its name.
+  const std::string dir = scratch_dir("rel_foreign");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  write_text(dir + "/survey.band1.csv", "someone else's");
+  const CommandResult r = run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(slurp(dir + "/survey.band1.csv"), "someone else's");
+  EXPECT_TRUE(fs::exists(dir + "/hit.acc1.band1.csv"));
+}
+
 TEST(Readers, NonUtf8HeaderGivesValidJson) {
   const std::string dir = scratch_dir("rel_utf8");
   write_text(dir + "/hit.csv", ringdown_csv("time,acc\xff\xfe [m/s^2],caf\xc3\xa9 [m/s^2]"));

@@ -10,6 +10,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/matrix_market.h"
+#include "jointlab/data/output_stage.h"
 #include "jointlab/model/fe/hcb.h"
 #include "jointlab/model/model_file_writer.h"
 #include "jointlab/model/sparse_eigen.h"
@@ -140,12 +141,12 @@ Eigen::VectorXd full_elastic_frequencies_hz(const RivetedBeamDescription& d, int
   return frequencies_hz(r.eigenvalues.tail(n));
 }
 
-void write_model_directory(const std::filesystem::path& dir, const ReducedModel& m) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec)
-    throw InputError(
-        fmt::format("{}: cannot create the output directory: {}", dir.string(), ec.message()));
+void write_model_directory(const std::filesystem::path& out, const ReducedModel& m) {
+  // The four files appear together, replacing a previous model as a set.
+  data::OutputStage stage(out, "build-model", [](const std::string& name) {
+    return name == "M.mtx" || name == "K.mtx" || name == "dofs.csv" || name == "model.toml";
+  });
+  const std::filesystem::path& dir = stage.path();
   data::write_matrix_market(dir / "M.mtx", m.mass, true);
   data::write_matrix_market(dir / "K.mtx", m.stiffness, true);
   std::string csv = "node,component\n";
@@ -185,6 +186,7 @@ void write_model_directory(const std::filesystem::path& dir, const ReducedModel&
   }
   write_model_file(dir / "model.toml", model, {dir / "M.mtx", dir / "K.mtx", dir / "dofs.csv"},
                    comments);
+  stage.commit();
 }
 
 }  // namespace jointlab::model::fe

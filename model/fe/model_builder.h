@@ -87,8 +87,8 @@ Eigen::VectorXd reduced_frequencies_hz(const ReducedModel& m);
 /// at its linear stiffness: what the reduction approximates (a sparse shift-invert solve).
 Eigen::VectorXd full_elastic_frequencies_hz(const RivetedBeamDescription& d, int n);
 
-/// Writes M.mtx, K.mtx, dofs.csv and model.toml into dir (created if missing), each file
-/// atomically; InputError when the directory cannot be written.
+/// Writes M.mtx, K.mtx, dofs.csv and model.toml into dir (created if missing), together or
+/// not at all (data/output_stage.h); InputError when the directory cannot be written.
 void write_model_directory(const std::filesystem::path& dir, const ReducedModel& m);
 
 }  // namespace jointlab::model::fe
