@@ -4,6 +4,8 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <optional>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
@@ -21,12 +23,36 @@ constexpr double kMinCoherence = 0.5;
 // Most samples one continued record may take (its spectrum then takes about 1.5 GB).
 constexpr double kMaxSamples = 5e7;
 
-// The band's analytic signal z of channel `channel` at absolute time t, by cubic
-// (Lagrange) interpolation of its baseband: the coarse grid samples the baseband at
-// 8 times its width, where the cubic's error is below 1e-3.
-std::complex<double> band_value(const signal::BandSignal& z, const ChannelSpectrum& channel,
-                                double t) {
-  const double x = (t - channel.t0) / z.dt;
+// What the shape and the nodal test need of one channel in one band: its band signal and
+// the time base and scale of the spectrum it came from. Channels are analysed one at a
+// time and only these (on the band's coarse grid) are kept, never every channel's spectrum.
+struct BandOfChannel {
+  signal::BandSignal z;    // displacement analytic signal times scale, from sample `first`
+  double t0 = 0;           // time of the analysed record's first sample [s]
+  double scale = 1;        // ChannelSpectrum::scale
+  Eigen::Index first = 0;  // coarse-grid index of z.baseband(0)
+};
+
+// Keeps only the samples of c's band signal over the record's time span [begin, end] (and
+// two on either side for the cubic): spans are measured data, never the continuations,
+// which for a short record are far longer than the data.
+void keep_record_span(BandOfChannel& c, double begin, double end) {
+  const Eigen::Index n = c.z.baseband.size();
+  if (n < 4) return;
+  const auto j0 = std::clamp<Eigen::Index>(
+      static_cast<Eigen::Index>(std::floor((begin - c.t0) / c.z.dt)) - 2, 0, n - 4);
+  const auto j1 = std::clamp<Eigen::Index>(
+      static_cast<Eigen::Index>(std::ceil((end - c.t0) / c.z.dt)) + 2, j0 + 3, n - 1);
+  c.z.baseband = Eigen::VectorXcd(c.z.baseband.segment(j0, j1 - j0 + 1));
+  c.first = j0;
+}
+
+// The band's analytic signal of a channel at absolute time t, by cubic (Lagrange)
+// interpolation of its baseband: the coarse grid samples the baseband at 8 times its
+// width, where the cubic's error is below 1e-3.
+std::complex<double> band_value(const BandOfChannel& channel, double t) {
+  const signal::BandSignal& z = channel.z;
+  const double x = (t - channel.t0) / z.dt - static_cast<double>(channel.first);
   const Eigen::Index n = z.baseband.size();
   if (n < 4) return 0.0;
   const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(x)) - 1, 0, n - 4);
@@ -44,29 +70,31 @@ std::complex<double> band_value(const signal::BandSignal& z, const ChannelSpectr
 
 // Channel b's band signal against channel a's over [t1, t2] (a's coarse grid):
 // ratio = a^H b / a^H a, coherence = |a^H b|^2 / (|a|^2 |b|^2), and b's complex
-// amplitude scaled to a's envelope at t1.
+// amplitude scaled to a's envelope at t1; in the record's units (band signals carry their
+// channel's ChannelSpectrum::scale).
 struct Projection {
   std::complex<double> ratio = 0.0;
   double coherence = 0.0;
   std::complex<double> amplitude = 0.0;
 };
 
-Projection projection(const signal::BandSignal& za, const ChannelSpectrum& ca,
-                      const signal::BandSignal& zb, const ChannelSpectrum& cb, double t1,
-                      double t2) {
+Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t1, double t2) {
   Projection p;
   std::complex<double> ab = 0.0;
   double aa = 0, bb = 0;
-  for (double t = t1; t <= t2 + 1e-12; t += za.dt) {
-    const std::complex<double> a = band_value(za, ca, t), b = band_value(zb, cb, t);
+  for (double t = t1; t <= t2 + 1e-12; t += ca.z.dt) {
+    const std::complex<double> a = band_value(ca, t), b = band_value(cb, t);
     ab += std::conj(a) * b;
     aa += std::norm(a);
     bb += std::norm(b);
   }
   if (!(aa > 0) || !(bb > 0) || !std::isfinite(aa) || !std::isfinite(bb)) return p;
   p.ratio = ab / aa;
-  p.coherence = std::norm(ab) / (aa * bb);
-  p.amplitude = p.ratio * std::abs(band_value(za, ca, t1));
+  const double c = std::abs(ab) / std::sqrt(aa) / std::sqrt(bb);  // aa * bb may overflow
+  p.coherence = c * c;
+  p.amplitude = p.ratio * std::abs(band_value(ca, t1)) / cb.scale;
+  p.ratio *= ca.scale / cb.scale;
+  if (!std::isfinite(std::abs(p.amplitude)) || !std::isfinite(std::abs(p.ratio))) return {};
   return p;
 }
 
@@ -223,33 +251,47 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   }
   std::vector<Eigen::Index> impact(all.size());
   for (size_t c = 0; c < all.size(); ++c) impact[c] = impact_index(all[c]->samples);
-  const auto index_of = [&](const data::Channel* ch) {
-    return static_cast<size_t>(std::find(all.begin(), all.end(), ch) - all.begin());
-  };
+  // Where each requested channel is in `all`, and which requests each of `all` answers
+  // (looked up once: records may hold 1e5 channels).
+  std::unordered_map<const data::Channel*, size_t> position;
+  for (size_t c = 0; c < all.size(); ++c) position.emplace(all[c], c);
+  std::vector<size_t> index_of(chans.size());
+  std::vector<std::vector<size_t>> requests(all.size());
+  for (size_t i = 0; i < chans.size(); ++i) {
+    index_of[i] = position.at(chans[i]);
+    requests[index_of[i]].push_back(i);
+  }
   for (size_t b = 0; b < out.bands.size(); ++b) {
     const signal::Band& band = out.bands[b];
     const PrepareOptions prepare = prepare_for({band}, taper, options.prepare);
-    // Band signals of every response channel (for the nodal test and the shape).
-    std::vector<Ringdown> others(all.size());
-    std::vector<ChannelSpectrum> spectra(all.size());
-    for (size_t c = 0; c < all.size(); ++c) {
-      spectra[c] =
-          channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
-    }
+    // Pass 1, every requested channel in turn: its spectrum (dropped before the next
+    // channel's) and backbones; the band signal is kept only where a backbone was found.
+    const double record_end = record.t0 + static_cast<double>(record.size() - 1) / record.fs;
+    const auto band_of = [&](const ChannelSpectrum& spectrum, signal::BandSignal z) {
+      BandOfChannel k{std::move(z), spectrum.t0, spectrum.scale, 0};
+      keep_record_span(k, record.t0, record_end);
+      return k;
+    };
+    const auto measured_by = [&](size_t c) {
+      return all[c]->quantity ? *all[c]->quantity : *options.quantity;
+    };
+    std::vector<std::optional<BandOfChannel>> kept(all.size());
     const size_t first = out.results.size();
-    for (const data::Channel* ch : chans) {
-      const size_t c = index_of(ch);
-      ChannelBand r;
-      r.channel = ch->name;
-      r.measured = ch->quantity ? *ch->quantity : *options.quantity;
-      r.band_index = static_cast<int>(b) + 1;
-      r.ringdown = extract_backbone(spectra[c], r.measured, band, options.ringdown, cache);
-      out.results.push_back(std::move(r));
-    }
+    out.results.resize(first + chans.size());
     for (size_t c = 0; c < all.size(); ++c) {
-      others[c].band =
-          band_signal(spectra[c], all[c]->quantity ? *all[c]->quantity : *options.quantity, band,
-                      options.ringdown, cache);
+      if (requests[c].empty()) continue;
+      const ChannelSpectrum spectrum =
+          channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
+      for (const size_t i : requests[c]) {
+        ChannelBand& r = out.results[first + i];
+        r.channel = all[c]->name;
+        r.measured = measured_by(c);
+        r.band_index = static_cast<int>(b) + 1;
+        r.ringdown = extract_backbone(spectrum, r.measured, band, options.ringdown, cache);
+        if (r.ringdown.summary.status == RingdownStatus::kOk && !kept[c])
+          kept[c] = band_of(spectrum, std::move(r.ringdown.band));
+        r.ringdown.band = signal::BandSignal{};
+      }
     }
     // Reference: the channel with the widest kept span (ties: the first).
     size_t ref = first;
@@ -261,40 +303,55 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     }
     out.reference.push_back(out.results[ref].channel);
     const Ringdown& rr = out.results[ref].ringdown;
-    if (rr.summary.status == RingdownStatus::kOk) {
-      const size_t rc = index_of(record.find(out.results[ref].channel));
-      for (size_t i = first; i < out.results.size(); ++i) {
-        const size_t c = index_of(record.find(out.results[i].channel));
-        out.results[i].complex_amplitude =
-            projection(others[rc].band, spectra[rc], others[c].band, spectra[c],
-                       rr.summary.span_start_s, rr.summary.span_end_s)
-                .amplitude;
+    if (rr.summary.status != RingdownStatus::kOk) continue;  // no shape, no nodal test
+
+    // Pass 2, every response channel against the kept ones: each channel's shape entry
+    // (projected on the reference over its span) and, for each channel with a backbone,
+    // the largest share another coherent channel of the file sees of the mode over that
+    // channel's own span. A channel without a kept band signal is analysed again here and
+    // dropped after its projections, so memory holds only the channels with backbones.
+    const BandOfChannel& reference = *kept[index_of[ref - first]];
+    std::vector<double> share(chans.size(), 1.0);
+    std::vector<size_t> with_backbone;
+    for (size_t i = 0; i < chans.size(); ++i)
+      if (out.results[first + i].ringdown.summary.status == RingdownStatus::kOk)
+        with_backbone.push_back(i);
+    for (size_t d = 0; d < all.size(); ++d) {
+      std::optional<BandOfChannel> again;
+      if (!kept[d]) {
+        const ChannelSpectrum spectrum =
+            channel_spectrum(all[d]->samples, record.fs, record.t0, prepare, cache, impact[d]);
+        again =
+            band_of(spectrum, band_signal(spectrum, measured_by(d), band, options.ringdown, cache));
+      }
+      const BandOfChannel& zd = kept[d] ? *kept[d] : *again;
+      for (const size_t i : requests[d]) {
+        out.results[first + i].complex_amplitude =
+            projection(reference, zd, rr.summary.span_start_s, rr.summary.span_end_s).amplitude;
+      }
+      if (options.min_share == 0) continue;
+      for (const size_t i : with_backbone) {
+        const size_t c = index_of[i];
+        if (c == d) continue;
+        const RingdownSummary& rs = out.results[first + i].ringdown.summary;
+        const Projection p = projection(*kept[c], zd, rs.span_start_s, rs.span_end_s);
+        if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
+          share[i] = std::min(share[i], 1.0 / std::abs(p.ratio));
+        }
       }
     }
     // A channel near a node: some coherent channel of the file sees the mode over
     // this channel's own span more than 1 / min_share times as strongly.
-    for (size_t i = first; i < out.results.size(); ++i) {
-      ChannelBand& r = out.results[i];
-      if (r.ringdown.summary.status != RingdownStatus::kOk || options.min_share == 0) continue;
-      const size_t c = index_of(record.find(r.channel));
-      double share = 1.0;
-      for (size_t d = 0; d < all.size(); ++d) {
-        if (d == c) continue;
-        const Projection p =
-            projection(others[c].band, spectra[c], others[d].band, spectra[d],
-                       r.ringdown.summary.span_start_s, r.ringdown.summary.span_end_s);
-        if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
-          share = std::min(share, 1.0 / std::abs(p.ratio));
-        }
-      }
-      if (!(share < options.min_share)) continue;
+    for (const size_t i : with_backbone) {
+      ChannelBand& r = out.results[first + i];
+      if (!(share[i] < options.min_share)) continue;
       r.ringdown.backbone = Backbone{};
       r.ringdown.summary.status = RingdownStatus::kNoSpan;
       r.ringdown.summary.message = fmt::format(
           "sees this mode at {:.1f} % of the strongest channel's amplitude (below --min-share "
           "{:g} %): near a node the envelope follows the mode shape's change with amplitude, "
           "so no backbone is given (the shape entry is kept)",
-          100 * share, 100 * options.min_share);
+          100 * share[i], 100 * options.min_share);
     }
   }
   return out;

@@ -46,7 +46,7 @@ struct ChannelBand {
   std::string channel;                     ///< channel name
   Quantity measured;                       ///< what the channel measures
   int band_index = 0;                      ///< 1-based band number
-  Ringdown ringdown;                       ///< backbone and summary
+  Ringdown ringdown;                       ///< backbone and summary (its band signal left empty)
   std::complex<double> complex_amplitude;  ///< operating-shape entry [m]
 };
 

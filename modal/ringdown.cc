@@ -170,7 +170,12 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   const Eigen::Index i_peak = impact >= 0 ? std::min(impact, n - 1) : impact_index(x);
   const Eigen::Index i_begin = std::min<Eigen::Index>(
       n - 1, i_peak + static_cast<Eigen::Index>(std::round(options.onset_skip_s * fs)));
-  const Eigen::VectorXd data = x.segment(i_begin, n - i_begin);
+  // Samples of 1e300 are finite but their squares are not (1e-300 likewise underflow): such
+  // a channel is analysed at an exact power-of-two scale and extract_backbone scales back.
+  const double peak = x.segment(i_begin, n - i_begin).cwiseAbs().maxCoeff();
+  const double scale =
+      peak > 1e100 || (peak > 0 && peak < 1e-100) ? std::ldexp(1.0, -std::ilogb(peak)) : 1.0;
+  const Eigen::VectorXd data = x.segment(i_begin, n - i_begin) * scale;
   Eigen::VectorXd y = data.array() - data.mean();
   Eigen::Index guard = 0, lag = 1;
   if (options.lowpass_hz > 0 && 2 * options.lowpass_hz < 0.5 * fs) {
@@ -208,6 +213,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   }
 
   ChannelSpectrum c;
+  c.scale = scale;
   c.n_record = e.samples.size();
   c.n_fft = signal::fast_size(2 * c.n_record);
   c.fs = fs;
@@ -223,27 +229,41 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
 namespace {
 
 // Envelope, its logarithm and the unwrapped phase (carrier restored) of a band
-// signal z(t_j) = baseband_j exp(2 pi i carrier t_j).
+// signal z(t_j) = baseband_j exp(2 pi i carrier t_j), computed up to sample `done`.
 struct EnvelopePhase {
   Eigen::VectorXd amp, log_amp, theta;
+  Eigen::Index done = 0;        // samples computed
+  double prev = 0, offset = 0;  // the unwrapping's state after them
 };
 
-EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz, double dt) {
-  const Eigen::Index m = baseband.size();
-  EnvelopePhase ep{Eigen::VectorXd(m), Eigen::VectorXd(m), Eigen::VectorXd(m)};
-  double prev = 0, offset = 0;
-  for (Eigen::Index j = 0; j < m; ++j) {
+// Computes ep up to sample `count` (sized for the whole baseband; samples already there are
+// kept): a record too short for its band is refused after the first few.
+void envelope_phase_to(EnvelopePhase& ep, const Eigen::VectorXcd& baseband, double carrier_hz,
+                       double dt, Eigen::Index count) {
+  if (ep.amp.size() != baseband.size()) {
+    ep = EnvelopePhase{};
+    ep.amp.resize(baseband.size());
+    ep.log_amp.resize(baseband.size());
+    ep.theta.resize(baseband.size());
+  }
+  for (Eigen::Index j = ep.done; j < std::min(count, baseband.size()); ++j) {
     ep.amp(j) = std::abs(baseband(j));
     ep.log_amp(j) = std::log(std::max(ep.amp(j), 1e-300));
     const double ph = std::arg(baseband(j));
     if (j > 0) {
-      const double d = ph - prev;
-      if (d > std::numbers::pi) offset -= kTwoPi;
-      if (d < -std::numbers::pi) offset += kTwoPi;
+      const double d = ph - ep.prev;
+      if (d > std::numbers::pi) ep.offset -= kTwoPi;
+      if (d < -std::numbers::pi) ep.offset += kTwoPi;
     }
-    prev = ph;
-    ep.theta(j) = ph + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
+    ep.prev = ph;
+    ep.theta(j) = ph + ep.offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
+    ep.done = j + 1;
   }
+}
+
+EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz, double dt) {
+  EnvelopePhase ep;
+  envelope_phase_to(ep, baseband, carrier_hz, dt, baseband.size());
   return ep;
 }
 
@@ -290,7 +310,7 @@ struct GainCorrection {
 // Band signal, noise floor, span and windows of one band (the set-up of the steps).
 BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& band,
                          const RingdownOptions& options, const signal::BandSignal& bs,
-                         const EnvelopePhase& ep) {
+                         EnvelopePhase& ep) {
   BandSetting s(channel, band, options);
   s.dt = bs.dt;
   const Eigen::Index m = bs.baseband.size();
@@ -309,6 +329,7 @@ BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& ban
   // Period from the phase over the first part of the usable span.
   const Eigen::Index a = std::min<Eigen::Index>(m - 1, static_cast<Eigen::Index>(s.start / s.dt));
   const Eigen::Index b = std::min<Eigen::Index>(m - 1, a + std::max<Eigen::Index>(4, m / 20));
+  envelope_phase_to(ep, bs.baseband, bs.carrier_hz, bs.dt, b + 1);
   s.f_guess = b > a ? (ep.theta(b) - ep.theta(a)) / (kTwoPi * static_cast<double>(b - a) * s.dt)
                     : bs.carrier_hz;
   s.period = 1.0 / std::max(s.f_guess, band.lo);
@@ -878,6 +899,27 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
   return notes;
 }
 
+// Amplitudes of a channel analysed at `scale` (ChannelSpectrum::scale) back in the record's
+// units; no backbone if they lie beyond the range of a double.
+void unscale(Ringdown& r, double scale) {
+  Backbone& bb = r.backbone;
+  RingdownSummary& sum = r.summary;
+  bb.amplitude /= scale;
+  bb.displacement /= scale;
+  sum.linear_fit_min /= scale;
+  sum.linear_fit_max /= scale;
+  if (bb.amplitude.allFinite() && bb.displacement.allFinite() && std::isfinite(sum.linear_fit_max))
+    return;
+  r.backbone = Backbone{};
+  const double carrier = sum.carrier_hz, peak_time = sum.peak_time_s;
+  sum = RingdownSummary{};
+  sum.carrier_hz = carrier;
+  sum.peak_time_s = peak_time;
+  sum.message =
+      "the backbone's amplitudes exceed the largest double (1.8e308): check the channel's unit "
+      "and scale";
+}
+
 }  // namespace
 
 signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
@@ -908,8 +950,10 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         "(check the channel for corrupted samples)";
     return out;
   }
-  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
-  const BandSetting s = band_setting(channel, band, options, bs, ep);
+  // The envelope and phase up to where band_setting needs them, the rest only for a
+  // record long enough for the band (many short channels are refused quickly).
+  EnvelopePhase envelope;
+  const BandSetting s = band_setting(channel, band, options, bs, envelope);
   if (s.stop - s.start < 2 * s.w_min) {
     // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
     const std::string advice = spectral_advice(channel, band, options.taper);
@@ -919,8 +963,10 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
     return out;
   }
-  sum.noise_floor_m = noise_floor(ep, s);
-  const double noise = sum.noise_floor_m;
+  envelope_phase_to(envelope, bs.baseband, bs.carrier_hz, bs.dt, bs.baseband.size());
+  const EnvelopePhase& ep = envelope;
+  const double noise = noise_floor(ep, s);
+  sum.noise_floor_m = noise / channel.scale;
 
   // Local estimates along the span: a first pass on the band signal, then, where the
   // band's effect on the mode changes along the span (the mode on a sloping part of
@@ -1015,8 +1061,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         "no span of the envelope stays above {} x the noise floor with a "
         "decaying fit whose damping is known to {:.0f} % (peak envelope "
         "{:.3e} m, noise floor {:.3e} m){}{}{}{}",
-        options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff(), noise,
-        advice.empty() ? "" : "; ", advice, gain_note.empty() ? "" : "; ",
+        options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
+        noise / channel.scale, advice.empty() ? "" : "; ", advice, gain_note.empty() ? "" : "; ",
         gain_note + (weak_note.empty() ? "" : (gain_note.empty() ? "" : "; ") + weak_note));
     return out;
   }
@@ -1034,6 +1080,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   if (!gain_note.empty()) notes.push_back(gain_note);
   if (!weak_note.empty()) notes.push_back(weak_note);
   for (const std::string& note : notes) sum.message += (sum.message.empty() ? "" : "; ") + note;
+  if (channel.scale != 1.0) unscale(out, channel.scale);
   return out;
 }
 

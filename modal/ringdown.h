@@ -140,13 +140,17 @@ struct ChannelSpectrum {
   double data_end_s = 0.0;         ///< last measured sample [s]
   double continued_begin_s = 0.0;  ///< faithful continuation before the data [s]
   double continued_end_s = 0.0;    ///< faithful continuation after the data [s]
+  /// The analysed samples are the record's times this power of two: 1 unless the channel's
+  /// magnitude lies outside [1e-100, 1e100], where squares would overflow or underflow.
+  double scale = 1.0;
 };
 
 /// Backbone, summary and the band's displacement analytic signal.
 struct Ringdown {
-  Backbone backbone;        ///< retained points
+  Backbone backbone;        ///< retained points (amplitudes in the record's units)
   RingdownSummary summary;  ///< span, noise floor, linear values, status
-  signal::BandSignal band;  ///< displacement analytic signal of the band (coarse grid)
+  signal::BandSignal
+      band;  ///< displacement analytic signal of the band times ChannelSpectrum::scale
 };
 
 /// Settling time of a band's filter [s]: its kernel is down to exp(-11) by then, so
@@ -170,7 +174,8 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
                                  const PrepareOptions& options, signal::FftCache& cache,
                                  Eigen::Index impact = -1);
 
-/// The displacement analytic signal of `band` from a channel measuring `measured`.
+/// The displacement analytic signal of `band` from a channel measuring `measured`, times
+/// channel.scale.
 signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
                                const signal::Band& band, const RingdownOptions& options,
                                signal::FftCache& cache);
