@@ -3,8 +3,10 @@
 // reading measured data (correlate/measured_data.h), the updates (linear_update.h,
 // iwan_update.h) and the files written (update_files.h, model/model_file_writer.h) are
 // library code.
+#include <algorithm>
 #include <filesystem>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,7 @@
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/update_files.h"
 #include "jointlab/model/iwan.h"
+#include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/model_file_writer.h"
 
@@ -174,6 +177,8 @@ void run_update_iwan(const IwanArgs& a) {
   const correlate::ProcessRun run = correlate::read_process_run(a.measured);
   std::vector<int> bands;
   const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  const int elastic = linear.size() - linear.rigid_count;
   std::vector<campaign::ModeBackbones> modes;
   for (const std::string& spec : a.modes) {
     correlate::IwanTarget t;
@@ -192,6 +197,21 @@ void run_update_iwan(const IwanArgs& a) {
     }
     if (t.mode < 1 || (colon != std::string::npos && band < 1)) {
       throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
+    }
+    if (t.mode > elastic) {
+      throw InputError(
+          fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes (1 to {})",
+                      spec, t.mode, a.model, elastic, elastic));
+    }
+    if (colon != std::string::npos &&
+        std::none_of(run.bands.begin(), run.bands.end(),
+                     [&](const correlate::ProcessBand& b) { return b.band == band; })) {
+      std::set<int> numbers;
+      for (const correlate::ProcessBand& b : run.bands) numbers.insert(b.band);
+      std::string have;
+      for (int b : numbers) have += (have.empty() ? "" : ", ") + std::to_string(b);
+      throw InputError(fmt::format("--mode {}: {} has no band {} (bands: {})", spec, a.measured,
+                                   band, have.empty() ? "none" : have));
     }
     int col = -1;
     if (colon == std::string::npos) {

@@ -471,6 +471,26 @@ Eigen::Matrix4d covariance(const IwanObjective& objective, const IwanUpdateOptio
   return out;
 }
 
+// The free parameters of v that end within 1e-3 of their range (in the search coordinates x)
+// of a bound, e.g. "Fs at its upper bound 2000 N".
+std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const Vec4& v) {
+  const Box box = initial_box(options);
+  const Vec4 x = to_x(v), lo = to_x(box.lo), hi = to_x(box.hi);
+  static const char* names[] = {"Fs", "gamma (Kt/Ks)", "chi", "beta"};
+  static const char* units[] = {" N", "", "", ""};
+  std::vector<std::string> out;
+  for (int k = 0; k < 4; ++k) {
+    if (!(hi(k) > lo(k))) continue;  // held
+    const double tol = 1e-3 * (hi(k) - lo(k));
+    if (x(k) <= lo(k) + tol) {
+      out.push_back(fmt::format("{} at its lower bound {:.6g}{}", names[k], box.lo(k), units[k]));
+    } else if (x(k) >= hi(k) - tol) {
+      out.push_back(fmt::format("{} at its upper bound {:.6g}{}", names[k], box.hi(k), units[k]));
+    }
+  }
+  return out;
+}
+
 void set_slips(const IwanObjective& objective, IwanUpdateSummary& s) {
   const Eigen::Vector2d slip = objective.slip_range(s.best);
   s.bottom_slip = slip(0);
@@ -513,9 +533,21 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     s.final_cost = objective.cost(start);
     return start;
   }
-  // The start is a candidate too: never hand back parameters that fit worse.
-  const double start_cost =
-      start.Kt == s.start.Kt && start.beta == s.start.beta ? s.initial_cost : objective.cost(start);
+  // The start is a candidate too when it lies in the search box (held parameters at their
+  // values): never hand back parameters that fit worse, nor any outside the given ranges.
+  const Box box = initial_box(options);
+  const double Ks = objective.reference_stiffness();
+  const Vec4 start_v(start.Fs, start.Kt / Ks, start.chi, start.beta);
+  bool start_inside = true;
+  for (int k = 0; k < 4; ++k) {
+    const double slack = 1e-12 * std::max(std::abs(box.lo(k)), std::abs(box.hi(k)));
+    start_inside =
+        start_inside && start_v(k) >= box.lo(k) - slack && start_v(k) <= box.hi(k) + slack;
+  }
+  const double start_cost = !start_inside ? INFINITY
+                            : start.Kt == s.start.Kt && start.beta == s.start.beta
+                                ? s.initial_cost
+                                : objective.cost(start);
   if (start_cost <= tr.best) {
     s.improved = false;
     s.best = start;
@@ -524,8 +556,12 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     set_slips(objective, s);
     return s.best;
   }
-  s.best = to_params(tr.best_v, objective.reference_stiffness());
+  // Inside the box also after the round trip through the search coordinates (exp(log(60))
+  // is 59.99999999999999).
+  tr.best_v = tr.best_v.cwiseMax(box.lo).cwiseMin(box.hi);
+  s.best = to_params(tr.best_v, Ks);
   s.final_cost = tr.best;
+  s.at_bounds = bounds_reached(options, tr.best_v);
   s.linear_error = objective.linear_error(s.best);
   s.covariance = covariance(objective, options, tr.best_v);
   for (int k = 0; k < 4; ++k) {
@@ -542,9 +578,11 @@ std::string IwanUpdateSummary::report() const {
       "Iwan update: {}, {} QSMA evaluations, {} rounds, cost {:.4g} -> {:.4g}, linear frequency "
       "error {:.3g} %\n  Fs {:.6g} -> {:.6g} N, Kt {:.6g} -> {:.6g} N/m, chi {:.4g} -> {:.4g}, "
       "beta {:.4g} -> {:.4g}\n",
-      names[static_cast<int>(status)], evaluations, rounds, initial_cost, final_cost,
-      100 * linear_error, start.Fs, best.Fs, start.Kt, best.Kt, start.chi, best.chi, start.beta,
-      best.beta);
+      status == IwanUpdateStatus::kConverged && !at_bounds.empty()
+          ? "stopped at a bound of the search range"
+          : names[static_cast<int>(status)],
+      evaluations, rounds, initial_cost, final_cost, 100 * linear_error, start.Fs, best.Fs,
+      start.Kt, best.Kt, start.chi, best.chi, start.beta, best.beta);
   if (!improved || status == IwanUpdateStatus::kNoValidPoint) {
     out += fmt::format(
         "  no sample improved on the start: the result is the start{}. {}\n",
@@ -553,6 +591,12 @@ std::string IwanUpdateSummary::report() const {
             ? "Widen the bounds or give a better start."
             : "The Monte Carlo's uniform samples rarely land near the optimum in wide bounds: "
               "use the global-local optimiser (--optimizer global-local).");
+  }
+  if (!at_bounds.empty()) {
+    std::string which;
+    for (const std::string& b : at_bounds) which += (which.empty() ? "" : ", ") + b;
+    out += fmt::format(
+        "  the fit ends at a bound: {}; the best fit may lie outside the range, widen it\n", which);
   }
   if (relative_std.any()) {
     out += fmt::format(

@@ -173,6 +173,8 @@ struct IwanUpdateSummary {
   int rounds = 0;           ///< Monte Carlo rounds or local starts
   IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;  ///< the method used
   bool improved = true;  ///< false: no sample beat the start (held parameters at their values)
+  /// Free parameters that end at a bound of the search box, e.g. "Fs at its upper bound 2000 N".
+  std::vector<std::string> at_bounds;
   /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
   /// unknown or held): with three or more curves the cluster-robust (sandwich) covariance with
   /// one cluster per curve, so the scatter between curves, not the number of points along them,
@@ -192,9 +194,10 @@ struct IwanUpdateSummary {
   std::string report() const;
 };
 
-/// Updates the Iwan set against the objective; returns the best parameters. Held parameters
+/// Updates the Iwan set against the objective; returns the best parameters, always inside the
+/// bounds (the start is a candidate only when it lies inside them). Held parameters
 /// (fixed_gamma, fixed_beta) are held at their values in every candidate, the start included;
-/// status kNoValidPoint when no candidate could be evaluated.
+/// status kNoValidPoint (and the start returned) when no candidate could be evaluated.
 model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
                                   IwanUpdateSummary* summary);
 

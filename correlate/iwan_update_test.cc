@@ -247,8 +247,8 @@ TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   EXPECT_LT(front[1].linear_error, 0.01);
 }
 
-// Started at the truth with a box that excludes it, no Monte Carlo sample beats the start: the
-// summary says so and names the working method. With gamma held the result holds it too.
+// Started at the truth inside the box, no Monte Carlo sample beats the start (cost 0 there):
+// the summary says so and names the working method. With gamma held the result holds it too.
 TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
@@ -256,18 +256,50 @@ TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
                           0.02);
   IwanUpdateOptions o;
   o.optimizer = IwanOptimizer::kPaper;
-  o.bounds = {60, 80, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
+  o.bounds = {10, 40, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
   o.max_evaluations = 200;
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   EXPECT_FALSE(sum.improved);
   EXPECT_EQ(p.Fs, 20.0);
+  EXPECT_TRUE(sum.at_bounds.empty());
   EXPECT_NE(sum.report().find("no sample improved"), std::string::npos) << sum.report();
   EXPECT_NE(sum.report().find("global-local"), std::string::npos) << sum.report();
   // gamma held at 0.8 while the start is at 1: never the start's K_T.
   o.fixed_gamma = 0.8;
   const model::IwanParameters q = update_iwan(obj, o, &sum);
   EXPECT_DOUBLE_EQ(q.Kt, 0.8 * obj.reference_stiffness());
+}
+
+// A box that excludes the truth (F_S = 20 N, the start): the result lies inside the box, never
+// at the better-fitting start; the local search's summary names the bound the fit ends at (the
+// cost falls towards F_S = 20, so F_S ends at the lower bound 60 N) instead of calling it
+// converged.
+TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
+  Synthetic s;
+  const model::Model m = two_chain_structure(s.truth);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 20, 1e-4,
+                          0.02);
+  for (const IwanOptimizer method : {IwanOptimizer::kPaper, IwanOptimizer::kGlobalLocal}) {
+    IwanUpdateOptions o;
+    o.optimizer = method;
+    o.bounds = {60, 80, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
+    o.max_evaluations = 200;
+    IwanUpdateSummary sum;
+    const model::IwanParameters p = update_iwan(obj, o, &sum);
+    EXPECT_GE(p.Fs, 60.0);
+    EXPECT_LE(p.Fs, 80.0);
+    EXPECT_EQ(sum.best.Fs, p.Fs);
+    EXPECT_TRUE(sum.improved);
+    EXPECT_EQ(sum.report().find("no sample improved"), std::string::npos) << sum.report();
+    if (method == IwanOptimizer::kPaper) continue;  // its samples rarely land on a bound
+    ASSERT_FALSE(sum.at_bounds.empty()) << sum.report();
+    EXPECT_EQ(sum.at_bounds.front(), "Fs at its lower bound 60 N") << sum.report();
+    EXPECT_NE(sum.report().find("the fit ends at a bound: Fs at its lower bound 60 N"),
+              std::string::npos)
+        << sum.report();
+    EXPECT_EQ(sum.report().find("converged"), std::string::npos) << sum.report();
+  }
 }
 
 TEST(IwanUpdate, BadInputIsReported) {

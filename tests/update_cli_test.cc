@@ -401,11 +401,29 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
                   model, (dir / "measured").string(), (dir / "sensors.csv").string(),
                   (dir / "bad").string()),
       "iwan.none");
-  expect_one_line_error(
-      fmt::format("update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode 1:4 --out {}",
-                  model, (dir / "measured").string(), (dir / "sensors.csv").string(),
-                  (dir / "bad").string()),
-      "no backbone of band 4");
+  // A range far from the truth (20 N) and the start (60 N): the result lies inside it.
+  const testing::CommandResult far = testing::run_jointlab(fmt::format(
+      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode 1:1 --fs-range "
+      "1000:2000 --evaluations 200 --out {}",
+      model, (dir / "measured").string(), (dir / "sensors.csv").string(), (dir / "far").string()));
+  ASSERT_EQ(far.status, 0) << far.err;
+  const double fs_far = std::stod(read_parameters(dir / "far" / "parameters.csv").at("Fs").at(2));
+  EXPECT_GE(fs_far, 1000.0) << far.out;
+  EXPECT_LE(fs_far, 2000.0) << far.out;
+  // A bound the fit ends at is named, and then the fit is not called converged.
+  if (far.out.find("the fit ends at a bound") != std::string::npos) {
+    EXPECT_EQ(far.out.find("Iwan update: converged"), std::string::npos) << far.out;
+  }
+
+  const std::string iwan = fmt::format(
+      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --out {} ", model,
+      (dir / "measured").string(), (dir / "sensors.csv").string(), (dir / "bad").string());
+  expect_one_line_error(iwan + "--mode 1:4", "measured has no band 4 (bands: 1, 2)");
+  expect_one_line_error(iwan + "--mode 999:1",
+                        "--mode 999:1: model mode 999 does not exist: " + model + " has");
+  expect_one_line_error(iwan + "--mode 999", "--mode 999: model mode 999 does not exist");
+  expect_one_line_error(iwan + "--mode 1:1 --fs-range 2000:1000",
+                        "--fs-range 2000:1000: need LO < HI with both Fs > 0");
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
