@@ -6,7 +6,7 @@
 # fuzz/regressions/<reader>/ (also read by the unit tests) and seed every run.
 #
 #   fuzz/run.sh [seconds per target, default 20] [target ...]
-#     (targets: csv uff58 mat abaqus matrix_market model campaign summary)
+#     (targets: csv uff58 mat abaqus matrix_market model campaign summary process)
 #   JOINTLAB_FUZZ_BUILD=<dir> selects the build directory (default build-fuzz/ in the repo).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -15,7 +15,7 @@ build="${JOINTLAB_FUZZ_BUILD:-$root/build-fuzz}"
 seconds="${1:-20}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(csv uff58 mat abaqus matrix_market model campaign summary)
+[ ${#targets[@]} -eq 0 ] && targets=(csv uff58 mat abaqus matrix_market model campaign summary process)
 
 if ! command -v clang++ >/dev/null 2>&1; then
   echo "fuzz: clang++ not found (Debian package clang-14)" >&2
