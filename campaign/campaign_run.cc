@@ -1,5 +1,7 @@
 #include "jointlab/campaign/campaign_run.h"
 
+#include <set>
+#include <string>
 #include <utility>
 
 #include <fmt/format.h>
@@ -14,6 +16,7 @@
 #include "jointlab/campaign/steps/model_side.h"
 #include "jointlab/campaign/steps/validate.h"
 #include "jointlab/core/error.h"
+#include "jointlab/data/output_stage.h"
 
 namespace jointlab::campaign {
 
@@ -53,23 +56,47 @@ ModelResults model_side(const Campaign& c, CampaignModelData data, const Measure
   return r;
 }
 
+// What `run` writes into its output folder (the staging folder replaces these as a set).
+bool is_run_output(const std::string& name) {
+  static const std::set<std::string> names{"model",   "hits",        "scatter",  "qsma",
+                                           "figures", "report.html", "report.md"};
+  return names.count(name) > 0;
+}
+
+// The previous run's model and hits, copied into the staging folder so that those whose
+// stamps still match are reused (steps/stamp.h) without touching the previous results.
+void carry_over(const fs::path& from, const fs::path& to) {
+  for (const char* name : {"model", "hits"}) {
+    if (!fs::is_directory(from / name)) continue;
+    std::error_code ec;
+    fs::copy(from / name, to / name, fs::copy_options::recursive, ec);
+    if (ec) {
+      throw InputError(
+          where((from / name).string(), 0, "cannot copy the previous results: " + ec.message()));
+    }
+  }
+}
+
 }  // namespace
 
 RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
   RunSummary summary;
   summary.hits = c.hit_count();
-  const fs::path out = fs::absolute(o.out);
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (!fs::is_directory(out))
-    throw InputError(fmt::format("{}: cannot create the output directory", out.string()));
-
+  const fs::path final_out = fs::absolute(o.out);
+  // Every output is written into a staging folder and committed as a set at the end: a run
+  // that fails or is killed leaves the previous results as they were.
+  data::OutputStage stage(final_out, "run", is_run_output);
+  const fs::path& out = stage.path();
   validate_settings(c);
+  if (!o.force) carry_over(final_out, out);
   const fs::path model_file = prepare_model(c, out, o, summary);
   CampaignModelData model_data;
   if (!model_file.empty()) {
     if (o.progress) o.progress(fmt::format("model: reading {}", model_file.string()));
     model_data = validate_model(c, model_file);
+    // The report names the model file where it will be.
+    const fs::path rel = model_file.lexically_relative(out);
+    if (!rel.empty() && *rel.begin() != "..") model_data.file = final_out / rel;
   }
   const std::vector<HitData> hits = process_hits(c, out, o, summary);
   const MeasuredSide measured = summarise_measured(c, hits, out / "scatter", o.progress);
@@ -87,10 +114,11 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
   if (o.progress) o.progress("figures: drawing");
   const CampaignFigures figures = draw_figures(c, measured, with_model, out / "figures");
   const Report report = campaign_report(c, summary, measured, with_model, figures);
-  summary.report_html = out / "report.html";
-  summary.report_markdown = out / "report.md";
-  write_report_html(report, summary.report_html);
-  write_report_markdown(report, summary.report_markdown);
+  write_report_html(report, out / "report.html");
+  write_report_markdown(report, out / "report.md");
+  stage.commit();
+  summary.report_html = final_out / "report.html";
+  summary.report_markdown = final_out / "report.md";
   return summary;
 }
 

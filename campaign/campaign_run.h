@@ -10,6 +10,9 @@
 //   qsma/mode<k>.start.csv, mode<k>.updated.csv  model curves in the measured amplitude
 //   figures/*.png                spectrum, backbones per mode, MAC, frequency errors
 //   report.html, report.md       the report (report.h)
+// Outputs appear as a set (data/output_stage.h): everything is written into a staging folder
+// in OUT and committed at the end, so a run that fails or is killed leaves OUT's previous
+// results as they were; a run that ends with modes without a backbone still commits.
 // Restart: the model and each hit are recomputed only when missing or when their stamp (the
 // content of their input file, every setting they depend on and the program's version,
 // steps/stamp.h) differs; everything after them is cheap and always rewritten. Before any hit

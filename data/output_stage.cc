@@ -56,14 +56,18 @@ void roll_forward(const fs::path& dir, const fs::path& commit_dir, const std::st
   if (owned && !fs::exists(record)) {  // a folder written before outputs were recorded
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
-      if (it->is_regular_file() && owned(name)) old.insert(name);
+      if ((it->is_regular_file() || it->is_directory()) && owned(name)) old.insert(name);
     }
   }
   for (const std::string& name : old) {
-    if (!fresh.count(name) && name.find('/') == std::string::npos) fs::remove(dir / name, ec);
+    if (!fresh.count(name) && name.find('/') == std::string::npos) fs::remove_all(dir / name, ec);
   }
   for (const std::string& name : fresh) {
     if (fs::exists(commit_dir / name)) {
+      // A folder replaces the previous one whole (rename cannot replace a non-empty folder);
+      // killed in between, the next run finishes the move from the commit folder.
+      if (fs::is_directory(commit_dir / name) && fs::exists(dir / name))
+        fs::remove_all(dir / name, ec);
       fs::rename(commit_dir / name, dir / name, ec);
       if (ec)
         throw InputError(
@@ -105,7 +109,7 @@ void OutputStage::commit() {
   std::error_code ec;
   for (fs::directory_iterator it(stage_, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
-    if (!it->is_regular_file() || is_temporary_name(name))
+    if (!(it->is_regular_file() || it->is_directory()) || is_temporary_name(name))
       throw InputError(where((stage_ / name).string(), 0, "unfinished output"));
     names.push_back(name);
   }

@@ -1,7 +1,8 @@
-// A command's output files, which appear in their folder together or not at all.
+// A command's output files and folders, which appear in their folder together or not at all.
 //
 // The command writes every output into a staging folder inside the output folder
-// (DIR/.<command>.stage-XXXXXXXX, claimed while the command runs); commit() lists them
+// (DIR/.<command>.stage-XXXXXXXX, claimed while the command runs; a folder in it replaces
+// the previous folder of its name whole); commit() lists them
 // in a manifest and renames the staging folder to DIR/.<command>.commit, the one atomic
 // step that decides between the old and the new set. It then removes the previous
 // outputs of the command that the new set does not replace, moves the new files into

@@ -85,6 +85,40 @@ TEST(OutputStage, CommitReplacesThePreviousSetAsAWhole) {
                 {".cmd.outputs", "c.csv\n"}, {"c.csv", "c3"}, {"keep.txt", "not an output"}}));
 }
 
+// A folder among the outputs replaces the previous folder of its name whole (none of its
+// old files survive), also when a killed commit is completed by the next run; an owned
+// folder the new set lacks is removed.
+TEST(OutputStage, FoldersReplaceThePreviousFolderWhole) {
+  const fs::path dir = fresh_dir("folders");
+  const auto owned = [](const std::string& n) { return n == "figs" || n == "old"; };
+  fs::create_directories(dir / "old");
+  put(dir / "old" / "x.png", "from an older version");
+  {
+    OutputStage s(dir, "cmd", owned);
+    fs::create_directories(s.path() / "figs" / "sub");
+    put(s.path() / "figs" / "a.png", "a1");
+    put(s.path() / "figs" / "sub" / "b.png", "b1");
+    s.commit();
+  }
+  EXPECT_FALSE(fs::exists(dir / "old"));
+  EXPECT_EQ(slurp(dir / "figs" / "sub" / "b.png"), "b1");
+  {
+    OutputStage s(dir, "cmd", owned);
+    fs::create_directories(s.path() / "figs");
+    put(s.path() / "figs" / "c.png", "c2");
+    s.commit();
+  }
+  EXPECT_EQ(snapshot(dir / "figs"), (std::map<std::string, std::string>{{"c.png", "c2"}}));
+  // Killed after the commit point: the next run moves the new folder into place.
+  fs::create_directories(dir / ".cmd.commit" / "figs");
+  put(dir / ".cmd.commit" / ".manifest", "figs\n");
+  put(dir / ".cmd.commit" / "figs" / "d.png", "d3");
+  { OutputStage next(dir, "cmd", owned); }
+  EXPECT_EQ(snapshot(dir / "figs"), (std::map<std::string, std::string>{{"d.png", "d3"}}));
+  EXPECT_EQ(snapshot(dir),
+            (std::map<std::string, std::string>{{".cmd.outputs", "figs\n"}, {"figs", "<dir>"}}));
+}
+
 TEST(OutputStage, AFailureBeforeCommitLeavesThePreviousOutputs) {
   const fs::path dir = fresh_dir("fail");
   {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -124,6 +125,55 @@ TEST(RunCli, RunIntoAnotherCampaignsFolderEqualsAFreshRun) {
   for (const char* f : {"scatter/mode1.bins.csv", "scatter/mode1.hits.csv", "scatter/mode1.json",
                         "qsma/mode1.start.csv", "hits/all/hit2.acc_5.band1.csv"})
     EXPECT_EQ(read_text(dir / "shared" / f), read_text(dir / "fresh" / f)) << f;
+}
+
+// Every file under `dir` (hidden ones too) with its contents, by path relative to `dir`.
+std::map<std::string, std::string> tree(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    files[fs::relative(e.path(), dir).string()] = e.is_directory() ? "<dir>" : read_text(e.path());
+  return files;
+}
+
+// A run that fails part-way (the band moved, so every hit is processed again, and one hit
+// file broken since the last run) leaves the output folder
+// exactly as the last complete run left it, with no staging folder or temporary; the next
+// good run replaces the set and reuses the unchanged hits.
+TEST(RunCli, AFailedRunLeavesThePreviousResults) {
+  const fs::path dir = testing::scratch_dir("run_cli_failed");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, "");
+  const fs::path out = dir / "out";
+  const std::string cmd = fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string());
+  ASSERT_EQ(testing::run_jointlab(cmd).status, 0);
+  const auto before = tree(out);
+  ASSERT_TRUE(before.count("report.md"));
+  ASSERT_TRUE(before.count(".run.outputs"));
+  // The band moved (every hit is processed again, its outputs rewritten) and hit 2 broken.
+  const std::string good = read_text(s.hits[1]), campaign = read_text(s.campaign);
+  const std::string band = fmt::format("band = [{:.3f}, {:.3f}]", s.band[0], s.band[1]);
+  ASSERT_NE(campaign.find(band), std::string::npos);
+  std::string moved = campaign;
+  moved.replace(
+      moved.find(band), band.size(),
+      fmt::format("band = [{:.3f}, {:.3f}]", 0.92 * s.frequency_hz, 1.08 * s.frequency_hz));
+  testing::write_text(s.campaign.string(), moved);
+  testing::write_text(s.hits[1].string(), "time,acc_5 [m/s^2]\n0,1\n0.001,x\n");
+  const testing::CommandResult bad = testing::run_jointlab(cmd);
+  EXPECT_EQ(bad.status, 2) << bad.err;
+  EXPECT_NE(bad.err.find("'x' is not a number"), std::string::npos) << bad.err;
+  EXPECT_EQ(tree(out), before);
+  testing::write_text(s.campaign.string(), campaign);
+  testing::write_text(s.hits[1].string(), good);
+  const testing::CommandResult again = testing::run_jointlab(cmd);
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_NE(again.out.find("3 up to date"), std::string::npos) << again.out;
+  const auto after = tree(out);
+  for (const auto& [name, text] : before) {
+    if (name.rfind("hits", 0) == 0) {
+      EXPECT_EQ(after.at(name), text) << name;
+    }
+  }
+  EXPECT_EQ(after.size(), before.size());
 }
 
 // The whole campaign is checked before any hit is processed: a typo in an update table, a
