@@ -245,7 +245,7 @@ void run_update_iwan(const IwanArgs& a) {
                 : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
                                              : correlate::IwanOptimizer::kGlobalLocal;
   correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
-                                     o.qsma_points, o.frequency_floor, o.damping_floor);
+                                     o.frequency_floor, o.damping_floor);
   objective.set_linear_modes(measured, 0.6);  // every paired mode's error on the Pareto front
   o.bounds = bounds_of(a, objective);
   if (const std::string e = o.error(); !e.empty()) {

@@ -38,15 +38,14 @@ std::string IwanUpdateOptions::error() const {
   if (!(contraction > 0 && contraction < 1)) return "contraction must be in (0, 1)";
   if (max_evaluations < samples) return "max_evaluations must be >= samples";
   if (local_starts < 1) return "local_starts must be >= 1";
-  if (qsma_points < 4) return "qsma_points must be >= 4";
   if (!(frequency_floor > 0) || !(damping_floor > 0)) return "floors must be > 0";
   return "";
 }
 
 IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
                              const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
-                             AmplitudeQuantity amplitude, int /*qsma_points*/,
-                             double frequency_floor, double damping_floor)
+                             AmplitudeQuantity amplitude, double frequency_floor,
+                             double damping_floor)
     : model_(&model),
       set_(set.starts_with("iwan.") ? set : "iwan." + set),
       sensors_(sensors),

@@ -83,7 +83,6 @@ struct IwanUpdateOptions {
   double contraction = 0.03;      ///< Monte Carlo: bounds contract to +-this around the best
   int max_evaluations = 1500;     ///< budget of QSMA evaluations
   int local_starts = 3;           ///< global-local: Ceres starts from the best samples
-  int qsma_points = 30;           ///< unused: the model is evaluated at each measured amplitude
   double frequency_floor = 1e-4;  ///< sigma_f at least this times f
   double damping_floor = 0.02;    ///< sigma_z at least this times zeta
   unsigned seed = 1;              ///< random seed
@@ -97,12 +96,11 @@ struct IwanUpdateOptions {
 class IwanObjective {
  public:
   /// Prepares the objective; InputError if the set is not an Iwan set of the model, a mode or
-  /// sensor is out of range, or a curve is empty or not positive. qsma_points is unused (the
-  /// model is evaluated at each measured amplitude, qsma_at.h).
+  /// sensor is out of range, or a curve is empty or not positive. The model is evaluated at each
+  /// measured amplitude (qsma_at.h).
   IwanObjective(const model::Model& model, const std::string& set,
                 const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
-                AmplitudeQuantity amplitude, int qsma_points, double frequency_floor,
-                double damping_floor);
+                AmplitudeQuantity amplitude, double frequency_floor, double damping_floor);
   /// K_s: the set's linear stiffness in the model [N/m].
   double reference_stiffness() const { return Ks_; }
   /// The set's parameters in the model.

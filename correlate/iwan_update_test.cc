@@ -32,7 +32,7 @@ struct Synthetic {
 TEST(IwanUpdate, ObjectiveIsSmallAtTheTruthAndLargeAway) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 30, 1e-4,
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
                           0.02);
   const model::IwanParameters truth{20, 5e5, -0.5, 1.0};
   // Noise-only residuals: expected cost ~ 2 (two residuals per point of unit variance / N).
@@ -50,7 +50,7 @@ TEST(IwanUpdate, GlobalLocalRecoversTheParametersFromFarOff) {
   start.chi = -0.1;
   start.beta /= 5;
   const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "iwan.rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 30,
+  const IwanObjective obj(m, "iwan.rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity,
                           1e-4, 0.02);
   IwanUpdateOptions o;
   o.optimizer = IwanOptimizer::kGlobalLocal;
@@ -121,7 +121,7 @@ TEST(IwanUpdate, MacroslipHitsRecoverEveryParameterWithinItsUncertainty) {
   start.chi = -0.3;
   start.beta = 0.5;
   const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 30, 1e-4,
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
                           0.02);
   const model::IwanParameters known{s.truth.Fs, s.truth.ka, s.truth.chi, s.truth.beta};
   // Exact evaluation: the truth's cost is the planted noise's, to the solver's accuracy.
@@ -179,8 +179,7 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
   start.chi = -0.3;
   start.beta = 1.0;
   const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 30, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
   IwanUpdateOptions o;
   o.bounds = {start.Fs / 30, start.Fs * 30, 0.3, 3.0, -0.95, 0.0, 0.01, 100};
   o.fixed_beta = 1.0;
@@ -218,7 +217,7 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
 TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 20, 1e-4,
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
                           0.02);
   IwanUpdateOptions o;
   o.bounds = {5, 80, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
@@ -234,8 +233,7 @@ TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   }
   IwanTarget t = s.target;
   t.linear_frequency_hz = 57.9;
-  const IwanObjective obj2(m, "rivet", s.sensors, {t}, AmplitudeQuantity::kVelocity, 20, 1e-4,
-                           0.02);
+  const IwanObjective obj2(m, "rivet", s.sensors, {t}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
   o.optimizer = IwanOptimizer::kGlobalLocal;
   o.max_evaluations = 200;
   const auto front = pareto_front(obj2, {0.8, 1.0}, o);
@@ -252,7 +250,7 @@ TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
 TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 20, 1e-4,
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
                           0.02);
   IwanUpdateOptions o;
   o.optimizer = IwanOptimizer::kPaper;
@@ -305,9 +303,9 @@ TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
 TEST(IwanUpdate, BadInputIsReported) {
   const model::Model m = two_chain_structure();
   Synthetic s;
-  EXPECT_THROW(IwanObjective(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 20,
-                             1e-4, 0.02),
-               InputError);  // no Iwan set in the linear model
+  EXPECT_THROW(
+      IwanObjective(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02),
+      InputError);  // no Iwan set in the linear model
   IwanUpdateOptions o;
   o.bounds.chi_min = -1.5;
   EXPECT_NE(o.error(), "");

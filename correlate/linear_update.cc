@@ -246,10 +246,9 @@ std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>&
   return out;
 }
 
-Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
-                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
-  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
+namespace {
+
+void check_measured(const std::vector<Sensor>& sensors, const MeasuredModes& measured) {
   if (measured.shapes.rows() != static_cast<Eigen::Index>(sensors.size()) ||
       measured.shapes.cols() != measured.frequency_hz.size()) {
     throw InputError(fmt::format(
@@ -262,57 +261,42 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
       throw InputError(fmt::format("measured mode {}: frequency must be > 0", i + 1));
     }
   }
-  const StiffnessSets sets(model, names);
-  const int n = sets.size();
-  for (int k = 0; k < n; ++k) {
-    if (!(sets.initial()(k) > 0)) {
-      throw InputError(fmt::format("parameter set '{}': starting stiffness must be > 0", names[k]));
-    }
-  }
-  const Eigen::VectorXd start = sets.initial();
-  Eigen::VectorXd lower = start * options.lower_factor, upper = start * options.upper_factor;
-  for (const ParameterBound& b : options.bounds) {
-    const auto it = std::find(names.begin(), names.end(), b.name);
-    if (it == names.end()) {
-      throw InputError(fmt::format("bounds of '{}': not one of the sets updated", b.name));
-    }
-    lower(it - names.begin()) = b.lower;
-    upper(it - names.begin()) = b.upper;
-  }
-  int minimised = -1;
-  if (options.rule == LinearRule::kSmallest) {
-    const auto it = std::find(names.begin(), names.end(), options.smallest_set);
-    if (it == names.end()) {
-      throw InputError(fmt::format("the smallest rule: '{}' is not one of the sets updated",
-                                   options.smallest_set));
-    }
-    minimised = static_cast<int>(it - names.begin());
-  }
-  LinearUpdateSummary local;
-  LinearUpdateSummary& s = summary ? *summary : local;
-  s = LinearUpdateSummary{};
-  const double window = options.frequency_window;
-  auto evaluate = [&](const Eigen::VectorXd& theta) {
-    return evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold, window);
-  };
+}
 
-  // The start, clamped into the bounds.
-  const Eigen::VectorXd begin = start.cwiseMax(lower).cwiseMin(upper);
-  const LinearEvaluation first = evaluate(begin);
-  s.initial_cost = first.cost();
-  if (first.pairing.pairs.empty()) {
-    s.status = LinearUpdateStatus::kTooFewPairs;
-    s.final_cost = s.initial_cost;
-    s.final = first;
-    return begin;
+// The index of `name` among the sets updated; InputError "`what`: ..." if it is not one.
+int set_index(const std::vector<std::string>& names, const std::string& name,
+              const std::string& what) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) {
+    throw InputError(fmt::format("{}: '{}' is not one of the sets updated", what, name));
+  }
+  return static_cast<int>(it - names.begin());
+}
+
+// The updating problem: the sets, the data, the options and the bounds of each set.
+struct LinearProblem {
+  const StiffnessSets& sets;
+  const model::Model& model;
+  const std::vector<std::string>& names;
+  const std::vector<Sensor>& sensors;
+  const MeasuredModes& measured;
+  const LinearUpdateOptions& options;
+  Eigen::VectorXd start, lower, upper;
+
+  int size() const { return sets.size(); }
+
+  LinearEvaluation evaluate(const Eigen::VectorXd& theta) const {
+    return evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold,
+                           options.frequency_window);
   }
 
   // Least squares over the sets not held, from x (ln theta), in the bounds.
-  auto fit = [&](Eigen::VectorXd& x, int held, LinearUpdateSummary* record) {
+  ceres::TerminationType fit(Eigen::VectorXd& x, int held, LinearUpdateSummary* record) const {
+    const int n = size();
     ceres::Problem problem;
-    problem.AddResidualBlock(
-        new LinearCost(sets, model, sensors, measured, options.mac_threshold, window), nullptr,
-        x.data());
+    problem.AddResidualBlock(new LinearCost(sets, model, sensors, measured, options.mac_threshold,
+                                            options.frequency_window),
+                             nullptr, x.data());
     for (int k = 0; k < n; ++k) {
       problem.SetParameterLowerBound(x.data(), k, std::log(lower(k)));
       problem.SetParameterUpperBound(x.data(), k, std::log(upper(k)));
@@ -334,169 +318,247 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     ceres::Solve(so, &problem, &cs);
     if (record) record->iterations += static_cast<int>(cs.iterations.size()) - 1;
     return cs.termination_type;
-  };
-  Eigen::VectorXd x = begin.array().log();
-  const ceres::TerminationType tt = fit(x, -1, &s);
-  if (tt == ceres::CONVERGENCE) {
-    s.status = LinearUpdateStatus::kConverged;
-  } else if (tt == ceres::NO_CONVERGENCE) {
-    s.status = LinearUpdateStatus::kIterationLimit;
-  } else {
-    s.status = LinearUpdateStatus::kFailed;
   }
-  Eigen::VectorXd theta = x.array().exp();
-  LinearEvaluation at = evaluate(theta);
+};
 
-  // Identifiability at the optimum.
+// The problem with the bounds of the options (start x factors, then the named bounds).
+LinearProblem make_problem(const StiffnessSets& sets, const model::Model& model,
+                           const std::vector<std::string>& names,
+                           const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                           const LinearUpdateOptions& options) {
+  for (int k = 0; k < sets.size(); ++k) {
+    if (!(sets.initial()(k) > 0)) {
+      throw InputError(fmt::format("parameter set '{}': starting stiffness must be > 0", names[k]));
+    }
+  }
+  LinearProblem p{sets, model, names, sensors, measured, options, sets.initial(), {}, {}};
+  p.lower = p.start * options.lower_factor;
+  p.upper = p.start * options.upper_factor;
+  for (const ParameterBound& b : options.bounds) {
+    const auto it = std::find(names.begin(), names.end(), b.name);
+    if (it == names.end()) {
+      throw InputError(fmt::format("bounds of '{}': not one of the sets updated", b.name));
+    }
+    p.lower(it - names.begin()) = b.lower;
+    p.upper(it - names.begin()) = b.upper;
+  }
+  return p;
+}
+
+// Per set at the optimum: sensitivity, flat or not, and the standard deviation of the
+// identifiable sets from (J^T J)^{-1} sigma_f^2.
+void report_identifiability(const LinearProblem& p, const LinearEvaluation& at,
+                            LinearUpdateSummary& s) {
+  const int n = p.size();
   s.parameters.resize(n);
   std::vector<int> identifiable;
   for (int k = 0; k < n; ++k) {
-    ParameterReport& p = s.parameters[k];
-    p.name = names[k];
-    p.start = start(k);
-    p.lower = lower(k);
-    p.upper = upper(k);
-    p.sensitivity = at.jacobian.col(k).cwiseAbs().maxCoeff();
-    p.flat = p.sensitivity < options.flat_sensitivity;
-    if (!p.flat) identifiable.push_back(k);
+    ParameterReport& r = s.parameters[k];
+    r.name = p.names[k];
+    r.start = p.start(k);
+    r.lower = p.lower(k);
+    r.upper = p.upper(k);
+    r.sensitivity = at.jacobian.col(k).cwiseAbs().maxCoeff();
+    r.flat = r.sensitivity < p.options.flat_sensitivity;
+    if (!r.flat) identifiable.push_back(k);
   }
-  if (!identifiable.empty()) {
-    Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(identifiable.size()));
-    for (size_t c = 0; c < identifiable.size(); ++c) j.col(c) = at.jacobian.col(identifiable[c]);
-    const Eigen::MatrixXd jtj = j.transpose() * j;
-    Eigen::LDLT<Eigen::MatrixXd> ldlt(jtj);
-    const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols())) *
-                                (options.frequency_std * options.frequency_std);
-    for (size_t c = 0; c < identifiable.size(); ++c) {
-      const double v = cov(c, c);
-      s.parameters[identifiable[c]].relative_std = (v >= 0 && std::isfinite(v)) ? std::sqrt(v) : 0;
-    }
+  if (identifiable.empty()) return;
+  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(identifiable.size()));
+  for (size_t c = 0; c < identifiable.size(); ++c) j.col(c) = at.jacobian.col(identifiable[c]);
+  const Eigen::MatrixXd jtj = j.transpose() * j;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(jtj);
+  const double sf = p.options.frequency_std;
+  const Eigen::MatrixXd cov =
+      ldlt.solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols())) * (sf * sf);
+  for (size_t c = 0; c < identifiable.size(); ++c) {
+    const double v = cov(c, c);
+    s.parameters[identifiable[c]].relative_std = (v >= 0 && std::isfinite(v)) ? std::sqrt(v) : 0;
   }
+}
 
-  // Within the tolerance: every pair kept, every paired error at most the tolerance.
-  const size_t pairs = at.pairing.pairs.size();
-  auto within = [&](const LinearEvaluation& e) {
-    return e.pairing.pairs.size() == pairs && e.max_error() <= options.tolerance;
+// Within the tolerance: every pair of `at` kept, every paired error at most the tolerance.
+auto within_tolerance(const LinearProblem& p, const LinearEvaluation& at) {
+  return [&p, pairs = at.pairing.pairs.size()](const LinearEvaluation& e) {
+    return e.pairing.pairs.size() == pairs && e.max_error() <= p.options.tolerance;
   };
+}
 
-  if (options.rule == LinearRule::kSmallest) {
-    // The paper's rule: the smallest theta_m with the others fitted and every error within.
-    const int k = minimised;
-    if (!within(at)) {
-      s.tolerance_met = false;
-      s.warnings.push_back(fmt::format(
-          "the tolerance {:.3g} % cannot be met: the least-squares fit leaves a largest "
-          "frequency error of {:.3g} %; kept the least-squares result",
-          100 * options.tolerance, 100 * at.max_error()));
+// The paper's rule: the smallest theta_k with the others fitted and every error within the
+// tolerance; x, theta and at move to it.
+void smallest_rule(const LinearProblem& p, int k, Eigen::VectorXd& x, Eigen::VectorXd& theta,
+                   LinearEvaluation& at, LinearUpdateSummary& s) {
+  const auto within = within_tolerance(p, at);
+  if (!within(at)) {
+    s.tolerance_met = false;
+    s.warnings.push_back(
+        fmt::format("the tolerance {:.3g} % cannot be met: the least-squares fit leaves a largest "
+                    "frequency error of {:.3g} %; kept the least-squares result",
+                    100 * p.options.tolerance, 100 * at.max_error()));
+    return;
+  }
+  // feasible(v): fit the others at theta_k = v from the last feasible point.
+  Eigen::VectorXd best = x;
+  auto feasible = [&](double v) {
+    Eigen::VectorXd trial = best;
+    trial(k) = v;
+    p.fit(trial, k, nullptr);
+    try {
+      if (!within(p.evaluate(trial.array().exp()))) return false;
+    } catch (const InputError&) {
+      return false;
+    }
+    best = trial;
+    s.history.push_back(p.evaluate(trial.array().exp()).cost());
+    s.theta_history.push_back(trial.array().exp());
+    return true;
+  };
+  double hi = x(k), lo = std::log(p.lower(k));
+  if (feasible(lo)) {
+    hi = lo;
+  } else {
+    // ln theta to 1e-3: theta_m within 0.1 % of the smallest feasible value.
+    for (int it = 0; it < 60 && hi - lo > 1e-3; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (feasible(mid) ? hi : lo) = mid;
+    }
+  }
+  x = best;
+  theta = x.array().exp();
+  s.parameters[k].smallest_within_tolerance = theta(k);
+  at = p.evaluate(theta);
+}
+
+// The smallest stiffness within the tolerance for each flat set, the others held.
+void smallest_flat(const LinearProblem& p, Eigen::VectorXd& theta, LinearEvaluation& at,
+                   LinearUpdateSummary& s) {
+  const auto within = within_tolerance(p, at);
+  for (int k = 0; k < p.size(); ++k) {
+    if (!s.parameters[k].flat) continue;
+    auto ok = [&](double v) {
+      Eigen::VectorXd t = theta;
+      t(k) = v;
+      try {
+        return within(p.evaluate(t));
+      } catch (const InputError&) {
+        return false;
+      }
+    };
+    if (!ok(theta(k))) continue;
+    double hi = std::log(theta(k));
+    double lo = std::log(p.lower(k));
+    if (ok(std::exp(lo))) {
+      hi = lo;
     } else {
-      // feasible(v): fit the others at theta_k = v from the last feasible point.
-      Eigen::VectorXd best = x;
-      auto feasible = [&](double v) {
-        Eigen::VectorXd trial = best;
-        trial(k) = v;
-        fit(trial, k, nullptr);
-        try {
-          if (!within(evaluate(trial.array().exp()))) return false;
-        } catch (const InputError&) {
-          return false;
-        }
-        best = trial;
-        s.history.push_back(evaluate(trial.array().exp()).cost());
-        s.theta_history.push_back(trial.array().exp());
-        return true;
-      };
-      double hi = x(k), lo = std::log(lower(k));
-      if (feasible(lo)) {
-        hi = lo;
-      } else {
-        // ln theta to 1e-3: theta_m within 0.1 % of the smallest feasible value.
-        for (int it = 0; it < 60 && hi - lo > 1e-3; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          (feasible(mid) ? hi : lo) = mid;
-        }
+      for (int it = 0; it < 40 && hi - lo > 1e-4; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (ok(std::exp(mid)) ? hi : lo) = mid;
       }
-      x = best;
-      theta = x.array().exp();
-      s.parameters[k].smallest_within_tolerance = theta(k);
-      at = evaluate(theta);
     }
-  } else if (options.tolerance > 0) {
-    // The smallest stiffness within the tolerance, for the flat parameters.
-    for (int k = 0; k < n; ++k) {
-      if (!s.parameters[k].flat) continue;
-      auto ok = [&](double v) {
-        Eigen::VectorXd t = theta;
-        t(k) = v;
-        try {
-          return within(evaluate(t));
-        } catch (const InputError&) {
-          return false;
-        }
-      };
-      if (!ok(theta(k))) continue;
-      double hi = std::log(theta(k));
-      double lo = std::log(lower(k));
-      if (ok(std::exp(lo))) {
-        hi = lo;
-      } else {
-        for (int it = 0; it < 40 && hi - lo > 1e-4; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          (ok(std::exp(mid)) ? hi : lo) = mid;
-        }
-      }
-      theta(k) = std::exp(hi);
-      s.parameters[k].smallest_within_tolerance = theta(k);
-    }
-    at = evaluate(theta);
+    theta(k) = std::exp(hi);
+    s.parameters[k].smallest_within_tolerance = theta(k);
   }
+  at = p.evaluate(theta);
+}
 
-  // Bounds reached.
-  for (int k = 0; k < n; ++k) {
-    ParameterReport& p = s.parameters[k];
+// Warns of every set that ends at a bound.
+void warn_bounds(const LinearProblem& p, const Eigen::VectorXd& theta, LinearUpdateSummary& s) {
+  for (int k = 0; k < p.size(); ++k) {
+    ParameterReport& r = s.parameters[k];
     const double lx = std::log(theta(k));
-    if (lx <= std::log(lower(k)) + 1e-6) p.at_bound = -1;
-    if (lx >= std::log(upper(k)) - 1e-6) p.at_bound = 1;
-    if (p.at_bound != 0) {
-      s.warnings.push_back(
-          fmt::format("{} ends at its {} bound {:.6g}: widen the bounds or hold it", p.name,
-                      p.at_bound < 0 ? "lower" : "upper", p.at_bound < 0 ? lower(k) : upper(k)));
-    }
-  }
-
-  // Model modes the sensors cannot tell apart (among modes up to 1.5 x the highest measured).
-  {
-    const double f_top = 1.5 * measured.frequency_hz.maxCoeff();
-    Eigen::Index count = 0;
-    while (count < at.all_model_frequency_hz.size() && at.all_model_frequency_hz(count) <= f_top)
-      ++count;
-    for (const AliasedModes& a :
-         aliased_modes(at.model_at_sensors.leftCols(count), options.alias_mac)) {
+    if (lx <= std::log(p.lower(k)) + 1e-6) r.at_bound = -1;
+    if (lx >= std::log(p.upper(k)) - 1e-6) r.at_bound = 1;
+    if (r.at_bound != 0) {
       s.warnings.push_back(fmt::format(
-          "model modes {} ({:.4g} Hz) and {} ({:.4g} Hz) look alike at the sensors (auto-MAC "
-          "{:.3f}): MAC cannot tell them apart, the frequency window must",
-          a.a + 1, at.all_model_frequency_hz(a.a), a.b + 1, at.all_model_frequency_hz(a.b), a.mac));
+          "{} ends at its {} bound {:.6g}: widen the bounds or hold it", r.name,
+          r.at_bound < 0 ? "lower" : "upper", r.at_bound < 0 ? p.lower(k) : p.upper(k)));
     }
   }
+}
 
-  // One-at-a-time sweeps around the result.
-  for (int k = 0; k < n; ++k) {
-    ParameterReport& p = s.parameters[k];
-    p.value = theta(k);
-    for (int i = 0; i < options.sweep_points; ++i) {
-      const double d =
-          -options.sweep_decades + 2.0 * options.sweep_decades * i / (options.sweep_points - 1);
+// Warns of model modes the sensors cannot tell apart (among modes up to 1.5 x the highest
+// measured).
+void warn_aliased(const LinearProblem& p, const LinearEvaluation& at, LinearUpdateSummary& s) {
+  const double f_top = 1.5 * p.measured.frequency_hz.maxCoeff();
+  Eigen::Index count = 0;
+  while (count < at.all_model_frequency_hz.size() && at.all_model_frequency_hz(count) <= f_top)
+    ++count;
+  for (const AliasedModes& a :
+       aliased_modes(at.model_at_sensors.leftCols(count), p.options.alias_mac)) {
+    s.warnings.push_back(fmt::format(
+        "model modes {} ({:.4g} Hz) and {} ({:.4g} Hz) look alike at the sensors (auto-MAC "
+        "{:.3f}): MAC cannot tell them apart, the frequency window must",
+        a.a + 1, at.all_model_frequency_hz(a.a), a.b + 1, at.all_model_frequency_hz(a.b), a.mac));
+  }
+}
+
+// One-at-a-time sweeps around the result.
+void sweeps(const LinearProblem& p, const Eigen::VectorXd& theta, LinearUpdateSummary& s) {
+  const LinearUpdateOptions& o = p.options;
+  for (int k = 0; k < p.size(); ++k) {
+    ParameterReport& r = s.parameters[k];
+    r.value = theta(k);
+    for (int i = 0; i < o.sweep_points; ++i) {
+      const double d = -o.sweep_decades + 2.0 * o.sweep_decades * i / (o.sweep_points - 1);
       const double f = std::pow(10.0, d);
       Eigen::VectorXd t = theta;
       t(k) *= f;
       try {
-        const LinearEvaluation e = evaluate(t);
-        p.sweep_factor.push_back(f);
-        p.sweep_rms.push_back(rms_error(e));
-        p.sweep_errors.push_back(e.residuals);
+        const LinearEvaluation e = p.evaluate(t);
+        r.sweep_factor.push_back(f);
+        r.sweep_rms.push_back(rms_error(e));
+        r.sweep_errors.push_back(e.residuals);
       } catch (const InputError&) {
       }
     }
   }
+}
+
+LinearUpdateStatus status_of(ceres::TerminationType tt) {
+  if (tt == ceres::CONVERGENCE) return LinearUpdateStatus::kConverged;
+  if (tt == ceres::NO_CONVERGENCE) return LinearUpdateStatus::kIterationLimit;
+  return LinearUpdateStatus::kFailed;
+}
+
+}  // namespace
+
+Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
+                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
+  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
+  check_measured(sensors, measured);
+  const StiffnessSets sets(model, names);
+  const LinearProblem p = make_problem(sets, model, names, sensors, measured, options);
+  const int minimised = options.rule == LinearRule::kSmallest
+                            ? set_index(names, options.smallest_set, "the smallest rule")
+                            : -1;
+  LinearUpdateSummary local;
+  LinearUpdateSummary& s = summary ? *summary : local;
+  s = LinearUpdateSummary{};
+
+  // The start, clamped into the bounds.
+  const Eigen::VectorXd begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
+  const LinearEvaluation first = p.evaluate(begin);
+  s.initial_cost = first.cost();
+  if (first.pairing.pairs.empty()) {
+    s.status = LinearUpdateStatus::kTooFewPairs;
+    s.final_cost = s.initial_cost;
+    s.final = first;
+    return begin;
+  }
+
+  Eigen::VectorXd x = begin.array().log();
+  s.status = status_of(p.fit(x, -1, &s));
+  Eigen::VectorXd theta = x.array().exp();
+  LinearEvaluation at = p.evaluate(theta);
+  report_identifiability(p, at, s);
+  if (options.rule == LinearRule::kSmallest) {
+    smallest_rule(p, minimised, x, theta, at, s);
+  } else if (options.tolerance > 0) {
+    smallest_flat(p, theta, at, s);
+  }
+  warn_bounds(p, theta, s);
+  warn_aliased(p, at, s);
+  sweeps(p, theta, s);
   s.final_cost = at.cost();
   s.final_mac = at.mac;
   s.final = std::move(at);

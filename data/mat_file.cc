@@ -249,62 +249,77 @@ double scalar_field(const Named& f, const std::string& file, const std::string& 
   return (*data)[0];
 }
 
-// Builds the record from the fields of a struct (or the top-level variables).
-Record build_record(const std::vector<Named>& vars, const std::string& file,
-                    const std::string& prefix) {
-  Record rec;
-  rec.source = file;
+// "the file " or "struct 'name' " for messages about a missing part.
+std::string holder(const std::string& prefix) {
+  return prefix.empty() ? "the file " : "struct '" + prefix.substr(0, prefix.size() - 1) + "' ";
+}
+
+// The fields of a struct (or the top-level variables) sorted by their role.
+struct Fields {
   const Named* time = nullptr;
   const Named* fs = nullptr;
   const Named* t0 = nullptr;
   const Named* units = nullptr;
   const Named* names = nullptr;
   std::vector<const Named*> channels;
+  size_t n = 0;  // samples per channel
+};
+
+// A numeric field: a channel (vector of 2 or more samples), metadata (scalar) or ignored.
+void classify_numeric(const Named& v, const std::string& file, const std::string& prefix, Fields& f,
+                      Record& rec, std::vector<std::string>& ignored) {
+  const std::string field = prefix + v.name;
+  const auto count = element_count(v.var);
+  if (count && *count > 0 && !v.var->data) {
+    throw InputError(where(file, 0,
+                           fmt::format("field '{}': data could not be read (truncated "
+                                       "or damaged file){}",
+                                       field, matio_says())));
+  }
+  size_t len = 0;
+  const bool vec = is_vector(v.var, len);
+  if (vec && len >= 2) {
+    if (v.var->isComplex) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}' is complex; a time history is "
+                                         "real",
+                                         field)));
+    }
+    if (!f.channels.empty() && len != f.n) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}' has {} samples, field '{}{}' "
+                                         "{}: channels must share one time base",
+                                         field, len, prefix, f.channels[0]->name, f.n)));
+    }
+    f.n = len;
+    f.channels.push_back(&v);
+  } else if (vec && len == 1 && !v.var->isComplex) {
+    if (auto d = numeric_data(v.var)) rec.metadata[v.name] = fmt::format("{}", (*d)[0]);
+  } else {
+    ignored.push_back(v.name);
+  }
+}
+
+// Sorts the fields by role; scalars and text lines go to rec.metadata, the rest is listed
+// under "ignored".
+Fields classify_fields(const std::vector<Named>& vars, const std::string& file,
+                       const std::string& prefix, Record& rec) {
+  Fields f;
   std::vector<std::string> ignored;
-  size_t n = 0;
   for (const Named& v : vars) {
-    const std::string field = prefix + v.name;
     if (!v.var) continue;
-    if (is_time_name(v.name) && !time && is_numeric(v.var)) {
-      time = &v;
+    if (is_time_name(v.name) && !f.time && is_numeric(v.var)) {
+      f.time = &v;
     } else if (lower(v.name) == "fs") {
-      fs = &v;
+      f.fs = &v;
     } else if (v.name == "t0") {
-      t0 = &v;
+      f.t0 = &v;
     } else if (lower(v.name) == "units") {
-      units = &v;
+      f.units = &v;
     } else if (v.name == "channel_names") {
-      names = &v;
+      f.names = &v;
     } else if (is_numeric(v.var)) {
-      const auto count = element_count(v.var);
-      if (count && *count > 0 && !v.var->data) {
-        throw InputError(where(file, 0,
-                               fmt::format("field '{}': data could not be read (truncated "
-                                           "or damaged file){}",
-                                           field, matio_says())));
-      }
-      size_t len = 0;
-      const bool vec = is_vector(v.var, len);
-      if (vec && len >= 2) {
-        if (v.var->isComplex) {
-          throw InputError(where(file, 0,
-                                 fmt::format("field '{}' is complex; a time history is "
-                                             "real",
-                                             field)));
-        }
-        if (!channels.empty() && len != n) {
-          throw InputError(where(file, 0,
-                                 fmt::format("field '{}' has {} samples, field '{}{}' "
-                                             "{}: channels must share one time base",
-                                             field, len, prefix, channels[0]->name, n)));
-        }
-        n = len;
-        channels.push_back(&v);
-      } else if (vec && len == 1 && !v.var->isComplex) {
-        if (auto d = numeric_data(v.var)) rec.metadata[v.name] = fmt::format("{}", (*d)[0]);
-      } else {
-        ignored.push_back(v.name);
-      }
+      classify_numeric(v, file, prefix, f, rec, ignored);
     } else if (v.var->class_type == MAT_C_CHAR) {
       if (auto text = char_data(v.var); text && text->find('\n') == std::string::npos) {
         rec.metadata[v.name] = *text;
@@ -315,178 +330,216 @@ Record build_record(const std::vector<Named>& vars, const std::string& file,
       ignored.push_back(v.name);
     }
   }
-  if (channels.empty()) {
-    throw InputError(where(
-        file, 0,
-        fmt::format("no channel: {}holds no real numeric vector "
-                    "besides the time base",
-                    prefix.empty() ? "the file "
-                                   : "struct '" + prefix.substr(0, prefix.size() - 1) + "' ")));
+  if (f.channels.empty()) {
+    throw InputError(where(file, 0,
+                           fmt::format("no channel: {}holds no real numeric vector "
+                                       "besides the time base",
+                                       holder(prefix))));
   }
   if (!ignored.empty()) {
     std::string list;
     for (const auto& s : ignored) list += (list.empty() ? "" : ", ") + s;
     rec.metadata["ignored"] = list;
   }
+  return f;
+}
 
-  // Time base.
+// The channel units of the 'units' field (one for all or one each) and the time unit's
+// factor to seconds (the first entry when there is a time vector).
+struct Units {
+  std::vector<std::string> channel;
   double time_scale = 1.0;
-  std::vector<std::string> unit_list;
-  if (units) {
-    auto list = string_list(units->var, true);
-    if (!list) {
+};
+
+Units read_units(const Fields& f, const std::string& file, const std::string& prefix) {
+  Units out;
+  if (!f.units) return out;
+  const std::string& name = f.units->name;
+  auto list = string_list(f.units->var, true);
+  if (!list) {
+    throw InputError(where(file, 0,
+                           fmt::format("field '{}{}' is not text (a char row or a cell"
+                                       " of strings)",
+                                       prefix, name)));
+  }
+  out.channel = *list;
+  const size_t nc = f.channels.size();
+  if (f.time) {
+    if (out.channel.size() != nc + 1 && out.channel.size() != 2) {
       throw InputError(where(file, 0,
-                             fmt::format("field '{}{}' is not text (a char row or a cell"
-                                         " of strings)",
-                                         prefix, units->name)));
+                             fmt::format("field '{}{}' has {} entries; expected the "
+                                         "time unit and then 1 or {} channel units",
+                                         prefix, name, out.channel.size(), nc)));
     }
-    unit_list = *list;
-    if (time) {
-      if (unit_list.size() != channels.size() + 1 && unit_list.size() != 2) {
-        throw InputError(
-            where(file, 0,
-                  fmt::format("field '{}{}' has {} entries; expected the "
-                              "time unit and then 1 or {} channel units",
-                              prefix, units->name, unit_list.size(), channels.size())));
-      }
-      const std::string tu = unit_list.front();
-      unit_list.erase(unit_list.begin());
-      if (tu == "ms") {
-        time_scale = 1e-3;
-      } else if (!tu.empty() && tu != "s") {
-        throw InputError(where(
-            file, 0,
-            fmt::format("field '{}{}': time unit '{}' is not s or ms", prefix, units->name, tu)));
-      }
-    } else if (unit_list.size() != channels.size() && unit_list.size() != 1) {
+    const std::string tu = out.channel.front();
+    out.channel.erase(out.channel.begin());
+    if (tu == "ms") {
+      out.time_scale = 1e-3;
+    } else if (!tu.empty() && tu != "s") {
+      throw InputError(where(
+          file, 0, fmt::format("field '{}{}': time unit '{}' is not s or ms", prefix, name, tu)));
+    }
+  } else if (out.channel.size() != nc && out.channel.size() != 1) {
+    throw InputError(where(file, 0,
+                           fmt::format("field '{}{}' has {} entries; expected 1 or {} "
+                                       "channel units",
+                                       prefix, name, out.channel.size(), nc)));
+  }
+  return out;
+}
+
+// The time vector in seconds, checked finite, increasing and uniform; returns its step.
+double time_vector_step(const Named& time, size_t n, double time_scale, const std::string& file,
+                        const std::string& prefix, double& t_first) {
+  const std::string field = prefix + time.name;
+  size_t len = 0;
+  auto t = numeric_data(time.var);
+  if (!t || !is_vector(time.var, len)) {
+    throw InputError(where(file, 0, fmt::format("field '{}' is not a real numeric vector", field)));
+  }
+  if (len != n) {
+    throw InputError(
+        where(file, 0, fmt::format("field '{}' has {} samples, the channels {}", field, len, n)));
+  }
+  for (double& x : *t) x *= time_scale;
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite((*t)[k])) {
+      throw InputError(
+          where(file, 0, fmt::format("field '{}': sample {} is {}", field, k + 1, (*t)[k])));
+    }
+    if (k > 0 && !((*t)[k] > (*t)[k - 1])) {
       throw InputError(where(file, 0,
-                             fmt::format("field '{}{}' has {} entries; expected 1 or {} "
-                                         "channel units",
-                                         prefix, units->name, unit_list.size(), channels.size())));
+                             fmt::format("field '{}': time {} at sample {} does not "
+                                         "increase (previous {})",
+                                         field, (*t)[k], k + 1, (*t)[k - 1])));
     }
   }
+  const double dt = ((*t)[n - 1] - (*t)[0]) / static_cast<double>(n - 1);
+  for (size_t k = 0; k < n; ++k) {
+    const double expected = (*t)[0] + static_cast<double>(k) * dt;
+    if (std::abs((*t)[k] - expected) > 0.1 * dt) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}': time step is not uniform: t = {}"
+                                         " at sample {} where {} was expected",
+                                         field, (*t)[k], k + 1, expected)));
+    }
+  }
+  if (!std::isfinite(1.0 / dt)) {
+    throw InputError(where(file, 0, fmt::format("field '{}': no usable time step", field)));
+  }
+  t_first = (*t)[0];
+  return dt;
+}
+
+// Sets rec.fs and rec.t0 from the 'time' vector, the 'fs' and 't0' scalars.
+void set_time_base(Record& rec, const Fields& f, double time_scale, const std::string& file,
+                   const std::string& prefix) {
   std::optional<double> fs_value;
-  if (fs) {
-    fs_value = scalar_field(*fs, file, prefix);
+  if (f.fs) {
+    fs_value = scalar_field(*f.fs, file, prefix);
     if (!std::isfinite(*fs_value) || *fs_value <= 0) {
       throw InputError(where(file, 0,
                              fmt::format("field '{}{}': {} Hz is not a positive sampling "
                                          "rate",
-                                         prefix, fs->name, *fs_value)));
+                                         prefix, f.fs->name, *fs_value)));
     }
   }
-  if (t0) {
-    rec.t0 = scalar_field(*t0, file, prefix);
+  if (f.t0) {
+    rec.t0 = scalar_field(*f.t0, file, prefix);
     if (!std::isfinite(rec.t0)) {
-      throw InputError(where(file, 0, fmt::format("field '{}{}' is not finite", prefix, t0->name)));
+      throw InputError(
+          where(file, 0, fmt::format("field '{}{}' is not finite", prefix, f.t0->name)));
     }
   }
-  if (time) {
-    const std::string field = prefix + time->name;
-    size_t len = 0;
-    auto t = numeric_data(time->var);
-    if (!t || !is_vector(time->var, len)) {
-      throw InputError(
-          where(file, 0, fmt::format("field '{}' is not a real numeric vector", field)));
-    }
-    if (len != n) {
-      throw InputError(
-          where(file, 0, fmt::format("field '{}' has {} samples, the channels {}", field, len, n)));
-    }
-    for (double& x : *t) x *= time_scale;
-    for (size_t k = 0; k < n; ++k) {
-      if (!std::isfinite((*t)[k])) {
-        throw InputError(
-            where(file, 0, fmt::format("field '{}': sample {} is {}", field, k + 1, (*t)[k])));
-      }
-      if (k > 0 && !((*t)[k] > (*t)[k - 1])) {
-        throw InputError(where(file, 0,
-                               fmt::format("field '{}': time {} at sample {} does not "
-                                           "increase (previous {})",
-                                           field, (*t)[k], k + 1, (*t)[k - 1])));
-      }
-    }
-    const double dt = ((*t)[n - 1] - (*t)[0]) / static_cast<double>(n - 1);
-    for (size_t k = 0; k < n; ++k) {
-      const double expected = (*t)[0] + static_cast<double>(k) * dt;
-      if (std::abs((*t)[k] - expected) > 0.1 * dt) {
-        throw InputError(where(file, 0,
-                               fmt::format("field '{}': time step is not uniform: t = {}"
-                                           " at sample {} where {} was expected",
-                                           field, (*t)[k], k + 1, expected)));
-      }
-    }
-    if (!std::isfinite(1.0 / dt)) {
-      throw InputError(where(file, 0, fmt::format("field '{}': no usable time step", field)));
-    }
+  if (f.time) {
+    double t_first = 0;
+    const double dt = time_vector_step(*f.time, f.n, time_scale, file, prefix, t_first);
     if (fs_value && std::abs(*fs_value - 1.0 / dt) > 1e-3 * *fs_value) {
-      throw InputError(where(file, 0,
-                             fmt::format("field '{}{}' = {} Hz disagrees with field '{}' "
-                                         "({} Hz)",
-                                         prefix, fs->name, *fs_value, field, 1.0 / dt)));
+      throw InputError(
+          where(file, 0,
+                fmt::format("field '{}{}' = {} Hz disagrees with field '{}{}' "
+                            "({} Hz)",
+                            prefix, f.fs->name, *fs_value, prefix, f.time->name, 1.0 / dt)));
     }
     rec.fs = fs_value ? *fs_value : 1.0 / dt;
-    if (!t0) rec.t0 = (*t)[0];
+    if (!f.t0) rec.t0 = t_first;
   } else if (fs_value) {
     rec.fs = *fs_value;
   } else {
-    throw InputError(where(
-        file, 0,
-        fmt::format("no time base: {}has no 'time' vector and no 'fs'"
-                    " scalar",
-                    prefix.empty() ? "the file "
-                                   : "struct '" + prefix.substr(0, prefix.size() - 1) + "' ")));
+    throw InputError(where(file, 0,
+                           fmt::format("no time base: {}has no 'time' vector and no 'fs'"
+                                       " scalar",
+                                       holder(prefix))));
   }
+}
+
+// One channel field as an SI channel named from 'channel_names' (or the field).
+Channel make_channel(const Named& v, const std::string& name, const std::string& unit_text,
+                     const Fields& f, const std::string& file, const std::string& prefix) {
+  const std::string field = prefix + v.name;
+  auto data = numeric_data(v.var);
+  if (!data || data->size() != f.n) {
+    throw InputError(
+        where(file, 0, fmt::format("field '{}': data could not be read{}", field, matio_says())));
+  }
+  for (size_t k = 0; k < f.n; ++k) {
+    if (!std::isfinite((*data)[k])) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}': sample {} is {} (NaN and Inf are"
+                                         " not allowed)",
+                                         field, k + 1, (*data)[k])));
+    }
+  }
+  Channel ch;
+  ch.name = name;
+  double scale = 1.0;
+  if (!unit_text.empty()) {
+    const auto unit = parse_unit(unit_text);
+    if (!unit) {
+      throw InputError(where(file, 0,
+                             fmt::format("field '{}{}': unknown unit '{}' for "
+                                         "channel '{}' (known: m, mm, um, in, m/s, "
+                                         "mm/s, in/s, m/s^2, mm/s^2, g, mg, N, kN, "
+                                         "lbf)",
+                                         prefix, f.units->name, unit_text, ch.name)));
+    }
+    ch.quantity = unit->quantity;
+    ch.unit = unit_text;
+    scale = unit->to_si;
+  }
+  ch.samples =
+      Eigen::Map<const Eigen::VectorXd>(data->data(), static_cast<Eigen::Index>(f.n)) * scale;
+  return ch;
+}
+
+// Builds the record from the fields of a struct (or the top-level variables).
+Record build_record(const std::vector<Named>& vars, const std::string& file,
+                    const std::string& prefix) {
+  Record rec;
+  rec.source = file;
+  const Fields f = classify_fields(vars, file, prefix, rec);
+  const Units units = read_units(f, file, prefix);
+  set_time_base(rec, f, units.time_scale, file, prefix);
 
   std::vector<std::string> channel_names;
-  if (names) {
-    auto list = string_list(names->var, false);
-    if (list && list->size() == channels.size()) channel_names = *list;
+  if (f.names) {
+    auto list = string_list(f.names->var, false);
+    if (list && list->size() == f.channels.size()) channel_names = *list;
   }
-  for (size_t c = 0; c < channels.size(); ++c) {
-    const Named& v = *channels[c];
-    const std::string field = prefix + v.name;
-    auto data = numeric_data(v.var);
-    if (!data || data->size() != n) {
-      throw InputError(
-          where(file, 0, fmt::format("field '{}': data could not be read{}", field, matio_says())));
-    }
-    for (size_t k = 0; k < n; ++k) {
-      if (!std::isfinite((*data)[k])) {
-        throw InputError(where(file, 0,
-                               fmt::format("field '{}': sample {} is {} (NaN and Inf are"
-                                           " not allowed)",
-                                           field, k + 1, (*data)[k])));
-      }
-    }
-    Channel ch;
-    ch.name = channel_names.empty() || channel_names[c].empty() ? v.name : channel_names[c];
-    double scale = 1.0;
-    if (!unit_list.empty()) {
-      const std::string& u = unit_list.size() == 1 ? unit_list[0] : unit_list[c];
-      if (!u.empty()) {
-        const auto unit = parse_unit(u);
-        if (!unit) {
-          throw InputError(where(file, 0,
-                                 fmt::format("field '{}{}': unknown unit '{}' for "
-                                             "channel '{}' (known: m, mm, um, in, m/s, "
-                                             "mm/s, in/s, m/s^2, mm/s^2, g, mg, N, kN, "
-                                             "lbf)",
-                                             prefix, units->name, u, ch.name)));
-        }
-        ch.quantity = unit->quantity;
-        ch.unit = u;
-        scale = unit->to_si;
-      }
-    }
+  for (size_t c = 0; c < f.channels.size(); ++c) {
+    const Named& v = *f.channels[c];
+    const std::string name =
+        channel_names.empty() || channel_names[c].empty() ? v.name : channel_names[c];
+    const std::string unit = units.channel.empty()       ? std::string()
+                             : units.channel.size() == 1 ? units.channel[0]
+                                                         : units.channel[c];
+    Channel ch = make_channel(v, name, unit, f, file, prefix);
     for (const Channel& other : rec.channels) {
       if (other.name == ch.name) {
-        throw InputError(
-            where(file, 0, fmt::format("field '{}': two channels named '{}'", field, ch.name)));
+        throw InputError(where(
+            file, 0, fmt::format("field '{}{}': two channels named '{}'", prefix, v.name, name)));
       }
     }
-    ch.samples =
-        Eigen::Map<const Eigen::VectorXd>(data->data(), static_cast<Eigen::Index>(n)) * scale;
     rec.channels.push_back(std::move(ch));
   }
   return rec;

@@ -1,7 +1,6 @@
 #include "jointlab/data/stepped_sine.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -10,13 +9,13 @@
 #include <numeric>
 #include <sstream>
 
-#include <csv.h>
 #include <fmt/format.h>
 #include <matio.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
 #include "jointlab/data/atomic_file.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/data/mat_file.h"
 #include "jointlab/data/read_record.h"
 
@@ -29,15 +28,6 @@ std::string control_name(SineControl c) {
 namespace {
 
 constexpr Eigen::Index kMinRows = 5;
-
-std::optional<double> to_double(std::string_view s) {
-  s = trim(s);
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  double v = 0;
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size()) return std::nullopt;
-  return v;
-}
 
 std::optional<SineControl> parse_control(std::string_view text) {
   const std::string t = lower(trim(text));
@@ -123,52 +113,158 @@ SteppedSineTable finish(Raw raw, const std::string& file, const std::string& fie
 // ---------------------------------------------------------------------------------------------
 // CSV
 
-struct RowCollector {
-  std::vector<std::string> fields;
-  static void on_field(void* data, size_t len, void* self) {
-    static_cast<RowCollector*>(self)->fields.emplace_back(
-        data ? static_cast<const char*>(data) : "", data ? len : 0);
-  }
-  static void on_row(int, void*) {}
+// The fields of one line; an empty last field (a trailing delimiter) is dropped.
+std::vector<std::string> split_fields(CsvLineSplitter& splitter, std::string_view line) {
+  std::vector<std::string> fields = splitter.split(line);
+  if (fields.size() > 1 && trim(fields.back()).empty()) fields.pop_back();
+  return fields;
+}
+
+// Where the columns of a stepped-sine CSV are and the SI factors of their units.
+struct CsvColumns {
+  long line = 0;
+  std::vector<std::string> header;
+  int f = -1, force = -1, response = -1, phase = -1, level = -1, control = -1;
+  double force_si = 1, response_si = 1, phase_si = 1;
+  Quantity response_quantity = Quantity::kAcceleration;
 };
 
-// Splits one line into fields with libcsv (quotes handled by the library).
-std::vector<std::string> split_line(std::string_view line, char delim) {
-  csv_parser p{};
-  csv_init(&p, CSV_APPEND_NULL);
-  csv_set_delim(&p, static_cast<unsigned char>(delim));
-  RowCollector row;
-  csv_parse(&p, line.data(), line.size(), RowCollector::on_field, RowCollector::on_row, &row);
-  csv_fini(&p, RowCollector::on_field, RowCollector::on_row, &row);
-  csv_free(&p);
-  if (row.fields.size() > 1 && trim(row.fields.back()).empty()) row.fields.pop_back();
-  return row.fields;
+double force_unit(const std::string& unit, const std::string& file, long line) {
+  if (unit.empty()) return 1.0;
+  const auto u = parse_unit(unit);
+  if (!u || u->quantity != Quantity::kForce) {
+    throw InputError(where(
+        file, line,
+        fmt::format("column 'force': '{}' is not a force unit (N, kN, lbf)", printable(unit))));
+  }
+  return u->to_si;
 }
 
-char detect_delimiter(std::string_view header) {
-  char best = ',';
-  long best_count = 0;
-  for (char c : {',', ';', '\t'}) {
-    const long n = std::count(header.begin(), header.end(), c);
-    if (n > best_count) best = c, best_count = n;
+void response_unit(CsvColumns& cols, const std::string& unit, std::optional<Quantity> quantity,
+                   const std::string& file) {
+  if (unit.empty()) {
+    if (!quantity) {
+      throw InputError(where(file, cols.line,
+                             "column 'response' has no unit: write e.g. 'response [m/s^2]' "
+                             "(or give --quantity)"));
+    }
+    cols.response_quantity = *quantity;
+    return;
   }
-  return best;
+  const auto u = parse_unit(unit);
+  if (!u || u->quantity == Quantity::kForce) {
+    throw InputError(where(file, cols.line,
+                           fmt::format("column 'response': '{}' is not a displacement, "
+                                       "velocity or acceleration unit (m, mm, m/s, m/s^2, g, ...)",
+                                       printable(unit))));
+  }
+  cols.response_quantity = u->quantity;
+  cols.response_si = u->to_si;
 }
 
-// "name [unit]" -> name, unit (empty when none).
-std::pair<std::string, std::string> split_header(std::string_view field, const std::string& file,
-                                                 long line) {
-  field = trim(field);
-  const auto open = field.find('[');
-  if (open == std::string_view::npos) return {lower(field), ""};
-  const auto close = field.find(']', open);
-  if (close == std::string_view::npos || !trim(field.substr(close + 1)).empty()) {
-    throw InputError(
-        where(file, line,
-              fmt::format("header '{}': unit must be written as 'name [unit]'", printable(field))));
+double phase_unit(const std::string& unit, const std::string& file, long line) {
+  const auto f = phase_factor(unit);
+  if (!f) {
+    throw InputError(where(file, line,
+                           fmt::format("column 'phase': unit '{}' is not deg or rad (write "
+                                       "'phase [deg]' or 'phase [rad]')",
+                                       printable(unit))));
   }
-  return {lower(trim(field.substr(0, open))),
-          std::string(trim(field.substr(open + 1, close - open - 1)))};
+  return *f;
+}
+
+CsvColumns read_columns(std::vector<std::string> header, long line, const std::string& file,
+                        std::optional<Quantity> quantity) {
+  CsvColumns cols;
+  cols.line = line;
+  cols.header = std::move(header);
+  for (size_t i = 0; i < cols.header.size(); ++i) {
+    auto [col, unit] = split_name_unit(cols.header[i], file, line);
+    col = lower(col);
+    auto take = [&](int& slot) {
+      if (slot >= 0) throw InputError(where(file, line, fmt::format("two '{}' columns", col)));
+      slot = static_cast<int>(i);
+    };
+    if (col == "frequency_hz" || (col == "frequency" && lower(unit) == "hz")) {
+      take(cols.f);
+    } else if (col == "frequency") {
+      throw InputError(
+          where(file, line, fmt::format("column 'frequency': unit '{}' is not Hz", unit)));
+    } else if (col == "force") {
+      take(cols.force);
+      cols.force_si = force_unit(unit, file, line);
+    } else if (col == "response") {
+      take(cols.response);
+      response_unit(cols, unit, quantity, file);
+    } else if (col == "phase") {
+      take(cols.phase);
+      cols.phase_si = phase_unit(unit, file, line);
+    } else if (col == "level") {
+      take(cols.level);
+    } else if (col == "control") {
+      take(cols.control);
+    }
+  }
+  const std::pair<int, const char*> required[] = {{cols.f, "frequency_hz"},
+                                                  {cols.force, "force"},
+                                                  {cols.response, "response"},
+                                                  {cols.phase, "phase"}};
+  for (const auto& [c, what] : required) {
+    if (c < 0) {
+      throw InputError(where(file, line,
+                             fmt::format("no '{}' column (need frequency_hz, force [N], "
+                                         "response [unit], phase [deg|rad])",
+                                         what)));
+    }
+  }
+  return cols;
+}
+
+// One data row into its level's table; new levels are added in order of first appearance.
+void add_row(const std::vector<std::string>& cells, long line, const CsvColumns& cols,
+             const std::string& file, const std::map<std::string, std::string>& metadata,
+             std::vector<Raw>& raws, std::vector<std::string>& level_keys) {
+  const auto cell = [&](int c) -> const std::string& { return cells[static_cast<size_t>(c)]; };
+  auto number = [&](int c) {
+    const auto v = parse_double(cell(c));
+    if (!v || !std::isfinite(*v)) {
+      throw InputError(where(
+          file, line,
+          fmt::format("column '{}': '{}' is not a finite number",
+                      printable(trim(cols.header[static_cast<size_t>(c)])), printable(cell(c)))));
+    }
+    return *v;
+  };
+  const std::string key = cols.level >= 0 ? std::string(trim(cell(cols.level))) : "";
+  if (cols.level >= 0 && key.empty()) throw InputError(where(file, line, "empty level"));
+  const size_t k = std::find(level_keys.begin(), level_keys.end(), key) - level_keys.begin();
+  if (k == level_keys.size()) {
+    level_keys.push_back(key);
+    raws.emplace_back();
+    const auto file_level = metadata.find("level");
+    raws.back().label = cols.level >= 0                ? "level " + key
+                        : file_level != metadata.end() ? "level " + file_level->second
+                                                       : "level 1";
+  }
+  Raw& r = raws[k];
+  if (cols.control >= 0) {
+    const auto c = parse_control(cell(cols.control));
+    if (!c) {
+      throw InputError(where(
+          file, line,
+          fmt::format("control '{}' is not 'response' or 'force'", printable(cell(cols.control)))));
+    }
+    if (r.control && *r.control != *c) {
+      throw InputError(
+          where(file, line, fmt::format("{} changes control within the level", r.label)));
+    }
+    r.control = c;
+  }
+  r.f.push_back(number(cols.f));
+  r.force.push_back(number(cols.force));
+  r.response.push_back(number(cols.response));
+  r.phase.push_back(number(cols.phase));
+  r.lines.push_back(line);
 }
 
 }  // namespace
@@ -176,198 +272,56 @@ std::pair<std::string, std::string> split_header(std::string_view field, const s
 std::vector<SteppedSineTable> parse_stepped_sine_csv(const std::string& text_in,
                                                      const std::string& name,
                                                      std::optional<Quantity> quantity) {
-  std::string_view text = text_in;
-  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  const std::string_view text = strip_bom(text_in);
   if (trim(text).empty()) throw InputError(where(name, 0, "empty file"));
   if (text.find('\0') != std::string_view::npos) {
     throw InputError(where(name, 0, "binary data, not a CSV text file"));
   }
   std::map<std::string, std::string> metadata;
   std::optional<SineControl> file_control;
-  size_t pos = 0;
-  long line_no = 0;
-  std::string_view line;
-  auto next_line = [&] {
-    if (pos >= text.size()) return false;
-    const size_t end = text.find('\n', pos);
-    const size_t stop = end == std::string_view::npos ? text.size() : end;
-    line = text.substr(pos, stop - pos);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos = stop + 1;
-    ++line_no;
-    return true;
-  };
-  bool have_header = false;
-  while (next_line()) {
-    const std::string_view t = trim(line);
-    if (t.empty()) continue;
-    if (t.front() == '#') {
-      const std::string_view body = trim(t.substr(1));
-      const auto colon = body.find(':');
-      if (colon == std::string_view::npos) continue;
-      const std::string key = lower(trim(body.substr(0, colon)));
-      const std::string value(trim(body.substr(colon + 1)));
-      if (key.empty()) continue;
-      metadata[key] = value;
-      if (key == "control") {
+  TextLines lines(text);
+  const std::string_view header_row =
+      read_preamble(lines, name, [&](const std::string& key, const std::string& value) {
+        metadata[key] = value;
+        if (key != "control") return;
         file_control = parse_control(value);
         if (!file_control) {
           throw InputError(
-              where(name, line_no,
+              where(name, lines.line_no(),
                     fmt::format("control '{}' is not 'response' or 'force'", printable(value))));
         }
-      }
-      continue;
-    }
-    have_header = true;
-    break;
-  }
-  if (!have_header) throw InputError(where(name, line_no, "no header row"));
-  const long header_line = line_no;
-  const char delim = detect_delimiter(line);
-  const std::vector<std::string> header = split_line(line, delim);
-  int c_f = -1, c_force = -1, c_resp = -1, c_phase = -1, c_level = -1, c_control = -1;
-  double force_si = 1, response_si = 1, phase_si = 1;
-  Quantity resp_q = Quantity::kAcceleration;
-  for (size_t i = 0; i < header.size(); ++i) {
-    const auto [col, unit] = split_header(header[i], name, header_line);
-    const int c = static_cast<int>(i);
-    auto take = [&](int& slot) {
-      if (slot >= 0) {
-        throw InputError(where(name, header_line, fmt::format("two '{}' columns", col)));
-      }
-      slot = c;
-    };
-    if (col == "frequency_hz" || (col == "frequency" && lower(unit) == "hz")) {
-      take(c_f);
-    } else if (col == "frequency") {
-      throw InputError(
-          where(name, header_line, fmt::format("column 'frequency': unit '{}' is not Hz", unit)));
-    } else if (col == "force") {
-      take(c_force);
-      if (!unit.empty()) {
-        const auto u = parse_unit(unit);
-        if (!u || u->quantity != Quantity::kForce) {
-          throw InputError(
-              where(name, header_line,
-                    fmt::format("column 'force': '{}' is not a force unit (N, kN, lbf)",
-                                printable(unit))));
-        }
-        force_si = u->to_si;
-      }
-    } else if (col == "response") {
-      take(c_resp);
-      if (unit.empty()) {
-        if (!quantity) {
-          throw InputError(where(name, header_line,
-                                 "column 'response' has no unit: write e.g. 'response [m/s^2]' "
-                                 "(or give --quantity)"));
-        }
-        resp_q = *quantity;
-      } else {
-        const auto u = parse_unit(unit);
-        if (!u || u->quantity == Quantity::kForce) {
-          throw InputError(
-              where(name, header_line,
-                    fmt::format("column 'response': '{}' is not a displacement, "
-                                "velocity or acceleration unit (m, mm, m/s, m/s^2, g, ...)",
-                                printable(unit))));
-        }
-        resp_q = u->quantity;
-        response_si = u->to_si;
-      }
-    } else if (col == "phase") {
-      take(c_phase);
-      const auto f = phase_factor(unit);
-      if (!f) {
-        throw InputError(where(name, header_line,
-                               fmt::format("column 'phase': unit '{}' is not deg or rad (write "
-                                           "'phase [deg]' or 'phase [rad]')",
-                                           printable(unit))));
-      }
-      phase_si = *f;
-    } else if (col == "level") {
-      take(c_level);
-    } else if (col == "control") {
-      take(c_control);
-    }
-  }
-  const std::pair<int, const char*> required[] = {
-      {c_f, "frequency_hz"}, {c_force, "force"}, {c_resp, "response"}, {c_phase, "phase"}};
-  for (const auto& [c, what] : required) {
-    if (c < 0) {
-      throw InputError(where(name, header_line,
-                             fmt::format("no '{}' column (need frequency_hz, force [N], "
-                                         "response [unit], phase [deg|rad])",
-                                         what)));
-    }
-  }
+      });
+  CsvLineSplitter splitter(detect_delimiter(header_row));
+  const CsvColumns cols =
+      read_columns(split_fields(splitter, header_row), lines.line_no(), name, quantity);
 
   // Rows, grouped by level in order of first appearance.
   std::vector<Raw> raws;
   std::vector<std::string> level_keys;
-  const size_t width = header.size();
-  while (next_line()) {
+  std::string_view line;
+  while (lines.next(line)) {
     const std::string_view t = trim(line);
     if (t.empty() || t.front() == '#') continue;
-    const std::vector<std::string> cells = split_line(line, delim);
-    if (cells.size() != width) {
+    const std::vector<std::string> cells = split_fields(splitter, line);
+    if (cells.size() != cols.header.size()) {
       throw InputError(where(
-          name, line_no, fmt::format("{} fields where the header has {}", cells.size(), width)));
+          name, lines.line_no(),
+          fmt::format("{} fields where the header has {}", cells.size(), cols.header.size())));
     }
-    auto number = [&](int c) {
-      const auto v = to_double(cells[static_cast<size_t>(c)]);
-      if (!v || !std::isfinite(*v)) {
-        throw InputError(where(name, line_no,
-                               fmt::format("column '{}': '{}' is not a finite number",
-                                           printable(trim(header[static_cast<size_t>(c)])),
-                                           printable(cells[static_cast<size_t>(c)]))));
-      }
-      return *v;
-    };
-    const std::string key =
-        c_level >= 0 ? std::string(trim(cells[static_cast<size_t>(c_level)])) : "";
-    if (c_level >= 0 && key.empty()) throw InputError(where(name, line_no, "empty level"));
-    size_t k = std::find(level_keys.begin(), level_keys.end(), key) - level_keys.begin();
-    if (k == level_keys.size()) {
-      level_keys.push_back(key);
-      raws.emplace_back();
-      raws.back().label = c_level >= 0              ? "level " + key
-                          : metadata.count("level") ? "level " + metadata["level"]
-                                                    : "level 1";
-    }
-    Raw& r = raws[k];
-    if (c_control >= 0) {
-      const auto c = parse_control(cells[static_cast<size_t>(c_control)]);
-      if (!c) {
-        throw InputError(where(name, line_no,
-                               fmt::format("control '{}' is not 'response' or 'force'",
-                                           printable(cells[static_cast<size_t>(c_control)]))));
-      }
-      if (r.control && *r.control != *c) {
-        throw InputError(
-            where(name, line_no, fmt::format("{} changes control within the level", r.label)));
-      }
-      r.control = c;
-    }
-    r.f.push_back(number(c_f));
-    r.force.push_back(number(c_force));
-    r.response.push_back(number(c_resp));
-    r.phase.push_back(number(c_phase));
-    r.lines.push_back(line_no);
+    add_row(cells, lines.line_no(), cols, name, metadata, raws, level_keys);
   }
-  if (raws.empty()) throw InputError(where(name, line_no, "no data rows"));
+  if (raws.empty()) throw InputError(where(name, lines.line_no(), "no data rows"));
   std::vector<SteppedSineTable> out;
   for (size_t k = 0; k < raws.size(); ++k) {
     const std::optional<SineControl> control = raws[k].control ? raws[k].control : file_control;
     if (!control) {
-      throw InputError(where(name, header_line,
+      throw InputError(where(name, cols.line,
                              "control not given: add '# control: response' (or force) or a "
                              "'control' column"));
     }
     const std::string label = raws[k].label;
-    out.push_back(
-        finish(std::move(raws[k]), name, label, *control, resp_q, force_si, response_si, phase_si));
+    out.push_back(finish(std::move(raws[k]), name, label, *control, cols.response_quantity,
+                         cols.force_si, cols.response_si, cols.phase_si));
     out.back().index = static_cast<int>(k) + 1;
     out.back().metadata = metadata;
   }

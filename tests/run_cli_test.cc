@@ -55,7 +55,7 @@ double first_value(const fs::path& p, const std::string& name) {
 
 constexpr const char* kUpdates =
     "[update.linear]\nsets = [\"iwan.rivet\"]\n\n"
-    "[update.iwan]\nenabled = true\nmax_evaluations = 150\nqsma_points = 15\n";
+    "[update.iwan]\nenabled = true\nmax_evaluations = 150\n";
 
 // The whole run: exit 0, every output, a linear update that moves the model's frequency onto
 // the measured one, and a second run that reuses the hits.
@@ -308,10 +308,9 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   correlate::IwanUpdateOptions io;
   io.max_evaluations = 40;
   io.samples = 20;
-  io.qsma_points = 15;
   const auto fit = [&](const campaign::IwanTargets& t) {
     const correlate::IwanObjective obj(start, "iwan.rivet", sensors, t.fitted, io.amplitude,
-                                       io.qsma_points, io.frequency_floor, io.damping_floor);
+                                       io.frequency_floor, io.damping_floor);
     correlate::IwanUpdateSummary sum;
     return correlate::update_iwan(obj, io, &sum);
   };

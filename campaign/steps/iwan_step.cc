@@ -24,8 +24,6 @@ void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOpt
       io.fixed_gamma = value;
     else if (key == "beta")
       io.fixed_beta = value;
-    else if (key == "qsma_points")
-      io.qsma_points = static_cast<int>(value);
     else if (key == "samples")
       io.samples = static_cast<int>(value);
     else if (key == "local_starts")
@@ -110,7 +108,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     return step;
   }
   const IwanObjective objective(base, step.set, sensors, targets.fitted, io.amplitude,
-                                io.qsma_points, io.frequency_floor, io.damping_floor);
+                                io.frequency_floor, io.damping_floor);
   say(
       fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
                   "left out where other modes carry over {:g} % of the joint slip)",
@@ -124,8 +122,8 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   // Each mode's backbone cost at the start and at the result, fitted or not: a mode the
   // one-mode QSMA cannot describe (its joints moved by another mode) stands out.
   for (const auto& [k, t] : targets.every) {
-    const IwanObjective one(base, step.set, sensors, {t}, io.amplitude, io.qsma_points,
-                            io.frequency_floor, io.damping_floor);
+    const IwanObjective one(base, step.set, sensors, {t}, io.amplitude, io.frequency_floor,
+                            io.damping_floor);
     step.mode_costs.push_back({c.modes[k].name, c.iwan_update.fits(c.modes[k].name),
                                one.cost(step.summary.start), one.cost(step.summary.best)});
   }

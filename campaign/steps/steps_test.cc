@@ -46,7 +46,7 @@ class Steps : public ::testing::Test {
     small_ = std::make_unique<testing::SmallCampaign>(testing::make_small_campaign(
         dir,
         "[update.linear]\nsets = [\"iwan.rivet\"]\n\n[update.iwan]\nenabled = true\n"
-        "max_evaluations = 60\nsamples = 20\nqsma_points = 15\n"));
+        "max_evaluations = 60\nsamples = 20\n"));
     campaign_ = std::make_unique<Campaign>(read_campaign(small_->campaign));
     RunOptions o;
     o.out = dir / "out";

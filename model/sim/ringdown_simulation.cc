@@ -121,6 +121,205 @@ std::vector<Coordinate> iwan_coordinates(const Model& model) {
   return coords;
 }
 
+// The modes with the joints at linear stiffness (rigid-body modes included), their damping
+// and how many are kept in the output.
+struct ModalBasis {
+  int n = 0;
+  int rigid_count = 0;
+  int n_out = 0;             // modes below the output cutoff
+  Eigen::MatrixXd phi;       // mode shapes, mass-normalised
+  Eigen::VectorXd w2, w, c;  // omega^2 (0 for rigid), omega, modal damping 2 zeta omega + ...
+};
+
+ModalBasis modal_basis(const Model& model, const SimulationOptions& options,
+                       SimulationSummary& sum) {
+  LinearModes modes = linear_modes(model.mass, model.linear_stiffness());
+  ModalBasis b;
+  b.n = modes.size();
+  b.rigid_count = modes.rigid_count;
+  b.w2 = modes.omega2;
+  for (int i = 0; i < modes.rigid_count; ++i) b.w2(i) = 0;
+  b.w = b.w2.cwiseSqrt();
+  sum.modes = b.n;
+  sum.rigid_modes = modes.rigid_count;
+  sum.lowest_elastic_hz = modes.rigid_count < b.n ? b.w(modes.rigid_count) / (2 * M_PI) : 0.0;
+  b.c.resize(b.n);
+  for (int i = 0; i < b.n; ++i) {
+    b.c(i) = options.rayleigh_mass + options.rayleigh_stiffness * b.w2(i) +
+             (modes.rigid(i) ? 0.0 : 2 * options.modal_damping * b.w(i));
+  }
+  const double cutoff = options.output_cutoff_hz > 0 ? options.output_cutoff_hz : 0.45 * options.fs;
+  while (b.n_out < b.n && b.w(b.n_out) <= 2 * M_PI * cutoff) ++b.n_out;
+  sum.output_modes = b.n_out;
+  b.phi = std::move(modes.shapes);
+  return b;
+}
+
+// Substeps per sample from the period error of the lowest elastic mode (unless given).
+int substeps(const ModalBasis& b, const SimulationOptions& options) {
+  if (options.substeps != 0) return options.substeps;
+  const double w1 = b.rigid_count < b.n ? b.w(b.rigid_count) : 0.0;
+  const double wdt_max = std::sqrt(12 * options.frequency_error);
+  return std::max(4, static_cast<int>(std::ceil(w1 / (options.fs * wdt_max))));
+}
+
+// The joint coordinates r = Psi eta of one time step: the condensed step operator S (and
+// S^{-1}), the Newton solve of S^{-1} (r - r_p) - h(r) = 0 and the commit of the joints.
+class JointStep {
+ public:
+  JointStep(std::vector<Coordinate> coords, const ModalBasis& b, const Eigen::VectorXd& kinv)
+      : coords_(std::move(coords)), nj_(static_cast<int>(coords_.size())) {
+    psi_.resize(nj_, b.n);
+    for (int j = 0; j < nj_; ++j) {
+      psi_.row(j) = b.phi.row(coords_[j].a);
+      if (coords_[j].b != kGround) psi_.row(j) -= b.phi.row(coords_[j].b);
+    }
+    s_.resize(nj_, nj_);
+    s_inv_.resize(nj_, nj_);
+    kt_.resize(nj_);
+    phi_max_.resize(nj_);
+    for (int j = 0; j < nj_; ++j) kt_(j) = coords_[j].kt, phi_max_(j) = coords_[j].phi_max;
+    if (nj_ > 0) {
+      s_ = psi_ * kinv.asDiagonal() * psi_.transpose();
+      Eigen::LDLT<Eigen::MatrixXd> ldlt(s_);
+      const double dmax = ldlt.vectorD().cwiseAbs().maxCoeff();
+      if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * dmax)) {
+        throw InputError(
+            "simulate: the model's Iwan joint coordinates are linearly dependent (a closed loop "
+            "of Iwan joints); the joint problem has no unique solution");
+      }
+      s_inv_ = ldlt.solve(Eigen::MatrixXd::Identity(nj_, nj_));
+      s_inv_ = 0.5 * (s_inv_ + s_inv_.transpose()).eval();
+    }
+    r_ = Eigen::VectorXd::Zero(nj_);
+    h_ = r_;
+    for (Eigen::VectorXd* v : {&r_p_, &r_new_, &dh_, &grad_, &step_, &r_try_, &h_try_, &dh_try_,
+                               &trial_h_, &res_, &res_try_}) {
+      v->resize(nj_);
+    }
+    llt_ = Eigen::LLT<Eigen::MatrixXd>(nj_);
+    jac_.resize(nj_, nj_);
+  }
+
+  int size() const { return nj_; }
+  const Eigen::MatrixXd& psi() const { return psi_; }
+  const Eigen::VectorXd& kt() const { return kt_; }
+  const Eigen::VectorXd& r() const { return r_; }
+  const Eigen::VectorXd& h() const { return h_; }
+  const std::vector<Coordinate>& coordinates() const { return coords_; }
+
+  // Newton on S^{-1} (r - r_p) - h(r) = 0 from the predicted r_p, started from the committed
+  // softening. The residual is formed as r - r_p - S h (no large cancelling terms) and mapped
+  // by S^{-1} to the gradient of the step's convex potential Pi. Returns the iterations taken;
+  // `converged` says whether the step fell below the tolerance.
+  int solve(const Eigen::VectorXd& r_p, const SimulationOptions& options, bool& converged) {
+    r_p_ = r_p;
+    r_new_ = r_p_ + s_ * h_;
+    double pot_h = evaluate(r_new_, trial_h_, dh_);
+    double pi = potential(r_new_, pot_h);
+    res_ = r_new_ - r_p_ - s_ * trial_h_;
+    converged = false;
+    int it = 0;
+    while (it < options.max_newton_iterations) {
+      ++it;
+      grad_ = s_inv_ * res_;
+      jac_ = s_inv_;
+      jac_.diagonal() -= dh_;
+      llt_.compute(jac_);
+      step_ = -llt_.solve(grad_);
+      if (!step_.allFinite()) break;
+      const double step_max = step_.cwiseAbs().maxCoeff();
+      if (step_max <= options.newton_tolerance * r_new_.cwiseAbs().maxCoeff()) {
+        r_new_ += step_;  // below the tolerance: the commit evaluates the forces there
+        converged = true;
+        break;
+      }
+      line_search(pi);
+    }
+    converged = converged && r_new_.allFinite();
+    return it;
+  }
+
+  // Commits the joints at the solved r: new softening h, dissipation and extremes.
+  void commit(EnergyBalance& en, SimulationSummary& sum) {
+    for (int j = 0; j < nj_; ++j) {
+      double f = 0;
+      for (IwanHistory& e : coords_[j].elements) {
+        const IwanMove mv = e.commit(r_new_(j));
+        f += mv.force;
+        en.joint_dissipated += mv.dissipation;
+      }
+      h_(j) = kt_(j) * r_new_(j) - f;
+      sum.max_joint_displacement = std::max(sum.max_joint_displacement, std::abs(r_new_(j)));
+      sum.max_phi_ratio = std::max(sum.max_phi_ratio, std::abs(r_new_(j)) / phi_max_(j));
+    }
+    r_ = r_new_;
+  }
+
+ private:
+  // Full step when the residual falls, else backtracking on Pi (Armijo).
+  void line_search(double& pi) {
+    const double res_max = res_.cwiseAbs().maxCoeff();
+    double lambda = 1;
+    for (int ls = 0;; ++ls) {
+      r_try_ = r_new_ + lambda * step_;
+      const double pot_try = evaluate(r_try_, h_try_, dh_try_);
+      const double pi_try = potential(r_try_, pot_try);
+      res_try_ = r_try_ - r_p_ - s_ * h_try_;
+      if (res_try_.cwiseAbs().maxCoeff() < res_max ||
+          pi_try <= pi + 1e-4 * lambda * grad_.dot(step_) || ls == 40) {
+        r_new_ = r_try_, trial_h_ = h_try_, dh_ = dh_try_, pi = pi_try, res_ = res_try_;
+        return;
+      }
+      lambda *= 0.5;
+    }
+  }
+
+  // h, h' and the incremental potential sum_j H_j(r_j) of a trial r.
+  double evaluate(const Eigen::VectorXd& rt, Eigen::VectorXd& ht, Eigen::VectorXd& dht) const {
+    double pot = 0;
+    for (int j = 0; j < nj_; ++j) {
+      double f = 0, df = 0, work = 0;
+      for (const IwanHistory& e : coords_[j].elements) {
+        const IwanMove m = e.trial(rt(j));
+        f += m.force, df += m.tangent, work += m.work;
+      }
+      const double rc = r_(j);
+      ht(j) = kt_(j) * rt(j) - f;
+      dht(j) = kt_(j) - df;
+      pot += 0.5 * kt_(j) * (rt(j) * rt(j) - rc * rc) - work;
+    }
+    return pot;
+  }
+
+  // The step's potential Pi(r) = 1/2 (r - r_p)^T S^{-1} (r - r_p) - sum H_j(r_j).
+  double potential(const Eigen::VectorXd& rt, double pot_h) const {
+    const Eigen::VectorXd d = rt - r_p_;
+    return 0.5 * d.dot(s_inv_ * d) - pot_h;
+  }
+
+  std::vector<Coordinate> coords_;
+  int nj_;
+  Eigen::MatrixXd psi_, s_, s_inv_, jac_;
+  Eigen::VectorXd kt_, phi_max_, r_, h_;
+  Eigen::VectorXd r_p_, r_new_, dh_, grad_, step_, r_try_, h_try_, dh_try_, trial_h_, res_,
+      res_try_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
+};
+
+// Energies at the end of the simulation.
+void final_energies(EnergyBalance& en, const ModalBasis& b, const JointStep& joints,
+                    const Eigen::VectorXd& eta, const Eigen::VectorXd& vel) {
+  en.kinetic = 0.5 * vel.squaredNorm();
+  double stored = 0;
+  for (const Coordinate& co : joints.coordinates()) {
+    for (const IwanHistory& e : co.elements) stored += e.stored_energy();
+  }
+  en.joint_stored = stored;
+  en.strain = 0.5 * (b.w2.array() * eta.array().square()).sum() -
+              0.5 * (joints.kt().array() * joints.r().array().square()).sum() + stored;
+}
+
 }  // namespace
 
 SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions& options,
@@ -132,71 +331,25 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
   SimulationSummary& sum = *summary;
   sum = SimulationSummary{};
 
-  // Linear modes with the joints at linear stiffness, rigid-body modes included.
-  const LinearModes modes = linear_modes(model.mass, model.linear_stiffness());
-  const int n = modes.size();
-  const Eigen::MatrixXd& phi = modes.shapes;
-  Eigen::VectorXd w2 = modes.omega2;
-  for (int i = 0; i < modes.rigid_count; ++i) w2(i) = 0;
-  const Eigen::VectorXd w = w2.cwiseSqrt();
-  sum.modes = n;
-  sum.rigid_modes = modes.rigid_count;
-  sum.lowest_elastic_hz = modes.rigid_count < n ? w(modes.rigid_count) / (2 * M_PI) : 0.0;
-
-  // Damping per mode and the output filter.
-  Eigen::VectorXd c(n);
-  for (int i = 0; i < n; ++i) {
-    c(i) = options.rayleigh_mass + options.rayleigh_stiffness * w2(i) +
-           (modes.rigid(i) ? 0.0 : 2 * options.modal_damping * w(i));
-  }
-  const double cutoff = options.output_cutoff_hz > 0 ? options.output_cutoff_hz : 0.45 * options.fs;
-  int n_out = 0;
-  while (n_out < n && w(n_out) <= 2 * M_PI * cutoff) ++n_out;
-  sum.output_modes = n_out;
-
-  // Step: substeps per sample from the period error of the lowest elastic mode.
-  int sub = options.substeps;
-  if (sub == 0) {
-    const double w1 = modes.rigid_count < n ? w(modes.rigid_count) : 0.0;
-    const double wdt_max = std::sqrt(12 * options.frequency_error);
-    sub = std::max(4, static_cast<int>(std::ceil(w1 / (options.fs * wdt_max))));
-  }
+  const ModalBasis b = modal_basis(model, options, sum);
+  const int n = b.n, n_out = b.n_out;
+  const Eigen::VectorXd& c = b.c;
+  const int sub = substeps(b, options);
   const double dt = 1.0 / (options.fs * sub);
   sum.dt = dt;
   sum.substeps = sub;
 
-  // Joint coordinates, Psi = B Phi and the condensed step operator S^{-1}.
-  std::vector<Coordinate> coords = iwan_coordinates(model);
-  const int nj = static_cast<int>(coords.size());
-  sum.joint_coordinates = nj;
-  Eigen::MatrixXd psi(nj, n);
-  for (int j = 0; j < nj; ++j) {
-    psi.row(j) = phi.row(coords[j].a);
-    if (coords[j].b != kGround) psi.row(j) -= phi.row(coords[j].b);
-  }
-  const Eigen::VectorXd khat = (w2.array() + 2 * c.array() / dt + 4 / (dt * dt)).matrix();
+  const Eigen::VectorXd khat = (b.w2.array() + 2 * c.array() / dt + 4 / (dt * dt)).matrix();
   const Eigen::VectorXd kinv = khat.cwiseInverse();
-  Eigen::MatrixXd s(nj, nj), s_inv(nj, nj);
-  Eigen::VectorXd kt(nj), phi_max(nj);
-  for (int j = 0; j < nj; ++j) kt(j) = coords[j].kt, phi_max(j) = coords[j].phi_max;
-  if (nj > 0) {
-    s = psi * kinv.asDiagonal() * psi.transpose();
-    Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
-    const double dmax = ldlt.vectorD().cwiseAbs().maxCoeff();
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * dmax)) {
-      throw InputError(
-          "simulate: the model's Iwan joint coordinates are linearly dependent (a closed loop "
-          "of Iwan joints); the joint problem has no unique solution");
-    }
-    s_inv = ldlt.solve(Eigen::MatrixXd::Identity(nj, nj));
-    s_inv = 0.5 * (s_inv + s_inv.transpose()).eval();
-  }
+  JointStep joints(iwan_coordinates(model), b, kinv);
+  sum.joint_coordinates = joints.size();
 
   // Sensor and impact rows of Phi.
   const auto n_sens = static_cast<Eigen::Index>(options.sensors.size());
   Eigen::MatrixXd phi_s(n_sens, n_out);
-  for (Eigen::Index k = 0; k < n_sens; ++k) phi_s.row(k) = phi.row(options.sensors[k]).head(n_out);
-  const Eigen::VectorXd phi_d = phi.row(options.pulse.dof).transpose();
+  for (Eigen::Index k = 0; k < n_sens; ++k)
+    phi_s.row(k) = b.phi.row(options.sensors[k]).head(n_out);
+  const Eigen::VectorXd phi_d = b.phi.row(options.pulse.dof).transpose();
 
   const auto n_samples =
       static_cast<Eigen::Index>(std::floor(options.duration * options.fs + 1e-9));
@@ -209,8 +362,6 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
 
   // State.
   Eigen::VectorXd eta = Eigen::VectorXd::Zero(n), vel = eta, acc = eta, eta_p(n), hist(n);
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(nj), r_p(nj), h = r, dh(nj), grad(nj), step(nj),
-                  r_try(nj), h_try(nj), dh_try(nj), trial_h(nj), res(nj), res_try(nj);
   double p_prev = options.pulse(0.0), u_d_prev = 0;
   EnergyBalance& en = sum.energy;
   auto record = [&](Eigen::Index k) {
@@ -219,33 +370,10 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
     out.displacement.row(k) = (phi_s * eta.head(n_out)).transpose();
     out.force(k) = options.pulse(static_cast<double>(k) / options.fs);
   };
-  // h, h' and the incremental potential sum_j H_j(r_j) of a trial r.
-  auto evaluate = [&](const Eigen::VectorXd& rt, Eigen::VectorXd& ht, Eigen::VectorXd& dht) {
-    double pot = 0;
-    for (int j = 0; j < nj; ++j) {
-      double f = 0, df = 0, work = 0;
-      for (const IwanHistory& e : coords[j].elements) {
-        const IwanMove m = e.trial(rt(j));
-        f += m.force, df += m.tangent, work += m.work;
-      }
-      const double rc = r(j);
-      ht(j) = kt(j) * rt(j) - f;
-      dht(j) = kt(j) - df;
-      pot += 0.5 * kt(j) * (rt(j) * rt(j) - rc * rc) - work;
-    }
-    return pot;
-  };
-  // The step's potential Pi(r) = 1/2 (r - r_p)^T S^{-1} (r - r_p) - sum H_j(r_j).
-  auto potential = [&](const Eigen::VectorXd& rt, double pot_h) {
-    const Eigen::VectorXd d = rt - r_p;
-    return 0.5 * d.dot(s_inv * d) - pot_h;
-  };
 
   record(0);
   const long total_steps = static_cast<long>(n_samples - 1) * sub;
   const long progress_every = std::max<long>(1, total_steps / 10);
-  Eigen::LLT<Eigen::MatrixXd> llt(nj);
-  Eigen::MatrixXd jac(nj, nj);
   for (long m = 1; m <= total_steps; ++m) {
     const double t = static_cast<double>(m) * dt;
     const double p = options.pulse(t);
@@ -253,50 +381,12 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
     hist = (4 / (dt * dt)) * eta + (4 / dt) * vel + acc;
     hist += c.cwiseProduct((2 / dt) * eta + vel);
     eta_p = (phi_d * p + hist).cwiseProduct(kinv);
-    if (nj > 0) {
-      r_p = psi * eta_p;
-      // Newton on S^{-1} (r - r_p) - h(r) = 0, started from the committed softening. The
-      // residual is formed as r - r_p - S h (no large cancelling terms) and mapped by S^{-1}
-      // to the gradient of the step's convex potential Pi.
-      Eigen::VectorXd r_new = r_p + s * h;
-      double pot_h = evaluate(r_new, trial_h, dh);
-      double pi = potential(r_new, pot_h);
-      res = r_new - r_p - s * trial_h;
+    if (joints.size() > 0) {
       bool converged = false;
-      int it = 0;
-      while (it < options.max_newton_iterations) {
-        ++it;
-        grad = s_inv * res;
-        jac = s_inv;
-        jac.diagonal() -= dh;
-        llt.compute(jac);
-        step = -llt.solve(grad);
-        if (!step.allFinite()) break;
-        const double step_max = step.cwiseAbs().maxCoeff();
-        if (step_max <= options.newton_tolerance * r_new.cwiseAbs().maxCoeff()) {
-          r_new += step;  // below the tolerance: the commit evaluates the forces there
-          converged = true;
-          break;
-        }
-        // Full step when the residual falls, else backtracking on Pi (Armijo).
-        const double res_max = res.cwiseAbs().maxCoeff();
-        double lambda = 1;
-        for (int ls = 0;; ++ls) {
-          r_try = r_new + lambda * step;
-          const double pot_try = evaluate(r_try, h_try, dh_try);
-          const double pi_try = potential(r_try, pot_try);
-          res_try = r_try - r_p - s * h_try;
-          if (res_try.cwiseAbs().maxCoeff() < res_max ||
-              pi_try <= pi + 1e-4 * lambda * grad.dot(step) || ls == 40) {
-            r_new = r_try, trial_h = h_try, dh = dh_try, pi = pi_try, res = res_try;
-            break;
-          }
-          lambda *= 0.5;
-        }
-      }
+      const int it = joints.solve(joints.psi() * eta_p, options, converged);
       sum.newton_iterations += it;
       sum.max_step_iterations = std::max(sum.max_step_iterations, it);
-      if (!converged || !r_new.allFinite()) {
+      if (!converged) {
         sum.status = SimulationStatus::kNewtonFailed;
         sum.message = fmt::format(
             "the joint problem did not converge at t = {:.6g} s after {} Newton iterations; "
@@ -309,20 +399,8 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
         out.force.conservativeResize(kept);
         break;
       }
-      // Commit the joints.
-      for (int j = 0; j < nj; ++j) {
-        double f = 0;
-        for (IwanHistory& e : coords[j].elements) {
-          const IwanMove mv = e.commit(r_new(j));
-          f += mv.force;
-          en.joint_dissipated += mv.dissipation;
-        }
-        h(j) = kt(j) * r_new(j) - f;
-        sum.max_joint_displacement = std::max(sum.max_joint_displacement, std::abs(r_new(j)));
-        sum.max_phi_ratio = std::max(sum.max_phi_ratio, std::abs(r_new(j)) / phi_max(j));
-      }
-      r = r_new;
-      eta_p += kinv.cwiseProduct(psi.transpose() * h);
+      joints.commit(en, sum);
+      eta_p += kinv.cwiseProduct(joints.psi().transpose() * joints.h());
     }
     // Newmark update (eta_p now holds eta_{n+1}).
     const Eigen::VectorXd acc_new = (4 / (dt * dt)) * (eta_p - eta) - (4 / dt) * vel - acc;
@@ -342,15 +420,7 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
     }
   }
 
-  // Energies at the end.
-  en.kinetic = 0.5 * vel.squaredNorm();
-  double stored = 0;
-  for (const Coordinate& co : coords) {
-    for (const IwanHistory& e : co.elements) stored += e.stored_energy();
-  }
-  en.joint_stored = stored;
-  en.strain = 0.5 * (w2.array() * eta.array().square()).sum() -
-              0.5 * (kt.array() * r.array().square()).sum() + stored;
+  final_energies(en, b, joints, eta, vel);
   if (sum.status == SimulationStatus::kOk) {
     sum.message = fmt::format("{} samples at {} Hz ({} s)", n_samples, options.fs,
                               (n_samples - 1) / options.fs);

@@ -1,0 +1,116 @@
+#include "jointlab/data/csv_lines.h"
+
+#include <algorithm>
+#include <charconv>
+
+#include <csv.h>
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
+
+namespace jointlab::data {
+
+std::optional<double> parse_double(std::string_view s) {
+  s = trim(s);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  double v = 0;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+char detect_delimiter(std::string_view header) {
+  char best = ',';
+  long best_count = 0;
+  for (char c : {',', ';', '\t'}) {
+    const long n = std::count(header.begin(), header.end(), c);
+    if (n > best_count) best = c, best_count = n;
+  }
+  return best;
+}
+
+std::string_view strip_bom(std::string_view text) {
+  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  return text;
+}
+
+bool TextLines::next(std::string_view& line) {
+  if (pos_ >= text_.size()) return false;
+  const size_t end = text_.find('\n', pos_);
+  const size_t stop = end == std::string_view::npos ? text_.size() : end;
+  line = text_.substr(pos_, stop - pos_);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  pos_ = stop + 1;
+  ++line_no_;
+  return true;
+}
+
+// libcsv hands fields and row ends to C callbacks; this collects one row.
+struct CsvLineSplitter::Impl {
+  csv_parser parser{};
+  std::vector<std::string> fields;
+  bool row_done = false;
+  static void on_field(void* data, size_t len, void* self) {
+    static_cast<Impl*>(self)->fields.emplace_back(data ? static_cast<const char*>(data) : "",
+                                                  data ? len : 0);
+  }
+  static void on_row(int, void* self) { static_cast<Impl*>(self)->row_done = true; }
+};
+
+CsvLineSplitter::CsvLineSplitter(char delim) : impl_(std::make_unique<Impl>()) {
+  csv_init(&impl_->parser, CSV_APPEND_NULL);
+  csv_set_delim(&impl_->parser, static_cast<unsigned char>(delim));
+}
+
+CsvLineSplitter::~CsvLineSplitter() { csv_free(&impl_->parser); }
+
+bool CsvLineSplitter::split(std::string_view line, std::vector<std::string>& out) {
+  Impl& p = *impl_;
+  p.fields.clear();
+  p.row_done = false;
+  csv_parse(&p.parser, line.data(), line.size(), Impl::on_field, Impl::on_row, &p);
+  csv_fini(&p.parser, Impl::on_field, Impl::on_row, &p);
+  out.swap(p.fields);
+  return p.row_done;
+}
+
+std::vector<std::string> CsvLineSplitter::split(std::string_view line) {
+  std::vector<std::string> out;
+  split(line, out);
+  return out;
+}
+
+std::string_view read_preamble(
+    TextLines& lines, const std::string& file,
+    const std::function<void(const std::string& key, const std::string& value)>& on_entry) {
+  std::string_view line;
+  while (lines.next(line)) {
+    const std::string_view t = trim(line);
+    if (t.empty()) continue;
+    if (t.front() != '#') return line;
+    const std::string_view body = trim(t.substr(1));
+    const auto colon = body.find(':');
+    if (colon == std::string_view::npos) continue;
+    const std::string key = lower(trim(body.substr(0, colon)));
+    if (!key.empty()) on_entry(key, std::string(trim(body.substr(colon + 1))));
+  }
+  throw InputError(where(file, lines.line_no(), "no header row"));
+}
+
+std::pair<std::string, std::string> split_name_unit(std::string_view field, const std::string& file,
+                                                    long line) {
+  field = trim(field);
+  const auto open = field.find('[');
+  if (open == std::string_view::npos) return {std::string(field), ""};
+  const auto close = field.find(']', open);
+  if (close == std::string_view::npos || !trim(field.substr(close + 1)).empty()) {
+    throw InputError(
+        where(file, line,
+              fmt::format("header '{}': unit must be written as 'name [unit]'", shorten(field))));
+  }
+  return {std::string(trim(field.substr(0, open))),
+          std::string(trim(field.substr(open + 1, close - open - 1)))};
+}
+
+}  // namespace jointlab::data

@@ -1,0 +1,77 @@
+// Building blocks of the CSV readers: a line cursor, libcsv field splitting, number parsing
+// and the "# key: value" lines before a header row.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace jointlab::data {
+
+/// A whole field as a double (surrounding blanks and a leading '+' allowed); nullopt otherwise.
+std::optional<double> parse_double(std::string_view field);
+
+/// The delimiter of a header row: whichever of ',', ';' and tab occurs most (',' if none).
+char detect_delimiter(std::string_view header);
+
+/// `text` without a leading UTF-8 byte-order mark.
+std::string_view strip_bom(std::string_view text);
+
+/// Walks a text line by line: 1-based line numbers as editors show them, the CR of CRLF dropped.
+class TextLines {
+ public:
+  /// A cursor before the first line of `text` (which must outlive the cursor).
+  explicit TextLines(std::string_view text) : text_(text) {}
+  /// Sets `line` to the next line; false at the end of the text.
+  bool next(std::string_view& line);
+  /// The number of the line `next` gave last (0 before the first).
+  long line_no() const { return line_no_; }
+  /// The offset of the text after the line `next` gave last.
+  size_t pos() const { return pos_; }
+  /// Moves the cursor back (or on) to offset `pos`, after line `line_no`.
+  void seek(size_t pos, long line_no) { pos_ = pos, line_no_ = line_no; }
+  /// The whole text.
+  std::string_view text() const { return text_; }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  long line_no_ = 0;
+};
+
+/// Splits single CSV lines into fields with libcsv (quotes handled by the library).
+class CsvLineSplitter {
+ public:
+  /// A splitter for fields separated by `delim`.
+  explicit CsvLineSplitter(char delim = ',');
+  ~CsvLineSplitter();
+  CsvLineSplitter(const CsvLineSplitter&) = delete;
+  CsvLineSplitter& operator=(const CsvLineSplitter&) = delete;
+  /// Puts the fields of `line` in `out`; false if the line holds no row (blank).
+  bool split(std::string_view line, std::vector<std::string>& out);
+  /// The fields of `line` (none for a blank line).
+  std::vector<std::string> split(std::string_view line);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Reads the blank and "# key: value" lines before a header row, handing each entry to
+/// `on_entry` (key trimmed and lower-cased, value trimmed; `lines.line_no()` is its line);
+/// returns the header row; InputError "file:line: no header row" if none.
+std::string_view read_preamble(
+    TextLines& lines, const std::string& file,
+    const std::function<void(const std::string& key, const std::string& value)>& on_entry);
+
+/// A header field "name [unit]" as its trimmed name and unit (empty when none); InputError
+/// naming `file` and `line` when the brackets are malformed.
+std::pair<std::string, std::string> split_name_unit(std::string_view field, const std::string& file,
+                                                    long line);
+
+}  // namespace jointlab::data
