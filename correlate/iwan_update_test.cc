@@ -276,7 +276,7 @@ TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
 TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 20, 1e-4,
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
                           0.02);
   for (const IwanOptimizer method : {IwanOptimizer::kPaper, IwanOptimizer::kGlobalLocal}) {
     IwanUpdateOptions o;
