@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/test_util.h"
 
 namespace jointlab::data {
 namespace {
@@ -131,7 +132,8 @@ TEST(CsvReader, ManyChannels) {
 
 TEST(CsvReader, ReadsFromAFileAsFromText) {
   const std::string text = "# fs: 10\nx [mm]\n1\n2\n3\n";
-  const std::string path = ::testing::TempDir() + "/jointlab_csv_reader_test.csv";
+  const std::string path =
+      jointlab::testing::scratch_path("jointlab_csv_reader_test", "read.csv").string();
   std::FILE* f = std::fopen(path.c_str(), "wb");
   ASSERT_NE(f, nullptr);
   std::fwrite(text.data(), 1, text.size(), f);
@@ -161,7 +163,8 @@ TEST(CsvReader, ReadingCostsAboutTheSamplesBinarySize) {
   GTEST_SKIP() << "AddressSanitizer keeps freed memory in quarantine";
 #endif
   // 1e6 rows of time and two channels: 24 MB as doubles, 44 MB as text.
-  const std::string path = ::testing::TempDir() + "/jointlab_csv_memory_test.csv";
+  const std::string path =
+      jointlab::testing::scratch_path("jointlab_csv_reader_test", "memory.csv").string();
   {
     std::FILE* f = std::fopen(path.c_str(), "wb");
     ASSERT_NE(f, nullptr);
