@@ -148,6 +148,11 @@ void check_iwan_args(const IwanArgs& a) {
   check_range("--gamma-range", a.gamma_range, "Kt", "Kt/Ks");
   check_range("--chi-range", a.chi_range, "chi", "chi");
   check_range("--beta-range", a.beta_range, "beta", "beta");
+  if (a.beta_range.size() == 2 && !(a.beta_range[0] > 0)) {  // beta >= 0, but searched in ln beta
+    throw InputError(
+        fmt::format("--beta-range {}:{}: need 0 < LO < HI (beta is searched on a log scale)",
+                    a.beta_range[0], a.beta_range[1]));
+  }
   if (a.set.find('.') != std::string::npos && !a.set.starts_with("iwan.")) {
     throw InputError(fmt::format(
         "--set {}: update-iwan updates an Iwan set (iwan.<name> or <name>); springs are "

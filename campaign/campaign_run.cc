@@ -77,16 +77,11 @@ void carry_over(const fs::path& from, const fs::path& to) {
   }
 }
 
-}  // namespace
-
-RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
+// The whole run into the staging folder `out` (final_out: where its outputs will be).
+RunSummary run_staged(const Campaign& c, const RunOptions& o, const fs::path& out,
+                      const fs::path& final_out) {
   RunSummary summary;
   summary.hits = c.hit_count();
-  const fs::path final_out = fs::absolute(o.out);
-  // Every output is written into a staging folder and committed as a set at the end: a run
-  // that fails or is killed leaves the previous results as they were.
-  data::OutputStage stage(final_out, "run", is_run_output);
-  const fs::path& out = stage.path();
   validate_settings(c);
   if (!o.force) carry_over(final_out, out);
   const fs::path model_file = prepare_model(c, out, o, summary);
@@ -116,6 +111,31 @@ RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
   const Report report = campaign_report(c, summary, measured, with_model, figures);
   write_report_html(report, out / "report.html");
   write_report_markdown(report, out / "report.md");
+  return summary;
+}
+
+}  // namespace
+
+RunSummary run_campaign(const Campaign& c, const RunOptions& o) {
+  const fs::path final_out = fs::absolute(o.out);
+  // Every output is written into a staging folder and committed as a set at the end: a run
+  // that fails or is killed leaves the previous results as they were.
+  data::OutputStage stage(final_out, "run", is_run_output);
+  // Messages name files where they will be, not where they are staged.
+  const auto shown = [&](std::string text) {
+    const std::string from = stage.path().string(), to = final_out.string();
+    for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+      text.replace(at, from.size(), to);
+    return text;
+  };
+  RunOptions staged = o;
+  if (o.progress) staged.progress = [&](const std::string& line) { o.progress(shown(line)); };
+  RunSummary summary;
+  try {
+    summary = run_staged(c, staged, stage.path(), final_out);
+  } catch (const InputError& e) {
+    throw InputError(shown(e.what()));
+  }
   stage.commit();
   summary.report_html = final_out / "report.html";
   summary.report_markdown = final_out / "report.md";

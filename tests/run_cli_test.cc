@@ -161,6 +161,7 @@ TEST(RunCli, AFailedRunLeavesThePreviousResults) {
   const testing::CommandResult bad = testing::run_jointlab(cmd);
   EXPECT_EQ(bad.status, 2) << bad.err;
   EXPECT_NE(bad.err.find("'x' is not a number"), std::string::npos) << bad.err;
+  EXPECT_EQ(bad.err.find(".run.stage"), std::string::npos) << bad.err;
   EXPECT_EQ(tree(out), before);
   testing::write_text(s.campaign.string(), campaign);
   testing::write_text(s.hits[1].string(), good);

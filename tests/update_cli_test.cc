@@ -424,6 +424,8 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   expect_one_line_error(iwan + "--mode 999", "--mode 999: model mode 999 does not exist");
   expect_one_line_error(iwan + "--mode 1:1 --fs-range 2000:1000",
                         "--fs-range 2000:1000: need LO < HI with both Fs > 0");
+  expect_one_line_error(iwan + "--mode 1:1 --beta-range 0:5",
+                        "--beta-range 0:5: need 0 < LO < HI (beta is searched on a log scale");
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
