@@ -246,7 +246,15 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
       r.ringdown = extract_backbone(spectra[c], r.measured, band, options.ringdown, cache);
       out.results.push_back(std::move(r));
     }
+    // A requested channel's band signal is the one its extraction made.
+    std::vector<char> have(all.size(), 0);
+    for (size_t i = first; i < out.results.size(); ++i) {
+      const size_t c = index_of(record.find(out.results[i].channel));
+      others[c].band = out.results[i].ringdown.band;
+      have[c] = 1;
+    }
     for (size_t c = 0; c < all.size(); ++c) {
+      if (have[c]) continue;
       others[c].band =
           band_signal(spectra[c], all[c]->quantity ? *all[c]->quantity : *options.quantity, band,
                       options.ringdown, cache);
