@@ -1,6 +1,7 @@
 // CSV result tables: named numeric columns, written atomically.
 //
-// Values are printed with 10 significant digits ("%.10g"), enough for every
+// Comment lines ("# key: value", as the test files' metadata) come first, then
+// the header row. Values are printed with 10 significant digits ("%.10g"), enough for every
 // result jointlab reports. A NaN or Inf in a result is a bug upstream; the
 // writer refuses it (std::logic_error) rather than print it.
 #pragma once
@@ -18,6 +19,7 @@ namespace jointlab::data {
 struct Table {
   std::vector<std::string> names;        ///< header row
   std::vector<Eigen::VectorXd> columns;  ///< one vector per name
+  std::vector<std::string> comments;     ///< lines written before the header, each after "# "
 
   /// Appends a column; asserts equal length with the first.
   void add(std::string name, Eigen::VectorXd values);

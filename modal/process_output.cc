@@ -1,5 +1,7 @@
 #include "jointlab/modal/process_output.h"
 
+#include <fmt/format.h>
+
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
@@ -12,11 +14,16 @@ std::string backbone_file_name(const std::string& source, const std::string& cha
 }
 
 void write_backbones(const std::filesystem::path& dir, const RecordResult& result,
-                     const RingdownOptions&) {
+                     const RingdownOptions& options) {
   for (const ChannelBand& r : result.results) {
     if (r.ringdown.summary.status != RingdownStatus::kOk) continue;
     const Backbone& b = r.ringdown.backbone;
     data::Table t;
+    t.comments.push_back(fmt::format("coverage_factor: {:g}", options.coverage_factor));
+    t.comments.push_back(fmt::format(
+        "uncertainty: frequency_std_hz and damping_std are expanded uncertainties k*sigma, "
+        "coverage factor k = {:g}",
+        options.coverage_factor));
     t.add("time_s", b.time_s);
     t.add("amplitude", b.amplitude);
     t.add("frequency_hz", b.frequency_hz);

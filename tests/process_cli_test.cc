@@ -128,7 +128,8 @@ TEST(ProcessArguments, BadArgumentsAreRefused) {
 std::map<std::string, std::vector<double>> read_columns(const std::string& path) {
   std::ifstream in(path);
   std::string line;
-  std::getline(in, line);
+  while (std::getline(in, line) && !line.empty() && line.front() == '#') {
+  }
   std::vector<std::string> names;
   std::stringstream hs(line);
   for (std::string n; std::getline(hs, n, ',');) names.push_back(n);
@@ -181,6 +182,37 @@ TEST_P(ProcessSynthetic, KnownBackboneThroughTheCommand) {
   ss << js.rdbuf();
   EXPECT_NE(ss.str().find("\"span_start_s\""), std::string::npos);
   EXPECT_NE(ss.str().find("ring.response.band1.csv"), std::string::npos);
+}
+
+// The coverage factor of the *_std columns is stated alike in --help (the default), in
+// each backbone file's header and in summary.json, for the default and a given one.
+TEST(ProcessCoverageFactor, StatedInHelpFileHeaderAndSummary) {
+  const CommandResult help = run_jointlab("process --help");
+  EXPECT_NE(help.out.find("k = 3 by default"), std::string::npos) << help.out;
+  const ThreeModeRecord rec = three_mode_record(60.0, 6.0, 1e-3, 5);
+  const std::string dir = scratch_dir("coverage");
+  std::string text = fmt::format("# fs: {}\nresponse [m]\n", rec.fs);
+  for (Eigen::Index k = 0; k < rec.displacement.size(); ++k)
+    text += fmt::format("{:.12g}\n", rec.displacement(k));
+  write_text(dir + "/ring.csv", text);
+  for (const char* k : {"", "2"}) {
+    const std::string out = fmt::format("{}/out{}", dir, k);
+    const CommandResult r =
+        run_jointlab(fmt::format("process {}/ring.csv --band 48:72 {}{} --out {}", dir,
+                                 *k ? "--coverage-factor " : "", k, out));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string factor = *k ? k : "3";
+    std::ifstream in(out + "/ring.response.band1.csv");
+    std::string first, second;
+    std::getline(in, first);
+    std::getline(in, second);
+    EXPECT_EQ(first, "# coverage_factor: " + factor);
+    EXPECT_NE(second.find("k*sigma, coverage factor k = " + factor), std::string::npos) << second;
+    std::ifstream js(out + "/summary.json");
+    std::stringstream ss;
+    ss << js.rdbuf();
+    EXPECT_NE(ss.str().find("\"coverage_factor\": " + factor), std::string::npos) << ss.str();
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Quantities, ProcessSynthetic,
