@@ -173,6 +173,33 @@ void points(const Eigen::VectorXd& x, const Eigen::VectorXd& y, bool logx, bool 
   }
 }
 
+// The polyline (x, y), x increasing or decreasing, cut to lo <= x <= hi: a segment that
+// crosses an end ends there, at its linearly interpolated y (so a curve's range and its
+// drawing stop at the frame instead of running past it).
+void clip_x(std::vector<PLFLT>& x, std::vector<PLFLT>& y, double lo, double hi) {
+  std::vector<PLFLT> cx, cy;
+  const auto inside = [&](size_t i) { return x[i] >= lo && x[i] <= hi; };
+  for (size_t i = 0; i < x.size(); ++i) {
+    if (i > 0) {
+      // Where the segment from i - 1 to i crosses an end, in the segment's order.
+      std::vector<double> w;
+      for (const double xe : {lo, hi})
+        if ((x[i - 1] - xe) * (x[i] - xe) < 0) w.push_back((xe - x[i - 1]) / (x[i] - x[i - 1]));
+      std::sort(w.begin(), w.end());
+      for (const double f : w) {
+        cx.push_back(x[i - 1] + f * (x[i] - x[i - 1]));
+        cy.push_back(y[i - 1] + f * (y[i] - y[i - 1]));
+      }
+    }
+    if (inside(i)) {
+      cx.push_back(x[i]);
+      cy.push_back(y[i]);
+    }
+  }
+  x = std::move(cx);
+  y = std::move(cy);
+}
+
 void line(const std::vector<PLFLT>& x, const std::vector<PLFLT>& y, PLINT colour, double width,
           PLINT style = 1) {
   if (x.size() < 2) return;
@@ -226,18 +253,23 @@ void axes(const char* xopt, const char* yopt) {
 }
 
 // Numeric labels of a log10 y axis over [lo, hi] (PLplot labels only whole decades, so a
-// range under a decade would show none): 1, 2, 5 x 10^k, or decades for wide ranges.
-void log_y_labels(double lo, double hi) {
+// range under a decade would show none): 1, 2, 5 x 10^k, or decades for wide ranges; a label
+// closer than `min_gap` (a fraction of the axis) to the one below it is left out, so that
+// labels never overlap (9 and 8 x 10^k sit 0.05 decades apart).
+void log_y_labels(double lo, double hi, double min_gap) {
   const std::vector<double> mantissas = hi - lo > 2.0 ? std::vector<double>{1}
                                         : hi - lo > 0.8
                                             ? std::vector<double>{1, 2, 5}
                                             : std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8, 9};
   plcol0(kBlack);
+  double last = -std::numeric_limits<double>::infinity();
   for (int k = static_cast<int>(std::floor(lo)); k <= static_cast<int>(std::ceil(hi)); ++k) {
     for (double m : mantissas) {
       const double v = m * std::pow(10.0, k), p = std::log10(v);
-      if (p < lo || p > hi) continue;
-      plmtex("lv", 0.6, (p - lo) / (hi - lo), 1.0, fmt::format("{:g}", v).c_str());
+      const double at = (p - lo) / (hi - lo);
+      if (p < lo || p > hi || at - last < min_gap) continue;
+      plmtex("lv", 0.6, at, 1.0, fmt::format("{:g}", v).c_str());
+      last = at;
     }
   }
 }
@@ -275,17 +307,26 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
 
   Range fy, zy;  // frequency [Hz], log10 damping
   std::vector<PLFLT> px, py;
+  // Every curve as drawn (cut at the amplitude window) lies inside the y ranges.
+  const auto add_curve = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& v, bool logy,
+                             Range& r) {
+    points(a, v, true, logy, px, py);
+    clip_x(px, py, ax.lo, ax.hi);
+    for (double u : py) r.add(u);
+  };
   for (const Curve& c : figure.hits) {
-    points(c.amplitude, c.frequency_hz, true, false, px, py, ax.lo, ax.hi);
-    for (double v : py) fy.add(v);
-    points(c.amplitude, c.damping, true, true, px, py, ax.lo, ax.hi);
-    for (double v : py) zy.add(v);
+    add_curve(c.amplitude, c.frequency_hz, false, fy);
+    add_curve(c.amplitude, c.damping, true, zy);
   }
   for (const ModelCurve& m : figure.model) {
-    points(m.amplitude, m.frequency_hz, true, false, px, py, ax.lo, ax.hi);
-    for (double v : py) fy.add(v);
-    points(m.amplitude, m.damping, true, true, px, py, ax.lo, ax.hi);
-    for (double v : py) zy.add(v);
+    add_curve(m.amplitude, m.frequency_hz, false, fy);
+    add_curve(m.amplitude, m.damping, true, zy);
+  }
+  for (const ScatterBin& b : figure.summary.bins) {
+    fy.add(b.frequency_hz.ci_low);
+    fy.add(b.frequency_hz.ci_high);
+    if (b.damping.ci_low > 0) zy.add(std::log10(b.damping.ci_low));
+    if (b.damping.ci_high > 0) zy.add(std::log10(b.damping.ci_high));
   }
   fy = fy.padded(0.08, 0.5);
   zy = zy.padded(0.08, 0.2);
@@ -336,16 +377,18 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     for (size_t i = 0; i < figure.hits.size(); ++i) {
       const Curve& c = figure.hits[i];
       points(c.amplitude, damping ? c.damping : c.frequency_hz, true, logy, px, py);
+      clip_x(px, py, ax.lo, ax.hi);
       line(px, py, flagged[i] ? kFlagged : kHit, 1.2, flagged[i] ? 2 : 1);
     }
     draw_bins(damping, logy);
     for (size_t m = 0; m < figure.model.size(); ++m) {
       const ModelCurve& mc = figure.model[m];
       points(mc.amplitude, damping ? mc.damping : mc.frequency_hz, true, logy, px, py);
+      clip_x(px, py, ax.lo, ax.hi);
       line(px, py, model_colours[m % 3], 2.2, m < 3 ? 1 : 3);
     }
     axes(damping ? "bcnstl" : "bcstl", logy ? "bcstl" : "bcnstv");
-    if (logy) log_y_labels(y.lo, y.hi);
+    if (logy) log_y_labels(y.lo, y.hi, 0.1);
   };
 
   plvpor(0.15, 0.67, 0.53, 0.92);
@@ -354,11 +397,11 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
   plmtex("l", 6.2, 0.5, 0.5, "frequency [Hz]");
   plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
 
-  plvpor(0.15, 0.67, 0.12, 0.49);
+  plvpor(0.15, 0.67, 0.14, 0.49);
   draw_panel(true);
   plcol0(kBlack);
   plmtex("l", 6.2, 0.5, 0.5, "damping ratio");
-  plmtex("b", 2.6, 0.5, 0.5, figure.amplitude_label.c_str());
+  plmtex("b", 3.4, 0.5, 0.5, figure.amplitude_label.c_str());
   // The legend sits to the right of the panels, clear of the data.
   std::vector<LegendEntry> entries;
   int n_flagged = static_cast<int>(std::count(flagged.begin(), flagged.end(), true));
@@ -398,7 +441,7 @@ void plot_spectrum(const SpectrumFigure& figure, const fs::path& file, const Fig
   y.hi += 0.4;  // room for the band labels
 
   Plot plot(file, size);
-  plvpor(0.13, 0.96, 0.11, 0.90);
+  plvpor(0.13, 0.96, 0.13, 0.90);
   plwind(0.0, fmax, y.lo, y.hi);
   grid("g", "gl");
   for (const LabelledBand& b : figure.bands) {
@@ -421,8 +464,8 @@ void plot_spectrum(const SpectrumFigure& figure, const fs::path& file, const Fig
     plptex(0.5 * (b.lo_hz + b.hi_hz), y.hi - 0.2, 1.0, 0.0, 0.5, b.label.c_str());
   plschr(0, 1.15);
   axes("bcnst", "bcstl");
-  log_y_labels(y.lo, y.hi);
-  plmtex("b", 2.6, 0.5, 0.5, "frequency [Hz]");
+  log_y_labels(y.lo, y.hi, 0.05);
+  plmtex("b", 3.2, 0.5, 0.5, "frequency [Hz]");
   plmtex("l", 5.6, 0.5, 0.5, figure.amplitude_label.c_str());
   plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
   legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP);
@@ -457,12 +500,15 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
   }
   plcol0(kBlack);
   plbox("bc", 1.0, 0, "bc", 1.0, 0);
+  // More than five columns: labels on two staggered lines, so that neighbours never overlap.
+  const bool stagger = nc > 5;
   for (Eigen::Index j = 0; j < nc; ++j)
-    plmtex("b", 1.5, (j + 0.5) / static_cast<double>(nc), 0.5, columns[j].c_str());
+    plmtex("b", stagger && j % 2 ? 2.7 : 1.5, (j + 0.5) / static_cast<double>(nc), 0.5,
+           columns[j].c_str());
   for (Eigen::Index i = 0; i < nr; ++i)
     plmtex("lv", 1.0, 1.0 - (i + 0.5) / static_cast<double>(nr), 1.0, rows[i].c_str());
   plschr(0, 1.15);
-  plmtex("b", 3.2, 0.5, 0.5, "model mode");
+  plmtex("b", stagger ? 4.0 : 3.2, 0.5, 0.5, "model mode");
   plmtex("l", 8.0, 0.5, 0.5, "measured mode");
   plmtex("t", 2.4, 0.5, 0.5, title.c_str());
   plschr(0, 0.9);
@@ -486,6 +532,8 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
     for (double v : s.percent) y.add(v);
   }
   y = y.padded(0.15, 0.5);
+  // Room above the bars for the legend (two lines take about a tenth of the height each).
+  y.hi += (0.12 * static_cast<double>(series.size()) + 0.05) * (y.hi - y.lo);
   const PLINT colours[4] = {kModel1, kMean, kModel2, kModel3};
   Plot plot(file, size);
   plvpor(0.13, 0.96, 0.13, 0.90);
@@ -503,7 +551,7 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
       plfill(4, bx, by);
       plcol0(kBlack);
       const double off = 0.03 * (y.hi - y.lo);
-      plptex(x0 + 0.45 * w, v >= 0 ? v + off * 0.3 : v - off, 1.0, 0.0, 0.5,
+      plptex(x0 + 0.45 * w, v >= 0 ? v + off : v - off, 1.0, 0.0, 0.5,
              fmt::format("{:.2f}", v).c_str());
     }
     entries.push_back({series[s].label, colours[s % 4], true});
