@@ -18,10 +18,6 @@ void Table::add(std::string name, Eigen::VectorXd values) {
 
 void write_table(const std::filesystem::path& path, const Table& table) {
   std::string text;
-  for (const std::string& line : table.comments) {
-    assert(line.find('\n') == std::string::npos);
-    text += "# " + line + '\n';
-  }
   for (size_t c = 0; c < table.names.size(); ++c) {
     if (c) text += ',';
     text += table.names[c];

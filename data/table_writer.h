@@ -1,7 +1,6 @@
 // CSV result tables: named numeric columns, written atomically.
 //
-// Comment lines ("# key: value", as the test files' metadata) come first, then
-// the header row. Values are printed with 10 significant digits ("%.10g"), enough for every
+// Values are printed with 10 significant digits ("%.10g"), enough for every
 // result jointlab reports. A NaN or Inf in a result is a bug upstream; the
 // writer refuses it (std::logic_error) rather than print it.
 #pragma once
@@ -19,7 +18,6 @@ namespace jointlab::data {
 struct Table {
   std::vector<std::string> names;        ///< header row
   std::vector<Eigen::VectorXd> columns;  ///< one vector per name
-  std::vector<std::string> comments;     ///< lines written before the header, each after "# "
 
   /// Appends a column; asserts equal length with the first.
   void add(std::string name, Eigen::VectorXd values);

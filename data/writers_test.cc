@@ -54,15 +54,6 @@ TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
   EXPECT_FALSE(fs::exists(q));
 }
 
-TEST(Table, WritesCommentLinesBeforeTheHeader) {
-  Table t;
-  t.comments = {"coverage_factor: 3", "note: two lines"};
-  t.add("a", Eigen::Vector2d(1.0, 0.5));
-  const fs::path p = scratch("comments.csv");
-  write_table(p, t);
-  EXPECT_EQ(slurp(p), "# coverage_factor: 3\n# note: two lines\na\n1\n0.5\n");
-}
-
 TEST(JsonWriter, NestedDocument) {
   JsonWriter w;
   w.begin_object()

@@ -1,6 +1,7 @@
 #include "jointlab/modal/ringdown.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstdlib>
@@ -607,12 +608,17 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
     const double offset = std::clamp((e.t - e.centre) / half, -1.0, 1.0);
     const Eigen::Index stride =
         std::max<Eigen::Index>(1, static_cast<Eigen::Index>(e.window / dt) / 48);
-    const auto slope = [&](const Eigen::VectorXd& y) {
-      return signal::fit_local(y, 0.0, dt, e.centre, half, degree, 1.0, stride, offset).slope;
+    // Real and imaginary parts share one design (one pass over the window for both).
+    const auto slopes = [&](const Eigen::VectorXd& re, const Eigen::VectorXd& im) {
+      const auto [a, b] =
+          signal::fit_local_pair(re, im, 0.0, dt, e.centre, half, degree, 1.0, stride, offset);
+      return std::array<double, 2>{a.slope, b.slope};
     };
     const auto scaled = [tail](double x) { return x == 0 ? 0.0 : tail * std::abs(x); };
-    gain_term[i] = std::hypot(scaled(slope(step_re)), slope(ends_re));
-    add_w[i] = std::hypot(add_w[i], std::hypot(scaled(slope(step_im)), slope(ends_im)));
+    const auto [step_s, step_w] = slopes(step_re, step_im);
+    const auto [ends_s, ends_w] = slopes(ends_re, ends_im);
+    gain_term[i] = std::hypot(scaled(step_s), ends_s);
+    add_w[i] = std::hypot(add_w[i], std::hypot(scaled(step_w), ends_w));
   }
   for (size_t i = 0; i < ne; ++i) {
     est[i].sigma_std = std::hypot(std::hypot(est[i].sigma_std, add_s[i]), gain_term[i]);
