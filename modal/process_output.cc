@@ -1,7 +1,5 @@
 #include "jointlab/modal/process_output.h"
 
-#include <fmt/format.h>
-
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
@@ -19,11 +17,6 @@ void write_backbones(const std::filesystem::path& dir, const RecordResult& resul
     if (r.ringdown.summary.status != RingdownStatus::kOk) continue;
     const Backbone& b = r.ringdown.backbone;
     data::Table t;
-    t.comments.push_back(fmt::format("coverage_factor: {:g}", options.coverage_factor));
-    t.comments.push_back(fmt::format(
-        "uncertainty: frequency_std_hz and damping_std are expanded uncertainties k*sigma, "
-        "coverage factor k = {:g}",
-        options.coverage_factor));
     t.add("time_s", b.time_s);
     t.add("amplitude", b.amplitude);
     t.add("frequency_hz", b.frequency_hz);
@@ -36,6 +29,9 @@ void write_backbones(const std::filesystem::path& dir, const RecordResult& resul
     t.add("snr", b.snr);
     t.add("window_s", b.window_s);
     t.add("harmonic", b.harmonic.cast<double>());
+    // The k of the *_std columns, named in the header row itself: a comment line above it
+    // would become the header of readers that take the first line (numpy, pandas).
+    t.add("coverage_factor", Eigen::VectorXd::Constant(b.size(), options.coverage_factor));
     data::write_table(dir / backbone_file_name(result.source, r.channel, r.band_index), t);
   }
 }
