@@ -27,17 +27,11 @@ NumericTable read_numeric_table(const fs::path& path) {
   if (!in) throw InputError(fmt::format("{}: cannot read", path.string()));
   NumericTable t;
   std::string line;
-  long row = 0;
-  // Leading "# key: value" comment lines (the backbone files state their coverage factor).
-  bool header = false;
-  while (!header && std::getline(in, line)) {
-    ++row;
-    header = !line.empty() && line.front() != '#';
-  }
-  if (!header) throw InputError(fmt::format("{}: empty", path.string()));
+  if (!std::getline(in, line)) throw InputError(fmt::format("{}: empty", path.string()));
   std::stringstream hs(line);
   for (std::string name; std::getline(hs, name, ',');) t.names.push_back(name);
   t.columns.resize(t.names.size());
+  long row = 1;
   while (std::getline(in, line)) {
     ++row;
     if (line.empty()) continue;
