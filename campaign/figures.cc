@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <plplot.h>
 
+#include "jointlab/campaign/plot_layout.h"
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
 
@@ -173,33 +174,6 @@ void points(const Eigen::VectorXd& x, const Eigen::VectorXd& y, bool logx, bool 
   }
 }
 
-// The polyline (x, y), x increasing or decreasing, cut to lo <= x <= hi: a segment that
-// crosses an end ends there, at its linearly interpolated y (so a curve's range and its
-// drawing stop at the frame instead of running past it).
-void clip_x(std::vector<PLFLT>& x, std::vector<PLFLT>& y, double lo, double hi) {
-  std::vector<PLFLT> cx, cy;
-  const auto inside = [&](size_t i) { return x[i] >= lo && x[i] <= hi; };
-  for (size_t i = 0; i < x.size(); ++i) {
-    if (i > 0) {
-      // Where the segment from i - 1 to i crosses an end, in the segment's order.
-      std::vector<double> w;
-      for (const double xe : {lo, hi})
-        if ((x[i - 1] - xe) * (x[i] - xe) < 0) w.push_back((xe - x[i - 1]) / (x[i] - x[i - 1]));
-      std::sort(w.begin(), w.end());
-      for (const double f : w) {
-        cx.push_back(x[i - 1] + f * (x[i] - x[i - 1]));
-        cy.push_back(y[i - 1] + f * (y[i] - y[i - 1]));
-      }
-    }
-    if (inside(i)) {
-      cx.push_back(x[i]);
-      cy.push_back(y[i]);
-    }
-  }
-  x = std::move(cx);
-  y = std::move(cy);
-}
-
 void line(const std::vector<PLFLT>& x, const std::vector<PLFLT>& y, PLINT colour, double width,
           PLINT style = 1) {
   if (x.size() < 2) return;
@@ -253,25 +227,11 @@ void axes(const char* xopt, const char* yopt) {
 }
 
 // Numeric labels of a log10 y axis over [lo, hi] (PLplot labels only whole decades, so a
-// range under a decade would show none): 1, 2, 5 x 10^k, or decades for wide ranges; a label
-// closer than `min_gap` (a fraction of the axis) to the one below it is left out, so that
-// labels never overlap (9 and 8 x 10^k sit 0.05 decades apart).
+// range under a decade would show none), kept min_gap of the axis apart (plot_layout.h).
 void log_y_labels(double lo, double hi, double min_gap) {
-  const std::vector<double> mantissas = hi - lo > 2.0 ? std::vector<double>{1}
-                                        : hi - lo > 0.8
-                                            ? std::vector<double>{1, 2, 5}
-                                            : std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8, 9};
   plcol0(kBlack);
-  double last = -std::numeric_limits<double>::infinity();
-  for (int k = static_cast<int>(std::floor(lo)); k <= static_cast<int>(std::ceil(hi)); ++k) {
-    for (double m : mantissas) {
-      const double v = m * std::pow(10.0, k), p = std::log10(v);
-      const double at = (p - lo) / (hi - lo);
-      if (p < lo || p > hi || at - last < min_gap) continue;
-      plmtex("lv", 0.6, at, 1.0, fmt::format("{:g}", v).c_str());
-      last = at;
-    }
-  }
+  for (const double v : log_label_values(lo, hi, min_gap))
+    plmtex("lv", 0.6, (std::log10(v) - lo) / (hi - lo), 1.0, fmt::format("{:g}", v).c_str());
 }
 
 // Grid lines under the data.
