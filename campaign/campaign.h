@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,19 +60,19 @@ struct CampaignUpdate {
 
 /// A whole campaign.
 struct Campaign {
-  std::filesystem::path file;                   ///< the campaign file (absolute)
-  std::string name;                             ///< title for reports
-  Quantity quantity = Quantity::kAcceleration;  ///< what unit-less channels measure
-  Quantity amplitude = Quantity::kVelocity;     ///< amplitude quantity of the backbones
-  std::filesystem::path truth;                  ///< optional known parameters (absolute), or empty
-  std::vector<CampaignGroup> groups;            ///< at least one
-  std::vector<CampaignChannel> channels;        ///< at least one
-  std::vector<CampaignMode> modes;              ///< at least one
-  CampaignModel model;                          ///< may be empty (no model side)
-  ScatterOptions scatter;                       ///< [scatter]
-  int qsma_points = 60;                         ///< [qsma] points
-  CampaignUpdate linear_update;                 ///< [update.linear]
-  CampaignUpdate iwan_update;                   ///< [update.iwan]
+  std::filesystem::path file;                ///< the campaign file (absolute)
+  std::string name;                          ///< title for reports
+  std::optional<Quantity> quantity;          ///< what unit-less channels measure, if given
+  Quantity amplitude = Quantity::kVelocity;  ///< amplitude quantity of the backbones
+  std::filesystem::path truth;               ///< optional known parameters (absolute), or empty
+  std::vector<CampaignGroup> groups;         ///< at least one
+  std::vector<CampaignChannel> channels;     ///< at least one
+  std::vector<CampaignMode> modes;           ///< at least one
+  CampaignModel model;                       ///< may be empty (no model side)
+  ScatterOptions scatter;                    ///< [scatter]
+  int qsma_points = 60;                      ///< [qsma] points
+  CampaignUpdate linear_update;              ///< [update.linear]
+  CampaignUpdate iwan_update;                ///< [update.iwan]
 
   /// Number of hits over every group.
   int hit_count() const;

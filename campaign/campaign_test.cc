@@ -31,6 +31,7 @@ TEST(Campaign, ReadsTheExample) {
   ASSERT_EQ(c.linear_update.sets.size(), 1u);
   EXPECT_EQ(c.linear_update.settings.at("mac_threshold"), 0.5);
   EXPECT_EQ(c.amplitude, Quantity::kVelocity);
+  EXPECT_EQ(c.quantity, Quantity::kAcceleration);
   // The Iwan step fits mode 1 only (mode 3 rings while mode 1 slips the rivets).
   EXPECT_TRUE(c.iwan_update.enabled);
   EXPECT_EQ(c.iwan_update.modes, std::vector<std::string>{"mode 1"});

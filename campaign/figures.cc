@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <plplot.h>
 
+#include "jointlab/campaign/plot_layout.h"
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
 
@@ -226,20 +227,11 @@ void axes(const char* xopt, const char* yopt) {
 }
 
 // Numeric labels of a log10 y axis over [lo, hi] (PLplot labels only whole decades, so a
-// range under a decade would show none): 1, 2, 5 x 10^k, or decades for wide ranges.
-void log_y_labels(double lo, double hi) {
-  const std::vector<double> mantissas = hi - lo > 2.0 ? std::vector<double>{1}
-                                        : hi - lo > 0.8
-                                            ? std::vector<double>{1, 2, 5}
-                                            : std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8, 9};
+// range under a decade would show none), kept min_gap of the axis apart (plot_layout.h).
+void log_y_labels(double lo, double hi, double min_gap) {
   plcol0(kBlack);
-  for (int k = static_cast<int>(std::floor(lo)); k <= static_cast<int>(std::ceil(hi)); ++k) {
-    for (double m : mantissas) {
-      const double v = m * std::pow(10.0, k), p = std::log10(v);
-      if (p < lo || p > hi) continue;
-      plmtex("lv", 0.6, (p - lo) / (hi - lo), 1.0, fmt::format("{:g}", v).c_str());
-    }
-  }
+  for (const double v : log_label_values(lo, hi, min_gap))
+    plmtex("lv", 0.6, (std::log10(v) - lo) / (hi - lo), 1.0, fmt::format("{:g}", v).c_str());
 }
 
 // Grid lines under the data.
@@ -275,17 +267,26 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
 
   Range fy, zy;  // frequency [Hz], log10 damping
   std::vector<PLFLT> px, py;
+  // Every curve as drawn (cut at the amplitude window) lies inside the y ranges.
+  const auto add_curve = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& v, bool logy,
+                             Range& r) {
+    points(a, v, true, logy, px, py);
+    clip_x(px, py, ax.lo, ax.hi);
+    for (double u : py) r.add(u);
+  };
   for (const Curve& c : figure.hits) {
-    points(c.amplitude, c.frequency_hz, true, false, px, py, ax.lo, ax.hi);
-    for (double v : py) fy.add(v);
-    points(c.amplitude, c.damping, true, true, px, py, ax.lo, ax.hi);
-    for (double v : py) zy.add(v);
+    add_curve(c.amplitude, c.frequency_hz, false, fy);
+    add_curve(c.amplitude, c.damping, true, zy);
   }
   for (const ModelCurve& m : figure.model) {
-    points(m.amplitude, m.frequency_hz, true, false, px, py, ax.lo, ax.hi);
-    for (double v : py) fy.add(v);
-    points(m.amplitude, m.damping, true, true, px, py, ax.lo, ax.hi);
-    for (double v : py) zy.add(v);
+    add_curve(m.amplitude, m.frequency_hz, false, fy);
+    add_curve(m.amplitude, m.damping, true, zy);
+  }
+  for (const ScatterBin& b : figure.summary.bins) {
+    fy.add(b.frequency_hz.ci_low);
+    fy.add(b.frequency_hz.ci_high);
+    if (b.damping.ci_low > 0) zy.add(std::log10(b.damping.ci_low));
+    if (b.damping.ci_high > 0) zy.add(std::log10(b.damping.ci_high));
   }
   fy = fy.padded(0.08, 0.5);
   zy = zy.padded(0.08, 0.2);
@@ -336,16 +337,18 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     for (size_t i = 0; i < figure.hits.size(); ++i) {
       const Curve& c = figure.hits[i];
       points(c.amplitude, damping ? c.damping : c.frequency_hz, true, logy, px, py);
+      clip_x(px, py, ax.lo, ax.hi);
       line(px, py, flagged[i] ? kFlagged : kHit, 1.2, flagged[i] ? 2 : 1);
     }
     draw_bins(damping, logy);
     for (size_t m = 0; m < figure.model.size(); ++m) {
       const ModelCurve& mc = figure.model[m];
       points(mc.amplitude, damping ? mc.damping : mc.frequency_hz, true, logy, px, py);
+      clip_x(px, py, ax.lo, ax.hi);
       line(px, py, model_colours[m % 3], 2.2, m < 3 ? 1 : 3);
     }
     axes(damping ? "bcnstl" : "bcstl", logy ? "bcstl" : "bcnstv");
-    if (logy) log_y_labels(y.lo, y.hi);
+    if (logy) log_y_labels(y.lo, y.hi, 0.1);
   };
 
   plvpor(0.15, 0.67, 0.53, 0.92);
@@ -354,11 +357,11 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
   plmtex("l", 6.2, 0.5, 0.5, "frequency [Hz]");
   plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
 
-  plvpor(0.15, 0.67, 0.12, 0.49);
+  plvpor(0.15, 0.67, 0.14, 0.49);
   draw_panel(true);
   plcol0(kBlack);
   plmtex("l", 6.2, 0.5, 0.5, "damping ratio");
-  plmtex("b", 2.6, 0.5, 0.5, figure.amplitude_label.c_str());
+  plmtex("b", 3.4, 0.5, 0.5, figure.amplitude_label.c_str());
   // The legend sits to the right of the panels, clear of the data.
   std::vector<LegendEntry> entries;
   int n_flagged = static_cast<int>(std::count(flagged.begin(), flagged.end(), true));
@@ -398,7 +401,7 @@ void plot_spectrum(const SpectrumFigure& figure, const fs::path& file, const Fig
   y.hi += 0.4;  // room for the band labels
 
   Plot plot(file, size);
-  plvpor(0.13, 0.96, 0.11, 0.90);
+  plvpor(0.13, 0.96, 0.13, 0.90);
   plwind(0.0, fmax, y.lo, y.hi);
   grid("g", "gl");
   for (const LabelledBand& b : figure.bands) {
@@ -421,8 +424,8 @@ void plot_spectrum(const SpectrumFigure& figure, const fs::path& file, const Fig
     plptex(0.5 * (b.lo_hz + b.hi_hz), y.hi - 0.2, 1.0, 0.0, 0.5, b.label.c_str());
   plschr(0, 1.15);
   axes("bcnst", "bcstl");
-  log_y_labels(y.lo, y.hi);
-  plmtex("b", 2.6, 0.5, 0.5, "frequency [Hz]");
+  log_y_labels(y.lo, y.hi, 0.05);
+  plmtex("b", 3.2, 0.5, 0.5, "frequency [Hz]");
   plmtex("l", 5.6, 0.5, 0.5, figure.amplitude_label.c_str());
   plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
   legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP);
@@ -457,12 +460,15 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
   }
   plcol0(kBlack);
   plbox("bc", 1.0, 0, "bc", 1.0, 0);
+  // More than five columns: labels on two staggered lines, so that neighbours never overlap.
+  const bool stagger = nc > 5;
   for (Eigen::Index j = 0; j < nc; ++j)
-    plmtex("b", 1.5, (j + 0.5) / static_cast<double>(nc), 0.5, columns[j].c_str());
+    plmtex("b", stagger && j % 2 ? 2.7 : 1.5, (j + 0.5) / static_cast<double>(nc), 0.5,
+           columns[j].c_str());
   for (Eigen::Index i = 0; i < nr; ++i)
     plmtex("lv", 1.0, 1.0 - (i + 0.5) / static_cast<double>(nr), 1.0, rows[i].c_str());
   plschr(0, 1.15);
-  plmtex("b", 3.2, 0.5, 0.5, "model mode");
+  plmtex("b", stagger ? 4.0 : 3.2, 0.5, 0.5, "model mode");
   plmtex("l", 8.0, 0.5, 0.5, "measured mode");
   plmtex("t", 2.4, 0.5, 0.5, title.c_str());
   plschr(0, 0.9);
@@ -486,6 +492,8 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
     for (double v : s.percent) y.add(v);
   }
   y = y.padded(0.15, 0.5);
+  // Room above the bars for the legend (two lines take about a tenth of the height each).
+  y.hi += (0.12 * static_cast<double>(series.size()) + 0.05) * (y.hi - y.lo);
   const PLINT colours[4] = {kModel1, kMean, kModel2, kModel3};
   Plot plot(file, size);
   plvpor(0.13, 0.96, 0.13, 0.90);
@@ -503,7 +511,7 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
       plfill(4, bx, by);
       plcol0(kBlack);
       const double off = 0.03 * (y.hi - y.lo);
-      plptex(x0 + 0.45 * w, v >= 0 ? v + off * 0.3 : v - off, 1.0, 0.0, 0.5,
+      plptex(x0 + 0.45 * w, v >= 0 ? v + off : v - off, 1.0, 0.0, 0.5,
              fmt::format("{:.2f}", v).c_str());
     }
     entries.push_back({series[s].label, colours[s % 4], true});

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <plplot.h>
 
+#include "jointlab/campaign/plot_layout.h"
 #include "jointlab/core/error.h"
 #include "jointlab/tests/test_util.h"
 
@@ -105,6 +106,47 @@ TEST(Figures, WriteFilesAndLeaveNoState) {
   for (const auto& e : fs::directory_iterator(dir))
     EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
   if (!std::getenv("JOINTLAB_KEEP_FIGURES")) fs::remove_all(dir);
+}
+
+// A curve that starts left of the window, ends right of it, and one that jumps across it in
+// one segment: what is drawn stays inside, ends on the frame at the interpolated value, and
+// keeps the points inside.
+TEST(PlotLayout, CurvesAreCutAtTheWindow) {
+  std::vector<double> x{-2, 0.5, 1.5, 4}, y{0, 5, 15, 40};  // y = 10 x but for the first
+  clip_x(x, y, 0.0, 2.0);
+  ASSERT_EQ(x.size(), 4u);
+  EXPECT_DOUBLE_EQ(x.front(), 0.0);
+  EXPECT_DOUBLE_EQ(y.front(), 4.0);  // 0.8 of the way from (-2, 0) to (0.5, 5)
+  EXPECT_DOUBLE_EQ(x.back(), 2.0);
+  EXPECT_DOUBLE_EQ(y.back(), 20.0);
+  EXPECT_DOUBLE_EQ(x[1], 0.5);
+  EXPECT_DOUBLE_EQ(x[2], 1.5);
+  std::vector<double> a{3, -1}, b{3, -1};  // decreasing, across the whole window
+  clip_x(a, b, 0.0, 2.0);
+  EXPECT_EQ(a, (std::vector<double>{2.0, 0.0}));
+  EXPECT_EQ(b, (std::vector<double>{2.0, 0.0}));
+  std::vector<double> c{3, 4}, d{1, 1};  // wholly outside
+  clip_x(c, d, 0.0, 2.0);
+  EXPECT_TRUE(c.empty());
+}
+
+// Log-axis labels for ranges from a fifth of a decade to five decades: at least two, in
+// range, increasing, and never closer than the gap asked for (9 and 8 x 10^k sit 0.05
+// decades apart, so a 0.6-decade axis used to print labels on top of each other).
+TEST(PlotLayout, LogLabelsKeepApart) {
+  for (const double span : {0.2, 0.6, 0.9, 1.7, 2.5, 5.0}) {
+    const double lo = -3.3, hi = lo + span, gap = 0.1;
+    const std::vector<double> v = log_label_values(lo, hi, gap);
+    ASSERT_GE(v.size(), 2u) << span;
+    for (size_t i = 0; i < v.size(); ++i) {
+      const double p = std::log10(v[i]);
+      EXPECT_GE(p, lo - 1e-12);
+      EXPECT_LE(p, hi + 1e-12);
+      if (i > 0) {
+        EXPECT_GE((p - std::log10(v[i - 1])) / span, gap - 1e-12) << span;
+      }
+    }
+  }
 }
 
 TEST(Figures, RejectsBadInput) {

@@ -12,7 +12,7 @@ std::string backbone_file_name(const std::string& source, const std::string& cha
 }
 
 void write_backbones(const std::filesystem::path& dir, const RecordResult& result,
-                     const RingdownOptions&) {
+                     const RingdownOptions& options) {
   for (const ChannelBand& r : result.results) {
     if (r.ringdown.summary.status != RingdownStatus::kOk) continue;
     const Backbone& b = r.ringdown.backbone;
@@ -29,6 +29,9 @@ void write_backbones(const std::filesystem::path& dir, const RecordResult& resul
     t.add("snr", b.snr);
     t.add("window_s", b.window_s);
     t.add("harmonic", b.harmonic.cast<double>());
+    // The k of the *_std columns, named in the header row itself: a comment line above it
+    // would become the header of readers that take the first line (numpy, pandas).
+    t.add("coverage_factor", Eigen::VectorXd::Constant(b.size(), options.coverage_factor));
     data::write_table(dir / backbone_file_name(result.source, r.channel, r.band_index), t);
   }
 }

@@ -116,11 +116,15 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
 // 80 to 77.2 Hz as the amplitude grows (half-gain points 78 and 84 Hz). The band's
 // gain is divided out where the band passes at least half of the mode; points where
 // it passes less, or where the correction is not known to the damping limit, are left
-// out. Measured: 0.42-1.57 decades (before: 0.64-0.99), median damping errors 0.6-0.9 %,
-// worst 1.6-1.7 % on two seeds; on the third (seed 11) the first points, whose mode lies
-// below the half-gain point 78 Hz, are read pulled into the band and the iteration
-// settles there: 12.1 % (before: 7.8 % as the worst of the three). Required: every
-// frequency within 0.05 %, the median damping within 1 %, every damping within 13 %.
+// out. On seed 11 the span starts 0.21 s after the impact, with the mode at 78.5 Hz on the
+// band's slope drifting 1.8 Hz/s: the correction is a third of the decay rate there and
+// rests on the mode before the first estimate, which the filter reaches but no estimate
+// describes. Held there, it left the first points 12 % off (+12, +8, -8 %); the difference
+// to the model continued along its line back to the impact now counts in their
+// uncertainty, and they drop out. Measured: 0.91, 0.42 and 0.71 decades (seed 11 had 1.57
+// with the 12 % points), median damping errors 0.6-0.9 %, worst 1.9, 1.7 and 1.6 %.
+// Required: every frequency within 0.05 %, the median damping within 1 %, every damping
+// within 10 %.
 TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
   for (const unsigned seed : {11u, 12u, 13u}) {
     const testing::ThreeModeRecord rec = testing::three_mode_record(80.0, 6.0, 1e-3, seed, 0.1);
@@ -132,7 +136,7 @@ TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
     std::printf("  note: %s\n", r.summary.message.c_str());
     EXPECT_GE(e.decades, 0.4) << "seed " << seed;
     EXPECT_LE(e.median_z, 0.01) << "seed " << seed;
-    EXPECT_LE(e.max_z, 0.13) << "seed " << seed;
+    EXPECT_LE(e.max_z, 0.10) << "seed " << seed;
     EXPECT_LE(e.max_f, 5e-4) << "seed " << seed;
   }
 }
@@ -144,8 +148,9 @@ TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
 // divided out, must leave at least 1.2 decades with median errors within 0.05 % in
 // frequency and 10 % in damping (the acceptance of a real record read this way) and every
 // damping within 10 %; the same record in the wide band 130:175 Hz is the reference
-// (measured 2.07-2.15 decades, median damping error 0.2-0.4 %). Measured here: 1.56-1.92
-// decades, median errors at most 4e-5 and 1.2 %, worst damping 5.8 %.
+// (measured 2.07-2.15 decades, median damping error 0.2-0.4 %). Measured here: 1.56-1.74
+// decades (1.56-1.92 before the ends of the model counted), median errors at most 4.3e-5
+// and 1.2 %, worst damping 5.8 %.
 TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
   const double fs = 5120, f1 = 151.0;
   const Eigen::Index n = static_cast<Eigen::Index>(4.0 * fs);
@@ -279,8 +284,46 @@ TEST(RingdownAdvice, NoModeInTheBandNamesThePeakNearIt) {
       << r.summary.message;
 }
 
+// The advice's numbers against modes of known damping: 80 Hz, damping 0.3, 1 and 3 % (noise
+// 1e-4 of the peak, 10 s at 1 kHz). The half-power width it names must be 2 zeta f within 5 %
+// (measured: exact to its 3 digits; read from the continued record's spectrum, as before, it
+// was 0.77-0.79 times that: 0.37, 1.25 and 3.78 Hz). Its factor (was 4): bands of 0.5-8
+// half-power widths gave no span in 16 of 21 cases, 0.44-1.00 decades in 4 and 2.34 in one
+// (0.3 %, 8 widths); bands of 12 and 16 widths gave 1.96-2.67 decades. Required: a band of 4 widths
+// gets the advice with the width, a band of 12 widths at least 1.5 decades.
+TEST(RingdownAdvice, HalfPowerWidthOfAModeOfKnownDamping) {
+  const double fs = 1000, f0 = 80.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(10 * fs);
+  for (const double zeta : {0.003, 0.01, 0.03}) {
+    std::mt19937 rng(1);
+    std::normal_distribution<double> g(0.0, 1e-4);
+    Eigen::VectorXd x(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / fs;
+      x(k) = std::exp(-zeta * 2 * std::numbers::pi * f0 * t) *
+                 std::cos(2 * std::numbers::pi * f0 * t) +
+             g(rng);
+    }
+    const double hp = 2 * zeta * f0;
+    const Ringdown narrow =
+        extract_band(x, fs, Quantity::kDisplacement, {f0 - 2 * hp, f0 + 2 * hp});
+    ASSERT_NE(narrow.summary.status, RingdownStatus::kOk) << zeta;
+    const std::string said = "narrower than 12 times the half-power width of its mode (";
+    const size_t at = narrow.summary.message.find(said);
+    ASSERT_NE(at, std::string::npos) << narrow.summary.message;
+    const double width = std::stod(narrow.summary.message.substr(at + said.size()));
+    const Ringdown wide = extract_band(x, fs, Quantity::kDisplacement, {f0 - 6 * hp, f0 + 6 * hp});
+    std::printf(
+        "zeta %.3f: half-power width %.3g Hz named, %.3g Hz true; 12 widths: %.2f decades\n", zeta,
+        width, hp, wide.summary.amplitude_decades);
+    EXPECT_NEAR(width / hp, 1.0, 0.05) << zeta;
+    ASSERT_EQ(wide.summary.status, RingdownStatus::kOk) << wide.summary.message;
+    EXPECT_GE(wide.summary.amplitude_decades, 1.5) << zeta;
+  }
+}
+
 // A band narrower than its mode: 79:81 Hz around a mode at 80 Hz with 3 % damping
-// (half-power width 4.8 Hz). The reason must say the band is narrower than 4 times the
+// (half-power width 4.8 Hz). The reason must say the band is narrower than 12 times the
 // mode's half-power width rather than only that the record is too short.
 TEST(RingdownAdvice, ABandNarrowerThanItsModeSaysSo) {
   const double fs = 1000, f0 = 80.0;
@@ -294,7 +337,8 @@ TEST(RingdownAdvice, ABandNarrowerThanItsModeSaysSo) {
   const Ringdown r = extract_band(x, fs, Quantity::kDisplacement, {79, 81});
   std::printf("advice: %s\n", r.summary.report().c_str());
   ASSERT_NE(r.summary.status, RingdownStatus::kOk);
-  EXPECT_NE(r.summary.message.find("narrower than 4 times the half-power width"), std::string::npos)
+  EXPECT_NE(r.summary.message.find("narrower than 12 times the half-power width"),
+            std::string::npos)
       << r.summary.message;
 }
 

@@ -33,21 +33,40 @@ struct Fft::Impl {
     half_out = fftw_alloc_complex(n / 2 + 1);
     full_in = fftw_alloc_complex(n);
     full_out = fftw_alloc_complex(n);
-    r2c = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_in, half_out, FFTW_ESTIMATE);
-    c2c_backward =
-        fftw_plan_dft_1d(static_cast<int>(n), full_in, full_out, FFTW_BACKWARD, FFTW_ESTIMATE);
-    // c2r overwrites its input: it reads full_in (n/2 + 1 values) and writes real_in.
-    c2r = fftw_plan_dft_c2r_1d(static_cast<int>(n), full_in, real_in, FFTW_ESTIMATE);
   }
   ~Impl() {
     std::lock_guard<std::mutex> lock(planner_mutex());
-    fftw_destroy_plan(r2c);
-    fftw_destroy_plan(c2c_backward);
-    fftw_destroy_plan(c2r);
+    for (fftw_plan p : {r2c, c2c_backward, c2r})
+      if (p) fftw_destroy_plan(p);
     fftw_free(real_in);
     fftw_free(half_out);
     fftw_free(full_in);
     fftw_free(full_out);
+  }
+  // Each plan is made on its first use: most sizes need one or two of the three, and
+  // planning costs more than a transform.
+  fftw_plan forward_plan() {
+    if (!r2c) {
+      std::lock_guard<std::mutex> lock(planner_mutex());
+      r2c = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_in, half_out, FFTW_ESTIMATE);
+    }
+    return r2c;
+  }
+  fftw_plan complex_plan() {
+    if (!c2c_backward) {
+      std::lock_guard<std::mutex> lock(planner_mutex());
+      c2c_backward =
+          fftw_plan_dft_1d(static_cast<int>(n), full_in, full_out, FFTW_BACKWARD, FFTW_ESTIMATE);
+    }
+    return c2c_backward;
+  }
+  // c2r overwrites its input: it reads full_in (n/2 + 1 values) and writes real_in.
+  fftw_plan real_plan() {
+    if (!c2r) {
+      std::lock_guard<std::mutex> lock(planner_mutex());
+      c2r = fftw_plan_dft_c2r_1d(static_cast<int>(n), full_in, real_in, FFTW_ESTIMATE);
+    }
+    return c2r;
   }
 };
 
@@ -63,7 +82,7 @@ Eigen::VectorXcd Fft::forward(const Eigen::Ref<const Eigen::VectorXd>& x) {
   assert(x.size() <= n);
   std::memset(impl_->real_in, 0, sizeof(double) * n);
   for (Eigen::Index j = 0; j < x.size(); ++j) impl_->real_in[j] = x(j);
-  fftw_execute(impl_->r2c);
+  fftw_execute(impl_->forward_plan());
   Eigen::VectorXcd out(n / 2 + 1);
   for (Eigen::Index k = 0; k <= n / 2; ++k) {
     out(k) = {impl_->half_out[k][0], impl_->half_out[k][1]};
@@ -78,7 +97,7 @@ Eigen::VectorXcd Fft::inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& 
     impl_->full_in[k][0] = spectrum(k).real();
     impl_->full_in[k][1] = spectrum(k).imag();
   }
-  fftw_execute(impl_->c2c_backward);
+  fftw_execute(impl_->complex_plan());
   Eigen::VectorXcd out(n);
   const double scale = 1.0 / static_cast<double>(n);
   for (Eigen::Index j = 0; j < n; ++j) {
@@ -94,7 +113,7 @@ Eigen::VectorXd Fft::inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half
     impl_->full_in[k][0] = half_spectrum(k).real();
     impl_->full_in[k][1] = half_spectrum(k).imag();
   }
-  fftw_execute(impl_->c2r);
+  fftw_execute(impl_->real_plan());
   Eigen::VectorXd out(n);
   const double scale = 1.0 / static_cast<double>(n);
   for (Eigen::Index j = 0; j < n; ++j) out(j) = impl_->real_in[j] * scale;

@@ -183,6 +183,44 @@ TEST_P(ProcessSynthetic, KnownBackboneThroughTheCommand) {
   EXPECT_NE(ss.str().find("ring.response.band1.csv"), std::string::npos);
 }
 
+// The coverage factor of the *_std columns is stated alike in --help (the default), in
+// each backbone file's header row (a last column coverage_factor, the contract's columns
+// first) and in summary.json, for the default and a given one.
+TEST(ProcessCoverageFactor, StatedInHelpFileHeaderAndSummary) {
+  const CommandResult help = run_jointlab("process --help");
+  EXPECT_NE(help.out.find("k = 3 by default"), std::string::npos) << help.out;
+  const ThreeModeRecord rec = three_mode_record(60.0, 6.0, 1e-3, 5);
+  const std::string dir = scratch_dir("coverage");
+  std::string text = fmt::format("# fs: {}\nresponse [m]\n", rec.fs);
+  for (Eigen::Index k = 0; k < rec.displacement.size(); ++k)
+    text += fmt::format("{:.12g}\n", rec.displacement(k));
+  write_text(dir + "/ring.csv", text);
+  for (const double k : {3.0, 2.0}) {
+    const std::string out = fmt::format("{}/out{:g}", dir, k);
+    const CommandResult r = run_jointlab(
+        fmt::format("process {}/ring.csv --band 48:72{} --out {}", dir,
+                    k == 3.0 ? std::string() : fmt::format(" --coverage-factor {:g}", k), out));
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::ifstream in(out + "/ring.response.band1.csv");
+    std::string header;
+    std::getline(in, header);
+    EXPECT_EQ(header.rfind("time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,"
+                           "damping_std,",
+                           0),
+              0u)
+        << header;
+    EXPECT_EQ(header.substr(header.rfind(',') + 1), "coverage_factor") << header;
+    const auto cols = read_columns(out + "/ring.response.band1.csv");
+    ASSERT_FALSE(cols.at("coverage_factor").empty());
+    for (const double v : cols.at("coverage_factor")) EXPECT_EQ(v, k);
+    std::ifstream js(out + "/summary.json");
+    std::stringstream ss;
+    ss << js.rdbuf();
+    EXPECT_NE(ss.str().find(fmt::format("\"coverage_factor\": {:g}", k)), std::string::npos)
+        << ss.str();
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Quantities, ProcessSynthetic,
                          ::testing::Values("displacement", "acceleration"));
 

@@ -249,6 +249,43 @@ TEST(RunCli, AModeWithoutABackboneIsReportedAndFails) {
   EXPECT_TRUE(fs::exists(out / "scatter/mode2.json"));
 }
 
+// Hit files whose channels have no unit: without the campaign's `quantity` the run is refused
+// with one line naming the channel and both ways to fix it; with it, they are processed.
+TEST(RunCli, UnitlessChannelsNeedTheCampaignsQuantity) {
+  const fs::path dir = testing::scratch_dir("run_cli_unitless");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10});
+  for (const fs::path& hit : s.hits) {
+    std::string text = read_text(hit);
+    const std::string unit = " [m/s^2]";
+    ASSERT_NE(text.find(unit), std::string::npos) << hit;
+    for (size_t at; (at = text.find(unit)) != std::string::npos;) text.erase(at, unit.size());
+    testing::write_text(hit.string(), text);
+  }
+  std::string text = read_text(s.campaign);
+  const std::string model = "[model]\nfile = \"model.toml\"\n";
+  text.erase(text.find(model), model.size());
+  const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
+  text.erase(text.find(mm), mm.size());
+  const std::string quantity = "quantity = \"acceleration\"\n";
+  ASSERT_NE(text.find(quantity), std::string::npos);
+  const std::string with = text;
+  text.erase(text.find(quantity), quantity.size());
+  testing::write_text(s.campaign.string(), text);
+  const auto run = [&] {
+    return testing::run_jointlab(
+        fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "out").string()));
+  };
+  testing::CommandResult r = run();
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  for (const char* says : {"channel 'acc_", "has no unit", "[m/s^2]", "quantity = ", "[campaign]"})
+    EXPECT_NE(r.err.find(says), std::string::npos) << says << ": " << r.err;
+  testing::write_text(s.campaign.string(), with);
+  r = run();
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "out" / "report.md"));
+}
+
 // `run` and `update-iwan` build their Iwan targets with one function: from the same hits
 // (processed by `run` into its cache, and by `process` into a folder `update-iwan` reads) and
 // the same settings, the targets agree point for point, weights and screening included, and

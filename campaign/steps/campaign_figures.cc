@@ -59,8 +59,9 @@ ReportFigure spectrum_figure(const Campaign& c, const fs::path& dir) {
     sf.frequency_hz = s.frequency_hz;
     sf.spectra.push_back(s.amplitude);
     sf.channel_names.push_back(ch.name);
-    const Quantity q = rc->quantity.value_or(c.quantity);
-    sf.amplitude_label = fmt::format("{} amplitude [{}]", quantity_name(q), si_unit(q));
+    const std::optional<Quantity> q = rc->quantity ? rc->quantity : c.quantity;
+    sf.amplitude_label =
+        q ? fmt::format("{} amplitude [{}]", quantity_name(*q), si_unit(*q)) : "amplitude";
   }
   double fmax = 0;
   for (const CampaignMode& m : c.modes) {

@@ -52,10 +52,12 @@ ReportSection data_section(const Campaign& c, const RunSummary& summary,
     if (!ch.dof.empty() && has_model) channels += fmt::format(" (model DOF {})", ch.dof);
   }
   s.paragraphs.push_back(fmt::format(
-      "Campaign file {}. {} hit(s) in {} group(s); channels {}; {} mode(s). Channels without a "
-      "unit measure {}; backbone amplitudes are {} amplitudes [{}].",
+      "Campaign file {}. {} hit(s) in {} group(s); channels {}; {} mode(s). {}; backbone "
+      "amplitudes are {} amplitudes [{}].",
       c.file.string(), summary.hits, c.groups.size(), channels, c.modes.size(),
-      quantity_name(c.quantity), quantity_name(c.amplitude), si_unit(c.amplitude)));
+      c.quantity ? fmt::format("Channels without a unit measure {}", quantity_name(*c.quantity))
+                 : std::string("Every channel's unit is taken from its file"),
+      quantity_name(c.amplitude), si_unit(c.amplitude)));
   ReportTable t{"Groups", {"group", "level", "hits", "files"}, {}};
   for (const CampaignGroup& g : c.groups) {
     std::string files;

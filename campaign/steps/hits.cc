@@ -25,6 +25,16 @@ fs::path hit_dir(const fs::path& out, const std::string& group) { return out / "
 void process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
                  signal::FftCache& cache) {
   const data::Record rec = data::read_record(file);
+  // The rule of `process`: a channel without a unit measures what the campaign says, or
+  // nothing can be assumed.
+  for (const CampaignChannel& ch : c.channels)
+    for (const data::Channel& rc : rec.channels)
+      if (rc.name == ch.name && !rc.quantity && !c.quantity)
+        throw InputError(fmt::format(
+            "{}: channel '{}' has no unit and the campaign gives no quantity: give its unit in "
+            "the header (e.g. '{} [m/s^2]', '{} [m/s]') or quantity = "
+            "\"acceleration\"|\"velocity\"|\"displacement\" in [campaign] of {}",
+            file.string(), ch.name, ch.name, ch.name, c.file.string()));
   modal::ProcessOptions opt;
   for (const CampaignMode& m : c.modes) opt.bands.push_back(m.band);
   for (const CampaignChannel& ch : c.channels) opt.channels.push_back(ch.name);
@@ -132,8 +142,9 @@ HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file
 }
 
 std::string hit_settings(const Campaign& c) {
-  std::string s = fmt::format("quantity {} amplitude {};", quantity_name(c.quantity),
-                              quantity_name(c.amplitude));
+  std::string s =
+      fmt::format("quantity {} amplitude {};", c.quantity ? quantity_name(*c.quantity) : "none",
+                  quantity_name(c.amplitude));
   for (const CampaignMode& m : c.modes)
     s += fmt::format(" band {:.17g}:{:.17g};", m.band.lo, m.band.hi);
   for (const CampaignChannel& ch : c.channels) s += fmt::format(" channel '{}';", ch.name);
