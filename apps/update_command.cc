@@ -365,6 +365,10 @@ void add_update_commands(CLI::App& app) {
   iw->add_option("--evaluations", ia->options.max_evaluations,
                  "budget of QSMA evaluations (default 1500)");
   iw->add_option("--seed", ia->options.seed, "random seed (default 1)");
+  iw->add_option("--threads", ia->options.threads,
+                 "threads evaluating samples (default 0: every core); the result does not "
+                 "depend on it")
+      ->check(CLI::NonNegativeNumber);
   range_option(iw, "--fs-range", ia->fs_range, "Fs bounds LO:HI [N] (default start/30:start*30)");
   range_option(iw, "--gamma-range", ia->gamma_range, "Kt/Ks bounds LO:HI (default 0.05:2)");
   range_option(iw, "--chi-range", ia->chi_range, "chi bounds LO:HI (default -0.95:0)");

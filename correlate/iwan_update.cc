@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/parallel.h"
 #include "jointlab/correlate/qsma_at.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/linear_modes.h"
@@ -19,6 +20,7 @@ namespace jointlab::correlate {
 namespace {
 
 constexpr double kPenalty = 1e6;  // cost of a parameter set the model cannot evaluate
+constexpr int kBatch = 50;        // samples evaluated between two progress reports
 
 }  // namespace
 
@@ -38,6 +40,7 @@ std::string IwanUpdateOptions::error() const {
   if (!(contraction > 0 && contraction < 1)) return "contraction must be in (0, 1)";
   if (max_evaluations < samples) return "max_evaluations must be >= samples";
   if (local_starts < 1) return "local_starts must be >= 1";
+  if (threads < 0) return "threads must be >= 0 (0: every core)";
   if (!(frequency_floor > 0) || !(damping_floor > 0)) return "floors must be > 0";
   return "";
 }
@@ -92,6 +95,15 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
       residual_curve_.insert(residual_curve_.end(), 2 * static_cast<size_t>(n), curve_index++);
     }
   }
+  // The linear model's set-up shared by every evaluation; a model it cannot serve (a mode
+  // it does not have) is evaluated from scratch, which says what is wrong.
+  int highest = 0;
+  for (const IwanTarget& t : targets_) highest = std::max(highest, t.mode);
+  try {
+    set_model_ = std::make_shared<const model::IwanSetModel>(model, set_, highest);
+  } catch (const InputError&) {
+    set_model_.reset();
+  }
 }
 
 model::Model IwanObjective::apply(const model::IwanParameters& p) const {
@@ -105,23 +117,29 @@ model::Model IwanObjective::apply(const model::IwanParameters& p) const {
 }
 
 bool IwanObjective::residuals(const model::IwanParameters& p, double* r) const {
-  return evaluate(p, r, nullptr);
+  return evaluate(p, r, nullptr, false);
+}
+
+bool IwanObjective::residuals_from_scratch(const model::IwanParameters& p, double* r) const {
+  return evaluate(p, r, nullptr, true);
 }
 
 Eigen::Vector2d IwanObjective::slip_range(const model::IwanParameters& p) const {
   std::vector<double> r(residual_count_);
   Eigen::Vector2d slip(INFINITY, 0);
-  return evaluate(p, r.data(), &slip) ? slip : Eigen::Vector2d::Zero();
+  return evaluate(p, r.data(), &slip, false) ? slip : Eigen::Vector2d::Zero();
 }
 
-bool IwanObjective::evaluate(const model::IwanParameters& p, double* r,
-                             Eigen::Vector2d* slip_range) const {
+bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip_range,
+                             bool from_scratch) const {
   ++evaluations_;
   if (!model::iwan_parameter_error(p).empty()) return false;
   const int pw = amplitude_power(amplitude_);
   const double n_total = residual_count_ / 2.0;
   try {
-    const model::JointCondensation jc(apply(p));
+    std::optional<model::JointCondensation> shared;
+    if (!from_scratch && set_model_) shared = set_model_->at(p);
+    const model::JointCondensation& jc = shared ? *shared : shared.emplace(apply(p));
     const model::LinearModes& modes = jc.modes();
     int k = 0;
     for (const IwanTarget& t : targets_) {
@@ -131,8 +149,10 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r,
       std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>> order;
       for (size_t ci = 0; ci < t.curves.size(); ++ci) {
         const MeasuredBackbone& c = t.curves[ci];
+        // A mode that leaves the sensor still (to rounding: 1e-8 of its largest motion) is
+        // not the one measured there.
         const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
-        if (!(ph > 0)) return false;
+        if (!(ph > 1e-8 * modes.shapes.col(col).cwiseAbs().maxCoeff())) return false;
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
           order.push_back({c.amplitude(j) / ph, {ci, j}});
       }
@@ -235,17 +255,26 @@ struct Tracker {
 
   int used() const { return objective.evaluations() - start_evaluations; }
   bool spent() const { return used() >= options.max_evaluations; }
-  void record(const Vec4& v, double c) {
+  void record(const Vec4& v, double c) { record(v, c, used()); }
+  void record(const Vec4& v, double c, int evaluation) {
     if (c < best) {
       best = c;
       best_v = v;
     }
-    summary.history.push_back({used(), c, best});
-    if (options.progress) options.progress(used(), best);
+    summary.history.push_back({evaluation, c, best});
+    if (options.progress) options.progress(evaluation, best);
   }
-  double eval(const Vec4& v) {
-    const double c = objective.cost(to_params(v, objective.reference_stiffness()));
-    record(v, c);
+  // Costs of vs (evaluated on options.threads threads, each independent of the others), then
+  // recorded in their order: the outcome does not depend on the number of threads.
+  std::vector<double> eval(const std::vector<Vec4>& vs) {
+    std::vector<double> c(vs.size());
+    const int base = used();
+    parallel_for(
+        vs.size(), static_cast<unsigned>(options.threads), [] { return 0; },
+        [&](size_t i, int) {
+          c[i] = objective.cost(to_params(vs[i], objective.reference_stiffness()));
+        });
+    for (size_t i = 0; i < vs.size(); ++i) record(vs[i], c[i], base + static_cast<int>(i) + 1);
     return c;
   }
 };
@@ -280,8 +309,13 @@ void monte_carlo(Tracker& tr, bool log_scale, std::mt19937& rng) {
   Box box = full;
   double previous = INFINITY;
   while (!tr.spent()) {
-    for (int s = 0; s < tr.options.samples && !tr.spent(); ++s)
-      tr.eval(sample(box, log_scale, rng));
+    const int n = std::min(tr.options.samples, tr.options.max_evaluations - tr.used());
+    for (int done = 0; done < n;) {
+      std::vector<Vec4> vs;
+      for (; done < n && static_cast<int>(vs.size()) < kBatch; ++done)
+        vs.push_back(sample(box, log_scale, rng));
+      tr.eval(vs);
+    }
     ++tr.summary.rounds;
     if (!(tr.best < previous)) {
       tr.summary.status = IwanUpdateStatus::kConverged;
@@ -323,22 +357,27 @@ class IwanCost : public ceres::CostFunction {
     tr_.record(v, c);
     if (!jac || !jac[0]) return true;
     const int m = num_residuals();
-    std::vector<double> rp(m), rm(m);
+    // The 2 x 4 shifted residual vectors, each independent: on the option's threads.
+    const double h = 1e-4;
+    std::vector<std::vector<double>> shifted(8, std::vector<double>(m));
+    std::array<char, 8> ok{};
+    parallel_for(
+        8, static_cast<unsigned>(tr_.options.threads), [] { return 0; },
+        [&](size_t j, int) {
+          const int k = static_cast<int>(j / 2);
+          if (held_[k]) return;
+          double xs[4];
+          std::copy(x[0], x[0] + 4, xs);
+          xs[k] += j % 2 == 0 ? h : -h;
+          ok[j] = tr_.objective.residuals(to_params(to_v(xs), Ks), shifted[j].data());
+        });
     for (int k = 0; k < 4; ++k) {
       if (held_[k]) {
         for (int i = 0; i < m; ++i) jac[0][i * 4 + k] = 0;
         continue;
       }
-      const double h = 1e-4;
-      double xp[4], xm[4];
-      std::copy(x[0], x[0] + 4, xp);
-      std::copy(x[0], x[0] + 4, xm);
-      xp[k] += h;
-      xm[k] -= h;
-      if (!tr_.objective.residuals(to_params(to_v(xp), Ks), rp.data()) ||
-          !tr_.objective.residuals(to_params(to_v(xm), Ks), rm.data())) {
-        return false;
-      }
+      if (!ok[2 * k] || !ok[2 * k + 1]) return false;
+      const std::vector<double>&rp = shifted[2 * k], &rm = shifted[2 * k + 1];
       for (int i = 0; i < m; ++i) jac[0][i * 4 + k] = (rp[i] - rm[i]) / (2 * h);
     }
     return true;
@@ -365,10 +404,14 @@ void global_local(Tracker& tr, std::mt19937& rng) {
   const IwanUpdateOptions& o = tr.options;
   const Box full = initial_box(o);
   std::vector<std::pair<double, Vec4>> samples;
-  const int n_global = std::max(o.samples, o.max_evaluations / 2);
-  for (int s = 0; s < n_global && !tr.spent(); ++s) {
-    const Vec4 v = sample(full, true, rng);
-    samples.emplace_back(tr.eval(v), v);
+  const int n_global =
+      std::min(std::max(o.samples, o.max_evaluations / 2), o.max_evaluations - tr.used());
+  for (int done = 0; done < n_global;) {
+    std::vector<Vec4> vs;
+    for (; done < n_global && static_cast<int>(vs.size()) < kBatch; ++done)
+      vs.push_back(sample(full, true, rng));
+    const std::vector<double> c = tr.eval(vs);
+    for (size_t i = 0; i < vs.size(); ++i) samples.emplace_back(c[i], vs[i]);
   }
   std::sort(samples.begin(), samples.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });

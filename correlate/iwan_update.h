@@ -24,7 +24,9 @@
 // gives the linear-frequency error |f_model,R - f_lin,exp| / f_lin,exp and the backbone cost.
 #pragma once
 
+#include <atomic>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +36,7 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/iwan.h"
+#include "jointlab/model/iwan_set_model.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
@@ -86,6 +89,9 @@ struct IwanUpdateOptions {
   double frequency_floor = 1e-4;  ///< sigma_f at least this times f
   double damping_floor = 0.02;    ///< sigma_z at least this times zeta
   unsigned seed = 1;              ///< random seed
+  /// Threads evaluating the samples of a round (0: every core); the result does not depend
+  /// on it.
+  int threads = 0;
   /// Called after every evaluation with (evaluations, best cost so far).
   std::function<void(int, double)> progress;
   /// What is wrong with these options, or "".
@@ -107,8 +113,12 @@ class IwanObjective {
   const model::IwanParameters& initial() const { return initial_; }
   /// Number of residuals.
   int residual_count() const { return residual_count_; }
-  /// Residuals at p (K_T = p.Kt); false if the model could not be evaluated there.
+  /// Residuals at p (K_T = p.Kt); false if the model could not be evaluated there. The model
+  /// comes from the set-up shared by every evaluation (model/iwan_set_model.h). Thread-safe.
   bool residuals(const model::IwanParameters& p, double* r) const;
+  /// The same with the model condensed from scratch at p (every mode, a new factorisation):
+  /// the reference the shared set-up is checked and timed against.
+  bool residuals_from_scratch(const model::IwanParameters& p, double* r) const;
   /// Sum of squared residuals at p (a large finite penalty if it cannot be evaluated).
   double cost(const model::IwanParameters& p) const;
   /// Largest joint slip [m] (QSMA max_slip) at the lowest and at the highest measured amplitude
@@ -141,8 +151,10 @@ class IwanObjective {
   std::vector<int> residual_curve_;
   MeasuredModes linear_modes_;
   double linear_mac_ = 0.6;
-  mutable int evaluations_ = 0;
-  bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip) const;
+  std::shared_ptr<const model::IwanSetModel> set_model_;  // null: every evaluation from scratch
+  mutable std::atomic<int> evaluations_ = 0;
+  bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip,
+                bool from_scratch) const;
 };
 
 /// Why update_iwan() stopped.

@@ -31,15 +31,11 @@ void JointCondensation::Law::eval(double r, double& h, double& dh, double& energ
   energy = a3 * s * s * p;
 }
 
-JointCondensation::JointCondensation(const Model& model, const ModesOptions& modes_options) {
-  if (model.iwan_count() == 0) {
-    throw InputError("QSMA: the model has no Iwan joint (every joint is a linear spring)");
-  }
-  modes_ = linear_modes(model, modes_options);
+void JointCondensation::set_coordinates(const std::vector<Joint>& joints) {
   // Group Iwan elements by unordered pair of ends: one coordinate each. An element with
   // swapped ends sees -r, which leaves its energy (even) and generalized force unchanged.
   std::map<std::pair<Eigen::Index, Eigen::Index>, int> index;
-  for (const Joint& joint : model.joints) {
+  for (const Joint& joint : joints) {
     if (!joint.iwan) continue;
     std::pair<Eigen::Index, Eigen::Index> key{joint.a, kGround};
     if (joint.b != kGround) key = {std::min(joint.a, joint.b), std::max(joint.a, joint.b)};
@@ -48,7 +44,6 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
     coords_[it->second].elements.push_back(*joint.iwan);
   }
   const int nj = size();
-  const Eigen::Index n = model.size();
   laws_.resize(nj);
   cycles_.resize(nj);
   phi_max_.resize(nj);
@@ -80,6 +75,16 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
       chi1_min_ = std::min(chi1_min_, chi1);
     }
   }
+}
+
+JointCondensation::JointCondensation(const Model& model, const ModesOptions& modes_options) {
+  if (model.iwan_count() == 0) {
+    throw InputError("QSMA: the model has no Iwan joint (every joint is a linear spring)");
+  }
+  modes_ = linear_modes(model, modes_options);
+  set_coordinates(model.joints);
+  const int nj = size();
+  const Eigen::Index n = model.size();
 
   // B^T as a dense n x n_J matrix (n_J is small).
   Eigen::MatrixXd bt = Eigen::MatrixXd::Zero(n, nj);
@@ -149,6 +154,25 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   }
   stiffness_ = cl.solve(Eigen::MatrixXd::Identity(nj, nj));
   stiffness_ = 0.5 * (stiffness_ + stiffness_.transpose()).eval();
+}
+
+JointCondensation::JointCondensation(const std::vector<Joint>& joints, LinearModes modes,
+                                     Eigen::MatrixXd condensed_stiffness)
+    : modes_(std::move(modes)), stiffness_(std::move(condensed_stiffness)) {
+  set_coordinates(joints);
+  assert(stiffness_.rows() == size() && stiffness_.cols() == size());
+  Eigen::MatrixXd b = Eigen::MatrixXd::Zero(size(), modes_.shapes.rows());
+  for (int j = 0; j < size(); ++j) {
+    b(j, coords_[j].a) = 1.0;
+    if (coords_[j].b != kGround) b(j, coords_[j].b) = -1.0;
+  }
+  joint_shapes_ = b * modes_.shapes;
+  const Eigen::LLT<Eigen::MatrixXd> llt(stiffness_);
+  if (llt.info() != Eigen::Success) {
+    throw InputError("QSMA: the joint-condensed stiffness is not positive definite");
+  }
+  flexibility_ = llt.solve(Eigen::MatrixXd::Identity(size(), size()));
+  flexibility_ = 0.5 * (flexibility_ + flexibility_.transpose()).eval();
 }
 
 Eigen::VectorXd JointCondensation::joint_motion(const Eigen::Ref<const Eigen::VectorXd>& u) const {

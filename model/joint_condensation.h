@@ -51,6 +51,12 @@ class JointCondensation {
   /// for QSMA of mode R), the joint coordinates and C = B G B^T; InputError if the model
   /// has no Iwan element or its Iwan coordinates are linearly dependent.
   explicit JointCondensation(const Model& model, const ModesOptions& modes = {});
+  /// From parts computed elsewhere (iwan_set_model.h): the joints give the coordinates and
+  /// their laws (in the order the model constructor groups them), with the model's linear
+  /// modes and K_c = C^{-1}; InputError as the model constructor, or if K_c is not positive
+  /// definite.
+  JointCondensation(const std::vector<Joint>& joints, LinearModes modes,
+                    Eigen::MatrixXd condensed_stiffness);
 
   /// The linear modes computed (rigid-body modes first) with joints at linear stiffness.
   const LinearModes& modes() const { return modes_; }
@@ -109,6 +115,8 @@ class JointCondensation {
     double Kt, Fs, phi_max, chi1, a1, a2, a3, e_max;
     void eval(double r, double& h, double& dh, double& energy) const;
   };
+  // Groups the Iwan elements of `joints` into coordinates with their laws.
+  void set_coordinates(const std::vector<Joint>& joints);
   void evaluate(const Eigen::VectorXd& r, Eigen::VectorXd& h, Eigen::VectorXd& dh,
                 double& energy) const;
 

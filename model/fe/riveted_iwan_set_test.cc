@@ -1,0 +1,83 @@
+// The shared set-up of Iwan updating (model/iwan_set_model.h) on a riveted beam built as the
+// example's: the condensation and the QSMA curve at new Iwan parameters against the same from
+// scratch.
+#include <optional>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "jointlab/model/fe/model_builder.h"
+#include "jointlab/model/iwan_set_model.h"
+#include "jointlab/model/joint_condensation.h"
+#include "jointlab/model/model_file.h"
+#include "jointlab/model/qsma.h"
+#include "jointlab/tests/test_util.h"
+
+namespace jointlab::model::fe {
+namespace {
+
+using jointlab::testing::Close;
+
+// The example description (24 rivets, 48 Iwan coordinates, six rigid-body modes) on a coarse
+// shell mesh with 8 fixed-interface modes, so the test stays fast, read back as a model.
+Model riveted_beam() {
+  RivetedBeamDescription d = default_riveted_beam();
+  d.element_size = 0.005;
+  d.coupling_radius = 0.007;
+  d.fixed_interface_modes = 8;
+  const ReducedModel r = build_reduced_model(d, {});
+  EXPECT_TRUE(r.summary.ok) << r.summary.report;
+  const std::filesystem::path dir = jointlab::testing::scratch_folder("riveted_iwan_set_test");
+  write_model_directory(dir, r);
+  return read_model(dir / "model.toml");
+}
+
+TEST(RivetedIwanSet, CondensationAndQsmaMatchTheEvaluationFromScratch) {
+  const Model model = riveted_beam();
+  const IwanSetModel family(model, "iwan.rivet", 3);
+  for (double gamma : {0.3, 1.0 + 1e-6, 3.0}) {
+    const IwanParameters p{30.0, gamma * 1e7, -0.4, 2.0};
+    const std::optional<JointCondensation> fast = family.at(p);
+    ASSERT_TRUE(fast) << gamma;
+    Model m = model;
+    for (Joint& j : m.joints) {
+      if (j.element != "iwan.rivet") continue;
+      j.stiffness = p.Kt;
+      j.iwan = Iwan(p);
+    }
+    const JointCondensation scratch(m);
+    const int rigid = scratch.modes().rigid_count;
+    ASSERT_EQ(rigid, 6);
+    ASSERT_EQ(fast->modes().rigid_count, rigid);
+    // Exact up to the rounding of two dense eigen-solves and condensations: 1e-9 relative.
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_TRUE(Close(fast->modes().omega2(rigid + k), scratch.modes().omega2(rigid + k), 1e-9))
+          << gamma << " mode " << k + 1;
+    }
+    const double kscale = scratch.condensed_stiffness().cwiseAbs().maxCoeff();
+    EXPECT_LE((fast->condensed_stiffness() - scratch.condensed_stiffness()).cwiseAbs().maxCoeff(),
+              1e-9 * kscale);
+    // Mode 1's QSMA curve at the same modal amplitudes (the default range's).
+    QsmaOptions options;
+    QsmaSummary summary;
+    options.points = 12;
+    const std::vector<QsmaPoint> range = qsma(scratch, 1, options, &summary);
+    ASSERT_GE(range.size(), 3u);
+    options.q_min = range.front().modal_amplitude;
+    // Up to the range's last point but one: at its end (the limit load or full macroslip) the
+    // curve is flat in alpha and its q there hangs on the last digits of the model.
+    options.q_max = range[range.size() - 2].modal_amplitude;
+    const std::vector<QsmaPoint> cf = qsma(*fast, 1, options, &summary),
+                                 cs = qsma(scratch, 1, options, &summary);
+    ASSERT_EQ(cf.size(), cs.size()) << gamma;
+    for (size_t i = 0; i < cf.size(); ++i) {
+      EXPECT_TRUE(Close(cf[i].frequency_hz, cs[i].frequency_hz, 1e-9)) << gamma << " " << i;
+      EXPECT_TRUE(Close(cf[i].damping_ratio, cs[i].damping_ratio, 1e-9)) << gamma << " " << i;
+      EXPECT_TRUE(Close(cf[i].ringdown_frequency_hz, cs[i].ringdown_frequency_hz, 1e-9))
+          << gamma << " " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace jointlab::model::fe
