@@ -121,8 +121,10 @@ void run_update_linear(const LinearArgs& a) {
 }
 
 struct IwanArgs {
-  std::string model, measured, sensors, out, set, optimizer = "global-local";
-  std::vector<std::string> modes, channels;
+  std::string model, measured, sensors, out, set, optimizer = "global-local", compare = "matched";
+  std::vector<std::string> modes, channels, stepped_sine;
+  std::string stepped_sine_channel;
+  int stepped_sine_mode = 0;
   std::vector<double> pareto;
   std::vector<double> fs_range, gamma_range{0.05, 2.0}, chi_range{-0.95, 0.0},
       beta_range{0.01, 100.0};
@@ -215,6 +217,35 @@ void run_update_iwan(const IwanArgs& a) {
     if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
     modes.push_back(std::move(mb));
   }
+  if (!a.stepped_sine.empty()) {
+    int sensor = 0;
+    if (!a.stepped_sine_channel.empty()) {
+      sensor = correlate::find_sensor(sensors, a.stepped_sine_channel);
+      if (sensor < 0) {
+        throw InputError(fmt::format("--stepped-sine-channel {}: not in the sensors file {}",
+                                     a.stepped_sine_channel, a.sensors));
+      }
+    } else if (sensors.size() != 1) {
+      throw InputError(
+          "--stepped-sine: give --stepped-sine-channel, the sensor the sweeps' response was "
+          "measured at");
+    }
+    const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : modes.front().model_mode;
+    for (const std::string& dir : a.stepped_sine) {
+      const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
+      if (ss.amplitude != run.amplitude) {
+        throw InputError(fmt::format(
+            "--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
+            "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
+            dir, a.measured));
+      }
+      campaign::ModeBackbones mb =
+          campaign::stepped_sine_run_backbones(ss, sensor, campaign::ScatterOptions{});
+      mb.name = fmt::format("stepped sine {}", dir);
+      mb.model_mode = mode;
+      modes.push_back(std::move(mb));
+    }
+  }
   campaign::IwanTargetOptions target_options;
   target_options.amplitude = run.amplitude;
   std::vector<correlate::IwanTarget> targets =
@@ -224,8 +255,11 @@ void run_update_iwan(const IwanArgs& a) {
   o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
                 : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
                                              : correlate::IwanOptimizer::kGlobalLocal;
+  o.comparison = a.compare == "secant" ? correlate::IwanComparison::kSecant
+                                       : correlate::IwanComparison::kMatched;
   correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
-                                     o.qsma_points, o.frequency_floor, o.damping_floor);
+                                     o.qsma_points, o.frequency_floor, o.damping_floor,
+                                     o.comparison);
   objective.set_linear_modes(measured, 0.6);  // every paired mode's error on the Pareto front
   o.bounds = bounds_of(a, objective);
   if (const std::string e = o.error(); !e.empty()) {
@@ -328,11 +362,25 @@ void add_update_commands(CLI::App& app) {
                  "elastic model mode R, with measured band BAND (default: the band paired by "
                  "MAC); repeat for more")
       ->required();
+  iw->add_option("--stepped-sine", ia->stepped_sine,
+                 "output directory of 'jointlab stepped-sine': its backbones are fitted with the "
+                 "hammer data, each against the steady-state pair (repeatable)");
+  iw->add_option("--stepped-sine-channel", ia->stepped_sine_channel,
+                 "sensor channel the stepped-sine response was measured at (default: the only "
+                 "sensor)");
+  iw->add_option("--stepped-sine-mode", ia->stepped_sine_mode,
+                 "elastic model mode of the stepped-sine backbones (default: the first --mode)")
+      ->check(CLI::PositiveNumber);
   iw->add_option("--channel", ia->channels,
                  "channel whose backbones are used (repeatable; default: each file's reference "
                  "channel of the band)");
   iw->add_option("--optimizer", ia->optimizer, "paper, paper-log or global-local (default)")
       ->check(CLI::IsMember({"paper", "paper-log", "global-local"}));
+  iw->add_option(
+        "--compare", ia->compare,
+        "matched (default): each backbone against the model pair its test shows (ring-down "
+        "or steady state); secant: against QSMA's secant pair, as the paper")
+      ->check(CLI::IsMember({"matched", "secant"}));
   iw->add_option("--gamma", ia->options.fixed_gamma, "hold Kt / Ks at this value")
       ->check(positive());
   iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")

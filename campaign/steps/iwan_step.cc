@@ -110,7 +110,8 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     return step;
   }
   const IwanObjective objective(base, step.set, sensors, targets.fitted, io.amplitude,
-                                io.qsma_points, io.frequency_floor, io.damping_floor);
+                                io.qsma_points, io.frequency_floor, io.damping_floor,
+                                io.comparison);
   say(
       fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
                   "left out where other modes carry over {:g} % of the joint slip)",
@@ -125,7 +126,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   // one-mode QSMA cannot describe (its joints moved by another mode) stands out.
   for (const auto& [k, t] : targets.every) {
     const IwanObjective one(base, step.set, sensors, {t}, io.amplitude, io.qsma_points,
-                            io.frequency_floor, io.damping_floor);
+                            io.frequency_floor, io.damping_floor, io.comparison);
     step.mode_costs.push_back({c.modes[k].name, c.iwan_update.fits(c.modes[k].name),
                                one.cost(step.summary.start), one.cost(step.summary.best)});
   }
