@@ -14,6 +14,7 @@
 #include "jointlab/apps/commands.h"
 #include "jointlab/campaign/figures.h"
 #include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
@@ -155,14 +156,10 @@ void check_iwan_args(const IwanArgs& a) {
   }
 }
 
-// The search box: the given LO:HI ranges; Fs by default within a factor 30 of the start.
+// The search box: the given LO:HI ranges, else the default (the same as `run`'s).
 correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjective& obj) {
-  correlate::IwanBounds b;
-  if (a.fs_range.size() == 2) {
-    b.Fs_min = a.fs_range[0], b.Fs_max = a.fs_range[1];
-  } else {
-    b.Fs_min = obj.initial().Fs / 30, b.Fs_max = obj.initial().Fs * 30;
-  }
+  correlate::IwanBounds b = correlate::default_iwan_bounds(obj.initial());
+  if (a.fs_range.size() == 2) b.Fs_min = a.fs_range[0], b.Fs_max = a.fs_range[1];
   b.gamma_min = a.gamma_range[0], b.gamma_max = a.gamma_range[1];
   b.chi_min = a.chi_range[0], b.chi_max = a.chi_range[1];
   b.beta_min = a.beta_range[0], b.beta_max = a.beta_range[1];
@@ -267,8 +264,9 @@ void run_update_iwan(const IwanArgs& a) {
   }
   std::vector<correlate::ParetoPoint> front;
   if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
-  correlate::IwanUpdateSummary summary;
-  const model::IwanParameters best = correlate::update_iwan(objective, o, &summary);
+  // The fit `run` makes (beta held first, freed when the data reach macroslip).
+  const correlate::IwanUpdateSummary summary = campaign::fit_iwan(objective, o, nullptr);
+  const model::IwanParameters best = summary.best;
   if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
     throw InputError(fmt::format(
         "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
@@ -383,6 +381,7 @@ void add_update_commands(CLI::App& app) {
       ->check(CLI::IsMember({"matched", "secant"}));
   iw->add_option("--gamma", ia->options.fixed_gamma, "hold Kt / Ks at this value")
       ->check(positive());
+  iw->add_option("--beta", ia->options.fixed_beta, "hold beta at this value")->check(positive());
   iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")
       ->delimiter(',');
   iw->add_option("--evaluations", ia->options.max_evaluations,

@@ -26,6 +26,19 @@ int amplitude_power(AmplitudeQuantity q) {
   return q == AmplitudeQuantity::kDisplacement ? 0 : q == AmplitudeQuantity::kVelocity ? 1 : 2;
 }
 
+IwanBounds default_iwan_bounds(const model::IwanParameters& start) {
+  IwanBounds b;
+  b.Fs_min = start.Fs / 30;
+  b.Fs_max = start.Fs * 30;
+  b.gamma_min = 0.05;
+  b.gamma_max = 2;
+  b.chi_min = -0.95;
+  b.chi_max = 0;
+  b.beta_min = 0.01;
+  b.beta_max = 100;
+  return b;
+}
+
 std::string IwanUpdateOptions::error() const {
   const IwanBounds& b = bounds;
   if (!(b.Fs_min > 0 && b.Fs_min < b.Fs_max)) return "bounds: 0 < Fs_min < Fs_max";
