@@ -253,6 +253,12 @@ TEST_F(Steps, IwanUpdateFitsAModesSteppedSineTests) {
   ASSERT_EQ(step.mode_costs.size(), 2u);
   EXPECT_TRUE(step.mode_costs[1].fitted);
   EXPECT_LT(step.mode_costs[1].start, 1e-6) << step.mode_costs[1].mode;
+  // The mode's figure overlays the stepped-sine points on the hits.
+  const CampaignFigures figures = draw_figures(c, *measured_, nullptr, out() / "fig_sine");
+  ASSERT_EQ(figures.backbone.size(), 1u);
+  EXPECT_GT(fs::file_size(figures.backbone[0].image), 1000u);
+  EXPECT_NE(figures.backbone[0].caption.find("stepped-sine points"), std::string::npos)
+      << figures.backbone[0].caption;
 }
 
 // Figures: one PNG per mode and the spectrum; the model's two only with a model.
