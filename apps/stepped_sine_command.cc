@@ -117,23 +117,10 @@ void run_stepped_sine(const SteppedSineArgs& args) {
   }
   std::vector<modal::SteppedSineFileResult> results;
   for (const std::string& f : args.files) {
-    modal::SteppedSineFileResult r;
+    modal::SteppedSineFileResult r = modal::extract_stepped_sine_file(f, quantity, opt);
     r.source = f;
-    r.tables = data::read_stepped_sine(f, quantity);
-    // Response-controlled levels first: their modal constant serves the force-controlled ones.
-    r.points.resize(r.tables.size());
-    for (size_t i = 0; i < r.tables.size(); ++i) {
-      if (r.tables[i].control == data::SineControl::kResponse) {
-        r.points[i] = modal::extract_backbone_point(r.tables[i], opt);
-      }
-    }
-    const modal::ModalConstant q = modal::response_modal_constant(r.points);
-    for (size_t i = 0; i < r.tables.size(); ++i) {
-      if (r.tables[i].control == data::SineControl::kForce) {
-        r.points[i] = modal::extract_backbone_point(r.tables[i], opt, q);
-      }
+    for (size_t i = 0; i < r.tables.size(); ++i)
       fmt::print(stderr, "{} {}: {}\n", f, r.tables[i].label, r.points[i].report());
-    }
     results.push_back(std::move(r));
   }
   const fs::path out(args.out);

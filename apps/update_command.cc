@@ -16,6 +16,7 @@
 #include "jointlab/apps/commands.h"
 #include "jointlab/campaign/figures.h"
 #include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
@@ -124,8 +125,10 @@ void run_update_linear(const LinearArgs& a) {
 }
 
 struct IwanArgs {
-  std::string model, measured, sensors, out, set, optimizer = "global-local";
-  std::vector<std::string> modes, channels;
+  std::string model, measured, sensors, out, set, optimizer = "global-local", compare = "matched";
+  std::vector<std::string> modes, channels, stepped_sine;
+  std::string stepped_sine_channel;
+  int stepped_sine_mode = 0;
   std::vector<double> pareto;
   std::vector<double> fs_range, gamma_range{0.05, 2.0}, chi_range{-0.95, 0.0},
       beta_range{0.01, 100.0};
@@ -161,14 +164,10 @@ void check_iwan_args(const IwanArgs& a) {
   }
 }
 
-// The search box: the given LO:HI ranges; Fs by default within a factor 30 of the start.
+// The search box: the given LO:HI ranges, else the default (the same as `run`'s).
 correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjective& obj) {
-  correlate::IwanBounds b;
-  if (a.fs_range.size() == 2) {
-    b.Fs_min = a.fs_range[0], b.Fs_max = a.fs_range[1];
-  } else {
-    b.Fs_min = obj.initial().Fs / 30, b.Fs_max = obj.initial().Fs * 30;
-  }
+  correlate::IwanBounds b = correlate::default_iwan_bounds(obj.initial());
+  if (a.fs_range.size() == 2) b.Fs_min = a.fs_range[0], b.Fs_max = a.fs_range[1];
   b.gamma_min = a.gamma_range[0], b.gamma_max = a.gamma_range[1];
   b.chi_min = a.chi_range[0], b.chi_max = a.chi_range[1];
   b.beta_min = a.beta_range[0], b.beta_max = a.beta_range[1];
@@ -240,6 +239,35 @@ void run_update_iwan(const IwanArgs& a) {
     if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
     modes.push_back(std::move(mb));
   }
+  if (!a.stepped_sine.empty()) {
+    int sensor = 0;
+    if (!a.stepped_sine_channel.empty()) {
+      sensor = correlate::find_sensor(sensors, a.stepped_sine_channel);
+      if (sensor < 0) {
+        throw InputError(fmt::format("--stepped-sine-channel {}: not in the sensors file {}",
+                                     a.stepped_sine_channel, a.sensors));
+      }
+    } else if (sensors.size() != 1) {
+      throw InputError(
+          "--stepped-sine: give --stepped-sine-channel, the sensor the sweeps' response was "
+          "measured at");
+    }
+    const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : modes.front().model_mode;
+    for (const std::string& dir : a.stepped_sine) {
+      const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
+      if (ss.amplitude != run.amplitude) {
+        throw InputError(fmt::format(
+            "--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
+            "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
+            dir, a.measured));
+      }
+      campaign::ModeBackbones mb =
+          campaign::stepped_sine_run_backbones(ss, sensor, campaign::ScatterOptions{});
+      mb.name = fmt::format("stepped sine {}", dir);
+      mb.model_mode = mode;
+      modes.push_back(std::move(mb));
+    }
+  }
   campaign::IwanTargetOptions target_options;
   target_options.amplitude = run.amplitude;
   std::vector<correlate::IwanTarget> targets =
@@ -249,8 +277,10 @@ void run_update_iwan(const IwanArgs& a) {
   o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
                 : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
                                              : correlate::IwanOptimizer::kGlobalLocal;
+  o.comparison = a.compare == "secant" ? correlate::IwanComparison::kSecant
+                                       : correlate::IwanComparison::kMatched;
   correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
-                                     o.frequency_floor, o.damping_floor);
+                                     o.frequency_floor, o.damping_floor, o.comparison);
   objective.set_linear_modes(measured, 0.6);  // every paired mode's error on the Pareto front
   o.bounds = bounds_of(a, objective);
   if (const std::string e = o.error(); !e.empty()) {
@@ -258,8 +288,9 @@ void run_update_iwan(const IwanArgs& a) {
   }
   std::vector<correlate::ParetoPoint> front;
   if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
-  correlate::IwanUpdateSummary summary;
-  const model::IwanParameters best = correlate::update_iwan(objective, o, &summary);
+  // The fit `run` makes (beta held first, freed when the data reach macroslip).
+  const correlate::IwanUpdateSummary summary = campaign::fit_iwan(objective, o, nullptr);
+  const model::IwanParameters best = summary.best;
   if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
     throw InputError(fmt::format(
         "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
@@ -353,13 +384,28 @@ void add_update_commands(CLI::App& app) {
                  "elastic model mode R, with measured band BAND (default: the band paired by "
                  "MAC); repeat for more")
       ->required();
+  iw->add_option("--stepped-sine", ia->stepped_sine,
+                 "output directory of 'jointlab stepped-sine': its backbones are fitted with the "
+                 "hammer data, each against the steady-state pair (repeatable)");
+  iw->add_option("--stepped-sine-channel", ia->stepped_sine_channel,
+                 "sensor channel the stepped-sine response was measured at (default: the only "
+                 "sensor)");
+  iw->add_option("--stepped-sine-mode", ia->stepped_sine_mode,
+                 "elastic model mode of the stepped-sine backbones (default: the first --mode)")
+      ->check(CLI::PositiveNumber);
   iw->add_option("--channel", ia->channels,
                  "channel whose backbones are used (repeatable; default: each file's reference "
                  "channel of the band)");
   iw->add_option("--optimizer", ia->optimizer, "paper, paper-log or global-local (default)")
       ->check(CLI::IsMember({"paper", "paper-log", "global-local"}));
+  iw->add_option(
+        "--compare", ia->compare,
+        "matched (default): each backbone against the model pair its test shows (ring-down "
+        "or steady state); secant: against QSMA's secant pair, as the paper")
+      ->check(CLI::IsMember({"matched", "secant"}));
   iw->add_option("--gamma", ia->options.fixed_gamma, "hold Kt / Ks at this value")
       ->check(positive());
+  iw->add_option("--beta", ia->options.fixed_beta, "hold beta at this value")->check(positive());
   iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")
       ->delimiter(',');
   iw->add_option("--evaluations", ia->options.max_evaluations,

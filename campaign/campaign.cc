@@ -236,7 +236,7 @@ void read_modes(const Context& ctx, const toml::table& doc, Campaign& c) {
   if (!modes) ctx.fail("no [[mode]]");
   for (const toml::node& item : array(ctx, *modes, "[[mode]]")) {
     const toml::table& t = table(ctx, item, "[[mode]]");
-    reject_unknown(ctx, t, "[[mode]]", {"name", "band", "model_mode", "reference"});
+    reject_unknown(ctx, t, "[[mode]]", {"name", "band", "model_mode", "reference", "stepped_sine"});
     CampaignMode m;
     m.name = fmt::format("mode {}", c.modes.size() + 1);
     if (const toml::node* v = t.get("name")) {
@@ -261,6 +261,14 @@ void read_modes(const Context& ctx, const toml::table& doc, Campaign& c) {
       m.reference = text(ctx, *v, "mode.reference");
       if (!c.channel(m.reference))
         ctx.fail(*v, fmt::format("mode.reference: '{}' is not a [[channel]]", m.reference));
+    }
+    if (const toml::node* v = t.get("stepped_sine")) {
+      for (const toml::node& f : array(ctx, *v, "mode.stepped_sine")) {
+        const fs::path p = ctx.resolve(text(ctx, f, "mode.stepped_sine"));
+        if (!fs::is_regular_file(p))
+          ctx.fail(f, fmt::format("mode.stepped_sine: no file {}", p.string()));
+        m.stepped_sine.push_back(p);
+      }
     }
     c.modes.push_back(m);
   }

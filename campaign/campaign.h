@@ -39,6 +39,9 @@ struct CampaignMode {
   signal::Band band;      ///< band-pass around the mode [Hz]
   int model_mode = 0;     ///< elastic mode of the model it corresponds to (1-based); 0: none
   std::string reference;  ///< channel whose backbones are summarised
+  /// Stepped-sine files of this mode (absolute; data/stepped_sine.h), the response measured at
+  /// the reference channel: their backbones are fitted with the hammer hits'.
+  std::vector<std::filesystem::path> stepped_sine;
 };
 
 /// Where the model comes from: a model file, or a riveted-beam description to build.

@@ -255,6 +255,10 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     ax.add(std::log10(b.amplitude_low));
     ax.add(std::log10(b.amplitude_high));
   }
+  for (const SinePoints& sp : figure.stepped_sine) {
+    for (Eigen::Index i = 0; i < sp.amplitude.size(); ++i)
+      if (sp.amplitude(i) > 0) ax.add(std::log10(sp.amplitude(i)));
+  }
   if (ax.empty()) {
     for (const ModelCurve& m : figure.model)
       for (Eigen::Index i = 0; i < m.amplitude.size(); ++i)
@@ -287,6 +291,12 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     fy.add(b.frequency_hz.ci_high);
     if (b.damping.ci_low > 0) zy.add(std::log10(b.damping.ci_low));
     if (b.damping.ci_high > 0) zy.add(std::log10(b.damping.ci_high));
+  }
+  for (const SinePoints& sp : figure.stepped_sine) {
+    points(sp.amplitude, sp.frequency_hz, true, false, px, py, ax.lo, ax.hi);
+    for (double v : py) fy.add(v);
+    points(sp.amplitude, sp.damping, true, true, px, py, ax.lo, ax.hi);
+    for (double v : py) zy.add(v);
   }
   fy = fy.padded(0.08, 0.5);
   zy = zy.padded(0.08, 0.2);
@@ -347,6 +357,27 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
       clip_x(px, py, ax.lo, ax.hi);
       line(px, py, model_colours[m % 3], 2.2, m < 3 ? 1 : 3);
     }
+    // Stepped-sine points: a marker and its uncertainty bar (clipped to the panel).
+    for (const SinePoints& sp : figure.stepped_sine) {
+      std::vector<PLFLT> x, v, lo, hi;
+      for (Eigen::Index i = 0; i < sp.amplitude.size(); ++i) {
+        const double m = damping ? sp.damping(i) : sp.frequency_hz(i);
+        const double u = damping ? sp.damping_std(i) : sp.frequency_std_hz(i);
+        if (!(sp.amplitude(i) > 0) || (logy && !(m > 0))) continue;
+        x.push_back(std::log10(sp.amplitude(i)));
+        v.push_back(logy ? std::log10(m) : m);
+        const double l = logy ? std::log10(std::max(m - u, 0.01 * m)) : m - u;
+        lo.push_back(std::max(l, y.lo));
+        hi.push_back(std::min(logy ? std::log10(m + u) : m + u, y.hi));
+      }
+      if (x.empty()) continue;
+      plcol0(kChannel2);
+      plwidth(1.5);
+      plerry(static_cast<PLINT>(x.size()), x.data(), lo.data(), hi.data());
+      plschr(0, 1.0);
+      plpoin(static_cast<PLINT>(x.size()), x.data(), v.data(), 22);
+      plschr(0, 1.15);
+    }
     axes(damping ? "bcnstl" : "bcstl", logy ? "bcstl" : "bcnstv");
     if (logy) log_y_labels(y.lo, y.hi, 0.1);
   };
@@ -375,6 +406,7 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
         {fmt::format("{:g} % CI of the mean", 100 * figure.summary.options.confidence), kBand,
          true});
   }
+  for (const SinePoints& sp : figure.stepped_sine) entries.push_back({sp.label, kChannel2, false});
   for (size_t m = 0; m < figure.model.size(); ++m)
     entries.push_back({figure.model[m].label, model_colours[m % 3], false, 2.2, m < 3 ? 1 : 3});
   legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP, true);

@@ -32,14 +32,25 @@ struct ModelCurve {
   Eigen::VectorXd damping;       ///< damping ratio
 };
 
+/// Stepped-sine points of one file with their uncertainties (as written: k sigma).
+struct SinePoints {
+  std::string label;                 ///< legend entry ("stepped sine sweeps")
+  Eigen::VectorXd amplitude;         ///< amplitude [SI of the measured amplitude]
+  Eigen::VectorXd frequency_hz;      ///< natural frequency [Hz]
+  Eigen::VectorXd damping;           ///< damping ratio
+  Eigen::VectorXd frequency_std_hz;  ///< uncertainty of the frequency [Hz]
+  Eigen::VectorXd damping_std;       ///< uncertainty of the damping ratio
+};
+
 /// Frequency and damping versus amplitude of one mode: every hit faint, the binned mean
-/// and its confidence band, and model curves.
+/// and its confidence band, stepped-sine points with their bars, and model curves.
 struct BackboneFigure {
-  std::string title;              ///< top line ("mode 1, acc_9003_z")
-  std::string amplitude_label;    ///< x axis ("velocity amplitude [m/s]")
-  std::vector<Curve> hits;        ///< every hit's backbone
-  ScatterSummary summary;         ///< bins (mean and interval) and flagged hits
-  std::vector<ModelCurve> model;  ///< model curves, drawn in the data's amplitude range
+  std::string title;                     ///< top line ("mode 1, acc_9003_z")
+  std::string amplitude_label;           ///< x axis ("velocity amplitude [m/s]")
+  std::vector<Curve> hits;               ///< every hit's backbone
+  ScatterSummary summary;                ///< bins (mean and interval) and flagged hits
+  std::vector<ModelCurve> model;         ///< model curves, drawn in the data's amplitude range
+  std::vector<SinePoints> stepped_sine;  ///< stepped-sine points of the mode
 };
 
 /// Draws a BackboneFigure (frequency above, damping on a log axis below) into `file`.

@@ -121,7 +121,11 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
     for (size_t c = 0; c < mode.curves.size(); ++c) {
       const Curve& cv = mode.curves[c];
       if (mode.scatter.options.exclude_outliers && flagged(mode.scatter, cv.id)) continue;
-      const Eigen::VectorXd share = share_of_others(modes, k, c, slips);
+      const correlate::BackboneKind kind =
+          c < mode.kinds.size() ? mode.kinds[c] : correlate::BackboneKind::kRingdown;
+      const Eigen::VectorXd share = kind == correlate::BackboneKind::kSteppedSine
+                                        ? Eigen::VectorXd::Zero(cv.amplitude.size())
+                                        : share_of_others(modes, k, c, slips);
       std::vector<Eigen::Index> keep;
       for (Eigen::Index j = 0; j < cv.amplitude.size(); ++j)
         if (!mode.fitted || share(j) <= o.max_slip_share) keep.push_back(j);
@@ -129,6 +133,7 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
       if (keep.size() < 2) continue;
       const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
       MeasuredBackbone mb;
+      mb.kind = kind;
       mb.sensor = mode.sensors[c];
       mb.amplitude.resize(n);
       mb.frequency_hz.resize(n);
@@ -186,6 +191,31 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
     throw InputError(fmt::format(
         "{}: no backbone of band {} on {}", (run.dir / "summary.json").string(), band,
         channels.empty() ? "a reference channel that is a sensor" : "the selected channels"));
+  }
+  mb.scatter = summarize_scatter(mb.curves, scatter);
+  return mb;
+}
+
+ModeBackbones stepped_sine_run_backbones(const correlate::SteppedSineRun& run, int sensor,
+                                         const ScatterOptions& scatter) {
+  ModeBackbones mb;
+  mb.name = "stepped sine";
+  const std::vector<correlate::MeasuredBackbone> backbones =
+      correlate::stepped_sine_backbones(run, sensor);
+  size_t i = 0;
+  for (const correlate::SteppedSineOutput& o : run.outputs) {
+    if (o.file.empty()) continue;
+    const correlate::MeasuredBackbone& b = backbones[i++];
+    Curve cv;
+    cv.id = fs::path(o.source).stem().string();
+    cv.amplitude = b.amplitude;
+    cv.frequency_hz = b.frequency_hz;
+    cv.damping = b.damping_ratio;
+    mb.curves.push_back(std::move(cv));
+    mb.frequency_std_hz.push_back(b.frequency_std_hz);
+    mb.damping_std.push_back(b.damping_std);
+    mb.sensors.push_back(sensor);
+    mb.kinds.push_back(correlate::BackboneKind::kSteppedSine);
   }
   mb.scatter = summarize_scatter(mb.curves, scatter);
   return mb;

@@ -13,6 +13,8 @@
 //   are left out: share_k(t) > max_slip_share (correlate/mode_interference.h), the other
 //   modes' slip from their backbones of the same hit, through the starting model's mode
 //   shapes. A mode that is not fitted keeps every point (its cost is only reported).
+// - Stepped-sine backbones (ModeBackbones::kinds) keep every point: a steady state at one
+//   level excites the one mode.
 // A backbone left with fewer than two points is dropped; a mode with no backbone gives no
 // target.
 #pragma once
@@ -39,6 +41,7 @@ struct ModeBackbones {
   double linear_frequency_hz = 0;  ///< measured linear frequency (0: unknown)
   std::vector<Curve> curves;       ///< backbones; Curve::id names the hit
   std::vector<int> sensors;        ///< per curve: its sensor index
+  std::vector<correlate::BackboneKind> kinds;     ///< per curve (empty or no entry: ring-down)
   std::vector<Eigen::VectorXd> frequency_std_hz;  ///< per curve: each point's own sigma_f [Hz]
                                                   ///< (process's; empty vector or entry: none)
   std::vector<Eigen::VectorXd> damping_std;       ///< per curve: each point's own sigma_z
@@ -76,5 +79,11 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
                                     const std::vector<correlate::Sensor>& sensors, int band,
                                     const std::vector<std::string>& channels,
                                     const ScatterOptions& scatter);
+
+/// The backbones of a `stepped-sine` run (one curve per file, no time), all measured at sensor
+/// index `sensor`, of kind stepped sine, and their scatter summary with `scatter`; InputError
+/// when no file gave a backbone.
+ModeBackbones stepped_sine_run_backbones(const correlate::SteppedSineRun& run, int sensor,
+                                         const ScatterOptions& scatter);
 
 }  // namespace jointlab::campaign

@@ -28,6 +28,19 @@ int amplitude_power(AmplitudeQuantity q) {
   return q == AmplitudeQuantity::kDisplacement ? 0 : q == AmplitudeQuantity::kVelocity ? 1 : 2;
 }
 
+IwanBounds default_iwan_bounds(const model::IwanParameters& start) {
+  IwanBounds b;
+  b.Fs_min = start.Fs / 30;
+  b.Fs_max = start.Fs * 30;
+  b.gamma_min = 0.05;
+  b.gamma_max = 2;
+  b.chi_min = -0.95;
+  b.chi_max = 0;
+  b.beta_min = 0.01;
+  b.beta_max = 100;
+  return b;
+}
+
 std::string IwanUpdateOptions::error() const {
   const IwanBounds& b = bounds;
   if (!(b.Fs_min > 0 && b.Fs_min < b.Fs_max)) return "bounds: 0 < Fs_min < Fs_max";
@@ -48,14 +61,15 @@ std::string IwanUpdateOptions::error() const {
 IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
                              const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
                              AmplitudeQuantity amplitude, double frequency_floor,
-                             double damping_floor)
+                             double damping_floor, IwanComparison comparison)
     : model_(&model),
       set_(set.starts_with("iwan.") ? set : "iwan." + set),
       sensors_(sensors),
       targets_(std::move(targets)),
       amplitude_(amplitude),
       f_floor_(frequency_floor),
-      z_floor_(damping_floor) {
+      z_floor_(damping_floor),
+      comparison_(comparison) {
   bool found = false;
   for (const model::Joint& j : model.joints) {
     if (j.element != set_) continue;
@@ -159,7 +173,10 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
       std::sort(order.begin(), order.end());
       std::vector<double> s(order.size());
       for (size_t i = 0; i < order.size(); ++i) s[i] = order[i].first;
-      const std::vector<QsmaAtPoint> at = qsma_at(jc, t.mode, pw, s);
+      const bool matched = comparison_ == IwanComparison::kMatched;
+      const std::vector<QsmaAtPoint> at =
+          qsma_at(jc, t.mode, pw, s,
+                  matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant);
       if (at.size() != s.size()) return false;
       if (slip_range) {
         (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);
@@ -175,11 +192,14 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
         const MeasuredBackbone& c = t.curves[ci];
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
           const model::QsmaPoint& q = *model_at[ci][static_cast<size_t>(j)];
+          const double f = matched ? q.ringdown_frequency_hz : q.frequency_hz;
+          const double z = !matched                               ? q.damping_ratio
+                           : c.kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
+                                                                  : q.ringdown_damping_ratio;
           const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
           const double sz = std::max(c.damping_std(j), z_floor_ * std::abs(c.damping_ratio(j)));
-          r[k++] = (q.frequency_hz - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
-          r[k++] =
-              sz > 0 ? (q.damping_ratio - c.damping_ratio(j)) / (sz * std::sqrt(n_total)) : 0.0;
+          r[k++] = (f - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
+          r[k++] = sz > 0 ? (z - c.damping_ratio(j)) / (sz * std::sqrt(n_total)) : 0.0;
         }
       }
     }

@@ -5,8 +5,14 @@
 // Model curve: QSMA of elastic mode R (qsma.h) gives q, omega(q), zeta(q). The measuring
 // sensor (dof d, sign s) sees the displacement amplitude x = |q phi_R[d]|; the amplitude of
 // the quantity `process` reported is a = x omega^p (p = 0, 1, 2 for displacement, velocity,
-// acceleration), omega the QSMA frequency at that point. The model frequency and damping are
-// evaluated exactly at each measured amplitude a_j (qsma_at.h: one static solve per secant
+// acceleration), omega the frequency the signal oscillates at.
+// Like with like (the default, IwanComparison::kMatched): a ring-down backbone is compared
+// with what a ring-down of the model shows, the first-harmonic frequency and
+// D / (2 pi q dE/dq) (QSMA's ring-down columns); a stepped-sine backbone with what a steady
+// state shows, the first-harmonic frequency and D / (2 pi k_1 q^2); omega above is the
+// first-harmonic frequency. kSecant compares every backbone with the paper's secant pair
+// sqrt(alpha/q), D / (2 pi alpha q), omega the secant frequency. The model frequency and damping
+// are evaluated exactly at each measured amplitude a_j (qsma_at.h: one static solve per secant
 // step, no grid), so the macroslip knee is where the model puts it.
 // Residuals, over the N measured points of every curve, weighted by the measured scatter:
 //     r_f,j = (f_model(a_j) - f_j) / (sigma_f,j sqrt(N)),  r_z,j = (zeta_model(a_j) - zeta_j)
@@ -47,8 +53,21 @@ enum class AmplitudeQuantity { kDisplacement, kVelocity, kAcceleration };
 /// Power of omega that turns a modal amplitude into this quantity's (0, 1 or 2).
 int amplitude_power(AmplitudeQuantity q);
 
+/// How a backbone was measured, hence which model pair it is compared with.
+enum class BackboneKind {
+  kRingdown,    ///< free decay (`process`): first-harmonic frequency, ring-down damping
+  kSteppedSine  ///< one steady state per level (`stepped-sine`): first-harmonic pair
+};
+
+/// Which model columns measured backbones are compared with.
+enum class IwanComparison {
+  kMatched,  ///< each backbone with the pair of its kind (ring-down or first-harmonic)
+  kSecant    ///< every backbone with QSMA's secant pair sqrt(alpha/q), D/(2 pi alpha q)
+};
+
 /// One measured backbone curve: points of one channel (or pooled hits of it).
 struct MeasuredBackbone {
+  BackboneKind kind = BackboneKind::kRingdown;  ///< how it was measured
   int sensor = 0;                    ///< index into the sensors: where the amplitude is measured
   Eigen::VectorXd amplitude;         ///< amplitude a_j (SI units of the quantity), > 0
   Eigen::VectorXd frequency_hz;      ///< f_j [Hz]
@@ -72,6 +91,10 @@ struct IwanBounds {
   double beta_min = 0.01, beta_max = 100;  ///< macroslip weight
 };
 
+/// The default search box of `update-iwan` and `run`: F_S within a factor 30 of the start's,
+/// gamma 0.05-2, chi -0.95-0, beta 0.01-100.
+IwanBounds default_iwan_bounds(const model::IwanParameters& start);
+
 /// Which optimiser update_iwan() runs.
 enum class IwanOptimizer { kPaper, kPaperLog, kGlobalLocal };
 
@@ -82,6 +105,7 @@ struct IwanUpdateOptions {
   double fixed_gamma = 0;                                      ///< > 0: gamma held at this value
   double fixed_beta = 0;                                       ///< > 0: beta held at this value
   AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< measured amplitude quantity
+  IwanComparison comparison = IwanComparison::kMatched;        ///< model columns compared
   int samples = 100;                                           ///< samples per Monte Carlo round
   double contraction = 0.03;      ///< Monte Carlo: bounds contract to +-this around the best
   int max_evaluations = 1500;     ///< budget of QSMA evaluations
@@ -106,7 +130,8 @@ class IwanObjective {
   /// measured amplitude (qsma_at.h).
   IwanObjective(const model::Model& model, const std::string& set,
                 const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
-                AmplitudeQuantity amplitude, double frequency_floor, double damping_floor);
+                AmplitudeQuantity amplitude, double frequency_floor, double damping_floor,
+                IwanComparison comparison = IwanComparison::kMatched);
   /// K_s: the set's linear stiffness in the model [N/m].
   double reference_stiffness() const { return Ks_; }
   /// The set's parameters in the model.
@@ -145,6 +170,7 @@ class IwanObjective {
   std::vector<IwanTarget> targets_;
   AmplitudeQuantity amplitude_;
   double f_floor_, z_floor_;
+  IwanComparison comparison_;
   double Ks_ = 0;
   model::IwanParameters initial_;
   int residual_count_ = 0;

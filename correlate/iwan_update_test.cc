@@ -205,7 +205,10 @@ TEST(IwanUpdate, MacroslipHitsRecoverEveryParameterWithinItsUncertainty) {
   EXPECT_TRUE(testing::Close(obj.cost(known), s.noise_cost, 1e-6));
   IwanUpdateOptions o;
   o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
-  o.max_evaluations = 1500;
+  // The ring-down damping jumps where the element reaches phi_max (its beta sliders slip at
+  // once), so the cost is only piecewise smooth near the knee: 1500 evaluations stopped at
+  // 2.11 against the truth's 1.91, 3000 reach below it.
+  o.max_evaluations = 3000;
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   SCOPED_TRACE(sum.report());
@@ -224,6 +227,141 @@ TEST(IwanUpdate, MacroslipHitsRecoverEveryParameterWithinItsUncertainty) {
     EXPECT_GT(sum.relative_std(k), 0.0);
     EXPECT_LE(err, 3 * sum.relative_std(k));
   }
+}
+
+// Like with like: noiseless ring-down backbones straight from QSMA's ring-down columns of the
+// truth (first-harmonic frequency, D / (2 pi q dE/dq), amplitude at the first-harmonic
+// frequency), three hits reaching 1.2, 1.6 and 2 times the full-macroslip amplitude. Compared
+// with the ring-down columns (the default) the truth's cost is 0 up to the 1e-10 placement of
+// the amplitudes, and the update from a start off in every parameter gives the truth back
+// within 0.5 % (noiseless data: what is left is the optimiser's tolerance on a flat valley of
+// F_S against beta). Compared with the secant pair the same data cost far more at the truth:
+// the two definitions differ by more than the damping floor of 2 % past the knee.
+TEST(IwanUpdate, RingdownBackbonesGiveTheirParametersBackComparedLikeWithLike) {
+  TwoChainParameters truth;
+  truth.iwan = true;
+  const std::vector<Sensor> sensors{{"a5", 5, -1.0}};
+  IwanTarget target;
+  for (const double top : {1.2, 1.6, 2.0}) {
+    target.curves.push_back(synthetic_backbone(two_chain_structure(truth), 1, sensors, 0,
+                                               AmplitudeQuantity::kVelocity, 20, top, 0, 0, 1));
+  }
+  TwoChainParameters start = truth;
+  start.Fs *= 1.5;
+  start.ka *= 1.2;
+  start.chi = -0.3;
+  start.beta = 0.6;
+  const model::Model m = two_chain_structure(start);
+  const model::IwanParameters known{truth.Fs, truth.ka, truth.chi, truth.beta};
+  const IwanObjective like(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
+  const IwanObjective secant(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4,
+                             0.02, IwanComparison::kSecant);
+  std::printf("cost at the truth: ring-down columns %.3g, secant pair %.3g\n", like.cost(known),
+              secant.cost(known));
+  EXPECT_LT(like.cost(known), 1e-12);
+  EXPECT_GT(secant.cost(known), 1.0);
+  IwanUpdateOptions o;
+  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.max_evaluations = 800;
+  IwanUpdateSummary sum;
+  const model::IwanParameters p = update_iwan(like, o, &sum);
+  SCOPED_TRACE(sum.report());
+  std::printf("%s", sum.report().c_str());
+  EXPECT_TRUE(testing::Close(p.Fs, truth.Fs, 0.005));
+  EXPECT_TRUE(testing::Close(p.Kt, truth.ka, 0.005));
+  EXPECT_TRUE(testing::Close(p.chi, truth.chi, 0.005));
+  EXPECT_TRUE(testing::Close(p.beta, truth.beta, 0.005));
+}
+
+// The secant option keeps the paper's comparison: backbones made of QSMA's secant pair (as the
+// paper's synthetic data) give their parameters back when compared with it, within 0.5 % as
+// above.
+TEST(IwanUpdate, SecantBackbonesGiveTheirParametersBackComparedWithTheSecantPair) {
+  TwoChainParameters truth;
+  truth.iwan = true;
+  const std::vector<Sensor> sensors{{"a5", 5, -1.0}};
+  IwanTarget target;
+  for (const double top : {1.2, 1.6, 2.0}) {
+    target.curves.push_back(synthetic_backbone(two_chain_structure(truth), 1, sensors, 0,
+                                               AmplitudeQuantity::kVelocity, 20, top, 0, 0, 1,
+                                               BackboneKind::kRingdown, IwanComparison::kSecant));
+  }
+  TwoChainParameters start = truth;
+  start.Fs *= 1.5;
+  start.ka *= 1.2;
+  start.chi = -0.3;
+  start.beta = 0.6;
+  const model::Model m = two_chain_structure(start);
+  const IwanObjective obj(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02,
+                          IwanComparison::kSecant);
+  EXPECT_LT(obj.cost({truth.Fs, truth.ka, truth.chi, truth.beta}), 1e-12);
+  IwanUpdateOptions o;
+  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.max_evaluations = 800;
+  o.comparison = IwanComparison::kSecant;
+  IwanUpdateSummary sum;
+  const model::IwanParameters p = update_iwan(obj, o, &sum);
+  SCOPED_TRACE(sum.report());
+  EXPECT_TRUE(testing::Close(p.Fs, truth.Fs, 0.005));
+  EXPECT_TRUE(testing::Close(p.Kt, truth.ka, 0.005));
+  EXPECT_TRUE(testing::Close(p.chi, truth.chi, 0.005));
+  EXPECT_TRUE(testing::Close(p.beta, truth.beta, 0.005));
+}
+
+// Hammer and stepped sine together. Ring-downs pass through macroslip within a cycle or two,
+// so their backbones stay in microslip (here: three hits topping at 0.3, 0.4 and 0.5 times the
+// full-macroslip amplitude, 2e-4 in frequency and 2 % in damping as `process` gives); a
+// stepped sine holds each level, so its points reach past the knee (one sweep set of 10 levels
+// up to twice the full-macroslip amplitude, scatter 1e-4 and 3 %, each point compared with the
+// first-harmonic pair). Fitted jointly from a start off in every parameter, F_S and beta come
+// back within 5 % and K_T and chi within 2 %; the ring-downs alone are microslip only, where
+// K_T, chi and R = f(F_S, beta) are identified but F_S and beta are not separately.
+struct HammerAndSteppedSine {
+  TwoChainParameters truth;
+  std::vector<Sensor> sensors{{"a5", 5, -1.0}};
+  IwanTarget hammer, sine;
+  HammerAndSteppedSine() {
+    truth.iwan = true;
+    const model::Model m = two_chain_structure(truth);
+    unsigned seed = 300;
+    for (const double top : {0.3, 0.4, 0.5}) {
+      hammer.curves.push_back(synthetic_backbone(m, 1, sensors, 0, AmplitudeQuantity::kVelocity, 20,
+                                                 top, 2e-4, 0.02, seed++));
+    }
+    sine.curves.push_back(synthetic_backbone(m, 1, sensors, 0, AmplitudeQuantity::kVelocity, 10,
+                                             2.0, 1e-4, 0.03, seed++, BackboneKind::kSteppedSine));
+  }
+};
+
+TEST(IwanUpdate, HammerAndSteppedSineTogetherIdentifySlipForceAndBeta) {
+  const HammerAndSteppedSine s;
+  TwoChainParameters start = s.truth;
+  start.Fs *= 1.5;
+  start.ka *= 1.2;
+  start.chi = -0.3;
+  start.beta = 0.6;
+  const model::Model m = two_chain_structure(start);
+  IwanTarget both = s.hammer;
+  both.curves.push_back(s.sine.curves.front());
+  const IwanObjective obj(m, "rivet", s.sensors, {both}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
+  IwanUpdateOptions o;
+  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.max_evaluations = 800;
+  IwanUpdateSummary sum;
+  const model::IwanParameters p = update_iwan(obj, o, &sum);
+  SCOPED_TRACE(sum.report());
+  std::printf("hammer + stepped sine: %s", sum.report().c_str());
+  EXPECT_FALSE(sum.microslip_only());
+  EXPECT_TRUE(testing::Close(p.Fs, s.truth.Fs, 0.05));
+  EXPECT_TRUE(testing::Close(p.beta, s.truth.beta, 0.05));
+  EXPECT_TRUE(testing::Close(p.Kt, s.truth.ka, 0.02));
+  EXPECT_TRUE(testing::Close(p.chi, s.truth.chi, 0.02));
+  // The ring-downs alone never leave microslip at the truth: F_S and beta are one family.
+  const IwanObjective hammer(m, "rivet", s.sensors, {s.hammer}, AmplitudeQuantity::kVelocity, 1e-4,
+                             0.02);
+  const model::IwanParameters known{s.truth.Fs, s.truth.ka, s.truth.chi, s.truth.beta};
+  const Eigen::Vector2d slip = hammer.slip_range(known);
+  EXPECT_LT(slip(1), model::Iwan(known).phi_max());
 }
 
 // A campaign in miniature: 8 hits whose joints scatter about the truth (K_T 2 %, F_S 3 %, one

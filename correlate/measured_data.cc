@@ -99,6 +99,12 @@ bool for_each_csv_row(const fs::path& path, const std::string& what, OnHeader on
   return header;
 }
 
+// The "program" that wrote a summary, or "" when it does not say.
+std::string program_of(const JsonValue& doc) {
+  const JsonValue* p = doc.find("program");
+  return p && p->is_string() ? p->string() : std::string();
+}
+
 }  // namespace
 
 ProcessRun read_process_run(const fs::path& dir) {
@@ -114,6 +120,11 @@ ProcessRun read_process_run(const fs::path& dir) {
   const JsonValue doc = data::read_json(path);
   const Fields f{path.string()};
   if (!doc.is_object()) f.fail("document", "expected an object");
+  if (program_of(doc) == "jointlab stepped-sine") {
+    f.fail("program",
+           "a 'jointlab stepped-sine' output, not a 'jointlab process' output (give "
+           "it as stepped-sine data)");
+  }
   ProcessRun run;
   run.dir = dir;
   run.amplitude = quantity_of(
@@ -171,6 +182,63 @@ ProcessRun read_process_run(const fs::path& dir) {
     }
   }
   return run;
+}
+
+SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
+  const fs::path path = dir / "summary.json";
+  if (!fs::is_directory(dir)) {
+    throw InputError(fmt::format("{}: not a directory (expected a 'jointlab stepped-sine' output)",
+                                 dir.string()));
+  }
+  if (!fs::exists(path)) {
+    throw InputError(fmt::format(
+        "{}: missing (expected a 'jointlab stepped-sine' output directory)", path.string()));
+  }
+  const JsonValue doc = data::read_json(path);
+  const Fields f{path.string()};
+  if (!doc.is_object()) f.fail("document", "expected an object");
+  if (program_of(doc) != "jointlab stepped-sine") {
+    f.fail("program",
+           "not a 'jointlab stepped-sine' output (a 'jointlab process' output is "
+           "given as ring-down data)");
+  }
+  SteppedSineRun run;
+  run.dir = dir;
+  run.amplitude = quantity_of(
+      f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
+  const JsonValue& files = f.get(doc, "document", "files", JsonValue::Type::kArray);
+  for (size_t i = 0; i < files.items().size(); ++i) {
+    const JsonValue& file = files.items()[i];
+    const std::string fp = fmt::format("files[{}]", i);
+    if (!file.is_object()) f.fail(fp, "expected an object");
+    SteppedSineOutput o;
+    o.source = f.get(file, fp, "file", JsonValue::Type::kString).string();
+    const JsonValue* out = file.find("output");
+    if (!out) f.fail(fp, "missing \"output\"");
+    if (out->is_string()) {
+      o.file = out->string();
+      if (o.file.empty() || o.file.find('/') != std::string::npos)
+        f.fail(fp + ".output", fmt::format("\"{}\" is not a file name", o.file));
+    } else if (!out->is_null()) {
+      f.fail(fp + ".output", "expected a string or null");
+    }
+    run.outputs.push_back(std::move(o));
+  }
+  return run;
+}
+
+std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor) {
+  std::vector<MeasuredBackbone> out;
+  for (const SteppedSineOutput& o : run.outputs) {
+    if (o.file.empty()) continue;
+    out.push_back(read_backbone_csv(run.dir / o.file, sensor));
+    out.back().kind = BackboneKind::kSteppedSine;
+  }
+  if (out.empty()) {
+    throw InputError(fmt::format("{}: no file gave a stepped-sine backbone",
+                                 (run.dir / "summary.json").string()));
+  }
+  return out;
 }
 
 MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,

@@ -53,8 +53,31 @@ struct ProcessRun {
   std::vector<ProcessOutput> outputs;                          ///< every file's outputs
 };
 
-/// Reads DIR/summary.json; InputError naming the file and the field (or line and byte).
+/// Reads DIR/summary.json; InputError naming the file and the field (or line and byte), and
+/// saying so when DIR is a `stepped-sine` output instead.
 ProcessRun read_process_run(const std::filesystem::path& dir);
+
+/// One file of a `jointlab stepped-sine` run and its backbone CSV.
+struct SteppedSineOutput {
+  std::string source;  ///< the stepped-sine file
+  std::string file;    ///< backbone CSV name in the directory; empty when no level gave a point
+};
+
+/// The contents of a `jointlab stepped-sine` output directory's summary.json
+/// (docs/stepped-sine.md): one backbone per file, one point per level.
+struct SteppedSineRun {
+  std::filesystem::path dir;                                   ///< the directory
+  AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< backbone amplitude quantity
+  std::vector<SteppedSineOutput> outputs;                      ///< every file's backbone
+};
+
+/// Reads DIR/summary.json of `jointlab stepped-sine`; InputError naming the file and the field,
+/// and saying so when DIR is a `process` output instead.
+SteppedSineRun read_stepped_sine_run(const std::filesystem::path& dir);
+
+/// Every backbone of a stepped-sine run, measured at sensor index `sensor`, of kind
+/// BackboneKind::kSteppedSine; InputError when no file gave a backbone.
+std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor);
 
 /// Linear modal data per band at the sensors; `bands` (if given) receives the band number of
 /// each measured mode. InputError when no band has a linear frequency or no sensor channel

@@ -27,7 +27,9 @@ struct State {
 
 class Curve {
  public:
-  Curve(const model::JointCondensation& m, int column, int power) : m_(m), power_(power) {
+  Curve(const model::JointCondensation& m, int mode, int power, AmplitudeFrequency frequency)
+      : m_(m), mode_(mode), power_(power), frequency_(frequency) {
+    const int column = m.modes().rigid_count + mode - 1;
     omega2_ = m.modes().omega2(column);
     p_ = m.joint_shapes().col(column);
     c_ = p_ / omega2_;
@@ -54,25 +56,30 @@ class Curve {
       if (!s.converged) continue;
       out.q = (alpha + p_.dot(m_.softening(out.r))) / omega2_;
       if (!(out.q > 0) || !std::isfinite(out.q)) return false;
-      out.ln_s = std::log(out.q) + 0.5 * power_ * (std::log(alpha) - std::log(out.q));
+      double omega2 = alpha / out.q;  // secant
+      if (frequency_ == AmplitudeFrequency::kFirstHarmonic && power_ > 0) {
+        // omega_1^2 = omega_r^2 - p^T diag(K_T - k_1) r / q (model/qsma.h)
+        const Eigen::VectorXd k1 = m_.first_harmonic_stiffness(out.r);
+        omega2 = omega2_;
+        for (int j = 0; j < m_.size(); ++j)
+          omega2 -= p_(j) * (m_.linear_stiffness(j) - k1(j)) * out.r(j) / out.q;
+        if (!(omega2 > 0)) return false;
+      }
+      out.ln_s = std::log(out.q) + 0.5 * power_ * std::log(omega2);
       return true;
     }
     return false;
   }
 
   model::QsmaPoint point(const State& s) const {
-    model::QsmaPoint pt;
-    pt.force_amplitude = s.alpha;
-    pt.modal_amplitude = s.q;
-    pt.frequency_hz = std::sqrt(s.alpha / s.q) / kTwoPi;
-    pt.damping_ratio = m_.dissipation(s.r) / (kTwoPi * s.alpha * s.q);
-    pt.max_slip = s.r.cwiseAbs().maxCoeff();
-    return pt;
+    return model::qsma_point(m_, mode_, s.alpha, s.r, s.tangent);
   }
 
  private:
   const model::JointCondensation& m_;
+  int mode_;
   int power_;
+  AmplitudeFrequency frequency_;
   double omega2_;
   Eigen::VectorXd p_, c_, g_;
 };
@@ -165,7 +172,8 @@ bool find(const Curve& curve, double target, State& at, double& slope, bool* rea
 }  // namespace
 
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
-                                 const std::vector<double>& amplitudes) {
+                                 const std::vector<double>& amplitudes,
+                                 AmplitudeFrequency frequency) {
   assert(power >= 0 && power <= 2);
   assert(std::is_sorted(amplitudes.begin(), amplitudes.end()));
   if (mode < 1 || mode > model.elastic_count()) {
@@ -175,7 +183,7 @@ std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode
   std::vector<QsmaAtPoint> out;
   if (amplitudes.empty()) return out;
   assert(amplitudes.front() > 0);
-  const Curve curve(model, model.modes().rigid_count + mode - 1, power);
+  const Curve curve(model, mode, power, frequency);
   // Start at the load of the linear structure: s = alpha omega^(power - 2).
   State at;
   const double alpha0 = amplitudes.front() * std::pow(curve.omega2(), 1 - 0.5 * power);

@@ -4,12 +4,14 @@
 // K u + F_J(u) = alpha M phi_r; at each level q = phi_r^T M u and omega = sqrt(alpha / q).
 // A measured backbone gives amplitudes of a sensor's displacement, velocity or acceleration:
 // a = |phi_r[d]| q omega^p (p = 0, 1, 2), so s = q omega^p = a / |phi_r[d]| is a point of the
-// curve. qsma_at() finds, for each s_i, the load level with ln s(alpha) = ln s_i to 1e-10 by a
-// bracketed secant (Illinois) iteration on ln alpha, continuing from the previous amplitude;
-// every step is one static solve of the condensed joint problem (joint_condensation.h).
-// Accurate where a fixed grid interpolated at the data is not: at the macroslip knee, where q
-// grows fast at almost constant alpha. Past the largest load the structure carries (no static
-// solution), amplitudes the model cannot reach get the last reachable point, flagged.
+// curve; omega is the secant frequency sqrt(alpha / q) or, as the signal a test records
+// oscillates at, the first-harmonic frequency (model/qsma.h). qsma_at() finds, for each s_i, the
+// load level with ln s(alpha) = ln s_i to 1e-10 by a bracketed secant (Illinois) iteration on ln
+// alpha, continuing from the previous amplitude; every step is one static solve of the condensed
+// joint problem (joint_condensation.h). Accurate where a fixed grid interpolated at the data is
+// not: at the macroslip knee, where q grows fast at almost constant alpha. Past the largest load
+// the structure carries (no static solution), amplitudes the model cannot reach get the last
+// reachable point, flagged.
 #pragma once
 
 #include <vector>
@@ -25,10 +27,17 @@ struct QsmaAtPoint {
   bool reached = false;    ///< false: beyond the largest amplitude the model carries
 };
 
+/// Which frequency omega turns the modal amplitude q into the measured s = q omega^power.
+enum class AmplitudeFrequency {
+  kSecant,        ///< sqrt(alpha / q), the paper's QSMA frequency
+  kFirstHarmonic  ///< the first-harmonic frequency (a ring-down's or a steady state's)
+};
+
 /// QSMA of elastic mode `mode` (1-based) at each amplitude s_i = q omega^power (ascending,
-/// > 0); empty if a static solve fails below the requested amplitudes. InputError if there
-/// is no such mode.
+/// > 0), with every column of the point; empty if a static solve fails below the requested
+/// amplitudes. InputError if there is no such mode.
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
-                                 const std::vector<double>& amplitudes);
+                                 const std::vector<double>& amplitudes,
+                                 AmplitudeFrequency frequency = AmplitudeFrequency::kSecant);
 
 }  // namespace jointlab::correlate

@@ -53,6 +53,47 @@ TEST(QsmaAt, ReproducesQsmaPointsAcrossTheMacroslipKnee) {
   }
 }
 
+// The ring-down and first-harmonic columns: a test's signal oscillates at the first-harmonic
+// frequency, so its amplitude is q omega_1^p. qsma() points converted that way must come back
+// with every column, the ring-down and harmonic damping included (same solves, same formulas:
+// to the 1e-10 placement of s, about 1e-8 after the damping's slope). Except at the point
+// qsma() puts exactly on the element's phi_max: there the ring-down damping jumps (the
+// element's beta sliders all slip at once, so the tangent stiffness, hence dE/dq, drops), and
+// a point 1e-10 away may lie on either side.
+TEST(QsmaAt, FirstHarmonicAmplitudesGiveTheRingdownAndHarmonicColumns) {
+  TwoChainParameters p;
+  p.iwan = true;
+  const model::JointCondensation jc(two_chain_structure(p));
+  model::QsmaSummary qs;
+  const auto automatic = model::qsma(jc, 1, {}, &qs);
+  model::QsmaOptions o;
+  o.points = 25;
+  o.q_max = 2 * automatic.back().modal_amplitude;
+  const auto curve = model::qsma(jc, 1, o, &qs);
+  for (int power = 0; power <= 2; ++power) {
+    std::vector<double> s;
+    for (const auto& c : curve)
+      s.push_back(c.modal_amplitude *
+                  std::pow(2 * std::numbers::pi * c.ringdown_frequency_hz, power));
+    const auto at = qsma_at(jc, 1, power, s, AmplitudeFrequency::kFirstHarmonic);
+    ASSERT_EQ(at.size(), curve.size());
+    int on_the_jump = 0;
+    for (size_t i = 0; i < curve.size(); ++i) {
+      SCOPED_TRACE(::testing::Message() << "power " << power << ", point " << i);
+      const model::QsmaPoint& a = at[i].point;
+      if (std::abs(curve[i].max_slip / jc.phi_max(0) - 1) < 1e-8) {
+        ++on_the_jump;
+        continue;
+      }
+      EXPECT_TRUE(testing::Close(a.modal_amplitude, curve[i].modal_amplitude, 1e-8));
+      EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, curve[i].ringdown_frequency_hz, 1e-9));
+      EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, curve[i].ringdown_damping_ratio, 1e-7));
+      EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, curve[i].harmonic_damping_ratio, 1e-7));
+    }
+    EXPECT_LE(on_the_jump, 1);
+  }
+}
+
 // A single mass on an Iwan element to ground (and nothing else): the load cannot exceed F_S, so
 // the amplitudes grow without bound as alpha approaches it. Below they are exact.
 TEST(QsmaAt, AmplitudesUpToTheLimitLoad) {

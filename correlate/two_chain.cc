@@ -62,7 +62,8 @@ model::Model two_chain_structure(const TwoChainParameters& p) {
 MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
                                     const std::vector<Sensor>& sensors, int sensor,
                                     AmplitudeQuantity quantity, int points, double top,
-                                    double frequency_noise, double damping_noise, unsigned seed) {
+                                    double frequency_noise, double damping_noise, unsigned seed,
+                                    BackboneKind kind, IwanComparison columns) {
   const model::JointCondensation jc(model);
   model::QsmaSummary qs;
   const auto full = model::qsma(jc, mode, {}, &qs);
@@ -79,6 +80,7 @@ MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
   MeasuredBackbone b;
+  b.kind = kind;
   b.sensor = sensor;
   const auto n = static_cast<Eigen::Index>(curve.size());
   b.amplitude.resize(n);
@@ -88,11 +90,16 @@ MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
   b.damping_std.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const model::QsmaPoint& p = curve[i];
-    b.amplitude(i) = p.modal_amplitude * ph * std::pow(2 * std::numbers::pi * p.frequency_hz, pw);
-    b.frequency_hz(i) = p.frequency_hz * (1 + frequency_noise * g(rng));
-    b.damping_ratio(i) = p.damping_ratio * (1 + damping_noise * g(rng));
-    b.frequency_std_hz(i) = frequency_noise * p.frequency_hz;
-    b.damping_std(i) = damping_noise * p.damping_ratio;
+    const bool secant = columns == IwanComparison::kSecant;
+    const double f = secant ? p.frequency_hz : p.ringdown_frequency_hz;
+    const double z = secant                               ? p.damping_ratio
+                     : kind == BackboneKind::kSteppedSine ? p.harmonic_damping_ratio
+                                                          : p.ringdown_damping_ratio;
+    b.amplitude(i) = p.modal_amplitude * ph * std::pow(2 * std::numbers::pi * f, pw);
+    b.frequency_hz(i) = f * (1 + frequency_noise * g(rng));
+    b.damping_ratio(i) = z * (1 + damping_noise * g(rng));
+    b.frequency_std_hz(i) = frequency_noise * f;
+    b.damping_std(i) = damping_noise * z;
   }
   return b;
 }

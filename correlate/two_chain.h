@@ -40,10 +40,14 @@ model::Model two_chain_structure(const TwoChainParameters& p = {});
 /// `sensor`: `points` points log-spaced in modal amplitude over the two decades below `top` times
 /// the end of the automatic QSMA range (a ring-down's span), the amplitude converted to `quantity`,
 /// frequency and damping perturbed by Gaussian relative noise (frequency_noise, damping_noise;
-/// seeded) and their std columns set to those noise levels.
+/// seeded) and their std columns set to those noise levels. The columns are those a test of
+/// `kind` shows (QSMA's ring-down or first-harmonic pair, the amplitude at the first-harmonic
+/// frequency), or with IwanComparison::kSecant QSMA's secant pair.
 MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
                                     const std::vector<Sensor>& sensors, int sensor,
                                     AmplitudeQuantity quantity, int points, double top,
-                                    double frequency_noise, double damping_noise, unsigned seed);
+                                    double frequency_noise, double damping_noise, unsigned seed,
+                                    BackboneKind kind = BackboneKind::kRingdown,
+                                    IwanComparison columns = IwanComparison::kMatched);
 
 }  // namespace jointlab::correlate

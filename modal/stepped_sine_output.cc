@@ -9,6 +9,25 @@
 
 namespace jointlab::modal {
 
+SteppedSineFileResult extract_stepped_sine_file(const std::filesystem::path& file,
+                                                std::optional<Quantity> quantity,
+                                                const SteppedSineOptions& opt) {
+  SteppedSineFileResult r;
+  r.source = file.string();
+  r.tables = data::read_stepped_sine(file.string(), quantity);
+  r.points.resize(r.tables.size());
+  for (size_t i = 0; i < r.tables.size(); ++i) {
+    if (r.tables[i].control == data::SineControl::kResponse)
+      r.points[i] = extract_backbone_point(r.tables[i], opt);
+  }
+  const ModalConstant q = response_modal_constant(r.points);
+  for (size_t i = 0; i < r.tables.size(); ++i) {
+    if (r.tables[i].control == data::SineControl::kForce)
+      r.points[i] = extract_backbone_point(r.tables[i], opt, q);
+  }
+  return r;
+}
+
 std::string sine_backbone_file_name(const std::string& source) {
   return std::filesystem::path(source).stem().string() + ".backbone.csv";
 }

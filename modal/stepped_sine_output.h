@@ -8,6 +8,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,14 @@ struct SteppedSineFileResult {
   std::vector<data::SteppedSineTable> tables;  ///< its levels
   std::vector<SineBackbonePoint> points;       ///< one per table
 };
+
+/// Reads a stepped-sine file (data/stepped_sine.h; `quantity`: what a response column without a
+/// unit measures) and extracts every level's point: the response-controlled levels first,
+/// whose modal constant then serves the force-controlled ones' energy balance. InputError on a
+/// defective file.
+SteppedSineFileResult extract_stepped_sine_file(const std::filesystem::path& file,
+                                                std::optional<Quantity> quantity,
+                                                const SteppedSineOptions& options);
 
 /// Name of a file's backbone CSV: "<stem>.backbone.csv".
 std::string sine_backbone_file_name(const std::string& source);

@@ -30,7 +30,7 @@ enum class Stop { kNone, kNoSolution, kMacroslip, kQmax };
 class Problem {
  public:
   Problem(const JointCondensation& m, int column, const QsmaOptions& o, QsmaSummary* s)
-      : m_(m), opt_(o), sum_(s) {
+      : m_(m), opt_(o), sum_(s), mode_(column - m.modes().rigid_count + 1) {
     omega2_ = m.modes().omega2(column);
     p_ = m.joint_shapes().col(column);
     c_ = p_ / omega2_;
@@ -99,38 +99,7 @@ class Problem {
     return Stop::kNone;
   }
 
-  QsmaPoint point(const State& s) const {
-    QsmaPoint pt;
-    pt.force_amplitude = s.alpha;
-    pt.modal_amplitude = s.q;
-    pt.frequency_hz = std::sqrt(s.alpha / s.q) / kTwoPi;
-    const double d = m_.dissipation(s.r);
-    pt.damping_ratio = d / (kTwoPi * s.alpha * s.q);
-    pt.max_slip = s.r.cwiseAbs().maxCoeff();
-    // First-harmonic modal stiffness (qsma.h): omega_1^2 = omega_r^2 - p^T diag(K_T - k_1) r / q.
-    const Eigen::VectorXd k1 = m_.first_harmonic_stiffness(s.r);
-    double w1 = omega2_;
-    for (int j = 0; j < m_.size(); ++j) {
-      w1 -= p_(j) * (m_.linear_stiffness(j) - k1(j)) * s.r(j) / s.q;
-    }
-    w1 = std::max(w1, 0.0);
-    pt.ringdown_frequency_hz = std::sqrt(w1) / kTwoPi;
-    pt.harmonic_damping_ratio = d / (kTwoPi * w1 * s.q * s.q);
-    pt.ringdown_damping_ratio = d / (kTwoPi * s.q * stored_energy_slope(s));
-    return pt;
-  }
-
-  // dE/dq along the curve (qsma.h): alpha + sum_j (dr_j/dq) (h_j - r_j h'_j), with
-  // dr/dalpha = (K_c - diag h')^{-1} g and dq/dalpha = (1 + p^T diag(h') dr/dalpha) / omega_r^2.
-  double stored_energy_slope(const State& s) const {
-    Eigen::VectorXd t = m_.tangent(g_, s.r);
-    if (t.size() == 0) t = s.tangent;  // singular exactly at a limit point: the solver's own
-    if (t.size() == 0) t = s.r / s.alpha;
-    const Eigen::VectorXd h = m_.softening(s.r), dh = m_.softening_tangent(s.r);
-    const double dq = (1 + p_.dot(dh.cwiseProduct(t))) / omega2_;
-    const Eigen::VectorXd w = h - s.r.cwiseProduct(dh);
-    return s.alpha + t.dot(w) / dq;
-  }
+  QsmaPoint point(const State& s) const { return qsma_point(m_, mode_, s.alpha, s.r, s.tangent); }
 
   // |zeta / zeta_0 - 1| at a solution: zeta_0 is the damping of the linear joint motion
   // at the same modal amplitude (the microslip power law).
@@ -211,6 +180,7 @@ class Problem {
   const JointCondensation& m_;
   QsmaOptions opt_;
   QsmaSummary* sum_;
+  int mode_;
   double omega2_;
   Eigen::VectorXd p_, c_, g_, loaded_, phi_max_all_;
 };
@@ -544,6 +514,40 @@ std::string QsmaSummary::report() const {
       "QSMA ended: {}. Last point: force amplitude {:.6g}, modal amplitude {:.6g}. "
       "{} static solves, {} Newton iterations. {}",
       why, end_force, end_modal_amplitude, solves, newton_iterations, message);
+}
+
+QsmaPoint qsma_point(const JointCondensation& m, int mode, double alpha, const Eigen::VectorXd& r,
+                     const Eigen::VectorXd& solver_tangent) {
+  const int column = m.modes().rigid_count + mode - 1;
+  const double omega2 = m.modes().omega2(column);
+  const Eigen::VectorXd p = m.joint_shapes().col(column);
+  const Eigen::VectorXd g = m.condensed_stiffness() * (p / omega2);
+  const Eigen::VectorXd h = m.softening(r);
+  const double q = (alpha + p.dot(h)) / omega2;
+  QsmaPoint pt;
+  pt.force_amplitude = alpha;
+  pt.modal_amplitude = q;
+  pt.frequency_hz = std::sqrt(alpha / q) / kTwoPi;
+  const double d = m.dissipation(r);
+  pt.damping_ratio = d / (kTwoPi * alpha * q);
+  pt.max_slip = r.cwiseAbs().maxCoeff();
+  // First-harmonic modal stiffness (qsma.h): omega_1^2 = omega_r^2 - p^T diag(K_T - k_1) r / q.
+  const Eigen::VectorXd k1 = m.first_harmonic_stiffness(r);
+  double w1 = omega2;
+  for (int j = 0; j < m.size(); ++j) w1 -= p(j) * (m.linear_stiffness(j) - k1(j)) * r(j) / q;
+  w1 = std::max(w1, 0.0);
+  pt.ringdown_frequency_hz = std::sqrt(w1) / kTwoPi;
+  pt.harmonic_damping_ratio = d / (kTwoPi * w1 * q * q);
+  // dE/dq along the curve (qsma.h): alpha + sum_j (dr_j/dq) (h_j - r_j h'_j), with
+  // dr/dalpha = (K_c - diag h')^{-1} g and dq/dalpha = (1 + p^T diag(h') dr/dalpha) / omega_r^2.
+  Eigen::VectorXd t = m.tangent(g, r);
+  if (t.size() == 0) t = solver_tangent;  // singular exactly at a limit point: the solver's own
+  if (t.size() == 0) t = r / alpha;
+  const Eigen::VectorXd dh = m.softening_tangent(r);
+  const double dq = (1 + p.dot(dh.cwiseProduct(t))) / omega2;
+  const double dE = alpha + t.dot(h - r.cwiseProduct(dh)) / dq;
+  pt.ringdown_damping_ratio = d / (kTwoPi * q * dE);
+  return pt;
 }
 
 std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const QsmaOptions& options,

@@ -107,6 +107,12 @@ struct QsmaSummary {
   std::string report() const;
 };
 
+/// The point of elastic mode `mode` (1-based) at a converged static solution r of load level
+/// alpha, with every column; solver_tangent (dr/dalpha from the solve, may be empty) stands in
+/// where the tangent matrix is singular.
+QsmaPoint qsma_point(const JointCondensation& model, int mode, double alpha,
+                     const Eigen::VectorXd& r, const Eigen::VectorXd& solver_tangent);
+
 /// QSMA curve of elastic mode `mode` (1-based, as numbered by `jointlab modes`); InputError if no
 /// such mode or the options are invalid (checked always), std::invalid_argument without a
 /// summary.

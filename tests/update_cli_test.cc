@@ -429,5 +429,77 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// A `stepped-sine` output folder as the command writes it (summary.json naming the program
+// and each file's backbone CSV with process's five columns).
+void write_stepped_sine_output(const fs::path& dir, const correlate::MeasuredBackbone& b) {
+  fs::create_directories(dir);
+  testing::write_text((dir / "summary.json").string(),
+                      "{\"program\": \"jointlab stepped-sine\", \"amplitude_quantity\": "
+                      "\"velocity\", \"amplitude_unit\": \"m/s\", \"files\": [{\"file\": "
+                      "\"sweeps.csv\", \"output\": \"sweeps.backbone.csv\", \"levels\": []}]}\n");
+  std::string t = "amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n";
+  for (Eigen::Index j = 0; j < b.amplitude.size(); ++j) {
+    t += fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", b.amplitude(j), b.frequency_hz(j),
+                     b.damping_ratio(j), b.frequency_std_hz(j), b.damping_std(j));
+  }
+  testing::write_text((dir / "sweeps.backbone.csv").string(), t);
+}
+
+// Hammer hits that stay in microslip (tops at 0.3 and 0.4 times the full-macroslip amplitude)
+// and one stepped sine up to twice it: update-iwan fits both, each against its own model pair,
+// and finds F_S and beta within 5 %, K_T and chi within 2 % (issue acceptance); the hammer
+// alone is microslip only and says so. A process folder given as --stepped-sine is refused.
+TEST(UpdateCli, IwanFitsHammerAndSteppedSineTogether) {
+  const fs::path dir = testing::scratch_dir("update_iwan_stepped_sine");
+  correlate::TwoChainParameters truth;
+  truth.iwan = true;
+  const model::Model m = correlate::two_chain_structure(truth);
+  Hit h1 = linear_hit(m, 2), h2 = h1;
+  h2.source = "hit2.csv";
+  const int a5 = correlate::find_sensor(kSensors, "a5");
+  h1.reference = h2.reference = {"a5", "b5"};
+  h1.backbones.push_back(correlate::synthetic_backbone(
+      m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 20, 0.3, 2e-4, 0.02, 21));
+  h2.backbones.push_back(correlate::synthetic_backbone(
+      m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 20, 0.4, 2e-4, 0.02, 22));
+  write_process_output(dir / "measured", {h1, h2});
+  write_stepped_sine_output(
+      dir / "sine",
+      correlate::synthetic_backbone(m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 10, 2.0, 1e-4,
+                                    0.03, 23, correlate::BackboneKind::kSteppedSine));
+  testing::write_text((dir / "sensors.csv").string(), sensors_text());
+  correlate::TwoChainParameters start = truth;
+  start.Fs *= 1.5;
+  start.ka *= 1.2;
+  start.chi = -0.3;
+  start.beta = 0.6;
+  const std::string model = write_model(dir, correlate::two_chain_structure(start), "start.toml");
+  const std::string common =
+      fmt::format("update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode 1:1", model,
+                  (dir / "measured").string(), (dir / "sensors.csv").string());
+  const testing::CommandResult r =
+      testing::run_jointlab(fmt::format("{} --stepped-sine {} --stepped-sine-channel a5 --out {}",
+                                        common, (dir / "sine").string(), (dir / "both").string()));
+  ASSERT_EQ(r.status, 0) << r.err;
+  SCOPED_TRACE(r.out);
+  const auto p = read_parameters(dir / "both" / "parameters.csv");
+  EXPECT_TRUE(testing::Close(std::stod(p.at("Fs").at(2)), truth.Fs, 0.05));
+  EXPECT_TRUE(testing::Close(std::stod(p.at("beta").at(2)), truth.beta, 0.05));
+  EXPECT_TRUE(testing::Close(std::stod(p.at("Kt").at(2)), truth.ka, 0.02));
+  EXPECT_TRUE(testing::Close(std::stod(p.at("chi").at(2)), truth.chi, 0.02));
+  EXPECT_NE(r.out.find("the data reach macroslip"), std::string::npos);
+  const testing::CommandResult h = testing::run_jointlab(
+      fmt::format("{} --beta-range 0.5:2 --out {}", common, (dir / "hammer").string()));
+  ASSERT_EQ(h.status, 0) << h.err;
+  EXPECT_NE(h.out.find("microslip only"), std::string::npos) << h.out;
+  expect_one_line_error(fmt::format("{} --stepped-sine {} --stepped-sine-channel a5 --out {}",
+                                    common, (dir / "measured").string(), (dir / "bad").string()),
+                        "not a 'jointlab stepped-sine' output");
+  expect_one_line_error(fmt::format("{} --stepped-sine {} --out {}", common,
+                                    (dir / "sine").string(), (dir / "bad").string()),
+                        "--stepped-sine-channel");
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
 }  // namespace
 }  // namespace jointlab

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/campaign/figures.h"
+#include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/mac.h"
 #include "jointlab/data/read_record.h"
@@ -29,13 +30,25 @@ ReportFigure backbone_figure(const Campaign& c, const MeasuredSide& measured,
     bf.model.push_back(model->start.curves[k]);
   if (model && model->have_updated && model->after.curves[k].amplitude.size() > 1)
     bf.model.push_back(model->after.curves[k]);
+  if (!c.modes[k].stepped_sine.empty()) {
+    const ModeBackbones sine = stepped_sine_backbones(c, k, measured.reference[k]);
+    for (size_t i = 0; i < sine.curves.size(); ++i) {
+      const Curve& cv = sine.curves[i];
+      bf.stepped_sine.push_back({"stepped sine " + cv.id, cv.amplitude, cv.frequency_hz, cv.damping,
+                                 sine.frequency_std_hz[i], sine.damping_std[i]});
+    }
+  }
   const fs::path p = dir / fmt::format("backbone_mode{}.png", k + 1);
   plot_backbones(bf, p);
   const bool curve = !bf.model.empty();
   return {fmt::format("{}: natural frequency and damping ratio versus {} "
                       "amplitude; every hit faint, the mean over hits per "
-                      "bin with its {:g} % confidence interval{}{}.",
+                      "bin with its {:g} % confidence interval{}{}{}.",
                       c.modes[k].name, quantity_name(c.amplitude), 100 * c.scatter.confidence,
+                      bf.stepped_sine.empty()
+                          ? ""
+                          : ", the stepped-sine points with their uncertainty bars (as written "
+                            "by stepped-sine: k sigma)",
                       curve ? ", and the model's QSMA curve" : "",
                       curve && c.iwan_update.enabled && c.modes[k].model_mode > 0 &&
                               !c.iwan_update.fits(c.modes[k].name)

@@ -1,9 +1,12 @@
 #include "jointlab/campaign/steps/iwan_step.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/core/error.h"
+#include "jointlab/modal/stepped_sine_output.h"
 
 namespace jointlab::campaign {
 
@@ -65,21 +68,70 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     }
     mb.scatter = m.scatter[k];
   }
+  // Each mode's stepped-sine tests: one more entry of the same model mode, one curve per file,
+  // each point weighed by its own uncertainty (kept apart from the hammer hits' scatter bins).
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    if (c.modes[k].stepped_sine.empty()) continue;
+    ModeBackbones sine = stepped_sine_backbones(c, k, m.reference[k]);
+    sine.fitted = c.iwan_update.fits(c.modes[k].name);
+    sine.linear_frequency_hz = modes[k].linear_frequency_hz;
+    modes.push_back(std::move(sine));
+  }
   return modes;
 }
 
-namespace {
+ModeBackbones stepped_sine_backbones(const Campaign& c, size_t k, int sensor) {
+  const CampaignMode& mode = c.modes[k];
+  modal::SteppedSineOptions opt;
+  opt.amplitude = c.amplitude;
+  ModeBackbones mb;
+  mb.name = mode.name + " (stepped sine)";
+  mb.model_mode = mode.model_mode;
+  for (const std::filesystem::path& f : mode.stepped_sine) {
+    const modal::SteppedSineFileResult r = modal::extract_stepped_sine_file(f, c.quantity, opt);
+    std::vector<size_t> rows;
+    for (size_t i = 0; i < r.points.size(); ++i)
+      if (r.points[i].status == modal::SineStatus::kOk) rows.push_back(i);
+    std::sort(rows.begin(), rows.end(),
+              [&](size_t a, size_t b) { return r.points[a].amplitude < r.points[b].amplitude; });
+    if (rows.empty()) continue;
+    const auto n = static_cast<Eigen::Index>(rows.size());
+    Curve cv;
+    cv.id = f.stem().string();
+    cv.group = "stepped sine";
+    cv.amplitude.resize(n), cv.frequency_hz.resize(n), cv.damping.resize(n);
+    Eigen::VectorXd sf(n), sz(n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const modal::SineBackbonePoint& p = r.points[rows[static_cast<size_t>(j)]];
+      cv.amplitude(j) = p.amplitude, cv.frequency_hz(j) = p.frequency_hz;
+      cv.damping(j) = p.damping_ratio, sf(j) = p.frequency_std_hz, sz(j) = p.damping_std;
+    }
+    mb.curves.push_back(std::move(cv));
+    mb.frequency_std_hz.push_back(sf);
+    mb.damping_std.push_back(sz);
+    mb.sensors.push_back(sensor);
+    mb.kinds.push_back(correlate::BackboneKind::kSteppedSine);
+  }
+  if (mb.curves.empty()) {
+    throw InputError(
+        where(c.file.string(), 0,
+              fmt::format("{}: no level of its stepped_sine files gave a point", mode.name)));
+  }
+  mb.scatter = summarize_scatter(mb.curves, ScatterOptions{});
+  return mb;
+}
 
-// The fit itself: beta held first, freed when the data reach macroslip; the better kept.
-IwanUpdateSummary fit(const IwanObjective& objective, const IwanUpdateOptions& io,
-                      const std::function<void(const std::string&)>& say) {
+IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptions& io,
+                           const std::function<void(const std::string&)>& say) {
   IwanUpdateSummary best;
   IwanUpdateOptions held = io;
   if (held.fixed_beta == 0) held.fixed_beta = objective.initial().beta;
   correlate::update_iwan(objective, held, &best);
   if (io.fixed_beta == 0 && !best.microslip_only()) {
-    say("update: " + best.report() +
-        "update: the data reach macroslip; Iwan identification with beta free");
+    if (say) {
+      say("update: " + best.report() +
+          "update: the data reach macroslip; Iwan identification with beta free");
+    }
     IwanUpdateSummary full;
     correlate::update_iwan(objective, io, &full);
     full.evaluations += best.evaluations;
@@ -87,8 +139,6 @@ IwanUpdateSummary fit(const IwanObjective& objective, const IwanUpdateOptions& i
   }
   return best;
 }
-
-}  // namespace
 
 IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors, const MeasuredSide& m,
@@ -102,19 +152,21 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   IwanUpdateOptions io;
   IwanTargetOptions to;
   iwan_update_options(c, io, to);
-  const IwanTargets targets = iwan_targets(base, sensors, campaign_backbones(c, m), to);
+  const std::vector<ModeBackbones> backbones = campaign_backbones(c, m);
+  const IwanTargets targets = iwan_targets(base, sensors, backbones, to);
   if (targets.fitted.empty()) {
     step.note = "update.iwan: no mode names its model mode (model_mode); Iwan updating skipped";
     return step;
   }
   const IwanObjective objective(base, step.set, sensors, targets.fitted, io.amplitude,
-                                io.frequency_floor, io.damping_floor);
+                                io.frequency_floor, io.damping_floor, io.comparison);
   say(
       fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
                   "left out where other modes carry over {:g} % of the joint slip)",
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
                   100 * to.max_slip_share));
-  step.summary = fit(objective, io, say);
+  io.bounds = correlate::default_iwan_bounds(objective.initial());
+  step.summary = fit_iwan(objective, io, say);
   step.beta_held = step.summary.microslip_only() || io.fixed_beta > 0;
   step.curves = static_cast<int>(targets.curves());
   step.updated = objective.apply(step.summary.best);
@@ -123,9 +175,9 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   // one-mode QSMA cannot describe (its joints moved by another mode) stands out.
   for (const auto& [k, t] : targets.every) {
     const IwanObjective one(base, step.set, sensors, {t}, io.amplitude, io.frequency_floor,
-                            io.damping_floor);
-    step.mode_costs.push_back({c.modes[k].name, c.iwan_update.fits(c.modes[k].name),
-                               one.cost(step.summary.start), one.cost(step.summary.best)});
+                            io.damping_floor, io.comparison);
+    step.mode_costs.push_back({backbones[k].name, backbones[k].fitted, one.cost(step.summary.start),
+                               one.cost(step.summary.best)});
   }
   step.ran = true;
   say("update: " + step.summary.report());

@@ -3,7 +3,9 @@
 // that name their model mode, starting from the linearly updated model. Below phi_max the
 // backbones depend on K_T, chi and R only, so the first fit holds beta at its starting value
 // (unless the campaign holds it); only when that fit puts the top of the data past phi_max
-// is beta freed for a second fit, and the better of the two is kept.
+// is beta freed for a second fit, and the better of the two is kept. The search box is
+// update-iwan's default (correlate::default_iwan_bounds), so that both commands give the same
+// parameters for the same backbones and settings.
 #pragma once
 
 #include <functional>
@@ -28,9 +30,23 @@ void iwan_update_options(const Campaign& campaign, correlate::IwanUpdateOptions&
 std::string iwan_set(const Campaign& campaign, const model::Model& model);
 
 /// The campaign's modes as the Iwan update sees them: each mode's backbones at its reference
-/// channel, its scatter summary and measured linear frequency.
+/// channel, its scatter summary and measured linear frequency; then, for each mode that lists
+/// stepped-sine files, one more entry of the same model mode with their backbones.
 std::vector<ModeBackbones> campaign_backbones(const Campaign& campaign,
                                               const MeasuredSide& measured);
+
+/// The Iwan fit `run` and `update-iwan` both make: beta held first (at options.fixed_beta, else
+/// at the objective's start), then, when that fit puts the top of the data past phi_max and
+/// beta is not held by the options, freed for a second fit; the better of the two, with the
+/// evaluations of both. `say` (may be empty) hears the first fit's report before the second.
+correlate::IwanUpdateSummary fit_iwan(const correlate::IwanObjective& objective,
+                                      const correlate::IwanUpdateOptions& options,
+                                      const std::function<void(const std::string&)>& say);
+
+/// The stepped-sine backbones of campaign mode k (one curve per file, of kind stepped sine, the
+/// amplitude in the campaign's quantity), measured at sensor index `sensor`; InputError naming
+/// the campaign file when no level of its files gives a point.
+ModeBackbones stepped_sine_backbones(const Campaign& campaign, size_t k, int sensor);
 
 /// One mode's backbone cost at the start and at the result.
 struct ModeCost {
