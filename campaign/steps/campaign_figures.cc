@@ -34,7 +34,8 @@ ReportFigure backbone_figure(const Campaign& c, const MeasuredSide& measured,
     const ModeBackbones sine = stepped_sine_backbones(c, k, measured.reference[k]);
     for (size_t i = 0; i < sine.curves.size(); ++i) {
       const Curve& cv = sine.curves[i];
-      bf.stepped_sine.push_back({"stepped sine " + cv.id, cv.amplitude, cv.frequency_hz, cv.damping,
+      const std::string label = sine.curves.size() == 1 ? "stepped sine" : "sine " + cv.id;
+      bf.stepped_sine.push_back({label, cv.amplitude, cv.frequency_hz, cv.damping,
                                  sine.frequency_std_hz[i], sine.damping_std[i]});
     }
   }

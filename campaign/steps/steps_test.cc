@@ -259,6 +259,13 @@ TEST_F(Steps, IwanUpdateFitsAModesSteppedSineTests) {
   EXPECT_GT(fs::file_size(figures.backbone[0].image), 1000u);
   EXPECT_NE(figures.backbone[0].caption.find("stepped-sine points"), std::string::npos)
       << figures.backbone[0].caption;
+  // The report compares them with the hits where their amplitudes overlap.
+  const Report report = campaign_report(c, *first_, *measured_, nullptr, figures);
+  size_t rows = 0;
+  for (const ReportSection& s : report.sections)
+    for (const ReportTable& t : s.tables)
+      if (t.caption.starts_with("Stepped sine against the hammer hits")) rows += t.rows.size();
+  EXPECT_GE(rows, 1u);
 }
 
 // Figures: one PNG per mode and the spectrum; the model's two only with a model.
