@@ -13,7 +13,8 @@ std::vector<Sensor> parse_sensors(const std::string& text, const std::string& na
   std::vector<Sensor> out;
   std::set<std::string> seen;
   bool header = false;
-  data::for_each_csv_line(text, [&](const std::vector<std::string>& cells, long n) {
+  data::for_each_csv_line(text, [&](std::vector<std::string> cells, long n) {
+    if (cells.size() > 1 && cells.back().empty()) cells.pop_back();  // a trailing comma
     if (!header) {
       if (cells.size() < 2 || cells.size() > 3 || cells[0] != "channel" || cells[1] != "dof" ||
           (cells.size() == 3 && cells[2] != "sign")) {

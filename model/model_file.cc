@@ -99,7 +99,8 @@ std::vector<std::string> read_labels(const Context& ctx, long line, const fs::pa
   std::vector<std::string> labels;
   std::set<std::string> seen;
   bool header = false;
-  data::for_each_csv_line(*text, [&](const std::vector<std::string>& cells, long n) {
+  data::for_each_csv_line(*text, [&](std::vector<std::string> cells, long n) {
+    if (cells.size() > 1 && cells.back().empty()) cells.pop_back();  // a trailing comma
     if (!header) {
       if (cells.size() != 2 || cells[0] != "node" || cells[1] != "component") {
         throw InputError(where(path.string(), n, "expected the header 'node,component'"));
