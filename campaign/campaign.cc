@@ -90,6 +90,28 @@ const toml::array& array(const Context& ctx, const toml::node& n, const std::str
   return *a;
 }
 
+// A setting of an update table: a number, a text, or a table of per-set bounds
+// { "<set>" = [lower, upper], ... }; the settings' meaning is checked where they are used.
+CampaignSetting setting(const Context& ctx, const toml::node& n, const std::string& field) {
+  const long line = static_cast<long>(n.source().begin.line);
+  if (n.is_string()) return {*n.value<std::string>(), line};
+  if (const toml::table* t = n.as_table()) {
+    std::vector<SetBounds> bounds;
+    for (auto&& [set, v] : *t) {
+      const std::string name = fmt::format("{}.\"{}\"", field, set.str());
+      const toml::array* a = v.as_array();
+      if (!a || a->size() != 2) ctx.fail(v, fmt::format("{} must be [lower, upper]", name));
+      const double lo = number(ctx, (*a)[0], name), hi = number(ctx, (*a)[1], name);
+      if (!(lo > 0 && lo < hi)) ctx.fail(v, fmt::format("{}: need 0 < lower < upper", name));
+      bounds.push_back({std::string(set.str()), lo, hi});
+    }
+    return {std::move(bounds), line};
+  }
+  if (!(n.is_integer() || n.is_floating_point()))
+    ctx.fail(n, fmt::format("{} must be a number, a string or a table of bounds", field));
+  return {number(ctx, n, field), line};
+}
+
 CampaignUpdate read_update(const Context& ctx, const toml::node& n, const std::string& field) {
   CampaignUpdate u;
   u.enabled = true;
@@ -104,7 +126,7 @@ CampaignUpdate read_update(const Context& ctx, const toml::node& n, const std::s
       for (const toml::node& s : array(ctx, value, field + ".modes"))
         u.modes.push_back(text(ctx, s, field + ".modes"));
     } else {
-      u.settings[k] = number(ctx, value, field + "." + k);
+      u.settings[k] = setting(ctx, value, field + "." + k);
     }
   }
   return u;

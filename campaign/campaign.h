@@ -11,6 +11,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include "jointlab/campaign/scatter.h"
@@ -51,12 +53,32 @@ struct CampaignModel {
   int fixed_interface_modes = -1;     ///< override of the description's reduction; -1: keep
 };
 
-/// One update step and its numeric settings (passed on to the updating library).
+/// Absolute bounds of one named set [N/m], 0 < lower < upper.
+struct SetBounds {
+  std::string set;   ///< the set's name
+  double lower = 0;  ///< smallest stiffness allowed
+  double upper = 0;  ///< largest stiffness allowed
+};
+
+/// One setting of an update table as written: a number, a text, or bounds of named sets.
+struct CampaignSetting {
+  std::variant<double, std::string, std::vector<SetBounds>> value;  ///< the value
+  long line = 0;  ///< its line in the campaign file (0: not read from a file)
+  CampaignSetting() = default;
+  /// A number (implicit, so a setting can be assigned a number).
+  CampaignSetting(double v, long at = 0) : value(v), line(at) {}  // NOLINT(google-explicit-*)
+  /// A text.
+  CampaignSetting(std::string v, long at) : value(std::move(v)), line(at) {}
+  /// Bounds of named sets.
+  CampaignSetting(std::vector<SetBounds> v, long at) : value(std::move(v)), line(at) {}
+};
+
+/// One update step and its settings (passed on to the updating library).
 struct CampaignUpdate {
   bool enabled = false;            ///< run this step
   std::vector<std::string> sets;   ///< named element sets to update ("spring.kz", "iwan.rivet")
   std::vector<std::string> modes;  ///< campaign modes (by name) it fits; empty: every mode
-  std::map<std::string, double> settings;  ///< every other key of the table
+  std::map<std::string, CampaignSetting> settings;  ///< every other key of the table
   /// True if this step fits the campaign mode named `mode` (listed, or no list given).
   bool fits(const std::string& mode) const;
 };

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/steps/linear_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/tests/test_util.h"
 
@@ -29,7 +31,7 @@ TEST(Campaign, ReadsTheExample) {
   EXPECT_FALSE(c.model.description.empty());
   EXPECT_TRUE(c.linear_update.enabled);
   ASSERT_EQ(c.linear_update.sets.size(), 1u);
-  EXPECT_EQ(c.linear_update.settings.at("mac_threshold"), 0.5);
+  EXPECT_EQ(std::get<double>(c.linear_update.settings.at("mac_threshold").value), 0.5);
   EXPECT_EQ(c.amplitude, Quantity::kVelocity);
   EXPECT_EQ(c.quantity, Quantity::kAcceleration);
   // The Iwan step fits mode 1 only (mode 3 rings while mode 1 slips the rivets).
@@ -71,6 +73,88 @@ TEST(Campaign, RejectsDefectsNamingTheLine) {
                            "band = [3.0, 4.0]\n")
                 .find(":10:"),
             std::string::npos);
+  fs::remove_all(dir);
+}
+
+// The linear updating options of the command can be set in [update.linear], typed; each bad
+// setting is refused at its line with its field named.
+TEST(Campaign, LinearUpdateSettingsAreTyped) {
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_campaign_settings");
+  fs::create_directories(dir);
+  std::ofstream(dir / "a.csv") << "# fs: 100\nx\n1\n";
+  std::ofstream(dir / "m.toml") << "# not read here\n";
+  const fs::path file = dir / "c.toml";
+  // [update.linear] is line 11, its settings from line 13 on (line 13 in the messages).
+  const std::string head =
+      "[[group]]\nname = \"g\"\nfiles = [\"a.csv\"]\n[[channel]]\nname = \"x\"\ndof = \"0\"\n"
+      "[[mode]]\nband = [1.0, 2.0]\n[model]\nfile = \"m.toml\"\n[update.linear]\nsets = "
+      "[\"iwan.rivet\", \"spring.kz\"]\n";
+  const Campaign c = parse_campaign(head +
+                                        "rule = \"smallest\"\nsmallest_set = \"iwan.rivet\"\n"
+                                        "tolerance = 0.005\nfrequency_window = 0.3\n"
+                                        "alias_mac = 0.95\nmax_iterations = 50\n"
+                                        "bounds = { \"spring.kz\" = [1e5, 1e9] }\n",
+                                    file);
+  const correlate::LinearUpdateOptions lo = linear_update_options(c);
+  EXPECT_EQ(lo.rule, correlate::LinearRule::kSmallest);
+  EXPECT_EQ(lo.smallest_set, "iwan.rivet");
+  EXPECT_EQ(lo.tolerance, 0.005);
+  EXPECT_EQ(lo.frequency_window, 0.3);
+  EXPECT_EQ(lo.alias_mac, 0.95);
+  EXPECT_EQ(lo.max_iterations, 50);
+  ASSERT_EQ(lo.bounds.size(), 1u);
+  EXPECT_EQ(lo.bounds[0].name, "spring.kz");
+  EXPECT_EQ(lo.bounds[0].lower, 1e5);
+  EXPECT_EQ(lo.bounds[0].upper, 1e9);
+
+  // Each defect: the message names the file, the setting's line (13) and the field.
+  const auto message = [&](const std::string& setting) {
+    try {
+      linear_update_options(parse_campaign(head + setting + "\n", file));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string at = file.string() + ":13: ";
+  EXPECT_EQ(message("rule = \"fastest\""),
+            at + "update.linear.rule must be \"least-squares\" or \"smallest\", not \"fastest\"");
+  EXPECT_EQ(message("rule = 1"), at + "update.linear.rule must be a string");
+  EXPECT_EQ(message("tolerance = \"small\""), at + "update.linear.tolerance must be a number");
+  EXPECT_EQ(message("max_iterations = 2.5"),
+            at + "update.linear.max_iterations must be a whole number from 1 to 100000");
+  EXPECT_EQ(message("smallest_set = \"iwan.bolt\""),
+            at + "update.linear.smallest_set 'iwan.bolt' is not one of update.linear.sets");
+  EXPECT_EQ(message("frequency_window = -0.1"),
+            at + "update.linear.frequency_window must be >= 0 (0: no window)");
+  EXPECT_EQ(message("alias_mac = 1.5"), at + "update.linear.alias_mac must be in (0, 1]");
+  EXPECT_EQ(message("bounds = 3.0"),
+            at + "update.linear.bounds must be a table of bounds: { \"<set>\" = [lower, upper], "
+                 "... }");
+  EXPECT_EQ(message("bounds = { \"iwan.bolt\" = [1.0, 2.0] }"),
+            at + "update.linear.bounds 'iwan.bolt' is not one of update.linear.sets");
+  EXPECT_NE(message("bounds = { \"spring.kz\" = [2.0, 1.0] }")
+                .find(":13: update.linear.bounds.\"spring.kz\": need 0 < lower < upper"),
+            std::string::npos);
+  EXPECT_NE(message("bounds = { \"spring.kz\" = [1.0] }")
+                .find(":13: update.linear.bounds.\"spring.kz\" must be [lower, upper]"),
+            std::string::npos);
+  EXPECT_NE(message("rate = 2").find(":13: update.linear: unknown setting 'rate' (known: rule,"),
+            std::string::npos);
+  // The smallest rule without a tolerance: the options' own check.
+  EXPECT_NE(message("rule = \"smallest\"").find("the smallest rule needs a tolerance > 0"),
+            std::string::npos);
+  // The Iwan table reads its settings the same way.
+  const Campaign iwan =
+      parse_campaign(head + "[update.iwan]\nsamples = \"many\"\n", file);  // samples on line 14
+  correlate::IwanUpdateOptions io;
+  IwanTargetOptions to;
+  try {
+    iwan_update_options(iwan, io, to);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), file.string() + ":14: update.iwan.samples must be a number");
+  }
   fs::remove_all(dir);
 }
 

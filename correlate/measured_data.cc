@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/data/json_reader.h"
 #include "jointlab/model/linear_modes.h"
 
@@ -51,51 +52,30 @@ AmplitudeQuantity quantity_of(const Fields& f, const std::string& name) {
          fmt::format("\"{}\" is not displacement, velocity or acceleration", name));
 }
 
-std::string trim(const std::string& s) {
-  const size_t a = s.find_first_not_of(" \t\r");
-  if (a == std::string::npos) return "";
-  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
-}
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream ss(line);
-  std::string c;
-  while (std::getline(ss, c, ',')) cells.push_back(trim(c));
-  if (!line.empty() && line.back() == ',') cells.push_back("");
-  return cells;
-}
-
 // Calls on_header(cells, line) for the first non-empty, non-comment line of a small CSV file
 // and on_row(cells, line) for each later one, after checking it has the header's width;
 // returns whether a header was seen. InputError naming the file ("cannot open the <what>").
 template <typename OnHeader, typename OnRow>
 bool for_each_csv_row(const fs::path& path, const std::string& what, OnHeader on_header,
                       OnRow on_row) {
-  std::ifstream in(path);
   const std::string name = path.string();
-  if (!in) throw InputError(fmt::format("{}: cannot open the {}", name, what));
-  std::string line;
-  long n = 0;
+  const auto text = data::read_text_file(path);
+  if (!text) throw InputError(fmt::format("{}: cannot open the {}", name, what));
   bool header = false;
   size_t width = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    line = trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    const std::vector<std::string> cells = split(line);
+  data::for_each_csv_line(*text, [&](const std::vector<std::string>& cells, long n) {
     if (!header) {
       on_header(cells, n);
       header = true;
       width = cells.size();
-      continue;
+      return;
     }
     if (cells.size() != width) {
       throw InputError(
           where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
     }
     on_row(cells, n);
-  }
+  });
   return header;
 }
 

@@ -1,48 +1,27 @@
 #include "jointlab/correlate/sensors.h"
 
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 
 namespace jointlab::correlate {
-namespace {
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-
-}  // namespace
-
 std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
                                   const model::Model& model) {
   std::vector<Sensor> out;
   std::set<std::string> seen;
-  std::istringstream in(text);
-  std::string line;
-  long n = 0;
   bool header = false;
-  while (std::getline(in, line)) {
-    ++n;
-    line = trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    std::string cell;
-    while (std::getline(ss, cell, ',')) cells.push_back(trim(cell));
+  data::for_each_csv_line(text, [&](std::vector<std::string> cells, long n) {
+    if (cells.size() > 1 && cells.back().empty()) cells.pop_back();  // a trailing comma
     if (!header) {
       if (cells.size() < 2 || cells.size() > 3 || cells[0] != "channel" || cells[1] != "dof" ||
           (cells.size() == 3 && cells[2] != "sign")) {
         throw InputError(where(name, n, "expected the header 'channel,dof[,sign]'"));
       }
       header = true;
-      continue;
+      return;
     }
     if (cells.size() < 2 || cells.size() > 3 || cells[0].empty() || cells[1].empty()) {
       throw InputError(where(name, n, "expected 'channel,dof[,sign]'"));
@@ -86,18 +65,16 @@ std::vector<Sensor> parse_sensors(const std::string& text, const std::string& na
       }
     }
     out.push_back(s);
-  }
+  });
   if (!header) throw InputError(where(name, 0, "empty file, expected 'channel,dof[,sign]'"));
   if (out.empty()) throw InputError(where(name, 0, "no sensors"));
   return out;
 }
 
 std::vector<Sensor> read_sensors(const std::filesystem::path& path, const model::Model& model) {
-  std::ifstream in(path);
-  if (!in) throw InputError(where(path.string(), 0, "cannot open the sensors file"));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_sensors(ss.str(), path.string(), model);
+  const auto text = data::read_text_file(path);
+  if (!text) throw InputError(where(path.string(), 0, "cannot open the sensors file"));
+  return parse_sensors(*text, path.string(), model);
 }
 
 Eigen::MatrixXd shapes_at_sensors(const std::vector<Sensor>& sensors,

@@ -25,6 +25,11 @@ TEST(Sensors, ParsesIndicesLabelsAndSigns) {
   const Eigen::MatrixXd at = shapes_at_sensors(s, shapes);
   EXPECT_EQ(at(0, 1), -shapes(2, 1));
   EXPECT_EQ(at(2, 0), shapes(7, 0));
+  // A spreadsheet's trailing comma on the header and the rows; a quoted channel name.
+  const auto t = parse_sensors("channel,dof,\n\"acc, tip\",3,\n", "sensors.csv", m);
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_EQ(t[0].channel, "acc, tip");
+  EXPECT_EQ(t[0].dof, 3);
 }
 
 TEST(Sensors, BadInputNamesFileAndLine) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <fstream>
+#include <sstream>
 
 #include <csv.h>
 #include <fmt/format.h>
@@ -111,6 +113,32 @@ std::pair<std::string, std::string> split_name_unit(std::string_view field, cons
   }
   return {std::string(trim(field.substr(0, open))),
           std::string(trim(field.substr(open + 1, close - open - 1)))};
+}
+
+void for_each_csv_line(
+    std::string_view text,
+    const std::function<void(const std::vector<std::string>& cells, long line)>& on_line,
+    char delim) {
+  TextLines lines(strip_bom(text));
+  CsvLineSplitter splitter(delim);
+  std::vector<std::string> cells;
+  std::string_view line;
+  while (lines.next(line)) {
+    const std::string_view t = trim(line);
+    if (t.empty() || t.front() == '#') continue;
+    splitter.split(t, cells);
+    for (std::string& c : cells) c = std::string(trim(c));
+    on_line(cells, lines.line_no());
+  }
+}
+
+std::optional<std::string> read_text_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) return std::nullopt;
+  return std::move(ss).str();
 }
 
 }  // namespace jointlab::data

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -73,5 +74,15 @@ std::string_view read_preamble(
 /// naming `file` and `line` when the brackets are malformed.
 std::pair<std::string, std::string> split_name_unit(std::string_view field, const std::string& file,
                                                     long line);
+
+/// Calls `on_line(cells, line)` for each line of a small CSV text that is neither blank nor a
+/// '#' comment, its cells split at `delim` (libcsv quoting) and trimmed.
+void for_each_csv_line(
+    std::string_view text,
+    const std::function<void(const std::vector<std::string>& cells, long line)>& on_line,
+    char delim = ',');
+
+/// The whole content of a file; nullopt if it cannot be opened or read.
+std::optional<std::string> read_text_file(const std::filesystem::path& path);
 
 }  // namespace jointlab::data

@@ -7,18 +7,13 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/mat_file.h"
 #include "jointlab/data/uff58.h"
 
 namespace jointlab::data {
 namespace {
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 // A header field: quoted (libcsv rules) when it holds the delimiter or a quote.
 std::string csv_field(const std::string& text) {

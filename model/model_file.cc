@@ -13,6 +13,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/memory.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/data/matrix_market.h"
 
 namespace jointlab::model {
@@ -21,13 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 
 long line_of(const toml::node& node) { return static_cast<long>(node.source().begin.line); }
-
-std::string trim(std::string s) {
-  const auto not_space = [](unsigned char c) { return !std::isspace(c); };
-  s.erase(s.begin(), std::find_if(s.begin(), s.end(), not_space));
-  s.erase(std::find_if(s.rbegin(), s.rend(), not_space).base(), s.end());
-  return s;
-}
 
 // Everything read_model needs to name the place of a defect.
 struct Context {
@@ -100,27 +94,19 @@ void check_positive_definite(const Context& ctx, long line, const std::string& f
 }
 
 std::vector<std::string> read_labels(const Context& ctx, long line, const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) ctx.fail(line, fmt::format("matrices.dof_labels: cannot open '{}'", path.string()));
+  const auto text = data::read_text_file(path);
+  if (!text) ctx.fail(line, fmt::format("matrices.dof_labels: cannot open '{}'", path.string()));
   std::vector<std::string> labels;
   std::set<std::string> seen;
-  std::string text;
-  long n = 0;
   bool header = false;
-  while (std::getline(in, text)) {
-    ++n;
-    text = trim(text);
-    if (text.empty() || text[0] == '#') continue;
-    std::vector<std::string> cells;
-    std::stringstream ss(text);
-    std::string cell;
-    while (std::getline(ss, cell, ',')) cells.push_back(trim(cell));
+  data::for_each_csv_line(*text, [&](std::vector<std::string> cells, long n) {
+    if (cells.size() > 1 && cells.back().empty()) cells.pop_back();  // a trailing comma
     if (!header) {
       if (cells.size() != 2 || cells[0] != "node" || cells[1] != "component") {
         throw InputError(where(path.string(), n, "expected the header 'node,component'"));
       }
       header = true;
-      continue;
+      return;
     }
     if (cells.size() != 2 || cells[0].empty() || cells[1].empty()) {
       throw InputError(where(path.string(), n, "expected 'node,component'"));
@@ -130,7 +116,7 @@ std::vector<std::string> read_labels(const Context& ctx, long line, const fs::pa
       throw InputError(where(path.string(), n, fmt::format("label '{}' appears twice", label)));
     }
     labels.push_back(label);
-  }
+  });
   if (!header) throw InputError(where(path.string(), 0, "empty file, expected 'node,component'"));
   return labels;
 }

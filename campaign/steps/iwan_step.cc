@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/campaign/steps/known_parameters.h"
+#include "jointlab/campaign/steps/update_settings.h"
 #include "jointlab/core/error.h"
 #include "jointlab/modal/stepped_sine_output.h"
 
@@ -20,24 +21,26 @@ void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOpt
                  : c.amplitude == Quantity::kAcceleration ? AmplitudeQuantity::kAcceleration
                                                           : AmplitudeQuantity::kVelocity;
   to.amplitude = io.amplitude;
-  for (const auto& [key, value] : c.iwan_update.settings) {
+  const UpdateSettings in(c, "update.iwan");
+  for (const auto& [key, s] : c.iwan_update.settings) {
     if (key == "max_evaluations")
-      io.max_evaluations = static_cast<int>(value);
+      io.max_evaluations = in.whole(key, s, 1, 10000000);
     else if (key == "gamma")
-      io.fixed_gamma = value;
+      io.fixed_gamma = in.number(key, s);
     else if (key == "beta")
-      io.fixed_beta = value;
+      io.fixed_beta = in.number(key, s);
     else if (key == "samples")
-      io.samples = static_cast<int>(value);
+      io.samples = in.whole(key, s, 2, 10000000);
     else if (key == "local_starts")
-      io.local_starts = static_cast<int>(value);
+      io.local_starts = in.whole(key, s, 1, 1000);
     else if (key == "seed")
-      io.seed = static_cast<unsigned>(value);
+      io.seed = static_cast<unsigned>(in.whole(key, s, 0, 2147483647));
     else if (key == "max_slip_share")
-      to.max_slip_share = value;
+      to.max_slip_share = in.number(key, s);
     else
-      throw InputError(
-          where(c.file.string(), 0, fmt::format("update.iwan: unknown setting '{}'", key)));
+      in.unknown(key, s,
+                 "gamma, beta, max_evaluations, samples, local_starts, seed, "
+                 "max_slip_share");
   }
   if (const std::string e = io.error(); !e.empty())
     throw InputError(where(c.file.string(), 0, "update.iwan: " + e));

@@ -1,32 +1,74 @@
 #include "jointlab/campaign/steps/linear_step.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "jointlab/campaign/steps/update_settings.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 
 namespace jointlab::campaign {
 
 correlate::LinearUpdateOptions linear_update_options(const Campaign& c) {
+  const UpdateSettings in(c, "update.linear");
   correlate::LinearUpdateOptions lo;
-  for (const auto& [key, value] : c.linear_update.settings) {
-    if (key == "mac_threshold")
-      lo.mac_threshold = value;
-    else if (key == "lower_factor")
-      lo.lower_factor = value;
-    else if (key == "upper_factor")
-      lo.upper_factor = value;
-    else if (key == "max_iterations")
-      lo.max_iterations = static_cast<int>(value);
-    else if (key == "tolerance")
-      lo.tolerance = value;
-    else if (key == "flat_sensitivity")
-      lo.flat_sensitivity = value;
-    else if (key == "frequency_std")
-      lo.frequency_std = value;
-    else
-      throw InputError(
-          where(c.file.string(), 0, fmt::format("update.linear: unknown setting '{}'", key)));
+  for (const auto& [key, s] : c.linear_update.settings) {
+    if (key == "mac_threshold") {
+      lo.mac_threshold = in.number(key, s);
+    } else if (key == "lower_factor") {
+      lo.lower_factor = in.number(key, s);
+    } else if (key == "upper_factor") {
+      lo.upper_factor = in.number(key, s);
+    } else if (key == "max_iterations") {
+      lo.max_iterations = in.whole(key, s, 1, 100000);
+    } else if (key == "tolerance") {
+      lo.tolerance = in.number(key, s);
+    } else if (key == "flat_sensitivity") {
+      lo.flat_sensitivity = in.number(key, s);
+    } else if (key == "frequency_std") {
+      lo.frequency_std = in.number(key, s);
+    } else if (key == "frequency_window") {
+      lo.frequency_window = in.number(key, s);
+      if (!(lo.frequency_window >= 0)) in.fail(key, s, "must be >= 0 (0: no window)");
+    } else if (key == "alias_mac") {
+      lo.alias_mac = in.number(key, s);
+      if (!(lo.alias_mac > 0 && lo.alias_mac <= 1)) in.fail(key, s, "must be in (0, 1]");
+    } else if (key == "rule") {
+      const std::string& r = in.text(key, s);
+      if (r == "least-squares") {
+        lo.rule = correlate::LinearRule::kLeastSquares;
+      } else if (r == "smallest") {
+        lo.rule = correlate::LinearRule::kSmallest;
+      } else {
+        in.fail(key, s,
+                fmt::format("must be \"least-squares\" or \"smallest\", not \"{}\"", printable(r)));
+      }
+    } else if (key == "smallest_set") {
+      lo.smallest_set = in.text(key, s);
+      if (std::find(c.linear_update.sets.begin(), c.linear_update.sets.end(), lo.smallest_set) ==
+          c.linear_update.sets.end()) {
+        in.fail(key, s, fmt::format("'{}' is not one of update.linear.sets", lo.smallest_set));
+      }
+    } else if (key == "bounds") {
+      for (const SetBounds& b : in.bounds(key, s)) {
+        if (std::find(c.linear_update.sets.begin(), c.linear_update.sets.end(), b.set) ==
+            c.linear_update.sets.end()) {
+          in.fail(key, s, fmt::format("'{}' is not one of update.linear.sets", b.set));
+        }
+        lo.bounds.push_back({b.set, b.lower, b.upper});
+      }
+    } else {
+      in.unknown(key, s,
+                 "rule, smallest_set, tolerance, bounds, lower_factor, upper_factor, "
+                 "frequency_window, mac_threshold, alias_mac, max_iterations, "
+                 "flat_sensitivity, frequency_std");
+    }
+  }
+  if (lo.rule == correlate::LinearRule::kSmallest && lo.smallest_set.empty() &&
+      c.linear_update.sets.size() == 1) {
+    lo.smallest_set = c.linear_update.sets.front();  // one set: the one minimised
   }
   if (const std::string e = lo.error(); !e.empty())
     throw InputError(where(c.file.string(), 0, "update.linear: " + e));

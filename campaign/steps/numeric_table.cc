@@ -2,13 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 
 namespace jointlab::campaign {
 
@@ -23,31 +21,29 @@ const std::vector<double>& NumericTable::column(const std::string& name,
 }
 
 NumericTable read_numeric_table(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(fmt::format("{}: cannot read", path.string()));
+  const auto text = data::read_text_file(path);
+  if (!text) throw InputError(fmt::format("{}: cannot read", path.string()));
   NumericTable t;
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(fmt::format("{}: empty", path.string()));
-  std::stringstream hs(line);
-  for (std::string name; std::getline(hs, name, ',');) t.names.push_back(name);
-  t.columns.resize(t.names.size());
-  long row = 1;
-  while (std::getline(in, line)) {
-    ++row;
-    if (line.empty()) continue;
-    std::stringstream rs(line);
-    size_t c = 0;
-    for (std::string cell; std::getline(rs, cell, ','); ++c) {
-      char* end = nullptr;
-      const double v = std::strtod(cell.c_str(), &end);
-      if (c >= t.columns.size() || end == cell.c_str() || !std::isfinite(v))
+  bool header = false;
+  data::for_each_csv_line(*text, [&](const std::vector<std::string>& cells, long row) {
+    if (!header) {
+      t.names = cells;
+      t.columns.resize(t.names.size());
+      header = true;
+      return;
+    }
+    if (cells.size() != t.columns.size())
+      throw InputError(where(path.string(), row, "wrong number of cells"));
+    for (size_t c = 0; c < cells.size(); ++c) {
+      const auto v = data::parse_double(cells[c]);
+      if (!v || !std::isfinite(*v))
         throw InputError(where(path.string(), row,
                                "not a row of numbers (delete the file to "
                                "recompute it)"));
-      t.columns[c].push_back(v);
+      t.columns[c].push_back(*v);
     }
-    if (c != t.columns.size()) throw InputError(where(path.string(), row, "wrong number of cells"));
-  }
+  });
+  if (!header) throw InputError(fmt::format("{}: empty", path.string()));
   return t;
 }
 
