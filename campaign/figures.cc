@@ -242,10 +242,9 @@ void grid(const char* xopt, const char* yopt) {
   pllsty(1);
 }
 
-}  // namespace
-
-void plot_backbones(const BackboneFigure& figure, const fs::path& file, const FigureSize& size) {
-  // Amplitude window: the hits, widened by a quarter decade each side.
+// Amplitude window of a backbone figure (log10): the hits, bins and stepped-sine points
+// (else the model curves), widened by a quarter decade each side.
+Range amplitude_window(const BackboneFigure& figure) {
   Range ax;
   for (const Curve& c : figure.hits) {
     for (Eigen::Index i = 0; i < c.amplitude.size(); ++i)
@@ -268,10 +267,14 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
   ax = ax.padded(0.0, 0.5);
   ax.lo -= 0.25;
   ax.hi += 0.25;
+  return ax;
+}
 
-  Range fy, zy;  // frequency [Hz], log10 damping
+// The frequency [Hz] and log10 damping ranges: every curve as drawn (cut at the amplitude
+// window), bin and point lies inside them.
+std::pair<Range, Range> value_ranges(const BackboneFigure& figure, const Range& ax) {
+  Range fy, zy;
   std::vector<PLFLT> px, py;
-  // Every curve as drawn (cut at the amplitude window) lies inside the y ranges.
   const auto add_curve = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& v, bool logy,
                              Range& r) {
     points(a, v, true, logy, px, py);
@@ -298,102 +301,94 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
     points(sp.amplitude, sp.damping, true, true, px, py, ax.lo, ax.hi);
     for (double v : py) zy.add(v);
   }
-  fy = fy.padded(0.08, 0.5);
-  zy = zy.padded(0.08, 0.2);
+  return {fy.padded(0.08, 0.5), zy.padded(0.08, 0.2)};
+}
 
-  std::vector<bool> flagged(figure.hits.size(), false);
-  for (size_t i = 0; i < figure.hits.size(); ++i) {
-    for (const HitDeviation& h : figure.summary.hits)
-      if (h.id == figure.hits[i].id && h.outlier) flagged[i] = true;
+// Mean and confidence band of one quantity (damping or frequency) from the scatter bins.
+void draw_bins(const std::vector<ScatterBin>& bins, bool damping, bool logy) {
+  if (bins.empty()) return;
+  std::vector<PLFLT> x, mean, bx, by;
+  for (const ScatterBin& b : bins) {
+    const Statistic& s = damping ? b.damping : b.frequency_hz;
+    const double m = s.mean, lo = s.ci_low, hi = s.ci_high;
+    if (logy && !(m > 0 && lo > 0)) continue;
+    x.push_back(std::log10(b.amplitude_center));
+    mean.push_back(logy ? std::log10(m) : m);
+    bx.push_back(x.back());
+    by.push_back(logy ? std::log10(hi) : hi);
   }
-  const PLINT model_colours[3] = {kModel1, kModel2, kModel3};
+  for (size_t k = bins.size(); k-- > 0;) {
+    const Statistic& s = damping ? bins[k].damping : bins[k].frequency_hz;
+    if (logy && !(s.mean > 0 && s.ci_low > 0)) continue;
+    bx.push_back(std::log10(bins[k].amplitude_center));
+    by.push_back(logy ? std::log10(s.ci_low) : s.ci_low);
+  }
+  if (bx.size() >= 3) {
+    plcol0(kBand);
+    plfill(static_cast<PLINT>(bx.size()), bx.data(), by.data());
+  }
+  line(x, mean, kMean, 2.5);
+  plcol0(kMean);
+  plschr(0, 0.9);
+  plpoin(static_cast<PLINT>(x.size()), x.data(), mean.data(), 17);
+  plschr(0, 1.15);
+}
 
-  Plot plot(file, size);
-  // Mean and confidence band of one quantity from the bins.
-  auto draw_bins = [&](bool damping, bool logy) {
-    const auto& bins = figure.summary.bins;
-    if (bins.empty()) return;
-    std::vector<PLFLT> x, mean, bx, by;
-    for (const ScatterBin& b : bins) {
-      const Statistic& s = damping ? b.damping : b.frequency_hz;
-      const double m = s.mean, lo = s.ci_low, hi = s.ci_high;
-      if (logy && !(m > 0 && lo > 0)) continue;
-      x.push_back(std::log10(b.amplitude_center));
-      mean.push_back(logy ? std::log10(m) : m);
-      bx.push_back(x.back());
-      by.push_back(logy ? std::log10(hi) : hi);
+// Stepped-sine points: a marker and its uncertainty bar (clipped to the panel's y range).
+void draw_stepped_sine(const std::vector<SinePoints>& stepped_sine, bool damping, bool logy,
+                       const Range& y) {
+  for (const SinePoints& sp : stepped_sine) {
+    std::vector<PLFLT> x, v, lo, hi;
+    for (Eigen::Index i = 0; i < sp.amplitude.size(); ++i) {
+      const double m = damping ? sp.damping(i) : sp.frequency_hz(i);
+      const double u = damping ? sp.damping_std(i) : sp.frequency_std_hz(i);
+      if (!(sp.amplitude(i) > 0) || (logy && !(m > 0))) continue;
+      x.push_back(std::log10(sp.amplitude(i)));
+      v.push_back(logy ? std::log10(m) : m);
+      const double l = logy ? std::log10(std::max(m - u, 0.01 * m)) : m - u;
+      lo.push_back(std::max(l, y.lo));
+      hi.push_back(std::min(logy ? std::log10(m + u) : m + u, y.hi));
     }
-    for (size_t k = bins.size(); k-- > 0;) {
-      const Statistic& s = damping ? bins[k].damping : bins[k].frequency_hz;
-      if (logy && !(s.mean > 0 && s.ci_low > 0)) continue;
-      bx.push_back(std::log10(bins[k].amplitude_center));
-      by.push_back(logy ? std::log10(s.ci_low) : s.ci_low);
-    }
-    if (bx.size() >= 3) {
-      plcol0(kBand);
-      plfill(static_cast<PLINT>(bx.size()), bx.data(), by.data());
-    }
-    line(x, mean, kMean, 2.5);
-    plcol0(kMean);
-    plschr(0, 0.9);
-    plpoin(static_cast<PLINT>(x.size()), x.data(), mean.data(), 17);
+    if (x.empty()) continue;
+    plcol0(kChannel2);
+    plwidth(1.5);
+    plerry(static_cast<PLINT>(x.size()), x.data(), lo.data(), hi.data());
+    plschr(0, 1.0);
+    plpoin(static_cast<PLINT>(x.size()), x.data(), v.data(), 22);
     plschr(0, 1.15);
-  };
-  auto draw_panel = [&](bool damping) {
-    const bool logy = damping;
-    const Range& y = damping ? zy : fy;
-    plwind(ax.lo, ax.hi, y.lo, y.hi);
-    grid("gl", logy ? "gl" : "g");
-    for (size_t i = 0; i < figure.hits.size(); ++i) {
-      const Curve& c = figure.hits[i];
-      points(c.amplitude, damping ? c.damping : c.frequency_hz, true, logy, px, py);
-      clip_x(px, py, ax.lo, ax.hi);
-      line(px, py, flagged[i] ? kFlagged : kHit, 1.2, flagged[i] ? 2 : 1);
-    }
-    draw_bins(damping, logy);
-    for (size_t m = 0; m < figure.model.size(); ++m) {
-      const ModelCurve& mc = figure.model[m];
-      points(mc.amplitude, damping ? mc.damping : mc.frequency_hz, true, logy, px, py);
-      clip_x(px, py, ax.lo, ax.hi);
-      line(px, py, model_colours[m % 3], 2.2, m < 3 ? 1 : 3);
-    }
-    // Stepped-sine points: a marker and its uncertainty bar (clipped to the panel).
-    for (const SinePoints& sp : figure.stepped_sine) {
-      std::vector<PLFLT> x, v, lo, hi;
-      for (Eigen::Index i = 0; i < sp.amplitude.size(); ++i) {
-        const double m = damping ? sp.damping(i) : sp.frequency_hz(i);
-        const double u = damping ? sp.damping_std(i) : sp.frequency_std_hz(i);
-        if (!(sp.amplitude(i) > 0) || (logy && !(m > 0))) continue;
-        x.push_back(std::log10(sp.amplitude(i)));
-        v.push_back(logy ? std::log10(m) : m);
-        const double l = logy ? std::log10(std::max(m - u, 0.01 * m)) : m - u;
-        lo.push_back(std::max(l, y.lo));
-        hi.push_back(std::min(logy ? std::log10(m + u) : m + u, y.hi));
-      }
-      if (x.empty()) continue;
-      plcol0(kChannel2);
-      plwidth(1.5);
-      plerry(static_cast<PLINT>(x.size()), x.data(), lo.data(), hi.data());
-      plschr(0, 1.0);
-      plpoin(static_cast<PLINT>(x.size()), x.data(), v.data(), 22);
-      plschr(0, 1.15);
-    }
-    axes(damping ? "bcnstl" : "bcstl", logy ? "bcstl" : "bcnstv");
-    if (logy) log_y_labels(y.lo, y.hi, 0.1);
-  };
+  }
+}
 
-  plvpor(0.15, 0.67, 0.53, 0.92);
-  draw_panel(false);
-  plcol0(kBlack);
-  plmtex("l", 6.2, 0.5, 0.5, "frequency [Hz]");
-  plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
+constexpr PLINT kModelColours[3] = {kModel1, kModel2, kModel3};
 
-  plvpor(0.15, 0.67, 0.14, 0.49);
-  draw_panel(true);
-  plcol0(kBlack);
-  plmtex("l", 6.2, 0.5, 0.5, "damping ratio");
-  plmtex("b", 3.4, 0.5, 0.5, figure.amplitude_label.c_str());
-  // The legend sits to the right of the panels, clear of the data.
+// One panel (frequency or damping against amplitude) of a backbone figure.
+void backbone_panel(const BackboneFigure& figure, const std::vector<bool>& flagged, const Range& ax,
+                    const Range& y, bool damping) {
+  const bool logy = damping;
+  std::vector<PLFLT> px, py;
+  plwind(ax.lo, ax.hi, y.lo, y.hi);
+  grid("gl", logy ? "gl" : "g");
+  for (size_t i = 0; i < figure.hits.size(); ++i) {
+    const Curve& c = figure.hits[i];
+    points(c.amplitude, damping ? c.damping : c.frequency_hz, true, logy, px, py);
+    clip_x(px, py, ax.lo, ax.hi);
+    line(px, py, flagged[i] ? kFlagged : kHit, 1.2, flagged[i] ? 2 : 1);
+  }
+  draw_bins(figure.summary.bins, damping, logy);
+  for (size_t m = 0; m < figure.model.size(); ++m) {
+    const ModelCurve& mc = figure.model[m];
+    points(mc.amplitude, damping ? mc.damping : mc.frequency_hz, true, logy, px, py);
+    clip_x(px, py, ax.lo, ax.hi);
+    line(px, py, kModelColours[m % 3], 2.2, m < 3 ? 1 : 3);
+  }
+  draw_stepped_sine(figure.stepped_sine, damping, logy, y);
+  axes(damping ? "bcnstl" : "bcstl", logy ? "bcstl" : "bcnstv");
+  if (logy) log_y_labels(y.lo, y.hi, 0.1);
+}
+
+// The legend entries of a backbone figure.
+std::vector<LegendEntry> backbone_legend(const BackboneFigure& figure,
+                                         const std::vector<bool>& flagged) {
   std::vector<LegendEntry> entries;
   int n_flagged = static_cast<int>(std::count(flagged.begin(), flagged.end(), true));
   entries.push_back(
@@ -408,8 +403,35 @@ void plot_backbones(const BackboneFigure& figure, const fs::path& file, const Fi
   }
   for (const SinePoints& sp : figure.stepped_sine) entries.push_back({sp.label, kChannel2, false});
   for (size_t m = 0; m < figure.model.size(); ++m)
-    entries.push_back({figure.model[m].label, model_colours[m % 3], false, 2.2, m < 3 ? 1 : 3});
-  legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP, true);
+    entries.push_back({figure.model[m].label, kModelColours[m % 3], false, 2.2, m < 3 ? 1 : 3});
+  return entries;
+}
+
+}  // namespace
+
+void plot_backbones(const BackboneFigure& figure, const fs::path& file, const FigureSize& size) {
+  const Range ax = amplitude_window(figure);
+  const auto [fy, zy] = value_ranges(figure, ax);
+  std::vector<bool> flagged(figure.hits.size(), false);
+  for (size_t i = 0; i < figure.hits.size(); ++i) {
+    for (const HitDeviation& h : figure.summary.hits)
+      if (h.id == figure.hits[i].id && h.outlier) flagged[i] = true;
+  }
+
+  Plot plot(file, size);
+  plvpor(0.15, 0.67, 0.53, 0.92);
+  backbone_panel(figure, flagged, ax, fy, false);
+  plcol0(kBlack);
+  plmtex("l", 6.2, 0.5, 0.5, "frequency [Hz]");
+  plmtex("t", 1.2, 0.5, 0.5, figure.title.c_str());
+
+  plvpor(0.15, 0.67, 0.14, 0.49);
+  backbone_panel(figure, flagged, ax, zy, true);
+  plcol0(kBlack);
+  plmtex("l", 6.2, 0.5, 0.5, "damping ratio");
+  plmtex("b", 3.4, 0.5, 0.5, figure.amplitude_label.c_str());
+  // The legend sits to the right of the panels, clear of the data.
+  legend(backbone_legend(figure, flagged), PL_POSITION_RIGHT | PL_POSITION_TOP, true);
   plot.finish();
 }
 

@@ -192,10 +192,11 @@ std::vector<signal::Band> bands_from_peaks(const data::Record& record,
   return bands;
 }
 
-RecordResult process_record(const data::Record& record, const ProcessOptions& options,
-                            signal::FftCache& cache) {
-  RecordResult out;
-  out.source = record.source;
+namespace {
+
+// The requested response channels (default: every channel that is not a force).
+std::vector<const data::Channel*> requested_channels(const data::Record& record,
+                                                     const ProcessOptions& options) {
   std::vector<const data::Channel*> chans;
   if (options.channels.empty()) {
     for (const data::Channel& c : record.channels) {
@@ -222,137 +223,196 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     throw InputError(where(record.source, 0,
                            fmt::format("{} samples: too short for a ring-down", record.size())));
   }
+  return chans;
+}
 
-  out.bands =
+// The bands to process: given, or the strongest spectral peaks; each below Nyquist.
+std::vector<signal::Band> record_bands(const data::Record& record,
+                                       const std::vector<const data::Channel*>& chans,
+                                       const ProcessOptions& options, signal::FftCache& cache) {
+  std::vector<signal::Band> bands =
       options.modes > 0 ? bands_from_peaks(record, chans, options.modes, cache) : options.bands;
-  if (options.modes > 0 && static_cast<int>(out.bands.size()) < options.modes) {
+  if (options.modes > 0 && static_cast<int>(bands.size()) < options.modes) {
     throw InputError(where(
         record.source, 0,
-        fmt::format("--modes {}: only {} spectral peaks found", options.modes, out.bands.size())));
+        fmt::format("--modes {}: only {} spectral peaks found", options.modes, bands.size())));
   }
-  for (const signal::Band& b : out.bands) {
+  for (const signal::Band& b : bands) {
     if (b.hi > record.fs / 2) {
       throw InputError(where(record.source, 0,
                              fmt::format("band {}:{} Hz reaches past the Nyquist frequency {} Hz",
                                          b.lo, b.hi, record.fs / 2)));
     }
   }
+  return bands;
+}
 
+// Every response channel the nodal test compares with (requested or not), its impact, and
+// which requests each answers (looked up once: records may hold 1e5 channels).
+struct ChannelSet {
+  const data::Record& record;
+  const ProcessOptions& options;
+  std::vector<const data::Channel*> all;
+  std::vector<Eigen::Index> impact;           ///< impact sample of each of `all`
+  std::vector<size_t> index_of;               ///< position in `all` of each request
+  std::vector<std::vector<size_t>> requests;  ///< requests each of `all` answers
+
+  ChannelSet(const data::Record& r, const ProcessOptions& o,
+             const std::vector<const data::Channel*>& chans)
+      : record(r), options(o) {
+    for (const data::Channel& c : record.channels) {
+      // Channels whose quantity is unknown cannot be compared (requested ones have one).
+      if (c.quantity != Quantity::kForce && (c.quantity || options.quantity)) all.push_back(&c);
+    }
+    impact.resize(all.size());
+    for (size_t c = 0; c < all.size(); ++c) impact[c] = impact_index(all[c]->samples);
+    std::unordered_map<const data::Channel*, size_t> position;
+    for (size_t c = 0; c < all.size(); ++c) position.emplace(all[c], c);
+    index_of.resize(chans.size());
+    requests.resize(all.size());
+    for (size_t i = 0; i < chans.size(); ++i) {
+      index_of[i] = position.at(chans[i]);
+      requests[index_of[i]].push_back(i);
+    }
+  }
+  Quantity measured_by(size_t c) const {
+    return all[c]->quantity ? *all[c]->quantity : *options.quantity;
+  }
+  ChannelSpectrum spectrum(size_t c, const PrepareOptions& prepare, signal::FftCache& cache) const {
+    return channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
+  }
+  BandOfChannel band_of(const ChannelSpectrum& spectrum, signal::BandSignal z) const {
+    const double record_end = record.t0 + static_cast<double>(record.size() - 1) / record.fs;
+    BandOfChannel k{std::move(z), spectrum.t0, spectrum.scale, 0};
+    keep_record_span(k, record.t0, record_end);
+    return k;
+  }
+};
+
+// Pass 1, every requested channel in turn: its spectrum (dropped before the next channel's)
+// and backbones into results[first + i]; the band signal is kept only where a backbone was
+// found.
+std::vector<std::optional<BandOfChannel>> extract_band(const ChannelSet& set,
+                                                       const signal::Band& band, int band_index,
+                                                       const PrepareOptions& prepare,
+                                                       ChannelBand* results,
+                                                       signal::FftCache& cache) {
+  std::vector<std::optional<BandOfChannel>> kept(set.all.size());
+  for (size_t c = 0; c < set.all.size(); ++c) {
+    if (set.requests[c].empty()) continue;
+    const ChannelSpectrum spectrum = set.spectrum(c, prepare, cache);
+    for (const size_t i : set.requests[c]) {
+      ChannelBand& r = results[i];
+      r.channel = set.all[c]->name;
+      r.measured = set.measured_by(c);
+      r.band_index = band_index;
+      r.ringdown = extract_backbone(spectrum, r.measured, band, set.options.ringdown, cache);
+      if (r.ringdown.summary.status == RingdownStatus::kOk && !kept[c])
+        kept[c] = set.band_of(spectrum, std::move(r.ringdown.band));
+      r.ringdown.band = signal::BandSignal{};
+    }
+  }
+  return kept;
+}
+
+// The reference channel: the widest kept span (ties: the first).
+size_t reference_channel(const ChannelBand* results, size_t n) {
+  const auto span = [](const Ringdown& r) {
+    return r.summary.status == RingdownStatus::kOk ? r.summary.amplitude_decades : -1.0;
+  };
+  size_t ref = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (span(results[i].ringdown) > span(results[ref].ringdown)) ref = i;
+  return ref;
+}
+
+// Pass 2, every response channel against the kept ones: each channel's shape entry
+// (projected on the reference over its span) and, for each channel with a backbone,
+// the largest share another coherent channel of the file sees of the mode over that
+// channel's own span. A channel without a kept band signal is analysed again here and
+// dropped after its projections, so memory holds only the channels with backbones.
+// Returns each request's share (1 where not computed).
+std::vector<double> shapes_and_shares(const ChannelSet& set, const signal::Band& band,
+                                      const PrepareOptions& prepare,
+                                      const std::vector<std::optional<BandOfChannel>>& kept,
+                                      size_t ref, ChannelBand* results, size_t n,
+                                      signal::FftCache& cache) {
+  const Ringdown& rr = results[ref].ringdown;
+  const BandOfChannel& reference = *kept[set.index_of[ref]];
+  std::vector<double> share(n, 1.0);
+  std::vector<size_t> with_backbone;
+  for (size_t i = 0; i < n; ++i)
+    if (results[i].ringdown.summary.status == RingdownStatus::kOk) with_backbone.push_back(i);
+  for (size_t d = 0; d < set.all.size(); ++d) {
+    std::optional<BandOfChannel> again;
+    if (!kept[d]) {
+      const ChannelSpectrum spectrum = set.spectrum(d, prepare, cache);
+      again = set.band_of(
+          spectrum, band_signal(spectrum, set.measured_by(d), band, set.options.ringdown, cache));
+    }
+    const BandOfChannel& zd = kept[d] ? *kept[d] : *again;
+    for (const size_t i : set.requests[d]) {
+      results[i].complex_amplitude =
+          projection(reference, zd, rr.summary.span_start_s, rr.summary.span_end_s).amplitude;
+    }
+    if (set.options.min_share == 0) continue;
+    for (const size_t i : with_backbone) {
+      const size_t c = set.index_of[i];
+      if (c == d) continue;
+      const RingdownSummary& rs = results[i].ringdown.summary;
+      const Projection p = projection(*kept[c], zd, rs.span_start_s, rs.span_end_s);
+      if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
+        share[i] = std::min(share[i], 1.0 / std::abs(p.ratio));
+      }
+    }
+  }
+  return share;
+}
+
+// A channel near a node: some coherent channel of the file sees the mode over this
+// channel's own span more than 1 / min_share times as strongly. Its backbone is dropped.
+void drop_near_nodes(const std::vector<double>& share, double min_share, ChannelBand* results) {
+  for (size_t i = 0; i < share.size(); ++i) {
+    ChannelBand& r = results[i];
+    if (r.ringdown.summary.status != RingdownStatus::kOk || !(share[i] < min_share)) continue;
+    r.ringdown.backbone = Backbone{};
+    r.ringdown.summary.status = RingdownStatus::kNoSpan;
+    r.ringdown.summary.message = fmt::format(
+        "sees this mode at {:.1f} % of the strongest channel's amplitude (below --min-share "
+        "{:g} %): near a node the envelope follows the mode shape's change with amplitude, "
+        "so no backbone is given (the shape entry is kept)",
+        100 * share[i], 100 * min_share);
+  }
+}
+
+}  // namespace
+
+RecordResult process_record(const data::Record& record, const ProcessOptions& options,
+                            signal::FftCache& cache) {
+  RecordResult out;
+  out.source = record.source;
+  const std::vector<const data::Channel*> chans = requested_channels(record, options);
+  out.bands = record_bands(record, chans, options, cache);
   check_processable(record, out.bands, chans, options);
   // Every band, channel and file is processed on its own: each channel from its own
   // impact, each band with the continuation and low-pass it alone needs (bands that
-  // need the same share one). The nodal test below compares a channel with every
-  // response channel of the file, requested or not.
-  const double taper = options.ringdown.taper;
-  std::vector<const data::Channel*> all;
-  for (const data::Channel& c : record.channels) {
-    // Channels whose quantity is unknown cannot be compared (requested ones have one).
-    if (c.quantity != Quantity::kForce && (c.quantity || options.quantity)) all.push_back(&c);
-  }
-  std::vector<Eigen::Index> impact(all.size());
-  for (size_t c = 0; c < all.size(); ++c) impact[c] = impact_index(all[c]->samples);
-  // Where each requested channel is in `all`, and which requests each of `all` answers
-  // (looked up once: records may hold 1e5 channels).
-  std::unordered_map<const data::Channel*, size_t> position;
-  for (size_t c = 0; c < all.size(); ++c) position.emplace(all[c], c);
-  std::vector<size_t> index_of(chans.size());
-  std::vector<std::vector<size_t>> requests(all.size());
-  for (size_t i = 0; i < chans.size(); ++i) {
-    index_of[i] = position.at(chans[i]);
-    requests[index_of[i]].push_back(i);
-  }
+  // need the same share one). The nodal test compares a channel with every response
+  // channel of the file, requested or not.
+  const ChannelSet set(record, options, chans);
   for (size_t b = 0; b < out.bands.size(); ++b) {
     const signal::Band& band = out.bands[b];
-    const PrepareOptions prepare = prepare_for({band}, taper, options.prepare);
-    // Pass 1, every requested channel in turn: its spectrum (dropped before the next
-    // channel's) and backbones; the band signal is kept only where a backbone was found.
-    const double record_end = record.t0 + static_cast<double>(record.size() - 1) / record.fs;
-    const auto band_of = [&](const ChannelSpectrum& spectrum, signal::BandSignal z) {
-      BandOfChannel k{std::move(z), spectrum.t0, spectrum.scale, 0};
-      keep_record_span(k, record.t0, record_end);
-      return k;
-    };
-    const auto measured_by = [&](size_t c) {
-      return all[c]->quantity ? *all[c]->quantity : *options.quantity;
-    };
-    std::vector<std::optional<BandOfChannel>> kept(all.size());
+    const PrepareOptions prepare = prepare_for({band}, options.ringdown.taper, options.prepare);
     const size_t first = out.results.size();
     out.results.resize(first + chans.size());
-    for (size_t c = 0; c < all.size(); ++c) {
-      if (requests[c].empty()) continue;
-      const ChannelSpectrum spectrum =
-          channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
-      for (const size_t i : requests[c]) {
-        ChannelBand& r = out.results[first + i];
-        r.channel = all[c]->name;
-        r.measured = measured_by(c);
-        r.band_index = static_cast<int>(b) + 1;
-        r.ringdown = extract_backbone(spectrum, r.measured, band, options.ringdown, cache);
-        if (r.ringdown.summary.status == RingdownStatus::kOk && !kept[c])
-          kept[c] = band_of(spectrum, std::move(r.ringdown.band));
-        r.ringdown.band = signal::BandSignal{};
-      }
-    }
-    // Reference: the channel with the widest kept span (ties: the first).
-    size_t ref = first;
-    for (size_t i = first; i < out.results.size(); ++i) {
-      const auto span = [](const Ringdown& r) {
-        return r.summary.status == RingdownStatus::kOk ? r.summary.amplitude_decades : -1.0;
-      };
-      if (span(out.results[i].ringdown) > span(out.results[ref].ringdown)) ref = i;
-    }
-    out.reference.push_back(out.results[ref].channel);
-    const Ringdown& rr = out.results[ref].ringdown;
-    if (rr.summary.status != RingdownStatus::kOk) continue;  // no shape, no nodal test
-
-    // Pass 2, every response channel against the kept ones: each channel's shape entry
-    // (projected on the reference over its span) and, for each channel with a backbone,
-    // the largest share another coherent channel of the file sees of the mode over that
-    // channel's own span. A channel without a kept band signal is analysed again here and
-    // dropped after its projections, so memory holds only the channels with backbones.
-    const BandOfChannel& reference = *kept[index_of[ref - first]];
-    std::vector<double> share(chans.size(), 1.0);
-    std::vector<size_t> with_backbone;
-    for (size_t i = 0; i < chans.size(); ++i)
-      if (out.results[first + i].ringdown.summary.status == RingdownStatus::kOk)
-        with_backbone.push_back(i);
-    for (size_t d = 0; d < all.size(); ++d) {
-      std::optional<BandOfChannel> again;
-      if (!kept[d]) {
-        const ChannelSpectrum spectrum =
-            channel_spectrum(all[d]->samples, record.fs, record.t0, prepare, cache, impact[d]);
-        again =
-            band_of(spectrum, band_signal(spectrum, measured_by(d), band, options.ringdown, cache));
-      }
-      const BandOfChannel& zd = kept[d] ? *kept[d] : *again;
-      for (const size_t i : requests[d]) {
-        out.results[first + i].complex_amplitude =
-            projection(reference, zd, rr.summary.span_start_s, rr.summary.span_end_s).amplitude;
-      }
-      if (options.min_share == 0) continue;
-      for (const size_t i : with_backbone) {
-        const size_t c = index_of[i];
-        if (c == d) continue;
-        const RingdownSummary& rs = out.results[first + i].ringdown.summary;
-        const Projection p = projection(*kept[c], zd, rs.span_start_s, rs.span_end_s);
-        if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
-          share[i] = std::min(share[i], 1.0 / std::abs(p.ratio));
-        }
-      }
-    }
-    // A channel near a node: some coherent channel of the file sees the mode over
-    // this channel's own span more than 1 / min_share times as strongly.
-    for (const size_t i : with_backbone) {
-      ChannelBand& r = out.results[first + i];
-      if (!(share[i] < options.min_share)) continue;
-      r.ringdown.backbone = Backbone{};
-      r.ringdown.summary.status = RingdownStatus::kNoSpan;
-      r.ringdown.summary.message = fmt::format(
-          "sees this mode at {:.1f} % of the strongest channel's amplitude (below --min-share "
-          "{:g} %): near a node the envelope follows the mode shape's change with amplitude, "
-          "so no backbone is given (the shape entry is kept)",
-          100 * share[i], 100 * options.min_share);
-    }
+    ChannelBand* results = out.results.data() + first;
+    const std::vector<std::optional<BandOfChannel>> kept =
+        extract_band(set, band, static_cast<int>(b) + 1, prepare, results, cache);
+    const size_t ref = reference_channel(results, chans.size());
+    out.reference.push_back(results[ref].channel);
+    if (results[ref].ringdown.summary.status != RingdownStatus::kOk) continue;  // no nodal test
+    const std::vector<double> share =
+        shapes_and_shares(set, band, prepare, kept, ref, results, chans.size(), cache);
+    drop_near_nodes(share, options.min_share, results);
   }
   return out;
 }

@@ -995,60 +995,25 @@ void unscale(Ringdown& r, double scale) {
       "and scale";
 }
 
-}  // namespace
+// Local estimates along the span and the band-gain correction they carry.
+struct CorrectedEstimates {
+  std::vector<Estimate> est;      ///< the last pass's estimates
+  GainCorrection previous;        ///< the correction `est` was made with
+  std::vector<double> gain_term;  ///< each estimate's model error from the correction
+};
 
-signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
-                               const signal::Band& band, const RingdownOptions& options,
-                               signal::FftCache& cache) {
-  signal::BandOptions bo;
-  bo.taper = options.taper;
-  bo.order = derivative_order(measured);
-  return signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs, band,
-                               bo, cache);
-}
-
-Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
-                          const signal::Band& band, const RingdownOptions& options,
-                          signal::FftCache& cache) {
-  Ringdown out;
-  RingdownSummary& sum = out.summary;
-  signal::BandOptions bo;
-  bo.taper = options.taper;
-  bo.order = derivative_order(measured);
-  out.band = band_signal(channel, measured, band, options, cache);
-  const signal::BandSignal& bs = out.band;
-  sum.carrier_hz = bs.carrier_hz;
-  sum.peak_time_s = channel.data_begin_s;
-  if (!bs.baseband.allFinite()) {
-    sum.message =
-        "the band signal is not finite: the record holds samples too large to process "
-        "(check the channel for corrupted samples)";
-    return out;
-  }
-  // The envelope and phase up to where band_setting needs them, the rest only for a
-  // record long enough for the band (many short channels are refused quickly).
-  EnvelopePhase envelope;
-  const BandSetting s = band_setting(channel, band, options, bs, envelope);
-  if (s.stop - s.start < 2 * s.w_min) {
-    // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
-    const std::string advice = spectral_advice(channel, band, options.taper, cache);
-    sum.message = fmt::format(
-        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
-        "time, {:.3f} s needed",
-        advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
-    return out;
-  }
-  envelope_phase_to(envelope, bs.baseband, bs.carrier_hz, bs.dt, bs.baseband.size());
-  const EnvelopePhase& ep = envelope;
-  const double noise = noise_floor(ep, s);
-  sum.noise_floor_m = noise / channel.scale;
-
-  // Local estimates along the span: a first pass on the band signal, then, where the
-  // band's effect on the mode changes along the span (the mode on a sloping part of
-  // the gain), passes on the band signal divided by that effect (GainCorrection).
+// Local estimates along the span: a first pass on the band signal, then, where the
+// band's effect on the mode changes along the span (the mode on a sloping part of
+// the gain), passes on the band signal divided by that effect (GainCorrection).
+CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const signal::Band& band,
+                                       const RingdownOptions& options, const signal::BandSignal& bs,
+                                       const BandSetting& s, double noise, Quantity measured,
+                                       signal::FftCache& cache) {
   signal::BandSignal full;
   if (options.method == Method::kPeaks) {
-    signal::BandOptions fo = bo;
+    signal::BandOptions fo;
+    fo.taper = options.taper;
+    fo.order = derivative_order(measured);
     fo.full_rate = true;
     full = signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs,
                                  band, fo, cache);
@@ -1094,9 +1059,23 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
                   : GainCorrection{};
   const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, tail,
                                                          bs.dt, bs.baseband.size(), options.degree);
+  return {std::move(est), previous, gain_term};
+}
 
-  // Valid points: envelope well above the noise floor, finite, positive decay rate,
-  // damping known to max_damping_rel_std.
+// Which estimates may form the backbone, with notes on those left out for the band's gain.
+struct Screening {
+  std::vector<char> valid;  ///< per estimate
+  std::string weak_note;    ///< points where the band passes less than half of the mode
+  std::string gain_note;    ///< points whose gain correction is not known well enough
+};
+
+// Valid points: envelope well above the noise floor, finite, positive decay rate,
+// damping known to max_damping_rel_std.
+Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, double noise,
+                           const RingdownOptions& options) {
+  const std::vector<Estimate>& est = c.est;
+  const GainCorrection& previous = c.previous;
+  const std::vector<double>& gain_term = c.gain_term;
   std::vector<char> valid(est.size()), gain_limited(est.size(), 0);
   size_t weak = 0;
   for (size_t i = 0; i < est.size(); ++i) {
@@ -1118,7 +1097,6 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         usable(e, noise_i, options.snr_min) && !valid[i] &&
         std::sqrt(std::max(0.0, e.sigma_std * e.sigma_std - gain_term[i] * gain_term[i])) <= limit;
   }
-  const Run run = longest_run(valid);
   const size_t limited =
       static_cast<size_t>(std::count(gain_limited.begin(), gain_limited.end(), 1));
   const std::string weak_note =
@@ -1133,6 +1111,63 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
                          "{} points left out where the correction for the band's gain was not "
                          "known to the damping limit (the mode on the band's steep edge)",
                          limited);
+  return {std::move(valid), weak_note, gain_note};
+}
+
+}  // namespace
+
+signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
+                               const signal::Band& band, const RingdownOptions& options,
+                               signal::FftCache& cache) {
+  signal::BandOptions bo;
+  bo.taper = options.taper;
+  bo.order = derivative_order(measured);
+  return signal::band_analytic(channel.spectrum, channel.n_record, channel.n_fft, channel.fs, band,
+                               bo, cache);
+}
+
+Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
+                          const signal::Band& band, const RingdownOptions& options,
+                          signal::FftCache& cache) {
+  Ringdown out;
+  RingdownSummary& sum = out.summary;
+  out.band = band_signal(channel, measured, band, options, cache);
+  const signal::BandSignal& bs = out.band;
+  sum.carrier_hz = bs.carrier_hz;
+  sum.peak_time_s = channel.data_begin_s;
+  if (!bs.baseband.allFinite()) {
+    sum.message =
+        "the band signal is not finite: the record holds samples too large to process "
+        "(check the channel for corrupted samples)";
+    return out;
+  }
+  // The envelope and phase up to where band_setting needs them, the rest only for a
+  // record long enough for the band (many short channels are refused quickly).
+  EnvelopePhase envelope;
+  const BandSetting s = band_setting(channel, band, options, bs, envelope);
+  if (s.stop - s.start < 2 * s.w_min) {
+    // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
+    const std::string advice = spectral_advice(channel, band, options.taper, cache);
+    sum.message = fmt::format(
+        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
+        "time, {:.3f} s needed",
+        advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
+    return out;
+  }
+  envelope_phase_to(envelope, bs.baseband, bs.carrier_hz, bs.dt, bs.baseband.size());
+  const EnvelopePhase& ep = envelope;
+  const double noise = noise_floor(ep, s);
+  sum.noise_floor_m = noise / channel.scale;
+
+  const CorrectedEstimates corr =
+      corrected_estimates(channel, band, options, bs, s, noise, measured, cache);
+  const std::vector<Estimate>& est = corr.est;
+  const GainCorrection& previous = corr.previous;
+  const Screening screened = screen_estimates(corr, s, noise, options);
+  const std::vector<char>& valid = screened.valid;
+  const std::string& weak_note = screened.weak_note;
+  const std::string& gain_note = screened.gain_note;
+  const Run run = longest_run(valid);
   if (run.count < 2) {
     const std::string advice = spectral_advice(channel, band, options.taper, cache);
     sum.message = fmt::format(
