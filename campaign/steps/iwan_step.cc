@@ -16,6 +16,19 @@ using correlate::IwanObjective;
 using correlate::IwanUpdateOptions;
 using correlate::IwanUpdateSummary;
 
+namespace {
+
+// What each backbone is compared with, as update-iwan --compare: "matched" or "secant".
+correlate::IwanComparison comparison(const UpdateSettings& in, const std::string& key,
+                                     const CampaignSetting& s) {
+  const std::string& v = in.text(key, s);
+  if (v == "matched") return correlate::IwanComparison::kMatched;
+  if (v == "secant") return correlate::IwanComparison::kSecant;
+  in.fail(key, s, fmt::format("must be \"matched\" or \"secant\", not \"{}\"", v));
+}
+
+}  // namespace
+
 void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOptions& to) {
   io.amplitude = c.amplitude == Quantity::kDisplacement   ? AmplitudeQuantity::kDisplacement
                  : c.amplitude == Quantity::kAcceleration ? AmplitudeQuantity::kAcceleration
@@ -37,10 +50,12 @@ void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOpt
       io.seed = static_cast<unsigned>(in.whole(key, s, 0, 2147483647));
     else if (key == "max_slip_share")
       to.max_slip_share = in.number(key, s);
+    else if (key == "compare")
+      io.comparison = comparison(in, key, s);
     else
       in.unknown(key, s,
                  "gamma, beta, max_evaluations, samples, local_starts, seed, "
-                 "max_slip_share");
+                 "max_slip_share, compare");
   }
   if (const std::string e = io.error(); !e.empty())
     throw InputError(where(c.file.string(), 0, "update.iwan: " + e));
