@@ -5,6 +5,7 @@
 #include <complex>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,40 @@ class Steps : public ::testing::Test {
   }
   static fs::path out() { return small_->dir / "out"; }
   static model::Model truth() { return correlate::two_chain_structure(small_->truth); }
+  // The truth's first-harmonic pair at 8 levels from microslip to twice the full-macroslip
+  // amplitude, at the mode's reference channel (velocity amplitude).
+  static correlate::MeasuredBackbone sine_pair(const CampaignModelData& d) {
+    return correlate::synthetic_backbone(truth(), small_->model_mode, d.sensors,
+                                         measured_->reference[0],
+                                         correlate::AmplitudeQuantity::kVelocity, 8, 2.0, 0, 0, 1,
+                                         correlate::BackboneKind::kSteppedSine);
+  }
+  // Response-controlled sweeps (one level per point of `pair`), each an exact single-mode
+  // hysteretic receptance at that level's pair, written as a stepped-sine CSV at `file`.
+  static fs::path write_sweeps(const correlate::MeasuredBackbone& pair, const fs::path& file) {
+    std::vector<data::SteppedSineTable> tables;
+    for (Eigen::Index i = 0; i < pair.amplitude.size(); ++i) {
+      data::SteppedSineTable t;
+      t.index = static_cast<int>(i) + 1;
+      t.label = fmt::format("level {}", i + 1);
+      t.control = data::SineControl::kResponse;
+      t.response_quantity = Quantity::kVelocity;
+      const int n = 41;
+      t.frequency_hz.resize(n), t.force.resize(n), t.response.resize(n), t.phase_rad.resize(n);
+      const double wn = 2 * kPi * pair.frequency_hz(i), z = pair.damping_ratio(i);
+      for (int k = 0; k < n; ++k) {
+        const double f = pair.frequency_hz(i) * (0.99 + 0.02 * k / (n - 1)), w = 2 * kPi * f;
+        const std::complex<double> h = 1.0 / std::complex<double>(wn * wn - w * w, 2 * z * wn * wn);
+        t.frequency_hz(k) = f;
+        t.response(k) = pair.amplitude(i);                          // held velocity amplitude
+        t.force(k) = pair.amplitude(i) / (w * std::abs(h));         // Y = F w |H|
+        t.phase_rad(k) = std::arg(std::complex<double>(0, 1) * h);  // velocity leads by 90 deg
+      }
+      tables.push_back(std::move(t));
+    }
+    data::write_stepped_sine_csv(file, tables);
+    return file;
+  }
   static inline std::unique_ptr<testing::SmallCampaign> small_;
   static inline std::unique_ptr<Campaign> campaign_;
   static inline std::unique_ptr<RunSummary> first_;
@@ -233,6 +268,14 @@ TEST_F(Steps, IwanCompareSetting) {
   EXPECT_LT(m.mode_costs[0].start, s.mode_costs[0].start);
 }
 
+// The report's "Stepped sine against the hammer hits" table (none when it has none).
+std::optional<ReportTable> sine_table(const Report& report) {
+  for (const ReportSection& s : report.sections)
+    for (const ReportTable& t : s.tables)
+      if (t.caption.starts_with("Stepped sine against the hammer hits")) return t;
+  return std::nullopt;
+}
+
 // A mode that lists stepped-sine tests: their backbones join the hammer hits' as one more
 // target of the same model mode, each point compared with the model's first-harmonic pair.
 // The sweeps are exact single-mode receptances (hysteretic, response-controlled in velocity)
@@ -243,32 +286,8 @@ TEST_F(Steps, IwanCompareSetting) {
 // 1e-6 (the floors are 1e-4 in frequency and 2 % in damping).
 TEST_F(Steps, IwanUpdateFitsAModesSteppedSineTests) {
   const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
-  const int sensor = measured_->reference[0];
-  const correlate::MeasuredBackbone pair = correlate::synthetic_backbone(
-      truth(), small_->model_mode, d.sensors, sensor, correlate::AmplitudeQuantity::kVelocity, 8,
-      2.0, 0, 0, 1, correlate::BackboneKind::kSteppedSine);
-  std::vector<data::SteppedSineTable> tables;
-  for (Eigen::Index i = 0; i < pair.amplitude.size(); ++i) {
-    data::SteppedSineTable t;
-    t.index = static_cast<int>(i) + 1;
-    t.label = fmt::format("level {}", i + 1);
-    t.control = data::SineControl::kResponse;
-    t.response_quantity = Quantity::kVelocity;
-    const int n = 41;
-    t.frequency_hz.resize(n), t.force.resize(n), t.response.resize(n), t.phase_rad.resize(n);
-    const double wn = 2 * kPi * pair.frequency_hz(i), z = pair.damping_ratio(i);
-    for (int k = 0; k < n; ++k) {
-      const double f = pair.frequency_hz(i) * (0.99 + 0.02 * k / (n - 1)), w = 2 * kPi * f;
-      const std::complex<double> h = 1.0 / std::complex<double>(wn * wn - w * w, 2 * z * wn * wn);
-      t.frequency_hz(k) = f;
-      t.response(k) = pair.amplitude(i);                          // held velocity amplitude
-      t.force(k) = pair.amplitude(i) / (w * std::abs(h));         // Y = F w |H|
-      t.phase_rad(k) = std::arg(std::complex<double>(0, 1) * h);  // velocity leads by 90 deg
-    }
-    tables.push_back(std::move(t));
-  }
-  const fs::path sweeps = out() / "sweeps.csv";
-  data::write_stepped_sine_csv(sweeps, tables);
+  const correlate::MeasuredBackbone pair = sine_pair(d);
+  const fs::path sweeps = write_sweeps(pair, out() / "sweeps.csv");
   Campaign c = *campaign_;
   c.modes[0].stepped_sine = {sweeps};
   const std::vector<ModeBackbones> backbones = campaign_backbones(c, *measured_);
@@ -296,11 +315,71 @@ TEST_F(Steps, IwanUpdateFitsAModesSteppedSineTests) {
       << figures.backbone[0].caption;
   // The report compares them with the hits where their amplitudes overlap.
   const Report report = campaign_report(c, *first_, *measured_, nullptr, figures);
-  size_t rows = 0;
-  for (const ReportSection& s : report.sections)
-    for (const ReportTable& t : s.tables)
-      if (t.caption.starts_with("Stepped sine against the hammer hits")) rows += t.rows.size();
-  EXPECT_GE(rows, 1u);
+  const std::optional<ReportTable> table = sine_table(report);
+  ASSERT_TRUE(table);
+  EXPECT_GE(table->rows.size(), 1u);
+  // Three hits fill the bins: every point inside one is compared with the bin's mean.
+  for (const auto& row : table->rows) EXPECT_TRUE(row[2].starts_with("bin mean (")) << row[2];
+}
+
+// With a single hit no scatter bin forms (bins need two curves), so each stepped-sine point
+// within the hit's amplitudes is compared with that hit's own backbone, interpolated at the
+// point's amplitude, and the table says so. Known answer: the hit's backbone is replaced by
+// f = f0 + f1 ln a, zeta = z0 + z1 ln a with constant uncertainties, which interpolation in
+// log amplitude reproduces exactly, so every row's hammer values, differences and their
+// ratios to u = sqrt(u_sine^2 + u_hit^2) follow in closed form (compared to the digits the
+// table prints: 4 decimals in Hz, 3 significant digits in damping, 2 in the ratios).
+TEST_F(Steps, SteppedSineAgainstOneHit) {
+  const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
+  const correlate::MeasuredBackbone pair = sine_pair(d);
+  Campaign c = *campaign_;
+  c.modes[0].stepped_sine = {write_sweeps(pair, out() / "sweeps_one_hit.csv")};
+  const std::vector<HitData> one{hits_->front()};
+  MeasuredSide m = summarise_measured(c, one, out() / "scatter_one_hit", nullptr);
+  ASSERT_EQ(m.curves[0].size(), 1u);
+  EXPECT_TRUE(m.scatter[0].bins.empty());
+  Curve& hit = m.curves[0][0];
+  const double lo = hit.amplitude.minCoeff(), hi = hit.amplitude.maxCoeff();
+  const ModeBackbones sine = stepped_sine_backbones(c, 0, m.reference[0]);
+  ASSERT_EQ(sine.curves.size(), 1u);
+  const Curve& sc = sine.curves[0];
+  std::vector<Eigen::Index> inside;
+  for (Eigen::Index i = 0; i < sc.amplitude.size(); ++i)
+    if (sc.amplitude(i) >= lo && sc.amplitude(i) <= hi) inside.push_back(i);
+  ASSERT_GE(inside.size(), 2u);  // the test needs points to compare
+
+  const double f0 = 56.0, f1 = -0.1, z0 = 0.01, z1 = 0.001, uf = 0.002, uz = 5e-5;
+  const auto f_at = [&](double a) { return f0 + f1 * std::log(a); };
+  const auto z_at = [&](double a) { return z0 + z1 * std::log(a); };
+  for (Eigen::Index j = 0; j < hit.amplitude.size(); ++j) {
+    hit.frequency_hz(j) = f_at(hit.amplitude(j));
+    hit.damping(j) = z_at(hit.amplitude(j));
+  }
+  m.point_std[0][0].frequency_hz.setConstant(uf);
+  m.point_std[0][0].damping.setConstant(uz);
+
+  RunSummary summary = *first_;
+  summary.hits = 1;
+  const CampaignFigures figures = draw_figures(c, m, nullptr, out() / "fig_one_hit");
+  const std::optional<ReportTable> table =
+      sine_table(campaign_report(c, summary, m, nullptr, figures));
+  ASSERT_TRUE(table);
+  EXPECT_NE(table->caption.find("each hit's own backbone"), std::string::npos);
+  ASSERT_EQ(table->rows.size(), inside.size());
+  for (size_t r = 0; r < inside.size(); ++r) {
+    const std::vector<std::string>& row = table->rows[r];
+    const Eigen::Index i = inside[r];
+    const double a = sc.amplitude(i), f = f_at(a), z = z_at(a);
+    const double df = sc.frequency_hz(i) - f, dz = sc.damping(i) - z;
+    EXPECT_EQ(row[2], "hit " + hit.id);
+    EXPECT_EQ(row[4], fmt::format("{:.4f}", f));
+    EXPECT_EQ(row[5], fmt::format("{:+.4f}", df));
+    EXPECT_EQ(row[6],
+              fmt::format("{:.2g}", std::abs(df) / std::hypot(sine.frequency_std_hz[0](i), uf)));
+    EXPECT_EQ(row[8], fmt::format("{:.3g}", z));
+    EXPECT_EQ(row[10],
+              fmt::format("{:.2g}", std::abs(dz) / std::hypot(sine.damping_std[0](i), uz)));
+  }
 }
 
 // Figures: one PNG per mode and the spectrum; the model's two only with a model.
