@@ -75,6 +75,15 @@ TEST(JsonWriter, NestedDocument) {
   EXPECT_THROW(bad.value(std::numeric_limits<double>::infinity()), std::logic_error);
 }
 
+TEST(JsonWriter, NumbersWritesTheSameAsOneKeyAndValueEach) {
+  JsonWriter one_by_one;
+  one_by_one.begin_object().key("b").value(0.25).key("a").value(3.0).end_object();
+  JsonWriter listed;
+  listed.begin_object().numbers({{"b", 0.25}, {"a", 3.0}}).end_object();
+  EXPECT_EQ(listed.str(), one_by_one.str());
+  EXPECT_EQ(listed.str(), "{\n  \"b\": 0.25,\n  \"a\": 3\n}\n");
+}
+
 TEST(JsonWriter, BytesThatAreNotUtf8BecomeReplacementCharacters) {
   JsonWriter w;
   // Latin-1 "acc\xb5" (a lone continuation byte), a truncated 3-byte sequence, an overlong
