@@ -54,6 +54,15 @@ TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
   EXPECT_FALSE(fs::exists(q));
 }
 
+TEST(Table, ListedColumnsAreAddedInOrder) {
+  Table listed;
+  listed.add({{"b", Eigen::Vector2d(2.0, 1e-7)}, {"a", Eigen::Vector2d(1.0, 0.5)}});
+  EXPECT_EQ(listed.names, (std::vector<std::string>{"b", "a"}));
+  ASSERT_EQ(listed.columns.size(), 2u);
+  EXPECT_EQ(listed.columns[0], Eigen::VectorXd(Eigen::Vector2d(2.0, 1e-7)));
+  EXPECT_EQ(listed.columns[1], Eigen::VectorXd(Eigen::Vector2d(1.0, 0.5)));
+}
+
 TEST(JsonWriter, NestedDocument) {
   JsonWriter w;
   w.begin_object()
