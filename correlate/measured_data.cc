@@ -209,6 +209,16 @@ SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
   return run;
 }
 
+MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points) {
+  MeasuredBackbone b;
+  b.kind = kind;
+  b.sensor = sensor;
+  for (Eigen::VectorXd* v :
+       {&b.amplitude, &b.frequency_hz, &b.damping_ratio, &b.frequency_std_hz, &b.damping_std})
+    v->setZero(points);
+  return b;
+}
+
 std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor) {
   std::vector<MeasuredBackbone> out;
   for (const SteppedSineOutput& o : run.outputs) {
