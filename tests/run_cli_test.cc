@@ -53,6 +53,18 @@ double first_value(const fs::path& p, const std::string& name) {
   return 0;
 }
 
+// `process` on the small campaign's hits, in its band, as velocity (what `run` does), into `out`.
+testing::CommandResult process_hits(const testing::SmallCampaign& s, const fs::path& out) {
+  std::string files;
+  for (const fs::path& h : s.hits) {
+    files += ' ';
+    files += h.string();
+  }
+  return testing::run_jointlab(
+      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
+                  s.band[1], out.string()));
+}
+
 // 600 evaluations: in the default search box (gamma 0.05-2, F_S within a factor 30) 150 left
 // the small campaign at its start.
 constexpr const char* kUpdates =
@@ -298,14 +310,7 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   const testing::CommandResult r = testing::run_jointlab(
       fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "run").string()));
   ASSERT_EQ(r.status, 0) << r.err;
-  std::string files;
-  for (const fs::path& h : s.hits) {
-    files += ' ';
-    files += h.string();
-  }
-  const testing::CommandResult p = testing::run_jointlab(
-      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
-                  s.band[1], (dir / "process").string()));
+  const testing::CommandResult p = process_hits(s, dir / "process");
   ASSERT_EQ(p.status, 0) << p.err;
 
   // The campaign's side, from run's cache.
@@ -378,14 +383,7 @@ TEST(RunCli, RunAndUpdateIwanGiveTheSameParameters) {
   const fs::path dir = testing::scratch_dir("run_cli_same_parameters");
   const testing::SmallCampaign s =
       testing::make_small_campaign(dir, "[update.iwan]\nenabled = true\nmax_evaluations = 150\n");
-  std::string files;
-  for (const fs::path& h : s.hits) {
-    files += ' ';
-    files += h.string();
-  }
-  const testing::CommandResult p = testing::run_jointlab(
-      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
-                  s.band[1], (dir / "process").string()));
+  const testing::CommandResult p = process_hits(s, dir / "process");
   ASSERT_EQ(p.status, 0) << p.err;
   const testing::CommandResult u = testing::run_jointlab(fmt::format(
       "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "
