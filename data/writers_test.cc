@@ -15,13 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 fs::path scratch(const std::string& name) {
   return testing::scratch_path("jointlab-writers-test", name);
 }
@@ -45,7 +38,7 @@ TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
   t.add("b", Eigen::Vector2d(2.0, 1e-7));
   const fs::path p = scratch("t.csv");
   write_table(p, t);
-  EXPECT_EQ(slurp(p), "a,b\n1,2\n0.5,1e-07\n");
+  EXPECT_EQ(testing::read_file(p), "a,b\n1,2\n0.5,1e-07\n");
 
   t.columns[1](0) = std::numeric_limits<double>::quiet_NaN();
   const fs::path q = scratch("nan.csv");
