@@ -132,14 +132,7 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
       out.screened += cv.amplitude.size() - static_cast<Eigen::Index>(keep.size());
       if (keep.size() < 2) continue;
       const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
-      MeasuredBackbone mb;
-      mb.kind = kind;
-      mb.sensor = mode.sensors[c];
-      mb.amplitude.resize(n);
-      mb.frequency_hz.resize(n);
-      mb.damping_ratio.resize(n);
-      mb.frequency_std_hz.resize(n);
-      mb.damping_std.resize(n);
+      MeasuredBackbone mb = correlate::sized_backbone(kind, mode.sensors[c], n);
       for (Eigen::Index j = 0; j < n; ++j) {
         const Eigen::Index i = keep[static_cast<size_t>(j)];
         mb.amplitude(j) = cv.amplitude(i);

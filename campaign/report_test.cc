@@ -14,13 +14,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // RFC 4648 section 10 test vectors.
 TEST(Report, Base64MatchesRfc4648) {
   EXPECT_EQ(base64(""), "");
@@ -48,11 +41,11 @@ TEST(Report, HtmlIsSelfContainedAndEscaped) {
   r.sections.push_back(s);
   write_report_html(r, dir / "r.html");
   write_report_markdown(r, dir / "r.md");
-  const std::string h = slurp(dir / "r.html");
+  const std::string h = testing::read_file(dir / "r.html");
   EXPECT_NE(h.find("a &lt;b&gt; &amp; c"), std::string::npos);
   EXPECT_NE(h.find("data:image/png;base64," + base64(png)), std::string::npos);
   EXPECT_EQ(h.find("src=\"f.png\""), std::string::npos);
-  const std::string m = slurp(dir / "r.md");
+  const std::string m = testing::read_file(dir / "r.md");
   EXPECT_NE(m.find("![cap](f.png)"), std::string::npos);
   EXPECT_NE(m.find("b\\|c"), std::string::npos);
   // A row of the wrong length is refused and nothing is written.

@@ -311,10 +311,7 @@ void write_scatter_hits_csv(const std::filesystem::path& path, const ScatterSumm
 namespace {
 void put(data::JsonWriter& j, const char* key, const Statistic& s) {
   j.key(key).begin_object();
-  j.key("mean").value(s.mean);
-  j.key("std").value(s.std);
-  j.key("ci_low").value(s.ci_low);
-  j.key("ci_high").value(s.ci_high);
+  j.numbers({{"mean", s.mean}, {"std", s.std}, {"ci_low", s.ci_low}, {"ci_high", s.ci_high}});
   j.end_object();
 }
 }  // namespace
@@ -325,20 +322,21 @@ void write_scatter_json(const std::filesystem::path& path, const std::string& mo
   j.begin_object();
   j.key("mode").value(mode);
   j.key("settings").begin_object();
-  j.key("bins_per_decade").value(s.options.bins_per_decade);
-  j.key("confidence").value(s.options.confidence);
-  j.key("min_curves").value(s.options.min_curves);
-  j.key("outlier_threshold").value(s.options.outlier_threshold);
-  j.key("frequency_floor").value(s.options.frequency_floor);
-  j.key("damping_floor").value(s.options.damping_floor);
-  j.key("exclude_outliers").value(s.options.exclude_outliers);
+  const ScatterOptions& o = s.options;
+  j.key("bins_per_decade").value(o.bins_per_decade);
+  j.key("confidence").value(o.confidence);
+  j.key("min_curves").value(o.min_curves);
+  j.numbers({{"outlier_threshold", o.outlier_threshold},
+             {"frequency_floor", o.frequency_floor},
+             {"damping_floor", o.damping_floor}});
+  j.key("exclude_outliers").value(o.exclude_outliers);
   j.end_object();
   j.key("bins").begin_array();
   for (const ScatterBin& b : s.bins) {
     j.begin_object();
-    j.key("amplitude_low").value(b.amplitude_low);
-    j.key("amplitude_high").value(b.amplitude_high);
-    j.key("amplitude_center").value(b.amplitude_center);
+    j.numbers({{"amplitude_low", b.amplitude_low},
+               {"amplitude_high", b.amplitude_high},
+               {"amplitude_center", b.amplitude_center}});
     j.key("curves").value(b.curves);
     j.key("flagged").value(b.flagged);
     put(j, "frequency_hz", b.frequency_hz);
@@ -352,15 +350,15 @@ void write_scatter_json(const std::filesystem::path& path, const std::string& mo
     j.key("hit").value(h.id);
     j.key("group").value(h.group);
     j.key("bins").value(h.bins);
-    j.key("frequency_deviation").value(h.frequency_deviation);
-    j.key("damping_deviation").value(h.damping_deviation);
-    j.key("frequency_z").value(h.frequency_z);
-    j.key("damping_z").value(h.damping_z);
+    j.numbers({{"frequency_deviation", h.frequency_deviation},
+               {"damping_deviation", h.damping_deviation},
+               {"frequency_z", h.frequency_z},
+               {"damping_z", h.damping_z}});
     if (h.has_linear) {
-      j.key("linear_frequency_hz").value(h.linear_frequency_hz);
-      j.key("linear_damping_ratio").value(h.linear_damping);
-      j.key("linear_frequency_z").value(h.linear_frequency_z);
-      j.key("linear_damping_z").value(h.linear_damping_z);
+      j.numbers({{"linear_frequency_hz", h.linear_frequency_hz},
+                 {"linear_damping_ratio", h.linear_damping},
+                 {"linear_frequency_z", h.linear_frequency_z},
+                 {"linear_damping_z", h.linear_damping_z}});
     }
     j.key("outlier").value(h.outlier);
     j.key("reason").value(h.reason);

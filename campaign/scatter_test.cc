@@ -181,11 +181,9 @@ TEST(Scatter, WritesFilesWithoutNaN) {
   write_scatter_hits_csv(dir / "hits.csv", s);
   write_scatter_json(dir / "scatter.json", "mode 1", s);
   for (const char* name : {"bins.csv", "hits.csv", "scatter.json"}) {
-    std::ifstream in(dir / name);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    EXPECT_FALSE(ss.str().empty()) << name;
-    EXPECT_EQ(ss.str().find("nan"), std::string::npos) << name;
+    const std::string text = testing::read_file(dir / name);
+    EXPECT_FALSE(text.empty()) << name;
+    EXPECT_EQ(text.find("nan"), std::string::npos) << name;
   }
   std::filesystem::remove_all(dir);
 }

@@ -47,6 +47,30 @@ MeasuredModes synthetic_measurement(const model::Model& truth, const std::vector
   return m;
 }
 
+// The smallest kflat on a log grid of 2000 values from 1e5 to 1e10 at which all six modes pair
+// within 1 % (the other sets as in `m`); 0 when none does. An independent check of the
+// smallest rule, by brute force.
+double scanned_smallest_kflat(const StiffnessSets& one, const model::Model& m,
+                              const std::vector<Sensor>& sensors, const MeasuredModes& meas) {
+  for (int i = 0; i < 2000; ++i) {
+    const double k = 1e5 * std::pow(1e5, i / 1999.0);
+    const LinearEvaluation e =
+        evaluate_linear(one, m, sensors, meas, Eigen::Matrix<double, 1, 1>(k), 0.6);
+    if (e.pairing.pairs.size() == 6 && e.max_error() <= 0.01) return k;
+  }
+  return 0;
+}
+
+// The smallest rule on spring.kflat: every paired error within 1 %, lower bound 1e-4 x start.
+LinearUpdateOptions smallest_kflat_options() {
+  LinearUpdateOptions o;
+  o.rule = LinearRule::kSmallest;
+  o.smallest_set = "spring.kflat";
+  o.tolerance = 0.01;
+  o.lower_factor = 1e-4;
+  return o;
+}
+
 TEST(LinearUpdate, JacobianMatchesFiniteDifferences) {
   const model::Model m = two_chain_structure();
   const auto sensors = chain_sensors(6);
@@ -141,20 +165,9 @@ TEST(LinearUpdate, SmallestRuleFindsTheSmallestStiffnessWithinTolerance) {
   start_p.kflat = 1e9;
   const model::Model start = two_chain_structure(start_p);
   const std::vector<std::string> one = {"spring.kflat"};
-  const StiffnessSets sets(start, one);
-  double scan = 0;
-  for (int i = 0; i < 2000 && scan == 0; ++i) {
-    const double k = 1e5 * std::pow(1e5, i / 1999.0);
-    const LinearEvaluation e =
-        evaluate_linear(sets, start, sensors, meas, Eigen::Matrix<double, 1, 1>(k), 0.6);
-    if (e.pairing.pairs.size() == 6 && e.max_error() <= 0.01) scan = k;
-  }
+  const double scan = scanned_smallest_kflat(StiffnessSets(start, one), start, sensors, meas);
   ASSERT_GT(scan, 1e5);
-  LinearUpdateOptions o;
-  o.rule = LinearRule::kSmallest;
-  o.smallest_set = "spring.kflat";
-  o.tolerance = 0.01;
-  o.lower_factor = 1e-4;
+  const LinearUpdateOptions o = smallest_kflat_options();
   LinearUpdateSummary s;
   const Eigen::VectorXd theta = update_linear(start, one, sensors, meas, o, &s);
   SCOPED_TRACE(s.report());
@@ -178,24 +191,14 @@ TEST(LinearUpdate, SmallestRuleWithTheOtherSetsFitted) {
   const model::Model truth = two_chain_structure(truth_p);
   const auto sensors = chain_sensors(6);
   const MeasuredModes meas = synthetic_measurement(truth, sensors, 6, 2e-3, 5);
-  const StiffnessSets held(truth, {"spring.kflat"});
-  double scan = 0;
-  for (int i = 0; i < 2000 && scan == 0; ++i) {
-    const double k = 1e5 * std::pow(1e5, i / 1999.0);
-    const LinearEvaluation e =
-        evaluate_linear(held, truth, sensors, meas, Eigen::Matrix<double, 1, 1>(k), 0.6);
-    if (e.pairing.pairs.size() == 6 && e.max_error() <= 0.01) scan = k;
-  }
+  const double scan =
+      scanned_smallest_kflat(StiffnessSets(truth, {"spring.kflat"}), truth, sensors, meas);
   TwoChainParameters start_p = truth_p;
   start_p.ka *= 2;
   start_p.kb /= 2;
   start_p.kflat = 1e9;
   const model::Model start = two_chain_structure(start_p);
-  LinearUpdateOptions o;
-  o.rule = LinearRule::kSmallest;
-  o.smallest_set = "spring.kflat";
-  o.tolerance = 0.01;
-  o.lower_factor = 1e-4;
+  const LinearUpdateOptions o = smallest_kflat_options();
   LinearUpdateSummary s;
   const Eigen::VectorXd theta = update_linear(start, kSets, sensors, meas, o, &s);
   SCOPED_TRACE(s.report());

@@ -85,21 +85,59 @@ std::string program_of(const JsonValue& doc) {
   return p && p->is_string() ? p->string() : std::string();
 }
 
-}  // namespace
-
-ProcessRun read_process_run(const fs::path& dir) {
+// The summary.json of the `program` output directory `dir`, checked to be an object.
+JsonValue read_summary(const fs::path& dir, const std::string& program) {
   const fs::path path = dir / "summary.json";
   if (!fs::is_directory(dir)) {
     throw InputError(
-        fmt::format("{}: not a directory (expected a 'jointlab process' output)", dir.string()));
+        fmt::format("{}: not a directory (expected a '{}' output)", dir.string(), program));
   }
   if (!fs::exists(path)) {
     throw InputError(
-        fmt::format("{}: missing (expected a 'jointlab process' output directory)", path.string()));
+        fmt::format("{}: missing (expected a '{}' output directory)", path.string(), program));
   }
-  const JsonValue doc = data::read_json(path);
-  const Fields f{path.string()};
-  if (!doc.is_object()) f.fail("document", "expected an object");
+  JsonValue doc = data::read_json(path);
+  if (!doc.is_object()) Fields{path.string()}.fail("document", "expected an object");
+  return doc;
+}
+
+// The output file named by `key` of `obj`: a plain file name, or "" where it is null.
+std::string output_file(const Fields& f, const JsonValue& obj, const std::string& path,
+                        const char* key) {
+  const JsonValue* v = obj.find(key);
+  if (!v) f.fail(path, fmt::format("missing \"{}\"", key));
+  if (v->is_null()) return {};
+  if (!v->is_string()) f.fail(path + "." + key, "expected a string or null");
+  const std::string& name = v->string();
+  if (name.empty() || name.find('/') != std::string::npos)
+    f.fail(path + "." + key, fmt::format("\"{}\" is not a file name", name));
+  return name;
+}
+
+// The amplitude quantity the document's backbones are in.
+AmplitudeQuantity amplitude_of(const Fields& f, const JsonValue& doc) {
+  return quantity_of(
+      f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
+}
+
+// Calls on_file(file, path) for each entry of the document's "files" array, checked to be an
+// object; path names it in messages ("files[i]").
+template <typename OnFile>
+void for_each_file(const Fields& f, const JsonValue& doc, OnFile on_file) {
+  const JsonValue& files = f.get(doc, "document", "files", JsonValue::Type::kArray);
+  for (size_t i = 0; i < files.items().size(); ++i) {
+    const JsonValue& file = files.items()[i];
+    const std::string fp = fmt::format("files[{}]", i);
+    if (!file.is_object()) f.fail(fp, "expected an object");
+    on_file(file, fp);
+  }
+}
+
+}  // namespace
+
+ProcessRun read_process_run(const fs::path& dir) {
+  const JsonValue doc = read_summary(dir, "jointlab process");
+  const Fields f{(dir / "summary.json").string()};
   if (program_of(doc) == "jointlab stepped-sine") {
     f.fail("program",
            "a 'jointlab stepped-sine' output, not a 'jointlab process' output (give "
@@ -107,13 +145,8 @@ ProcessRun read_process_run(const fs::path& dir) {
   }
   ProcessRun run;
   run.dir = dir;
-  run.amplitude = quantity_of(
-      f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
-  const JsonValue& files = f.get(doc, "document", "files", JsonValue::Type::kArray);
-  for (size_t i = 0; i < files.items().size(); ++i) {
-    const JsonValue& file = files.items()[i];
-    const std::string fp = fmt::format("files[{}]", i);
-    if (!file.is_object()) f.fail(fp, "expected an object");
+  run.amplitude = amplitude_of(f, doc);
+  for_each_file(f, doc, [&](const JsonValue& file, const std::string& fp) {
     const std::string source = f.get(file, fp, "file", JsonValue::Type::kString).string();
     const JsonValue& bands = f.get(file, fp, "bands", JsonValue::Type::kArray);
     for (size_t b = 0; b < bands.items().size(); ++b) {
@@ -149,34 +182,16 @@ ProcessRun read_process_run(const fs::path& dir) {
       po.source = source;
       po.channel = f.get(out, op, "channel", JsonValue::Type::kString).string();
       po.band = f.band(out, op);
-      const JsonValue* file_name = out.find("file");
-      if (!file_name) f.fail(op, "missing \"file\"");
-      if (file_name->is_string()) {
-        po.file = file_name->string();
-        if (po.file.empty() || po.file.find('/') != std::string::npos)
-          f.fail(op + ".file", fmt::format("\"{}\" is not a file name", po.file));
-      } else if (!file_name->is_null()) {
-        f.fail(op + ".file", "expected a string or null");
-      }
+      po.file = output_file(f, out, op, "file");
       run.outputs.push_back(std::move(po));
     }
-  }
+  });
   return run;
 }
 
 SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
-  const fs::path path = dir / "summary.json";
-  if (!fs::is_directory(dir)) {
-    throw InputError(fmt::format("{}: not a directory (expected a 'jointlab stepped-sine' output)",
-                                 dir.string()));
-  }
-  if (!fs::exists(path)) {
-    throw InputError(fmt::format(
-        "{}: missing (expected a 'jointlab stepped-sine' output directory)", path.string()));
-  }
-  const JsonValue doc = data::read_json(path);
-  const Fields f{path.string()};
-  if (!doc.is_object()) f.fail("document", "expected an object");
+  const JsonValue doc = read_summary(dir, "jointlab stepped-sine");
+  const Fields f{(dir / "summary.json").string()};
   if (program_of(doc) != "jointlab stepped-sine") {
     f.fail("program",
            "not a 'jointlab stepped-sine' output (a 'jointlab process' output is "
@@ -184,27 +199,24 @@ SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
   }
   SteppedSineRun run;
   run.dir = dir;
-  run.amplitude = quantity_of(
-      f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
-  const JsonValue& files = f.get(doc, "document", "files", JsonValue::Type::kArray);
-  for (size_t i = 0; i < files.items().size(); ++i) {
-    const JsonValue& file = files.items()[i];
-    const std::string fp = fmt::format("files[{}]", i);
-    if (!file.is_object()) f.fail(fp, "expected an object");
+  run.amplitude = amplitude_of(f, doc);
+  for_each_file(f, doc, [&](const JsonValue& file, const std::string& fp) {
     SteppedSineOutput o;
     o.source = f.get(file, fp, "file", JsonValue::Type::kString).string();
-    const JsonValue* out = file.find("output");
-    if (!out) f.fail(fp, "missing \"output\"");
-    if (out->is_string()) {
-      o.file = out->string();
-      if (o.file.empty() || o.file.find('/') != std::string::npos)
-        f.fail(fp + ".output", fmt::format("\"{}\" is not a file name", o.file));
-    } else if (!out->is_null()) {
-      f.fail(fp + ".output", "expected a string or null");
-    }
+    o.file = output_file(f, file, fp, "output");
     run.outputs.push_back(std::move(o));
-  }
+  });
   return run;
+}
+
+MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points) {
+  MeasuredBackbone b;
+  b.kind = kind;
+  b.sensor = sensor;
+  for (Eigen::VectorXd* v :
+       {&b.amplitude, &b.frequency_hz, &b.damping_ratio, &b.frequency_std_hz, &b.damping_std})
+    v->setZero(points);
+  return b;
 }
 
 std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor) {

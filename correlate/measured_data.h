@@ -85,6 +85,9 @@ std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, 
 MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
                              std::vector<int>* bands = nullptr);
 
+/// A backbone of `kind` measured at sensor index `sensor` with `points` points, all zero.
+MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points);
+
 /// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`;
 /// InputError naming the file and line.
 MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor);

@@ -170,5 +170,14 @@ TEST(MeasuredData, ReadsAPlainModesTable) {
             std::string::npos);
 }
 
+TEST(MeasuredData, ASizedBackboneHasEveryColumnAtThatLengthAndZero) {
+  const MeasuredBackbone b = sized_backbone(BackboneKind::kSteppedSine, 3, 4);
+  EXPECT_EQ(b.kind, BackboneKind::kSteppedSine);
+  EXPECT_EQ(b.sensor, 3);
+  for (const Eigen::VectorXd* v :
+       {&b.amplitude, &b.frequency_hz, &b.damping_ratio, &b.frequency_std_hz, &b.damping_std})
+    EXPECT_EQ(*v, Eigen::VectorXd::Zero(4));
+}
+
 }  // namespace
 }  // namespace jointlab::correlate

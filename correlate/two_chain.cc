@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "jointlab/correlate/measured_data.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/qsma.h"
 
@@ -79,15 +80,8 @@ MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
                                                               : 2;
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
-  MeasuredBackbone b;
-  b.kind = kind;
-  b.sensor = sensor;
   const auto n = static_cast<Eigen::Index>(curve.size());
-  b.amplitude.resize(n);
-  b.frequency_hz.resize(n);
-  b.damping_ratio.resize(n);
-  b.frequency_std_hz.resize(n);
-  b.damping_std.resize(n);
+  MeasuredBackbone b = sized_backbone(kind, sensor, n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const model::QsmaPoint& p = curve[i];
     const bool secant = columns == IwanComparison::kSecant;

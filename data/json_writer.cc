@@ -174,4 +174,10 @@ JsonWriter& JsonWriter::null() {
   return *this;
 }
 
+JsonWriter& JsonWriter::numbers(
+    std::initializer_list<std::pair<std::string_view, double>> entries) {
+  for (const auto& [k, x] : entries) key(k).value(x);
+  return *this;
+}
+
 }  // namespace jointlab::data

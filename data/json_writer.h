@@ -8,8 +8,10 @@
 // std::logic_error (results never contain NaN).
 #pragma once
 
+#include <initializer_list>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace jointlab::data {
@@ -41,6 +43,8 @@ class JsonWriter {
   JsonWriter& value(bool b);
   /// Writes null.
   JsonWriter& null();
+  /// Writes one key and number per entry, in the order given (each as value(double)).
+  JsonWriter& numbers(std::initializer_list<std::pair<std::string_view, double>> entries);
   /// The document so far (complete once every begin has its end).
   const std::string& str() const { return out_; }
 

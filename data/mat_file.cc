@@ -24,8 +24,46 @@
 #include <zlib.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/mat_variable.h"
 
 namespace jointlab::data {
+
+std::optional<size_t> mat_element_count(const matvar_t* v) {
+  if (!v || v->rank < 0 || v->rank > 32 || (v->rank > 0 && !v->dims)) return std::nullopt;
+  size_t n = 1;
+  for (int i = 0; i < v->rank; ++i) {
+    if (v->dims[i] != 0 && n > SIZE_MAX / v->dims[i]) return std::nullopt;
+    n *= v->dims[i];
+  }
+  return n;
+}
+
+std::optional<std::string> mat_char_text(const matvar_t* v) {
+  if (!v || v->class_type != MAT_C_CHAR) return std::nullopt;
+  const auto n = mat_element_count(v);
+  if (!n) return std::nullopt;
+  if (*n == 0) return std::string();
+  const size_t size = Mat_SizeOf(v->data_type);
+  if (!v->data || (size != 1 && size != 2 && size != 4) || v->nbytes < *n * size) {
+    return std::nullopt;
+  }
+  const size_t rows = v->rank >= 1 ? v->dims[0] : 1;
+  const size_t cols = rows ? *n / rows : 0;
+  std::string out;
+  for (size_t r = 0; r < rows; ++r) {
+    if (r) out += '\n';
+    for (size_t c = 0; c < cols; ++c) {
+      const size_t i = r + rows * c;
+      uint32_t code = 0;
+      if (size == 1) code = static_cast<const uint8_t*>(v->data)[i];
+      if (size == 2) code = static_cast<const uint16_t*>(v->data)[i];
+      if (size == 4) code = static_cast<const uint32_t*>(v->data)[i];
+      out += code >= 0x20 && code < 0x7f ? static_cast<char>(code) : '?';
+    }
+  }
+  return out;
+}
+
 namespace {
 
 // matio reports problems through a log function; keep its last word for our messages
@@ -61,16 +99,6 @@ using VarPtr = std::unique_ptr<matvar_t, VarFreer>;
 // exceeds that much of the file is a lie, refused before anything is allocated.
 constexpr double kMaxExpansion = 1100.0;
 
-std::optional<size_t> element_count(const matvar_t* v) {
-  if (!v || v->rank < 0 || v->rank > 32 || (v->rank > 0 && !v->dims)) return std::nullopt;
-  size_t n = 1;
-  for (int i = 0; i < v->rank; ++i) {
-    if (v->dims[i] != 0 && n > SIZE_MAX / v->dims[i]) return std::nullopt;
-    n *= v->dims[i];
-  }
-  return n;
-}
-
 bool is_numeric(const matvar_t* v) {
   switch (v->class_type) {
     case MAT_C_DOUBLE:
@@ -95,7 +123,7 @@ size_t class_size(const matvar_t* v) { return Mat_SizeOfClass(v->class_type); }
 // overflows or nests too deep.
 std::optional<double> declared_bytes(const matvar_t* v, int depth = 0) {
   if (depth > 8) return std::nullopt;
-  const auto n = element_count(v);
+  const auto n = mat_element_count(v);
   if (!n) return std::nullopt;
   if (v->class_type == MAT_C_STRUCT) {
     const unsigned nfields = Mat_VarGetNumberOfFields(const_cast<matvar_t*>(v));
@@ -118,7 +146,7 @@ std::optional<double> declared_bytes(const matvar_t* v, int depth = 0) {
 
 // Numeric data of a read variable as doubles; nullopt when it has none.
 std::optional<std::vector<double>> numeric_data(const matvar_t* v) {
-  const auto n = element_count(v);
+  const auto n = mat_element_count(v);
   if (!n || !v->data || !is_numeric(v) || v->isComplex) return std::nullopt;
   const size_t size = class_size(v);
   if (size == 0 || v->nbytes < *n * size) return std::nullopt;
@@ -163,39 +191,12 @@ std::optional<std::vector<double>> numeric_data(const matvar_t* v) {
   return out;
 }
 
-// A char array as text (rows joined by newlines); non-ASCII characters become '?'.
-std::optional<std::string> char_data(const matvar_t* v) {
-  if (!v || v->class_type != MAT_C_CHAR) return std::nullopt;
-  const auto n = element_count(v);
-  if (!n) return std::nullopt;
-  if (*n == 0) return std::string();
-  const size_t size = Mat_SizeOf(v->data_type);
-  if (!v->data || (size != 1 && size != 2 && size != 4) || v->nbytes < *n * size) {
-    return std::nullopt;
-  }
-  const size_t rows = v->rank >= 1 ? v->dims[0] : 1;
-  const size_t cols = rows ? *n / rows : 0;
-  std::string out;
-  for (size_t r = 0; r < rows; ++r) {
-    if (r) out += '\n';
-    for (size_t c = 0; c < cols; ++c) {
-      const size_t i = r + rows * c;
-      uint32_t code = 0;
-      if (size == 1) code = static_cast<const uint8_t*>(v->data)[i];
-      if (size == 2) code = static_cast<const uint16_t*>(v->data)[i];
-      if (size == 4) code = static_cast<const uint32_t*>(v->data)[i];
-      out += code >= 0x20 && code < 0x7f ? static_cast<char>(code) : '?';
-    }
-  }
-  return out;
-}
-
 // A char row or a cell of char rows as a list of strings.
 std::optional<std::vector<std::string>> string_list(const matvar_t* v, bool split_commas) {
   if (!v) return std::nullopt;
   std::vector<std::string> out;
   if (v->class_type == MAT_C_CHAR) {
-    auto text = char_data(v);
+    auto text = mat_char_text(v);
     if (!text) return std::nullopt;
     if (!split_commas) return std::vector<std::string>{*text};
     size_t pos = 0;
@@ -211,11 +212,11 @@ std::optional<std::vector<std::string>> string_list(const matvar_t* v, bool spli
     return out;
   }
   if (v->class_type == MAT_C_CELL) {
-    const auto n = element_count(v);
+    const auto n = mat_element_count(v);
     if (!n || *n > 100000 || !v->data) return std::nullopt;
     for (size_t i = 0; i < *n; ++i) {
       const matvar_t* cell = static_cast<matvar_t* const*>(v->data)[i];
-      auto text = char_data(cell);
+      auto text = mat_char_text(cell);
       if (!text) return std::nullopt;
       out.push_back(*text);
     }
@@ -225,7 +226,7 @@ std::optional<std::vector<std::string>> string_list(const matvar_t* v, bool spli
 }
 
 bool is_vector(const matvar_t* v, size_t& length) {
-  const auto n = element_count(v);
+  const auto n = mat_element_count(v);
   if (!n || v->rank > 2) return false;
   if (v->rank == 2 && v->dims[0] != 1 && v->dims[1] != 1) return false;
   length = *n;
@@ -269,7 +270,7 @@ struct Fields {
 void classify_numeric(const Named& v, const std::string& file, const std::string& prefix, Fields& f,
                       Record& rec, std::vector<std::string>& ignored) {
   const std::string field = prefix + v.name;
-  const auto count = element_count(v.var);
+  const auto count = mat_element_count(v.var);
   if (count && *count > 0 && !v.var->data) {
     throw InputError(where(file, 0,
                            fmt::format("field '{}': data could not be read (truncated "
@@ -321,7 +322,7 @@ Fields classify_fields(const std::vector<Named>& vars, const std::string& file,
     } else if (is_numeric(v.var)) {
       classify_numeric(v, file, prefix, f, rec, ignored);
     } else if (v.var->class_type == MAT_C_CHAR) {
-      if (auto text = char_data(v.var); text && text->find('\n') == std::string::npos) {
+      if (auto text = mat_char_text(v.var); text && text->find('\n') == std::string::npos) {
         rec.metadata[v.name] = *text;
       } else {
         ignored.push_back(v.name);
@@ -893,7 +894,7 @@ Record read_mat(const std::filesystem::path& path) {
     if (top_level) {
       vars.push_back(Named{name, var.get()});
     } else {
-      const auto n = element_count(var.get());
+      const auto n = mat_element_count(var.get());
       if (var->class_type != MAT_C_STRUCT || !n || *n != 1) {
         throw InputError(where(file, 0,
                                fmt::format("struct '{}' is not 1x1; jointlab reads one "
@@ -905,7 +906,7 @@ Record read_mat(const std::filesystem::path& path) {
       char* const* fields = Mat_VarGetStructFieldnames(var.get());
       for (unsigned i = 0; fields && i < nf; ++i) {
         matvar_t* f = Mat_VarGetStructFieldByIndex(var.get(), i, 0);
-        if (!fields[i] || !f || (element_count(f).value_or(1) > 0 && !f->data)) {
+        if (!fields[i] || !f || (mat_element_count(f).value_or(1) > 0 && !f->data)) {
           throw InputError(where(file, 0,
                                  fmt::format("field '{}.{}' could not be read (truncated "
                                              "or damaged file){}",

@@ -23,19 +23,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 void put(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
 std::map<std::string, std::string> snapshot(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::directory_iterator(dir))
-    files[e.path().filename().string()] = e.is_directory() ? "<dir>" : slurp(e.path());
+    files[e.path().filename().string()] = e.is_directory() ? "<dir>" : testing::read_file(e.path());
   return files;
 }
 
@@ -101,7 +94,7 @@ TEST(OutputStage, FoldersReplaceThePreviousFolderWhole) {
     s.commit();
   }
   EXPECT_FALSE(fs::exists(dir / "old"));
-  EXPECT_EQ(slurp(dir / "figs" / "sub" / "b.png"), "b1");
+  EXPECT_EQ(testing::read_file(dir / "figs" / "sub" / "b.png"), "b1");
   {
     OutputStage s(dir, "cmd", owned);
     fs::create_directories(s.path() / "figs");
@@ -189,7 +182,7 @@ TEST(OutputStage, ARunningWritersFilesAreSpared) {
   EXPECT_TRUE(fs::is_directory(running.path()));
   EXPECT_FALSE(fs::exists(dir / "y.csv.tmp-0123abcd"));
   writing.commit();
-  EXPECT_EQ(slurp(dir / "x.csv"), "in progress");
+  EXPECT_EQ(testing::read_file(dir / "x.csv"), "in progress");
 }
 
 TEST(AtomicFile, AFailedWriteLeavesNothing) {

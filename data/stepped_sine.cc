@@ -17,6 +17,7 @@
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/csv_lines.h"
 #include "jointlab/data/mat_file.h"
+#include "jointlab/data/mat_variable.h"
 #include "jointlab/data/read_record.h"
 
 namespace jointlab::data {
@@ -340,12 +341,7 @@ struct VarFreer {
   void operator()(matvar_t* v) const { Mat_VarFree(v); }
 };
 
-size_t element_count(const matvar_t* v) {
-  if (!v || v->rank < 0 || v->rank > 8 || (v->rank > 0 && !v->dims)) return 0;
-  size_t n = 1;
-  for (int i = 0; i < v->rank; ++i) n *= v->dims[i];
-  return n;
-}
+size_t element_count(const matvar_t* v) { return mat_element_count(v).value_or(0); }
 
 // A real double (or single) vector field; InputError naming it otherwise.
 std::vector<double> vector_field(const matvar_t* v, const std::string& file,
@@ -361,22 +357,6 @@ std::vector<double> vector_field(const matvar_t* v, const std::string& file,
   for (size_t i = 0; i < n; ++i) {
     out[i] = v->class_type == MAT_C_DOUBLE ? static_cast<const double*>(v->data)[i]
                                            : static_cast<const float*>(v->data)[i];
-  }
-  return out;
-}
-
-std::optional<std::string> char_row(const matvar_t* v) {
-  if (!v || v->class_type != MAT_C_CHAR || !v->data) return std::nullopt;
-  const size_t n = element_count(v);
-  const size_t size = Mat_SizeOf(v->data_type);
-  if ((size != 1 && size != 2 && size != 4) || v->nbytes < n * size) return std::nullopt;
-  std::string out;
-  for (size_t i = 0; i < n; ++i) {
-    uint32_t code = 0;
-    if (size == 1) code = static_cast<const uint8_t*>(v->data)[i];
-    if (size == 2) code = static_cast<const uint16_t*>(v->data)[i];
-    if (size == 4) code = static_cast<const uint32_t*>(v->data)[i];
-    out += code >= 0x20 && code < 0x7f ? static_cast<char>(code) : '?';
   }
   return out;
 }
@@ -413,7 +393,7 @@ void read_table_array(matvar_t* arr, const std::string& path_name, const std::st
   for (size_t e = 0; e < n; ++e) {
     const std::string base = fmt::format("{}({})", path_name, e + 1);
     std::optional<SineControl> control;
-    if (auto c = char_row(field_of(arr, "control", e))) control = parse_control(*c);
+    if (auto c = mat_char_text(field_of(arr, "control", e))) control = parse_control(*c);
     if (!control && resp != force) control = resp ? SineControl::kResponse : SineControl::kForce;
     if (!control) {
       throw InputError(where(file, 0,
@@ -443,7 +423,7 @@ void read_table_array(matvar_t* arr, const std::string& path_name, const std::st
                                          base, resp_name, raw.f.size(), raw.force.size(),
                                          raw.response.size(), raw.phase.size())));
     }
-    const auto units_text = char_row(field_of(arr, "units", e));
+    const auto units_text = mat_char_text(field_of(arr, "units", e));
     if (!units_text) {
       throw InputError(where(file, 0,
                              fmt::format("field '{}.units' missing or not text (expected e.g. "

@@ -16,6 +16,10 @@ void Table::add(std::string name, Eigen::VectorXd values) {
   columns.push_back(std::move(values));
 }
 
+void Table::add(std::initializer_list<std::pair<std::string, Eigen::VectorXd>> named_columns) {
+  for (const auto& [name, values] : named_columns) add(name, values);
+}
+
 void write_table(const std::filesystem::path& path, const Table& table) {
   std::string text;
   for (size_t c = 0; c < table.names.size(); ++c) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +22,8 @@ struct Table {
 
   /// Appends a column; asserts equal length with the first.
   void add(std::string name, Eigen::VectorXd values);
+  /// Appends the columns in the order given (each as add()).
+  void add(std::initializer_list<std::pair<std::string, Eigen::VectorXd>> named_columns);
   /// Number of rows (0 if no column).
   Eigen::Index rows() const { return columns.empty() ? 0 : columns.front().size(); }
 };

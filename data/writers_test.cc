@@ -15,13 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 fs::path scratch(const std::string& name) {
   return testing::scratch_path("jointlab-writers-test", name);
 }
@@ -45,13 +38,22 @@ TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
   t.add("b", Eigen::Vector2d(2.0, 1e-7));
   const fs::path p = scratch("t.csv");
   write_table(p, t);
-  EXPECT_EQ(slurp(p), "a,b\n1,2\n0.5,1e-07\n");
+  EXPECT_EQ(testing::read_file(p), "a,b\n1,2\n0.5,1e-07\n");
 
   t.columns[1](0) = std::numeric_limits<double>::quiet_NaN();
   const fs::path q = scratch("nan.csv");
   fs::remove(q);
   EXPECT_THROW(write_table(q, t), std::logic_error);
   EXPECT_FALSE(fs::exists(q));
+}
+
+TEST(Table, ListedColumnsAreAddedInOrder) {
+  Table listed;
+  listed.add({{"b", Eigen::Vector2d(2.0, 1e-7)}, {"a", Eigen::Vector2d(1.0, 0.5)}});
+  EXPECT_EQ(listed.names, (std::vector<std::string>{"b", "a"}));
+  ASSERT_EQ(listed.columns.size(), 2u);
+  EXPECT_EQ(listed.columns[0], Eigen::VectorXd(Eigen::Vector2d(2.0, 1e-7)));
+  EXPECT_EQ(listed.columns[1], Eigen::VectorXd(Eigen::Vector2d(1.0, 0.5)));
 }
 
 TEST(JsonWriter, NestedDocument) {
@@ -73,6 +75,15 @@ TEST(JsonWriter, NestedDocument) {
       "{\n  \"name\": \"a\\\"b\",\n  \"list\": [\n    1,\n    2.5\n  ],\n  \"empty\": {}\n}\n");
   JsonWriter bad;
   EXPECT_THROW(bad.value(std::numeric_limits<double>::infinity()), std::logic_error);
+}
+
+TEST(JsonWriter, NumbersWritesTheSameAsOneKeyAndValueEach) {
+  JsonWriter one_by_one;
+  one_by_one.begin_object().key("b").value(0.25).key("a").value(3.0).end_object();
+  JsonWriter listed;
+  listed.begin_object().numbers({{"b", 0.25}, {"a", 3.0}}).end_object();
+  EXPECT_EQ(listed.str(), one_by_one.str());
+  EXPECT_EQ(listed.str(), "{\n  \"b\": 0.25,\n  \"a\": 3\n}\n");
 }
 
 TEST(JsonWriter, BytesThatAreNotUtf8BecomeReplacementCharacters) {

@@ -1,8 +1,8 @@
 #include "jointlab/modal/process_output.h"
 
-#include "jointlab/data/atomic_file.h"
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
+#include "jointlab/modal/summary_json.h"
 
 namespace jointlab::modal {
 
@@ -42,86 +42,83 @@ namespace {
 // lowest amplitude (linear_reference_amplitude), its expanded uncertainty and the amplitudes
 // the fit spans.
 void write_linear(data::JsonWriter& j, const RingdownSummary& s) {
-  j.key("linear_frequency_hz").value(s.linear_frequency_hz);
-  j.key("linear_frequency_std_hz").value(s.linear_frequency_std_hz);
-  j.key("linear_damping_ratio").value(s.linear_damping);
-  j.key("linear_damping_std").value(s.linear_damping_std);
-  j.key("linear_reference_amplitude").value(s.linear_fit_min);
-  j.key("linear_fit_amplitude_min").value(s.linear_fit_min);
-  j.key("linear_fit_amplitude_max").value(s.linear_fit_max);
+  j.numbers({{"linear_frequency_hz", s.linear_frequency_hz},
+             {"linear_frequency_std_hz", s.linear_frequency_std_hz},
+             {"linear_damping_ratio", s.linear_damping},
+             {"linear_damping_std", s.linear_damping_std},
+             {"linear_reference_amplitude", s.linear_fit_min},
+             {"linear_fit_amplitude_min", s.linear_fit_min},
+             {"linear_fit_amplitude_max", s.linear_fit_max}});
 }
 
-}  // namespace
-
-void write_summary(const std::filesystem::path& dir, const std::vector<RecordResult>& results,
-                   const ProcessOptions& options) {
-  data::JsonWriter j;
-  j.begin_object();
-  j.key("program").value("jointlab process");
-  j.key("method").value(options.ringdown.method == Method::kHilbert ? "hilbert" : "pff");
-  j.key("amplitude_quantity").value(quantity_name(options.ringdown.amplitude));
-  j.key("amplitude_unit").value(si_unit(options.ringdown.amplitude));
-  // The *_std columns and values are expanded uncertainties: coverage_factor times sigma.
-  j.key("coverage_factor").value(options.ringdown.coverage_factor);
-  j.key("files").begin_array();
-  for (const RecordResult& rec : results) {
+// One record's entry of "files": its bands (with linear values and operating shape) and outputs.
+void write_record(data::JsonWriter& j, const RecordResult& rec) {
+  j.key("file").value(rec.source);
+  j.key("bands").begin_array();
+  for (size_t b = 0; b < rec.bands.size(); ++b) {
     j.begin_object();
-    j.key("file").value(rec.source);
-    j.key("bands").begin_array();
-    for (size_t b = 0; b < rec.bands.size(); ++b) {
-      j.begin_object();
-      j.key("band").value(static_cast<int>(b) + 1);
-      j.key("low_hz").value(rec.bands[b].lo);
-      j.key("high_hz").value(rec.bands[b].hi);
-      j.key("reference_channel").value(rec.reference[b]);
-      // The reference channel's low-amplitude values are the band's linear modal data.
-      for (const ChannelBand& r : rec.results) {
-        if (r.band_index != static_cast<int>(b) + 1 || r.channel != rec.reference[b]) continue;
-        const RingdownSummary& s = r.ringdown.summary;
-        if (s.status == RingdownStatus::kOk) write_linear(j, s);
-      }
-      j.key("operating_shape").begin_array();
-      for (const ChannelBand& r : rec.results) {
-        if (r.band_index != static_cast<int>(b) + 1) continue;
-        j.begin_object();
-        j.key("channel").value(r.channel);
-        j.key("real_m").value(r.complex_amplitude.real());
-        j.key("imag_m").value(r.complex_amplitude.imag());
-        j.end_object();
-      }
-      j.end_array();
-      j.end_object();
-    }
-    j.end_array();
-    j.key("outputs").begin_array();
+    j.key("band").value(static_cast<int>(b) + 1);
+    j.key("low_hz").value(rec.bands[b].lo);
+    j.key("high_hz").value(rec.bands[b].hi);
+    j.key("reference_channel").value(rec.reference[b]);
+    // The reference channel's low-amplitude values are the band's linear modal data.
     for (const ChannelBand& r : rec.results) {
+      if (r.band_index != static_cast<int>(b) + 1 || r.channel != rec.reference[b]) continue;
       const RingdownSummary& s = r.ringdown.summary;
+      if (s.status == RingdownStatus::kOk) write_linear(j, s);
+    }
+    j.key("operating_shape").begin_array();
+    for (const ChannelBand& r : rec.results) {
+      if (r.band_index != static_cast<int>(b) + 1) continue;
       j.begin_object();
       j.key("channel").value(r.channel);
-      j.key("measured_quantity").value(quantity_name(r.measured));
-      j.key("band").value(r.band_index);
-      j.key("noise_floor_m").value(s.noise_floor_m);
-      if (s.status == RingdownStatus::kOk) {
-        j.key("file").value(backbone_file_name(rec.source, r.channel, r.band_index));
-        j.key("points").value(static_cast<long>(r.ringdown.backbone.size()));
-        j.key("span_start_s").value(s.span_start_s);
-        j.key("span_end_s").value(s.span_end_s);
-        j.key("amplitude_decades").value(s.amplitude_decades);
-        write_linear(j, s);
-        j.key("superharmonic_points").value(s.superharmonic_points);
-        if (!s.message.empty()) j.key("note").value(s.message);
-      } else {
-        j.key("file").null();
-        j.key("reason").value(s.message);
-      }
+      j.key("real_m").value(r.complex_amplitude.real());
+      j.key("imag_m").value(r.complex_amplitude.imag());
       j.end_object();
     }
     j.end_array();
     j.end_object();
   }
   j.end_array();
-  j.end_object();
-  data::write_file_atomically(dir / "summary.json", j.str());
+  j.key("outputs").begin_array();
+  for (const ChannelBand& r : rec.results) {
+    const RingdownSummary& s = r.ringdown.summary;
+    j.begin_object();
+    j.key("channel").value(r.channel);
+    j.key("measured_quantity").value(quantity_name(r.measured));
+    j.key("band").value(r.band_index);
+    j.key("noise_floor_m").value(s.noise_floor_m);
+    if (s.status == RingdownStatus::kOk) {
+      j.key("file").value(backbone_file_name(rec.source, r.channel, r.band_index));
+      j.key("points").value(static_cast<long>(r.ringdown.backbone.size()));
+      j.key("span_start_s").value(s.span_start_s);
+      j.key("span_end_s").value(s.span_end_s);
+      j.key("amplitude_decades").value(s.amplitude_decades);
+      write_linear(j, s);
+      j.key("superharmonic_points").value(s.superharmonic_points);
+      if (!s.message.empty()) j.key("note").value(s.message);
+    } else {
+      j.key("file").null();
+      j.key("reason").value(s.message);
+    }
+    j.end_object();
+  }
+  j.end_array();
+}
+
+}  // namespace
+
+void write_summary(const std::filesystem::path& dir, const std::vector<RecordResult>& results,
+                   const ProcessOptions& options) {
+  const RingdownOptions& o = options.ringdown;
+  write_summary_json(
+      dir,
+      [&](data::JsonWriter& j) {
+        j.key("program").value("jointlab process");
+        j.key("method").value(o.method == Method::kHilbert ? "hilbert" : "pff");
+        write_amplitude_keys(j, o.amplitude, o.coverage_factor);
+      },
+      results.size(), [&](data::JsonWriter& j, size_t i) { write_record(j, results[i]); });
 }
 
 }  // namespace jointlab::modal

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <numeric>
 
-#include "jointlab/data/atomic_file.h"
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
+#include "jointlab/modal/summary_json.h"
 
 namespace jointlab::modal {
 
@@ -72,21 +72,71 @@ void write_sine_backbone(const std::filesystem::path& dir, const SteppedSineFile
   data::write_table(dir / sine_backbone_file_name(r.source), t);
 }
 
+namespace {
+
+// One sweep level's entry of "levels": its data, backbone point and single-mode fit.
+void write_level(data::JsonWriter& j, const data::SteppedSineTable& t, const SineBackbonePoint& p) {
+  j.key("level").value(t.index);
+  j.key("label").value(t.label);
+  j.key("control").value(data::control_name(t.control));
+  j.key("response_quantity").value(quantity_name(t.response_quantity));
+  j.key("points").value(static_cast<long>(t.size()));
+  j.numbers({{"low_hz", t.frequency_hz(0)}, {"high_hz", t.frequency_hz(t.size() - 1)}});
+  if (p.status == SineStatus::kOk) {
+    j.numbers({{"amplitude", p.amplitude},
+               {"frequency_hz", p.frequency_hz},
+               {"damping_ratio", p.damping_ratio},
+               {"frequency_std_hz", p.frequency_std_hz},
+               {"damping_std", p.damping_std},
+               {"displacement_m", p.displacement_m},
+               {"force_n", p.force_n}});
+    j.key("frequency_method")
+        .value(t.control == data::SineControl::kResponse ? "single-mode fit" : "phase resonance");
+    j.key("damping_method")
+        .value(p.damping_direct       ? "single-mode fit"
+               : p.own_modal_constant ? "energy balance at phase resonance with this "
+                                        "sweep's own modal constant (less direct; biased "
+                                        "when the amplitude varies much)"
+                                      : "energy balance at phase resonance with the "
+                                        "response-controlled levels' modal constant "
+                                        "(less direct)");
+    if (!p.message.empty()) j.key("note").value(p.message);
+  } else {
+    j.key("reason").value(p.message);
+  }
+  if (p.fit.converged) {
+    const SineFit& f = p.fit;
+    j.key("fit").begin_object();
+    j.numbers({{"frequency_hz", f.frequency_hz},
+               {"damping_ratio", f.damping_ratio},
+               {"frequency_sigma_hz", f.frequency_sigma_hz},
+               {"damping_sigma", f.damping_sigma},
+               {"modal_constant_re", f.modal_constant.real()},
+               {"modal_constant_im", f.modal_constant.imag()},
+               {"residual0_re", f.residual0.real()},
+               {"residual0_im", f.residual0.imag()},
+               {"residual1_re", f.residual1.real()},
+               {"residual1_im", f.residual1.imag()},
+               {"rms", f.rms}});
+    j.key("iterations").value(f.iterations);
+    j.end_object();
+  }
+}
+
+}  // namespace
+
 void write_sine_summary(const std::filesystem::path& dir,
                         const std::vector<SteppedSineFileResult>& results,
                         const SteppedSineOptions& options) {
-  data::JsonWriter j;
-  j.begin_object();
-  j.key("program").value("jointlab stepped-sine");
-  j.key("amplitude_quantity").value(quantity_name(options.amplitude));
-  j.key("amplitude_unit").value(si_unit(options.amplitude));
-  j.key("coverage_factor").value(options.coverage_factor);
-  j.key("damping_model")
-      .value(options.damping == SineDamping::kHysteretic ? "hysteretic" : "viscous");
-  j.key("residual_terms").value(options.residual_terms);
-  j.key("files").begin_array();
-  for (const SteppedSineFileResult& r : results) {
-    j.begin_object();
+  auto header = [&](data::JsonWriter& j) {
+    j.key("program").value("jointlab stepped-sine");
+    write_amplitude_keys(j, options.amplitude, options.coverage_factor);
+    j.key("damping_model")
+        .value(options.damping == SineDamping::kHysteretic ? "hysteretic" : "viscous");
+    j.key("residual_terms").value(options.residual_terms);
+  };
+  auto file = [&](data::JsonWriter& j, size_t k) {
+    const SteppedSineFileResult& r = results[k];
     j.key("file").value(r.source);
     if (usable_points(r) > 0) {
       j.key("output").value(sine_backbone_file_name(r.source));
@@ -95,63 +145,13 @@ void write_sine_summary(const std::filesystem::path& dir,
     }
     j.key("levels").begin_array();
     for (size_t i = 0; i < r.tables.size(); ++i) {
-      const data::SteppedSineTable& t = r.tables[i];
-      const SineBackbonePoint& p = r.points[i];
       j.begin_object();
-      j.key("level").value(t.index);
-      j.key("label").value(t.label);
-      j.key("control").value(data::control_name(t.control));
-      j.key("response_quantity").value(quantity_name(t.response_quantity));
-      j.key("points").value(static_cast<long>(t.size()));
-      j.key("low_hz").value(t.frequency_hz(0));
-      j.key("high_hz").value(t.frequency_hz(t.size() - 1));
-      if (p.status == SineStatus::kOk) {
-        j.key("amplitude").value(p.amplitude);
-        j.key("frequency_hz").value(p.frequency_hz);
-        j.key("damping_ratio").value(p.damping_ratio);
-        j.key("frequency_std_hz").value(p.frequency_std_hz);
-        j.key("damping_std").value(p.damping_std);
-        j.key("displacement_m").value(p.displacement_m);
-        j.key("force_n").value(p.force_n);
-        j.key("frequency_method")
-            .value(t.control == data::SineControl::kResponse ? "single-mode fit"
-                                                             : "phase resonance");
-        j.key("damping_method")
-            .value(p.damping_direct       ? "single-mode fit"
-                   : p.own_modal_constant ? "energy balance at phase resonance with this "
-                                            "sweep's own modal constant (less direct; biased "
-                                            "when the amplitude varies much)"
-                                          : "energy balance at phase resonance with the "
-                                            "response-controlled levels' modal constant "
-                                            "(less direct)");
-        if (!p.message.empty()) j.key("note").value(p.message);
-      } else {
-        j.key("reason").value(p.message);
-      }
-      if (p.fit.converged) {
-        j.key("fit").begin_object();
-        j.key("frequency_hz").value(p.fit.frequency_hz);
-        j.key("damping_ratio").value(p.fit.damping_ratio);
-        j.key("frequency_sigma_hz").value(p.fit.frequency_sigma_hz);
-        j.key("damping_sigma").value(p.fit.damping_sigma);
-        j.key("modal_constant_re").value(p.fit.modal_constant.real());
-        j.key("modal_constant_im").value(p.fit.modal_constant.imag());
-        j.key("residual0_re").value(p.fit.residual0.real());
-        j.key("residual0_im").value(p.fit.residual0.imag());
-        j.key("residual1_re").value(p.fit.residual1.real());
-        j.key("residual1_im").value(p.fit.residual1.imag());
-        j.key("rms").value(p.fit.rms);
-        j.key("iterations").value(p.fit.iterations);
-        j.end_object();
-      }
+      write_level(j, r.tables[i], r.points[i]);
       j.end_object();
     }
     j.end_array();
-    j.end_object();
-  }
-  j.end_array();
-  j.end_object();
-  data::write_file_atomically(dir / "summary.json", j.str());
+  };
+  write_summary_json(dir, header, results.size(), file);
 }
 
 }  // namespace jointlab::modal

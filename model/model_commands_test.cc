@@ -39,13 +39,6 @@ void write(const std::string& name, const std::string& text) {
   std::ofstream(dir() / name) << text;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 struct Outcome {
   int status = -1;
   std::string err;
@@ -60,7 +53,7 @@ Outcome run(const std::string& args) {
   const std::string command = "cd '" + dir().string() + "' && '" + program.string() + "' " + args +
                               " 2> '" + err.string() + "' > /dev/null";
   const int raw = std::system(command.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err)};
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, testing::read_file(err)};
 }
 
 std::vector<std::vector<double>> read_csv(const fs::path& p, std::string* header) {
@@ -156,7 +149,7 @@ TEST(ModelCommands, QsmaOfTwoFreeMassesUsesTheReducedMass) {
   // 10 significant digits in the file.
   EXPECT_TRUE(
       Close(rows[1][1], std::sqrt((k0 + kRivet.Kt) / (m1 * m2 / (m1 + m2))) / kTwoPi, 1e-9));
-  const std::string text = slurp(dir() / "pair_modes.csv");
+  const std::string text = testing::read_file(dir() / "pair_modes.csv");
   EXPECT_NE(text.find(",rigid\n"), std::string::npos);
   EXPECT_NE(text.find(",elastic\n"), std::string::npos);
 }

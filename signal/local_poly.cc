@@ -139,26 +139,16 @@ template <int K>
 std::array<LocalFit, K> dispatch(const std::array<const Eigen::VectorXd*, K>& ys, double t_first,
                                  double dt, double centre, double half_width, int degree,
                                  double correlation, Eigen::Index stride, double offset) {
-  switch (degree) {
-    case 1:
-      return fit_local_series<K, 2>(ys, t_first, dt, centre, half_width, correlation, stride,
-                                    offset);
-    case 2:
-      return fit_local_series<K, 3>(ys, t_first, dt, centre, half_width, correlation, stride,
-                                    offset);
-    case 3:
-      return fit_local_series<K, 4>(ys, t_first, dt, centre, half_width, correlation, stride,
-                                    offset);
-    case 4:
-      return fit_local_series<K, 5>(ys, t_first, dt, centre, half_width, correlation, stride,
-                                    offset);
-    case 5:
-      return fit_local_series<K, 6>(ys, t_first, dt, centre, half_width, correlation, stride,
-                                    offset);
-    default:
-      assert(false && "degree must be 1 to 5");
-      return {};
+  // fit_local_series for Q = degree + 1 columns, degree 1 to 5.
+  constexpr std::array fits{&fit_local_series<K, 2>, &fit_local_series<K, 3>,
+                            &fit_local_series<K, 4>, &fit_local_series<K, 5>,
+                            &fit_local_series<K, 6>};
+  if (degree < 1 || degree > static_cast<int>(fits.size())) {
+    assert(false && "degree must be 1 to 5");
+    return {};
   }
+  return fits[static_cast<size_t>(degree - 1)](ys, t_first, dt, centre, half_width, correlation,
+                                               stride, offset);
 }
 
 }  // namespace

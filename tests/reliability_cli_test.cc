@@ -25,18 +25,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Every entry of `dir` (hidden ones too) with its contents; folders as "<dir>".
 std::map<std::string, std::string> snapshot(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::directory_iterator(dir))
-    files[e.path().filename().string()] = e.is_directory() ? "<dir>" : slurp(e.path());
+    files[e.path().filename().string()] = e.is_directory() ? "<dir>" : testing::read_file(e.path());
   return files;
 }
 
@@ -141,7 +134,7 @@ TEST_F(ProcessOutputs, AFullDiskLeavesThePreviousOutputs) {
   ASSERT_TRUE(WIFEXITED(raw));
   CommandResult r;
   r.status = WEXITSTATUS(raw);
-  r.err = slurp(dir_ + "/err.txt");
+  r.err = testing::read_file(dir_ + "/err.txt");
   expect_error(r, "out/summary.json: write failed (disk full?)");
   EXPECT_EQ(snapshot(out_), before_);
 }
@@ -184,7 +177,7 @@ TEST(ProcessOutputsInAForeignFolder, FilesOfOthersAreKept) {
   write_text(dir + "/survey.band1.csv", "someone else's");
   const CommandResult r = run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir);
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_EQ(slurp(dir + "/survey.band1.csv"), "someone else's");
+  EXPECT_EQ(testing::read_file(dir + "/survey.band1.csv"), "someone else's");
   EXPECT_TRUE(fs::exists(dir + "/hit.acc1.band1.csv"));
 }
 
@@ -217,7 +210,7 @@ TEST(HugeSamples, AreProcessedLikeTheSameRecordAtUnitScale) {
     write_text(dir + "/hit.csv", noisy_ringdown_csv(scale));
     const CommandResult r = run_jointlab("process " + dir + "/hit.csv" + bands + out);
     ASSERT_EQ(r.status, 0) << r.err;
-    const std::string json = slurp(out + "/summary.json");
+    const std::string json = testing::read_file(out + "/summary.json");
     EXPECT_NO_THROW(data::parse_json(json, "summary.json"));
     EXPECT_EQ(json.find("nan"), std::string::npos);
     EXPECT_EQ(json.find("inf"), std::string::npos);
@@ -261,7 +254,7 @@ TEST(Readers, NonUtf8HeaderGivesValidJson) {
   const CommandResult r =
       run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir + "/o");
   ASSERT_EQ(r.status, 0) << r.err;
-  const std::string json = slurp(dir + "/o/summary.json");
+  const std::string json = testing::read_file(dir + "/o/summary.json");
   EXPECT_NE(json.find("acc\\ufffd\\ufffd"), std::string::npos);
   EXPECT_NE(json.find("caf\xc3\xa9"), std::string::npos);  // valid UTF-8 stays as it is
   EXPECT_NO_THROW(data::parse_json(json, "summary.json"));

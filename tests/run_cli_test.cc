@@ -32,13 +32,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // The first data row's value in column `name` of a numeric CSV.
 double first_value(const fs::path& p, const std::string& name) {
   std::ifstream in(p);
@@ -51,6 +44,18 @@ double first_value(const fs::path& p, const std::string& name) {
     if (h == name) return std::stod(cell);
   ADD_FAILURE() << p << ": no column " << name;
   return 0;
+}
+
+// `process` on the small campaign's hits, in its band, as velocity (what `run` does), into `out`.
+testing::CommandResult process_hits(const testing::SmallCampaign& s, const fs::path& out) {
+  std::string files;
+  for (const fs::path& h : s.hits) {
+    files += ' ';
+    files += h.string();
+  }
+  return testing::run_jointlab(
+      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
+                  s.band[1], out.string()));
 }
 
 // 600 evaluations: in the default search box (gamma 0.05-2, F_S within a factor 30) 150 left
@@ -75,7 +80,7 @@ TEST(RunCli, SmallCampaignEndToEnd) {
     EXPECT_TRUE(fs::exists(out / f)) << f;
   for (int h = 1; h <= 3; ++h)
     EXPECT_TRUE(fs::exists(out / "hits/all" / fmt::format("hit{}.linear.csv", h))) << h;
-  const std::string report = read_text(out / "report.md");
+  const std::string report = testing::read_file(out / "report.md");
   EXPECT_NE(report.find("Scatter summary: mode A1"), std::string::npos);
   EXPECT_NE(report.find("Iwan identification"), std::string::npos);
   // The lowest-amplitude QSMA point is the model's linear frequency. The start model's K_T is
@@ -114,7 +119,7 @@ TEST(RunCli, RunIntoAnotherCampaignsFolderEqualsAFreshRun) {
   };
   run(dir / "shared");
   // The other campaign: the band narrowed to +-8 % (the file keeps its name and folder).
-  std::string text = read_text(s.campaign);
+  std::string text = testing::read_file(s.campaign);
   const std::string band = fmt::format("band = [{:.3f}, {:.3f}]", s.band[0], s.band[1]);
   ASSERT_NE(text.find(band), std::string::npos);
   text.replace(
@@ -126,14 +131,15 @@ TEST(RunCli, RunIntoAnotherCampaignsFolderEqualsAFreshRun) {
   run(dir / "fresh");
   for (const char* f : {"scatter/mode1.bins.csv", "scatter/mode1.hits.csv", "scatter/mode1.json",
                         "qsma/mode1.start.csv", "hits/all/hit2.acc_5.band1.csv"})
-    EXPECT_EQ(read_text(dir / "shared" / f), read_text(dir / "fresh" / f)) << f;
+    EXPECT_EQ(testing::read_file(dir / "shared" / f), testing::read_file(dir / "fresh" / f)) << f;
 }
 
 // Every file under `dir` (hidden ones too) with its contents, by path relative to `dir`.
 std::map<std::string, std::string> tree(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir))
-    files[fs::relative(e.path(), dir).string()] = e.is_directory() ? "<dir>" : read_text(e.path());
+    files[fs::relative(e.path(), dir).string()] =
+        e.is_directory() ? "<dir>" : testing::read_file(e.path());
   return files;
 }
 
@@ -151,7 +157,7 @@ TEST(RunCli, AFailedRunLeavesThePreviousResults) {
   ASSERT_TRUE(before.count("report.md"));
   ASSERT_TRUE(before.count(".run.outputs"));
   // The band moved (every hit is processed again, its outputs rewritten) and hit 2 broken.
-  const std::string good = read_text(s.hits[1]), campaign = read_text(s.campaign);
+  const std::string good = testing::read_file(s.hits[1]), campaign = testing::read_file(s.campaign);
   const std::string band = fmt::format("band = [{:.3f}, {:.3f}]", s.band[0], s.band[1]);
   ASSERT_NE(campaign.find(band), std::string::npos);
   std::string moved = campaign;
@@ -201,7 +207,7 @@ TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   // model_mode beyond the model's size.
   const fs::path dir = testing::scratch_dir("run_cli_bad_mode");
   const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10});
-  std::string text = read_text(s.campaign);
+  std::string text = testing::read_file(s.campaign);
   const std::string mm = fmt::format("model_mode = {}", s.model_mode);
   text.replace(text.find(mm), mm.size(), "model_mode = 9999");
   testing::write_text(s.campaign.string(), text);
@@ -219,7 +225,7 @@ TEST(RunCli, AModeWithoutABackboneIsReportedAndFails) {
   const fs::path dir = testing::scratch_dir("run_cli_nothing");
   const testing::SmallCampaign s = testing::make_small_campaign(
       dir, "[[mode]]\nname = \"nothing\"\nband = [20.0, 30.0]\nreference = \"acc_5\"\n");
-  std::string text = read_text(s.campaign);
+  std::string text = testing::read_file(s.campaign);
   const std::string model = "[model]\nfile = \"model.toml\"\n";
   ASSERT_NE(text.find(model), std::string::npos);
   text.erase(text.find(model), model.size());
@@ -232,7 +238,7 @@ TEST(RunCli, AModeWithoutABackboneIsReportedAndFails) {
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_NE(r.err.find("nothing"), std::string::npos) << r.err;
-  const std::string report = read_text(out / "report.md");
+  const std::string report = testing::read_file(out / "report.md");
   const size_t top = report.find("## ");
   ASSERT_NE(top, std::string::npos);
   EXPECT_EQ(report.compare(top, 28, "## Modes without a backbone\n"), 0) << report.substr(0, 300);
@@ -257,13 +263,13 @@ TEST(RunCli, UnitlessChannelsNeedTheCampaignsQuantity) {
   const fs::path dir = testing::scratch_dir("run_cli_unitless");
   const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10});
   for (const fs::path& hit : s.hits) {
-    std::string text = read_text(hit);
+    std::string text = testing::read_file(hit);
     const std::string unit = " [m/s^2]";
     ASSERT_NE(text.find(unit), std::string::npos) << hit;
     for (size_t at; (at = text.find(unit)) != std::string::npos;) text.erase(at, unit.size());
     testing::write_text(hit.string(), text);
   }
-  std::string text = read_text(s.campaign);
+  std::string text = testing::read_file(s.campaign);
   const std::string model = "[model]\nfile = \"model.toml\"\n";
   text.erase(text.find(model), model.size());
   const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
@@ -298,14 +304,7 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   const testing::CommandResult r = testing::run_jointlab(
       fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "run").string()));
   ASSERT_EQ(r.status, 0) << r.err;
-  std::string files;
-  for (const fs::path& h : s.hits) {
-    files += ' ';
-    files += h.string();
-  }
-  const testing::CommandResult p = testing::run_jointlab(
-      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
-                  s.band[1], (dir / "process").string()));
+  const testing::CommandResult p = process_hits(s, dir / "process");
   ASSERT_EQ(p.status, 0) << p.err;
 
   // The campaign's side, from run's cache.
@@ -378,14 +377,7 @@ TEST(RunCli, RunAndUpdateIwanGiveTheSameParameters) {
   const fs::path dir = testing::scratch_dir("run_cli_same_parameters");
   const testing::SmallCampaign s =
       testing::make_small_campaign(dir, "[update.iwan]\nenabled = true\nmax_evaluations = 150\n");
-  std::string files;
-  for (const fs::path& h : s.hits) {
-    files += ' ';
-    files += h.string();
-  }
-  const testing::CommandResult p = testing::run_jointlab(
-      fmt::format("process{} --band {:.3f}:{:.3f} --amplitude velocity --out {}", files, s.band[0],
-                  s.band[1], (dir / "process").string()));
+  const testing::CommandResult p = process_hits(s, dir / "process");
   ASSERT_EQ(p.status, 0) << p.err;
   const testing::CommandResult u = testing::run_jointlab(fmt::format(
       "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "

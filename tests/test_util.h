@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <sstream>
 #include <string>
 
 #include <unistd.h>
@@ -51,6 +52,14 @@ inline std::string input_error_of(const std::function<void()>& f) {
   }
   ADD_FAILURE() << "no InputError";
   return "";
+}
+
+/// The whole content of the file at `path` ("" when it cannot be read).
+inline std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
 }
 
 /// A temporary folder named after `folder`, made per process (ctest runs the cases

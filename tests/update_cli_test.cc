@@ -330,6 +330,28 @@ TEST(UpdateCli, SmallestRuleWritesThePapersTablesAndAModesTableGivesTheSameUpdat
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// A mode-1 velocity backbone of `m` at sensor a5: `points` points up to `top` times the
+// full-macroslip amplitude, relative frequency and damping noise, random seed.
+correlate::MeasuredBackbone a5_backbone(const model::Model& m, int points, double top,
+                                        double frequency_noise, double damping_noise,
+                                        unsigned seed) {
+  return correlate::synthetic_backbone(m, 1, kSensors, correlate::find_sensor(kSensors, "a5"),
+                                       AmplitudeQuantity::kVelocity, points, top, frequency_noise,
+                                       damping_noise, seed);
+}
+
+// The process folder `dir` of two hits of `m` (hit1.csv, hit2.csv; reference channels a5 and
+// b5), each with one backbone.
+void write_two_hits(const fs::path& dir, const model::Model& m, correlate::MeasuredBackbone b1,
+                    correlate::MeasuredBackbone b2) {
+  Hit h1 = linear_hit(m, 2), h2 = h1;
+  h2.source = "hit2.csv";
+  h1.reference = h2.reference = {"a5", "b5"};
+  h1.backbones.push_back(std::move(b1));
+  h2.backbones.push_back(std::move(b2));
+  write_process_output(dir, {h1, h2});
+}
+
 // Backbone top: the measured curves run up to twice the end of the automatic QSMA range
 // (full macroslip of the element), well into macroslip, where F_S shows.
 constexpr double kTop = 2.0;
@@ -339,15 +361,8 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   correlate::TwoChainParameters truth;
   truth.iwan = true;
   const model::Model m = correlate::two_chain_structure(truth);
-  Hit h1 = linear_hit(m, 2), h2 = h1;
-  h2.source = "hit2.csv";
-  const int a5 = correlate::find_sensor(kSensors, "a5");
-  h1.reference = h2.reference = {"a5", "b5"};
-  h1.backbones.push_back(correlate::synthetic_backbone(
-      m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 30, kTop, 5e-4, 0.03, 7));
-  h2.backbones.push_back(correlate::synthetic_backbone(
-      m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 25, kTop, 5e-4, 0.03, 11));
-  write_process_output(dir / "measured", {h1, h2});
+  write_two_hits(dir / "measured", m, a5_backbone(m, 30, kTop, 5e-4, 0.03, 7),
+                 a5_backbone(m, 25, kTop, 5e-4, 0.03, 11));
   testing::write_text((dir / "sensors.csv").string(), sensors_text());
   correlate::TwoChainParameters start = truth;
   start.Fs *= 3;
@@ -454,15 +469,9 @@ TEST(UpdateCli, IwanFitsHammerAndSteppedSineTogether) {
   correlate::TwoChainParameters truth;
   truth.iwan = true;
   const model::Model m = correlate::two_chain_structure(truth);
-  Hit h1 = linear_hit(m, 2), h2 = h1;
-  h2.source = "hit2.csv";
+  write_two_hits(dir / "measured", m, a5_backbone(m, 20, 0.3, 2e-4, 0.02, 21),
+                 a5_backbone(m, 20, 0.4, 2e-4, 0.02, 22));
   const int a5 = correlate::find_sensor(kSensors, "a5");
-  h1.reference = h2.reference = {"a5", "b5"};
-  h1.backbones.push_back(correlate::synthetic_backbone(
-      m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 20, 0.3, 2e-4, 0.02, 21));
-  h2.backbones.push_back(correlate::synthetic_backbone(
-      m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 20, 0.4, 2e-4, 0.02, 22));
-  write_process_output(dir / "measured", {h1, h2});
   write_stepped_sine_output(
       dir / "sine",
       correlate::synthetic_backbone(m, 1, kSensors, a5, AmplitudeQuantity::kVelocity, 10, 2.0, 1e-4,

@@ -71,16 +71,16 @@ void process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
       reasons += fmt::format("{} {} {}\n", cb.band_index, static_cast<int>(chan(i)), why);
     }
   }
-  t.add("band", band);
-  t.add("channel", chan);
-  t.add("ok", ok);
-  t.add("linear_frequency_hz", f);
-  t.add("linear_damping", z);
-  t.add("amplitude_re_m", re);
-  t.add("amplitude_im_m", im);
-  t.add("span_start_s", t0);
-  t.add("span_end_s", t1);
-  t.add("decades", dec);
+  t.add({{"band", band},
+         {"channel", chan},
+         {"ok", ok},
+         {"linear_frequency_hz", f},
+         {"linear_damping", z},
+         {"amplitude_re_m", re},
+         {"amplitude_im_m", im},
+         {"span_start_s", t0},
+         {"span_end_s", t1},
+         {"decades", dec}});
   data::write_file_atomically(dir / (file.stem().string() + ".reasons.txt"), reasons);
   // Written last: its presence marks the hit as complete.
   data::write_table(dir / (file.stem().string() + ".linear.csv"), t);
