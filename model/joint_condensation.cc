@@ -214,6 +214,14 @@ Eigen::VectorXd JointCondensation::softening_tangent(
   return dh;
 }
 
+void JointCondensation::softening(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
+                                  Eigen::VectorXd& dh) const {
+  h.resize(size());
+  dh.resize(size());
+  double energy;
+  evaluate(r, h, dh, energy);
+}
+
 Eigen::VectorXd JointCondensation::first_harmonic_stiffness(
     const Eigen::Ref<const Eigen::VectorXd>& r) const {
   Eigen::VectorXd k(size());
@@ -236,6 +244,13 @@ Eigen::VectorXd JointCondensation::tangent(const Eigen::Ref<const Eigen::VectorX
                                            const Eigen::Ref<const Eigen::VectorXd>& r) const {
   Eigen::MatrixXd hessian = stiffness_;
   hessian.diagonal() -= softening_tangent(r);
+  // Cholesky where the Hessian is positive definite (everywhere but at a limit point), a few
+  // times faster than LDLT; LDLT where it is only semidefinite.
+  const Eigen::LLT<Eigen::MatrixXd> llt(hessian);
+  if (llt.info() == Eigen::Success) {
+    Eigen::VectorXd t = llt.solve(g);
+    if (t.allFinite()) return t;
+  }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(hessian);
   if (ldlt.info() != Eigen::Success) return {};
   Eigen::VectorXd t = ldlt.solve(g);
