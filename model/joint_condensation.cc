@@ -342,8 +342,7 @@ StaticSolve JointCondensation::solve(const Eigen::Ref<const Eigen::VectorXd>& g,
   if (tangent && out.iterations > 0 && llt.info() == Eigen::Success) *tangent = llt.solve(g);
   if (tangent && out.iterations == 0) {
     hessian = stiffness_;
-    evaluate(r, h, dh, energy);
-    hessian.diagonal() -= dh;
+    hessian.diagonal() -= dh;  // dh is h'(r): the potential was last evaluated at r
     llt.compute(hessian);
     *tangent = llt.info() == Eigen::Success ? Eigen::VectorXd(llt.solve(g)) : Eigen::VectorXd();
   }
