@@ -23,17 +23,17 @@ struct State {
   Eigen::VectorXd tangent;  // dr/dalpha at the solution (continuation predictor)
   double q = 0;             // modal amplitude
   double ln_s = 0;          // ln (q omega^power)
+  Eigen::VectorXd k1;       // first-harmonic stiffness at r (first-harmonic frequency only)
 };
 
 class Curve {
  public:
   Curve(const model::JointCondensation& m, int mode, int power, AmplitudeFrequency frequency)
-      : m_(m), mode_(mode), power_(power), frequency_(frequency) {
-    const int column = m.modes().rigid_count + mode - 1;
-    omega2_ = m.modes().omega2(column);
-    p_ = m.joint_shapes().col(column);
+      : m_(m), mode_(m, mode), power_(power), frequency_(frequency) {
+    omega2_ = mode_.omega2;
+    p_ = mode_.p;
     c_ = p_ / omega2_;
-    g_ = m.condensed_stiffness() * c_;
+    g_ = mode_.g;
   }
 
   double omega2() const { return omega2_; }
@@ -59,10 +59,10 @@ class Curve {
       double omega2 = alpha / out.q;  // secant
       if (frequency_ == AmplitudeFrequency::kFirstHarmonic && power_ > 0) {
         // omega_1^2 = omega_r^2 - p^T diag(K_T - k_1) r / q (model/qsma.h)
-        const Eigen::VectorXd k1 = m_.first_harmonic_stiffness(out.r);
+        out.k1 = m_.first_harmonic_stiffness(out.r);
         omega2 = omega2_;
         for (int j = 0; j < m_.size(); ++j)
-          omega2 -= p_(j) * (m_.linear_stiffness(j) - k1(j)) * out.r(j) / out.q;
+          omega2 -= p_(j) * (m_.linear_stiffness(j) - out.k1(j)) * out.r(j) / out.q;
         if (!(omega2 > 0)) return false;
       }
       out.ln_s = std::log(out.q) + 0.5 * power_ * std::log(omega2);
@@ -72,12 +72,13 @@ class Curve {
   }
 
   model::QsmaPoint point(const State& s) const {
-    return model::qsma_point(m_, mode_, s.alpha, s.r, s.tangent);
+    return model::qsma_point(m_, mode_, s.alpha, s.r, s.tangent,
+                             s.k1.size() == m_.size() ? &s.k1 : nullptr);
   }
 
  private:
   const model::JointCondensation& m_;
-  int mode_;
+  model::QsmaMode mode_;
   int power_;
   AmplitudeFrequency frequency_;
   double omega2_;

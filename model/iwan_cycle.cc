@@ -56,14 +56,18 @@ double slip_integral(double chi, double b) {
 
 }  // namespace
 
-IwanCycle::IwanCycle(const Iwan& iwan) : iwan_(iwan), j1_(slip_integral(iwan.chi(), 1.0)) {}
+IwanCycle::IwanCycle(const Iwan& iwan)
+    : iwan_(iwan),
+      j1_(slip_integral(iwan.chi(), 1.0)),
+      pm_chi1_(std::pow(iwan.phi_max(), iwan.chi() + 1)) {}
 
 double IwanCycle::first_harmonic_stiffness(double amplitude) const {
   const double a = std::abs(amplitude);
   const double chi1 = iwan_.chi() + 1, pm = iwan_.phi_max(), R = iwan_.R(), S = iwan_.S();
   if (a == 0) return iwan_.stiffness();
   if (a < pm) {
-    return R * std::pow(a, chi1) * j1_ + R * (std::pow(pm, chi1) - std::pow(a, chi1)) / chi1 + S;
+    const double a_chi1 = std::pow(a, chi1);
+    return R * a_chi1 * j1_ + R * (pm_chi1_ - a_chi1) / chi1 + S;
   }
   const double b = pm / a;
   return R * std::pow(a, chi1) * slip_integral(iwan_.chi(), b) + S * g_of_ratio(b);

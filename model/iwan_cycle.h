@@ -38,7 +38,8 @@ class IwanCycle {
 
  private:
   Iwan iwan_;
-  double j1_ = 0;  // J(1)
+  double j1_ = 0;       // J(1)
+  double pm_chi1_ = 0;  // phi_max^(chi+1)
 };
 
 }  // namespace jointlab::model

@@ -214,6 +214,14 @@ Eigen::VectorXd JointCondensation::softening_tangent(
   return dh;
 }
 
+void JointCondensation::softening(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
+                                  Eigen::VectorXd& dh) const {
+  h.resize(size());
+  dh.resize(size());
+  double energy;
+  evaluate(r, h, dh, energy);
+}
+
 Eigen::VectorXd JointCondensation::first_harmonic_stiffness(
     const Eigen::Ref<const Eigen::VectorXd>& r) const {
   Eigen::VectorXd k(size());
@@ -236,6 +244,13 @@ Eigen::VectorXd JointCondensation::tangent(const Eigen::Ref<const Eigen::VectorX
                                            const Eigen::Ref<const Eigen::VectorXd>& r) const {
   Eigen::MatrixXd hessian = stiffness_;
   hessian.diagonal() -= softening_tangent(r);
+  // Cholesky where the Hessian is positive definite (everywhere but at a limit point), a few
+  // times faster than LDLT; LDLT where it is only semidefinite.
+  const Eigen::LLT<Eigen::MatrixXd> llt(hessian);
+  if (llt.info() == Eigen::Success) {
+    Eigen::VectorXd t = llt.solve(g);
+    if (t.allFinite()) return t;
+  }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(hessian);
   if (ldlt.info() != Eigen::Success) return {};
   Eigen::VectorXd t = ldlt.solve(g);
@@ -327,8 +342,7 @@ StaticSolve JointCondensation::solve(const Eigen::Ref<const Eigen::VectorXd>& g,
   if (tangent && out.iterations > 0 && llt.info() == Eigen::Success) *tangent = llt.solve(g);
   if (tangent && out.iterations == 0) {
     hessian = stiffness_;
-    evaluate(r, h, dh, energy);
-    hessian.diagonal() -= dh;
+    hessian.diagonal() -= dh;  // dh is h'(r): the potential was last evaluated at r
     llt.compute(hessian);
     *tangent = llt.info() == Eigen::Success ? Eigen::VectorXd(llt.solve(g)) : Eigen::VectorXd();
   }

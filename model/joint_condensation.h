@@ -88,13 +88,16 @@ class JointCondensation {
   Eigen::VectorXd softening(const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// Its derivative h'_j(r_j) in [0, K_T] [N/m].
   Eigen::VectorXd softening_tangent(const Eigen::Ref<const Eigen::VectorXd>& r) const;
+  /// The softening h and its derivative h' together (one evaluation of the laws).
+  void softening(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
+                 Eigen::VectorXd& dh) const;
   /// In-phase first-harmonic stiffness of each coordinate in a steady cycle of amplitude
   /// |r_j| (iwan_cycle.h), summed over its elements [N/m].
   Eigen::VectorXd first_harmonic_stiffness(const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// Energy the Iwan elements store at the turning point of cycles of amplitudes |r| [J].
   double turning_point_energy(const Eigen::Ref<const Eigen::VectorXd>& r) const;
-  /// dr/dalpha = (K_c - diag h'(r))^{-1} g at r (LDLT: finite also at a limit point where
-  /// the Hessian is only semidefinite); empty when it is singular.
+  /// dr/dalpha = (K_c - diag h'(r))^{-1} g at r (Cholesky, or LDLT: finite also at a limit
+  /// point where the Hessian is only semidefinite); empty when it is singular.
   Eigen::VectorXd tangent(const Eigen::Ref<const Eigen::VectorXd>& g,
                           const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// Energy dissipated in one Masing cycle with joint amplitudes |r| [J].

@@ -516,13 +516,25 @@ std::string QsmaSummary::report() const {
       why, end_force, end_modal_amplitude, solves, newton_iterations, message);
 }
 
+QsmaMode::QsmaMode(const JointCondensation& model, int mode) {
+  const int column = model.modes().rigid_count + mode - 1;
+  omega2 = model.modes().omega2(column);
+  p = model.joint_shapes().col(column);
+  g = model.condensed_stiffness() * (p / omega2);
+}
+
 QsmaPoint qsma_point(const JointCondensation& m, int mode, double alpha, const Eigen::VectorXd& r,
                      const Eigen::VectorXd& solver_tangent) {
-  const int column = m.modes().rigid_count + mode - 1;
-  const double omega2 = m.modes().omega2(column);
-  const Eigen::VectorXd p = m.joint_shapes().col(column);
-  const Eigen::VectorXd g = m.condensed_stiffness() * (p / omega2);
-  const Eigen::VectorXd h = m.softening(r);
+  return qsma_point(m, QsmaMode(m, mode), alpha, r, solver_tangent);
+}
+
+QsmaPoint qsma_point(const JointCondensation& m, const QsmaMode& mode, double alpha,
+                     const Eigen::VectorXd& r, const Eigen::VectorXd& solver_tangent,
+                     const Eigen::VectorXd* first_harmonic) {
+  const double omega2 = mode.omega2;
+  const Eigen::VectorXd& p = mode.p;
+  Eigen::VectorXd h, dh;
+  m.softening(r, h, dh);
   const double q = (alpha + p.dot(h)) / omega2;
   QsmaPoint pt;
   pt.force_amplitude = alpha;
@@ -532,7 +544,7 @@ QsmaPoint qsma_point(const JointCondensation& m, int mode, double alpha, const E
   pt.damping_ratio = d / (kTwoPi * alpha * q);
   pt.max_slip = r.cwiseAbs().maxCoeff();
   // First-harmonic modal stiffness (qsma.h): omega_1^2 = omega_r^2 - p^T diag(K_T - k_1) r / q.
-  const Eigen::VectorXd k1 = m.first_harmonic_stiffness(r);
+  const Eigen::VectorXd k1 = first_harmonic ? *first_harmonic : m.first_harmonic_stiffness(r);
   double w1 = omega2;
   for (int j = 0; j < m.size(); ++j) w1 -= p(j) * (m.linear_stiffness(j) - k1(j)) * r(j) / q;
   w1 = std::max(w1, 0.0);
@@ -540,10 +552,9 @@ QsmaPoint qsma_point(const JointCondensation& m, int mode, double alpha, const E
   pt.harmonic_damping_ratio = d / (kTwoPi * w1 * q * q);
   // dE/dq along the curve (qsma.h): alpha + sum_j (dr_j/dq) (h_j - r_j h'_j), with
   // dr/dalpha = (K_c - diag h')^{-1} g and dq/dalpha = (1 + p^T diag(h') dr/dalpha) / omega_r^2.
-  Eigen::VectorXd t = m.tangent(g, r);
+  Eigen::VectorXd t = m.tangent(mode.g, r);
   if (t.size() == 0) t = solver_tangent;  // singular exactly at a limit point: the solver's own
   if (t.size() == 0) t = r / alpha;
-  const Eigen::VectorXd dh = m.softening_tangent(r);
   const double dq = (1 + p.dot(dh.cwiseProduct(t))) / omega2;
   const double dE = alpha + t.dot(h - r.cwiseProduct(dh)) / dq;
   pt.ringdown_damping_ratio = d / (kTwoPi * q * dE);

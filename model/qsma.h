@@ -107,11 +107,26 @@ struct QsmaSummary {
   std::string report() const;
 };
 
+/// What qsma_point() needs of one mode, computed once per curve rather than once per point.
+struct QsmaMode {
+  /// The constants of elastic mode `mode` (1-based) of `model`.
+  QsmaMode(const JointCondensation& model, int mode);
+  double omega2 = 0;  ///< omega_r^2 of the linear structure
+  Eigen::VectorXd p;  ///< the mode's joint coordinates B phi_r
+  Eigen::VectorXd g;  ///< K_c p / omega_r^2: the joint load of unit alpha
+};
+
 /// The point of elastic mode `mode` (1-based) at a converged static solution r of load level
 /// alpha, with every column; solver_tangent (dr/dalpha from the solve, may be empty) stands in
 /// where the tangent matrix is singular.
 QsmaPoint qsma_point(const JointCondensation& model, int mode, double alpha,
                      const Eigen::VectorXd& r, const Eigen::VectorXd& solver_tangent);
+
+/// qsma_point() with the mode's constants given; first_harmonic, when not null, is
+/// model.first_harmonic_stiffness(r) computed already.
+QsmaPoint qsma_point(const JointCondensation& model, const QsmaMode& mode, double alpha,
+                     const Eigen::VectorXd& r, const Eigen::VectorXd& solver_tangent,
+                     const Eigen::VectorXd* first_harmonic = nullptr);
 
 /// QSMA curve of elastic mode `mode` (1-based, as numbered by `jointlab modes`); InputError if no
 /// such mode or the options are invalid (checked always), std::invalid_argument without a
