@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/tests/process_memory.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::data {
@@ -146,17 +147,7 @@ TEST(CsvReader, ReadsFromAFileAsFromText) {
   std::remove(path.c_str());
 }
 
-// Peak and current resident memory of this process [bytes] (/proc/self/status).
-std::pair<double, double> memory_now() {
-  std::ifstream in("/proc/self/status");
-  double hwm = 0, rss = 0;
-  for (std::string line; std::getline(in, line);) {
-    std::istringstream ss(line.substr(line.find(':') + 1));
-    if (line.rfind("VmHWM:", 0) == 0) ss >> hwm;
-    if (line.rfind("VmRSS:", 0) == 0) ss >> rss;
-  }
-  return {hwm * 1024, rss * 1024};
-}
+using jointlab::testing::memory_now;
 
 TEST(CsvReader, ReadingCostsAboutTheSamplesBinarySize) {
 #if defined(__SANITIZE_ADDRESS__)

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/data/read_record.h"
+#include "jointlab/tests/process_memory.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::modal {
@@ -49,17 +50,7 @@ TEST(Process, ABandWhoseSharedContinuationFallsShortGetsItsOwn) {
   }
 }
 
-// Peak and current resident memory of this process [bytes] (/proc/self/status).
-std::pair<double, double> memory_now() {
-  std::ifstream in("/proc/self/status");
-  double hwm = 0, rss = 0;
-  for (std::string line; std::getline(in, line);) {
-    std::istringstream ss(line.substr(line.find(':') + 1));
-    if (line.rfind("VmHWM:", 0) == 0) ss >> hwm;
-    if (line.rfind("VmRSS:", 0) == 0) ss >> rss;
-  }
-  return {hwm * 1024, rss * 1024};
-}
+using jointlab::testing::memory_now;
 
 // Many short channels (10000 x 64 samples, 5.1 MB as doubles): each channel's continued
 // record is far longer than its data (the band's filter needs 0.04 s either side of 0.064 s),
