@@ -279,8 +279,7 @@ void run_update_iwan(const IwanArgs& a) {
                                              : correlate::IwanOptimizer::kGlobalLocal;
   o.comparison = a.compare == "secant" ? correlate::IwanComparison::kSecant
                                        : correlate::IwanComparison::kMatched;
-  correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o.amplitude,
-                                     o.frequency_floor, o.damping_floor, o.comparison);
+  correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o);
   objective.set_linear_modes(measured, 0.6);  // every paired mode's error on the Pareto front
   o.bounds = bounds_of(a, objective);
   if (const std::string e = o.error(); !e.empty()) {

@@ -88,8 +88,7 @@ void draw_samples(Case& c, const model::IwanParameters& start, double Ks) {
 }
 
 correlate::IwanObjective make_objective(const Case& c) {
-  return correlate::IwanObjective(c.base, c.set, c.sensors, c.targets, c.options.amplitude,
-                                  c.options.frequency_floor, c.options.damping_floor);
+  return correlate::IwanObjective(c.base, c.set, c.sensors, c.targets, c.options);
 }
 
 // The cases: 0 the example campaign's Iwan update (everything before update_iwan(), as

@@ -37,8 +37,7 @@ int main(int argc, char** argv) {
     start.beta = off(truth.beta);
     start.chi = -0.1;
     const jointlab::model::Model m = two_chain_structure(start);
-    const IwanObjective obj(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4,
-                            0.02);
+    const IwanObjective obj(m, "rivet", sensors, {target}, IwanUpdateOptions{});
     double c[3];
     for (int k = 0; k < 3; ++k) {
       IwanUpdateOptions o;

@@ -60,16 +60,15 @@ std::string IwanUpdateOptions::error() const {
 
 IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
                              const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
-                             AmplitudeQuantity amplitude, double frequency_floor,
-                             double damping_floor, IwanComparison comparison)
+                             const IwanUpdateOptions& options)
     : model_(&model),
       set_(set.starts_with("iwan.") ? set : "iwan." + set),
       sensors_(sensors),
       targets_(std::move(targets)),
-      amplitude_(amplitude),
-      f_floor_(frequency_floor),
-      z_floor_(damping_floor),
-      comparison_(comparison) {
+      amplitude_(options.amplitude),
+      f_floor_(options.frequency_floor),
+      z_floor_(options.damping_floor),
+      comparison_(options.comparison) {
   bool found = false;
   for (const model::Joint& j : model.joints) {
     if (j.element != set_) continue;

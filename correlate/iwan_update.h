@@ -127,11 +127,11 @@ class IwanObjective {
  public:
   /// Prepares the objective; InputError if the set is not an Iwan set of the model, a mode or
   /// sensor is out of range, or a curve is empty or not positive. The model is evaluated at each
-  /// measured amplitude (qsma_at.h).
+  /// measured amplitude (qsma_at.h). Of the options it takes the measured amplitude quantity,
+  /// the comparison and the two floors.
   IwanObjective(const model::Model& model, const std::string& set,
                 const std::vector<Sensor>& sensors, std::vector<IwanTarget> targets,
-                AmplitudeQuantity amplitude, double frequency_floor, double damping_floor,
-                IwanComparison comparison = IwanComparison::kMatched);
+                const IwanUpdateOptions& options);
   /// K_s: the set's linear stiffness in the model [N/m].
   double reference_stiffness() const { return Ks_; }
   /// The set's parameters in the model.

@@ -31,11 +31,64 @@ struct Synthetic {
   }
 };
 
+// The search box of these tests around a start: F_S within a factor 30 of it, gamma 0.05-2,
+// chi -0.95-0, beta 0.01-100.
+IwanBounds box_around(const TwoChainParameters& start) {
+  return {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+}
+
+// The default update in the box around the start, with a budget of `evaluations`.
+IwanUpdateOptions options_around(const TwoChainParameters& start, int evaluations) {
+  IwanUpdateOptions o;
+  o.bounds = box_around(start);
+  o.max_evaluations = evaluations;
+  return o;
+}
+
+// A start off the truth in every parameter: F_S x1.5, K_T x1.2, chi -0.3, beta 0.6.
+TwoChainParameters start_off(const TwoChainParameters& truth) {
+  TwoChainParameters start = truth;
+  start.Fs *= 1.5;
+  start.ka *= 1.2;
+  start.chi = -0.3;
+  start.beta = 0.6;
+  return start;
+}
+
+// Noiseless ring-down backbones of the truth's mode 1 (20 points each), three hits reaching
+// 1.2, 1.6 and 2 times the full-macroslip amplitude, made of the given model columns; the
+// model at start_off() of the truth.
+struct NoiselessHits {
+  TwoChainParameters truth;
+  std::vector<Sensor> sensors{{"a5", 5, -1.0}};
+  IwanTarget target;
+  TwoChainParameters start;
+  model::Model m;
+  explicit NoiselessHits(IwanComparison columns) {
+    truth.iwan = true;
+    for (const double top : {1.2, 1.6, 2.0}) {
+      target.curves.push_back(synthetic_backbone(two_chain_structure(truth), 1, sensors, 0,
+                                                 AmplitudeQuantity::kVelocity, 20, top, 0, 0, 1,
+                                                 BackboneKind::kRingdown, columns));
+    }
+    start = start_off(truth);
+    m = two_chain_structure(start);
+  }
+};
+
+// F_S, K_T, chi and beta of p each within relative `tolerance` of the truth's.
+void expect_parameters(const model::IwanParameters& p, const TwoChainParameters& truth,
+                       double tolerance) {
+  EXPECT_TRUE(testing::Close(p.Fs, truth.Fs, tolerance));
+  EXPECT_TRUE(testing::Close(p.Kt, truth.ka, tolerance));
+  EXPECT_TRUE(testing::Close(p.chi, truth.chi, tolerance));
+  EXPECT_TRUE(testing::Close(p.beta, truth.beta, tolerance));
+}
+
 TEST(IwanUpdate, ObjectiveIsSmallAtTheTruthAndLargeAway) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
   const model::IwanParameters truth{20, 5e5, -0.5, 1.0};
   // Noise-only residuals: expected cost ~ 2 (two residuals per point of unit variance / N).
   EXPECT_LT(obj.cost(truth), 6.0);
@@ -51,8 +104,7 @@ TEST(IwanUpdate, ObjectiveIsSmallAtTheTruthAndLargeAway) {
 TEST(IwanUpdate, SharedSetUpGivesTheResidualsFromScratch) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<double> a(static_cast<size_t>(obj.residual_count())), b(a.size());
@@ -95,11 +147,10 @@ TEST(IwanUpdate, TwoThreadsGiveTheResultOfOne) {
     IwanUpdateSummary one, two;
     model::IwanParameters p[2];
     for (int threads : {1, 2}) {
-      const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                              0.02);
+      const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
       IwanUpdateOptions o;
       o.optimizer = method;
-      o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+      o.bounds = box_around(start);
       o.max_evaluations = 300;
       o.threads = threads;
       p[threads - 1] = update_iwan(obj, o, threads == 1 ? &one : &two);
@@ -127,11 +178,10 @@ TEST(IwanUpdate, GlobalLocalRecoversTheParametersFromFarOff) {
   start.chi = -0.1;
   start.beta /= 5;
   const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "iwan.rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity,
-                          1e-4, 0.02);
+  const IwanObjective obj(m, "iwan.rivet", s.sensors, {s.target}, {});
   IwanUpdateOptions o;
   o.optimizer = IwanOptimizer::kGlobalLocal;
-  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(start);
   o.max_evaluations = 1500;
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
@@ -198,17 +248,14 @@ TEST(IwanUpdate, MacroslipHitsRecoverEveryParameterWithinItsUncertainty) {
   start.chi = -0.3;
   start.beta = 0.5;
   const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
   const model::IwanParameters known{s.truth.Fs, s.truth.ka, s.truth.chi, s.truth.beta};
   // Exact evaluation: the truth's cost is the planted noise's, to the solver's accuracy.
   EXPECT_TRUE(testing::Close(obj.cost(known), s.noise_cost, 1e-6));
-  IwanUpdateOptions o;
-  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
   // The ring-down damping jumps where the element reaches phi_max (its beta sliders slip at
   // once), so the cost is only piecewise smooth near the knee: 1500 evaluations stopped at
   // 2.11 against the truth's 1.91, 3000 reach below it.
-  o.max_evaluations = 3000;
+  const IwanUpdateOptions o = options_around(start, 3000);
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   SCOPED_TRACE(sum.report());
@@ -238,74 +285,36 @@ TEST(IwanUpdate, MacroslipHitsRecoverEveryParameterWithinItsUncertainty) {
 // F_S against beta). Compared with the secant pair the same data cost far more at the truth:
 // the two definitions differ by more than the damping floor of 2 % past the knee.
 TEST(IwanUpdate, RingdownBackbonesGiveTheirParametersBackComparedLikeWithLike) {
-  TwoChainParameters truth;
-  truth.iwan = true;
-  const std::vector<Sensor> sensors{{"a5", 5, -1.0}};
-  IwanTarget target;
-  for (const double top : {1.2, 1.6, 2.0}) {
-    target.curves.push_back(synthetic_backbone(two_chain_structure(truth), 1, sensors, 0,
-                                               AmplitudeQuantity::kVelocity, 20, top, 0, 0, 1));
-  }
-  TwoChainParameters start = truth;
-  start.Fs *= 1.5;
-  start.ka *= 1.2;
-  start.chi = -0.3;
-  start.beta = 0.6;
-  const model::Model m = two_chain_structure(start);
-  const model::IwanParameters known{truth.Fs, truth.ka, truth.chi, truth.beta};
-  const IwanObjective like(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
-  const IwanObjective secant(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4,
-                             0.02, IwanComparison::kSecant);
+  const NoiselessHits c(IwanComparison::kMatched);
+  const model::IwanParameters known{c.truth.Fs, c.truth.ka, c.truth.chi, c.truth.beta};
+  const IwanObjective like(c.m, "rivet", c.sensors, {c.target}, {});
+  IwanUpdateOptions secant_pair;
+  secant_pair.comparison = IwanComparison::kSecant;
+  const IwanObjective secant(c.m, "rivet", c.sensors, {c.target}, secant_pair);
   std::printf("cost at the truth: ring-down columns %.3g, secant pair %.3g\n", like.cost(known),
               secant.cost(known));
   EXPECT_LT(like.cost(known), 1e-12);
   EXPECT_GT(secant.cost(known), 1.0);
-  IwanUpdateOptions o;
-  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
-  o.max_evaluations = 800;
   IwanUpdateSummary sum;
-  const model::IwanParameters p = update_iwan(like, o, &sum);
+  const model::IwanParameters p = update_iwan(like, options_around(c.start, 800), &sum);
   SCOPED_TRACE(sum.report());
   std::printf("%s", sum.report().c_str());
-  EXPECT_TRUE(testing::Close(p.Fs, truth.Fs, 0.005));
-  EXPECT_TRUE(testing::Close(p.Kt, truth.ka, 0.005));
-  EXPECT_TRUE(testing::Close(p.chi, truth.chi, 0.005));
-  EXPECT_TRUE(testing::Close(p.beta, truth.beta, 0.005));
+  expect_parameters(p, c.truth, 0.005);
 }
 
 // The secant option keeps the paper's comparison: backbones made of QSMA's secant pair (as the
 // paper's synthetic data) give their parameters back when compared with it, within 0.5 % as
 // above.
 TEST(IwanUpdate, SecantBackbonesGiveTheirParametersBackComparedWithTheSecantPair) {
-  TwoChainParameters truth;
-  truth.iwan = true;
-  const std::vector<Sensor> sensors{{"a5", 5, -1.0}};
-  IwanTarget target;
-  for (const double top : {1.2, 1.6, 2.0}) {
-    target.curves.push_back(synthetic_backbone(two_chain_structure(truth), 1, sensors, 0,
-                                               AmplitudeQuantity::kVelocity, 20, top, 0, 0, 1,
-                                               BackboneKind::kRingdown, IwanComparison::kSecant));
-  }
-  TwoChainParameters start = truth;
-  start.Fs *= 1.5;
-  start.ka *= 1.2;
-  start.chi = -0.3;
-  start.beta = 0.6;
-  const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02,
-                          IwanComparison::kSecant);
-  EXPECT_LT(obj.cost({truth.Fs, truth.ka, truth.chi, truth.beta}), 1e-12);
-  IwanUpdateOptions o;
-  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
-  o.max_evaluations = 800;
+  const NoiselessHits c(IwanComparison::kSecant);
+  IwanUpdateOptions o = options_around(c.start, 800);
   o.comparison = IwanComparison::kSecant;
+  const IwanObjective obj(c.m, "rivet", c.sensors, {c.target}, o);
+  EXPECT_LT(obj.cost({c.truth.Fs, c.truth.ka, c.truth.chi, c.truth.beta}), 1e-12);
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   SCOPED_TRACE(sum.report());
-  EXPECT_TRUE(testing::Close(p.Fs, truth.Fs, 0.005));
-  EXPECT_TRUE(testing::Close(p.Kt, truth.ka, 0.005));
-  EXPECT_TRUE(testing::Close(p.chi, truth.chi, 0.005));
-  EXPECT_TRUE(testing::Close(p.beta, truth.beta, 0.005));
+  expect_parameters(p, c.truth, 0.005);
 }
 
 // Hammer and stepped sine together. Ring-downs pass through macroslip within a cycle or two,
@@ -335,18 +344,12 @@ struct HammerAndSteppedSine {
 
 TEST(IwanUpdate, HammerAndSteppedSineTogetherIdentifySlipForceAndBeta) {
   const HammerAndSteppedSine s;
-  TwoChainParameters start = s.truth;
-  start.Fs *= 1.5;
-  start.ka *= 1.2;
-  start.chi = -0.3;
-  start.beta = 0.6;
+  const TwoChainParameters start = start_off(s.truth);
   const model::Model m = two_chain_structure(start);
   IwanTarget both = s.hammer;
   both.curves.push_back(s.sine.curves.front());
-  const IwanObjective obj(m, "rivet", s.sensors, {both}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
-  IwanUpdateOptions o;
-  o.bounds = {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
-  o.max_evaluations = 800;
+  const IwanObjective obj(m, "rivet", s.sensors, {both}, {});
+  const IwanUpdateOptions o = options_around(start, 800);
   IwanUpdateSummary sum;
   const model::IwanParameters p = update_iwan(obj, o, &sum);
   SCOPED_TRACE(sum.report());
@@ -357,8 +360,7 @@ TEST(IwanUpdate, HammerAndSteppedSineTogetherIdentifySlipForceAndBeta) {
   EXPECT_TRUE(testing::Close(p.Kt, s.truth.ka, 0.02));
   EXPECT_TRUE(testing::Close(p.chi, s.truth.chi, 0.02));
   // The ring-downs alone never leave microslip at the truth: F_S and beta are one family.
-  const IwanObjective hammer(m, "rivet", s.sensors, {s.hammer}, AmplitudeQuantity::kVelocity, 1e-4,
-                             0.02);
+  const IwanObjective hammer(m, "rivet", s.sensors, {s.hammer}, {});
   const model::IwanParameters known{s.truth.Fs, s.truth.ka, s.truth.chi, s.truth.beta};
   const Eigen::Vector2d slip = hammer.slip_range(known);
   EXPECT_LT(slip(1), model::Iwan(known).phi_max());
@@ -394,7 +396,7 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
   start.chi = -0.3;
   start.beta = 1.0;
   const model::Model m = two_chain_structure(start);
-  const IwanObjective obj(m, "rivet", sensors, {target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
+  const IwanObjective obj(m, "rivet", sensors, {target}, {});
   IwanUpdateOptions o;
   o.bounds = {start.Fs / 30, start.Fs * 30, 0.3, 3.0, -0.95, 0.0, 0.01, 100};
   o.fixed_beta = 1.0;
@@ -432,8 +434,7 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
 TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
   IwanUpdateOptions o;
   o.bounds = {5, 80, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
   o.max_evaluations = 300;
@@ -448,7 +449,7 @@ TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   }
   IwanTarget t = s.target;
   t.linear_frequency_hz = 57.9;
-  const IwanObjective obj2(m, "rivet", s.sensors, {t}, AmplitudeQuantity::kVelocity, 1e-4, 0.02);
+  const IwanObjective obj2(m, "rivet", s.sensors, {t}, {});
   o.optimizer = IwanOptimizer::kGlobalLocal;
   o.max_evaluations = 200;
   const auto front = pareto_front(obj2, {0.8, 1.0}, o);
@@ -465,8 +466,7 @@ TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
 TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
   IwanUpdateOptions o;
   o.optimizer = IwanOptimizer::kPaper;
   o.bounds = {10, 40, 0.5, 1.5, -0.9, -0.1, 0.1, 10};
@@ -491,8 +491,7 @@ TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
 TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);
-  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4,
-                          0.02);
+  const IwanObjective obj(m, "rivet", s.sensors, {s.target}, {});
   for (const IwanOptimizer method : {IwanOptimizer::kPaper, IwanOptimizer::kGlobalLocal}) {
     IwanUpdateOptions o;
     o.optimizer = method;
@@ -518,9 +517,8 @@ TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
 TEST(IwanUpdate, BadInputIsReported) {
   const model::Model m = two_chain_structure();
   Synthetic s;
-  EXPECT_THROW(
-      IwanObjective(m, "rivet", s.sensors, {s.target}, AmplitudeQuantity::kVelocity, 1e-4, 0.02),
-      InputError);  // no Iwan set in the linear model
+  EXPECT_THROW(IwanObjective(m, "rivet", s.sensors, {s.target}, {}),
+               InputError);  // no Iwan set in the linear model
   IwanUpdateOptions o;
   o.bounds.chi_min = -1.5;
   EXPECT_NE(o.error(), "");

@@ -348,8 +348,7 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   io.max_evaluations = 40;
   io.samples = 20;
   const auto fit = [&](const campaign::IwanTargets& t) {
-    const correlate::IwanObjective obj(start, "iwan.rivet", sensors, t.fitted, io.amplitude,
-                                       io.frequency_floor, io.damping_floor);
+    const correlate::IwanObjective obj(start, "iwan.rivet", sensors, t.fitted, io);
     correlate::IwanUpdateSummary sum;
     return correlate::update_iwan(obj, io, &sum);
   };

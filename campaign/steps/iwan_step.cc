@@ -176,8 +176,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     step.note = "update.iwan: no mode names its model mode (model_mode); Iwan updating skipped";
     return step;
   }
-  const IwanObjective objective(base, step.set, sensors, targets.fitted, io.amplitude,
-                                io.frequency_floor, io.damping_floor, io.comparison);
+  const IwanObjective objective(base, step.set, sensors, targets.fitted, io);
   say(
       fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
                   "left out where other modes carry over {:g} % of the joint slip)",
@@ -192,8 +191,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   // Each mode's backbone cost at the start and at the result, fitted or not: a mode the
   // one-mode QSMA cannot describe (its joints moved by another mode) stands out.
   for (const auto& [k, t] : targets.every) {
-    const IwanObjective one(base, step.set, sensors, {t}, io.amplitude, io.frequency_floor,
-                            io.damping_floor, io.comparison);
+    const IwanObjective one(base, step.set, sensors, {t}, io);
     step.mode_costs.push_back({backbones[k].name, backbones[k].fitted, one.cost(step.summary.start),
                                one.cost(step.summary.best)});
   }
