@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
@@ -56,15 +57,6 @@ signal::Band parse_band(const std::string& text) {
   return {lo, hi};
 }
 
-Quantity parse_quantity_arg(const std::string& option, const std::string& value) {
-  const auto q = parse_quantity(value);
-  if (!q || *q == Quantity::kForce) {
-    throw InputError(
-        fmt::format("{} {}: expected displacement, velocity or acceleration", option, value));
-  }
-  return *q;
-}
-
 // Names of the files `process` writes: summary.json and "<stem>.<channel>.band<k>.csv".
 bool is_process_output(const std::string& name) {
   static const std::regex backbone(R"(.*\.band[0-9]+\.csv)");
@@ -76,8 +68,8 @@ void run_process(const ProcessArgs& args) {
   for (const std::string& b : args.bands) opt.bands.push_back(parse_band(b));
   opt.modes = args.modes;
   opt.channels = args.channels;
-  if (!args.quantity.empty()) opt.quantity = parse_quantity_arg("--quantity", args.quantity);
-  opt.ringdown.amplitude = parse_quantity_arg("--amplitude", args.amplitude);
+  if (!args.quantity.empty()) opt.quantity = motion_quantity("--quantity", args.quantity);
+  opt.ringdown.amplitude = motion_quantity("--amplitude", args.amplitude);
   opt.ringdown.method = args.method == "pff" ? modal::Method::kPeaks : modal::Method::kHilbert;
   opt.ringdown.snr_min = args.snr_min;
   opt.ringdown.max_damping_rel_std = args.max_damping_std;
@@ -86,16 +78,7 @@ void run_process(const ProcessArgs& args) {
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
 
   namespace fs = std::filesystem;
-  // Two inputs with one stem would write over each other's outputs.
-  for (size_t i = 0; i < args.files.size(); ++i) {
-    for (size_t k = 0; k < i; ++k) {
-      if (fs::path(args.files[i]).stem() == fs::path(args.files[k]).stem()) {
-        throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
-                                     args.files[k], args.files[i],
-                                     fs::path(args.files[i]).stem().string()));
-      }
-    }
-  }
+  check_distinct_stems(args.files);
 
   // Backbones and summary.json appear together, replacing the previous run's as a set.
   // Backbone-like names count as old outputs only in a folder holding an old summary.json.

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
 #include "jointlab/apps/stepped_sine_figure.h"
 #include "jointlab/core/error.h"
@@ -75,15 +76,6 @@ std::vector<FigureSeries> figure_series(const std::vector<modal::SteppedSineFile
   return out;
 }
 
-Quantity motion_quantity(const std::string& option, const std::string& value) {
-  const auto q = parse_quantity(value);
-  if (!q || *q == Quantity::kForce) {
-    throw InputError(
-        fmt::format("{} {}: expected displacement, velocity or acceleration", option, value));
-  }
-  return *q;
-}
-
 void run_stepped_sine(const SteppedSineArgs& args) {
   modal::SteppedSineOptions opt;
   opt.amplitude = motion_quantity("--amplitude", args.amplitude);
@@ -96,15 +88,7 @@ void run_stepped_sine(const SteppedSineArgs& args) {
   if (!args.quantity.empty()) quantity = motion_quantity("--quantity", args.quantity);
 
   namespace fs = std::filesystem;
-  for (size_t i = 0; i < args.files.size(); ++i) {
-    for (size_t k = 0; k < i; ++k) {
-      if (fs::path(args.files[i]).stem() == fs::path(args.files[k]).stem()) {
-        throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
-                                     args.files[k], args.files[i],
-                                     fs::path(args.files[i]).stem().string()));
-      }
-    }
-  }
+  check_distinct_stems(args.files);
   // Read and extract everything first: a bad file stops the run before any output exists.
   std::vector<correlate::MeasuredBackbone> ring;
   for (const std::string& f : args.ringdowns) ring.push_back(correlate::read_backbone_csv(f, 0));
