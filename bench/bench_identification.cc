@@ -23,10 +23,9 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include <benchmark/benchmark.h>
 
+#include "jointlab/bench/bench_scratch.h"
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
 #include "jointlab/campaign/iwan_targets.h"
@@ -51,8 +50,7 @@ constexpr int kEvaluations = 1500;
 constexpr int kFromScratch = 20;
 
 fs::path work_dir() {
-  static const fs::path dir =
-      fs::temp_directory_path() / ("jointlab-bench-identification-" + std::to_string(getpid()));
+  static const fs::path dir = bench::scratch_dir("identification");
   return dir;
 }
 
@@ -299,12 +297,4 @@ BENCHMARK(BM_Identification)
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  std::error_code ec;
-  fs::remove_all(work_dir(), ec);
-  return 0;
-}
+int main(int argc, char** argv) { return jointlab::bench::run_benchmarks(argc, argv, work_dir()); }

@@ -25,10 +25,9 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include <benchmark/benchmark.h>
 
+#include "jointlab/bench/bench_scratch.h"
 #include "jointlab/model/fe/model_builder.h"
 #include "jointlab/model/fe/riveted_beam.h"
 #include "jointlab/model/joint_condensation.h"
@@ -45,8 +44,7 @@ using namespace jointlab;
 constexpr int kPoints = 21;
 
 fs::path work_dir() {
-  static const fs::path dir =
-      fs::temp_directory_path() / ("jointlab-bench-qsma-" + std::to_string(getpid()));
+  static const fs::path dir = bench::scratch_dir("qsma");
   return dir;
 }
 
@@ -158,12 +156,4 @@ BENCHMARK(BM_QsmaSpeedup)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  std::error_code ec;
-  fs::remove_all(work_dir(), ec);
-  return 0;
-}
+int main(int argc, char** argv) { return jointlab::bench::run_benchmarks(argc, argv, work_dir()); }
