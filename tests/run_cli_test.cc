@@ -58,6 +58,39 @@ testing::CommandResult process_hits(const testing::SmallCampaign& s, const fs::p
                   s.band[1], out.string()));
 }
 
+// `update-iwan` on the process folder dir/process of the small campaign's hits (its mode as
+// elastic mode 1, channel acc_5, 150 evaluations), into dir/iwan.
+testing::CommandResult update_iwan_on_process(const testing::SmallCampaign& s,
+                                              const fs::path& dir) {
+  return testing::run_jointlab(fmt::format(
+      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "
+      "--evaluations 150 --out {}",
+      s.model.string(), (dir / "process").string(), s.sensors.string(), s.model_mode,
+      (dir / "iwan").string()));
+}
+
+// What `run` makes of the small campaign's hits and model, with dir/run as its output folder
+// (where its hit cache is): the measured side and the model with its sensors.
+struct CampaignSide {
+  campaign::Campaign c;
+  campaign::RunSummary summary;
+  campaign::MeasuredSide measured;
+  model::Model start;
+  std::vector<correlate::Sensor> sensors;
+};
+
+CampaignSide campaign_side(const testing::SmallCampaign& s, const fs::path& dir) {
+  CampaignSide out;
+  out.c = campaign::read_campaign(s.campaign);
+  campaign::RunOptions o;
+  o.out = dir / "run";
+  const auto hits = campaign::process_hits(out.c, o.out, o, out.summary);
+  out.measured = campaign::summarise_measured(out.c, hits, dir / "scatter", nullptr);
+  out.start = model::read_model(s.model);
+  out.sensors = correlate::read_sensors(s.sensors, out.start);
+  return out;
+}
+
 // 600 evaluations: in the default search box (gamma 0.05-2, F_S within a factor 30) 150 left
 // the small campaign at its start.
 constexpr const char* kUpdates =
@@ -308,16 +341,9 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   ASSERT_EQ(p.status, 0) << p.err;
 
   // The campaign's side, from run's cache.
-  const campaign::Campaign c = campaign::read_campaign(s.campaign);
-  campaign::RunOptions o;
-  o.out = dir / "run";
-  campaign::RunSummary summary;
-  const auto hits = campaign::process_hits(c, o.out, o, summary);
+  const CampaignSide side = campaign_side(s, dir);
+  const auto& [c, summary, measured, start, sensors] = side;
   EXPECT_EQ(summary.hits_reused, 3);
-  const campaign::MeasuredSide measured =
-      campaign::summarise_measured(c, hits, dir / "scatter", nullptr);
-  const model::Model start = model::read_model(s.model);
-  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(s.sensors, start);
   campaign::IwanTargetOptions to;
   const campaign::IwanTargets from_run =
       campaign::iwan_targets(start, sensors, campaign::campaign_backbones(c, measured), to);
@@ -358,11 +384,7 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   EXPECT_EQ(pa.chi, pb.chi);
   EXPECT_EQ(pa.beta, pb.beta);
   // And the command itself runs on them.
-  const testing::CommandResult u = testing::run_jointlab(fmt::format(
-      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "
-      "--evaluations 150 --out {}",
-      s.model.string(), (dir / "process").string(), s.sensors.string(), s.model_mode,
-      (dir / "iwan").string()));
+  const testing::CommandResult u = update_iwan_on_process(s, dir);
   EXPECT_EQ(u.status, 0) << u.err;
 }
 
@@ -378,22 +400,11 @@ TEST(RunCli, RunAndUpdateIwanGiveTheSameParameters) {
       testing::make_small_campaign(dir, "[update.iwan]\nenabled = true\nmax_evaluations = 150\n");
   const testing::CommandResult p = process_hits(s, dir / "process");
   ASSERT_EQ(p.status, 0) << p.err;
-  const testing::CommandResult u = testing::run_jointlab(fmt::format(
-      "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "
-      "--evaluations 150 --out {}",
-      s.model.string(), (dir / "process").string(), s.sensors.string(), s.model_mode,
-      (dir / "iwan").string()));
+  const testing::CommandResult u = update_iwan_on_process(s, dir);
   ASSERT_EQ(u.status, 0) << u.err;
 
-  const campaign::Campaign c = campaign::read_campaign(s.campaign);
-  campaign::RunOptions o;
-  o.out = dir / "run";
-  campaign::RunSummary summary;
-  const auto hits = campaign::process_hits(c, o.out, o, summary);
-  const campaign::MeasuredSide measured =
-      campaign::summarise_measured(c, hits, dir / "scatter", nullptr);
-  const model::Model start = model::read_model(s.model);
-  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(s.sensors, start);
+  const CampaignSide side = campaign_side(s, dir);
+  const auto& [c, summary, measured, start, sensors] = side;
   const campaign::IwanStep step = campaign::iwan_update_step(c, start, sensors, measured, nullptr);
   ASSERT_TRUE(step.ran) << step.note;
   const model::IwanParameters& r = step.summary.best;
