@@ -71,13 +71,44 @@ LinearUpdateOptions smallest_kflat_options() {
   return o;
 }
 
+// Six modes with 0.2 % frequency scatter made at kflat = 3e9 (ka, kb at their defaults), as
+// chain_sensors(6) see them: the measurement of the smallest-rule tests.
+struct StiffJointMeasurement {
+  TwoChainParameters truth_p = [] {
+    TwoChainParameters p;
+    p.kflat = 3e9;
+    return p;
+  }();
+  model::Model truth = two_chain_structure(truth_p);
+  std::vector<Sensor> sensors = chain_sensors(6);
+  MeasuredModes meas = synthetic_measurement(truth, sensors, 6, 2e-3, 5);
+};
+
+// The smallest rule's outcome: tolerance met, all six modes paired, each within 1 %.
+void expect_six_modes_within_one_percent(const LinearUpdateSummary& s) {
+  EXPECT_TRUE(s.tolerance_met);
+  EXPECT_EQ(s.final.pairing.pairs.size(), 6u);
+  EXPECT_LE(s.final.max_error(), 0.01);
+}
+
+// The default structure's lowest `count` modes without frequency noise (seeded shape noise), as
+// chain_sensors(6) see them, and the model with the three sets at theta evaluated against them.
+struct NoiselessMeasurement {
+  model::Model m = two_chain_structure();
+  std::vector<Sensor> sensors = chain_sensors(6);
+  MeasuredModes meas;
+  StiffnessSets sets{m, kSets};
+  NoiselessMeasurement(int count, unsigned seed)
+      : meas(synthetic_measurement(m, sensors, count, 0.0, seed)) {}
+  LinearEvaluation at(const Eigen::Vector3d& theta) const {
+    return evaluate_linear(sets, m, sensors, meas, theta, 0.6);
+  }
+};
+
 TEST(LinearUpdate, JacobianMatchesFiniteDifferences) {
-  const model::Model m = two_chain_structure();
-  const auto sensors = chain_sensors(6);
-  const MeasuredModes meas = synthetic_measurement(m, sensors, 6, 0.0, 1);
-  const StiffnessSets sets(m, kSets);
+  const NoiselessMeasurement d(6, 1);
   const Eigen::Vector3d theta(7e5, 2e5, 1e9);
-  const LinearEvaluation e = evaluate_linear(sets, m, sensors, meas, theta, 0.6);
+  const LinearEvaluation e = d.at(theta);
   ASSERT_EQ(e.pairing.pairs.size(), 6u);
   for (int k = 0; k < 3; ++k) {
     // Central difference in ln theta, step 1e-3: truncation h^2/6 ~ 2e-7 relative; rounding
@@ -87,9 +118,7 @@ TEST(LinearUpdate, JacobianMatchesFiniteDifferences) {
     Eigen::Vector3d tp = theta, tm = theta;
     tp(k) *= std::exp(h);
     tm(k) *= std::exp(-h);
-    const Eigen::VectorXd fd = (evaluate_linear(sets, m, sensors, meas, tp, 0.6).residuals -
-                                evaluate_linear(sets, m, sensors, meas, tm, 0.6).residuals) /
-                               (2 * h);
+    const Eigen::VectorXd fd = (d.at(tp).residuals - d.at(tm).residuals) / (2 * h);
     for (int i = 0; i < 6; ++i) {
       EXPECT_TRUE(testing::Close(e.jacobian(i, k), fd(i), 1e-5, 1e-8))
           << "mode " << i << " k " << k;
@@ -98,21 +127,18 @@ TEST(LinearUpdate, JacobianMatchesFiniteDifferences) {
 }
 
 TEST(LinearUpdate, MacPairingKeepsTheRightPairsWhenModesSwap) {
-  const model::Model truth = two_chain_structure();
-  const auto sensors = chain_sensors(6);
-  const MeasuredModes meas = synthetic_measurement(truth, sensors, 4, 0.0, 2);
-  const StiffnessSets sets(truth, kSets);
+  const NoiselessMeasurement d(4, 2);
   // ka ten times too stiff: chain A's first mode (truth 57.9 Hz, measured mode 0) rises above
   // chain B's first mode (59.9 Hz, measured mode 1): model mode order B, A.
   const Eigen::Vector3d theta(5e6, 3e5, 1e10);
-  const LinearEvaluation e = evaluate_linear(sets, truth, sensors, meas, theta, 0.6);
+  const LinearEvaluation e = d.at(theta);
   EXPECT_EQ(e.pairing.model_for(0), 1);
   EXPECT_EQ(e.pairing.model_for(1), 0);
   // Index pairing would compare chain B's 59.9 Hz with chain A's measured mode and so see
   // a mismatch on mode 1 where there is none: chain B (kb) is exact here.
   EXPECT_NEAR(e.residuals(1), 0.0, 1e-9);
   const double index_error =
-      (e.all_model_frequency_hz(1) - meas.frequency_hz(1)) / meas.frequency_hz(1);
+      (e.all_model_frequency_hz(1) - d.meas.frequency_hz(1)) / d.meas.frequency_hz(1);
   EXPECT_GT(std::abs(index_error), 0.1);
 }
 
@@ -156,11 +182,8 @@ TEST(LinearUpdate, RecoversIdentifiableStiffnessAndReportsTheFlatOne) {
 // 1 % is found by a 2000-point log scan over 1e5..1e10 (a second method); the rule's bisection
 // must land within 10 % of it (it is built to 0.1 %) with every error within 1 %.
 TEST(LinearUpdate, SmallestRuleFindsTheSmallestStiffnessWithinTolerance) {
-  TwoChainParameters truth_p;
-  truth_p.kflat = 3e9;
-  const model::Model truth = two_chain_structure(truth_p);
-  const auto sensors = chain_sensors(6);
-  const MeasuredModes meas = synthetic_measurement(truth, sensors, 6, 2e-3, 5);
+  const StiffJointMeasurement d;
+  const auto& [truth_p, truth, sensors, meas] = d;
   TwoChainParameters start_p = truth_p;
   start_p.kflat = 1e9;
   const model::Model start = two_chain_structure(start_p);
@@ -172,9 +195,7 @@ TEST(LinearUpdate, SmallestRuleFindsTheSmallestStiffnessWithinTolerance) {
   const Eigen::VectorXd theta = update_linear(start, one, sensors, meas, o, &s);
   SCOPED_TRACE(s.report());
   std::printf("%s  scan: smallest kflat within 1 %%: %.4g\n", s.report().c_str(), scan);
-  EXPECT_TRUE(s.tolerance_met);
-  EXPECT_EQ(s.final.pairing.pairs.size(), 6u);
-  EXPECT_LE(s.final.max_error(), 0.01);
+  expect_six_modes_within_one_percent(s);
   EXPECT_TRUE(testing::Close(theta(0), scan, 0.10));
   EXPECT_EQ(s.parameters[0].at_bound, 0);
   // The history carries every stiffness (the paper's Table 1).
@@ -186,11 +207,8 @@ TEST(LinearUpdate, SmallestRuleFindsTheSmallestStiffnessWithinTolerance) {
 // Every paired error within 1 %; kflat no larger than the smallest value with ka, kb held at the
 // truth (+10 %), ka and kb still near the truth.
 TEST(LinearUpdate, SmallestRuleWithTheOtherSetsFitted) {
-  TwoChainParameters truth_p;
-  truth_p.kflat = 3e9;
-  const model::Model truth = two_chain_structure(truth_p);
-  const auto sensors = chain_sensors(6);
-  const MeasuredModes meas = synthetic_measurement(truth, sensors, 6, 2e-3, 5);
+  const StiffJointMeasurement d;
+  const auto& [truth_p, truth, sensors, meas] = d;
   const double scan =
       scanned_smallest_kflat(StiffnessSets(truth, {"spring.kflat"}), truth, sensors, meas);
   TwoChainParameters start_p = truth_p;
@@ -203,9 +221,7 @@ TEST(LinearUpdate, SmallestRuleWithTheOtherSetsFitted) {
   const Eigen::VectorXd theta = update_linear(start, kSets, sensors, meas, o, &s);
   SCOPED_TRACE(s.report());
   std::printf("%s  scan with ka, kb at the truth: %.4g\n", s.report().c_str(), scan);
-  EXPECT_TRUE(s.tolerance_met);
-  EXPECT_EQ(s.final.pairing.pairs.size(), 6u);
-  EXPECT_LE(s.final.max_error(), 0.01);
+  expect_six_modes_within_one_percent(s);
   EXPECT_LE(theta(2), 1.1 * scan);
   EXPECT_TRUE(testing::Close(theta(0), truth_p.ka, 0.2));
   EXPECT_TRUE(testing::Close(theta(1), truth_p.kb, 0.05));
@@ -214,11 +230,8 @@ TEST(LinearUpdate, SmallestRuleWithTheOtherSetsFitted) {
 // A tolerance below the scatter cannot be met: the rule says so and keeps least squares. A lower
 // bound above the smallest feasible value: the set ends at that bound, with a warning.
 TEST(LinearUpdate, SmallestRuleReportsUnmetToleranceAndBounds) {
-  TwoChainParameters truth_p;
-  truth_p.kflat = 3e9;
-  const model::Model truth = two_chain_structure(truth_p);
-  const auto sensors = chain_sensors(6);
-  const MeasuredModes meas = synthetic_measurement(truth, sensors, 6, 2e-3, 5);
+  const StiffJointMeasurement d;
+  const auto& [truth_p, truth, sensors, meas] = d;
   LinearUpdateOptions o;
   o.rule = LinearRule::kSmallest;
   o.smallest_set = "spring.kflat";

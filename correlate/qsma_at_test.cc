@@ -16,21 +16,37 @@ double amplitude(const model::QsmaPoint& p, int power) {
   return p.modal_amplitude * std::pow(2 * std::numbers::pi * p.frequency_hz, power);
 }
 
+// The Iwan two-chain structure, condensed.
+model::JointCondensation iwan_chains() {
+  TwoChainParameters p;
+  p.iwan = true;
+  return model::JointCondensation(two_chain_structure(p));
+}
+
+// qsma() of mode 1 at `points` load levels up to `reach` times the modal amplitude where its
+// automatic range ends, and how that automatic range ended.
+struct LongCurve {
+  std::vector<model::QsmaPoint> curve;
+  model::QsmaTermination automatic_end;
+};
+LongCurve long_curve(const model::JointCondensation& jc, int points, double reach) {
+  model::QsmaSummary qs;
+  const auto automatic = model::qsma(jc, 1, {}, &qs);
+  const model::QsmaTermination automatic_end = qs.termination;
+  model::QsmaOptions o;
+  o.points = points;
+  o.q_max = reach * automatic.back().modal_amplitude;
+  return {model::qsma(jc, 1, o, &qs), automatic_end};
+}
+
 // Second method: qsma() marches up in load; its points, converted to amplitudes s = q omega^p,
 // must come back from qsma_at() with the same load, frequency and damping. The curve runs to
 // three times the full-macroslip amplitude, across the knee. Both solve the same static problem
 // to 1e-12 of the forces and qsma_at() places s to 1e-10, so they agree to about 1e-9.
 TEST(QsmaAt, ReproducesQsmaPointsAcrossTheMacroslipKnee) {
-  TwoChainParameters p;
-  p.iwan = true;
-  const model::JointCondensation jc(two_chain_structure(p));
-  model::QsmaSummary qs;
-  const auto automatic = model::qsma(jc, 1, {}, &qs);
-  ASSERT_EQ(qs.termination, model::QsmaTermination::kFullMacroslip);
-  model::QsmaOptions o;
-  o.points = 40;
-  o.q_max = 3 * automatic.back().modal_amplitude;
-  const auto curve = model::qsma(jc, 1, o, &qs);
+  const model::JointCondensation jc = iwan_chains();
+  const auto [curve, automatic_end] = long_curve(jc, 40, 3);
+  ASSERT_EQ(automatic_end, model::QsmaTermination::kFullMacroslip);
   ASSERT_GE(curve.size(), 40u);
   const double phi_max = jc.phi_max(0);
   for (int power = 0; power <= 2; ++power) {
@@ -61,15 +77,8 @@ TEST(QsmaAt, ReproducesQsmaPointsAcrossTheMacroslipKnee) {
 // element's beta sliders all slip at once, so the tangent stiffness, hence dE/dq, drops), and
 // a point 1e-10 away may lie on either side.
 TEST(QsmaAt, FirstHarmonicAmplitudesGiveTheRingdownAndHarmonicColumns) {
-  TwoChainParameters p;
-  p.iwan = true;
-  const model::JointCondensation jc(two_chain_structure(p));
-  model::QsmaSummary qs;
-  const auto automatic = model::qsma(jc, 1, {}, &qs);
-  model::QsmaOptions o;
-  o.points = 25;
-  o.q_max = 2 * automatic.back().modal_amplitude;
-  const auto curve = model::qsma(jc, 1, o, &qs);
+  const model::JointCondensation jc = iwan_chains();
+  const std::vector<model::QsmaPoint> curve = long_curve(jc, 25, 2).curve;
   for (int power = 0; power <= 2; ++power) {
     std::vector<double> s;
     for (const auto& c : curve)
