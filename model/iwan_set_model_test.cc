@@ -8,6 +8,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/model/qsma.h"
 #include "jointlab/tests/frame_element.h"
+#include "jointlab/tests/iwan_set_reference.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model {
@@ -28,16 +29,6 @@ Model two_masses(const IwanParameters& p) {
   model.mass = sparse(M);
   model.stiffness = sparse(K);
   model.joints.push_back({1, kGround, "iwan.rivet", p.Kt, Iwan(p)});
-  return model;
-}
-
-// A model with the set at p, built as the objective does: every element of the set at p.
-Model with_set(Model model, const std::string& set, const IwanParameters& p) {
-  for (Joint& j : model.joints) {
-    if (j.element != set) continue;
-    j.stiffness = p.Kt;
-    j.iwan = Iwan(p);
-  }
   return model;
 }
 
@@ -77,25 +68,11 @@ TEST(IwanSetModel, TwoMassesMatchTheClosedForm) {
 // (set iwan.x) on the relative axial motion, stiff springs on the rest; a second Iwan set
 // (iwan.other) on two rivets stays at its parameters.
 Model stacked_beams() {
-  const int elements = 20;
-  const double L = 0.6, E = 70e9, rho = 2700, b = 0.025, h = 0.005;
-  const double A = b * h, I = b * h * h * h / 12, le = L / elements;
-  const int nodes = elements + 1, per_beam = 3 * nodes, n = 2 * per_beam;
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n), M = Eigen::MatrixXd::Zero(n, n);
-  const testing::FrameElement fe = testing::frame_element(E, A, I, rho, le);
-  for (int beam = 0; beam < 2; ++beam) {
-    const double e = beam == 0 ? h / 2 : -h / 2;
-    for (int el = 0; el < elements; ++el) {
-      Eigen::MatrixXd T = Eigen::MatrixXd::Identity(6, 6);
-      T(0, 2) = T(3, 5) = e;
-      const int o = beam * per_beam + 3 * el;
-      K.block(o, o, 6, 6) += T.transpose() * fe.k * T;
-      M.block(o, o, 6, 6) += T.transpose() * fe.m * T;
-    }
-  }
+  const testing::StackedBeams s = testing::stacked_beam_matrices(20);
+  const int nodes = s.nodes, per_beam = s.per_beam;
   Model model;
-  model.mass = sparse(M);
-  model.stiffness = sparse(K);
+  model.mass = sparse(s.M);
+  model.stiffness = sparse(s.K);
   const IwanParameters rivet{150.0, 2.0e7, -0.5, 0.5}, other{80.0, 1.0e7, -0.3, 1.0};
   for (int k = 0; k < 10; ++k) {
     const int node = static_cast<int>(std::lround((k + 0.5) * nodes / 10 - 0.5));
@@ -120,7 +97,7 @@ TEST(IwanSetModel, StackedBeamsMatchTheCondensationFromScratch) {
     const IwanParameters p{120.0, gamma * 2.0e7, -0.4, 0.8};
     const std::optional<JointCondensation> fast = family.at(p);
     ASSERT_TRUE(fast) << gamma;
-    const Model scaled = with_set(model, "iwan.x", p);
+    const Model scaled = testing::with_set(model, "iwan.x", p);
     const JointCondensation scratch(scaled);
     const int rigid = scratch.modes().rigid_count;
     ASSERT_EQ(fast->modes().rigid_count, rigid);
@@ -150,17 +127,8 @@ TEST(IwanSetModel, StackedBeamsMatchTheCondensationFromScratch) {
     }
     // The QSMA curve of mode 1 at the same modal amplitudes (the default range's, each point
     // solved to 1e-13 in ln q).
-    QsmaOptions options;
-    QsmaSummary summary;
-    options.points = 15;
-    const std::vector<QsmaPoint> range = qsma(scratch, 1, options, &summary);
-    ASSERT_GE(range.size(), 3u);
-    options.q_min = range.front().modal_amplitude;
-    // Up to the range's last point but one: at its end (the limit load or full macroslip) the
-    // curve is flat in alpha and its q there hangs on the last digits of the model.
-    options.q_max = range[range.size() - 2].modal_amplitude;
-    const std::vector<QsmaPoint> cf = qsma(*fast, 1, options, &summary),
-                                 cs = qsma(scratch, 1, options, &summary);
+    std::vector<QsmaPoint> cf, cs;
+    ASSERT_NO_FATAL_FAILURE(testing::qsma_on_one_range(*fast, scratch, 1, 15, &cf, &cs));
     ASSERT_EQ(cf.size(), cs.size()) << gamma;
     for (size_t i = 0; i < cf.size(); ++i) {
       EXPECT_TRUE(Close(cf[i].frequency_hz, cs[i].frequency_hz, 1e-9)) << gamma << " " << i;

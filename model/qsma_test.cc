@@ -260,26 +260,11 @@ struct Beams {
 };
 
 Beams stacked_beams(int elements, const IwanParameters& iwan, double parallel_spring = 0) {
-  const double L = 0.6, E = 70e9, rho = 2700, b = 0.025, h = 0.005;
-  const double A = b * h, I = b * h * h * h / 12, le = L / elements;
-  const int nodes = elements + 1, per_beam = 3 * nodes, n = 2 * per_beam;
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n), M = Eigen::MatrixXd::Zero(n, n);
-  const testing::FrameElement fe = testing::frame_element(E, A, I, rho, le);
-  for (int beam = 0; beam < 2; ++beam) {
-    const double e = beam == 0 ? h / 2 : -h / 2;  // bottom beam's face is above its centroid
-    for (int el = 0; el < elements; ++el) {
-      // Centroid DOFs from face DOFs: u_c = u + e theta (theta = dw/dx, u_c - z theta).
-      Eigen::MatrixXd T = Eigen::MatrixXd::Identity(6, 6);
-      T(0, 2) = T(3, 5) = e;
-      const Eigen::MatrixXd kf = T.transpose() * fe.k * T, mf = T.transpose() * fe.m * T;
-      const int o = beam * per_beam + 3 * el;
-      K.block(o, o, 6, 6) += kf;
-      M.block(o, o, 6, 6) += mf;
-    }
-  }
+  const testing::StackedBeams s = testing::stacked_beam_matrices(elements);
+  const int nodes = s.nodes, per_beam = s.per_beam;
   Beams out;
-  out.model.mass = sparse(M);
-  out.model.stiffness = sparse(K);
+  out.model.mass = sparse(s.M);
+  out.model.stiffness = sparse(s.K);
   for (int i = 0; i < nodes; ++i) out.top_u.push_back(per_beam + 3 * i);
   const int rivets = 10;
   for (int k = 0; k < rivets; ++k) {

@@ -1,9 +1,10 @@
 // Test-only reference element: the planar Euler-Bernoulli frame element, DOFs
 // (u, w, theta) at each of its two nodes, linear axial and cubic Hermite bending
-// shape functions, consistent mass (the textbook matrices, independent of model/fe).
+// shape functions, consistent mass (the textbook matrices, independent of model/fe), and two
+// stacked beams made of it.
 #pragma once
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 namespace jointlab::testing {
 
@@ -40,6 +41,43 @@ inline FrameElement frame_element(double E, double A, double I, double rho, doub
     }
   }
   return f;
+}
+
+/// Two stacked free-free planar beams, each 0.6 m of aluminium 25 mm x 5 mm in `elements`
+/// frame elements, not joined: DOFs (u, w, theta) per node, u the axial displacement of the
+/// beam's contact face, a rigid offset e from its centroid (u_centroid = u_face + e theta);
+/// the bottom beam's nodes first, then the top beam's.
+struct StackedBeams {
+  Eigen::MatrixXd K;  ///< stiffness
+  Eigen::MatrixXd M;  ///< consistent mass
+  int nodes = 0;      ///< nodes per beam
+  int per_beam = 0;   ///< DOFs per beam: 3 nodes
+};
+
+/// The stacked beams of `elements` elements each.
+inline StackedBeams stacked_beam_matrices(int elements) {
+  const double L = 0.6, E = 70e9, rho = 2700, b = 0.025, h = 0.005;
+  const double A = b * h, I = b * h * h * h / 12, le = L / elements;
+  StackedBeams s;
+  s.nodes = elements + 1;
+  s.per_beam = 3 * s.nodes;
+  const int n = 2 * s.per_beam;
+  s.K = Eigen::MatrixXd::Zero(n, n);
+  s.M = Eigen::MatrixXd::Zero(n, n);
+  const FrameElement fe = frame_element(E, A, I, rho, le);
+  for (int beam = 0; beam < 2; ++beam) {
+    const double e = beam == 0 ? h / 2 : -h / 2;  // bottom beam's face is above its centroid
+    for (int el = 0; el < elements; ++el) {
+      // Centroid DOFs from face DOFs: u_c = u + e theta (theta = dw/dx, u_c - z theta).
+      Eigen::MatrixXd T = Eigen::MatrixXd::Identity(6, 6);
+      T(0, 2) = T(3, 5) = e;
+      const Eigen::MatrixXd kf = T.transpose() * fe.k * T, mf = T.transpose() * fe.m * T;
+      const int o = beam * s.per_beam + 3 * el;
+      s.K.block(o, o, 6, 6) += kf;
+      s.M.block(o, o, 6, 6) += mf;
+    }
+  }
+  return s;
 }
 
 }  // namespace jointlab::testing

@@ -11,6 +11,7 @@
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/qsma.h"
+#include "jointlab/tests/iwan_set_reference.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {
@@ -39,13 +40,7 @@ TEST(RivetedIwanSet, CondensationAndQsmaMatchTheEvaluationFromScratch) {
     const IwanParameters p{30.0, gamma * 1e7, -0.4, 2.0};
     const std::optional<JointCondensation> fast = family.at(p);
     ASSERT_TRUE(fast) << gamma;
-    Model m = model;
-    for (Joint& j : m.joints) {
-      if (j.element != "iwan.rivet") continue;
-      j.stiffness = p.Kt;
-      j.iwan = Iwan(p);
-    }
-    const JointCondensation scratch(m);
+    const JointCondensation scratch(jointlab::testing::with_set(model, "iwan.rivet", p));
     const int rigid = scratch.modes().rigid_count;
     ASSERT_EQ(rigid, 6);
     ASSERT_EQ(fast->modes().rigid_count, rigid);
@@ -58,17 +53,8 @@ TEST(RivetedIwanSet, CondensationAndQsmaMatchTheEvaluationFromScratch) {
     EXPECT_LE((fast->condensed_stiffness() - scratch.condensed_stiffness()).cwiseAbs().maxCoeff(),
               1e-9 * kscale);
     // Mode 1's QSMA curve at the same modal amplitudes (the default range's).
-    QsmaOptions options;
-    QsmaSummary summary;
-    options.points = 12;
-    const std::vector<QsmaPoint> range = qsma(scratch, 1, options, &summary);
-    ASSERT_GE(range.size(), 3u);
-    options.q_min = range.front().modal_amplitude;
-    // Up to the range's last point but one: at its end (the limit load or full macroslip) the
-    // curve is flat in alpha and its q there hangs on the last digits of the model.
-    options.q_max = range[range.size() - 2].modal_amplitude;
-    const std::vector<QsmaPoint> cf = qsma(*fast, 1, options, &summary),
-                                 cs = qsma(scratch, 1, options, &summary);
+    std::vector<QsmaPoint> cf, cs;
+    ASSERT_NO_FATAL_FAILURE(jointlab::testing::qsma_on_one_range(*fast, scratch, 1, 12, &cf, &cs));
     ASSERT_EQ(cf.size(), cs.size()) << gamma;
     for (size_t i = 0; i < cf.size(); ++i) {
       EXPECT_TRUE(Close(cf[i].frequency_hz, cs[i].frequency_hz, 1e-9)) << gamma << " " << i;
