@@ -9,6 +9,7 @@
 #include "jointlab/model/fe/fe_model.h"
 #include "jointlab/model/fe/strip_mesh.h"
 #include "jointlab/model/sparse_eigen.h"
+#include "jointlab/tests/free_modes.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {
@@ -73,11 +74,7 @@ std::vector<double> free_free_bending(int n, double length) {
   FeModel model;
   add_beam_line(model, uniform_stations(0, length, n), 0, 0, aluminium_strip());
   const AssembledModel a = model.assemble();
-  EigenOptions o;
-  o.count = 24;
-  o.shift = -1.0;  // below the six rigid-body modes (λ = 0)
-  const EigenResult r = lowest_modes(a.stiffness, a.mass, o);
-  EXPECT_TRUE(r.summary.ok()) << r.summary.report;
+  const EigenResult r = jointlab::testing::free_modes(a.stiffness, a.mass, 24);
   const Eigen::VectorXd f = frequencies_hz(r.eigenvalues);
   std::vector<double> out;
   for (int k = 0; k < f.size() && out.size() < 5; ++k) {

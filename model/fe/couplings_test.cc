@@ -11,6 +11,7 @@
 #include "jointlab/model/fe/fe_model.h"
 #include "jointlab/model/fe/strip_mesh.h"
 #include "jointlab/model/sparse_eigen.h"
+#include "jointlab/tests/free_modes.h"
 
 namespace jointlab::model::fe {
 namespace {
@@ -76,11 +77,7 @@ TEST(RigidLink, MovesTheSlaveRigidly) {
 // Count of eigenvalues with f below 0.1 Hz among the lowest 12 (shift below zero). Round-off
 // puts rigid-body eigenvalues near 1e-16 λ_max ≈ 1e-4 rad²/s² (f ~ 1e-3 Hz), not at 0.
 int rigid_modes(const AssembledModel& a) {
-  EigenOptions o;
-  o.count = 12;
-  o.shift = -1.0;
-  const EigenResult r = lowest_modes(a.stiffness, a.mass, o);
-  EXPECT_TRUE(r.summary.ok()) << r.summary.report;
+  const EigenResult r = jointlab::testing::free_modes(a.stiffness, a.mass, 12);
   const Eigen::VectorXd f = frequencies_hz(r.eigenvalues);
   int n = 0;
   for (int k = 0; k < f.size(); ++k) n += f(k) < 0.1;

@@ -9,6 +9,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/model/fe/model_builder.h"
 #include "jointlab/model/sparse_eigen.h"
+#include "jointlab/tests/free_modes.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {
@@ -71,11 +72,7 @@ int rigid_modes(const RivetedBeamDescription& d, double s) {
       s == 0 ? a.stiffness : with_joints(a.stiffness, b.joints, stiff, [&](int node, int c) {
         return a.dof(node, c - 1);
       });
-  EigenOptions o;
-  o.count = 16;
-  o.shift = -1.0;
-  const EigenResult r = lowest_modes(k, a.mass, o);
-  EXPECT_TRUE(r.summary.ok()) << r.summary.report;
+  const EigenResult r = jointlab::testing::free_modes(k, a.mass, 16);
   const Eigen::VectorXd f = frequencies_hz(r.eigenvalues);
   int n = 0;
   while (n < f.size() && f(n) < 0.1) ++n;

@@ -11,6 +11,7 @@
 #include "jointlab/model/fe/fe_model.h"
 #include "jointlab/model/fe/strip_mesh.h"
 #include "jointlab/model/sparse_eigen.h"
+#include "jointlab/tests/free_modes.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::model::fe {
@@ -152,11 +153,7 @@ std::vector<double> strip_bending(int nx, int ny, const ShellSection& s, double 
   const StripGrid g = add_shell_strip(model, uniform_stations(0, length, nx),
                                       uniform_stations(-width / 2, width / 2, ny), 0, s);
   const AssembledModel a = model.assemble();
-  EigenOptions o;
-  o.count = 20;
-  o.shift = -1.0;
-  const EigenResult r = lowest_modes(a.stiffness, a.mass, o);
-  EXPECT_TRUE(r.summary.ok()) << r.summary.report;
+  const EigenResult r = jointlab::testing::free_modes(a.stiffness, a.mass, 20);
   const Eigen::VectorXd f = frequencies_hz(r.eigenvalues);
   std::vector<double> out;
   for (int k = 0; k < f.size() && out.size() < 5; ++k) {
