@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -28,6 +29,19 @@ std::string error_of(const std::string& text) {
     return e.what();
   }
   return "";
+}
+
+// An entry of a matrix and the value it must hold.
+struct Entry {
+  int row, col;
+  double value;
+};
+
+// Every entry of `expected` in m, exactly (the files hold short decimals).
+void expect_entries(const Eigen::SparseMatrix<double>& m, const std::vector<Entry>& expected) {
+  for (const Entry& e : expected) {
+    EXPECT_EQ(m.coeff(e.row, e.col), e.value) << "(" << e.row << ", " << e.col << ")";
+  }
 }
 
 TEST(MatrixMarket, ReadsCoordinateGeneral) {
@@ -59,18 +73,11 @@ TEST(MatrixMarket, ReadsArrayGeneralAndSymmetric) {
   // Column-major: [[1 3] [2 4]].
   const auto g = read_matrix_market(
       scratch("a.mtx", "%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n"));
-  EXPECT_EQ(g.coeff(0, 0), 1.0);
-  EXPECT_EQ(g.coeff(1, 0), 2.0);
-  EXPECT_EQ(g.coeff(0, 1), 3.0);
-  EXPECT_EQ(g.coeff(1, 1), 4.0);
+  expect_entries(g, {{0, 0, 1.0}, {1, 0, 2.0}, {0, 1, 3.0}, {1, 1, 4.0}});
   // Lower triangle column by column: a11 a21 a31 a22 a32 a33.
   const auto s = read_matrix_market(
       scratch("as.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n1\n2\n3\n4\n5\n6\n"));
-  EXPECT_EQ(s.coeff(0, 2), 3.0);
-  EXPECT_EQ(s.coeff(2, 0), 3.0);
-  EXPECT_EQ(s.coeff(2, 1), 5.0);
-  EXPECT_EQ(s.coeff(1, 2), 5.0);
-  EXPECT_EQ(s.coeff(2, 2), 6.0);
+  expect_entries(s, {{0, 2, 3.0}, {2, 0, 3.0}, {2, 1, 5.0}, {1, 2, 5.0}, {2, 2, 6.0}});
 }
 
 TEST(MatrixMarket, WriteReadRoundTripIsExact) {

@@ -39,6 +39,15 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
+// fresh_dir(name) holding the outputs of a committed run of "cmd": a.csv, "old".
+fs::path with_old_output(const std::string& name) {
+  const fs::path dir = fresh_dir(name);
+  OutputStage s(dir, "cmd");
+  put(s.path() / "a.csv", "old");
+  s.commit();
+  return dir;
+}
+
 bool is_csv(const std::string& name) { return name.ends_with(".csv"); }
 
 TEST(OutputStage, CommitReplacesThePreviousSetAsAWhole) {
@@ -113,12 +122,7 @@ TEST(OutputStage, FoldersReplaceThePreviousFolderWhole) {
 }
 
 TEST(OutputStage, AFailureBeforeCommitLeavesThePreviousOutputs) {
-  const fs::path dir = fresh_dir("fail");
-  {
-    OutputStage s(dir, "cmd");
-    put(s.path() / "a.csv", "old");
-    s.commit();
-  }
+  const fs::path dir = with_old_output("fail");
   const auto before = snapshot(dir);
   try {
     OutputStage s(dir, "cmd");
@@ -131,12 +135,7 @@ TEST(OutputStage, AFailureBeforeCommitLeavesThePreviousOutputs) {
 }
 
 TEST(OutputStage, KilledRunsAreCleanedUpOrCompletedByTheNext) {
-  const fs::path dir = fresh_dir("killed");
-  {
-    OutputStage s(dir, "cmd");
-    put(s.path() / "a.csv", "old");
-    s.commit();
-  }
+  const fs::path dir = with_old_output("killed");
   const auto before = snapshot(dir);
   // A run killed while writing: its staging folder and a temporary stay behind.
   const pid_t child = fork();

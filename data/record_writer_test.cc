@@ -18,7 +18,6 @@
 namespace jointlab::data {
 namespace {
 
-using jointlab::testing::Close;
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
@@ -51,7 +50,7 @@ TEST(RecordWriter, CsvUffAsciiUffBinaryCsvRoundTrip) {
 
   ASSERT_EQ(end.channels.size(), 3u);
   // UFF stores dt with 7 significant digits (E13.6): fs to 5e-7.
-  EXPECT_TRUE(Close(end.fs, csv.fs, 5e-7)) << end.fs << " vs " << csv.fs;
+  EXPECT_TRUE(testing::Close(end.fs, csv.fs, 5e-7)) << end.fs << " vs " << csv.fs;
   EXPECT_EQ(end.fs, from_bin.fs);  // CSV prints fs in full: exact
   EXPECT_EQ(end.t0, from_bin.t0);
   for (size_t c = 0; c < 3; ++c) {
@@ -63,7 +62,8 @@ TEST(RecordWriter, CsvUffAsciiUffBinaryCsvRoundTrip) {
       ASSERT_EQ(from_bin.channels[c].samples[k], from_asc.channels[c].samples[k]) << c << k;
       ASSERT_EQ(end.channels[c].samples[k], from_bin.channels[c].samples[k]) << c << k;
       // The ASCII step: E20.12 prints 13 significant digits, half a unit <= 5e-13 relative.
-      ASSERT_TRUE(Close(end.channels[c].samples[k], a.samples[k], 5e-13, 1e-300)) << c << k;
+      ASSERT_TRUE(testing::Close(end.channels[c].samples[k], a.samples[k], 5e-13, 1e-300))
+          << c << k;
     }
   }
 }

@@ -59,11 +59,19 @@ SimulationOptions options() {
   return o;
 }
 
-TEST(SimulatedRecord, WritesTheContractsCsvWithMetadata) {
-  const Model m = pair(true);
-  const SimulationOptions o = options();
+// The pair's simulated ring-down under options(), what make_simulated_record() turns into a
+// record.
+struct Ringdown {
+  Model m;
+  SimulationOptions o = options();
   SimulationSummary s;
-  const SimulatedResponse r = simulate_ringdown(m, o, &s);
+  SimulatedResponse r;
+  explicit Ringdown(bool labels) : m(pair(labels)), r(simulate_ringdown(m, o, &s)) {}
+};
+
+TEST(SimulatedRecord, WritesTheContractsCsvWithMetadata) {
+  const Ringdown d(true);
+  const auto& [m, o, s, r] = d;
   RecordOptions ro;
   ro.model_name = "pair.toml";
   const data::Record rec = make_simulated_record(m, o, r, s, ro);
@@ -82,10 +90,8 @@ TEST(SimulatedRecord, WritesTheContractsCsvWithMetadata) {
 TEST(SimulatedRecord, NoiseHasTheRequestedLevelAndSeed) {
   // White Gaussian noise of standard deviation 1 % of each channel's peak: over 2000
   // samples the sample standard deviation is within 3 / sqrt(2 * 2000) = 5 % of it.
-  const Model m = pair(false);
-  const SimulationOptions o = options();
-  SimulationSummary s;
-  const SimulatedResponse r = simulate_ringdown(m, o, &s);
+  const Ringdown d(false);
+  const auto& [m, o, s, r] = d;
   RecordOptions ro;
   ro.noise = 0.01;
   ro.seed = 42;
