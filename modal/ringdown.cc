@@ -837,6 +837,37 @@ double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCa
   return (cross(kr, kr - 1) - cross(kl, kl + 1)) * df;
 }
 
+// Bins first..last of a spectrum, compared by magnitude as std::abs gives it: from the
+// squared magnitudes where they differ by far more than their rounding (1e-12 against
+// 1e-15), else from std::abs itself, so the comparisons are those of std::abs but cost a
+// hypot only at near ties.
+class SpectrumMagnitudes {
+ public:
+  SpectrumMagnitudes(const Eigen::VectorXcd& spectrum, Eigen::Index first, Eigen::Index last)
+      : spectrum_(spectrum), first_(first), squared_(last - first + 1) {
+    for (Eigen::Index k = first; k <= last; ++k) {
+      const double re = spectrum(k).real(), im = spectrum(k).imag();
+      squared_(k - first) = re * re + im * im;
+    }
+  }
+  // |X(a)| > |X(b)|, or >= with or_equal (false when either is NaN).
+  bool greater(Eigen::Index a, Eigen::Index b, bool or_equal = false) const {
+    constexpr double kClear = 1 + 1e-12, kNormal = 1e-290;
+    const double sa = squared_(a - first_), sb = squared_(b - first_);
+    if (std::isfinite(sa) && std::isfinite(sb) && std::min(sa, sb) >= kNormal) {
+      if (sa > sb * kClear) return true;
+      if (sb > sa * kClear) return false;
+    }
+    const double ma = std::abs(spectrum_(a)), mb = std::abs(spectrum_(b));
+    return or_equal ? ma >= mb : ma > mb;
+  }
+
+ private:
+  const Eigen::VectorXcd& spectrum_;
+  Eigen::Index first_;
+  Eigen::VectorXd squared_;
+};
+
 // What the channel's spectrum shows around a band with no span: the strongest peak
 // near it, or that the band is narrower than kWidths half-power widths of its mode.
 std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& band, double taper,
@@ -852,18 +883,17 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   };
   const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
   if (k1 <= k0 + 2) return {};
-  // The highest local maximum (a rising or falling edge of the range is not a peak), from
-  // each bin's magnitude taken once (bins k0 - 1 to k1 + 1).
+  // The highest local maximum (a rising or falling edge of the range is not a peak).
   const Eigen::Index first = std::max<Eigen::Index>(k0, 1) - 1;
   const Eigen::Index last = std::min<Eigen::Index>(k1 + 1, channel.spectrum.size() - 1);
-  Eigen::VectorXd magnitude(last - first + 1);
-  for (Eigen::Index k = first; k <= last; ++k) magnitude(k - first) = std::abs(channel.spectrum(k));
-  const auto mag = [&](Eigen::Index k) { return magnitude(k - first); };
+  const SpectrumMagnitudes mag(channel.spectrum, first, last);
   Eigen::Index kp = -1;
   for (Eigen::Index k = first + 1; k <= k1; ++k) {
-    const double v = mag(k);
-    if (k + 1 >= channel.spectrum.size() || !(v > mag(k - 1)) || !(v >= mag(k + 1))) continue;
-    if (kp < 0 || v > mag(kp)) kp = k;
+    if (k + 1 >= channel.spectrum.size() || !mag.greater(k, k - 1) ||
+        !mag.greater(k, k + 1, true)) {
+      continue;
+    }
+    if (kp < 0 || mag.greater(k, kp)) kp = k;
   }
   if (kp < 0) {
     return fmt::format("no mode in the band and no spectral peak from {:.2f} to {:.2f} Hz",

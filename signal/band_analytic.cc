@@ -114,19 +114,20 @@ BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eig
   const BandWeights& w =
       cache.band_weights(key, [&] { return band_weights(n_fft, fs, band, options); });
   const Eigen::Index m = w.m;
-  Eigen::VectorXcd shifted = Eigen::VectorXcd::Zero(m);
-  for (size_t i = 0; i < w.bin.size(); ++i) shifted(w.index[i]) = w.factor[i] * spectrum(w.bin[i]);
-  Eigen::VectorXcd b = cache.get(m).inverse_complex(shifted);
-  b *= static_cast<double>(m) / static_cast<double>(n_fft);
-
   BandSignal out;
   out.dt = static_cast<double>(n_fft) / (fs * static_cast<double>(m));
   out.carrier_hz = static_cast<double>(w.k_c) * (fs / static_cast<double>(n_fft));
   out.noise_bandwidth_hz = w.noise_bandwidth_hz;
+  // The shifted bins straight into the transform's input; of its output only the samples
+  // covering the record (the padding dropped).
+  Fft& fft = cache.get(m);
+  std::complex<double>* shifted = fft.complex_input();
+  for (size_t i = 0; i < w.bin.size(); ++i) shifted[w.index[i]] = w.factor[i] * spectrum(w.bin[i]);
   const double duration = static_cast<double>(n_record - 1) / fs;
   const Eigen::Index keep = std::min<Eigen::Index>(
       m, static_cast<Eigen::Index>(std::floor(duration / out.dt + 1e-9)) + 1);
-  out.baseband = b.head(keep);
+  out.baseband = fft.inverse_complex_head(keep);
+  out.baseband *= static_cast<double>(m) / static_cast<double>(n_fft);
   return out;
 }
 
