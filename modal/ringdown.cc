@@ -191,19 +191,19 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   guard = std::min(guard, y.size() / 4);
   const Eigen::Index ext = static_cast<Eigen::Index>(std::round(options.extend_s * fs));
   const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
-  const auto extend = [&](int order) {
-    return signal::extend_record(y.segment(guard, y.size() - 2 * guard), ext + guard, ext + guard,
-                                 order, fit, 1e3, lag);
+  const Eigen::Index wanted = ext + guard;
+  const auto extend = [&](int order, bool before, bool after) {
+    return signal::extend_record(y.segment(guard, y.size() - 2 * guard), before ? wanted : 0,
+                                 after ? wanted : 0, order, fit, 1e3, lag);
   };
-  signal::Extension e = extend(options.ar_order);
+  signal::Extension e = extend(options.ar_order, true, true);
   // A model with more poles than the record has modes fits some to the noise;
   // run backwards, a heavily damped one of those can blow up within the span the
   // band filters need. Lower orders (halving, down to 4) then take over that end
-  // if they continue it further.
-  const Eigen::Index wanted = ext + guard;
+  // if they continue it further (an end already continued in full is not tried again).
   for (int order = options.ar_order / 2;
        order >= 4 && (e.before_valid < wanted || e.after_valid < wanted); order /= 2) {
-    const signal::Extension f = extend(order);
+    const signal::Extension f = extend(order, e.before_valid < wanted, e.after_valid < wanted);
     if (f.before_valid > e.before_valid) {
       e.samples.head(wanted) = f.samples.head(wanted);
       e.before_valid = f.before_valid;
