@@ -52,6 +52,24 @@ TEST(Process, ABandWhoseSharedContinuationFallsShortGetsItsOwn) {
 
 using jointlab::testing::memory_now;
 
+// A record at 1 kHz of `channels` accelerations a0, a1, ... of `rows` samples each,
+// sample k of channel c being sample(c, k, t = k / fs).
+template <typename Sample>
+data::Record many_channels(int channels, int rows, Sample sample) {
+  data::Record rec;
+  rec.fs = 1000;
+  rec.source = "many.csv";
+  rec.channels.resize(static_cast<size_t>(channels));
+  for (int c = 0; c < channels; ++c) {
+    data::Channel& ch = rec.channels[static_cast<size_t>(c)];
+    ch.name = fmt::format("a{}", c);
+    ch.quantity = Quantity::kAcceleration;
+    ch.samples.resize(rows);
+    for (int k = 0; k < rows; ++k) ch.samples(k) = sample(c, k, k / rec.fs);
+  }
+  return rec;
+}
+
 // Many short channels (10000 x 64 samples, 5.1 MB as doubles): each channel's continued
 // record is far longer than its data (the band's filter needs 0.04 s either side of 0.064 s),
 // so holding every channel's spectrum, or its band signal over the continuations, would take
@@ -61,20 +79,10 @@ TEST(Process, ManyShortChannelsCostAboutTheirSamplesInMemory) {
   GTEST_SKIP() << "AddressSanitizer keeps freed memory in quarantine";
 #endif
   constexpr int kChannels = 10000, kRows = 64;
-  data::Record rec;
-  rec.fs = 1000;
-  rec.channels.resize(kChannels);
-  for (int c = 0; c < kChannels; ++c) {
-    data::Channel& ch = rec.channels[static_cast<size_t>(c)];
-    ch.name = fmt::format("a{}", c);
-    ch.quantity = Quantity::kAcceleration;
-    ch.samples.resize(kRows);
-    for (int k = 0; k < kRows; ++k) {
-      const double t = k / rec.fs;
-      ch.samples(k) = std::exp(-20 * t) * std::sin(2 * std::numbers::pi * (200 + c % 7) * t) +
-                      1e-3 * std::sin(1234.5 * (k + c));
-    }
-  }
+  const data::Record rec = many_channels(kChannels, kRows, [](int c, int k, double t) {
+    return std::exp(-20 * t) * std::sin(2 * std::numbers::pi * (200 + c % 7) * t) +
+           1e-3 * std::sin(1234.5 * (k + c));
+  });
   const double binary = 8.0 * kChannels * kRows;
   ProcessOptions opt;
   opt.bands = {{100, 400}};
@@ -141,49 +149,29 @@ void expect_same_channel(const ChannelBand& together, const ChannelBand& alone) 
 // so it is off (--min-share 0) here.
 TEST(Process, EachOf2000ChannelsGetsWhatItGetsAlone) {
   constexpr int kChannels = 2000, kRows = 250;
-  data::Record rec;
-  rec.fs = 1000;
-  rec.source = "many.csv";
-  rec.channels.resize(kChannels);
-  for (int c = 0; c < kChannels; ++c) {
-    data::Channel& ch = rec.channels[static_cast<size_t>(c)];
-    ch.name = fmt::format("a{}", c);
-    ch.quantity = Quantity::kAcceleration;
-    ch.samples.resize(kRows);
+  const data::Record rec = many_channels(kChannels, kRows, [](int c, int k, double t) {
     const double f = 150 + (c * 37) % 250, decay = 3 + c % 7;
-    for (int k = 0; k < kRows; ++k) {
-      const double t = k / rec.fs, noise = 1e-4 * std::sin(1234.5 * (k + 7.0 * c));
-      const double ring = std::exp(-decay * t) * std::sin(2 * std::numbers::pi * f * t);
-      const double low = std::exp(-decay * t) * std::sin(2 * std::numbers::pi * 60 * t);
-      double x = 0.5;  // a flat line unless one of these
-      switch (c % 200 < 10 ? 4 + c % 200 : c % 40) {
-        case 0:
-          x = ring + noise;
-          break;
-        case 1:
-          x = 1e300 * (ring + noise);
-          break;
-        case 2:
-          x = k == 100 ? 1e300 : ring + noise;
-          break;
-        case 3:
-          x = 1e-300 * (ring + noise);
-          break;
-        case 4:
-          x = noise;
-          break;
-        case 5:
-          x = low + noise;
-          break;
-        case 6:
-          x = (k < 30 ? ring : 0.0) + noise;
-          break;
-        default:
-          break;
-      }
-      ch.samples(k) = x;
+    const double noise = 1e-4 * std::sin(1234.5 * (k + 7.0 * c));
+    const double ring = std::exp(-decay * t) * std::sin(2 * std::numbers::pi * f * t);
+    switch (c % 200 < 10 ? 4 + c % 200 : c % 40) {
+      case 0:
+        return ring + noise;
+      case 1:
+        return 1e300 * (ring + noise);
+      case 2:
+        return k == 100 ? 1e300 : ring + noise;
+      case 3:
+        return 1e-300 * (ring + noise);
+      case 4:
+        return noise;
+      case 5:
+        return std::exp(-decay * t) * std::sin(2 * std::numbers::pi * 60 * t) + noise;
+      case 6:
+        return (k < 30 ? ring : 0.0) + noise;
+      default:
+        return 0.5;  // a flat line
     }
-  }
+  });
   ProcessOptions opt;
   opt.bands = {{100, 420}};
   opt.min_share = 0;
