@@ -4,10 +4,15 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <mutex>
 #include <regex>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
@@ -40,18 +45,17 @@ struct ProcessArgs {
 
 signal::Band parse_band(const std::string& text) {
   const auto colon = text.find(':');
-  double lo = 0, hi = 0;
-  try {
-    if (colon == std::string::npos) throw std::invalid_argument("no colon");
-    size_t used_lo = 0, used_hi = 0;
-    const std::string lo_text = text.substr(0, colon), hi_text = text.substr(colon + 1);
-    lo = std::stod(lo_text, &used_lo);
-    hi = std::stod(hi_text, &used_hi);
-    if (used_lo != lo_text.size() || used_hi != hi_text.size()) throw std::invalid_argument("tail");
-  } catch (const std::logic_error&) {
+  if (colon == std::string::npos) {
     throw InputError(fmt::format("--band {}: expected LO:HI in Hz, e.g. 70:90", text));
   }
-  if (!(lo > 0 && hi > lo && std::isfinite(hi))) {
+  double lo = 0, hi = 0;
+  for (const auto& [part, value] :
+       {std::pair{text.substr(0, colon), &lo}, std::pair{text.substr(colon + 1), &hi}}) {
+    if (std::string why = finite_number(part, *value); !why.empty()) {
+      throw InputError(fmt::format("--band {}: {}; expected LO:HI in Hz, e.g. 70:90", text, why));
+    }
+  }
+  if (!(lo > 0 && hi > lo)) {
     throw InputError(fmt::format("--band {}: need 0 < LO < HI (Hz)", text));
   }
   return {lo, hi};
@@ -96,11 +100,15 @@ void run_process(const ProcessArgs& args) {
         const data::Record rec = data::read_record(args.files[i]);
         results[i] = modal::process_record(rec, opt, cache);
         modal::write_backbones(out, results[i], opt.ringdown);
+        // A line per channel and band, written in blocks (a record may hold 1e5 channels).
         std::lock_guard<std::mutex> lock(print);
+        std::string lines;
         for (const modal::ChannelBand& r : results[i].results) {
-          fmt::print(stderr, "{} {} band {}: {}\n", args.files[i], r.channel, r.band_index,
-                     r.ringdown.summary.report());
+          fmt::format_to(std::back_inserter(lines), "{} {} band {}: {}\n", args.files[i], r.channel,
+                         r.band_index, r.ringdown.summary.report());
+          if (lines.size() > 65536) fmt::print(stderr, "{}", std::exchange(lines, {}));
         }
+        fmt::print(stderr, "{}", lines);
       });
   modal::write_summary(out, results, opt);
   stage.commit();
@@ -111,6 +119,30 @@ void run_process(const ProcessArgs& args) {
   }
   fmt::print("jointlab process: {} backbone file(s) and summary.json written to {}\n", written,
              args.out);
+  // Like `run`: everything is written, and a band with a backbone at no channel of any file
+  // (not merely at some: nodal sensors) fails the command, naming the band and why.
+  std::vector<std::string> empty;
+  size_t bands = 0;
+  for (const auto& r : results) bands = std::max(bands, r.bands.size());
+  for (size_t b = 0; b < bands; ++b) {
+    std::string why;
+    bool some = false;
+    for (const auto& r : results) {
+      if (b >= r.bands.size()) continue;
+      const std::string w = modal::band_without_backbone(r, static_cast<int>(b) + 1);
+      some = some || w.empty();
+      if (why.empty() && !w.empty()) {
+        why = fmt::format("band {} ({:g}:{:g} Hz): no backbone at any channel{}; {}{}", b + 1,
+                          r.bands[b].lo, r.bands[b].hi, results.size() > 1 ? " of any file" : "",
+                          results.size() > 1 ? r.source + " " : "", w);
+      }
+    }
+    if (!some) empty.push_back(why);
+  }
+  if (!empty.empty()) {
+    throw InputError(
+        fmt::format("{}; everything else is written to {}", fmt::join(empty, "; "), args.out));
+  }
 }
 
 }  // namespace

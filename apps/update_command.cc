@@ -40,23 +40,21 @@ struct LinearArgs {
   correlate::LinearUpdateOptions options;
 };
 
-// --bound NAME=LO:HI, absolute stiffness bounds of one set.
+// --bound NAME=LO:HI, absolute stiffness bounds of one set (0 < LO < HI, both finite).
 correlate::ParameterBound parse_bound(const std::string& spec) {
   const size_t eq = spec.rfind('='), colon = spec.rfind(':');
-  correlate::ParameterBound b;
-  try {
-    if (eq == std::string::npos || colon == std::string::npos || colon < eq) {
-      throw std::invalid_argument(spec);
-    }
-    b.name = spec.substr(0, eq);
-    size_t used = 0;
-    const std::string lo = spec.substr(eq + 1, colon - eq - 1), hi = spec.substr(colon + 1);
-    b.lower = std::stod(lo, &used);
-    if (used != lo.size()) throw std::invalid_argument(spec);
-    b.upper = std::stod(hi, &used);
-    if (used != hi.size()) throw std::invalid_argument(spec);
-  } catch (const std::exception&) {
+  if (eq == std::string::npos || colon == std::string::npos || colon < eq) {
     throw InputError(fmt::format("--bound {}: expected NAME=LO:HI (stiffness values)", spec));
+  }
+  correlate::ParameterBound b;
+  b.name = spec.substr(0, eq);
+  for (const auto& [text, value] : {std::pair{spec.substr(eq + 1, colon - eq - 1), &b.lower},
+                                    std::pair{spec.substr(colon + 1), &b.upper}}) {
+    if (std::string why = finite_number(text, *value); !why.empty())
+      throw InputError(fmt::format("--bound {}: {}", spec, why));
+  }
+  if (!(b.lower > 0 && b.lower < b.upper)) {
+    throw InputError(fmt::format("--bound {}: need 0 < LO < HI (stiffness values)", spec));
   }
   return b;
 }
@@ -73,6 +71,10 @@ void run_update_linear(const LinearArgs& a) {
   correlate::LinearUpdateOptions options = a.options;
   for (const std::string& b : a.bounds) options.bounds.push_back(parse_bound(b));
   if (a.bound_factors.size() == 2) {
+    if (!(a.bound_factors[0] > 0 && a.bound_factors[0] < 1 && a.bound_factors[1] > 1)) {
+      throw InputError(fmt::format("--bound-factors {}:{}: need 0 < LO < 1 < HI",
+                                   a.bound_factors[0], a.bound_factors[1]));
+    }
     options.lower_factor = a.bound_factors[0];
     options.upper_factor = a.bound_factors[1];
   }
@@ -321,9 +323,10 @@ void run_update_iwan(const IwanArgs& a) {
   }
 }
 
+// A LO:HI option of two finite numbers (each refused on its own when it is not one).
 void range_option(CLI::App* cmd, const std::string& name, std::vector<double>& v,
                   const std::string& help) {
-  cmd->add_option(name, v, help)->delimiter(':')->expected(2);
+  cmd->add_option(name, v, help)->delimiter(':')->expected(2)->check(finite());
 }
 
 }  // namespace

@@ -387,6 +387,17 @@ void drop_near_nodes(const std::vector<double>& share, double min_share, Channel
 
 }  // namespace
 
+std::string band_without_backbone(const RecordResult& record, int band) {
+  const ChannelBand* reference = nullptr;
+  for (const ChannelBand& r : record.results) {
+    if (r.band_index != band) continue;
+    if (r.ringdown.summary.status == RingdownStatus::kOk) return {};
+    if (!reference || r.channel == record.reference[static_cast<size_t>(band - 1)]) reference = &r;
+  }
+  if (!reference) return {};
+  return reference->channel + ": " + reference->ringdown.summary.message;
+}
+
 RecordResult process_record(const data::Record& record, const ProcessOptions& options,
                             signal::FftCache& cache) {
   RecordResult out;

@@ -55,8 +55,12 @@ struct RecordResult {
   std::string source;                  ///< file processed
   std::vector<signal::Band> bands;     ///< bands used (1-based in outputs)
   std::vector<std::string> reference;  ///< per band: reference channel for the shape
-  std::vector<ChannelBand> results;    ///< channel-major, then band
+  std::vector<ChannelBand> results;    ///< band-major, then channel
 };
+
+/// Why band `band` (1-based) of `record` gave a backbone at no channel: its reference
+/// channel's name and reason ("acc1: no span of ..."); "" when some channel gave one.
+std::string band_without_backbone(const RecordResult& record, int band);
 
 /// Chooses `count` bands around the most prominent spectral peaks of the channels.
 std::vector<signal::Band> bands_from_peaks(const data::Record& record,

@@ -67,6 +67,9 @@ void write_record(data::JsonWriter& j, const RecordResult& rec) {
       const RingdownSummary& s = r.ringdown.summary;
       if (s.status == RingdownStatus::kOk) write_linear(j, s);
     }
+    // A band with a backbone at no channel says why (its reference channel's reason).
+    if (const std::string why = band_without_backbone(rec, static_cast<int>(b) + 1); !why.empty())
+      j.key("reason").value(why);
     j.key("operating_shape").begin_array();
     for (const ChannelBand& r : rec.results) {
       if (r.band_index != static_cast<int>(b) + 1) continue;

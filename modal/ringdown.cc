@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <limits>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -190,19 +191,19 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   guard = std::min(guard, y.size() / 4);
   const Eigen::Index ext = static_cast<Eigen::Index>(std::round(options.extend_s * fs));
   const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
-  const auto extend = [&](int order) {
-    return signal::extend_record(y.segment(guard, y.size() - 2 * guard), ext + guard, ext + guard,
-                                 order, fit, 1e3, lag);
+  const Eigen::Index wanted = ext + guard;
+  const auto extend = [&](int order, bool before, bool after) {
+    return signal::extend_record(y.segment(guard, y.size() - 2 * guard), before ? wanted : 0,
+                                 after ? wanted : 0, order, fit, 1e3, lag);
   };
-  signal::Extension e = extend(options.ar_order);
+  signal::Extension e = extend(options.ar_order, true, true);
   // A model with more poles than the record has modes fits some to the noise;
   // run backwards, a heavily damped one of those can blow up within the span the
   // band filters need. Lower orders (halving, down to 4) then take over that end
-  // if they continue it further.
-  const Eigen::Index wanted = ext + guard;
+  // if they continue it further (an end already continued in full is not tried again).
   for (int order = options.ar_order / 2;
        order >= 4 && (e.before_valid < wanted || e.after_valid < wanted); order /= 2) {
-    const signal::Extension f = extend(order);
+    const signal::Extension f = extend(order, e.before_valid < wanted, e.after_valid < wanted);
     if (f.before_valid > e.before_valid) {
       e.samples.head(wanted) = f.samples.head(wanted);
       e.before_valid = f.before_valid;
@@ -230,42 +231,54 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
 namespace {
 
 // Envelope, its logarithm and the unwrapped phase (carrier restored) of a band
-// signal z(t_j) = baseband_j exp(2 pi i carrier t_j), computed up to sample `done`.
+// signal z(t_j) = baseband_j exp(2 pi i carrier t_j).
 struct EnvelopePhase {
   Eigen::VectorXd amp, log_amp, theta;
-  Eigen::Index done = 0;        // samples computed
-  double prev = 0, offset = 0;  // the unwrapping's state after them
 };
 
-// Computes ep up to sample `count` (sized for the whole baseband; samples already there are
-// kept): a record too short for its band is refused after the first few.
-void envelope_phase_to(EnvelopePhase& ep, const Eigen::VectorXcd& baseband, double carrier_hz,
-                       double dt, Eigen::Index count) {
-  if (ep.amp.size() != baseband.size()) {
-    ep = EnvelopePhase{};
-    ep.amp.resize(baseband.size());
-    ep.log_amp.resize(baseband.size());
-    ep.theta.resize(baseband.size());
-  }
-  for (Eigen::Index j = ep.done; j < std::min(count, baseband.size()); ++j) {
-    ep.amp(j) = std::abs(baseband(j));
-    ep.log_amp(j) = std::log(std::max(ep.amp(j), 1e-300));
-    const double ph = std::arg(baseband(j));
-    if (j > 0) {
-      const double d = ph - ep.prev;
-      if (d > std::numbers::pi) ep.offset -= kTwoPi;
-      if (d < -std::numbers::pi) ep.offset += kTwoPi;
-    }
-    ep.prev = ph;
-    ep.theta(j) = ph + ep.offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
-    ep.done = j + 1;
-  }
+// The unwrapping's step at sample j > 0: -2 pi, 0 or +2 pi added to the phase from j on.
+// Two samples whose imaginary parts share a sign lie in one closed half plane, where the
+// difference of their arguments is within pi: arg() is needed only where the sign changes.
+double unwrap_step(const Eigen::VectorXcd& baseband, Eigen::Index j) {
+  if (std::signbit(baseband(j).imag()) == std::signbit(baseband(j - 1).imag())) return 0.0;
+  const double d = std::arg(baseband(j)) - std::arg(baseband(j - 1));
+  if (d > std::numbers::pi) return -kTwoPi;
+  if (d < -std::numbers::pi) return kTwoPi;
+  return 0.0;
+}
+
+// The unwrapped phase at sample j with the unwrapping's offset there.
+double phase_at(const Eigen::VectorXcd& baseband, double carrier_hz, double dt, Eigen::Index j,
+                double offset) {
+  return std::arg(baseband(j)) + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
 }
 
 EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz, double dt) {
   EnvelopePhase ep;
-  envelope_phase_to(ep, baseband, carrier_hz, dt, baseband.size());
+  ep.amp.resize(baseband.size());
+  ep.log_amp.resize(baseband.size());
+  ep.theta.resize(baseband.size());
+  double offset = 0;
+  for (Eigen::Index j = 0; j < baseband.size(); ++j) {
+    ep.amp(j) = std::abs(baseband(j));
+    ep.log_amp(j) = std::log(std::max(ep.amp(j), 1e-300));
+    if (j > 0) offset += unwrap_step(baseband, j);
+    ep.theta(j) = phase_at(baseband, carrier_hz, dt, j, offset);
+  }
   return ep;
+}
+
+// The unwrapped phase of envelope_phase at samples a <= b alone (the same numbers, without
+// the envelope or the phase between them: a record too short for its band is refused
+// from these).
+std::pair<double, double> phases_at(const Eigen::VectorXcd& baseband, double carrier_hz, double dt,
+                                    Eigen::Index a, Eigen::Index b) {
+  double offset = 0, at_a = 0;
+  for (Eigen::Index j = 0; j <= b; ++j) {
+    if (j > 0) offset += unwrap_step(baseband, j);
+    if (j == a) at_a = phase_at(baseband, carrier_hz, dt, j, offset);
+  }
+  return {at_a, phase_at(baseband, carrier_hz, dt, b, offset)};
 }
 
 // What the steps of one band's extraction share.
@@ -310,8 +323,7 @@ struct GainCorrection {
 
 // Band signal, noise floor, span and windows of one band (the set-up of the steps).
 BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& band,
-                         const RingdownOptions& options, const signal::BandSignal& bs,
-                         EnvelopePhase& ep) {
+                         const RingdownOptions& options, const signal::BandSignal& bs) {
   BandSetting s(channel, band, options);
   s.dt = bs.dt;
   const Eigen::Index m = bs.baseband.size();
@@ -330,9 +342,9 @@ BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& ban
   // Period from the phase over the first part of the usable span.
   const Eigen::Index a = std::min<Eigen::Index>(m - 1, static_cast<Eigen::Index>(s.start / s.dt));
   const Eigen::Index b = std::min<Eigen::Index>(m - 1, a + std::max<Eigen::Index>(4, m / 20));
-  envelope_phase_to(ep, bs.baseband, bs.carrier_hz, bs.dt, b + 1);
-  s.f_guess = b > a ? (ep.theta(b) - ep.theta(a)) / (kTwoPi * static_cast<double>(b - a) * s.dt)
-                    : bs.carrier_hz;
+  const auto [theta_a, theta_b] = phases_at(bs.baseband, bs.carrier_hz, bs.dt, a, b);
+  s.f_guess =
+      b > a ? (theta_b - theta_a) / (kTwoPi * static_cast<double>(b - a) * s.dt) : bs.carrier_hz;
   s.period = 1.0 / std::max(s.f_guess, band.lo);
   s.w_min = std::max({options.min_periods * s.period, 4.0 / bs.noise_bandwidth_hz, 6.0 * s.dt});
   return s;
@@ -825,6 +837,37 @@ double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCa
   return (cross(kr, kr - 1) - cross(kl, kl + 1)) * df;
 }
 
+// Bins first..last of a spectrum, compared by magnitude as std::abs gives it: from the
+// squared magnitudes where they differ by far more than their rounding (1e-12 against
+// 1e-15), else from std::abs itself, so the comparisons are those of std::abs but cost a
+// hypot only at near ties.
+class SpectrumMagnitudes {
+ public:
+  SpectrumMagnitudes(const Eigen::VectorXcd& spectrum, Eigen::Index first, Eigen::Index last)
+      : spectrum_(spectrum), first_(first), squared_(last - first + 1) {
+    for (Eigen::Index k = first; k <= last; ++k) {
+      const double re = spectrum(k).real(), im = spectrum(k).imag();
+      squared_(k - first) = re * re + im * im;
+    }
+  }
+  // |X(a)| > |X(b)|, or >= with or_equal (false when either is NaN).
+  bool greater(Eigen::Index a, Eigen::Index b, bool or_equal = false) const {
+    constexpr double kClear = 1 + 1e-12, kNormal = 1e-290;
+    const double sa = squared_(a - first_), sb = squared_(b - first_);
+    if (std::isfinite(sa) && std::isfinite(sb) && std::min(sa, sb) >= kNormal) {
+      if (sa > sb * kClear) return true;
+      if (sb > sa * kClear) return false;
+    }
+    const double ma = std::abs(spectrum_(a)), mb = std::abs(spectrum_(b));
+    return or_equal ? ma >= mb : ma > mb;
+  }
+
+ private:
+  const Eigen::VectorXcd& spectrum_;
+  Eigen::Index first_;
+  Eigen::VectorXd squared_;
+};
+
 // What the channel's spectrum shows around a band with no span: the strongest peak
 // near it, or that the band is narrower than kWidths half-power widths of its mode.
 std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& band, double taper,
@@ -841,14 +884,16 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
   if (k1 <= k0 + 2) return {};
   // The highest local maximum (a rising or falling edge of the range is not a peak).
+  const Eigen::Index first = std::max<Eigen::Index>(k0, 1) - 1;
+  const Eigen::Index last = std::min<Eigen::Index>(k1 + 1, channel.spectrum.size() - 1);
+  const SpectrumMagnitudes mag(channel.spectrum, first, last);
   Eigen::Index kp = -1;
-  for (Eigen::Index k = std::max<Eigen::Index>(k0, 1); k <= k1; ++k) {
-    const double v = std::abs(channel.spectrum(k));
-    if (k + 1 >= channel.spectrum.size() || !(v > std::abs(channel.spectrum(k - 1))) ||
-        !(v >= std::abs(channel.spectrum(k + 1)))) {
+  for (Eigen::Index k = first + 1; k <= k1; ++k) {
+    if (k + 1 >= channel.spectrum.size() || !mag.greater(k, k - 1) ||
+        !mag.greater(k, k + 1, true)) {
       continue;
     }
-    if (kp < 0 || v > std::abs(channel.spectrum(kp))) kp = k;
+    if (kp < 0 || mag.greater(k, kp)) kp = k;
   }
   if (kp < 0) {
     return fmt::format("no mode in the band and no spectral peak from {:.2f} to {:.2f} Hz",
@@ -1141,10 +1186,9 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         "(check the channel for corrupted samples)";
     return out;
   }
-  // The envelope and phase up to where band_setting needs them, the rest only for a
-  // record long enough for the band (many short channels are refused quickly).
-  EnvelopePhase envelope;
-  const BandSetting s = band_setting(channel, band, options, bs, envelope);
+  // The envelope and phase only for a record long enough for the band (many short
+  // channels are refused quickly).
+  const BandSetting s = band_setting(channel, band, options, bs);
   if (s.stop - s.start < 2 * s.w_min) {
     // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
     const std::string advice = spectral_advice(channel, band, options.taper, cache);
@@ -1154,8 +1198,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
     return out;
   }
-  envelope_phase_to(envelope, bs.baseband, bs.carrier_hz, bs.dt, bs.baseband.size());
-  const EnvelopePhase& ep = envelope;
+  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
   const double noise = noise_floor(ep, s);
   sum.noise_floor_m = noise / channel.scale;
 

@@ -59,11 +59,11 @@ Fft& FftCache::get(Eigen::Index n) {
   return it->second;
 }
 
-BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eigen::Index n_record,
-                         Eigen::Index n_fft, double fs, const Band& band,
-                         const BandOptions& options, FftCache& cache) {
-  assert(spectrum.size() == n_fft / 2 + 1);
-  assert(band.lo > 0 && band.hi > band.lo && band.hi <= fs / 2);
+namespace {
+
+// The band's bins and their factors for a spectrum of n_fft bins at fs.
+BandWeights band_weights(Eigen::Index n_fft, double fs, const Band& band,
+                         const BandOptions& options) {
   const double df = fs / static_cast<double>(n_fft);
   // The Gaussian edges reach below 1e-12 within 1.75 w of the nominal edges.
   const double reach = 1.75 * options.taper * (band.hi - band.lo);
@@ -72,39 +72,62 @@ BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eig
   const Eigen::Index k_hi = std::min<Eigen::Index>(
       static_cast<Eigen::Index>(std::ceil((band.hi + reach) / df)), n_fft / 2);
   const Eigen::Index width = k_hi - k_lo + 1;
-  const Eigen::Index m =
-      options.full_rate ? n_fft
-                        : fast_size(std::max<Eigen::Index>(
-                              16, static_cast<Eigen::Index>(
-                                      std::ceil(options.oversample * static_cast<double>(width)))));
-  const Eigen::Index k_c = options.full_rate ? 0 : (k_lo + k_hi) / 2;
-
-  Eigen::VectorXcd shifted = Eigen::VectorXcd::Zero(m);
-  double noise_bw = 0.0;
+  BandWeights w;
+  w.m = options.full_rate ? n_fft
+                          : fast_size(std::max<Eigen::Index>(
+                                16, static_cast<Eigen::Index>(std::ceil(
+                                        options.oversample * static_cast<double>(width)))));
+  w.k_c = options.full_rate ? 0 : (k_lo + k_hi) / 2;
   for (Eigen::Index k = k_lo; k <= k_hi; ++k) {
     const double f = static_cast<double>(k) * df;
     const double g = band_gain(band, options.taper, f);
     if (g == 0.0) continue;
-    noise_bw += g * g * df;
+    w.noise_bandwidth_hz += g * g * df;
     // (i w)^(-order) by repeated multiplication (std::pow on complex is costly).
     std::complex<double> h = 1.0;
     const std::complex<double> iw(0.0, 2.0 * std::numbers::pi * f);
     for (int o = 0; o < std::abs(options.order); ++o) h *= iw;
     if (options.order > 0) h = 1.0 / h;
-    const Eigen::Index idx = ((k - k_c) % m + m) % m;
-    shifted(idx) = 2.0 * g * h * spectrum(k);
+    w.bin.push_back(k);
+    w.index.push_back(((k - w.k_c) % w.m + w.m) % w.m);
+    w.factor.push_back(2.0 * g * h);
   }
-  Eigen::VectorXcd b = cache.get(m).inverse_complex(shifted);
-  b *= static_cast<double>(m) / static_cast<double>(n_fft);
+  return w;
+}
 
+}  // namespace
+
+BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eigen::Index n_record,
+                         Eigen::Index n_fft, double fs, const Band& band,
+                         const BandOptions& options, FftCache& cache) {
+  assert(spectrum.size() == n_fft / 2 + 1);
+  assert(band.lo > 0 && band.hi > band.lo && band.hi <= fs / 2);
+  // Every channel of a record has the same bins and factors: made once per band and size.
+  const std::array<double, 8> key{static_cast<double>(n_fft),
+                                  fs,
+                                  band.lo,
+                                  band.hi,
+                                  options.taper,
+                                  options.oversample,
+                                  static_cast<double>(options.order),
+                                  options.full_rate ? 1.0 : 0.0};
+  const BandWeights& w =
+      cache.band_weights(key, [&] { return band_weights(n_fft, fs, band, options); });
+  const Eigen::Index m = w.m;
   BandSignal out;
   out.dt = static_cast<double>(n_fft) / (fs * static_cast<double>(m));
-  out.carrier_hz = static_cast<double>(k_c) * df;
-  out.noise_bandwidth_hz = noise_bw;
+  out.carrier_hz = static_cast<double>(w.k_c) * (fs / static_cast<double>(n_fft));
+  out.noise_bandwidth_hz = w.noise_bandwidth_hz;
+  // The shifted bins straight into the transform's input; of its output only the samples
+  // covering the record (the padding dropped).
+  Fft& fft = cache.get(m);
+  std::complex<double>* shifted = fft.complex_input();
+  for (size_t i = 0; i < w.bin.size(); ++i) shifted[w.index[i]] = w.factor[i] * spectrum(w.bin[i]);
   const double duration = static_cast<double>(n_record - 1) / fs;
   const Eigen::Index keep = std::min<Eigen::Index>(
       m, static_cast<Eigen::Index>(std::floor(duration / out.dt + 1e-9)) + 1);
-  out.baseband = b.head(keep);
+  out.baseband = fft.inverse_complex_head(keep);
+  out.baseband *= static_cast<double>(m) / static_cast<double>(n_fft);
   return out;
 }
 

@@ -20,8 +20,11 @@
 // Time t is measured from the record's first sample.
 #pragma once
 
+#include <array>
 #include <complex>
 #include <map>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -58,12 +61,35 @@ double band_gain(const Band& band, double taper, double f);
 /// which the band passes exp(2 pi i f t), a sinusoid of frequency f_r decaying at 2 pi d.
 std::complex<double> band_gain(const Band& band, double taper, std::complex<double> f);
 
-/// Reusable FFT plans keyed by transform size, and the last filter gain computed
-/// (every channel of a record shares it); one workspace per thread.
+/// The bins of one band's analytic signal: where each non-zero bin k of the spectrum goes
+/// in the shifted spectrum and its factor 2 G(f_k) H(f_k) (band_analytic).
+struct BandWeights {
+  Eigen::Index m = 0;                        ///< coarse-grid (inverse transform) size
+  Eigen::Index k_c = 0;                      ///< carrier bin
+  std::vector<Eigen::Index> bin, index;      ///< spectrum bin k and its place in the shift
+  std::vector<std::complex<double>> factor;  ///< 2 G(f_k) H(f_k)
+  double noise_bandwidth_hz = 0.0;           ///< integral of G(f)^2 over f > 0 [Hz]
+};
+
+/// Reusable FFT plans keyed by transform size, the last filter gain computed and the last
+/// few bands' weights (every channel of a record shares them); one workspace per thread.
 class FftCache {
  public:
   /// The Fft of length n, created on first use.
   Fft& get(Eigen::Index n);
+  /// The weights made by `make` for `key`, kept for the last few keys.
+  template <typename Make>
+  const BandWeights& band_weights(const std::array<double, 8>& key, Make make) {
+    for (auto& [k, w] : weights_)
+      if (k == key) return w;
+    if (weights_.size() < kWeightsKept) {
+      weights_.emplace_back(key, make());
+      return weights_.back().second;
+    }
+    auto& slot = weights_[next_weights_++ % kWeightsKept];
+    slot = {key, make()};
+    return slot.second;
+  }
   /// The gain vector made by `make` for `key`, recomputed only when the key changes.
   template <typename Make>
   const Eigen::VectorXd& gain(const Eigen::Vector4d& key, Make make) {
@@ -78,6 +104,9 @@ class FftCache {
   std::map<Eigen::Index, Fft> ffts_;
   Eigen::Vector4d gain_key_ = Eigen::Vector4d::Constant(-1.0);
   Eigen::VectorXd gain_;
+  static constexpr size_t kWeightsKept = 8;  // bands and their superharmonic bands
+  std::vector<std::pair<std::array<double, 8>, BandWeights>> weights_;
+  size_t next_weights_ = 0;
 };
 
 /// Analytic signal of `band` from the one-sided spectrum of an n-sample record padded to n_fft.

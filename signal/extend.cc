@@ -40,27 +40,29 @@ std::pair<Eigen::VectorXd, Eigen::Index> continue_forward(const Eigen::VectorXd&
     b(r) = y(k);
   }
   const Eigen::VectorXd c = A.colPivHouseholderQr().solve(b);
-  // Work on y followed by the continuation, so every lagged sample is at hand.
-  Eigen::VectorXd full(n + count);
-  full.head(n) = y;
-  for (Eigen::Index k = n; k < n + count; ++k) {
-    double v = 0;
-    for (int j = 1; j <= order; ++j) v += c(j - 1) * full(k - j * lag);
-    full(k) = v;
-  }
-  Eigen::VectorXd out = full.tail(count);
-  // The first sample past the limit (a sinusoid of RMS r peaks at r sqrt 2).
+  // Continued up to the first sample past the limit (a sinusoid of RMS r peaks at r sqrt 2):
+  // what follows it is dropped. Work on y followed by the continuation, so every lagged
+  // sample is at hand.
   const double ref = std::sqrt(y.tail(len).squaredNorm() / static_cast<double>(len));
   const double limit = max_growth * ref * std::sqrt(2.0);
+  Eigen::VectorXd full(n + count);
+  full.head(n) = y;
   Eigen::Index keep = 0;
-  while (keep < count && std::isfinite(out(keep)) && std::abs(out(keep)) <= limit) ++keep;
+  for (; keep < count; ++keep) {
+    const Eigen::Index k = n + keep;
+    double v = 0;
+    for (int j = 1; j <= order; ++j) v += c(j - 1) * full(k - j * lag);
+    if (!(std::isfinite(v) && std::abs(v) <= limit)) break;
+    full(k) = v;
+  }
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(count);
+  out.head(keep) = full.segment(n, keep);
   if (keep == count) return {out, count};
   const Eigen::Index faithful = keep / 2;
   for (Eigen::Index k = faithful; k < keep; ++k) {
     const double x = static_cast<double>(k - faithful) / static_cast<double>(keep - faithful);
     out(k) *= 0.5 * (1.0 + std::cos(std::numbers::pi * x));
   }
-  out.tail(count - keep).setZero();
   return {out, faithful};
 }
 

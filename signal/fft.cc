@@ -106,6 +106,24 @@ Eigen::VectorXcd Fft::inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& 
   return out;
 }
 
+std::complex<double>* Fft::complex_input() {
+  impl_->complex_plan();  // planned before the input is filled
+  std::memset(static_cast<void*>(impl_->full_in), 0, sizeof(fftw_complex) * impl_->n);
+  // fftw_complex is double[2], laid out as std::complex<double>.
+  return reinterpret_cast<std::complex<double>*>(impl_->full_in);
+}
+
+Eigen::VectorXcd Fft::inverse_complex_head(Eigen::Index count) {
+  assert(count >= 0 && count <= impl_->n);
+  fftw_execute(impl_->complex_plan());
+  Eigen::VectorXcd out(count);
+  const double scale = 1.0 / static_cast<double>(impl_->n);
+  for (Eigen::Index j = 0; j < count; ++j) {
+    out(j) = {impl_->full_out[j][0] * scale, impl_->full_out[j][1] * scale};
+  }
+  return out;
+}
+
 Eigen::VectorXd Fft::inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half_spectrum) {
   const Eigen::Index n = impl_->n;
   assert(half_spectrum.size() == n / 2 + 1);

@@ -32,6 +32,12 @@ class Fft {
   Eigen::VectorXcd forward(const Eigen::Ref<const Eigen::VectorXd>& x);
   /// Complex inverse of a full n-point spectrum, scaled by 1/n.
   Eigen::VectorXcd inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& spectrum);
+  /// The complex inverse's input, n values set to zero, to be filled before
+  /// inverse_complex_head() (no copy of a mostly zero spectrum).
+  std::complex<double>* complex_input();
+  /// The first `count` values of the complex inverse of complex_input()'s n values, scaled by
+  /// 1/n (the same numbers as inverse_complex gives).
+  Eigen::VectorXcd inverse_complex_head(Eigen::Index count);
   /// Real inverse of a one-sided spectrum X[0..n/2] (Hermitian symmetry implied), scaled by 1/n.
   Eigen::VectorXd inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half_spectrum);
 

@@ -98,9 +98,12 @@ TEST(ProcessArguments, BadArgumentsAreRefused) {
     EXPECT_NE(r.err.find(f), std::string::npos) << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists(dir + "/o/summary.json"));
-  // With --quantity it is processed.
+  // With --quantity it is processed; the undamped sine has no backbone at its only
+  // channel, so the band fails the command (exit 2) once summary.json is written.
   r = run_jointlab("process " + file + " --band 40:55 --quantity velocity --out " + dir + "/o");
-  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("band 1 (40:55 Hz): no backbone at any channel; x: "), std::string::npos)
+      << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir + "/o/summary.json"));
   // Sizes are checked before anything is allocated: a band too narrow for the record,
   // and sample rates whose continuation would not fit in memory (dt 1e-30 once overflowed

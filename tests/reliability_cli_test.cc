@@ -92,6 +92,74 @@ TEST(ArgumentErrors, OneLineWithReadableBoundsAndStatus2) {
   EXPECT_FALSE(fs::exists(dir + "/o"));
 }
 
+// Every LO:HI option given a number that is not a finite double (1e400 overflows, 1e-400
+// underflows to 0, nan and inf are none) names the option and the problem on one line, exit
+// status 2, before any file is read (the paths need not exist); so do values outside the
+// parameter's domain. The values that were once printed as "inf" or "0" are named as typed.
+TEST(ArgumentErrors, RangeValuesThatAreNotFiniteDoublesAreNamed) {
+  const std::string dir = scratch_dir("rel_ranges");
+  const std::string iwan = "update-iwan " + dir + "/m.toml --measured " + dir + "/p --sensors " +
+                           dir + "/s.csv --set iwan.j --mode 1:1 --out " + dir + "/o ";
+  const std::string big = "overflows a double (largest 1.8e+308)";
+  expect_error(run_jointlab(iwan + "--fs-range 1e400:1e500"), "--fs-range: 1e400 " + big);
+  expect_error(run_jointlab(iwan + "--fs-range 10:1e500"), "--fs-range: 1e500 " + big);
+  expect_error(run_jointlab(iwan + "--gamma-range 1e-400:1"),
+               "--gamma-range: 1e-400 underflows to 0 in a double");
+  expect_error(run_jointlab(iwan + "--chi-range nan:0"), "--chi-range: nan is not a finite number");
+  expect_error(run_jointlab(iwan + "--beta-range 0.1:inf"),
+               "--beta-range: inf is not a finite number");
+  expect_error(run_jointlab(iwan + "--fs-range -5:10"),
+               "--fs-range -5:10: need LO < HI with both Fs > 0");
+  expect_error(run_jointlab(iwan + "--gamma 1e999"), "--gamma: 1e999 " + big);
+  const std::string lin = "update-linear " + dir + "/m.toml --measured " + dir + "/p --sensors " +
+                          dir + "/s.csv --set spring.k --out " + dir + "/o ";
+  expect_error(run_jointlab(lin + "--bound-factors 1e-3:1e400"), "--bound-factors: 1e400 " + big);
+  expect_error(run_jointlab(lin + "--bound-factors 0:10"), "--bound-factors 0:10: need 0 < LO < 1");
+  expect_error(run_jointlab(lin + "--bound spring.k=1:1e400"),
+               "--bound spring.k=1:1e400: 1e400 " + big);
+  expect_error(run_jointlab(lin + "--bound spring.k=-1:10"),
+               "--bound spring.k=-1:10: need 0 < LO < HI");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  expect_error(run_jointlab("process " + dir + "/hit.csv --band 1e400:1e500 --out " + dir + "/o"),
+               "--band 1e400:1e500: 1e400 " + big);
+  expect_error(run_jointlab("process " + dir + "/hit.csv --band 70:1e309 --out " + dir + "/o"),
+               "--band 70:1e309: 1e309 " + big);
+  EXPECT_FALSE(fs::exists(dir + "/o"));
+}
+
+// A band that gives a backbone at no channel fails `process` as `run` fails for a mode
+// without a backbone (contract: "writes what it can and exits non-zero"): the other band's
+// backbones and summary.json (with the empty band's reason) are written, and one stderr
+// line names the band in Hz and why, exit status 2. A band empty at some channels only
+// (70:90 Hz sees nothing at acc2) is normal and exits 0.
+TEST(ProcessEmptyBand, FailsAfterWritingTheOtherBands) {
+  const std::string dir = scratch_dir("rel_empty_band");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  const CommandResult ok =
+      run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir + "/ok");
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  EXPECT_TRUE(fs::exists(dir + "/ok/hit.acc1.band1.csv"));
+  EXPECT_FALSE(fs::exists(dir + "/ok/hit.acc2.band1.csv"));
+
+  const CommandResult r = run_jointlab("process " + dir + "/hit.csv --band 70:90 --band 300:360 " +
+                                       "--out " + dir + "/out");
+  expect_error(r, "band 2 (300:360 Hz): no backbone at any channel; acc");
+  EXPECT_NE(r.err.find("everything else is written to " + dir + "/out"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::exists(dir + "/out/hit.acc1.band1.csv"));
+  EXPECT_FALSE(fs::exists(dir + "/out/hit.acc1.band2.csv"));
+  const data::JsonValue summary = data::read_json(dir + "/out/summary.json");
+  const std::vector<data::JsonValue>& bands =
+      summary.find("files")->items().at(0).find("bands")->items();
+  ASSERT_EQ(bands.size(), 2u);
+  EXPECT_EQ(bands[0].find("reason"), nullptr);
+  ASSERT_NE(bands[1].find("reason"), nullptr);
+  EXPECT_NE(r.err.find(bands[1].find("reason")->string()), std::string::npos) << r.err;
+  // No staging folder or temporary is left behind.
+  for (const auto& e : fs::directory_iterator(dir + "/out"))
+    EXPECT_EQ(e.path().filename().string().find(".process.stage-"), std::string::npos);
+}
+
 class ProcessOutputs : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -236,15 +304,19 @@ TEST(HugeSamples, AreProcessedLikeTheSameRecordAtUnitScale) {
     }
   }
   // Displacements of 1e306 at 80 Hz reach 2.5e311 m/s^2, past the largest double: that
-  // channel has no backbone and says why, the other channel is processed.
+  // channel has no backbone and says why, the other channel is processed (acc2 has no mode
+  // at 80 Hz, so the band has no backbone at all: exit 2 with summary.json written).
   write_text(dir + "/hit.csv", ringdown_csv("time,d1 [m],acc2 [m/s^2]", 1e306));
   const CommandResult r = run_jointlab("process " + dir + "/hit.csv --band 70:90 --amplitude " +
                                        "acceleration --out " + dir + "/over");
-  ASSERT_EQ(r.status, 0) << r.err;
+  expect_error(r,
+               "band 1 (70:90 Hz): no backbone at any channel; d1: the backbone's amplitudes "
+               "exceed the largest double");
   EXPECT_NE(r.err.find("d1 band 1: no backbone: the backbone's amplitudes exceed the largest "
                        "double"),
             std::string::npos)
       << r.err;
+  EXPECT_NE(r.err.find("acc2 band 1: no backbone: "), std::string::npos) << r.err;
   EXPECT_NO_THROW(data::read_json(dir + "/over/summary.json"));
 }
 
