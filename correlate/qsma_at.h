@@ -5,12 +5,16 @@
 // A measured backbone gives amplitudes of a sensor's displacement, velocity or acceleration:
 // a = |phi_r[d]| q omega^p (p = 0, 1, 2), so s = q omega^p = a / |phi_r[d]| is a point of the
 // curve; omega is the secant frequency sqrt(alpha / q) or, as the signal a test records
-// oscillates at, the first-harmonic frequency (model/qsma.h). qsma_at() finds, for each s_i, the
-// load level with ln s(alpha) = ln s_i to 1e-10 by a bracketed secant (Illinois) iteration on ln
-// alpha, continuing from the previous amplitude; every step is one static solve of the condensed
-// joint problem (joint_condensation.h). Accurate where a fixed grid interpolated at the data is
-// not: at the macroslip knee, where q grows fast at almost constant alpha. Past the largest load
-// the structure carries (no static solution), amplitudes the model cannot reach get the last
+// oscillates at, the first-harmonic frequency (model/qsma.h). qsma_at() finds, for each s_i,
+// the load level with ln s(alpha) = ln s_i by Newton's method on the bordered system
+// [K_c r - h(r) = alpha g, ln s(r, alpha) = ln s_i] in (r, ln alpha), from the Euler
+// predictor of the previous amplitude: one factorisation of the condensed joint problem
+// (joint_condensation.h) per step, quadratic convergence to rounding (~1e-14 in ln s), and
+// the last factorisation is the exact tangent the point's ring-down damping needs. Where
+// Newton does not converge (a kink of the Iwan law at phi_max, a limit point) a bracketed
+// secant (Illinois) iteration on ln alpha of full static solves takes over, to 1e-10.
+// Accurate where a fixed grid interpolated at the data is not: at the macroslip knee, where q
+// grows fast at almost constant alpha. Past the largest load the structure carries (no static solution), amplitudes the model cannot reach get the last
 // reachable point, flagged.
 #pragma once
 
