@@ -21,11 +21,11 @@ constexpr int kNewtonSteps = 25;      // bordered Newton steps per amplitude bef
 // A converged static solution at load level alpha.
 struct State {
   double alpha = 0;
-  Eigen::VectorXd r;        // joint coordinates
-  Eigen::VectorXd tangent;  // dr/dalpha at the solution (continuation predictor)
-  double q = 0;             // modal amplitude
-  double ln_s = 0;          // ln (q omega^power)
-  Eigen::VectorXd k1;       // first-harmonic stiffness at r (first-harmonic frequency only)
+  Eigen::VectorXd r;           // joint coordinates
+  Eigen::VectorXd tangent;     // dr/dalpha at the solution (continuation predictor)
+  double q = 0;                // modal amplitude
+  double ln_s = 0;             // ln (q omega^power)
+  Eigen::VectorXd k1;          // first-harmonic stiffness at r (first-harmonic frequency only)
   bool exact_tangent = false;  // tangent factorised at r itself (not at the last iterate)
 };
 
@@ -312,7 +312,7 @@ State predict(const State& at, double target, double slope) {
 
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
                                  const std::vector<double>& amplitudes,
-                                 AmplitudeFrequency frequency) {
+                                 AmplitudeFrequency frequency, QsmaAtSolver solver) {
   assert(power >= 0 && power <= 2);
   assert(std::is_sorted(amplitudes.begin(), amplitudes.end()));
   if (mode < 1 || mode > model.elastic_count()) {
@@ -335,7 +335,8 @@ std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode
       const double target = std::log(s);
       State next = predict(at, target, slope);
       double next_slope = slope;
-      if (curve.newton(target, next, next_slope) && !curve.near_kink(next.r)) {
+      if (solver == QsmaAtSolver::kNewton && curve.newton(target, next, next_slope) &&
+          !curve.near_kink(next.r)) {
         at = std::move(next);
         slope = next_slope;
       } else if (!find(curve, target, at, slope, &reached)) {

@@ -14,8 +14,8 @@
 // Newton does not converge (a kink of the Iwan law at phi_max, a limit point) a bracketed
 // secant (Illinois) iteration on ln alpha of full static solves takes over, to 1e-10.
 // Accurate where a fixed grid interpolated at the data is not: at the macroslip knee, where q
-// grows fast at almost constant alpha. Past the largest load the structure carries (no static solution), amplitudes the model cannot reach get the last
-// reachable point, flagged.
+// grows fast at almost constant alpha. Past the largest load the structure carries (no static
+// solution), amplitudes the model cannot reach get the last reachable point, flagged.
 #pragma once
 
 #include <vector>
@@ -37,11 +37,18 @@ enum class AmplitudeFrequency {
   kFirstHarmonic  ///< the first-harmonic frequency (a ring-down's or a steady state's)
 };
 
+/// How qsma_at() places each amplitude on the curve.
+enum class QsmaAtSolver {
+  kNewton,     ///< bordered Newton, bracketing where it does not converge (above)
+  kBracketing  ///< bracketing alone: the slower reference Newton is checked against
+};
+
 /// QSMA of elastic mode `mode` (1-based) at each amplitude s_i = q omega^power (ascending,
 /// > 0), with every column of the point; empty if a static solve fails below the requested
 /// amplitudes. InputError if there is no such mode.
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
                                  const std::vector<double>& amplitudes,
-                                 AmplitudeFrequency frequency = AmplitudeFrequency::kSecant);
+                                 AmplitudeFrequency frequency = AmplitudeFrequency::kSecant,
+                                 QsmaAtSolver solver = QsmaAtSolver::kNewton);
 
 }  // namespace jointlab::correlate

@@ -44,7 +44,8 @@ double slip_fraction_stiffness(double t) {
   if (t < 0.05) {
     const double x = 2 * t, x2 = x * x;
     return x * x2 *
-           (1.0 / 12 - x2 * (1.0 / 240 - x2 * (1.0 / 10080 - x2 * (1.0 / 725760 - x2 / 79833600)))) /
+           (1.0 / 12 -
+            x2 * (1.0 / 240 - x2 * (1.0 / 10080 - x2 * (1.0 / 725760 - x2 / 79833600)))) /
            std::numbers::pi;
   }
   return (t - std::sin(t) * std::cos(t)) / std::numbers::pi;
@@ -94,8 +95,8 @@ double IwanCycle::first_harmonic_stiffness(double amplitude, double* slope) cons
     const double t = std::acos(1 - 2 * b);
     // J'(b) = b^chi g(b) and g'(b) = 4 sin(t) / pi; b decreases as -b / A.
     const double dg = 4 * std::sin(t) / std::numbers::pi;
-    *slope = sign * (R * chi1 * (a_chi1 / a) * j -
-                     (b / a) * (R * a_chi1 * std::pow(b, chi) * g + S * dg));
+    *slope = sign *
+             (R * chi1 * (a_chi1 / a) * j - (b / a) * (R * a_chi1 * std::pow(b, chi) * g + S * dg));
   }
   return R * a_chi1 * j + S * g;
 }

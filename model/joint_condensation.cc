@@ -228,8 +228,8 @@ void JointCondensation::softening(const Eigen::Ref<const Eigen::VectorXd>& r, Ei
 }
 
 void JointCondensation::softening_and_harmonic(const Eigen::Ref<const Eigen::VectorXd>& r,
-                                                Eigen::VectorXd& h, Eigen::VectorXd& dh,
-                                                Eigen::VectorXd& k1, Eigen::VectorXd& dk1) const {
+                                               Eigen::VectorXd& h, Eigen::VectorXd& dh,
+                                               Eigen::VectorXd& k1, Eigen::VectorXd& dk1) const {
   const int nj = size();
   h.resize(nj);
   dh.resize(nj);

@@ -88,7 +88,8 @@ TEST(JointCondensation, SofteningAndHarmonicTogetherMatchEachAlone) {
   // same laws in another order of operations: 1e-12 relative (rounding is ~1e-15).
   Model model = free_pair(1.0, 2.0, 1e5, kRivet);
   model.joints.push_back({1, 0, "iwan.rivet", 5e5, Iwan(IwanParameters{10.0, 5e5, -0.8, 0.2})});
-  model.joints.push_back({0, kGround, "iwan.rivet", 1e6, Iwan(IwanParameters{30.0, 1e6, 0.0, 3.0})});
+  model.joints.push_back(
+      {0, kGround, "iwan.rivet", 1e6, Iwan(IwanParameters{30.0, 1e6, 0.0, 3.0})});
   const JointCondensation jc(model);
   ASSERT_EQ(jc.size(), 2);
   const double pm = jc.phi_max(0);
