@@ -175,7 +175,8 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
       const bool matched = comparison_ == IwanComparison::kMatched;
       const std::vector<QsmaAtPoint> at =
           qsma_at(jc, t.mode, pw, s,
-                  matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant);
+                  matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant,
+                  from_scratch ? QsmaAtSolver::kBracketing : QsmaAtSolver::kNewton);
       if (at.size() != s.size()) return false;
       if (slip_range) {
         (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);

@@ -141,8 +141,9 @@ class IwanObjective {
   /// Residuals at p (K_T = p.Kt); false if the model could not be evaluated there. The model
   /// comes from the set-up shared by every evaluation (model/iwan_set_model.h). Thread-safe.
   bool residuals(const model::IwanParameters& p, double* r) const;
-  /// The same with the model condensed from scratch at p (every mode, a new factorisation):
-  /// the reference the shared set-up is checked and timed against.
+  /// The same the slow way, as before either speed-up: the model condensed from scratch at p
+  /// (every mode, a new factorisation) and each amplitude bracketed by full static solves
+  /// (qsma_at.h); the reference the fast evaluation is checked and timed against.
   bool residuals_from_scratch(const model::IwanParameters& p, double* r) const;
   /// Sum of squared residuals at p (a large finite penalty if it cannot be evaluated).
   double cost(const model::IwanParameters& p) const;

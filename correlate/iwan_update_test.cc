@@ -96,11 +96,12 @@ TEST(IwanUpdate, ObjectiveIsSmallAtTheTruthAndLargeAway) {
   EXPECT_GT(obj.cost({20, 5.5e5, -0.5, 1.0}), 100.0);
 }
 
-// The shared set-up (model/iwan_set_model.h) against the condensation from scratch at the
-// same parameters, across the search box: the same residuals. Both are exact up to the
-// rounding of two dense eigen-solves and condensations (~1e-12 relative in frequency); the
-// residuals differ from the measured points by ~1e-4 of the frequency, which magnifies that
-// to ~1e-10 relative in the cost: 1e-9 is the threshold.
+// The fast evaluation (shared set-up, model/iwan_set_model.h; Newton, qsma_at.h) against
+// the slow one (condensation from scratch, bracketing) at the same parameters, across the
+// search box: the same residuals. They differ by the rounding of two dense eigen-solves and
+// condensations (~1e-12 relative in frequency) and by the bracketing's 1e-10 in ln s (~1e-10
+// in the columns); the residuals differ from the measured points by ~1e-4 of the frequency,
+// which magnifies that to ~1e-10 relative in the cost: 1e-9 is the threshold.
 TEST(IwanUpdate, SharedSetUpGivesTheResidualsFromScratch) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);

@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -15,15 +16,17 @@ namespace {
 constexpr double kTwoPi = 2 * std::numbers::pi;
 constexpr double kTolerance = 1e-10;  // |ln s - ln s_i| at a returned point
 constexpr int kMaxSteps = 200;        // static solves per requested amplitude, at most
+constexpr int kNewtonSteps = 25;      // bordered Newton steps per amplitude before falling back
 
 // A converged static solution at load level alpha.
 struct State {
   double alpha = 0;
-  Eigen::VectorXd r;        // joint coordinates
-  Eigen::VectorXd tangent;  // dr/dalpha at the solution (continuation predictor)
-  double q = 0;             // modal amplitude
-  double ln_s = 0;          // ln (q omega^power)
-  Eigen::VectorXd k1;       // first-harmonic stiffness at r (first-harmonic frequency only)
+  Eigen::VectorXd r;           // joint coordinates
+  Eigen::VectorXd tangent;     // dr/dalpha at the solution (continuation predictor)
+  double q = 0;                // modal amplitude
+  double ln_s = 0;             // ln (q omega^power)
+  Eigen::VectorXd k1;          // first-harmonic stiffness at r (first-harmonic frequency only)
+  bool exact_tangent = false;  // tangent factorised at r itself (not at the last iterate)
 };
 
 class Curve {
@@ -34,6 +37,17 @@ class Curve {
     p_ = mode_.p;
     c_ = p_ / omega2_;
     g_ = mode_.g;
+    for (int j = 0; j < m.size(); ++j)
+      for (const model::Iwan& e : m.coordinates()[j].elements) kinks_.push_back({j, e.phi_max()});
+  }
+
+  // True when a coordinate is within 1e-8 of an element's phi_max, where the Iwan tangent
+  // jumps: Newton may settle on either side of it, and the ring-down damping differs by side.
+  // The bracketing iteration then decides, as it did before Newton was tried.
+  bool near_kink(const Eigen::VectorXd& r) const {
+    for (const auto& [j, phi] : kinks_)
+      if (std::abs(std::abs(r(j)) - phi) <= 1e-8 * phi) return true;
+    return false;
   }
 
   double omega2() const { return omega2_; }
@@ -71,9 +85,118 @@ class Curve {
     return false;
   }
 
+  // Newton's method on the bordered system K_c r - h(r) = alpha g, ln s(r, alpha) = target in
+  // (r, ln alpha), from the guess in `st`: one factorisation per step, converging
+  // quadratically to rounding. On success `st` is the solution with its tangent dr/dalpha at
+  // r itself and `slope` d ln s / d ln alpha there; false (st undefined) where it does not
+  // converge.
+  bool newton(double target, State& st, double& slope) const {
+    const int nj = m_.size();
+    const Eigen::MatrixXd& kc = m_.condensed_stiffness();
+    const bool harmonic = frequency_ == AmplitudeFrequency::kFirstHarmonic && power_ > 0;
+    const double half = 0.5 * power_;
+    Eigen::VectorXd h(nj), dh(nj), kr(nj), residual(nj), grad(nj), u(nj), t(nj), dk1(nj);
+    Eigen::MatrixXd hessian(nj, nj);
+    Eigen::LLT<Eigen::MatrixXd> llt(nj);
+    bool factorised = false;  // llt holds the Hessian of an earlier iterate
+    double x = std::log(st.alpha), previous = INFINITY;
+    for (int step = 0; step < kNewtonSteps; ++step) {
+      const double alpha = std::exp(x);
+      if (harmonic)
+        m_.softening_and_harmonic(st.r, h, dh, st.k1, dk1);
+      else
+        m_.softening(st.r, h, dh);
+      kr.noalias() = kc * st.r;
+      residual = kr - h - alpha * g_;
+      const double q = (alpha + p_.dot(h)) / omega2_;
+      if (!(q > 0) || !std::isfinite(q)) return false;
+      // c = ln s - target and its gradient: grad (in r) and dc_da (in alpha, r held).
+      const Eigen::VectorXd dq = p_.cwiseProduct(dh) / omega2_;  // dq/dr; dq/dalpha = 1/omega_r^2
+      double c = 0, dc_da = 0;
+      if (harmonic) {
+        // omega_1^2 = omega_r^2 - D / q, D = sum_j p_j (K_T,j - k_1j) r_j (model/qsma.h).
+        double big_d = 0;
+        Eigen::VectorXd dd(nj);
+        for (int j = 0; j < nj; ++j) {
+          const double kt = m_.linear_stiffness(j);
+          big_d += p_(j) * (kt - st.k1(j)) * st.r(j);
+          dd(j) = p_(j) * (kt - st.k1(j) - dk1(j) * st.r(j));
+        }
+        const double omega2 = omega2_ - big_d / q;
+        if (!(omega2 > 0)) return false;
+        c = std::log(q) + half * std::log(omega2) - target;
+        grad = dq / q + half * (-dd / q + (big_d / (q * q)) * dq) / omega2;
+        dc_da = 1 / (omega2_ * q) + half * big_d / (q * q * omega2_ * omega2);
+      } else {
+        c = (1 - half) * std::log(q) + half * std::log(alpha) - target;
+        grad = (1 - half) / q * dq;
+        dc_da = (1 - half) / (omega2_ * q) + half / alpha;
+      }
+      const double scale = alpha * g_.lpNorm<Eigen::Infinity>() + kr.lpNorm<Eigen::Infinity>() +
+                           h.lpNorm<Eigen::Infinity>();
+      // Done when the force balance holds to 1e-12 of the forces (as JointCondensation::solve)
+      // and ln s is on target to rounding: below 1e-14, or below 1e-10 where a step no longer
+      // gains the factor 4 quadratic convergence would (the rounding floor of ln s).
+      const double ac = std::abs(c);
+      const bool done = residual.lpNorm<Eigen::Infinity>() <= 1e-12 * scale &&
+                        (ac <= 1e-14 || (ac <= 1e-10 && ac > 0.25 * previous));
+      previous = ac;
+      // The tangent at r: from the last factorisation by iterative refinement where r has
+      // hardly moved since (it converges like Newton's own step), else from a new one.
+      if (!(done && factorised && refine(llt, dh, t))) {
+        hessian = kc;
+        hessian.diagonal() -= dh;
+        llt.compute(hessian);
+        if (llt.info() != Eigen::Success) return false;
+        factorised = true;
+        t = llt.solve(g_);  // dr/dalpha
+      }
+      const double dc_dx = alpha * (grad.dot(t) + dc_da);  // d ln s / d ln alpha on the path
+      if (!(dc_dx > 0) || !std::isfinite(dc_dx)) return false;
+      if (done) {
+        st.alpha = alpha;
+        st.tangent = t;
+        st.exact_tangent = true;
+        st.q = q;
+        st.ln_s = c + target;
+        if (!harmonic) st.k1.resize(0);
+        slope = std::clamp(dc_dx, 1e-3, 1e6);
+        return true;
+      }
+      u = llt.solve(residual);
+      double dx = (grad.dot(u) - c) / dc_dx;
+      const double limit = std::log(8.0);
+      dx = std::clamp(dx, -limit, limit);
+      st.r += alpha * dx * t - u;
+      x += dx;
+      if (!st.r.allFinite() || !std::isfinite(x)) return false;
+    }
+    return false;
+  }
+
+  // Refines t (solved with the factorisation `llt` of an earlier iterate's Hessian) to
+  // (K_c - diag dh)^{-1} g: t += llt^{-1} (g - (K_c - diag dh) t). Each pass multiplies the
+  // error by rho, the relative change of the Hessian, which the first correction measures
+  // (|e_0| ~ rho |t|); so after a correction d the error left is ~(|d| / |t|) |d|, below
+  // 1e-16 |t| once |d| <= 1e-8 |t|. False if three passes do not get there.
+  bool refine(const Eigen::LLT<Eigen::MatrixXd>& llt, const Eigen::VectorXd& dh,
+              Eigen::VectorXd& t) const {
+    for (int pass = 0; pass < 3; ++pass) {
+      Eigen::VectorXd defect = g_ - m_.condensed_stiffness() * t;
+      defect += dh.cwiseProduct(t);
+      const Eigen::VectorXd correction = llt.solve(defect);
+      t += correction;
+      if (!t.allFinite()) return false;
+      if (correction.lpNorm<Eigen::Infinity>() <= 1e-8 * t.lpNorm<Eigen::Infinity>()) return true;
+    }
+    return false;
+  }
+
   model::QsmaPoint point(const State& s) const {
-    return model::qsma_point(m_, mode_, s.alpha, s.r, s.tangent,
-                             s.k1.size() == m_.size() ? &s.k1 : nullptr);
+    const Eigen::VectorXd* k1 = s.k1.size() == m_.size() ? &s.k1 : nullptr;
+    if (s.exact_tangent)
+      return model::qsma_point_with_tangent(m_, mode_, s.alpha, s.r, s.tangent, k1);
+    return model::qsma_point(m_, mode_, s.alpha, s.r, s.tangent, k1);
   }
 
  private:
@@ -83,6 +206,7 @@ class Curve {
   AmplitudeFrequency frequency_;
   double omega2_;
   Eigen::VectorXd p_, c_, g_;
+  std::vector<std::pair<int, double>> kinks_;  // (coordinate, an element's phi_max)
 };
 
 // The state with ln s = target, starting from a solved state `at`; slope is the running
@@ -170,11 +294,25 @@ bool find(const Curve& curve, double target, State& at, double& slope, bool* rea
   return true;
 }
 
+// The Euler predictor from `at` towards ln s = target: ln alpha moved by the running slope (at
+// most a factor 8), r along the tangent.
+State predict(const State& at, double target, double slope) {
+  const double limit = std::log(8.0);
+  const double dx = std::clamp((target - at.ln_s) / slope, -limit, limit);
+  State next;
+  next.alpha = at.alpha * std::exp(dx);
+  if (at.tangent.size() == at.r.size())
+    next.r = at.r + (next.alpha - at.alpha) * at.tangent;
+  else
+    next.r = at.r * (next.alpha / at.alpha);
+  return next;
+}
+
 }  // namespace
 
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
                                  const std::vector<double>& amplitudes,
-                                 AmplitudeFrequency frequency) {
+                                 AmplitudeFrequency frequency, QsmaAtSolver solver) {
   assert(power >= 0 && power <= 2);
   assert(std::is_sorted(amplitudes.begin(), amplitudes.end()));
   if (mode < 1 || mode > model.elastic_count()) {
@@ -193,7 +331,18 @@ std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode
   bool reached = true;
   for (double s : amplitudes) {
     // Past the last reachable amplitude every larger one is unreachable too.
-    if (reached && !find(curve, std::log(s), at, slope, &reached)) return {};
+    if (reached) {
+      const double target = std::log(s);
+      State next = predict(at, target, slope);
+      double next_slope = slope;
+      if (solver == QsmaAtSolver::kNewton && curve.newton(target, next, next_slope) &&
+          !curve.near_kink(next.r)) {
+        at = std::move(next);
+        slope = next_slope;
+      } else if (!find(curve, target, at, slope, &reached)) {
+        return {};
+      }
+    }
     out.push_back({curve.point(at), reached});
   }
   return out;

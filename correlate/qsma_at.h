@@ -5,13 +5,17 @@
 // A measured backbone gives amplitudes of a sensor's displacement, velocity or acceleration:
 // a = |phi_r[d]| q omega^p (p = 0, 1, 2), so s = q omega^p = a / |phi_r[d]| is a point of the
 // curve; omega is the secant frequency sqrt(alpha / q) or, as the signal a test records
-// oscillates at, the first-harmonic frequency (model/qsma.h). qsma_at() finds, for each s_i, the
-// load level with ln s(alpha) = ln s_i to 1e-10 by a bracketed secant (Illinois) iteration on ln
-// alpha, continuing from the previous amplitude; every step is one static solve of the condensed
-// joint problem (joint_condensation.h). Accurate where a fixed grid interpolated at the data is
-// not: at the macroslip knee, where q grows fast at almost constant alpha. Past the largest load
-// the structure carries (no static solution), amplitudes the model cannot reach get the last
-// reachable point, flagged.
+// oscillates at, the first-harmonic frequency (model/qsma.h). qsma_at() finds, for each s_i,
+// the load level with ln s(alpha) = ln s_i by Newton's method on the bordered system
+// [K_c r - h(r) = alpha g, ln s(r, alpha) = ln s_i] in (r, ln alpha), from the Euler
+// predictor of the previous amplitude: one factorisation of the condensed joint problem
+// (joint_condensation.h) per step, quadratic convergence to rounding (~1e-14 in ln s), and
+// the last factorisation is the exact tangent the point's ring-down damping needs. Where
+// Newton does not converge (a kink of the Iwan law at phi_max, a limit point) a bracketed
+// secant (Illinois) iteration on ln alpha of full static solves takes over, to 1e-10.
+// Accurate where a fixed grid interpolated at the data is not: at the macroslip knee, where q
+// grows fast at almost constant alpha. Past the largest load the structure carries (no static
+// solution), amplitudes the model cannot reach get the last reachable point, flagged.
 #pragma once
 
 #include <vector>
@@ -33,11 +37,18 @@ enum class AmplitudeFrequency {
   kFirstHarmonic  ///< the first-harmonic frequency (a ring-down's or a steady state's)
 };
 
+/// How qsma_at() places each amplitude on the curve.
+enum class QsmaAtSolver {
+  kNewton,     ///< bordered Newton, bracketing where it does not converge (above)
+  kBracketing  ///< bracketing alone: the slower reference Newton is checked against
+};
+
 /// QSMA of elastic mode `mode` (1-based) at each amplitude s_i = q omega^power (ascending,
 /// > 0), with every column of the point; empty if a static solve fails below the requested
 /// amplitudes. InputError if there is no such mode.
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
                                  const std::vector<double>& amplitudes,
-                                 AmplitudeFrequency frequency = AmplitudeFrequency::kSecant);
+                                 AmplitudeFrequency frequency = AmplitudeFrequency::kSecant,
+                                 QsmaAtSolver solver = QsmaAtSolver::kNewton);
 
 }  // namespace jointlab::correlate

@@ -1,5 +1,6 @@
 #include "jointlab/correlate/qsma_at.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -66,6 +67,46 @@ TEST(QsmaAt, ReproducesQsmaPointsAcrossTheMacroslipKnee) {
       past_knee += curve[i].max_slip > phi_max;
     }
     EXPECT_GE(past_knee, 3);  // the comparison covers macroslip
+  }
+}
+
+// Newton against the bracketing iteration on the same amplitudes, secant and first-harmonic,
+// across the knee: Newton places s to rounding (1e-12 asked; the bracketing stops at 1e-10 in
+// ln s), and every column agrees to 1e-8 (the bracketing's 1e-10 times the columns' slopes
+// d ln column / d ln s <= ~10, with margin).
+TEST(QsmaAt, NewtonAgreesWithTheBracketingIteration) {
+  const model::JointCondensation jc = iwan_chains();
+  const auto [curve, automatic_end] = long_curve(jc, 40, 3);
+  ASSERT_GE(curve.size(), 40u);
+  for (AmplitudeFrequency frequency :
+       {AmplitudeFrequency::kSecant, AmplitudeFrequency::kFirstHarmonic}) {
+    const bool harmonic = frequency == AmplitudeFrequency::kFirstHarmonic;
+    for (int power = 0; power <= 2; ++power) {
+      std::vector<double> s;
+      // Off qsma()'s own points: none sits on the element's phi_max, where Newton hands over.
+      for (const auto& c : curve)
+        s.push_back(amplitude(c, power) * (1 + 1e-3 * (1 + s.size() % 3)));
+      std::sort(s.begin(), s.end());
+      const auto newton = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kNewton);
+      const auto bracketing = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kBracketing);
+      ASSERT_EQ(newton.size(), s.size());
+      ASSERT_EQ(bracketing.size(), s.size());
+      for (size_t i = 0; i < s.size(); ++i) {
+        SCOPED_TRACE(::testing::Message()
+                     << "harmonic " << harmonic << ", power " << power << ", point " << i);
+        const model::QsmaPoint& a = newton[i].point;
+        const model::QsmaPoint& b = bracketing[i].point;
+        const double f = harmonic ? a.ringdown_frequency_hz : a.frequency_hz;
+        EXPECT_TRUE(testing::Close(a.modal_amplitude * std::pow(2 * std::numbers::pi * f, power),
+                                   s[i], 1e-12));
+        EXPECT_TRUE(testing::Close(a.force_amplitude, b.force_amplitude, 1e-8));
+        EXPECT_TRUE(testing::Close(a.frequency_hz, b.frequency_hz, 1e-8));
+        EXPECT_TRUE(testing::Close(a.damping_ratio, b.damping_ratio, 1e-8));
+        EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, b.ringdown_frequency_hz, 1e-8));
+        EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, b.ringdown_damping_ratio, 1e-8));
+        EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, b.harmonic_damping_ratio, 1e-8));
+      }
+    }
   }
 }
 

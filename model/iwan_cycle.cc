@@ -10,7 +10,10 @@
 namespace jointlab::model {
 namespace {
 
-constexpr int kNodes = 48;
+// Gauss-Legendre nodes of the slip integral: exact to degree 47, and the integrand is
+// u^(6 chi + 14) times a function analytic in u^3; against 400 nodes 20 and 24 nodes agree to
+// 2e-13 for chi in [-0.999, 0.5] and b in [1e-8, 1] (the rounding floor), 16 to 5e-10.
+constexpr int kNodes = 24;
 
 // Gauss-Legendre nodes and weights on [0, 1] (Golub-Welsch: eigenvalues of the Jacobi
 // matrix of the Legendre recurrence); Eigen has no quadrature module.
@@ -34,8 +37,17 @@ const GaussLegendre& rule() {
   return r;
 }
 
-// g(s) with cos t = 1 - 2 s, as a function of t in [0, pi].
+// g(s) with cos t = 1 - 2 s, as a function of t in [0, pi]. Below t = 0.05, t - sin(2t)/2 by
+// its series in x = 2t (the difference loses ~-log10(t^2) digits; the first omitted term is
+// below 1e-19 of the sum there).
 double slip_fraction_stiffness(double t) {
+  if (t < 0.05) {
+    const double x = 2 * t, x2 = x * x;
+    return x * x2 *
+           (1.0 / 12 -
+            x2 * (1.0 / 240 - x2 * (1.0 / 10080 - x2 * (1.0 / 725760 - x2 / 79833600)))) /
+           std::numbers::pi;
+  }
   return (t - std::sin(t) * std::cos(t)) / std::numbers::pi;
 }
 
@@ -61,16 +73,32 @@ IwanCycle::IwanCycle(const Iwan& iwan)
       j1_(slip_integral(iwan.chi(), 1.0)),
       pm_chi1_(std::pow(iwan.phi_max(), iwan.chi() + 1)) {}
 
-double IwanCycle::first_harmonic_stiffness(double amplitude) const {
+double IwanCycle::first_harmonic_stiffness(double amplitude, double* slope) const {
   const double a = std::abs(amplitude);
-  const double chi1 = iwan_.chi() + 1, pm = iwan_.phi_max(), R = iwan_.R(), S = iwan_.S();
-  if (a == 0) return iwan_.stiffness();
+  const double chi = iwan_.chi(), chi1 = chi + 1, pm = iwan_.phi_max(), R = iwan_.R();
+  const double S = iwan_.S();
+  const double sign = amplitude < 0 ? -1.0 : 1.0;
+  if (a == 0) {
+    if (slope) *slope = 0;
+    return iwan_.stiffness();
+  }
   if (a < pm) {
     const double a_chi1 = std::pow(a, chi1);
+    if (slope) *slope = sign * R * (a_chi1 / a) * (chi1 * j1_ - 1);
     return R * a_chi1 * j1_ + R * (pm_chi1_ - a_chi1) / chi1 + S;
   }
   const double b = pm / a;
-  return R * std::pow(a, chi1) * slip_integral(iwan_.chi(), b) + S * g_of_ratio(b);
+  const double a_chi1 = std::pow(a, chi1);
+  const double j = slip_integral(chi, b);
+  const double g = g_of_ratio(b);
+  if (slope) {
+    const double t = std::acos(1 - 2 * b);
+    // J'(b) = b^chi g(b) and g'(b) = 4 sin(t) / pi; b decreases as -b / A.
+    const double dg = 4 * std::sin(t) / std::numbers::pi;
+    *slope = sign *
+             (R * chi1 * (a_chi1 / a) * j - (b / a) * (R * a_chi1 * std::pow(b, chi) * g + S * dg));
+  }
+  return R * a_chi1 * j + S * g;
 }
 
 double IwanCycle::turning_point_energy(double amplitude) const {

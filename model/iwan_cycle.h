@@ -14,10 +14,12 @@
 //            + [A >= phi_max] S g(phi_max / A),      J(b) = int_0^b s^chi g(s) ds,
 //   E(A)   = K_T A^2 / 2 - R A^(chi+3) / ((chi+1)(chi+3))       (A < phi_max),
 //   E(A)   = R phi_max^(chi+3) / (2 (chi+3)) + S phi_max^2 / 2  (A >= phi_max),
+// with slope dk_1/dA = R A^chi ((chi+1) J(1) - 1) (A < phi_max) and, past phi_max,
+//   R (chi+1) A^chi J(b) - (b / A) (R A^(chi+1) b^chi g(b) + S g'(b)),  g'(s) = 4 sin(t) / pi;
 // so dE/dA = A F'(A) (F' the virgin tangent of iwan.h: the stiffness of the sliders not
 // slipping). J(1) depends on chi alone and is computed once; J(b < 1) (macroslip) by the
 // same quadrature: substituting s = sin^2(t/2), t = T u^3 makes the integrand a smooth
-// power u^(6 chi + 14) near 0, and 48-point Gauss-Legendre on u integrates it to rounding.
+// power u^(6 chi + 14) near 0, and 24-point Gauss-Legendre on u integrates it to rounding.
 // Units: A in m, k_1 in N/m, E in J.
 #pragma once
 
@@ -32,7 +34,12 @@ class IwanCycle {
   explicit IwanCycle(const Iwan& iwan);
 
   /// In-phase first-harmonic stiffness of the cycle of amplitude |A| [N/m]; K_T at A = 0.
-  double first_harmonic_stiffness(double amplitude) const;
+  /// When slope is given it receives dk_1/dA at A [N/m^2] (odd in A; 0 at A = 0, where it is
+  /// singular for chi < 0).
+  double first_harmonic_stiffness(double amplitude, double* slope = nullptr) const;
+  /// The microslip integral J(1) = int_0^1 s^chi g(s) ds (above): below phi_max,
+  /// k_1(A) = R A^(chi+1) (J(1) - 1 / (chi+1)) + R phi_max^(chi+1) / (chi+1) + S.
+  double microslip_integral() const { return j1_; }
   /// Energy stored at the turning point of the cycle of amplitude |A| [J].
   double turning_point_energy(double amplitude) const;
 

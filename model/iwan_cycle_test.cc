@@ -35,6 +35,29 @@ TEST(IwanCycle, FirstHarmonicStiffnessMatchesTheMasingLoopByQuadrature) {
   }
 }
 
+TEST(IwanCycle, FirstHarmonicSlopeIsTheDerivativeOfTheStiffness) {
+  // Against a central difference of first_harmonic_stiffness with step h = 1e-5 A (away from
+  // the kink at phi_max, ratio 1.0, where only one-sided derivatives exist): truncation
+  // ~h^2 |k'''| / 6 ~ 1e-10 and rounding ~1e-16 k / h ~ 1e-11 of k / A, so 1e-7 of k / A
+  // separates a wrong term (order k / A) by six decades.
+  for (const IwanParameters& p : kSets) {
+    const Iwan iwan(p);
+    const IwanCycle cycle(iwan);
+    for (double ratio : kRatios) {
+      if (ratio == 1.0) continue;
+      const double a = ratio * iwan.phi_max(), h = 1e-5 * a;
+      const double fd =
+          (cycle.first_harmonic_stiffness(a + h) - cycle.first_harmonic_stiffness(a - h)) / (2 * h);
+      const double scale = cycle.first_harmonic_stiffness(a) / a;
+      double slope = 0, slope_minus = 0;
+      EXPECT_EQ(cycle.first_harmonic_stiffness(a, &slope), cycle.first_harmonic_stiffness(a));
+      EXPECT_NEAR(slope, fd, 1e-7 * scale) << "chi " << p.chi << " A/phi_max " << ratio;
+      cycle.first_harmonic_stiffness(-a, &slope_minus);
+      EXPECT_EQ(slope_minus, -slope);
+    }
+  }
+}
+
 TEST(IwanCycle, TurningPointEnergyIsTheVirginWorkLessTheLoadingLoss) {
   // Loading along the virgin curve to A stores the turning-point energy and dissipates, in
   // every slider that slips, phi (A - phi): a quarter of one cycle's loss. So

@@ -69,6 +69,11 @@ void JointCondensation::set_coordinates(const std::vector<Joint>& joints) {
                           R / (chi1 * (chi1 + 1)), R / (chi1 * (chi1 + 1) * (chi1 + 2)),
                           e.energy(e.phi_max())});
       cycles_[j].emplace_back(e);
+      Law& law = laws_[j].back();
+      const double j1 = cycles_[j].back().microslip_integral();
+      law.k1_0 = R * std::pow(e.phi_max(), chi1) / chi1 + e.S();
+      law.k1_p = R * (j1 - 1 / chi1);
+      law.dk1_p = R * (chi1 * j1 - 1);
       kt_(j) += e.stiffness();
       phi_max_(j) = std::max(phi_max_(j), e.phi_max());
       phi_max_min_ = std::min(phi_max_min_, e.phi_max());
@@ -222,12 +227,50 @@ void JointCondensation::softening(const Eigen::Ref<const Eigen::VectorXd>& r, Ei
   evaluate(r, h, dh, energy);
 }
 
+void JointCondensation::softening_and_harmonic(const Eigen::Ref<const Eigen::VectorXd>& r,
+                                               Eigen::VectorXd& h, Eigen::VectorXd& dh,
+                                               Eigen::VectorXd& k1, Eigen::VectorXd& dk1) const {
+  const int nj = size();
+  h.resize(nj);
+  dh.resize(nj);
+  k1.resize(nj);
+  dk1.resize(nj);
+  for (int j = 0; j < nj; ++j) {
+    h(j) = dh(j) = k1(j) = dk1(j) = 0;
+    const double s = std::abs(r(j));
+    const double sign = r(j) < 0 ? -1.0 : 1.0;
+    for (size_t e = 0; e < laws_[j].size(); ++e) {
+      const Law& law = laws_[j][e];
+      if (s >= law.phi_max) {
+        double hj, dhj, ej, slope;
+        law.eval(r(j), hj, dhj, ej);
+        h(j) += hj;
+        dh(j) += dhj;
+        k1(j) += cycles_[j][e].first_harmonic_stiffness(r(j), &slope);
+        dk1(j) += slope;
+        continue;
+      }
+      const double p = s > 0 ? std::pow(s, law.chi1) : 0.0;
+      h(j) += sign * law.a2 * s * p;
+      dh(j) += law.a1 * p;
+      k1(j) += law.k1_0 + law.k1_p * p;
+      if (s > 0) dk1(j) += sign * law.dk1_p * p / s;
+    }
+  }
+}
+
 Eigen::VectorXd JointCondensation::first_harmonic_stiffness(
-    const Eigen::Ref<const Eigen::VectorXd>& r) const {
+    const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd* slope) const {
   Eigen::VectorXd k(size());
+  if (slope) slope->resize(size());
   for (int j = 0; j < size(); ++j) {
     k(j) = 0;
-    for (const IwanCycle& c : cycles_[j]) k(j) += c.first_harmonic_stiffness(r(j));
+    if (slope) (*slope)(j) = 0;
+    for (const IwanCycle& c : cycles_[j]) {
+      double dk = 0;
+      k(j) += c.first_harmonic_stiffness(r(j), slope ? &dk : nullptr);
+      if (slope) (*slope)(j) += dk;
+    }
   }
   return k;
 }

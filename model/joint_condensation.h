@@ -92,8 +92,14 @@ class JointCondensation {
   void softening(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
                  Eigen::VectorXd& dh) const;
   /// In-phase first-harmonic stiffness of each coordinate in a steady cycle of amplitude
-  /// |r_j| (iwan_cycle.h), summed over its elements [N/m].
-  Eigen::VectorXd first_harmonic_stiffness(const Eigen::Ref<const Eigen::VectorXd>& r) const;
+  /// |r_j| (iwan_cycle.h), summed over its elements [N/m]; slope, when given, receives
+  /// d k_1j / d r_j [N/m^2].
+  Eigen::VectorXd first_harmonic_stiffness(const Eigen::Ref<const Eigen::VectorXd>& r,
+                                           Eigen::VectorXd* slope = nullptr) const;
+  /// h, h' and the first-harmonic stiffness k_1 with its slope dk_1/dr together: one power
+  /// per element below phi_max (the laws share |r|^(chi+1)).
+  void softening_and_harmonic(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
+                              Eigen::VectorXd& dh, Eigen::VectorXd& k1, Eigen::VectorXd& dk1) const;
   /// Energy the Iwan elements store at the turning point of cycles of amplitudes |r| [J].
   double turning_point_energy(const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// dr/dalpha = (K_c - diag h'(r))^{-1} g at r (Cholesky, or LDLT: finite also at a limit
@@ -116,6 +122,8 @@ class JointCondensation {
   // One element's law with its constants precomputed (one pow per evaluation).
   struct Law {
     double Kt, Fs, phi_max, chi1, a1, a2, a3, e_max;
+    // Below phi_max, k_1 = k1_0 + k1_p |r|^chi1 and dk_1/d|r| = dk1_p |r|^chi1 / |r|.
+    double k1_0 = 0, k1_p = 0, dk1_p = 0;
     void eval(double r, double& h, double& dh, double& energy) const;
   };
   // Groups the Iwan elements of `joints` into coordinates with their laws.

@@ -531,6 +531,15 @@ QsmaPoint qsma_point(const JointCondensation& m, int mode, double alpha, const E
 QsmaPoint qsma_point(const JointCondensation& m, const QsmaMode& mode, double alpha,
                      const Eigen::VectorXd& r, const Eigen::VectorXd& solver_tangent,
                      const Eigen::VectorXd* first_harmonic) {
+  Eigen::VectorXd t = m.tangent(mode.g, r);
+  if (t.size() == 0) t = solver_tangent;  // singular exactly at a limit point: the solver's own
+  if (t.size() == 0) t = r / alpha;
+  return qsma_point_with_tangent(m, mode, alpha, r, t, first_harmonic);
+}
+
+QsmaPoint qsma_point_with_tangent(const JointCondensation& m, const QsmaMode& mode, double alpha,
+                                  const Eigen::VectorXd& r, const Eigen::VectorXd& t,
+                                  const Eigen::VectorXd* first_harmonic) {
   const double omega2 = mode.omega2;
   const Eigen::VectorXd& p = mode.p;
   Eigen::VectorXd h, dh;
@@ -552,9 +561,6 @@ QsmaPoint qsma_point(const JointCondensation& m, const QsmaMode& mode, double al
   pt.harmonic_damping_ratio = d / (kTwoPi * w1 * q * q);
   // dE/dq along the curve (qsma.h): alpha + sum_j (dr_j/dq) (h_j - r_j h'_j), with
   // dr/dalpha = (K_c - diag h')^{-1} g and dq/dalpha = (1 + p^T diag(h') dr/dalpha) / omega_r^2.
-  Eigen::VectorXd t = m.tangent(mode.g, r);
-  if (t.size() == 0) t = solver_tangent;  // singular exactly at a limit point: the solver's own
-  if (t.size() == 0) t = r / alpha;
   const double dq = (1 + p.dot(dh.cwiseProduct(t))) / omega2;
   const double dE = alpha + t.dot(h - r.cwiseProduct(dh)) / dq;
   pt.ringdown_damping_ratio = d / (kTwoPi * q * dE);

@@ -128,6 +128,13 @@ QsmaPoint qsma_point(const JointCondensation& model, const QsmaMode& mode, doubl
                      const Eigen::VectorXd& r, const Eigen::VectorXd& solver_tangent,
                      const Eigen::VectorXd* first_harmonic = nullptr);
 
+/// qsma_point() where the exact tangent dr/dalpha = (K_c - diag h'(r))^{-1} g at r itself is
+/// known (no factorisation); first_harmonic as above.
+QsmaPoint qsma_point_with_tangent(const JointCondensation& model, const QsmaMode& mode,
+                                  double alpha, const Eigen::VectorXd& r,
+                                  const Eigen::VectorXd& tangent,
+                                  const Eigen::VectorXd* first_harmonic = nullptr);
+
 /// QSMA curve of elastic mode `mode` (1-based, as numbered by `jointlab modes`); InputError if no
 /// such mode or the options are invalid (checked always), std::invalid_argument without a
 /// summary.

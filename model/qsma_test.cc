@@ -81,6 +81,36 @@ Model free_pair(double m1, double m2, double k0, const IwanParameters& p) {
   return model;
 }
 
+TEST(JointCondensation, SofteningAndHarmonicTogetherMatchEachAlone) {
+  // Two elements of different chi and phi_max on one coordinate, one on another: every
+  // column of the joint evaluation against softening() and first_harmonic_stiffness(), at
+  // rest, in microslip of both, between the two phi_max and past both, of either sign. The
+  // same laws in another order of operations: 1e-12 relative (rounding is ~1e-15).
+  Model model = free_pair(1.0, 2.0, 1e5, kRivet);
+  model.joints.push_back({1, 0, "iwan.rivet", 5e5, Iwan(IwanParameters{10.0, 5e5, -0.8, 0.2})});
+  model.joints.push_back(
+      {0, kGround, "iwan.rivet", 1e6, Iwan(IwanParameters{30.0, 1e6, 0.0, 3.0})});
+  const JointCondensation jc(model);
+  ASSERT_EQ(jc.size(), 2);
+  const double pm = jc.phi_max(0);
+  for (double ratio : {0.0, 1e-4, 0.3, 0.7, 0.99, 1.5, 40.0}) {
+    for (double sign : {1.0, -1.0}) {
+      Eigen::VectorXd r(2);
+      r << sign * ratio * pm, -sign * ratio * jc.phi_max(1);
+      Eigen::VectorXd h, dh, k1, dk1, h_alone, dh_alone, slope;
+      jc.softening_and_harmonic(r, h, dh, k1, dk1);
+      jc.softening(r, h_alone, dh_alone);
+      const Eigen::VectorXd k1_alone = jc.first_harmonic_stiffness(r, &slope);
+      for (int j = 0; j < 2; ++j) {
+        EXPECT_NEAR(h(j), h_alone(j), 1e-12 * std::abs(h_alone(j))) << ratio << " " << j;
+        EXPECT_NEAR(dh(j), dh_alone(j), 1e-12 * std::abs(dh_alone(j))) << ratio << " " << j;
+        EXPECT_NEAR(k1(j), k1_alone(j), 1e-12 * k1_alone(j)) << ratio << " " << j;
+        EXPECT_NEAR(dk1(j), slope(j), 1e-12 * std::abs(slope(j))) << ratio << " " << j;
+      }
+    }
+  }
+}
+
 TEST(Qsma, MassOnSpringWithIwanToGroundMatchesTheClosedForm) {
   const double m = 0.5, k0 = 1.0e6;
   const JointCondensation model(sdof(m, k0, kRivet));
