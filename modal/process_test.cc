@@ -139,7 +139,7 @@ void expect_same_channel(const ChannelBand& together, const ChannelBand& alone) 
   EXPECT_TRUE(p.harmonic == q.harmonic);
 }
 
-// Channels do not affect each other's results: 2000 channels of one record (one in ten a
+// Channels do not affect each other's results: 400 channels of one record (one in ten a
 // ring-down at 150-400 Hz, as measured, times 1e300 or 1e-300 or with one corrupted sample;
 // a few noise alone, a mode outside the band or a burst too short for it; flat lines) give each
 // channel the same summary and backbone, to the bit, as the channel processed alone (the
@@ -147,8 +147,9 @@ void expect_same_channel(const ChannelBand& together, const ChannelBand& alone) 
 // and band weights, shared by the channels of a record, must not carry anything from one
 // channel to the next. The nodal test compares channels by design,
 // so it is off (--min-share 0) here.
-TEST(Process, EachOf2000ChannelsGetsWhatItGetsAlone) {
-  constexpr int kChannels = 2000, kRows = 250;
+TEST(Process, EachOf400ChannelsGetsWhatItGetsAlone) {
+  // Every case below recurs every 200 channels: 400 meet each twice, at other neighbours.
+  constexpr int kChannels = 400, kRows = 250;
   const data::Record rec = many_channels(kChannels, kRows, [](int c, int k, double t) {
     const double f = 150 + (c * 37) % 250, decay = 3 + c % 7;
     const double noise = 1e-4 * std::sin(1234.5 * (k + 7.0 * c));
@@ -194,7 +195,7 @@ TEST(Process, EachOf2000ChannelsGetsWhatItGetsAlone) {
   }
   // Both outcomes occur: the ring-downs give backbones, the others none.
   std::printf("%d of %d channels with a backbone\n", with_backbone, kChannels);
-  EXPECT_GE(with_backbone, 100);
+  EXPECT_GE(with_backbone, 20);
   EXPECT_LT(with_backbone, kChannels);
 }
 
