@@ -95,8 +95,9 @@ class Curve {
     const Eigen::MatrixXd& kc = m_.condensed_stiffness();
     const bool harmonic = frequency_ == AmplitudeFrequency::kFirstHarmonic && power_ > 0;
     const double half = 0.5 * power_;
-    Eigen::VectorXd h(nj), dh(nj), kr(nj), residual(nj), grad(nj), u(nj), t(nj), dk1(nj);
+    Eigen::VectorXd h(nj), dh(nj), kr(nj), residual(nj), grad(nj), t(nj), dk1(nj), dq(nj), dd(nj);
     Eigen::MatrixXd hessian(nj, nj);
+    Eigen::Matrix<double, Eigen::Dynamic, 2> rhs(nj, 2), solved(nj, 2);  // [g, residual] solved
     Eigen::LLT<Eigen::MatrixXd> llt(nj);
     bool factorised = false;  // llt holds the Hessian of an earlier iterate
     double x = std::log(st.alpha), previous = INFINITY;
@@ -111,12 +112,11 @@ class Curve {
       const double q = (alpha + p_.dot(h)) / omega2_;
       if (!(q > 0) || !std::isfinite(q)) return false;
       // c = ln s - target and its gradient: grad (in r) and dc_da (in alpha, r held).
-      const Eigen::VectorXd dq = p_.cwiseProduct(dh) / omega2_;  // dq/dr; dq/dalpha = 1/omega_r^2
+      dq = p_.cwiseProduct(dh) / omega2_;  // dq/dr; dq/dalpha = 1/omega_r^2
       double c = 0, dc_da = 0;
       if (harmonic) {
         // omega_1^2 = omega_r^2 - D / q, D = sum_j p_j (K_T,j - k_1j) r_j (model/qsma.h).
         double big_d = 0;
-        Eigen::VectorXd dd(nj);
         for (int j = 0; j < nj; ++j) {
           const double kt = m_.linear_stiffness(j);
           big_d += p_(j) * (kt - st.k1(j)) * st.r(j);
@@ -149,7 +149,14 @@ class Curve {
         llt.compute(hessian);
         if (llt.info() != Eigen::Success) return false;
         factorised = true;
-        t = llt.solve(g_);  // dr/dalpha
+        if (done) {
+          t = llt.solve(g_);  // dr/dalpha
+        } else {              // dr/dalpha and the Newton correction, in one pass
+          rhs.col(0) = g_;
+          rhs.col(1) = residual;
+          solved = llt.solve(rhs);
+          t = solved.col(0);
+        }
       }
       const double dc_dx = alpha * (grad.dot(t) + dc_da);  // d ln s / d ln alpha on the path
       if (!(dc_dx > 0) || !std::isfinite(dc_dx)) return false;
@@ -163,7 +170,7 @@ class Curve {
         slope = std::clamp(dc_dx, 1e-3, 1e6);
         return true;
       }
-      u = llt.solve(residual);
+      const auto u = solved.col(1);  // (K_c - diag h')^{-1} residual
       double dx = (grad.dot(u) - c) / dc_dx;
       const double limit = std::log(8.0);
       dx = std::clamp(dx, -limit, limit);
