@@ -14,9 +14,13 @@ packages=(
   clang libclang-rt-14-dev
 )
 
+# One dpkg-query for all (a second in all, one per package, otherwise); a package never
+# installed is not listed by it at all.
+installed=$(dpkg-query -W -f='${Package} ${Status}\n' "${packages[@]}" 2>/dev/null \
+  | awk '/ install ok installed$/ {print $1}' || true)
 missing=()
 for p in "${packages[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+  if ! grep -qx -- "$p" <<< "$installed"; then
     missing+=("$p")
   fi
 done
