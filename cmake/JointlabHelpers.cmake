@@ -6,9 +6,12 @@ function(jointlab_warnings target)
   if(JOINTLAB_SANITIZE)
     # GCC 12's flow analysis sees through the sanitizers' instrumentation poorly and reports
     # std::regex and std::function internals as maybe uninitialized: kept as a warning here.
+    # UBSan stops at its first report, so that a report fails the test instead of scrolling by.
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
+                                             -fno-sanitize-recover=undefined
                                              -Wno-error=maybe-uninitialized)
-    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined
+                                          -fno-sanitize-recover=undefined)
   endif()
 endfunction()
 
@@ -56,7 +59,14 @@ function(jointlab_add_test name source)
   if(JOINTLAB_SANITIZE)  # leaks inside third-party libraries (fontconfig under PLplot) only
     list(APPEND env "LSAN_OPTIONS=suppressions=${PROJECT_SOURCE_DIR}/fuzz/lsan.supp")
   endif()
-  gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_BINARY_DIR}
-    PROPERTIES ENVIRONMENT "${env}"
-    DISCOVERY_TIMEOUT 60)
+  gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_BINARY_DIR} DISCOVERY_TIMEOUT 60)
+  # The environment is set by a script ctest reads after the discovered tests. Given to
+  # gtest_discover_tests(PROPERTIES ENVIRONMENT ...), the list is split at its ';' on the way
+  # to the generated file (CMake 3.25), and only the first variable reaches the tests.
+  set(env_script "${CMAKE_CURRENT_BINARY_DIR}/${name}_environment.cmake")
+  file(WRITE "${env_script}"
+    "if(${name}_TESTS)\n"
+    "  set_tests_properties(\${${name}_TESTS} PROPERTIES ENVIRONMENT [==[${env}]==])\n"
+    "endif()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${env_script}")
 endfunction()

@@ -197,7 +197,8 @@ class JointStep {
                                &trial_h_, &res_, &res_try_}) {
       v->resize(nj_);
     }
-    llt_ = Eigen::LLT<Eigen::MatrixXd>(nj_);
+    // Sized and in a defined state (a factorisation never computed has no valid info()).
+    llt_.compute(Eigen::MatrixXd::Identity(nj_, nj_));
     jac_.resize(nj_, nj_);
   }
 
