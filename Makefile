@@ -4,7 +4,7 @@ BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench format clean
+.PHONY: all deps configure build test demo bench sanitize format clean
 
 all: build
 
@@ -30,8 +30,13 @@ bench: build
 	@for b in $(BUILD_DIR)/bin/jointlab_bench_*; do echo "== $$b"; $$b; done
 	@bash bench/compare_scipy.sh $(BUILD_DIR)
 
+# The whole suite under AddressSanitizer and UBSan (any report fails its test); LeakSanitizer
+# ignores only the third-party caches listed in fuzz/lsan.supp.
+sanitize:
+	@$(MAKE) test BUILD_DIR=build-sanitize BUILD_TYPE=RelWithDebInfo CMAKE_FLAGS=-DJOINTLAB_SANITIZE=ON
+
 format:
 	@clang-format -i $$(git ls-files '*.h' '*.cc')
 
 clean:
-	@rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log
+	@rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log build-sanitize build-sanitize.configure.log
