@@ -92,10 +92,8 @@ class JointCondensation {
   void softening(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
                  Eigen::VectorXd& dh) const;
   /// In-phase first-harmonic stiffness of each coordinate in a steady cycle of amplitude
-  /// |r_j| (iwan_cycle.h), summed over its elements [N/m]; slope, when given, receives
-  /// d k_1j / d r_j [N/m^2].
-  Eigen::VectorXd first_harmonic_stiffness(const Eigen::Ref<const Eigen::VectorXd>& r,
-                                           Eigen::VectorXd* slope = nullptr) const;
+  /// |r_j| (iwan_cycle.h), summed over its elements [N/m].
+  Eigen::VectorXd first_harmonic_stiffness(const Eigen::Ref<const Eigen::VectorXd>& r) const;
   /// h, h' and the first-harmonic stiffness k_1 with its slope dk_1/dr together: one power
   /// per element below phi_max (the laws share |r|^(chi+1)).
   void softening_and_harmonic(const Eigen::Ref<const Eigen::VectorXd>& r, Eigen::VectorXd& h,
@@ -124,7 +122,9 @@ class JointCondensation {
     double Kt, Fs, phi_max, chi1, a1, a2, a3, e_max;
     // Below phi_max, k_1 = k1_0 + k1_p |r|^chi1 and dk_1/d|r| = dk1_p |r|^chi1 / |r|.
     double k1_0 = 0, k1_p = 0, dk1_p = 0;
-    void eval(double r, double& h, double& dh, double& energy) const;
+    // h, h' and the stored energy at r; returns |r|^chi1 below phi_max (0 beyond), the power
+    // the microslip terms of h, h' and k_1 share.
+    double eval(double r, double& h, double& dh, double& energy) const;
   };
   // Groups the Iwan elements of `joints` into coordinates with their laws.
   void set_coordinates(const std::vector<Joint>& joints);

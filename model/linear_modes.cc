@@ -98,18 +98,6 @@ LinearModes dense_modes(const Eigen::SparseMatrix<double>& mass,
   return {solver.eigenvalues(), solver.eigenvectors(), 0};
 }
 
-// K_lin x applied element by element: the structure's K, then k (x_a - x_b) per joint,
-// free of the cancellation a stiff joint brings to the assembled matrix.
-Eigen::VectorXd apply_stiffness(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& x) {
-  Eigen::VectorXd y = model.stiffness * x;
-  for (const Joint& j : model.joints) {
-    const double f = j.stiffness * (x(j.a) - (j.b == kGround ? 0.0 : x(j.b)));
-    y(j.a) += f;
-    if (j.b != kGround) y(j.b) -= f;
-  }
-  return y;
-}
-
 // y = (K_lin - sigma M)^{-1} x for Spectra: one CHOLMOD factorization, then iterative
 // refinement (two steps) with residuals formed element by element: a joint 1e12 times
 // stiffer than the rest leaves rounding of order 1e-4 in the factorization's soft part.
@@ -125,7 +113,7 @@ class RefinedShiftInvert {
     const Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
     Eigen::VectorXd y = factor_.solve(x);
     for (int it = 0; it < 2; ++it) {
-      const Eigen::VectorXd r = x - apply_stiffness(model_, y) + shift_ * (model_.mass * y);
+      const Eigen::VectorXd r = x - model_.apply_linear_stiffness(y) + shift_ * (model_.mass * y);
       y += factor_.solve(r);
     }
     Eigen::Map<Eigen::VectorXd>(y_out, rows()) = y;
@@ -179,7 +167,7 @@ LinearModes sparse_modes(const Model& model, const Eigen::SparseMatrix<double>& 
     v = Eigen::HouseholderQR<Eigen::MatrixXd>(v).householderQ() * Eigen::MatrixXd::Identity(n, nev);
   }
   Eigen::MatrixXd kv(n, nev);
-  for (int k = 0; k < nev; ++k) kv.col(k) = apply_stiffness(model, v.col(k));
+  for (int k = 0; k < nev; ++k) kv.col(k) = model.apply_linear_stiffness(v.col(k));
   const Eigen::MatrixXd kr = v.transpose() * kv, mr = v.transpose() * (model.mass * v);
   const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> rr(0.5 * (kr + kr.transpose()),
                                                                      0.5 * (mr + mr.transpose()));
@@ -206,6 +194,21 @@ LinearModes linear_modes(const Model& model, const ModesOptions& options) {
   if (!(scale > 0)) scale = diagonal_scale(k_lin, model.mass);
   if (!std::isfinite(scale)) {
     throw InputError("linear modes: the stiffness or mass has entries that overflow");
+  }
+  // A joint more than 1e16 times stiffer than the structure's stiffest diagonal entry: the
+  // structure's own stiffness falls below rounding in that joint's rows of K_lin.
+  double structure_max = 0;
+  for (Eigen::Index i = 0; i < model.size(); ++i)
+    structure_max = std::max(structure_max, std::abs(model.stiffness.coeff(i, i)));
+  for (const Joint& j : model.joints) {
+    if (structure_max > 0 && j.stiffness > 1e16 * structure_max) {
+      throw InputError(fmt::format(
+          "linear modes: joint '{}' has stiffness {:.3g} N/m, more than 1e16 times the "
+          "structure's stiffest diagonal entry ({:.3g} N/m): the structure falls below "
+          "double precision beside it; a penalty stiffness 1e6 times the structure's is rigid "
+          "to 6 digits",
+          j.element, j.stiffness, structure_max));
+    }
   }
   const double threshold = options.rigid_tolerance * scale;
   const auto rigid_count = [&](const LinearModes& m) {
@@ -242,6 +245,22 @@ LinearModes linear_modes(const Model& model, const ModesOptions& options) {
         "linear modes: the stiffness matrix with joints at linear stiffness is not positive "
         "semidefinite (eigenvalue omega^2 = {:.6g} rad^2/s^2)",
         out.omega2.minCoeff()));
+  }
+  // Rayleigh quotients out of order (beyond rounding of the reduced problem) or not finite:
+  // the solve lost the structure to rounding, as a joint far stiffer than the structure can
+  // make it. Refused rather than reported as modes.
+  for (int i = 1; i < out.size(); ++i) {
+    if (!std::isfinite(out.omega2(i)) ||
+        out.omega2(i) < out.omega2(i - 1) * (1 - 1e-6) - threshold) {
+      double stiffest = 0;
+      for (const Joint& j : model.joints) stiffest = std::max(stiffest, j.stiffness);
+      throw InputError(fmt::format(
+          "linear modes: the modes are not resolved (omega^2 of mode {} is {:.6g} rad^2/s^2, "
+          "below the {:.6g} of the one before): the stiffest joint ({:.3g} N/m) leaves K_lin "
+          "too ill-conditioned; a penalty stiffness 1e6 times the structure's is rigid to 6 "
+          "digits",
+          i + 1, out.omega2(i), out.omega2(i - 1), stiffest));
+    }
   }
   int keep = out.size();
   if (elastic > 0) {

@@ -1,6 +1,7 @@
 #include "jointlab/model/model_file.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -181,6 +182,17 @@ Eigen::SparseMatrix<double> Model::linear_stiffness() const {
   Eigen::SparseMatrix<double> k(stiffness.rows(), stiffness.cols());
   k.setFromTriplets(t.begin(), t.end());
   return k;
+}
+
+Eigen::VectorXd Model::apply_linear_stiffness(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  assert(x.size() == size());
+  Eigen::VectorXd y = stiffness * x;
+  for (const Joint& j : joints) {
+    const double f = j.stiffness * (x(j.a) - (j.b == kGround ? 0.0 : x(j.b)));
+    y(j.a) += f;
+    if (j.b != kGround) y(j.b) -= f;
+  }
+  return y;
 }
 
 void validate_model(const Model& model, const std::string& source) {

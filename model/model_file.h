@@ -46,6 +46,9 @@ struct Model {
   int iwan_count() const;
   /// K plus every joint at its linear stiffness (Eq. 4).
   Eigen::SparseMatrix<double> linear_stiffness() const;
+  /// K_lin x formed element by element (K x, then k (x_a - x_b) per joint): free of the
+  /// cancellation a joint far stiffer than the structure brings to the assembled matrix.
+  Eigen::VectorXd apply_linear_stiffness(const Eigen::Ref<const Eigen::VectorXd>& x) const;
 };
 
 /// Reads a model file and the matrices it names; InputError naming file and field or line.
