@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -39,11 +40,26 @@ void run_run(const RunArgs& args) {
   }
   const campaign::RunSummary s = campaign::run_campaign(c, o);
   fmt::print("jointlab run: {}\n", s.report());
-  if (!s.no_backbone.empty()) {
-    throw InputError(
-        fmt::format("{}: no backbone in any hit for {}; everything else is written, "
-                    "the report says why: {}",
-                    args.campaign, fmt::join(s.no_backbone, ", "), s.report_markdown.string()));
+  // One line for what went wrong, however many hits and modes: the report has the rest.
+  std::vector<std::string> wrong;
+  if (!s.failed_hits.empty()) {
+    const campaign::FailedHit& first = s.failed_hits.front();
+    // At most 240 characters of the first reason, cut after a word; the report has it whole.
+    constexpr size_t kShown = 240;
+    std::string why = first.why;
+    if (why.size() > kShown) {
+      const size_t space = why.rfind(' ', kShown - 4);
+      why = why.substr(0, space == std::string::npos ? kShown - 4 : space) + " ...";
+    }
+    wrong.push_back(fmt::format("{} hit(s) could not be processed and are left out (first: {}: {})",
+                                s.failed_hits.size(), first.file.string(), why));
+  }
+  if (!s.no_backbone.empty())
+    wrong.push_back(fmt::format("no backbone in any hit for {}", fmt::join(s.no_backbone, ", ")));
+  if (!wrong.empty()) {
+    throw InputError(fmt::format("{}: {}; everything else is written, the report says why: {}",
+                                 args.campaign, fmt::join(wrong, ", and "),
+                                 s.report_markdown.string()));
   }
 }
 
@@ -58,7 +74,8 @@ void add_run_command(CLI::App& app) {
       "standard deviation, Student-t interval, flagged hits), run QSMA of the model's modes\n"
       "and the updates, draw the figures and write OUT/report.html and OUT/report.md.\n"
       "Restartable: the model and hits are reused while their input files, settings and the\n"
-      "program version are unchanged.\n\n"
+      "program version are unchanged. A hit that cannot be read or processed is left out and\n"
+      "named (report, stderr, exit status 2); everything else is still written.\n\n"
       "Example:\n"
       "  jointlab run data/examples/riveted-campaign/campaign.toml --out out/campaign");
   cmd->add_option("CAMPAIGN", args->campaign, "campaign file (TOML)")

@@ -22,12 +22,17 @@ namespace jointlab::campaign {
 
 namespace fs = std::filesystem;
 
+std::string FailedHit::text() const { return fmt::format("{}: {}", file.string(), why); }
+
 std::string RunSummary::report() const {
-  std::string s = fmt::format("{} hit(s): {} processed, {} up to date; {} flagged", hits,
-                              hits_processed, hits_reused, flagged_hits);
+  std::string s =
+      fmt::format("{} hit(s): {} processed, {} up to date", hits, hits_processed, hits_reused);
+  if (!failed_hits.empty()) s += fmt::format(", {} left out", failed_hits.size());
+  s += fmt::format("; {} flagged", flagged_hits);
   if (model_built) s += "; model built";
-  for (const std::string& m : no_backbone) s += fmt::format("\n  {}: no backbone", m);
   if (model_reused) s += "; model up to date";
+  for (const FailedHit& f : failed_hits) s += fmt::format("\n  left out: {}", f.text());
+  for (const std::string& m : no_backbone) s += fmt::format("\n  {}: no backbone", m);
   for (const std::string& n : notes) s += "\n  note: " + n;
   s +=
       fmt::format("\n  report: {}\n  markdown: {}", report_html.string(), report_markdown.string());
@@ -107,7 +112,8 @@ RunSummary run_staged(const Campaign& c, const RunOptions& o, const fs::path& ou
   if (!model_file.empty()) model = model_side(c, std::move(model_data), measured, out, o, summary);
   const ModelResults* with_model = model_file.empty() ? nullptr : &model;
   if (o.progress) o.progress("figures: drawing");
-  const CampaignFigures figures = draw_figures(c, measured, with_model, out / "figures");
+  const CampaignFigures figures =
+      draw_figures(c, measured, with_model, out / "figures", summary.failed_hits);
   const Report report = campaign_report(c, summary, measured, with_model, figures);
   write_report_html(report, out / "report.html");
   write_report_markdown(report, out / "report.md");

@@ -12,7 +12,8 @@
 //   report.html, report.md       the report (report.h)
 // Outputs appear as a set (data/output_stage.h): everything is written into a staging folder
 // in OUT and committed at the end, so a run that fails or is killed leaves OUT's previous
-// results as they were; a run that ends with modes without a backbone still commits.
+// results as they were; a run that ends with hits left out (a test file that cannot be read
+// or processed) or modes without a backbone still commits.
 // Restart: the model and each hit are recomputed only when missing or when their stamp (the
 // content of their input file, every setting they depend on and the program's version,
 // steps/stamp.h) differs; everything after them is cheap and always rewritten. Before any hit
@@ -39,11 +40,21 @@ struct RunOptions {
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
 };
 
+/// A hit that could not be read or processed: left out of the run and named in its report.
+struct FailedHit {
+  std::filesystem::path file;  ///< the test file
+  std::string group;           ///< its group's name
+  std::string why;             ///< what is wrong with it (one line)
+  /// "<file>: <why>".
+  std::string text() const;
+};
+
 /// What run_campaign() did.
 struct RunSummary {
   int hits = 0;                           ///< hits in the campaign
   int hits_processed = 0;                 ///< hits processed in this run
   int hits_reused = 0;                    ///< hits whose outputs were up to date
+  std::vector<FailedHit> failed_hits;     ///< hits left out: unreadable or unprocessable
   bool model_built = false;               ///< the model was built in this run
   bool model_reused = false;              ///< the built model was up to date
   int flagged_hits = 0;                   ///< hits flagged in any mode
@@ -55,9 +66,11 @@ struct RunSummary {
   std::string report() const;
 };
 
-/// Runs the whole campaign into options.out; InputError for bad input (files, DOFs, bands).
-/// A mode no hit gives a backbone for is no error here: everything else is written, the
-/// report says so at its top and RunSummary::no_backbone lists it.
+/// Runs the whole campaign into options.out; InputError for bad input (the campaign, its
+/// model, DOFs, bands), and then the previous results stay as they were. A hit that cannot be
+/// read or processed and a mode no hit gives a backbone for are no error here: everything
+/// else is written, the report says so at its top and RunSummary::failed_hits and
+/// RunSummary::no_backbone list them.
 RunSummary run_campaign(const Campaign& campaign, const RunOptions& options);
 
 }  // namespace jointlab::campaign

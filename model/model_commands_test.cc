@@ -170,7 +170,7 @@ TEST(ModelCommands, QsmaStopsAtTheLimitLoadAndSaysSo) {
   expect_closed_form_csv(dir() / "limit.csv", 0.0, m1 * m2 / (m1 + m2));
 }
 
-// Each invalid input: non-zero exit, one stderr line naming the place, no output left.
+// Each invalid input: exit status 2, one stderr line naming the place, no output left.
 TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
   write_pair("base", 1.0, 2.0, 100.0);
   const std::string mass = "base_M.mtx", stiff = "base_K.mtx";
@@ -224,7 +224,7 @@ TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
                                        std::string("modes ") + file + " --out bad.csv"}) {
       fs::remove(dir() / "bad.csv");
       const Outcome r = run(command);
-      EXPECT_NE(r.status, 0) << command;
+      EXPECT_EQ(r.status, 2) << command << "\nstderr: " << r.err;
       EXPECT_NE(r.err.find(c.expected), std::string::npos) << command << "\nstderr: " << r.err;
       EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
       EXPECT_FALSE(fs::exists(dir() / "bad.csv")) << command;
@@ -232,7 +232,7 @@ TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
   }
   // A mode that does not exist.
   const Outcome r = run("qsma base.toml --mode 3 --out bad.csv");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("mode 3 does not exist"), std::string::npos) << r.err;
 }
 

@@ -31,13 +31,13 @@ void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
 
 class ProcessBadInput : public ::testing::TestWithParam<BadCase> {};
 
-TEST_P(ProcessBadInput, OneLineErrorAndNonZeroExit) {
+TEST_P(ProcessBadInput, OneLineErrorAndExitStatus2) {
   const BadCase& c = GetParam();
   const std::string dir = scratch_dir(std::string("bad_") + c.name);
   const std::string file = dir + "/hit.csv";
   write_text(file, c.text);
   const CommandResult rp = run_jointlab("process " + file + " --band 10:20 --out " + dir + "/out");
-  EXPECT_NE(rp.status, 0);
+  EXPECT_EQ(rp.status, 2) << rp.err;
   std::string msg = rp.err;
   while (!msg.empty() && msg.back() == '\n') msg.pop_back();
   EXPECT_EQ(msg.find('\n'), std::string::npos) << "not one line: " << rp.err;
@@ -80,16 +80,16 @@ TEST(ProcessArguments, BadArgumentsAreRefused) {
   const std::string file = dir + "/hit.csv";
   write_text(file, "time,x\n" + good_rows(4000));
   CommandResult r = run_jointlab("process " + file + " --band 90:70 --out " + dir + "/o");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("LO < HI"), std::string::npos) << r.err;
   r = run_jointlab("process " + file + " --band 100:900 --out " + dir + "/o");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("Nyquist"), std::string::npos) << r.err;
   r = run_jointlab("process " + file + " --band 10:20 --channel nope --out " + dir + "/o");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("no channel 'nope'"), std::string::npos) << r.err;
   r = run_jointlab("process " + file + " --out " + dir + "/o");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("--band"), std::string::npos) << r.err;
   // A channel without a unit and no --quantity: refused, naming the channel and both fixes.
   r = run_jointlab("process " + file + " --band 40:55 --out " + dir + "/o");

@@ -1,9 +1,12 @@
 // End-to-end tests of `jointlab run` on a small simulated campaign (small_campaign.h): the
 // whole chain from test files to the report, the restart, and the Iwan targets that `run`
 // and `update-iwan` build from the same hits.
+#include <sys/wait.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -176,10 +179,44 @@ std::map<std::string, std::string> tree(const fs::path& dir) {
   return files;
 }
 
-// A run that fails part-way (the band moved, so every hit is processed again, and one hit
-// file broken since the last run) leaves the output folder
-// exactly as the last complete run left it, with no staging folder or temporary; the next
-// good run replaces the set and reuses the unchanged hits.
+// `text` with its first `from` replaced by `to` (which must be there).
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+// The campaign file with its band moved to +-8 % of the mode (every hit is processed again).
+std::string band_moved(const testing::SmallCampaign& s, const std::string& campaign) {
+  return replaced(
+      campaign, fmt::format("band = [{:.3f}, {:.3f}]", s.band[0], s.band[1]),
+      fmt::format("band = [{:.3f}, {:.3f}]", 0.92 * s.frequency_hz, 1.08 * s.frequency_hz));
+}
+
+// `run` of the small campaign into `out` with every write(2) to a file whose path holds
+// `fails` refused as on a full disk (tests/fail_writes.cc).
+testing::CommandResult run_on_full_disk(const testing::SmallCampaign& s, const fs::path& out,
+                                        const std::string& fails) {
+  const std::string shim = testing::binary_dir() + "/tests/libjointlab_fail_writes.so";
+  EXPECT_TRUE(fs::exists(shim));
+  const fs::path err = s.dir / "full_disk.err";
+  const std::string cmd = fmt::format(
+      "LD_PRELOAD={} ASAN_OPTIONS=verify_asan_link_order=0 JOINTLAB_FAIL_WRITES_TO={} "
+      "{}/bin/jointlab run {} --out {} --quiet > /dev/null 2> {}",
+      shim, fails, testing::binary_dir(), s.campaign.string(), out.string(), err.string());
+  const int raw = std::system(cmd.c_str());
+  testing::CommandResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.err = testing::read_file(err);
+  return r;
+}
+
+// A run that fails part-way (the band moved, so every hit is processed again, and then a
+// write fails as on a full disk: a hit's cache, which is no fault of the hit, or the report,
+// the last file before the commit) leaves the output folder exactly as the last complete run
+// left it, with no staging folder or temporary; the next good run replaces the set and reuses
+// the unchanged hits.
 TEST(RunCli, AFailedRunLeavesThePreviousResults) {
   const fs::path dir = testing::scratch_dir("run_cli_failed");
   const testing::SmallCampaign s = testing::make_small_campaign(dir, "");
@@ -189,23 +226,18 @@ TEST(RunCli, AFailedRunLeavesThePreviousResults) {
   const auto before = tree(out);
   ASSERT_TRUE(before.count("report.md"));
   ASSERT_TRUE(before.count(".run.outputs"));
-  // The band moved (every hit is processed again, its outputs rewritten) and hit 2 broken.
-  const std::string good = testing::read_file(s.hits[1]), campaign = testing::read_file(s.campaign);
-  const std::string band = fmt::format("band = [{:.3f}, {:.3f}]", s.band[0], s.band[1]);
-  ASSERT_NE(campaign.find(band), std::string::npos);
-  std::string moved = campaign;
-  moved.replace(
-      moved.find(band), band.size(),
-      fmt::format("band = [{:.3f}, {:.3f}]", 0.92 * s.frequency_hz, 1.08 * s.frequency_hz));
-  testing::write_text(s.campaign.string(), moved);
-  testing::write_text(s.hits[1].string(), "time,acc_5 [m/s^2]\n0,1\n0.001,x\n");
-  const testing::CommandResult bad = testing::run_jointlab(cmd);
-  EXPECT_EQ(bad.status, 2) << bad.err;
-  EXPECT_NE(bad.err.find("'x' is not a number"), std::string::npos) << bad.err;
-  EXPECT_EQ(bad.err.find(".run.stage"), std::string::npos) << bad.err;
-  EXPECT_EQ(tree(out), before);
+  const std::string campaign = testing::read_file(s.campaign);
+  testing::write_text(s.campaign.string(), band_moved(s, campaign));
+  for (const std::string fails : {"hit2.linear.csv", "report.md"}) {
+    const testing::CommandResult bad = run_on_full_disk(s, out, fails);
+    EXPECT_EQ(bad.status, 2) << fails << ": " << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    EXPECT_NE(bad.err.find(fails + ": write failed (disk full?)"), std::string::npos) << bad.err;
+    EXPECT_EQ(bad.err.find("left out"), std::string::npos) << bad.err;
+    EXPECT_EQ(bad.err.find(".run.stage"), std::string::npos) << bad.err;
+    EXPECT_EQ(tree(out), before) << fails;
+  }
   testing::write_text(s.campaign.string(), campaign);
-  testing::write_text(s.hits[1].string(), good);
   const testing::CommandResult again = testing::run_jointlab(cmd);
   ASSERT_EQ(again.status, 0) << again.err;
   EXPECT_NE(again.out.find("3 up to date"), std::string::npos) << again.out;
@@ -216,6 +248,94 @@ TEST(RunCli, AFailedRunLeavesThePreviousResults) {
     }
   }
   EXPECT_EQ(after.size(), before.size());
+}
+
+// Issue 17: a hit that cannot be read (a cell that is not a number) or processed (a sample
+// rate of 1e30 Hz) is left out, and the campaign is not: exit status 2 with one line naming
+// the first, the report's top lists both with their reasons, the other hits' outputs are
+// those of a run without the bad hits (byte for byte, in the old folder and in a fresh one),
+// nothing of the bad hits' earlier results is left, and once the files are fixed the next run
+// processes exactly those hits.
+TEST(RunCli, AHitThatCannotBeProcessedIsLeftOut) {
+  const fs::path dir = testing::scratch_dir("run_cli_bad_hit");
+  const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10, 20, 40, 30});
+  const fs::path out = dir / "out";
+  const auto run = [&](const fs::path& to) {
+    return testing::run_jointlab(
+        fmt::format("run {} --out {} --quiet", s.campaign.string(), to.string()));
+  };
+  ASSERT_EQ(run(out).status, 0);
+  // Each hit's cache files, by hit stem.
+  const auto cache = [&](const fs::path& from, const std::string& stem) {
+    std::map<std::string, std::string> files;
+    for (const auto& [name, text] : tree(from / "hits" / "all"))
+      if (name.rfind(stem + ".", 0) == 0 && name.find(".stamp") == std::string::npos)
+        files[name] = text;
+    return files;
+  };
+  const auto bad1 = cache(out, "hit1"), good1 = cache(out, "hit2"), good2 = cache(out, "hit3"),
+             bad4 = cache(out, "hit4");
+  ASSERT_TRUE(good1.count("hit2.acc_5.band1.csv"));
+  ASSERT_TRUE(good1.count("hit2.linear.csv"));
+  ASSERT_TRUE(fs::exists(out / "hits/all/hit1.acc_5.band1.csv"));
+  // hit1 (the spectrum's hit) broken, hit4 at a sample rate no record can have.
+  const std::string text1 = testing::read_file(s.hits[0]), text4 = testing::read_file(s.hits[3]);
+  testing::write_text(s.hits[0].string(), "time,acc_1 [m/s^2],acc_5 [m/s^2]\n0,1,1\n0.001,1,x\n");
+  testing::write_text(s.hits[3].string(), replaced(text4, "# fs: 1000\n", "# fs: 1e30\n"));
+
+  for (const fs::path& to : {out, dir / "fresh"}) {
+    SCOPED_TRACE(to.string());
+    const testing::CommandResult r = run(to);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    for (const std::string& says :
+         {"2 hit(s) could not be processed and are left out (first: " + s.hits[0].string(),
+          std::string("'x' is not a number"), std::string("everything else is written"),
+          (to / "report.md").string()})
+      EXPECT_NE(r.err.find(says), std::string::npos) << says << "\n" << r.err;
+    // In the old folder the good hits are up to date; in the fresh one they are processed
+    // side by side with the bad ones.
+    EXPECT_NE(r.out.find(to == out ? "4 hit(s): 0 processed, 2 up to date, 2 left out;"
+                                   : "4 hit(s): 2 processed, 0 up to date, 2 left out;"),
+              std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("left out: " + s.hits[3].string() + ": sample rate 1e+30 Hz"),
+              std::string::npos)
+        << r.out;
+    const std::string report = testing::read_file(to / "report.md");
+    const size_t top = report.find("## ");
+    ASSERT_NE(top, std::string::npos);
+    EXPECT_EQ(report.compare(top, 17, "## Hits left out\n"), 0) << report.substr(0, 300);
+    const size_t data = report.find("## Data processed");
+    ASSERT_NE(data, std::string::npos);
+    const std::string section = report.substr(top, data - top);
+    for (const std::string& says :
+         {"| " + s.hits[0].string() + " | all | line 3: ", std::string("'x' is not a number"),
+          "| " + s.hits[3].string() + " | all | ", std::string("sample rate 1e+30 Hz")})
+      EXPECT_NE(section.find(says), std::string::npos) << says << "\n" << section;
+    // The good hits: as without the bad ones; the bad ones: no backbone and no stamp left.
+    EXPECT_EQ(cache(to, "hit2"), good1);
+    EXPECT_EQ(cache(to, "hit3"), good2);
+    for (const char* bad : {"hit1", "hit4"}) {
+      for (const char* file : {".acc_1.band1.csv", ".acc_5.band1.csv", ".stamp"})
+        EXPECT_FALSE(fs::exists(to / "hits/all" / (bad + std::string(file)))) << bad << file;
+      EXPECT_TRUE(fs::exists(to / "hits/all" / (bad + std::string(".linear.csv")))) << bad;
+    }
+    // The spectrum is drawn from a hit that could be read.
+    EXPECT_NE(report.find("spectrum.png"), std::string::npos);
+  }
+  // Fixed: exactly the two hits are processed again, and give what they gave before.
+  testing::write_text(s.hits[0].string(), text1);
+  testing::write_text(s.hits[3].string(), text4);
+  const testing::CommandResult fixed = run(out);
+  ASSERT_EQ(fixed.status, 0) << fixed.err;
+  EXPECT_NE(fixed.out.find("4 hit(s): 2 processed, 2 up to date;"), std::string::npos) << fixed.out;
+  EXPECT_EQ(testing::read_file(out / "report.md").find("Hits left out"), std::string::npos);
+  EXPECT_EQ(cache(out, "hit1"), bad1);
+  EXPECT_EQ(cache(out, "hit4"), bad4);
+  EXPECT_EQ(cache(out, "hit2"), good1);
+  EXPECT_TRUE(fs::exists(out / "hits/all/hit1.stamp"));
+  EXPECT_TRUE(fs::exists(out / "hits/all/hit4.stamp"));
 }
 
 // The whole campaign is checked before any hit is processed: a typo in an update table, a
@@ -290,8 +410,9 @@ TEST(RunCli, AModeWithoutABackboneIsReportedAndFails) {
   EXPECT_TRUE(fs::exists(out / "scatter/mode2.json"));
 }
 
-// Hit files whose channels have no unit: without the campaign's `quantity` the run is refused
-// with one line naming the channel and both ways to fix it; with it, they are processed.
+// Hit files whose channels have no unit: without the campaign's `quantity` each is left out
+// (exit status 2, its mode without a backbone) with one line naming the channel and both ways
+// to fix it, the report's top giving the whole reason; with it, they are processed.
 TEST(RunCli, UnitlessChannelsNeedTheCampaignsQuantity) {
   const fs::path dir = testing::scratch_dir("run_cli_unitless");
   const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10});
@@ -321,6 +442,10 @@ TEST(RunCli, UnitlessChannelsNeedTheCampaignsQuantity) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   for (const char* says : {"channel 'acc_", "has no unit", "[m/s^2]", "quantity = ", "[campaign]"})
     EXPECT_NE(r.err.find(says), std::string::npos) << says << ": " << r.err;
+  const std::string report = testing::read_file(dir / "out" / "report.md");
+  EXPECT_EQ(report.find("## Hits left out"), report.find("## ")) << report.substr(0, 300);
+  EXPECT_NE(report.find("[campaign] of " + s.campaign.string()), std::string::npos)
+      << report.substr(0, 600);
   testing::write_text(s.campaign.string(), with);
   r = run();
   EXPECT_EQ(r.status, 0) << r.err;

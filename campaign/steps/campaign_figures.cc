@@ -59,9 +59,19 @@ ReportFigure backbone_figure(const Campaign& c, const MeasuredSide& measured,
           p};
 }
 
-// Spectrum of the first hit of the last group (the strongest level, by convention).
-ReportFigure spectrum_figure(const Campaign& c, const fs::path& dir) {
-  const fs::path& f = c.groups.back().files.front();
+// The hit whose spectrum is shown: the first of the last group (the strongest level, by
+// convention) that is not left out, else of the group before, and so on; empty when none.
+fs::path spectrum_hit(const Campaign& c, const std::vector<FailedHit>& left_out) {
+  for (auto g = c.groups.rbegin(); g != c.groups.rend(); ++g)
+    for (const fs::path& f : g->files)
+      if (std::none_of(left_out.begin(), left_out.end(),
+                       [&](const FailedHit& h) { return h.file == f; }))
+        return f;
+  return {};
+}
+
+// Spectrum of the hit `f`.
+ReportFigure spectrum_figure(const Campaign& c, const fs::path& f, const fs::path& dir) {
   const data::Record rec = data::read_record(f);
   signal::FftCache cache;
   SpectrumFigure sf;
@@ -138,7 +148,8 @@ std::vector<ReportFigure> model_figures(const Campaign& c, const MeasuredSide& m
 }  // namespace
 
 CampaignFigures draw_figures(const Campaign& c, const MeasuredSide& measured,
-                             const ModelResults* model, const fs::path& dir) {
+                             const ModelResults* model, const fs::path& dir,
+                             const std::vector<FailedHit>& left_out) {
   fs::create_directories(dir);
   CampaignFigures f;
   for (size_t k = 0; k < c.modes.size(); ++k) {
@@ -146,7 +157,8 @@ CampaignFigures draw_figures(const Campaign& c, const MeasuredSide& measured,
     f.backbone.push_back(measured.curves[k].empty() ? ReportFigure{}
                                                     : backbone_figure(c, measured, model, k, dir));
   }
-  f.spectrum = spectrum_figure(c, dir);
+  if (const fs::path hit = spectrum_hit(c, left_out); !hit.empty())
+    f.spectrum = spectrum_figure(c, hit, dir);
   if (model) f.model = model_figures(c, measured, *model, dir);
   return f;
 }

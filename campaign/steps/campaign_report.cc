@@ -24,6 +24,21 @@ std::string g6(double v) { return fmt::format("{:.6g}", v); }
 std::string zeta(double v) { return fmt::format("{:.3g}", v); }
 std::string pct(double v) { return fmt::format("{:+.3f} %", v); }
 
+// At the very top of the report: each hit that could not be read or processed, and why.
+ReportSection left_out_section(const RunSummary& summary) {
+  ReportSection s;
+  s.heading = "Hits left out";
+  s.paragraphs.push_back(fmt::format(
+      "{} hit(s) could not be read or processed and are left out of everything below; the "
+      "next run tries them again.",
+      summary.failed_hits.size()));
+  ReportTable t{"Why each hit is left out", {"file", "group", "reason"}, {}};
+  for (const FailedHit& f : summary.failed_hits)
+    t.rows.push_back({f.file.string(), f.group, f.why});
+  s.tables.push_back(t);
+  return s;
+}
+
 // At the top of the report: each mode no hit gave a backbone for, and every hit's reason.
 ReportSection no_backbone_section(const Campaign& c, const MeasuredSide& m) {
   ReportSection s;
@@ -78,7 +93,7 @@ ReportSection data_section(const Campaign& c, const RunSummary& summary,
     if (has_model) mt.rows.back().push_back(m.model_mode ? std::to_string(m.model_mode) : "-");
   }
   s.tables.push_back(mt);
-  s.figures.push_back(figures.spectrum);
+  if (!figures.spectrum.image.empty()) s.figures.push_back(figures.spectrum);
   return s;
 }
 
@@ -377,8 +392,11 @@ ReportSection notes_section(const Campaign& c, const RunSummary& summary) {
   for (const std::string& n : summary.notes) s.paragraphs.push_back(n);
   const bool has_model = !c.model.file.empty() || !c.model.description.empty();
   s.paragraphs.push_back(
-      fmt::format("This run: {} hit(s) processed, {} reused from earlier runs{}.",
+      fmt::format("This run: {} hit(s) processed, {} reused from earlier runs{}{}.",
                   summary.hits_processed, summary.hits_reused,
+                  summary.failed_hits.empty()
+                      ? ""
+                      : fmt::format(", {} left out (see the top)", summary.failed_hits.size()),
                   !has_model             ? ""
                   : summary.model_built  ? "; model built"
                   : summary.model_reused ? "; model reused"
@@ -392,6 +410,7 @@ Report campaign_report(const Campaign& c, const RunSummary& summary, const Measu
                        const ModelResults* model, const CampaignFigures& figures) {
   Report report;
   report.title = fmt::format("Test campaign: {}", c.name);
+  if (!summary.failed_hits.empty()) report.sections.push_back(left_out_section(summary));
   if (!summary.no_backbone.empty()) report.sections.push_back(no_backbone_section(c, measured));
   report.sections.push_back(data_section(c, summary, figures));
   report.sections.push_back(settings_section(c));

@@ -1,7 +1,8 @@
 // Step "report" of a campaign run (method.md Figure 1): the report's sections, in order:
-// data processed, settings, one scatter summary per mode, the model (linear frequencies, joint
-// parameters, the updates and, for a simulated campaign, the comparison with the known
-// parameters) and notes. report.h writes it as HTML and Markdown.
+// the hits left out and the modes without a backbone (when there are any), data processed,
+// settings, one scatter summary per mode, the model (linear frequencies, joint parameters, the
+// updates and, for a simulated campaign, the comparison with the known parameters) and notes.
+// report.h writes it as HTML and Markdown.
 #pragma once
 
 #include "jointlab/campaign/campaign.h"

@@ -1,8 +1,10 @@
 #include "jointlab/campaign/steps/hits.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -22,8 +24,23 @@ namespace fs = std::filesystem;
 
 fs::path hit_dir(const fs::path& out, const std::string& group) { return out / "hits" / group; }
 
-void process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
-                 signal::FftCache& cache) {
+namespace {
+
+// The campaign's processing settings; a setting `process` refuses is the campaign's error.
+modal::ProcessOptions process_options(const Campaign& c) {
+  modal::ProcessOptions opt;
+  for (const CampaignMode& m : c.modes) opt.bands.push_back(m.band);
+  for (const CampaignChannel& ch : c.channels) opt.channels.push_back(ch.name);
+  opt.quantity = c.quantity;
+  opt.ringdown.amplitude = c.amplitude;
+  if (const std::string why = opt.check(); !why.empty())
+    throw InputError(fmt::format("{}: {}", c.file.string(), why));
+  return opt;
+}
+
+// Reads and processes one test file; InputError for whatever is wrong with it.
+modal::RecordResult analyse_hit(const Campaign& c, const modal::ProcessOptions& opt,
+                                const fs::path& file, signal::FftCache& cache) {
   const data::Record rec = data::read_record(file);
   // The rule of `process`: a channel without a unit measures what the campaign says, or
   // nothing can be assumed.
@@ -35,55 +52,144 @@ void process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
             "the header (e.g. '{} [m/s^2]', '{} [m/s]') or quantity = "
             "\"acceleration\"|\"velocity\"|\"displacement\" in [campaign] of {}",
             file.string(), ch.name, ch.name, ch.name, c.file.string()));
-  modal::ProcessOptions opt;
-  for (const CampaignMode& m : c.modes) opt.bands.push_back(m.band);
-  for (const CampaignChannel& ch : c.channels) opt.channels.push_back(ch.name);
-  opt.quantity = c.quantity;
-  opt.ringdown.amplitude = c.amplitude;
-  if (const std::string why = opt.check(); !why.empty())
-    throw InputError(fmt::format("{}: {}", c.file.string(), why));
-  const modal::RecordResult r = modal::process_record(rec, opt, cache);
-  fs::create_directories(dir);
-  modal::write_backbones(dir, r, opt.ringdown);
-  data::Table t;
-  const Eigen::Index n = static_cast<Eigen::Index>(r.results.size());
-  Eigen::VectorXd band(n), chan(n), ok(n), f(n), z(n), re(n), im(n), t0(n), t1(n), dec(n);
+  return modal::process_record(rec, opt, cache);
+}
+
+// The linear data of a hit's cache, `n` rows of zeros to fill (columns: hits.h), and its
+// reasons, one line "<band> <channel index> <why>" per band and channel without a backbone.
+struct LinearColumns {
+  explicit LinearColumns(Eigen::Index n)
+      : band(Eigen::VectorXd::Zero(n)),
+        chan(band),
+        ok(band),
+        f(band),
+        z(band),
+        re(band),
+        im(band),
+        t0(band),
+        t1(band),
+        dec(band) {}
+  Eigen::VectorXd band, chan, ok, f, z, re, im, t0, t1, dec;
   std::string reasons;
-  for (Eigen::Index i = 0; i < n; ++i) {
+
+  // Writes <stem>.reasons.txt, then <stem>.linear.csv: its presence marks the hit as complete.
+  void write(const fs::path& dir, const fs::path& file) const {
+    data::write_file_atomically(dir / (file.stem().string() + ".reasons.txt"), reasons);
+    data::Table t;
+    t.add({{"band", band},
+           {"channel", chan},
+           {"ok", ok},
+           {"linear_frequency_hz", f},
+           {"linear_damping", z},
+           {"amplitude_re_m", re},
+           {"amplitude_im_m", im},
+           {"span_start_s", t0},
+           {"span_end_s", t1},
+           {"decades", dec}});
+    data::write_table(dir / (file.stem().string() + ".linear.csv"), t);
+  }
+};
+
+// The cache of a processed hit.
+void write_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
+               const modal::RecordResult& r, const modal::ProcessOptions& opt) {
+  modal::write_backbones(dir, r, opt.ringdown);
+  LinearColumns l(static_cast<Eigen::Index>(r.results.size()));
+  for (Eigen::Index i = 0; i < l.band.size(); ++i) {
     const modal::ChannelBand& cb = r.results[i];
-    band(i) = cb.band_index;
-    chan(i) = 0;
+    l.band(i) = cb.band_index;
     for (size_t k = 0; k < c.channels.size(); ++k)
-      if (c.channels[k].name == cb.channel) chan(i) = static_cast<double>(k);
-    const bool good = cb.ringdown.summary.status == modal::RingdownStatus::kOk;
-    ok(i) = good;
-    f(i) = good ? cb.ringdown.summary.linear_frequency_hz : 0.0;
-    z(i) = good ? cb.ringdown.summary.linear_damping : 0.0;
-    re(i) = std::isfinite(cb.complex_amplitude.real()) ? cb.complex_amplitude.real() : 0.0;
-    im(i) = std::isfinite(cb.complex_amplitude.imag()) ? cb.complex_amplitude.imag() : 0.0;
+      if (c.channels[k].name == cb.channel) l.chan(i) = static_cast<double>(k);
     const modal::RingdownSummary& rs = cb.ringdown.summary;
-    t0(i) = good ? rs.span_start_s : 0.0;
-    t1(i) = good ? rs.span_end_s : 0.0;
-    dec(i) = good ? rs.amplitude_decades : 0.0;
+    const bool good = rs.status == modal::RingdownStatus::kOk;
+    l.ok(i) = good;
+    l.f(i) = good ? rs.linear_frequency_hz : 0.0;
+    l.z(i) = good ? rs.linear_damping : 0.0;
+    l.re(i) = std::isfinite(cb.complex_amplitude.real()) ? cb.complex_amplitude.real() : 0.0;
+    l.im(i) = std::isfinite(cb.complex_amplitude.imag()) ? cb.complex_amplitude.imag() : 0.0;
+    l.t0(i) = good ? rs.span_start_s : 0.0;
+    l.t1(i) = good ? rs.span_end_s : 0.0;
+    l.dec(i) = good ? rs.amplitude_decades : 0.0;
     if (!good) {
       std::string why = rs.message.empty() ? "no span kept" : rs.message;
       std::replace(why.begin(), why.end(), '\n', ' ');
-      reasons += fmt::format("{} {} {}\n", cb.band_index, static_cast<int>(chan(i)), why);
+      l.reasons += fmt::format("{} {} {}\n", cb.band_index, static_cast<int>(l.chan(i)), why);
     }
   }
-  t.add({{"band", band},
-         {"channel", chan},
-         {"ok", ok},
-         {"linear_frequency_hz", f},
-         {"linear_damping", z},
-         {"amplitude_re_m", re},
-         {"amplitude_im_m", im},
-         {"span_start_s", t0},
-         {"span_end_s", t1},
-         {"decades", dec}});
-  data::write_file_atomically(dir / (file.stem().string() + ".reasons.txt"), reasons);
-  // Written last: its presence marks the hit as complete.
-  data::write_table(dir / (file.stem().string() + ".linear.csv"), t);
+  l.write(dir, file);
+}
+
+// The cache of a hit that could not be read or processed: no backbone at any band and
+// channel, each for `why`; its earlier backbones and stamp go, so that nothing of an earlier
+// run is read as this hit's and the hit is tried again by the next run.
+void write_failed_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
+                      const std::string& why) {
+  const size_t nb = c.modes.size(), nc = c.channels.size();
+  std::vector<fs::path> stale{dir / (file.stem().string() + ".stamp")};
+  for (size_t b = 0; b < nb; ++b)
+    for (const CampaignChannel& ch : c.channels)
+      stale.push_back(dir /
+                      modal::backbone_file_name(file.string(), ch.name, static_cast<int>(b) + 1));
+  for (const fs::path& p : stale) {
+    std::error_code ec;
+    fs::remove(p, ec);
+    if (ec)
+      throw InputError(where(p.string(), 0, "cannot remove an earlier result: " + ec.message()));
+  }
+  LinearColumns l(static_cast<Eigen::Index>(nb * nc));
+  for (size_t b = 0; b < nb; ++b) {
+    for (size_t ch = 0; ch < nc; ++ch) {
+      const Eigen::Index i = static_cast<Eigen::Index>(b * nc + ch);
+      l.band(i) = static_cast<double>(b + 1);
+      l.chan(i) = static_cast<double>(ch);
+      l.reasons += fmt::format("{} {} {}\n", b + 1, ch, why);
+    }
+  }
+  l.write(dir, file);
+}
+
+// A hit left out for `message` (an InputError's, which names the file: "FILE:LINE: what" or
+// "FILE: what"), its reason without the file's name.
+FailedHit left_out(const fs::path& file, const std::string& group, const std::string& message) {
+  FailedHit f{file, group, message};
+  const std::string name = file.string() + ":";
+  if (message.rfind(name, 0) != 0) return f;
+  std::string why = message.substr(name.size());
+  size_t digits = 0;
+  while (digits < why.size() && std::isdigit(static_cast<unsigned char>(why[digits]))) ++digits;
+  if (digits > 0 && digits < why.size() && why[digits] == ':')
+    why = "line " + why.substr(0, digits) + why.substr(digits);
+  const size_t text = why.find_first_not_of(' ');
+  if (text != std::string::npos) f.why = why.substr(text);
+  return f;
+}
+
+// `text` on one line.
+std::string one_line(std::string text) {
+  std::replace(text.begin(), text.end(), '\r', ' ');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
+}
+
+}  // namespace
+
+std::string process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
+                        signal::FftCache& cache) {
+  const modal::ProcessOptions opt = process_options(c);
+  std::optional<modal::RecordResult> r;
+  std::string why;
+  try {
+    r = analyse_hit(c, opt, file, cache);
+  } catch (const InputError& e) {
+    why = one_line(e.what());
+  }
+  fs::create_directories(dir);
+  if (r) {
+    write_hit(c, file, dir, *r, opt);
+  } else {
+    write_failed_hit(c, file, dir, why);
+  }
+  return why;
 }
 
 HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file,
@@ -177,17 +283,29 @@ std::vector<HitData> process_hits(const Campaign& c, const fs::path& out, const 
     if (o.progress) o.progress(s);
   };
   if (!todo.empty()) {
+    process_options(c);  // the campaign's own settings are refused before any hit
     say(fmt::format("process: {} hit(s) to process, {} up to date", todo.size(),
                     summary.hits_reused));
+    // Each job owns its entry: why its hit could not be read or processed (empty: it was).
+    std::vector<std::string> failed(todo.size());
     parallel_for(
         todo.size(), o.threads, [] { return signal::FftCache{}; },
         [&](size_t i, signal::FftCache& cache) {
           const Job& j = jobs[todo[i]];
           const fs::path dir = hit_dir(out, j.group->name);
-          process_hit(c, j.file, dir, cache);
-          write_stamp(dir / (j.file.stem().string() + ".stamp"), stamps[todo[i]]);
+          failed[i] = process_hit(c, j.file, dir, cache);
+          if (failed[i].empty())
+            write_stamp(dir / (j.file.stem().string() + ".stamp"), stamps[todo[i]]);
         });
-    summary.hits_processed = static_cast<int>(todo.size());
+    for (size_t i = 0; i < todo.size(); ++i) {
+      if (failed[i].empty()) {
+        ++summary.hits_processed;
+        continue;
+      }
+      const Job& j = jobs[todo[i]];
+      summary.failed_hits.push_back(left_out(j.file, j.group->name, failed[i]));
+      say(fmt::format("process: {}; the hit is left out", summary.failed_hits.back().text()));
+    }
   } else {
     say(fmt::format("process: all {} hit(s) up to date", jobs.size()));
   }

@@ -2,7 +2,9 @@
 // every group is processed with the library of `jointlab process` (the campaign's bands and
 // channels) into OUT/hits/<group>/, then read back. A hit is recomputed only when its cache
 // is missing or its stamp (<stem>.stamp, stamp.h: the test file's content, hit_settings()
-// and the program's version) differs.
+// and the program's version) differs. A test file that cannot be read or processed (an
+// InputError about that file) does not stop the run: its hit is left out, with the error as
+// the reason of its every band and channel, and is tried again by the next run.
 //
 // Cache of one hit: the backbones <stem>.<channel>.band<k>.csv (modal/process_output.h),
 // <stem>.reasons.txt (one line "<band> <channel index> <why there is no backbone>" per band
@@ -54,8 +56,12 @@ struct HitData {
 std::filesystem::path hit_dir(const std::filesystem::path& out, const std::string& group);
 
 /// Processes one test file with the campaign's settings and writes its cache into `dir`.
-void process_hit(const Campaign& campaign, const std::filesystem::path& file,
-                 const std::filesystem::path& dir, signal::FftCache& cache);
+/// Returns "" or, when the file cannot be read or processed, why (one line, naming the file),
+/// its cache then that of a hit without a backbone at any band and channel for that reason,
+/// without its earlier backbones and stamp. InputError for the campaign's settings or a cache
+/// that cannot be written.
+std::string process_hit(const Campaign& campaign, const std::filesystem::path& file,
+                        const std::filesystem::path& dir, signal::FftCache& cache);
 
 /// Reads one hit's cache from `dir`.
 HitData load_hit(const Campaign& campaign, const CampaignGroup& group,
@@ -66,7 +72,8 @@ HitData load_hit(const Campaign& campaign, const CampaignGroup& group,
 std::string hit_settings(const Campaign& campaign);
 
 /// The step: processes the hits whose cache is stale (in parallel), reads every hit back in
-/// campaign order, and counts processed and reused hits in `summary`.
+/// campaign order, counts processed and reused hits in `summary` and lists there the hits
+/// that could not be read or processed (left out: no backbone, no stamp, tried again next run).
 std::vector<HitData> process_hits(const Campaign& campaign, const std::filesystem::path& out,
                                   const RunOptions& options, RunSummary& summary);
 

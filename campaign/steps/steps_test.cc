@@ -137,6 +137,51 @@ TEST_F(Steps, ProcessHitsThenReuseThem) {
   EXPECT_EQ(reused[2].curves[0][1].frequency_hz, (*hits_)[2].curves[0][1].frequency_hz);
 }
 
+// A test file that cannot be read is left out, not fatal: its hit has no backbone at any band
+// and channel, each for the reader's message; its earlier backbones and stamp are gone, so
+// the next call tries it again, while the other hit is processed and then reused.
+TEST_F(Steps, AHitThatCannotBeReadIsLeftOut) {
+  const fs::path dir = small_->dir / "left_out";
+  fs::create_directories(dir / "out" / "hits" / "all");
+  Campaign c = *campaign_;
+  c.groups.resize(1);
+  c.groups[0].files = {dir / "good.csv", dir / "bad.csv"};
+  fs::copy_file(small_->hits[0], c.groups[0].files[0]);
+  testing::write_text(c.groups[0].files[1].string(),
+                      "time,acc_1 [m/s^2],acc_5 [m/s^2]\n0,1,1\n0.001,x,1\n");
+  // What an earlier run of bad.csv left.
+  for (const char* stale : {"bad.acc_1.band1.csv", "bad.acc_5.band1.csv", "bad.stamp"})
+    testing::write_text((dir / "out" / "hits" / "all" / stale).string(), "earlier");
+  RunOptions o;
+  o.out = dir / "out";
+  RunSummary summary;
+  const std::vector<HitData> hits = process_hits(c, o.out, o, summary);
+  EXPECT_EQ(summary.hits_processed, 1);
+  ASSERT_EQ(summary.failed_hits.size(), 1u);
+  const FailedHit& f = summary.failed_hits[0];
+  EXPECT_EQ(f.file, c.groups[0].files[1]);
+  EXPECT_EQ(f.group, "all");
+  EXPECT_EQ(f.why.rfind("line 3: ", 0), 0u) << f.why;
+  EXPECT_NE(f.why.find("'x' is not a number"), std::string::npos) << f.why;
+  EXPECT_EQ(f.text(), c.groups[0].files[1].string() + ": " + f.why);
+  ASSERT_EQ(hits.size(), 2u);
+  for (int ch = 0; ch < 2; ++ch) {
+    EXPECT_TRUE(hits[0].linear[0][ch].ok) << ch;
+    const LinearEntry& le = hits[1].linear[0][ch];
+    EXPECT_FALSE(le.ok) << ch;
+    EXPECT_EQ(le.reason, c.groups[0].files[1].string() +
+                             ":3: " + f.why.substr(std::string("line 3: ").size()));
+    EXPECT_EQ(hits[1].curves[0][ch].amplitude.size(), 0) << ch;
+  }
+  for (const char* stale : {"bad.acc_1.band1.csv", "bad.acc_5.band1.csv", "bad.stamp"})
+    EXPECT_FALSE(fs::exists(dir / "out" / "hits" / "all" / stale)) << stale;
+  RunSummary again;
+  process_hits(c, o.out, o, again);
+  EXPECT_EQ(again.hits_reused, 1);
+  EXPECT_EQ(again.hits_processed, 0);
+  EXPECT_EQ(again.failed_hits.size(), 1u);
+}
+
 // The measured mode: the mean linear frequency of the kept hits, recomputed here, and an
 // operating shape that matches the truth's mode shape at the sensors (MAC).
 TEST_F(Steps, SummariseMeasuredModes) {
