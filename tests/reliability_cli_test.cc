@@ -407,6 +407,12 @@ TEST(Limits, SizesAreRefusedBeforeAllocating) {
                "simulate: the record would hold 1e+09 samples x 1 sensor(s) = 1e+09 values; the "
                "limit is 5e7");
   EXPECT_FALSE(fs::exists(dir + "/sim.csv"));
+  // Within that limit, 1e9 Hz for 0.04 s is 1.6e8 steps of 2.5e-10 s against a 13 Hz mode
+  // (w_1 dt = 2e-8): refused at once rather than run for a minute into a drifting record.
+  expect_error(run_jointlab("simulate " + model + " --impact 1 --force 1 --duration 0.04 " +
+                            "--fs 1e9 --out " + dir + "/sim.csv"),
+               "would lose the acceleration to rounding; lower --fs");
+  EXPECT_FALSE(fs::exists(dir + "/sim.csv"));
   write_text(dir + "/beam.toml", "[mesh]\nelement = \"beam\"\nsize = 1e-7\n");
   expect_error(run_jointlab("build-model " + dir + "/beam.toml --out " + dir + "/m"),
                "field 'mesh.size' = 1e-07 m is too small: 5e+06 beam elements per strip, the "
