@@ -56,8 +56,9 @@ void run_simulate(SimulateArgs& args) {
   model::SimulationSummary summary;
   const model::SimulatedResponse r = model::simulate_ringdown(m, o, &summary);
   if (summary.status != model::SimulationStatus::kOk) {
-    throw InputError(fmt::format("simulate: {}: {} (a smaller step, --substeps, may help)",
-                                 args.model, summary.message));
+    throw InputError(
+        fmt::format("simulate: {}: {}; no record is written (a smaller step, --substeps, may help)",
+                    args.model, summary.message));
   }
   args.record.model_name = args.model;
   const data::Record rec = model::make_simulated_record(m, o, r, summary, args.record);

@@ -369,6 +369,36 @@ TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("model_mode 9999"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "hits"));
+  // A channel's DOF outside the model (named with the campaign file), and a model file whose
+  // Iwan set is unphysical (chi = 5, named with the model file's line): before any hit.
+  const fs::path dof_dir = testing::scratch_dir("run_cli_bad_dof");
+  const testing::SmallCampaign d = testing::make_small_campaign(dof_dir, "", {10});
+  text = testing::read_file(d.campaign);
+  const size_t dof_at = text.find("dof = \"");
+  ASSERT_NE(dof_at, std::string::npos);
+  text.replace(dof_at, text.find('\n', dof_at) - dof_at, "dof = \"99999\"");
+  testing::write_text(d.campaign.string(), text);
+  const testing::CommandResult bad_dof = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", d.campaign.string(), (dof_dir / "out").string()));
+  EXPECT_EQ(bad_dof.status, 2);
+  EXPECT_EQ(std::count(bad_dof.err.begin(), bad_dof.err.end(), '\n'), 1) << bad_dof.err;
+  EXPECT_NE(bad_dof.err.find(d.campaign.string() + ": channel 'acc_"), std::string::npos)
+      << bad_dof.err;
+  EXPECT_NE(bad_dof.err.find("index outside the model's"), std::string::npos) << bad_dof.err;
+  EXPECT_FALSE(fs::exists(dof_dir / "out" / "hits"));
+  const fs::path chi_dir = testing::scratch_dir("run_cli_bad_model");
+  const testing::SmallCampaign m = testing::make_small_campaign(chi_dir, "", {10});
+  text = testing::read_file(m.model);
+  const size_t chi_at = text.find("chi = ");
+  ASSERT_NE(chi_at, std::string::npos);
+  text.replace(chi_at, text.find('\n', chi_at) - chi_at, "chi = 5.0");
+  testing::write_text(m.model.string(), text);
+  const testing::CommandResult bad_model = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", m.campaign.string(), (chi_dir / "out").string()));
+  EXPECT_EQ(bad_model.status, 2);
+  EXPECT_EQ(std::count(bad_model.err.begin(), bad_model.err.end(), '\n'), 1) << bad_model.err;
+  EXPECT_NE(bad_model.err.find("chi = 5 must be in (-1, 0]"), std::string::npos) << bad_model.err;
+  EXPECT_FALSE(fs::exists(chi_dir / "out" / "hits"));
 }
 
 // A band with no mode in it: everything else is written, the report's top says "no backbone"

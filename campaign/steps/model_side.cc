@@ -107,7 +107,8 @@ CampaignModelData read_campaign_model(const Campaign& c, const fs::path& file) {
   d.file = file;
   d.model = model::read_model(file);
   for (const CampaignChannel& ch : c.channels) {
-    d.dofs.push_back(model::resolve_dof(d.model, ch.dof, fmt::format("channel '{}' dof", ch.name)));
+    d.dofs.push_back(model::resolve_dof(
+        d.model, ch.dof, fmt::format("{}: channel '{}' dof", c.file.string(), ch.name)));
     d.sensors.push_back({ch.name, d.dofs.back(), ch.sign});
   }
   return d;
