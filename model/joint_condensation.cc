@@ -157,14 +157,12 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   const double left = (bt.transpose() * factor.solve(residual)).cwiseAbs().maxCoeff() /
                       flexibility_.cwiseAbs().maxCoeff();
   if (flexibility_.allFinite() && !(left <= 1e-6)) {
-    double joint_max = 0;
-    for (const Joint& joint : model.joints) joint_max = std::max(joint_max, joint.stiffness);
     throw InputError(fmt::format(
         "QSMA: the joints' flexibility B K_lin^-1 B^T is resolved only to {:.1g} of itself: a "
         "joint or spring far stiffer than the structure (the stiffest is {:.3g} N/m) leaves "
         "K_lin too ill-conditioned; a penalty stiffness 1e6 times the structure's is rigid to "
         "6 digits",
-        left, joint_max));
+        left, model.stiffest_joint()));
   }
   if (!flexibility_.allFinite()) {
     throw InputError(

@@ -252,14 +252,12 @@ LinearModes linear_modes(const Model& model, const ModesOptions& options) {
   for (int i = 1; i < out.size(); ++i) {
     if (!std::isfinite(out.omega2(i)) ||
         out.omega2(i) < out.omega2(i - 1) * (1 - 1e-6) - threshold) {
-      double stiffest = 0;
-      for (const Joint& j : model.joints) stiffest = std::max(stiffest, j.stiffness);
       throw InputError(fmt::format(
           "linear modes: the modes are not resolved (omega^2 of mode {} is {:.6g} rad^2/s^2, "
           "below the {:.6g} of the one before): the stiffest joint ({:.3g} N/m) leaves K_lin "
           "too ill-conditioned; a penalty stiffness 1e6 times the structure's is rigid to 6 "
           "digits",
-          i + 1, out.omega2(i), out.omega2(i - 1), stiffest));
+          i + 1, out.omega2(i), out.omega2(i - 1), model.stiffest_joint()));
     }
   }
   int keep = out.size();

@@ -195,6 +195,12 @@ Eigen::VectorXd Model::apply_linear_stiffness(const Eigen::Ref<const Eigen::Vect
   return y;
 }
 
+double Model::stiffest_joint() const {
+  double k = 0;
+  for (const Joint& j : joints) k = std::max(k, j.stiffness);
+  return k;
+}
+
 void validate_model(const Model& model, const std::string& source) {
   const Context ctx{source};
   check_square(ctx, 0, "mass", "M", model.mass);

@@ -49,6 +49,8 @@ struct Model {
   /// K_lin x formed element by element (K x, then k (x_a - x_b) per joint): free of the
   /// cancellation a joint far stiffer than the structure brings to the assembled matrix.
   Eigen::VectorXd apply_linear_stiffness(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The largest joint stiffness (spring k or Iwan K_T) [N/m]; 0 without joints.
+  double stiffest_joint() const;
 };
 
 /// Reads a model file and the matrices it names; InputError naming file and field or line.
