@@ -448,7 +448,8 @@ TEST(IwanUpdate, BetaHeldAtZero) {
   }
   TwoChainParameters start = start_off(truth);
   start.beta = 0;
-  const IwanObjective obj(two_chain_structure(start), "rivet", sensors, {target}, {});
+  const model::Model m = two_chain_structure(start);  // the objective refers to it
+  const IwanObjective obj(m, "rivet", sensors, {target}, {});
   for (const IwanOptimizer optimizer :
        {IwanOptimizer::kGlobalLocal, IwanOptimizer::kPaper, IwanOptimizer::kPaperLog}) {
     SCOPED_TRACE(static_cast<int>(optimizer));
@@ -458,6 +459,7 @@ TEST(IwanUpdate, BetaHeldAtZero) {
     IwanUpdateSummary sum;
     const model::IwanParameters p = update_iwan(obj, o, &sum);
     SCOPED_TRACE(sum.report());
+    std::printf("%s", sum.report().c_str());
     EXPECT_NE(sum.status, IwanUpdateStatus::kNoValidPoint);
     EXPECT_EQ(p.beta, 0.0);
     EXPECT_TRUE(std::isfinite(sum.final_cost));
