@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/model/fe/model_builder.h"
 #include "jointlab/model/fe/riveted_beam.h"
@@ -35,26 +36,24 @@ void run_build_model(const BuildModelArgs& args) {
   if (args.modes >= 0) d.fixed_interface_modes = args.modes;
   fe::BuildOptions options;
   if (!args.quiet)
-    options.progress = [&](const std::string& s) {
-      fmt::print(stderr, "[{:6.1f} s] {}\n", elapsed(), s);
-    };
+    options.progress = [&](const std::string& s) { say(stderr, "[{:6.1f} s] {}\n", elapsed(), s); };
   const fe::ReducedModel m = fe::build_reduced_model(d, options);
   if (!m.summary.ok)
     throw InputError(
         fmt::format("{}: the reduction failed: {}", args.description, m.summary.report));
-  if (!args.quiet) fmt::print(stderr, "[{:6.1f} s] writing {}\n", elapsed(), args.out);
+  if (!args.quiet) say(stderr, "[{:6.1f} s] writing {}\n", elapsed(), args.out);
   fe::write_model_directory(args.out, m);
   if (args.quiet) return;
   const Eigen::VectorXd f = fe::reduced_frequencies_hz(m);
   std::string freqs;
   for (int k = 6; k < std::min<int>(16, static_cast<int>(f.size())); ++k)
     freqs += fmt::format(" {:.2f}", f(k));
-  fmt::print(stderr,
-             "[{:6.1f} s] done: {} DOFs reduced to {} ({} boundary + {} modes)\n"
-             "  assembly {:.2f} s, reduction {:.2f} s\n"
-             "  first elastic frequencies with the joints at their linear stiffness [Hz]:{}\n",
-             elapsed(), m.summary.full_dofs, m.stiffness.rows(), m.summary.boundary_dofs,
-             m.summary.modes, m.summary.seconds_assembly, m.summary.seconds_reduction, freqs);
+  say(stderr,
+      "[{:6.1f} s] done: {} DOFs reduced to {} ({} boundary + {} modes)\n"
+      "  assembly {:.2f} s, reduction {:.2f} s\n"
+      "  first elastic frequencies with the joints at their linear stiffness [Hz]:{}\n",
+      elapsed(), m.summary.full_dofs, m.stiffness.rows(), m.summary.boundary_dofs, m.summary.modes,
+      m.summary.seconds_assembly, m.summary.seconds_reduction, freqs);
   if (args.skip_check) return;
   // The reduction's accuracy: reduced against full elastic frequencies (Ritz values lie above).
   const int n = std::min<int>(10, static_cast<int>(f.size()) - 6);
@@ -66,10 +65,10 @@ void run_build_model(const BuildModelArgs& args) {
     worst = std::max(worst, std::abs(e));
     errs += fmt::format(" {:.3g}", 100 * e);
   }
-  fmt::print(stderr,
-             "[{:6.1f} s] reduction accuracy, first {} elastic modes, reduced / full - 1 [%]:{}\n"
-             "  largest {:.3g} % (raise reduction.fixed_interface_modes or --modes to lower it)\n",
-             elapsed(), n, errs, 100 * worst);
+  say(stderr,
+      "[{:6.1f} s] reduction accuracy, first {} elastic modes, reduced / full - 1 [%]:{}\n"
+      "  largest {:.3g} % (raise reduction.fixed_interface_modes or --modes to lower it)\n",
+      elapsed(), n, errs, 100 * worst);
 }
 
 }  // namespace

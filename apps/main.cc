@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
 
@@ -37,8 +38,8 @@ int main(int argc, char** argv) {
     names += (names.empty() ? "" : ", ") + sub->get_name();
   }
   if (!known) {
-    fmt::print(stderr, "jointlab: error: unknown command '{}' (commands: {})\n",
-               jointlab::shorten(argv[1]), names);
+    jointlab::apps::say(stderr, "jointlab: error: unknown command '{}' (commands: {})\n",
+                        jointlab::shorten(argv[1]), names);
     return 2;
   }
   try {
@@ -48,14 +49,16 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);
     std::string message = e.what();
     std::replace(message.begin(), message.end(), '\n', ' ');
-    fmt::print(stderr, "jointlab: error: {} (see --help)\n", jointlab::shorten(message, 400));
+    jointlab::apps::say(stderr, "jointlab: error: {} (see --help)\n",
+                        jointlab::shorten(message, 400));
     return 2;
   } catch (const jointlab::InputError& e) {
     // Readers cut names in their messages; this bounds whatever else a message quotes.
-    fmt::print(stderr, "jointlab: error: {}\n", jointlab::shorten(e.what(), 2000));
+    jointlab::apps::say(stderr, "jointlab: error: {}\n", jointlab::shorten(e.what(), 2000));
     return 2;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "jointlab: internal error: {}\n", jointlab::shorten(e.what(), 2000));
+    jointlab::apps::say(stderr, "jointlab: internal error: {}\n",
+                        jointlab::shorten(e.what(), 2000));
     return 3;
   }
   return 0;

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <regex>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -16,6 +17,7 @@
 
 #include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
 #include "jointlab/data/output_stage.h"
@@ -49,8 +51,10 @@ signal::Band parse_band(const std::string& text) {
     throw InputError(fmt::format("--band {}: expected LO:HI in Hz, e.g. 70:90", text));
   }
   double lo = 0, hi = 0;
-  for (const auto& [part, value] :
-       {std::pair{text.substr(0, colon), &lo}, std::pair{text.substr(colon + 1), &hi}}) {
+  for (const auto& [part, value, what] : {std::tuple{text.substr(0, colon), &lo, "LO"},
+                                          std::tuple{text.substr(colon + 1), &hi, "HI"}}) {
+    if (part.empty())
+      throw InputError(fmt::format("--band {}: {} is missing; give LO:HI in Hz", text, what));
     if (std::string why = finite_number(part, *value); !why.empty()) {
       throw InputError(fmt::format("--band {}: {}; expected LO:HI in Hz, e.g. 70:90", text, why));
     }
@@ -106,9 +110,9 @@ void run_process(const ProcessArgs& args) {
         for (const modal::ChannelBand& r : results[i].results) {
           fmt::format_to(std::back_inserter(lines), "{} {} band {}: {}\n", args.files[i], r.channel,
                          r.band_index, r.ringdown.summary.report());
-          if (lines.size() > 65536) fmt::print(stderr, "{}", std::exchange(lines, {}));
+          if (lines.size() > 65536) say(stderr, "{}", std::exchange(lines, {}));
         }
-        fmt::print(stderr, "{}", lines);
+        say(stderr, "{}", lines);
       });
   modal::write_summary(out, results, opt);
   stage.commit();
@@ -117,8 +121,8 @@ void run_process(const ProcessArgs& args) {
     for (const auto& c : r.results)
       written += c.ringdown.summary.status == modal::RingdownStatus::kOk;
   }
-  fmt::print("jointlab process: {} backbone file(s) and summary.json written to {}\n", written,
-             args.out);
+  say(stdout, "jointlab process: {} backbone file(s) and summary.json written to {}\n", written,
+      args.out);
   // Like `run`: everything is written, and a band with a backbone at no channel of any file
   // (not merely at some: nodal sensors) fails the command, naming the band and why.
   std::vector<std::string> empty;

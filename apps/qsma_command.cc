@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
@@ -42,7 +43,7 @@ void run_qsma(const QsmaArgs& args) {
   if (curve.empty()) throw InputError(fmt::format("qsma: {}", summary.message));
   model::write_qsma_csv(args.out, curve);
   if (summary.termination == model::QsmaTermination::kLimitLoad) {
-    fmt::print(stderr, "jointlab qsma: {}\n", summary.message);
+    say(stderr, "jointlab qsma: {}\n", summary.message);
   }
 }
 

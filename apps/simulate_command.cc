@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/data/record_writer.h"
 #include "jointlab/model/model_file.h"
@@ -46,12 +47,10 @@ void run_simulate(SimulateArgs& args) {
   }
   if (const std::string e = args.record.error(); !e.empty()) throw InputError("simulate: --" + e);
   if (!args.quiet) {
-    o.progress = [&](const std::string& s) {
-      fmt::print(stderr, "[{:6.1f} s] {}\n", elapsed(), s);
-    };
-    fmt::print(stderr, "[{:6.1f} s] {}: {} DOFs, {} joints ({} Iwan); impact at {} with {} N\n",
-               elapsed(), args.model, m.size(), m.joints.size(), m.iwan_count(),
-               model::dof_name(m, o.pulse.dof), o.pulse.force);
+    o.progress = [&](const std::string& s) { say(stderr, "[{:6.1f} s] {}\n", elapsed(), s); };
+    say(stderr, "[{:6.1f} s] {}: {} DOFs, {} joints ({} Iwan); impact at {} with {} N\n", elapsed(),
+        args.model, m.size(), m.joints.size(), m.iwan_count(), model::dof_name(m, o.pulse.dof),
+        o.pulse.force);
   }
   model::SimulationSummary summary;
   const model::SimulatedResponse r = model::simulate_ringdown(m, o, &summary);
@@ -64,8 +63,8 @@ void run_simulate(SimulateArgs& args) {
   const data::Record rec = model::make_simulated_record(m, o, r, summary, args.record);
   data::write_record(args.out, rec);
   if (!args.quiet) {
-    fmt::print(stderr, "[{:6.1f} s] {}\n[{:6.1f} s] wrote {}\n", elapsed(), summary.report(),
-               elapsed(), args.out);
+    say(stderr, "[{:6.1f} s] {}\n[{:6.1f} s] wrote {}\n", elapsed(), summary.report(), elapsed(),
+        args.out);
   }
 }
 

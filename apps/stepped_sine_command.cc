@@ -8,6 +8,7 @@
 
 #include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/apps/stepped_sine_figure.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/measured_data.h"
@@ -104,7 +105,7 @@ void run_stepped_sine(const SteppedSineArgs& args) {
     modal::SteppedSineFileResult r = modal::extract_stepped_sine_file(f, quantity, opt);
     r.source = f;
     for (size_t i = 0; i < r.tables.size(); ++i)
-      fmt::print(stderr, "{} {}: {}\n", f, r.tables[i].label, r.points[i].report());
+      say(stderr, "{} {}: {}\n", f, r.tables[i].label, r.points[i].report());
     results.push_back(std::move(r));
   }
   const fs::path out(args.out);
@@ -125,8 +126,8 @@ void run_stepped_sine(const SteppedSineArgs& args) {
         fmt::format("{} amplitude [{}]", quantity_name(opt.amplitude), si_unit(opt.amplitude)),
         args.figure);
   }
-  fmt::print("jointlab stepped-sine: {} backbone file(s) and summary.json written to {}\n", written,
-             out.string());
+  say(stdout, "jointlab stepped-sine: {} backbone file(s) and summary.json written to {}\n",
+      written, out.string());
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/campaign/figures.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/campaign/steps/iwan_step.h"
@@ -122,8 +123,8 @@ void run_update_linear(const LinearArgs& a) {
     for (int j = 0; j < cols; ++j) columns.push_back(fmt::format("FE {}", j + 1));
     campaign::plot_mac(mac.leftCols(cols), rows, columns, "MAC at the result", out / "mac.png");
   }
-  fmt::print("{}", summary.report());
-  for (const std::string& w : summary.warnings) fmt::print(stderr, "warning: {}\n", w);
+  say(stdout, "{}", summary.report());
+  for (const std::string& w : summary.warnings) say(stderr, "warning: {}\n", w);
 }
 
 struct IwanArgs {
@@ -307,9 +308,9 @@ void run_update_iwan(const IwanArgs& a) {
   correlate::write_iwan_parameters(fs::path(a.out) / "parameters.csv", summary);
   correlate::write_iwan_history(fs::path(a.out) / "history.csv", summary);
   if (!front.empty()) correlate::write_pareto(fs::path(a.out) / "pareto.csv", front);
-  fmt::print("{}", summary.report());
+  say(stdout, "{}", summary.report());
   for (const correlate::ParetoPoint& p : front) {
-    fmt::print(
+    say(stdout,
         "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
         "error {:.3g} %, backbone cost {:.4g}{}\n",
         p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
@@ -319,7 +320,7 @@ void run_update_iwan(const IwanArgs& a) {
       modes += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
                                 : fmt::format(" {}: unpaired", i + 1);
     }
-    if (!p.mode_errors.empty()) fmt::print("{}\n", modes);
+    if (!p.mode_errors.empty()) say(stdout, "{}\n", modes);
   }
 }
 
@@ -407,7 +408,10 @@ void add_update_commands(CLI::App& app) {
       ->check(CLI::IsMember({"matched", "secant"}));
   iw->add_option("--gamma", ia->options.fixed_gamma, "hold Kt / Ks at this value")
       ->check(positive());
-  iw->add_option("--beta", ia->options.fixed_beta, "hold beta at this value")->check(positive());
+  iw->add_option_function<double>(
+        "--beta", [ia](const double& beta) { ia->options.fixed_beta = beta; },
+        "hold beta at this value (0: no macroslip weight)")
+      ->check(non_negative());
   iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")
       ->delimiter(',');
   iw->add_option("--evaluations", ia->options.max_evaluations,

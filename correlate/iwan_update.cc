@@ -48,7 +48,8 @@ std::string IwanUpdateOptions::error() const {
   if (!(b.chi_min > -1 && b.chi_min < b.chi_max)) return "bounds: -1 < chi_min < chi_max";
   if (!(b.beta_min > 0 && b.beta_min < b.beta_max)) return "bounds: 0 < beta_min < beta_max";
   if (!(fixed_gamma >= 0)) return "fixed_gamma must be >= 0";
-  if (!(fixed_beta >= 0)) return "fixed_beta must be >= 0";
+  if (fixed_beta && !(*fixed_beta >= 0 && std::isfinite(*fixed_beta)))
+    return "fixed_beta must be a finite number >= 0";
   if (samples < 2) return "samples must be >= 2";
   if (!(contraction > 0 && contraction < 1)) return "contraction must be in (0, 1)";
   if (max_evaluations < samples) return "max_evaluations must be >= samples";
@@ -315,12 +316,17 @@ Vec4 sample(const Box& b, bool log_scale, std::mt19937& rng) {
   return v;
 }
 
+// Which of (F_S, gamma, chi, beta) the options hold at a given value.
+std::array<bool, 4> held_parameters(const IwanUpdateOptions& o) {
+  return {false, o.fixed_gamma > 0, false, o.fixed_beta.has_value()};
+}
+
 Box initial_box(const IwanUpdateOptions& o) {
   const IwanBounds& b = o.bounds;
   Box box{Vec4(b.Fs_min, b.gamma_min, b.chi_min, b.beta_min),
           Vec4(b.Fs_max, b.gamma_max, b.chi_max, b.beta_max)};
   if (o.fixed_gamma > 0) box.lo(1) = box.hi(1) = o.fixed_gamma;
-  if (o.fixed_beta > 0) box.lo(3) = box.hi(3) = o.fixed_beta;
+  if (o.fixed_beta) box.lo(3) = box.hi(3) = *o.fixed_beta;
   return box;
 }
 
@@ -367,7 +373,7 @@ class IwanCost : public ceres::CostFunction {
   }
   bool Evaluate(double const* const* x, double* r, double** jac) const override {
     const double Ks = tr_.objective.reference_stiffness();
-    const Vec4 v = to_v(x[0]);
+    const Vec4 v = with_held(to_v(x[0]));
     if (!tr_.objective.residuals(to_params(v, Ks), r)) {
       tr_.record(v, kPenalty);
       return false;
@@ -389,7 +395,7 @@ class IwanCost : public ceres::CostFunction {
           double xs[4];
           std::copy(x[0], x[0] + 4, xs);
           xs[k] += j % 2 == 0 ? h : -h;
-          ok[j] = tr_.objective.residuals(to_params(to_v(xs), Ks), shifted[j].data());
+          ok[j] = tr_.objective.residuals(to_params(with_held(to_v(xs)), Ks), shifted[j].data());
         });
     for (int k = 0; k < 4; ++k) {
       if (held_[k]) {
@@ -404,6 +410,15 @@ class IwanCost : public ceres::CostFunction {
   }
 
  private:
+  // v with the held parameters at their values: their coordinates in x are placeholders (ln 0
+  // of beta held at 0 is no finite coordinate).
+  Vec4 with_held(Vec4 v) const {
+    const IwanUpdateOptions& o = tr_.options;
+    if (held_[1]) v(1) = o.fixed_gamma;
+    if (held_[3]) v(3) = *o.fixed_beta;
+    return v;
+  }
+
   Tracker& tr_;
   std::array<bool, 4> held_;
 };
@@ -435,7 +450,7 @@ void global_local(Tracker& tr, std::mt19937& rng) {
   }
   std::sort(samples.begin(), samples.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  const std::array<bool, 4> held{false, o.fixed_gamma > 0, false, o.fixed_beta > 0};
+  const std::array<bool, 4> held = held_parameters(o);
   std::vector<int> constant;
   for (int k = 0; k < 4; ++k)
     if (held[k]) constant.push_back(k);
@@ -446,6 +461,8 @@ void global_local(Tracker& tr, std::mt19937& rng) {
     if (remaining <= 9) break;
     const int limit = tr.used() + remaining / (o.local_starts - s);
     Vec4 x = to_x(samples[s].second);
+    for (int k = 0; k < 4; ++k)
+      if (held[k]) x(k) = 0;  // a placeholder (IwanCost uses the held values)
     ceres::Problem problem;
     problem.AddResidualBlock(new IwanCost(tr, held), nullptr, x.data());
     const Vec4 lo = to_x(full.lo), hi = to_x(full.hi);
@@ -480,7 +497,7 @@ void global_local(Tracker& tr, std::mt19937& rng) {
 // between curves poorly when G is small), with the cluster-robust correlations.
 Eigen::Matrix4d covariance(const IwanObjective& objective, const IwanUpdateOptions& options,
                            const Vec4& v) {
-  const std::array<bool, 4> held{false, options.fixed_gamma > 0, false, options.fixed_beta > 0};
+  const std::array<bool, 4> held = held_parameters(options);
   std::vector<int> free;
   for (int k = 0; k < 4; ++k)
     if (!held[k]) free.push_back(k);
@@ -588,7 +605,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   // The start with the held parameters at their held values: K_T = gamma K_s as asked.
   model::IwanParameters start = s.start;
   if (options.fixed_gamma > 0) start.Kt = options.fixed_gamma * objective.reference_stiffness();
-  if (options.fixed_beta > 0) start.beta = options.fixed_beta;
+  if (options.fixed_beta) start.beta = *options.fixed_beta;
   if (!(tr.best < kPenalty)) {
     s.status = IwanUpdateStatus::kNoValidPoint;
     s.best = start;

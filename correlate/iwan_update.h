@@ -100,10 +100,10 @@ enum class IwanOptimizer { kPaper, kPaperLog, kGlobalLocal };
 
 /// Settings of update_iwan().
 struct IwanUpdateOptions {
-  IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;       ///< method
-  IwanBounds bounds;                                           ///< search box
-  double fixed_gamma = 0;                                      ///< > 0: gamma held at this value
-  double fixed_beta = 0;                                       ///< > 0: beta held at this value
+  IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;  ///< method
+  IwanBounds bounds;                                      ///< search box
+  double fixed_gamma = 0;                                 ///< > 0: gamma held at this value
+  std::optional<double> fixed_beta;  ///< beta held at this value (>= 0; 0: no macroslip weight)
   AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< measured amplitude quantity
   IwanComparison comparison = IwanComparison::kMatched;        ///< model columns compared
   int samples = 100;                                           ///< samples per Monte Carlo round

@@ -432,6 +432,52 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
   EXPECT_FALSE(testing::Close(p.Fs, truth.Fs, 2 * s_fs));
 }
 
+// beta = 0 (no macroslip delta, method.md) is in the domain and can be held: every optimiser
+// keeps it at exactly 0 (its search coordinate ln beta is no finite number, so the held value
+// must not go through it), and with noiseless backbones of a beta = 0 truth reaching 1.2 to 2
+// times full macroslip the global-local update recovers F_S, K_T and chi.
+TEST(IwanUpdate, BetaHeldAtZero) {
+  TwoChainParameters truth;
+  truth.iwan = true;
+  truth.beta = 0;
+  const std::vector<Sensor> sensors{{"a5", 5, -1.0}};
+  IwanTarget target;
+  for (const double top : {1.2, 1.6, 2.0}) {
+    target.curves.push_back(synthetic_backbone(two_chain_structure(truth), 1, sensors, 0,
+                                               AmplitudeQuantity::kVelocity, 20, top, 0, 0, 1));
+  }
+  TwoChainParameters start = start_off(truth);
+  start.beta = 0;
+  const model::Model m = two_chain_structure(start);  // the objective refers to it
+  const IwanObjective obj(m, "rivet", sensors, {target}, {});
+  for (const IwanOptimizer optimizer :
+       {IwanOptimizer::kGlobalLocal, IwanOptimizer::kPaper, IwanOptimizer::kPaperLog}) {
+    SCOPED_TRACE(static_cast<int>(optimizer));
+    IwanUpdateOptions o = options_around(start, 400);
+    o.optimizer = optimizer;
+    o.fixed_beta = 0.0;
+    IwanUpdateSummary sum;
+    const model::IwanParameters p = update_iwan(obj, o, &sum);
+    SCOPED_TRACE(sum.report());
+    std::printf("%s", sum.report().c_str());
+    EXPECT_NE(sum.status, IwanUpdateStatus::kNoValidPoint);
+    EXPECT_EQ(p.beta, 0.0);
+    EXPECT_TRUE(std::isfinite(sum.final_cost));
+    EXPECT_LT(sum.final_cost, sum.initial_cost);
+    EXPECT_EQ(sum.relative_std(3), 0.0);  // held
+    // Noiseless data and the right beta: the local search ends at the truth. 1e-3 allows for
+    // the finite-difference Jacobian and Ceres' stopping tolerances.
+    if (optimizer == IwanOptimizer::kGlobalLocal) {
+      EXPECT_TRUE(testing::Close(p.Fs, truth.Fs, 1e-3)) << p.Fs;
+      EXPECT_TRUE(testing::Close(p.Kt, truth.ka, 1e-3)) << p.Kt;
+      EXPECT_TRUE(testing::Close(p.chi, truth.chi, 1e-3)) << p.chi;
+    }
+  }
+  IwanUpdateOptions bad = options_around(start, 400);
+  bad.fixed_beta = -0.1;
+  EXPECT_EQ(bad.error(), "fixed_beta must be a finite number >= 0");
+}
+
 TEST(IwanUpdate, MonteCarloVariantsImproveAndParetoFrontMarksDominance) {
   Synthetic s;
   const model::Model m = two_chain_structure(s.truth);

@@ -20,6 +20,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/memory.h"
 #include "jointlab/data/csv_lines.h"
+#include "jointlab/data/names.h"
 
 namespace jointlab::data {
 
@@ -133,6 +134,10 @@ Header read_header(std::string_view line, long line_no, const std::string& name,
           where(name, h.line, fmt::format("two channels named '{}'", shorten(c.name))));
     }
   }
+  std::vector<std::string> channels;
+  for (size_t c = 0; c < h.cols.size(); ++c)
+    if (static_cast<int>(c) != h.time_col) channels.push_back(h.cols[c].name);
+  check_channel_names(channels, name, h.line);
   if (h.time_col < 0 && !have_fs) {
     throw InputError(where(name, h.line, "no 'time' column and no '# fs: <Hz>' line"));
   }

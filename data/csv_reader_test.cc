@@ -98,13 +98,19 @@ TEST(CsvReader, BadInputsGiveOneLineErrors) {
   // A trailing delimiter on one row is an empty field, not a style.
   expect_error("time,x\n0,1\n0.1,2,\n0.2,3\n", {"hit.csv:3", "3 fields where the header has 2"});
   expect_error("time,x,\n0,1,\n0.1,2,3\n", {"hit.csv:3", "3 fields where the header has 2"});
-  // Names and values in messages are cut (a 1 MB channel name gives a short message).
-  try {
-    parse_csv("time," + std::string(1 << 20, 'a') + "\n0,1\n0.1,x\n", "hit.csv");
-    ADD_FAILURE() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_LT(std::string(e.what()).size(), 300u);
-    EXPECT_NE(std::string(e.what()).find("... (1048576 bytes)"), std::string::npos);
+  // Names and values in messages are cut: a 1 MB unit gives a short message, and so does a
+  // 1 MB channel name (refused: longer than kMaxChannelNameBytes).
+  for (const auto& [header, fragment] :
+       {std::pair{"time,a [" + std::string(1 << 20, 'u') + "]", "... (1048576 bytes)"},
+        std::pair{"time," + std::string(1 << 20, 'a'),
+                  "channel name of 1048576 bytes ('aaaaaaaaaa"}}) {
+    try {
+      parse_csv(header + "\n0,1\n0.1,x\n", "hit.csv");
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_LT(std::string(e.what()).size(), 300u);
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "jointlab/data/names.h"
+
 namespace jointlab::data {
 
 void JsonWriter::newline() {
@@ -73,37 +75,6 @@ JsonWriter& JsonWriter::value(std::string_view s) {
   return *this;
 }
 
-namespace {
-
-// Length of the well-formed UTF-8 sequence starting s[i] (RFC 3629: no overlong forms,
-// no surrogates, nothing above U+10FFFF), or 0 if the bytes there are not one.
-size_t utf8_length(std::string_view s, size_t i) {
-  const auto b = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
-  const unsigned char c = b(i);
-  size_t n = 0;
-  unsigned char lo = 0x80, hi = 0xBF;  // allowed range of the second byte
-  if (c >= 0xC2 && c <= 0xDF) {
-    n = 2;
-  } else if (c >= 0xE0 && c <= 0xEF) {
-    n = 3;
-    if (c == 0xE0) lo = 0xA0;
-    if (c == 0xED) hi = 0x9F;
-  } else if (c >= 0xF0 && c <= 0xF4) {
-    n = 4;
-    if (c == 0xF0) lo = 0x90;
-    if (c == 0xF4) hi = 0x8F;
-  } else {
-    return 0;
-  }
-  if (i + n > s.size() || b(i + 1) < lo || b(i + 1) > hi) return 0;
-  for (size_t k = 2; k < n; ++k) {
-    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
-  }
-  return n;
-}
-
-}  // namespace
-
 void JsonWriter::write_string(std::string_view s) {
   out_ += '"';
   for (size_t i = 0; i < s.size();) {
@@ -112,7 +83,7 @@ void JsonWriter::write_string(std::string_view s) {
     if (u >= 0x80) {
       // Text from input files (channel names, metadata) may be in any encoding; JSON must be
       // UTF-8, so each byte that is not part of a valid sequence becomes U+FFFD.
-      if (const size_t n = utf8_length(s, i); n > 0) {
+      if (const size_t n = utf8_sequence_length(s, i); n > 0) {
         out_.append(s.substr(i, n));
         i += n;
       } else {

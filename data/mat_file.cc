@@ -25,6 +25,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/data/mat_variable.h"
+#include "jointlab/data/names.h"
 
 namespace jointlab::data {
 
@@ -543,6 +544,9 @@ Record build_record(const std::vector<Named>& vars, const std::string& file,
     }
     rec.channels.push_back(std::move(ch));
   }
+  std::vector<std::string> names;
+  for (const Channel& ch : rec.channels) names.push_back(ch.name);
+  check_channel_names(names, file);
   return rec;
 }
 

@@ -84,6 +84,12 @@ OutputStage::OutputStage(fs::path dir, std::string command,
                          std::function<bool(const std::string&)> owned)
     : dir_(std::move(dir)), command_(std::move(command)), owned_(std::move(owned)) {
   std::error_code ec;
+  // The outermost folder this stage creates, removed again if the command fails before
+  // anything is in it.
+  for (fs::path p = dir_; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    created_ = p;
+    if (p == p.parent_path()) break;
+  }
   fs::create_directories(dir_, ec);
   if (!fs::is_directory(dir_))
     throw InputError(where(dir_.string(), 0, "cannot create output directory"));
@@ -98,9 +104,14 @@ OutputStage::OutputStage(fs::path dir, std::string command,
 }
 
 OutputStage::~OutputStage() {
-  if (!committed_) {
-    std::error_code ec;
-    fs::remove_all(stage_, ec);
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(stage_, ec);
+  if (created_.empty()) return;
+  // Folders this stage created, from dir() up, while they are empty (fs::remove leaves a
+  // folder that is not: another run may have put its stage there meanwhile).
+  for (fs::path p = dir_;; p = p.parent_path()) {
+    if (!fs::remove(p, ec) || p == created_ || p == p.parent_path()) break;
   }
 }
 

@@ -26,10 +26,12 @@ class OutputStage {
   /// Prepares `dir` (created if missing) for the outputs of `command`; `owned` says which
   /// file names the command writes, so that in a folder written before outputs were
   /// recorded (no DIR/.<command>.outputs) the old ones are replaced as well (none when
-  /// empty). Throws InputError if `dir` cannot be made.
+  /// empty). Throws InputError if `dir` cannot be made. Folders it creates for `dir` are
+  /// removed again when the stage ends uncommitted and they are empty.
   OutputStage(std::filesystem::path dir, std::string command,
               std::function<bool(const std::string&)> owned = {});
-  /// Removes the staging folder and everything in it unless committed.
+  /// Removes the staging folder and everything in it unless committed; then also the
+  /// folders the constructor created for `dir`, as far as they are empty.
   ~OutputStage();
   OutputStage(const OutputStage&) = delete;
   OutputStage& operator=(const OutputStage&) = delete;
@@ -44,6 +46,7 @@ class OutputStage {
 
  private:
   std::filesystem::path dir_, stage_;
+  std::filesystem::path created_;  // the outermost folder the constructor created, or empty
   std::string command_;
   std::function<bool(const std::string&)> owned_;
   TemporaryClaim claim_;

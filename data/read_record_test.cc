@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <sstream>
 #include <string>
 
 #include <fmt/format.h>
@@ -10,6 +11,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/data/mat_file.h"
+#include "jointlab/data/names.h"
 #include "jointlab/data/record_writer.h"
 #include "jointlab/data/uff58.h"
 #include "jointlab/tests/test_util.h"
@@ -63,6 +65,72 @@ TEST(ReadRecord, ExamplesFromOtherPrograms) {
                           "../shared/data/brake-reuss-beam/HammerImpact.mat";
   if (!fs::exists(hammer)) GTEST_SKIP() << "HammerImpact.mat not found beside the repository";
   EXPECT_EQ(read_record(hammer).channels.size(), 3u);
+}
+
+// The message of the InputError that reading `path` throws, or "" if it reads.
+std::string read_error(const fs::path& path) {
+  try {
+    read_record(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Output files are named after channels, so every reader refuses a name longer than
+// kMaxChannelNameBytes, naming the file and the length, and reads one at the limit.
+TEST(ReadRecord, LongChannelNamesAreRefusedByEveryReader) {
+  for (const size_t bytes : {kMaxChannelNameBytes, kMaxChannelNameBytes + 1, size_t{5000}}) {
+    SCOPED_TRACE(bytes);
+    const std::string name(bytes, 'n');
+    Record r = sample();
+    r.channels[0].name = name;
+    write_csv_record(scratch("long.csv"), r);
+    write_mat(scratch("long.mat"), r);
+    // The UFF writer keeps to 80 characters; ID line 1 is the name, so lengthen it in the text.
+    r.channels[0].name = "placeholder_name";
+    write_uff58(scratch("long.uff"), r, false);
+    std::stringstream text;
+    text << std::ifstream(scratch("long.uff")).rdbuf();
+    std::string uff = text.str();
+    uff.replace(uff.find("placeholder_name"), 16, name);
+    std::ofstream(scratch("long.uff")) << uff;
+    for (const char* file : {"long.csv", "long.mat", "long.uff"}) {
+      const std::string m = read_error(scratch(file));
+      if (bytes <= kMaxChannelNameBytes) {
+        EXPECT_EQ(m, "") << file;
+        EXPECT_EQ(read_record(scratch(file)).channels.at(0).name, name) << file;
+        continue;
+      }
+      EXPECT_NE(m.find(scratch(file).string()), std::string::npos) << m;
+      EXPECT_NE(m.find(fmt::format("channel name of {} bytes ('nnnnnnnnnn", bytes)),
+                std::string::npos)
+          << m;
+      EXPECT_NE(m.find("'): at most 128 (names make output file names)"), std::string::npos) << m;
+      EXPECT_LT(m.size(), 300u) << file;
+    }
+  }
+}
+
+// Two names that differ only in bytes that are not UTF-8 (or in '/' and control characters)
+// would name the same output file: refused, naming both.
+TEST(ReadRecord, NamesGivingTheSameFileNameAreRefused) {
+  EXPECT_EQ(file_name_part("acc\xff\xfe"), "acc__");
+  EXPECT_EQ(file_name_part(std::string("a/b\x01\x7f", 5) + std::string(1, '\0') + "c"), "a_b___c");
+  EXPECT_EQ(file_name_part("caf\xc3\xa9 \xe2\x82\xac"),
+            "caf\xc3\xa9 \xe2\x82\xac");             // valid UTF-8 stays
+  EXPECT_EQ(file_name_part("\xc3"), "_");            // truncated sequence
+  EXPECT_EQ(file_name_part("\xed\xa0\x80"), "___");  // a surrogate
+  EXPECT_EQ(file_name_part("\xc0\xaf"), "__");       // an overlong '/'
+  Record r = sample();
+  r.channels.push_back(r.channels[0]);
+  r.channels[0].name = "acc\xff";
+  r.channels[1].name = "acc\xfe";
+  write_csv_record(scratch("twins.csv"), r);
+  const std::string m = read_error(scratch("twins.csv"));
+  EXPECT_NE(m.find("channels 'acc?' and 'acc?' both make output file names with 'acc_'"),
+            std::string::npos)
+      << m;
 }
 
 TEST(ReadRecord, UnknownFormatIsOneLineNamingTheFile) {

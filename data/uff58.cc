@@ -17,6 +17,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
+#include "jointlab/data/names.h"
 
 namespace jointlab::data {
 namespace {
@@ -702,6 +703,9 @@ Record parse_uff58(std::string_view bytes, const std::string& name) {
         *direction_name(ds.direction) ? direction_name(ds.direction) : "scalar";
     rec.channels.push_back(std::move(ch));
   }
+  std::vector<std::string> names;
+  for (const Channel& ch : rec.channels) names.push_back(ch.name);
+  check_channel_names(names, name);
   return rec;
 }
 

@@ -1,10 +1,14 @@
 // libFuzzer target: `process` end to end on small fuzzed records. The input's first 8 bytes
 // choose the record's shape (channels, their quantities, the sample rate, the band, the
 // amplitude quantity, the method), the rest are the samples as doubles, channel after
-// channel (an input with a non-finite sample is skipped: no reader returns one). The
+// channel, at most kMaxSamples each (an input with a non-finite sample is skipped: no reader
+// returns one). The sample rate is one of four usual rates or, when byte 1 has its high bit
+// set, any rate from 1e-300 to 2e300 Hz (bytes 1 and 7), as absurd as a file's time column
+// can make it. The
 // record is written as a CSV file and read back, processed as `jointlab process` does, and
 // its backbones and summary.json are written; anything but that or an InputError is a
 // finding.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -27,6 +31,14 @@ using jointlab::Quantity;
 constexpr std::array<Quantity, 4> kQuantities{Quantity::kAcceleration, Quantity::kVelocity,
                                               Quantity::kDisplacement, Quantity::kForce};
 constexpr std::array<double, 4> kRates{1000.0, 2048.0, 5120.0, 1e5};
+constexpr size_t kMaxSamples = 1024;
+
+// The sample rate bytes 1 and 7 choose: a usual rate, or m 10^e with m in [1, 2) from byte 1's
+// low bits and e in [-300, 300] from byte 7.
+double sample_rate(const uint8_t* data) {
+  if ((data[1] & 0x80) == 0) return kRates[data[1] % kRates.size()];
+  return (1 + (data[1] & 0x7f) / 128.0) * std::pow(10.0, -300.0 + 600.0 * data[7] / 255.0);
+}
 
 }  // namespace
 
@@ -34,10 +46,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   namespace fs = std::filesystem;
   if (size < 8) return 0;
   const int channels = 1 + data[0] % 3;
-  const double fs_hz = kRates[data[1] % kRates.size()];
+  const double fs_hz = sample_rate(data);
   // Band edges as fractions of Nyquist (the record's own checks judge them).
   const double lo = (1 + data[2]) / 257.0 * fs_hz / 2, hi = lo + (1 + data[3]) / 257.0 * fs_hz / 2;
-  const size_t n = (size - 8) / 8 / static_cast<size_t>(channels);
+  const size_t n = std::min(kMaxSamples, (size - 8) / 8 / static_cast<size_t>(channels));
   jointlab::data::Record rec;
   rec.fs = fs_hz;
   for (int c = 0; c < channels; ++c) {

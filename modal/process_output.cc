@@ -1,14 +1,19 @@
 #include "jointlab/modal/process_output.h"
 
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/data/json_writer.h"
+#include "jointlab/data/names.h"
 #include "jointlab/data/table_writer.h"
 #include "jointlab/modal/summary_json.h"
 
 namespace jointlab::modal {
 
 std::string backbone_file_name(const std::string& source, const std::string& channel, int band) {
-  return std::filesystem::path(source).stem().string() + "." + channel + ".band" +
-         std::to_string(band) + ".csv";
+  return data::file_name_part(std::filesystem::path(source).stem().string()) + "." +
+         data::file_name_part(channel) + ".band" + std::to_string(band) + ".csv";
 }
 
 void write_backbones(const std::filesystem::path& dir, const RecordResult& result,
@@ -32,7 +37,15 @@ void write_backbones(const std::filesystem::path& dir, const RecordResult& resul
     // The k of the *_std columns, named in the header row itself: a comment line above it
     // would become the header of readers that take the first line (numpy, pandas).
     t.add("coverage_factor", Eigen::VectorXd::Constant(b.size(), options.coverage_factor));
-    data::write_table(dir / backbone_file_name(result.source, r.channel, r.band_index), t);
+    const std::string name = backbone_file_name(result.source, r.channel, r.band_index);
+    if (name.size() > data::kMaxFileNameBytes) {
+      throw InputError(fmt::format(
+          "{}: channel '{}' band {}: its output file name would be {} bytes ('{}...'), more "
+          "than the {} a file name may have; shorten the file's or the channel's name",
+          result.source, printable(r.channel), r.band_index, name.size(), printable(name),
+          data::kMaxFileNameBytes));
+    }
+    data::write_table(dir / name, t);
   }
 }
 

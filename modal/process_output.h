@@ -16,10 +16,12 @@
 
 namespace jointlab::modal {
 
-/// Name of the backbone CSV of one channel and band: "<stem>.<channel>.band<k>.csv".
+/// Name of the backbone CSV of one channel and band: "<stem>.<channel>.band<k>.csv", stem and
+/// channel as data::file_name_part gives them (summary.json names the file the same).
 std::string backbone_file_name(const std::string& source, const std::string& channel, int band);
 
-/// Writes the backbone CSVs of `result` into `dir` (no file for a channel-band without a span).
+/// Writes the backbone CSVs of `result` into `dir` (no file for a channel-band without a span);
+/// InputError if a name would be longer than data::kMaxFileNameBytes.
 void write_backbones(const std::filesystem::path& dir, const RecordResult& result,
                      const RingdownOptions& options);
 

@@ -27,7 +27,10 @@ std::string iwan_parameter_error(const IwanParameters& p) {
       {"Fs", p.Fs}, {"Kt", p.Kt}, {"chi", p.chi}, {"beta", p.beta}};
   for (const auto& [name, value] : fields) {
     const ParameterDomain d = iwan_parameter_domain(name);
-    if (!d.contains(value)) return fmt::format("{} = {} must be {}", name, value, d.text());
+    if (!d.contains(value)) {
+      return fmt::format("{} = {} must be {}{}", name, value,
+                         std::isfinite(value) ? "" : "a finite number ", d.text());
+    }
   }
   return "";
 }

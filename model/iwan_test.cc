@@ -154,7 +154,12 @@ TEST(Iwan, ParameterErrorsNameTheField) {
   EXPECT_EQ(iwan_parameter_error({40, 2e6, 0.5, 1}), "chi = 0.5 must be in (-1, 0]");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, 1, 1}), "chi = 1 must be in (-1, 0]");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, 0, 1}), "");
-  EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, INFINITY}), "beta = inf must be >= 0");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, INFINITY}),
+            "beta = inf must be a finite number >= 0");
+  EXPECT_EQ(iwan_parameter_error({40, INFINITY, -0.5, 1}), "Kt = inf must be a finite number > 0");
+  EXPECT_EQ(iwan_parameter_error({NAN, 2e6, -0.5, 1}), "Fs = nan must be a finite number > 0");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, -INFINITY, 1}),
+            "chi = -inf must be a finite number in (-1, 0]");
   EXPECT_EQ(iwan_parameter_domain("Kt").text(), "> 0");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, -0.1}), "beta = -0.1 must be >= 0");
 }

@@ -15,6 +15,16 @@
 
 namespace jointlab::model {
 
+namespace {
+
+// The ends of a joint coordinate for a message: "DOF 3 and ground", "DOFs 3 and 7" (0-based
+// matrix indices).
+std::string joint_ends(Eigen::Index a, Eigen::Index b) {
+  return b == kGround ? fmt::format("DOF {} and ground", a) : fmt::format("DOFs {} and {}", a, b);
+}
+
+}  // namespace
+
 double JointCondensation::Law::eval(double r, double& h, double& dh, double& energy) const {
   const double s = std::abs(r);
   const double sign = r < 0 ? -1.0 : 1.0;
@@ -63,10 +73,11 @@ void JointCondensation::set_coordinates(const std::vector<Joint>& joints) {
       if (!(e.phi_max() >= 1e-90) || !std::isfinite(e.phi_max()) || !std::isfinite(R) || !(R > 0) ||
           !std::isfinite(e.S()) || !std::isfinite(work) || !(work > 0)) {
         throw InputError(fmt::format(
-            "QSMA: the Iwan element between DOFs {} and {} (Fs = {:g}, Kt = {:g}, chi = {:g}) "
-            "has phi_max = {:.3g} m and Fs phi_max = {:.3g} J beyond double precision; state "
-            "the model in other units",
-            coords_[j].a, coords_[j].b, e.slip_force(), e.stiffness(), e.chi(), e.phi_max(), work));
+            "QSMA: the Iwan element between {} (Fs = {:g}, Kt = {:g}, chi = {:g}) has phi_max "
+            "= {:.3g} m and Fs phi_max = {:.3g} J beyond double precision; state the model in "
+            "other units",
+            joint_ends(coords_[j].a, coords_[j].b), e.slip_force(), e.stiffness(), e.chi(),
+            e.phi_max(), work));
       }
       laws_[j].push_back({e.stiffness(), e.slip_force(), e.phi_max(), chi1, R / chi1,
                           R / (chi1 * (chi1 + 1)), R / (chi1 * (chi1 + 1) * (chi1 + 2)),

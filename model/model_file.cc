@@ -319,7 +319,8 @@ Model read_model(const fs::path& path) {
       const std::string name = "spring." + std::string(key.str());
       const double k = number(ctx, value, name);
       if (!(k > 0) || !std::isfinite(k))
-        ctx.fail(value, fmt::format("{} = {} must be > 0", name, k));
+        ctx.fail(value, fmt::format("{} = {} must be {}> 0", name, k,
+                                    std::isfinite(k) ? "" : "a finite number "));
       springs.emplace(name, k);
     }
   }

@@ -3,6 +3,7 @@
 // previous ones as a set or not at all, and temporaries of killed runs are removed.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -158,6 +159,60 @@ TEST(ProcessEmptyBand, FailsAfterWritingTheOtherBands) {
   // No staging folder or temporary is left behind.
   for (const auto& e : fs::directory_iterator(dir + "/out"))
     EXPECT_EQ(e.path().filename().string().find(".process.stage-"), std::string::npos);
+}
+
+// A process that refuses its input (a sample rate no analysis can afford, a band too narrow
+// for the record) or its arguments leaves no output folder it created for the run, however
+// deep; a folder that was there stays, with what it held.
+TEST(ProcessRefusals, LeaveNoFolderTheyCreated) {
+  const std::string dir = scratch_dir("rel_refusal_folders");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  std::string fast = "time,acc1 [m/s^2]\n";
+  for (int k = 0; k < 1000; ++k) fast += fmt::format("{},{}\n", k * 1e-30, std::sin(k * 0.5));
+  write_text(dir + "/fast.csv", fast);
+  expect_error(run_jointlab("process " + dir + "/fast.csv --band 70:90 --out " + dir + "/a/b/c"),
+               "sample rate 1e+30 Hz");
+  EXPECT_FALSE(fs::exists(dir + "/a"));
+  expect_error(run_jointlab("process " + dir + "/hit.csv --band 80:80.0001 --out " + dir + "/o"),
+               "too narrow");
+  EXPECT_FALSE(fs::exists(dir + "/o"));
+  expect_error(run_jointlab("process " + dir + "/hit.csv --band 70: --out " + dir + "/o"),
+               "--band 70:: HI is missing; give LO:HI in Hz");
+  expect_error(run_jointlab("process " + dir + "/hit.csv --band :90 --out " + dir + "/o"),
+               "--band :90: LO is missing; give LO:HI in Hz");
+  EXPECT_FALSE(fs::exists(dir + "/o"));
+  fs::create_directories(dir + "/kept");
+  write_text(dir + "/kept/notes.txt", "mine");
+  expect_error(run_jointlab("process " + dir + "/fast.csv --band 70:90 --out " + dir + "/kept"),
+               "sample rate 1e+30 Hz");
+  EXPECT_EQ(snapshot(dir + "/kept"), (std::map<std::string, std::string>{{"notes.txt", "mine"}}));
+  fs::create_directories(dir + "/empty");
+  expect_error(run_jointlab("process " + dir + "/fast.csv --band 70:90 --out " + dir + "/empty"),
+               "sample rate 1e+30 Hz");
+  EXPECT_TRUE(fs::is_directory(dir + "/empty"));
+}
+
+// The exit status of a command whose stdout and stderr cannot be written (here /dev/full: every
+// write fails with "no space") is its own: 0 with every output written, 2 for an error. The
+// lines are lost, not the run (fmt::print's exception once aborted it with status 134).
+TEST(ConsoleWrites, FailuresToPrintLeaveTheExitStatusAlone) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  const std::string dir = scratch_dir("rel_dev_full");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  const auto status = [&](const std::string& args) {
+    const std::string cmd =
+        binary_dir() + "/bin/jointlab " + args + " > /dev/full 2> /dev/full < /dev/null";
+    const int raw = std::system(cmd.c_str());
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : 1000 + WTERMSIG(raw);
+  };
+  EXPECT_EQ(status("process " + dir + "/hit.csv --band 70:90 --out " + dir + "/o"), 0);
+  EXPECT_TRUE(fs::exists(dir + "/o/hit.acc1.band1.csv"));
+  EXPECT_TRUE(fs::exists(dir + "/o/summary.json"));
+  EXPECT_EQ(status("process " + dir + "/hit.csv --band 70:90 --band 300:360 --out " + dir + "/o2"),
+            2);
+  EXPECT_EQ(status("process " + dir + "/missing.csv --band 70:90 --out " + dir + "/o3"), 2);
+  EXPECT_EQ(status("process " + dir + "/hit.csv --band 70 --out " + dir + "/o3"), 2);
+  EXPECT_EQ(status("frobnicate"), 2);
 }
 
 class ProcessOutputs : public ::testing::Test {
@@ -332,6 +387,61 @@ TEST(Readers, NonUtf8HeaderGivesValidJson) {
   EXPECT_NO_THROW(data::parse_json(json, "summary.json"));
 }
 
+// File names are built from channel names with bytes that are not UTF-8, '/' and control
+// characters replaced by '_' (data/names.h): every file summary.json links exists under that
+// name, and the folder holds no other backbone.
+TEST(Readers, SummaryLinksTheBackbonesOfOddlyNamedChannels) {
+  const std::string dir = scratch_dir("rel_utf8_links");
+  write_text(dir + "/hit.csv",
+             ringdown_csv("time,acc\xff\xfe [m/s^2],caf\xc3\xa9\x7f\x01/x [m/s^2]"));
+  const CommandResult r =
+      run_jointlab("process " + dir + "/hit.csv --band 70:90 --band 140:160 --out " + dir + "/o");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const data::JsonValue summary = data::read_json(dir + "/o/summary.json");
+  std::vector<std::string> linked;
+  for (const data::JsonValue& o : summary.find("files")->items().at(0).find("outputs")->items())
+    if (o.find("file")->is_string()) linked.push_back(o.find("file")->string());
+  std::sort(linked.begin(), linked.end());
+  EXPECT_EQ(linked,
+            (std::vector<std::string>{"hit.acc__.band1.csv", "hit.caf\xc3\xa9___x.band2.csv"}));
+  std::vector<std::string> on_disk;
+  for (const auto& e : fs::directory_iterator(dir + "/o")) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > 4 && name.substr(name.size() - 4) == ".csv") on_disk.push_back(name);
+  }
+  std::sort(on_disk.begin(), on_disk.end());
+  EXPECT_EQ(on_disk, linked);
+}
+
+// A channel name longer than 128 bytes is refused when the file is read, in one short line
+// (outputs are named after channels; a 50 MB name once made a 52 MB progress line and a 210 MB
+// summary.json, and a 300-byte one a "File name too long" naming a temporary). A 128-byte
+// name is processed; with a long file name too, the output name that would be too long is
+// named with the file and channel, not as a temporary.
+TEST(Readers, LongChannelNamesAreRefusedWhenRead) {
+  const std::string dir = scratch_dir("rel_long_names");
+  const std::string name(129, 'n');
+  write_text(dir + "/hit.csv", ringdown_csv("time," + name + " [m/s^2],acc2 [m/s^2]"));
+  CommandResult r = run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir + "/o");
+  expect_error(r, dir + "/hit.csv:1: channel name of 129 bytes ('nnnnnnnnnn");
+  expect_error(r, "'): at most 128 (names make output file names)");
+  EXPECT_LT(r.err.size(), 300u);
+  EXPECT_FALSE(fs::exists(dir + "/o"));
+
+  write_text(dir + "/hit.csv", ringdown_csv("time," + name.substr(1) + " [m/s^2],acc2 [m/s^2]"));
+  r = run_jointlab("process " + dir + "/hit.csv --band 70:90 --out " + dir + "/o");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir + "/o/hit." + name.substr(1) + ".band1.csv"));
+
+  const std::string stem(120, 's');
+  write_text(dir + "/" + stem + ".csv",
+             ringdown_csv("time," + name.substr(1) + " [m/s^2],acc2 [m/s^2]"));
+  r = run_jointlab("process " + dir + "/" + stem + ".csv --band 70:90 --out " + dir + "/o2");
+  expect_error(r, "band 1: its output file name would be 259 bytes ('ssss");
+  expect_error(r, "more than the 242 a file name may have; shorten the file's or the channel's");
+  EXPECT_EQ(r.err.find(".tmp-"), std::string::npos) << r.err;
+}
+
 TEST(Readers, TrailingCommaOnOneRowIsAnError) {
   const std::string dir = scratch_dir("rel_comma");
   write_text(dir + "/hit.csv", "time,x\n0,1\n0.001,2,\n0.002,3\n");
@@ -342,7 +452,7 @@ TEST(Readers, TrailingCommaOnOneRowIsAnError) {
 TEST(Readers, HugeNamesAreCutInMessages) {
   const std::string dir = scratch_dir("rel_long");
   const std::string name(1 << 20, 'a');
-  write_text(dir + "/hit.csv", "time," + name + "\n0,1\n0.001,x\n");
+  write_text(dir + "/hit.csv", "time,x [" + name + "]\n0,1\n0.001,x\n");
   const CommandResult r =
       run_jointlab("process " + dir + "/hit.csv --band 10:20 --out " + dir + "/o");
   expect_error(r, "... (1048576 bytes)");
@@ -386,6 +496,24 @@ TEST(ModelDomains, ChiAboveZeroIsRefusedByEveryReader) {
   expect_error(run_jointlab(iwan + "--set rivet --fs-range 0:10"),
                "--fs-range 0:10: need LO < HI with both Fs > 0");
   expect_error(run_jointlab(iwan + "--set spring.kz"), "--set spring.kz: update-iwan updates");
+  // beta >= 0, as in model files (method.md: beta = 0 leaves the macroslip delta out): --beta 0
+  // passes the checks (the command then fails on the measured data that are not there), a
+  // negative value does not.
+  const CommandResult zero = run_jointlab(iwan + "--set rivet --beta 0");
+  EXPECT_EQ(zero.status, 2) << zero.err;
+  EXPECT_EQ(zero.err.find("--beta"), std::string::npos) << zero.err;
+  expect_error(run_jointlab(iwan + "--set rivet --beta=-1"), "--beta: -1 is negative");
+  // A parameter that is no finite number says so.
+  std::string text = testing::read_file(model);
+  text.replace(text.find("Kt = 2.0e4"), 10, "Kt = inf");
+  write_text(model, text);
+  expect_error(run_jointlab("modes " + model + " --out " + dir + "/modes.csv"),
+               "iwan.rivet: Kt = inf must be a finite number > 0");
+  text.replace(text.find("Kt = inf"), 8, "Kt = 2.0e4");
+  text.replace(text.find("beta = 1.0"), 10, "beta = nan");
+  write_text(model, text);
+  expect_error(run_jointlab("modes " + model + " --out " + dir + "/modes.csv"),
+               "iwan.rivet: beta = nan must be a finite number >= 0");
 }
 
 TEST(Limits, SizesAreRefusedBeforeAllocating) {
@@ -418,6 +546,18 @@ TEST(Limits, SizesAreRefusedBeforeAllocating) {
                "field 'mesh.size' = 1e-07 m is too small: 5e+06 beam elements per strip, the "
                "limit is 100000");
   EXPECT_FALSE(fs::exists(dir + "/m/model.toml"));
+  write_text(dir + "/shell.toml", "[mesh]\nelement = \"shell\"\nsize = 1e-7\n");
+  expect_error(run_jointlab("build-model " + dir + "/shell.toml --out " + dir + "/m"),
+               "field 'mesh.size' = 1e-07 m is too small: 1.27e+12 shell elements per strip, "
+               "the limit is 2000000");
+  EXPECT_FALSE(fs::exists(dir + "/m/model.toml"));
+  // Kt = 1e-300 puts phi_max beyond double precision; the joint to ground is named so.
+  model = write_model(dir, "-0.5");
+  std::string text = testing::read_file(model);
+  text.replace(text.find("Kt = 2.0e4"), 10, "Kt = 1e-300");
+  write_text(model, text);
+  expect_error(run_jointlab("qsma " + model + " --mode 1 --out " + dir + "/q.csv"),
+               "QSMA: the Iwan element between DOF 0 and ground (Fs = 40, Kt = 1e-300,");
 }
 
 }  // namespace

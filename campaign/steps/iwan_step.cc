@@ -143,9 +143,9 @@ IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptio
                            const std::function<void(const std::string&)>& say) {
   IwanUpdateSummary best;
   IwanUpdateOptions held = io;
-  if (held.fixed_beta == 0) held.fixed_beta = objective.initial().beta;
+  if (!held.fixed_beta) held.fixed_beta = objective.initial().beta;
   correlate::update_iwan(objective, held, &best);
-  if (io.fixed_beta == 0 && !best.microslip_only()) {
+  if (!io.fixed_beta && !best.microslip_only()) {
     if (say) {
       say("update: " + best.report() +
           "update: the data reach macroslip; Iwan identification with beta free");
@@ -184,7 +184,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   100 * to.max_slip_share));
   io.bounds = correlate::default_iwan_bounds(objective.initial());
   step.summary = fit_iwan(objective, io, say);
-  step.beta_held = step.summary.microslip_only() || io.fixed_beta > 0;
+  step.beta_held = step.summary.microslip_only() || io.fixed_beta.has_value();
   step.curves = static_cast<int>(targets.curves());
   step.updated = objective.apply(step.summary.best);
   if (!c.truth.empty()) step.cost_known = objective.cost(read_truth(c.truth).iwan);

@@ -253,7 +253,10 @@ void validate(const RivetedBeamDescription& d) {
   positive(d.element_size, "mesh.size");
   if (d.element_size > d.length / 4) fail("field 'mesh.size' must be at most strips.length / 4");
   if (d.shell && (d.length / d.element_size) * (d.width / d.element_size) > 2e6)
-    fail("field 'mesh.size' is too small: more than 2 million elements per strip");
+    fail(
+        fmt::format("field 'mesh.size' = {} m is too small: {:.3g} shell elements per strip, "
+                    "the limit is 2000000",
+                    d.element_size, (d.length / d.element_size) * (d.width / d.element_size)));
   // The reduction holds dense columns as long as the model (6 DOFs per beam node) for every
   // interface DOF and kept mode: 1e5 elements per strip keep that below about 0.5 GB.
   if (!d.shell && d.length / d.element_size > 1e5)
