@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
 #include "jointlab/core/error.h"
@@ -35,11 +36,11 @@ void run_run(const RunArgs& args) {
   if (!args.quiet) {
     o.progress = [&](const std::string& s) {
       const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      fmt::print(stderr, "[{:6.1f} s] {}\n", t, s);
+      say(stderr, "[{:6.1f} s] {}\n", t, s);
     };
   }
   const campaign::RunSummary s = campaign::run_campaign(c, o);
-  fmt::print("jointlab run: {}\n", s.report());
+  say(stdout, "jointlab run: {}\n", s.report());
   // One line for what went wrong, however many hits and modes: the report has the rest.
   std::vector<std::string> wrong;
   if (!s.failed_hits.empty()) {
