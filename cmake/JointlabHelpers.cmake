@@ -57,7 +57,8 @@ function(jointlab_add_test name source)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   set(env "JOINTLAB_SOURCE_DIR=${PROJECT_SOURCE_DIR};JOINTLAB_BINARY_DIR=${PROJECT_BINARY_DIR}")
   if(JOINTLAB_SANITIZE)  # leaks inside third-party libraries (fontconfig under PLplot) only
-    list(APPEND env "LSAN_OPTIONS=suppressions=${PROJECT_SOURCE_DIR}/fuzz/lsan.supp")
+    # print_suppressions=0: the statistics would add lines to the commands' one-line errors.
+    list(APPEND env "LSAN_OPTIONS=suppressions=${PROJECT_SOURCE_DIR}/fuzz/lsan.supp:print_suppressions=0")
   endif()
   gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_BINARY_DIR} DISCOVERY_TIMEOUT 60)
   # The environment is set by a script ctest reads after the discovered tests. Given to
