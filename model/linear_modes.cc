@@ -197,9 +197,9 @@ LinearModes linear_modes(const Model& model, const ModesOptions& options) {
   }
   // A joint more than 1e16 times stiffer than the structure's stiffest diagonal entry: the
   // structure's own stiffness falls below rounding in that joint's rows of K_lin.
-  double structure_max = 0;
-  for (Eigen::Index i = 0; i < model.size(); ++i)
-    structure_max = std::max(structure_max, std::abs(model.stiffness.coeff(i, i)));
+  const Eigen::VectorXd structure_diagonal = model.stiffness.diagonal();
+  const double structure_max =
+      structure_diagonal.size() > 0 ? structure_diagonal.cwiseAbs().maxCoeff() : 0.0;
   for (const Joint& j : model.joints) {
     if (structure_max > 0 && j.stiffness > 1e16 * structure_max) {
       throw InputError(fmt::format(

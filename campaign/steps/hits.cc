@@ -55,6 +55,13 @@ modal::RecordResult analyse_hit(const Campaign& c, const modal::ProcessOptions& 
   return modal::process_record(rec, opt, cache);
 }
 
+// `text` on one line.
+std::string one_line(std::string text) {
+  std::replace(text.begin(), text.end(), '\r', ' ');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
+}
+
 // The linear data of a hit's cache, `n` rows of zeros to fill (columns: hits.h), and its
 // reasons, one line "<band> <channel index> <why>" per band and channel without a backbone.
 struct LinearColumns {
@@ -111,8 +118,7 @@ void write_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
     l.t1(i) = good ? rs.span_end_s : 0.0;
     l.dec(i) = good ? rs.amplitude_decades : 0.0;
     if (!good) {
-      std::string why = rs.message.empty() ? "no span kept" : rs.message;
-      std::replace(why.begin(), why.end(), '\n', ' ');
+      const std::string why = one_line(rs.message.empty() ? "no span kept" : rs.message);
       l.reasons += fmt::format("{} {} {}\n", cb.band_index, static_cast<int>(l.chan(i)), why);
     }
   }
@@ -162,13 +168,6 @@ FailedHit left_out(const fs::path& file, const std::string& group, const std::st
   const size_t text = why.find_first_not_of(' ');
   if (text != std::string::npos) f.why = why.substr(text);
   return f;
-}
-
-// `text` on one line.
-std::string one_line(std::string text) {
-  std::replace(text.begin(), text.end(), '\r', ' ');
-  std::replace(text.begin(), text.end(), '\n', ' ');
-  return text;
 }
 
 }  // namespace
