@@ -340,6 +340,26 @@ TEST(RunCli, AHitThatCannotBeProcessedIsLeftOut) {
 
 // The whole campaign is checked before any hit is processed: a typo in an update table, a
 // model_mode beyond the model, an Iwan set the model lacks. One line, exit status 2, no hit.
+// Runs the campaign into dir/out and checks it is refused with one line and exit status 2
+// before any hit is processed; returns what it said.
+std::string refused_before_hits(const testing::SmallCampaign& s, const fs::path& dir) {
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "out").string()));
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out" / "hits")) << r.err;
+  return r.err;
+}
+
+// Replaces the line of `file` that starts at the first `key` with `line`.
+void replace_setting(const fs::path& file, const std::string& key, const std::string& line) {
+  std::string text = testing::read_file(file);
+  const size_t at = text.find(key);
+  ASSERT_NE(at, std::string::npos) << key;
+  text.replace(at, text.find('\n', at) - at, line);
+  testing::write_text(file.string(), text);
+}
+
 TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   const std::vector<std::pair<std::string, std::string>> cases{
       {"[update.linear]\nsets = [\"iwan.rivet\"]\nmac_treshold = 0.5\n", "mac_treshold"},
@@ -349,56 +369,29 @@ TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   int k = 0;
   for (const auto& [extra, says] : cases) {
     const fs::path dir = testing::scratch_dir(fmt::format("run_cli_bad{}", k++));
-    const testing::SmallCampaign s = testing::make_small_campaign(dir, extra, {10});
-    const testing::CommandResult r = testing::run_jointlab(
-        fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "out").string()));
-    EXPECT_EQ(r.status, 2) << extra;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(dir / "out" / "hits")) << extra;
+    const std::string err =
+        refused_before_hits(testing::make_small_campaign(dir, extra, {10}), dir);
+    EXPECT_NE(err.find(says), std::string::npos) << err;
   }
   // model_mode beyond the model's size.
   const fs::path dir = testing::scratch_dir("run_cli_bad_mode");
   const testing::SmallCampaign s = testing::make_small_campaign(dir, "", {10});
-  std::string text = testing::read_file(s.campaign);
-  const std::string mm = fmt::format("model_mode = {}", s.model_mode);
-  text.replace(text.find(mm), mm.size(), "model_mode = 9999");
-  testing::write_text(s.campaign.string(), text);
-  const testing::CommandResult r = testing::run_jointlab(
-      fmt::format("run {} --out {} --quiet", s.campaign.string(), (dir / "out").string()));
-  EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("model_mode 9999"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir / "out" / "hits"));
+  replace_setting(s.campaign, fmt::format("model_mode = {}", s.model_mode), "model_mode = 9999");
+  std::string err = refused_before_hits(s, dir);
+  EXPECT_NE(err.find("model_mode 9999"), std::string::npos) << err;
   // A channel's DOF outside the model (named with the campaign file), and a model file whose
   // Iwan set is unphysical (chi = 5, named with the model file's line): before any hit.
   const fs::path dof_dir = testing::scratch_dir("run_cli_bad_dof");
   const testing::SmallCampaign d = testing::make_small_campaign(dof_dir, "", {10});
-  text = testing::read_file(d.campaign);
-  const size_t dof_at = text.find("dof = \"");
-  ASSERT_NE(dof_at, std::string::npos);
-  text.replace(dof_at, text.find('\n', dof_at) - dof_at, "dof = \"99999\"");
-  testing::write_text(d.campaign.string(), text);
-  const testing::CommandResult bad_dof = testing::run_jointlab(
-      fmt::format("run {} --out {} --quiet", d.campaign.string(), (dof_dir / "out").string()));
-  EXPECT_EQ(bad_dof.status, 2);
-  EXPECT_EQ(std::count(bad_dof.err.begin(), bad_dof.err.end(), '\n'), 1) << bad_dof.err;
-  EXPECT_NE(bad_dof.err.find(d.campaign.string() + ": channel 'acc_"), std::string::npos)
-      << bad_dof.err;
-  EXPECT_NE(bad_dof.err.find("index outside the model's"), std::string::npos) << bad_dof.err;
-  EXPECT_FALSE(fs::exists(dof_dir / "out" / "hits"));
+  replace_setting(d.campaign, "dof = \"", "dof = \"99999\"");
+  err = refused_before_hits(d, dof_dir);
+  EXPECT_NE(err.find(d.campaign.string() + ": channel 'acc_"), std::string::npos) << err;
+  EXPECT_NE(err.find("index outside the model's"), std::string::npos) << err;
   const fs::path chi_dir = testing::scratch_dir("run_cli_bad_model");
   const testing::SmallCampaign m = testing::make_small_campaign(chi_dir, "", {10});
-  text = testing::read_file(m.model);
-  const size_t chi_at = text.find("chi = ");
-  ASSERT_NE(chi_at, std::string::npos);
-  text.replace(chi_at, text.find('\n', chi_at) - chi_at, "chi = 5.0");
-  testing::write_text(m.model.string(), text);
-  const testing::CommandResult bad_model = testing::run_jointlab(
-      fmt::format("run {} --out {} --quiet", m.campaign.string(), (chi_dir / "out").string()));
-  EXPECT_EQ(bad_model.status, 2);
-  EXPECT_EQ(std::count(bad_model.err.begin(), bad_model.err.end(), '\n'), 1) << bad_model.err;
-  EXPECT_NE(bad_model.err.find("chi = 5 must be in (-1, 0]"), std::string::npos) << bad_model.err;
-  EXPECT_FALSE(fs::exists(chi_dir / "out" / "hits"));
+  replace_setting(m.model, "chi = ", "chi = 5.0");
+  err = refused_before_hits(m, chi_dir);
+  EXPECT_NE(err.find("chi = 5 must be in (-1, 0]"), std::string::npos) << err;
 }
 
 // A band with no mode in it: everything else is written, the report's top says "no backbone"
