@@ -18,6 +18,7 @@
 #include "jointlab/campaign/figures.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/update_figures.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
@@ -36,7 +37,7 @@ namespace fs = std::filesystem;
 
 struct LinearArgs {
   std::string model, measured, modes_table, sensors, out, rule = "least-squares";
-  std::vector<std::string> sets, bounds;
+  std::vector<std::string> sets, bounds, holds;
   std::vector<double> bound_factors;
   correlate::LinearUpdateOptions options;
 };
@@ -60,6 +61,20 @@ correlate::ParameterBound parse_bound(const std::string& spec) {
   return b;
 }
 
+// --hold NAME[=VALUE]: the set held at VALUE (default: the model's) instead of fitted.
+correlate::ParameterHold parse_hold(const std::string& spec) {
+  const size_t eq = spec.rfind('=');
+  correlate::ParameterHold h{spec.substr(0, eq), 0};
+  if (eq != std::string::npos) {
+    if (std::string why = finite_number(spec.substr(eq + 1), h.value); !why.empty())
+      throw InputError(fmt::format("--hold {}: {}", spec, why));
+    if (!(h.value > 0))
+      throw InputError(fmt::format("--hold {}: the value must be a stiffness > 0", spec));
+  }
+  if (h.name.empty()) throw InputError(fmt::format("--hold {}: expected NAME[=VALUE]", spec));
+  return h;
+}
+
 void make_out_dir(const std::string& out) {
   std::error_code ec;
   fs::create_directories(out, ec);
@@ -71,6 +86,7 @@ void make_out_dir(const std::string& out) {
 void run_update_linear(const LinearArgs& a) {
   correlate::LinearUpdateOptions options = a.options;
   for (const std::string& b : a.bounds) options.bounds.push_back(parse_bound(b));
+  for (const std::string& h : a.holds) options.holds.push_back(parse_hold(h));
   if (a.bound_factors.size() == 2) {
     if (!(a.bound_factors[0] > 0 && a.bound_factors[0] < 1 && a.bound_factors[1] > 1)) {
       throw InputError(fmt::format("--bound-factors {}:{}: need 0 < LO < 1 < HI",
@@ -98,13 +114,25 @@ void run_update_linear(const LinearArgs& a) {
       a.modes_table.empty()
           ? correlate::measured_modes(correlate::read_process_run(a.measured), sensors)
           : correlate::read_modes_table(a.modes_table, sensors, nullptr);
+  // Progress on stderr: a fit of the example beam takes 10-50 s.
+  options.progress = [](int iteration, double cost, double largest) {
+    say(stderr, "update-linear: iteration {}, cost {:.4g}, largest frequency error {:.3g} %\n",
+        iteration, cost, 100 * largest);
+  };
   correlate::LinearUpdateSummary summary;
   const Eigen::VectorXd theta =
       correlate::update_linear(m, a.sets, sensors, measured, options, &summary);
   if (summary.status == correlate::LinearUpdateStatus::kTooFewPairs) {
+    throw InputError(fmt::format(
+        "update-linear: no measured mode of {} pairs with a model mode (MAC >= {}, frequency "
+        "within {:g} %)",
+        a.measured.empty() ? a.modes_table : a.measured, options.mac_threshold,
+        100 * options.frequency_window));
+  }
+  if (summary.status == correlate::LinearUpdateStatus::kAmbiguous) {
+    say(stdout, "{}", summary.report());  // where it stopped, for the user to judge
     throw InputError(
-        fmt::format("update-linear: no measured mode of {} pairs with a model mode (MAC >= {})",
-                    a.measured.empty() ? a.modes_table : a.measured, options.mac_threshold));
+        fmt::format("update-linear: the pairs cannot be decided: {}", summary.ambiguity));
   }
   const model::Model updated = correlate::StiffnessSets(m, a.sets).apply(theta);
   make_out_dir(a.out);
@@ -115,16 +143,9 @@ void run_update_linear(const LinearArgs& a) {
   correlate::write_linear_modes(out / "modes.csv", summary);
   correlate::write_mac_matrix(out / "mac.csv", summary);
   correlate::write_linear_sweeps(out / "sweeps.csv", summary);
-  {
-    const Eigen::MatrixXd& mac = summary.final.mac;
-    const int cols = correlate::mac_columns(summary);
-    std::vector<std::string> rows, columns;
-    for (Eigen::Index i = 0; i < mac.rows(); ++i) rows.push_back(fmt::format("test {}", i + 1));
-    for (int j = 0; j < cols; ++j) columns.push_back(fmt::format("FE {}", j + 1));
-    campaign::plot_mac(mac.leftCols(cols), rows, columns, "MAC at the result", out / "mac.png");
-  }
+  campaign::write_linear_figures(summary, out);
+  // The report carries every warning once.
   say(stdout, "{}", summary.report());
-  for (const std::string& w : summary.warnings) say(stderr, "warning: {}\n", w);
 }
 
 struct IwanArgs {
@@ -337,9 +358,25 @@ void add_update_commands(CLI::App& app) {
   CLI::App* lin = app.add_subcommand(
       "update-linear",
       "Updates named joint stiffness sets (spring.<name>, iwan.<name> at Kt) so the model's\n"
-      "linear frequencies match the measured ones, modes paired by MAC at every step.\n"
-      "Reads DIR/summary.json of 'jointlab process'; writes OUTDIR/model.toml (with its\n"
-      "matrices), parameters.csv and history.csv, and prints a report.");
+      "linear frequencies match the measured ones (the paper's first step).\n"
+      "Pairing: at the start each test mode pairs with the model mode of highest MAC at the\n"
+      "sensors within the frequency window (modes invisible at the sensors never pair; modes\n"
+      "alike at the sensors are told apart by frequency, else the command stops and says\n"
+      "which); then every pair is followed by its full shape as the stiffness moves, and\n"
+      "checked again at the result. A set the frequencies do not see (FLAT) is held.\n"
+      "Reads DIR/summary.json of 'jointlab process' (or --modes-table). Writes into OUTDIR:\n"
+      "  model.toml (+ matrices)  the updated model\n"
+      "  parameters.csv           name,initial,final,relative_std,... (1 sigma, widened by the\n"
+      "                           reduced chi-square when the frequencies scatter beyond\n"
+      "                           --frequency-std)\n"
+      "  modes.csv                measured,frequency_hz,model_mode,model_frequency_hz,error,mac\n"
+      "                           (error a fraction; empty cells: unpaired)\n"
+      "  history.csv/.png         objective and every stiffness per iteration (Figure 2)\n"
+      "  sweeps.csv/.png          one-at-a-time sweeps, modes followed by shape (Figure 3)\n"
+      "  mac_start.png, mac.png   MAC at the start and at the result, pairs framed (Figure 4)\n"
+      "Progress on stderr, the report (with every warning once) on stdout.\n"
+      "Example: jointlab update-linear beam/model.toml --measured processed --sensors\n"
+      "  sensors.csv --set iwan.rivet --set spring.rz --out linear");
   lin->add_option("MODEL", la->model, "model file (TOML)")->required();
   lin->add_option("--measured", la->measured, "output directory of 'jointlab process'");
   lin->add_option("--modes-table", la->modes_table,
@@ -365,7 +402,13 @@ void add_update_commands(CLI::App& app) {
   lin->add_option("--mac-threshold", la->options.mac_threshold,
                   "smallest MAC of a mode pair (default 0.6)");
   lin->add_option("--frequency-window", la->options.frequency_window,
-                  "pairs also need |f_model / f_test - 1| within this (default 0: off)");
+                  "pairs also need |f_model / f_test - 1| within this (default 0.5; 0: off)");
+  lin->add_option("--hold", la->holds,
+                  "NAME[=VALUE]: hold a set at VALUE (default: the model's) instead of "
+                  "fitting it (repeatable)");
+  lin->add_option("--frequency-std", la->options.frequency_std,
+                  "relative uncertainty of the measured frequencies, for the standard "
+                  "deviations and the reduced chi-square (default 0.001)");
   lin->add_option("--alias-mac", la->options.alias_mac,
                   "warn when two model modes have an auto-MAC at the sensors above this "
                   "(default 0.9)");

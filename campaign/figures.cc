@@ -488,14 +488,18 @@ void plot_spectrum(const SpectrumFigure& figure, const fs::path& file, const Fig
 
 void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<std::string>& rows,
               const std::vector<std::string>& columns, const std::string& title,
-              const fs::path& file, const FigureSize& size) {
+              const fs::path& file, const FigureSize& size, const std::vector<MacCell>& marked) {
   const Eigen::Index nr = mac.rows(), nc = mac.cols();
   if (nr == 0 || nc == 0 || static_cast<Eigen::Index>(rows.size()) != nr ||
       static_cast<Eigen::Index>(columns.size()) != nc)
     throw InputError(fmt::format("{}: a {}x{} MAC matrix needs {} row and {} column labels",
                                  file.string(), nr, nc, nr, nc));
+  // Room on the left for the longest row label ("test 1 (127.9 Hz)").
+  size_t longest = 0;
+  for (const std::string& r : rows) longest = std::max(longest, r.size());
+  const double left = std::clamp(0.04 + 0.0115 * static_cast<double>(longest), 0.22, 0.40);
   Plot plot(file, size);
-  plvpor(0.22, 0.92, 0.16, 0.86);
+  plvpor(left, 0.92, 0.16, 0.86);
   plwind(0, static_cast<PLFLT>(nc), 0, static_cast<PLFLT>(nr));
   plschr(0, nr > 8 || nc > 8 ? 0.75 : 1.0);
   for (Eigen::Index i = 0; i < nr; ++i) {
@@ -512,6 +516,17 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
       plptex(x0 + 0.5, y0 + 0.5, 1.0, 0.0, 0.5, fmt::format("{:.2f}", v).c_str());
     }
   }
+  // The pairs: a red frame inside each paired cell.
+  for (const auto& [i, j] : marked) {
+    if (i < 0 || j < 0 || i >= nr || j >= nc) continue;
+    const PLFLT y0 = static_cast<PLFLT>(nr - 1 - i), x0 = static_cast<PLFLT>(j);
+    const PLFLT bx[5] = {x0 + 0.04, x0 + 0.96, x0 + 0.96, x0 + 0.04, x0 + 0.04};
+    const PLFLT by[5] = {y0 + 0.04, y0 + 0.04, y0 + 0.96, y0 + 0.96, y0 + 0.04};
+    plcol0(kModel1);
+    plwidth(3.0);
+    plline(5, bx, by);
+    plwidth(1.0);
+  }
   plcol0(kBlack);
   plbox("bc", 1.0, 0, "bc", 1.0, 0);
   // More than five columns: labels on two staggered lines, so that neighbours never overlap.
@@ -523,10 +538,12 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
     plmtex("lv", 1.0, 1.0 - (i + 0.5) / static_cast<double>(nr), 1.0, rows[i].c_str());
   plschr(0, 1.15);
   plmtex("b", stagger ? 4.0 : 3.2, 0.5, 0.5, "model mode");
-  plmtex("l", 8.0, 0.5, 0.5, "measured mode");
+  plmtex("l", std::max(8.0, 0.62 * static_cast<double>(longest) + 2.0), 0.5, 0.5, "measured mode");
   plmtex("t", 2.4, 0.5, 0.5, title.c_str());
   plschr(0, 0.9);
-  plmtex("t", 0.8, 0.5, 0.5, "MAC = |x^H y|^2 / ((x^H x)(y^H y)), 1 for collinear shapes");
+  plmtex("t", 0.8, 0.5, 0.5,
+         marked.empty() ? "MAC = |x^H y|^2 / ((x^H x)(y^H y)), 1 for collinear shapes"
+                        : "MAC = |x^H y|^2 / ((x^H x)(y^H y)); pairs framed in red");
   plschr(0, 1.15);
   plot.finish();
 }
@@ -580,6 +597,87 @@ void plot_frequency_errors(const std::vector<std::string>& modes,
   plmtex("l", 5.6, 0.5, 0.5, "(model - test) / test [%]");
   plmtex("t", 1.2, 0.5, 0.5, title.c_str());
   legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP);
+  plot.finish();
+}
+
+void plot_panels(const std::vector<LinePanel>& panels, const std::string& title,
+                 const fs::path& file, const FigureSize& size) {
+  if (panels.empty()) throw InputError(fmt::format("{}: no panel to plot", file.string()));
+  const int n = static_cast<int>(panels.size());
+  const int cols = n > 2 ? 2 : 1, rows = (n + cols - 1) / cols;
+  const PLINT colours[6] = {kModel1, kMean, kModel2, kModel3, kChannel2, kBlack};
+  const PLINT styles[3] = {1, 2, 3};
+  Plot plot(file, size);
+  const double top = 0.93, bottom = 0.04, height = (top - bottom) / rows;
+  for (int p = 0; p < n; ++p) {
+    const LinePanel& panel = panels[static_cast<size_t>(p)];
+    const int r = p / cols, c = p % cols;
+    const double x0 = cols == 1 ? 0.11 : (c == 0 ? 0.09 : 0.50),
+                 x1 = cols == 1 ? 0.76 : (c == 0 ? 0.38 : 0.79);
+    const double y1 = top - r * height - 0.04, y0 = top - (r + 1) * height + 0.07;
+    auto tx = [&](double v) { return panel.log_x ? (v > 0 ? std::log10(v) : NAN) : v; };
+    auto ty = [&](double v) { return panel.log_y ? (v > 0 ? std::log10(v) : NAN) : v; };
+    Range xr, yr;
+    for (const LineSeries& s : panel.series)
+      for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+        if (!s.y[i]) continue;
+        const double u = tx(s.x[i]), v = ty(*s.y[i]);
+        if (std::isfinite(u) && std::isfinite(v)) xr.add(u), yr.add(v);
+      }
+    for (double m : panel.marks_x) xr.add(tx(m));
+    xr = xr.padded(0.02, 0.5);
+    yr = yr.padded(0.08, panel.log_y ? 0.5 : 1.0);
+    plvpor(x0, x1, y0, y1);
+    plwind(xr.lo, xr.hi, yr.lo, yr.hi);
+    // A log y axis is labelled by log_y_labels (PLplot labels every decade, which crowd).
+    const std::string xo = panel.log_x ? "bcnstl" : "bcnst", yo = panel.log_y ? "bcstl" : "bcnstv";
+    grid(panel.log_x ? "gl" : "g", panel.log_y ? "gl" : "g");
+    std::vector<LegendEntry> entries;
+    for (size_t k = 0; k < panel.series.size(); ++k) {
+      const LineSeries& s = panel.series[k];
+      const PLINT colour = colours[k % 6], style = styles[(k / 6) % 3];
+      std::vector<PLFLT> px, py;
+      auto flush = [&] {
+        if (px.size() == 1) {
+          plcol0(colour);
+          plpoin(1, px.data(), py.data(), 17);
+        }
+        line(px, py, colour, 2.0, style);
+        px.clear();
+        py.clear();
+      };
+      for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+        const double u = tx(s.x[i]), v = s.y[i] ? ty(*s.y[i]) : NAN;
+        if (!std::isfinite(u) || !std::isfinite(v)) {
+          flush();
+          continue;
+        }
+        px.push_back(u);
+        py.push_back(v);
+      }
+      flush();
+      entries.push_back({s.label, colour, false, 2.0, style});
+    }
+    for (double m : panel.marks_x) {
+      const PLFLT mx[2] = {tx(m), tx(m)}, my[2] = {yr.lo, yr.hi};
+      if (std::isfinite(mx[0])) line({mx[0], mx[1]}, {my[0], my[1]}, kBlack, 1.5, 2);
+    }
+    if (!panel.marks_x.empty() && !panel.marks_label.empty())
+      entries.push_back({panel.marks_label, kBlack, false, 1.5, 2});
+    plschr(0, 0.85);
+    axes(xo.c_str(), yo.c_str());
+    if (panel.log_y) log_y_labels(yr.lo, yr.hi, 0.07);
+    plmtex("b", 3.0, 0.5, 0.5, panel.x_label.c_str());
+    plmtex("l", panel.log_y ? 6.4 : 4.6, 0.5, 0.5, panel.y_label.c_str());
+    plmtex("t", 0.8, 0.5, 0.5, panel.title.c_str());
+    // Two columns share one legend (the same series in every panel), right of the top row.
+    if (cols == 1) legend(entries, PL_POSITION_RIGHT | PL_POSITION_TOP, true);
+    if (cols == 2 && p == 1) legend(entries, PL_POSITION_RIGHT, true);
+    plschr(0, 1.15);
+  }
+  plvpor(0, 1, 0, 1);
+  plwind(0, 1, 0, 1);
+  plmtex("t", -1.6, 0.5, 0.5, title.c_str());
   plot.finish();
 }
 

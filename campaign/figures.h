@@ -9,7 +9,9 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -79,11 +81,37 @@ struct SpectrumFigure {
 void plot_spectrum(const SpectrumFigure& figure, const std::filesystem::path& file,
                    const FigureSize& size = {});
 
+/// A cell of a MAC matrix: (row, column).
+using MacCell = std::pair<int, int>;
+
 /// Draws a MAC matrix (rows: measured modes, columns: model modes) as grey cells with
-/// their values, into `file`.
+/// their values, the `marked` cells (the pairs) framed in red, into `file`.
 void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<std::string>& rows,
               const std::vector<std::string>& columns, const std::string& title,
-              const std::filesystem::path& file, const FigureSize& size = {});
+              const std::filesystem::path& file, const FigureSize& size = {},
+              const std::vector<MacCell>& marked = {});
+
+/// One line of a LinePanel; a point without a y value breaks the line.
+struct LineSeries {
+  std::string label;                     ///< legend entry
+  std::vector<double> x;                 ///< abscissae
+  std::vector<std::optional<double>> y;  ///< ordinates (none: a gap)
+};
+
+/// One panel of line plots with a legend.
+struct LinePanel {
+  std::string title;                  ///< above the panel
+  std::string x_label, y_label;       ///< axis labels with units
+  bool log_x = false, log_y = false;  ///< logarithmic axes (non-positive values left out)
+  std::vector<LineSeries> series;     ///< the lines
+  std::vector<double> marks_x;        ///< vertical lines (the result), in x units
+  std::string marks_label;            ///< legend entry of the vertical lines
+};
+
+/// Draws panels of lines, two columns when there are more than two (sharing the legend of the
+/// top right panel: give every panel the same series), into `file`.
+void plot_panels(const std::vector<LinePanel>& panels, const std::string& title,
+                 const std::filesystem::path& file, const FigureSize& size = {1150, 800});
 
 /// One set of relative errors, one per mode.
 struct ErrorSeries {

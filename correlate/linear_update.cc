@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include <ceres/ceres.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/model/linear_modes.h"
@@ -82,60 +84,91 @@ double LinearEvaluation::max_error() const {
   return m;
 }
 
-LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
-                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
-                                 double mac_threshold, double frequency_window) {
-  const model::LinearModes modes = model::linear_modes(model.mass, sets.stiffness(theta));
-  const int elastic = modes.size() - modes.rigid_count;
-  const Eigen::MatrixXd phi = modes.shapes.rightCols(elastic);
-  LinearEvaluation e;
-  e.model_at_sensors = shapes_at_sensors(sensors, phi);
-  e.mac = mac_matrix(measured.shapes, e.model_at_sensors);
+namespace {
+
+// Each model mode's squared norm at the sensors.
+Eigen::VectorXd norms_at_sensors(const Eigen::MatrixXd& at_sensors) {
+  return at_sensors.colwise().squaredNorm().transpose();
+}
+
+std::vector<bool> shapes_given(const MeasuredModes& measured) {
+  std::vector<bool> out(static_cast<size_t>(measured.frequency_hz.size()));
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i)
+    out[static_cast<size_t>(i)] = measured.shapes.col(i).squaredNorm() > 0;
+  return out;
+}
+
+}  // namespace
+
+LinearEvaluation evaluate_pairs(const StiffnessSets& sets, const std::vector<Sensor>& sensors,
+                                const MeasuredModes& measured,
+                                const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                const ElasticModes& modes, const std::vector<int>& columns) {
   const int m = static_cast<int>(measured.frequency_hz.size());
-  e.all_model_frequency_hz.resize(elastic);
-  for (int j = 0; j < elastic; ++j)
-    e.all_model_frequency_hz(j) = modes.frequency_hz(modes.rigid_count + j);
-  Eigen::MatrixXd candidates = e.mac;
-  // A measured mode without a shape pairs with the nearest model frequency.
-  for (int i = 0; i < m; ++i) {
-    if (measured.shapes.col(i).squaredNorm() > 0 || elastic == 0) continue;
-    Eigen::Index nearest = 0;
-    (e.all_model_frequency_hz.array() - measured.frequency_hz(i)).abs().minCoeff(&nearest);
-    candidates.row(i).setZero();
-    candidates(i, nearest) = 1;
-  }
-  if (frequency_window > 0) {
-    for (int i = 0; i < m; ++i) {
-      for (int j = 0; j < elastic; ++j) {
-        const double d = e.all_model_frequency_hz(j) / measured.frequency_hz(i) - 1;
-        if (std::abs(d) > frequency_window) candidates(i, j) = 0;
-      }
-    }
-  }
-  e.pairing = pair_modes(candidates, mac_threshold);
+  LinearEvaluation e;
+  e.model_at_sensors = shapes_at_sensors(sensors, modes.shapes);
+  e.mac = mac_matrix(measured.shapes, e.model_at_sensors);
+  e.all_model_frequency_hz = modes.frequency_hz;
   e.measured_frequency_hz = measured.frequency_hz;
   e.model_frequency_hz = Eigen::VectorXd::Zero(m);
   e.residuals = Eigen::VectorXd::Zero(m);
   e.jacobian = Eigen::MatrixXd::Zero(m, sets.size());
-  for (const ModePair& p : e.pairing.pairs) {
-    const double f = e.all_model_frequency_hz(p.model);
-    const double fe = measured.frequency_hz(p.measured);
-    e.model_frequency_hz(p.measured) = f;
-    e.residuals(p.measured) = (f - fe) / fe;
+  std::vector<char> used(static_cast<size_t>(modes.frequency_hz.size()), 0);
+  for (int i = 0; i < m; ++i) {
+    const int j = i < static_cast<int>(columns.size()) ? columns[static_cast<size_t>(i)] : -1;
+    if (j < 0) {
+      e.pairing.unpaired_measured.push_back(i);
+      continue;
+    }
+    used[static_cast<size_t>(j)] = 1;
+    e.pairing.pairs.push_back({i, j, e.mac(i, j)});
+    const double f = modes.frequency_hz(j);
+    const double fe = measured.frequency_hz(i);
+    e.model_frequency_hz(i) = f;
+    e.residuals(i) = (f - fe) / fe;
     if (f <= 0) continue;
-    const Eigen::VectorXd v = phi.col(p.model);
+    const Eigen::VectorXd v = modes.shapes.col(j);
     for (int k = 0; k < sets.size(); ++k) {
       const double dw2 = v.dot(sets.pattern(k) * v);
-      e.jacobian(p.measured, k) =
-          theta(k) * dw2 / (8.0 * std::numbers::pi * std::numbers::pi * f * fe);
+      e.jacobian(i, k) = theta(k) * dw2 / (8.0 * std::numbers::pi * std::numbers::pi * f * fe);
     }
   }
+  for (size_t j = 0; j < used.size(); ++j)
+    if (!used[j]) e.pairing.unpaired_model.push_back(static_cast<int>(j));
   return e;
 }
 
+LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
+                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                 const PairingRules& rules) {
+  const ElasticModes modes = elastic_modes(model.mass, sets.stiffness(theta));
+  const Eigen::MatrixXd at = shapes_at_sensors(sensors, modes.shapes);
+  const RulePairing rp =
+      pair_by_rules(mac_matrix(measured.shapes, at), measured.frequency_hz, shapes_given(measured),
+                    modes.frequency_hz, norms_at_sensors(at), rules);
+  std::vector<int> columns(static_cast<size_t>(measured.frequency_hz.size()), -1);
+  for (const ModePair& p : rp.pairing.pairs) columns[static_cast<size_t>(p.measured)] = p.model;
+  LinearEvaluation e = evaluate_pairs(sets, sensors, measured, theta, modes, columns);
+  e.hidden = rp.hidden;
+  e.ambiguity = rp.ambiguity;
+  e.ambiguous_measured = rp.ambiguous_measured;
+  e.ambiguous_candidates = rp.ambiguous_candidates;
+  return e;
+}
+
+LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
+                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                 double mac_threshold, double frequency_window) {
+  PairingRules rules;
+  rules.mac_threshold = mac_threshold;
+  rules.frequency_window = frequency_window;
+  return evaluate_linear(sets, model, sensors, measured, theta, rules);
+}
+
 std::string LinearUpdateOptions::error() const {
-  if (!(mac_threshold >= 0 && mac_threshold <= 1)) return "mac_threshold must be in [0, 1]";
+  if (!(mac_threshold > 0 && mac_threshold <= 1)) return "mac_threshold must be in (0, 1]";
   if (!(lower_factor > 0 && lower_factor < 1)) return "lower_factor must be in (0, 1)";
   if (!(upper_factor > 1) || !std::isfinite(upper_factor)) return "upper_factor must be > 1";
   if (max_iterations < 1) return "max_iterations must be >= 1";
@@ -144,12 +177,18 @@ std::string LinearUpdateOptions::error() const {
   if (!(frequency_std > 0)) return "frequency_std must be > 0";
   if (!(sweep_decades > 0)) return "sweep_decades must be > 0";
   if (sweep_points < 2) return "sweep_points must be >= 2";
-  if (!(frequency_window >= 0)) return "frequency_window must be >= 0";
+  if (!(frequency_window >= 0) || !std::isfinite(frequency_window))
+    return "frequency_window must be >= 0";
+  if (!(visibility >= 0 && visibility < 1)) return "visibility must be in [0, 1)";
   if (!(alias_mac > 0 && alias_mac <= 1)) return "alias_mac must be in (0, 1]";
   for (const ParameterBound& b : bounds) {
     if (!(b.lower > 0 && b.lower < b.upper) || !std::isfinite(b.upper)) {
       return fmt::format("bounds of '{}': need 0 < lower < upper", b.name);
     }
+  }
+  for (const ParameterHold& h : holds) {
+    if (!(h.value >= 0) || !std::isfinite(h.value))
+      return fmt::format("hold of '{}': the value must be a stiffness > 0", h.name);
   }
   if (rule == LinearRule::kSmallest) {
     if (!(tolerance > 0)) return "the smallest rule needs a tolerance > 0";
@@ -157,79 +196,6 @@ std::string LinearUpdateOptions::error() const {
   }
   return "";
 }
-
-namespace {
-
-// Ceres cost on x = ln theta with the analytic Jacobian of evaluate_linear().
-class LinearCost : public ceres::CostFunction {
- public:
-  LinearCost(const StiffnessSets& sets, const model::Model& model,
-             const std::vector<Sensor>& sensors, const MeasuredModes& measured, double threshold,
-             double window)
-      : sets_(sets),
-        model_(model),
-        sensors_(sensors),
-        measured_(measured),
-        threshold_(threshold),
-        window_(window) {
-    set_num_residuals(static_cast<int>(measured.frequency_hz.size()));
-    mutable_parameter_block_sizes()->push_back(sets.size());
-  }
-  bool Evaluate(double const* const* x, double* residuals, double** jacobians) const override {
-    const int n = sets_.size();
-    Eigen::VectorXd theta(n);
-    for (int k = 0; k < n; ++k) theta(k) = std::exp(x[0][k]);
-    LinearEvaluation e;
-    try {
-      e = evaluate_linear(sets_, model_, sensors_, measured_, theta, threshold_, window_);
-    } catch (const InputError&) {
-      return false;  // an indefinite K at this step: the optimiser shrinks its step
-    }
-    const int m = num_residuals();
-    for (int i = 0; i < m; ++i) residuals[i] = e.residuals(i);
-    if (jacobians && jacobians[0]) {
-      for (int i = 0; i < m; ++i) {
-        for (int k = 0; k < n; ++k) jacobians[0][i * n + k] = e.jacobian(i, k);
-      }
-    }
-    return true;
-  }
-
- private:
-  const StiffnessSets& sets_;
-  const model::Model& model_;
-  const std::vector<Sensor>& sensors_;
-  const MeasuredModes& measured_;
-  double threshold_, window_;
-};
-
-// Records the objective and every stiffness after each iteration (the paper's Table 1).
-class ProgressCallback : public ceres::IterationCallback {
- public:
-  ProgressCallback(const std::function<void(int, double)>& f, const Eigen::VectorXd& x,
-                   LinearUpdateSummary* s)
-      : f_(f), x_(x), s_(s) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
-    if (s_) {
-      s_->history.push_back(it.cost);
-      s_->theta_history.push_back(x_.array().exp());
-    }
-    if (f_) f_(it.iteration, it.cost);
-    return ceres::SOLVER_CONTINUE;
-  }
-
- private:
-  const std::function<void(int, double)>& f_;
-  const Eigen::VectorXd& x_;
-  LinearUpdateSummary* s_;
-};
-
-double rms_error(const LinearEvaluation& e) {
-  if (e.pairing.pairs.empty()) return 0;
-  return std::sqrt(e.residuals.squaredNorm() / static_cast<double>(e.pairing.pairs.size()));
-}
-
-}  // namespace
 
 std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>& at_sensors,
                                         double threshold) {
@@ -248,6 +214,14 @@ std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>&
 
 namespace {
 
+// A point of the fit whose pairs are known: ln theta, the elastic modes there, and the
+// model column each measured mode is paired with (-1: unpaired).
+struct TrackedPoint {
+  Eigen::VectorXd x;
+  ElasticModes modes;
+  std::vector<int> columns;
+};
+
 void check_measured(const std::vector<Sensor>& sensors, const MeasuredModes& measured) {
   if (measured.shapes.rows() != static_cast<Eigen::Index>(sensors.size()) ||
       measured.shapes.cols() != measured.frequency_hz.size()) {
@@ -256,10 +230,28 @@ void check_measured(const std::vector<Sensor>& sensors, const MeasuredModes& mea
         measured.shapes.cols(), measured.shapes.rows(), measured.frequency_hz.size(),
         sensors.size()));
   }
+  auto name = [&](Eigen::Index i) {
+    return static_cast<size_t>(i) < measured.labels.size() && !measured.labels[i].empty()
+               ? fmt::format("measured mode {} ({})", i + 1, measured.labels[i])
+               : fmt::format("measured mode {}", i + 1);
+  };
+  bool any_shape = false;
   for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
     if (!(measured.frequency_hz(i) > 0) || !std::isfinite(measured.frequency_hz(i))) {
-      throw InputError(fmt::format("measured mode {}: frequency must be > 0", i + 1));
+      throw InputError(fmt::format("{}: frequency must be > 0", name(i)));
     }
+    if (!measured.shapes.col(i).allFinite())
+      throw InputError(
+          fmt::format("{}: its shape is not a finite number at every sensor", name(i)));
+    any_shape = any_shape || measured.shapes.col(i).squaredNorm() > 0;
+  }
+  if (!any_shape) return;  // frequencies only: pairs by the nearest frequency
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
+    if (measured.shapes.col(i).squaredNorm() > 0) continue;
+    throw InputError(fmt::format(
+        "{} ({:.6g} Hz): its shape is zero at every sensor, so no MAC can pair it (0/0); give "
+        "its shape or leave the mode out",
+        name(i), measured.frequency_hz(i)));
   }
 }
 
@@ -273,6 +265,11 @@ int set_index(const std::vector<std::string>& names, const std::string& name,
   return static_cast<int>(it - names.begin());
 }
 
+double rms_of(const LinearEvaluation& e) {
+  if (e.pairing.pairs.empty()) return 0;
+  return std::sqrt(e.residuals.squaredNorm() / static_cast<double>(e.pairing.pairs.size()));
+}
+
 // The updating problem: the sets, the data, the options and the bounds of each set.
 struct LinearProblem {
   const StiffnessSets& sets;
@@ -282,44 +279,177 @@ struct LinearProblem {
   const MeasuredModes& measured;
   const LinearUpdateOptions& options;
   Eigen::VectorXd start, lower, upper;
+  TrackingOptions tracking;
 
   int size() const { return sets.size(); }
 
-  LinearEvaluation evaluate(const Eigen::VectorXd& theta) const {
-    return evaluate_linear(sets, model, sensors, measured, theta, options.mac_threshold,
-                           options.frequency_window);
+  PairingRules rules() const {
+    PairingRules r;
+    r.mac_threshold = options.mac_threshold;
+    r.frequency_window = options.frequency_window;
+    r.visibility = options.visibility;
+    return r;
   }
 
-  // Least squares over the sets not held, from x (ln theta), in the bounds.
-  ceres::TerminationType fit(Eigen::VectorXd& x, int held, LinearUpdateSummary* record) const {
-    const int n = size();
-    ceres::Problem problem;
-    problem.AddResidualBlock(new LinearCost(sets, model, sensors, measured, options.mac_threshold,
-                                            options.frequency_window),
-                             nullptr, x.data());
-    for (int k = 0; k < n; ++k) {
-      problem.SetParameterLowerBound(x.data(), k, std::log(lower(k)));
-      problem.SetParameterUpperBound(x.data(), k, std::log(upper(k)));
+  // The point at x with its pairs made afresh by the rules.
+  TrackedPoint fresh(const Eigen::VectorXd& x, LinearEvaluation* e = nullptr) const {
+    const Eigen::VectorXd theta = x.array().exp();
+    TrackedPoint p{x, elastic_modes(model.mass, sets.stiffness(theta)), {}};
+    const Eigen::MatrixXd at = shapes_at_sensors(sensors, p.modes.shapes);
+    const RulePairing rp =
+        pair_by_rules(mac_matrix(measured.shapes, at), measured.frequency_hz,
+                      shapes_given(measured), p.modes.frequency_hz, norms_at_sensors(at), rules());
+    p.columns.assign(static_cast<size_t>(measured.frequency_hz.size()), -1);
+    for (const ModePair& q : rp.pairing.pairs) p.columns[static_cast<size_t>(q.measured)] = q.model;
+    if (e) {
+      *e = evaluate_pairs(sets, sensors, measured, theta, p.modes, p.columns);
+      e->hidden = rp.hidden;
+      e->ambiguity = rp.ambiguity;
+      e->ambiguous_measured = rp.ambiguous_measured;
+      e->ambiguous_candidates = rp.ambiguous_candidates;
     }
-    if (held >= 0) {
-      if (n == 1) return ceres::CONVERGENCE;
-      problem.SetManifold(x.data(), new ceres::SubsetManifold(n, {held}));
+    return p;
+  }
+
+  // `from` moved to x, every pair followed by its full shape; nullopt when one is lost.
+  std::optional<TrackedPoint> move(const TrackedPoint& from, const Eigen::VectorXd& x,
+                                   int substeps = 1) const {
+    if (x == from.x) return from;
+    TrackingOptions t = tracking;
+    t.substeps = substeps;
+    const Eigen::VectorXd dx = x - from.x;
+    const auto path = [&](double s) -> Eigen::SparseMatrix<double> {
+      return sets.stiffness((from.x + s * dx).array().exp());
+    };
+    std::optional<FollowedModes> f;
+    try {
+      f = follow_path(path, model.mass, from.modes, from.columns, t);
+    } catch (const InputError&) {
+      return std::nullopt;  // an indefinite K on the way
     }
-    ceres::Solver::Options so;
-    so.max_num_iterations = options.max_iterations;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.function_tolerance = 1e-12;
-    so.gradient_tolerance = 1e-14;
-    so.parameter_tolerance = 1e-10;
-    so.update_state_every_iteration = true;
-    ProgressCallback cb(options.progress, x, record);
-    so.callbacks.push_back(&cb);
-    ceres::Solver::Summary cs;
-    ceres::Solve(so, &problem, &cs);
-    if (record) record->iterations += static_cast<int>(cs.iterations.size()) - 1;
-    return cs.termination_type;
+    if (!f) return std::nullopt;
+    return TrackedPoint{x, std::move(f->modes), std::move(f->columns)};
+  }
+
+  LinearEvaluation evaluate(const TrackedPoint& p) const {
+    return evaluate_pairs(sets, sensors, measured, p.x.array().exp(), p.modes, p.columns);
   }
 };
+
+// The pairs followed from the last accepted step: each Ceres evaluation moves the reference
+// point to the trial x by following shapes; each accepted step becomes the new reference.
+class Follower {
+ public:
+  explicit Follower(const LinearProblem& p, TrackedPoint start) : p_(p), ref_(std::move(start)) {}
+  const TrackedPoint* at(const Eigen::VectorXd& x) {
+    for (const TrackedPoint& c : cache_)
+      if (c.x == x) return &c;
+    std::optional<TrackedPoint> moved = p_.move(ref_, x);
+    if (!moved) return nullptr;
+    if (cache_.size() >= 4) cache_.erase(cache_.begin());
+    cache_.push_back(std::move(*moved));
+    return &cache_.back();
+  }
+  // The accepted step: the new reference (false when its pairs cannot be followed there).
+  bool accept(const Eigen::VectorXd& x) {
+    const TrackedPoint* p = at(x);
+    if (!p) return false;
+    ref_ = *p;
+    return true;
+  }
+  const TrackedPoint& reference() const { return ref_; }
+
+ private:
+  const LinearProblem& p_;
+  TrackedPoint ref_;
+  std::vector<TrackedPoint> cache_;
+};
+
+// Ceres cost on x = ln theta with the analytic Jacobian, pairs followed by shape.
+class LinearCost : public ceres::CostFunction {
+ public:
+  LinearCost(const LinearProblem& p, Follower& follower) : p_(p), follower_(follower) {
+    set_num_residuals(static_cast<int>(p.measured.frequency_hz.size()));
+    mutable_parameter_block_sizes()->push_back(p.size());
+  }
+  bool Evaluate(double const* const* x, double* residuals, double** jacobians) const override {
+    const int n = p_.size();
+    const Eigen::VectorXd xv = Eigen::Map<const Eigen::VectorXd>(x[0], n);
+    const TrackedPoint* at = follower_.at(xv);
+    if (!at) return false;  // a pair lost on the way: the optimiser shrinks its step
+    const LinearEvaluation e = p_.evaluate(*at);
+    const int m = num_residuals();
+    for (int i = 0; i < m; ++i) residuals[i] = e.residuals(i);
+    if (jacobians && jacobians[0]) {
+      for (int i = 0; i < m; ++i) {
+        for (int k = 0; k < n; ++k) jacobians[0][i * n + k] = e.jacobian(i, k);
+      }
+    }
+    return true;
+  }
+
+ private:
+  const LinearProblem& p_;
+  Follower& follower_;
+};
+
+// After each iteration: the accepted step becomes the reference; records the objective and
+// every stiffness (the paper's Table 1) and reports progress.
+class IterationRecorder : public ceres::IterationCallback {
+ public:
+  IterationRecorder(const LinearProblem& p, Follower& f, const Eigen::VectorXd& x,
+                    LinearUpdateSummary* s)
+      : p_(p), f_(f), x_(x), s_(s) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& it) override {
+    if (!f_.accept(x_)) return ceres::SOLVER_ABORT;
+    if (s_) {
+      s_->history.push_back(it.cost);
+      s_->theta_history.push_back(x_.array().exp());
+    }
+    if (p_.options.progress)
+      p_.options.progress(it.iteration, it.cost, p_.evaluate(f_.reference()).max_error());
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const LinearProblem& p_;
+  Follower& f_;
+  const Eigen::VectorXd& x_;
+  LinearUpdateSummary* s_;
+};
+
+// Least squares over the sets not held, from `start` (pairs known there), in the bounds.
+ceres::TerminationType fit(const LinearProblem& p, TrackedPoint& point,
+                           const std::vector<char>& held, LinearUpdateSummary* record) {
+  const int n = p.size();
+  std::vector<int> constant;
+  for (int k = 0; k < n; ++k)
+    if (held[static_cast<size_t>(k)]) constant.push_back(k);
+  if (static_cast<int>(constant.size()) == n) return ceres::CONVERGENCE;
+  Eigen::VectorXd x = point.x;
+  Follower follower(p, point);
+  ceres::Problem problem;
+  problem.AddResidualBlock(new LinearCost(p, follower), nullptr, x.data());
+  for (int k = 0; k < n; ++k) {
+    problem.SetParameterLowerBound(x.data(), k, std::log(p.lower(k)));
+    problem.SetParameterUpperBound(x.data(), k, std::log(p.upper(k)));
+  }
+  if (!constant.empty()) problem.SetManifold(x.data(), new ceres::SubsetManifold(n, constant));
+  ceres::Solver::Options so;
+  so.max_num_iterations = p.options.max_iterations;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.function_tolerance = 1e-12;
+  so.gradient_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-10;
+  so.update_state_every_iteration = true;
+  IterationRecorder cb(p, follower, x, record);
+  so.callbacks.push_back(&cb);
+  ceres::Solver::Summary cs;
+  ceres::Solve(so, &problem, &cs);
+  if (record) record->iterations += std::max(0, static_cast<int>(cs.iterations.size()) - 1);
+  point = follower.reference();
+  return cs.termination_type;
+}
 
 // The problem with the bounds of the options (start x factors, then the named bounds).
 LinearProblem make_problem(const StiffnessSets& sets, const model::Model& model,
@@ -331,7 +461,7 @@ LinearProblem make_problem(const StiffnessSets& sets, const model::Model& model,
       throw InputError(fmt::format("parameter set '{}': starting stiffness must be > 0", names[k]));
     }
   }
-  LinearProblem p{sets, model, names, sensors, measured, options, sets.initial(), {}, {}};
+  LinearProblem p{sets, model, names, sensors, measured, options, sets.initial(), {}, {}, {}};
   p.lower = p.start * options.lower_factor;
   p.upper = p.start * options.upper_factor;
   for (const ParameterBound& b : options.bounds) {
@@ -345,34 +475,57 @@ LinearProblem make_problem(const StiffnessSets& sets, const model::Model& model,
   return p;
 }
 
-// Per set at the optimum: sensitivity, flat or not, and the standard deviation of the
-// identifiable sets from (J^T J)^{-1} sigma_f^2.
-void report_identifiability(const LinearProblem& p, const LinearEvaluation& at,
-                            LinearUpdateSummary& s) {
+// Sensitivity of each set at `at`; flat sets are marked.
+void report_sensitivity(const LinearProblem& p, const LinearEvaluation& at,
+                        LinearUpdateSummary& s) {
   const int n = p.size();
   s.parameters.resize(n);
-  std::vector<int> identifiable;
   for (int k = 0; k < n; ++k) {
     ParameterReport& r = s.parameters[k];
     r.name = p.names[k];
     r.start = p.start(k);
     r.lower = p.lower(k);
     r.upper = p.upper(k);
-    r.sensitivity = at.jacobian.col(k).cwiseAbs().maxCoeff();
+    r.sensitivity = at.jacobian.rows() > 0 ? at.jacobian.col(k).cwiseAbs().maxCoeff() : 0.0;
     r.flat = r.sensitivity < p.options.flat_sensitivity;
-    if (!r.flat) identifiable.push_back(k);
   }
-  if (identifiable.empty()) return;
-  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(identifiable.size()));
-  for (size_t c = 0; c < identifiable.size(); ++c) j.col(c) = at.jacobian.col(identifiable[c]);
+}
+
+// Standard deviations of the fitted sets at the result (its Jacobian), widened by the reduced
+// chi-square of the least-squares fit `ls` when the frequencies scatter beyond their stated
+// uncertainty (at the least-squares point: a rule that then moves to its tolerance adds errors
+// on purpose, not scatter).
+void report_uncertainty(const LinearProblem& p, const LinearEvaluation& at,
+                        const LinearEvaluation& ls, const std::vector<char>& held,
+                        LinearUpdateSummary& s) {
+  std::vector<int> fitted;
+  for (int k = 0; k < p.size(); ++k) {
+    s.parameters[k].relative_std.reset();
+    if (!held[static_cast<size_t>(k)] && !s.parameters[k].flat) fitted.push_back(k);
+  }
+  const int pairs = static_cast<int>(ls.pairing.pairs.size());
+  s.degrees_of_freedom = pairs - static_cast<int>(fitted.size());
+  const double sf = p.options.frequency_std;
+  s.reduced_chi2 = s.degrees_of_freedom > 0
+                       ? ls.residuals.squaredNorm() / (sf * sf) / s.degrees_of_freedom
+                       : 0.0;
+  if (fitted.empty()) return;
+  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(fitted.size()));
+  for (size_t c = 0; c < fitted.size(); ++c) j.col(c) = at.jacobian.col(fitted[c]);
   const Eigen::MatrixXd jtj = j.transpose() * j;
   Eigen::LDLT<Eigen::MatrixXd> ldlt(jtj);
-  const double sf = p.options.frequency_std;
-  const Eigen::MatrixXd cov =
-      ldlt.solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols())) * (sf * sf);
-  for (size_t c = 0; c < identifiable.size(); ++c) {
+  const double scale = sf * sf * std::max(1.0, s.reduced_chi2);
+  const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols())) * scale;
+  for (size_t c = 0; c < fitted.size(); ++c) {
     const double v = cov(c, c);
-    s.parameters[identifiable[c]].relative_std = (v >= 0 && std::isfinite(v)) ? std::sqrt(v) : 0;
+    if (v >= 0 && std::isfinite(v)) s.parameters[fitted[c]].relative_std = std::sqrt(v);
+  }
+  if (s.reduced_chi2 > 1) {
+    s.warnings.push_back(fmt::format(
+        "the frequencies scatter beyond their stated uncertainty ({:.3g} %): reduced chi-square "
+        "{:.3g} over {} degrees of freedom, so the model does not describe them to within it "
+        "(model-form error); the standard deviations are widened by sqrt({:.3g})",
+        100 * sf, s.reduced_chi2, s.degrees_of_freedom, s.reduced_chi2));
   }
 }
 
@@ -384,37 +537,40 @@ auto within_tolerance(const LinearProblem& p, const LinearEvaluation& at) {
 }
 
 // The paper's rule: the smallest theta_k with the others fitted and every error within the
-// tolerance; x, theta and at move to it.
-void smallest_rule(const LinearProblem& p, int k, Eigen::VectorXd& x, Eigen::VectorXd& theta,
-                   LinearEvaluation& at, LinearUpdateSummary& s) {
-  const auto within = within_tolerance(p, at);
-  if (!within(at)) {
+// tolerance; `point` moves to it.
+void smallest_rule(const LinearProblem& p, int k, std::vector<char> held, TrackedPoint& point,
+                   LinearUpdateSummary& s) {
+  const auto within = within_tolerance(p, p.evaluate(point));
+  if (!within(p.evaluate(point))) {
     s.tolerance_met = false;
     s.warnings.push_back(
         fmt::format("the tolerance {:.3g} % cannot be met: the least-squares fit leaves a largest "
                     "frequency error of {:.3g} %; kept the least-squares result",
-                    100 * p.options.tolerance, 100 * at.max_error()));
+                    100 * p.options.tolerance, 100 * p.evaluate(point).max_error()));
     return;
   }
+  held[static_cast<size_t>(k)] = 1;
   // feasible(v): fit the others at theta_k = v from the last feasible point.
-  Eigen::VectorXd best = x;
+  TrackedPoint best = point;
   auto feasible = [&](double v) {
-    Eigen::VectorXd trial = best;
-    trial(k) = v;
-    p.fit(trial, k, nullptr);
-    try {
-      if (!within(p.evaluate(trial.array().exp()))) return false;
-    } catch (const InputError&) {
-      return false;
-    }
-    best = trial;
-    s.history.push_back(p.evaluate(trial.array().exp()).cost());
-    s.theta_history.push_back(trial.array().exp());
+    Eigen::VectorXd x = best.x;
+    x(k) = v;
+    std::optional<TrackedPoint> trial = p.move(best, x);
+    if (!trial) return false;
+    fit(p, *trial, held, nullptr);
+    const LinearEvaluation e = p.evaluate(*trial);
+    if (!within(e)) return false;
+    best = std::move(*trial);
+    s.history.push_back(e.cost());
+    s.theta_history.push_back(best.x.array().exp());
     return true;
   };
-  double hi = x(k), lo = std::log(p.lower(k));
+  double hi = point.x(k), lo = std::log(p.lower(k));
   if (feasible(lo)) {
-    hi = lo;
+    s.warnings.push_back(fmt::format(
+        "{}: every value down to its lower bound {:.6g} keeps the errors within {:.3g} %: the "
+        "frequencies do not bound it from below, and the result is that bound",
+        p.names[k], p.lower(k), 100 * p.options.tolerance));
   } else {
     // ln theta to 1e-3: theta_m within 0.1 % of the smallest feasible value.
     for (int it = 0; it < 60 && hi - lo > 1e-3; ++it) {
@@ -422,42 +578,39 @@ void smallest_rule(const LinearProblem& p, int k, Eigen::VectorXd& x, Eigen::Vec
       (feasible(mid) ? hi : lo) = mid;
     }
   }
-  x = best;
-  theta = x.array().exp();
-  s.parameters[k].smallest_within_tolerance = theta(k);
-  at = p.evaluate(theta);
+  point = best;
+  s.parameters[k].smallest_within_tolerance = std::exp(point.x(k));
 }
 
-// The smallest stiffness within the tolerance for each flat set, the others held.
-void smallest_flat(const LinearProblem& p, Eigen::VectorXd& theta, LinearEvaluation& at,
-                   LinearUpdateSummary& s) {
-  const auto within = within_tolerance(p, at);
+// The smallest stiffness within the tolerance for each flat set, the others held; a set that
+// meets it down to its lower bound stays where it is.
+void smallest_flat(const LinearProblem& p, TrackedPoint& point, LinearUpdateSummary& s) {
+  const auto within = within_tolerance(p, p.evaluate(point));
   for (int k = 0; k < p.size(); ++k) {
-    if (!s.parameters[k].flat) continue;
-    auto ok = [&](double v) {
-      Eigen::VectorXd t = theta;
-      t(k) = v;
-      try {
-        return within(p.evaluate(t));
-      } catch (const InputError&) {
-        return false;
-      }
+    if (!s.parameters[k].flat || s.parameters[k].held_by_user) continue;
+    auto at = [&](double lx) -> std::optional<TrackedPoint> {
+      Eigen::VectorXd x = point.x;
+      x(k) = lx;
+      std::optional<TrackedPoint> q = p.move(point, x);
+      if (!q || !within(p.evaluate(*q))) return std::nullopt;
+      return q;
     };
-    if (!ok(theta(k))) continue;
-    double hi = std::log(theta(k));
-    double lo = std::log(p.lower(k));
-    if (ok(std::exp(lo))) {
-      hi = lo;
-    } else {
-      for (int it = 0; it < 40 && hi - lo > 1e-4; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        (ok(std::exp(mid)) ? hi : lo) = mid;
-      }
+    if (!within(p.evaluate(point))) continue;
+    double hi = point.x(k), lo = std::log(p.lower(k));
+    if (at(lo)) {
+      s.warnings.push_back(fmt::format(
+          "{}: every value down to its lower bound {:.6g} keeps the errors within {:.3g} %: "
+          "held at {:.6g}",
+          p.names[k], p.lower(k), 100 * p.options.tolerance, std::exp(point.x(k))));
+      continue;
     }
-    theta(k) = std::exp(hi);
-    s.parameters[k].smallest_within_tolerance = theta(k);
+    for (int it = 0; it < 40 && hi - lo > 1e-4; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (at(mid) ? hi : lo) = mid;
+    }
+    if (std::optional<TrackedPoint> q = at(hi)) point = std::move(*q);
+    s.parameters[k].smallest_within_tolerance = std::exp(point.x(k));
   }
-  at = p.evaluate(theta);
 }
 
 // Warns of every set that ends at a bound.
@@ -465,6 +618,7 @@ void warn_bounds(const LinearProblem& p, const Eigen::VectorXd& theta, LinearUpd
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[k];
     const double lx = std::log(theta(k));
+    r.at_bound = 0;
     if (lx <= std::log(p.lower(k)) + 1e-6) r.at_bound = -1;
     if (lx >= std::log(p.upper(k)) - 1e-6) r.at_bound = 1;
     if (r.at_bound != 0) {
@@ -475,41 +629,74 @@ void warn_bounds(const LinearProblem& p, const Eigen::VectorXd& theta, LinearUpd
   }
 }
 
-// Warns of model modes the sensors cannot tell apart (among modes up to 1.5 x the highest
-// measured).
+// One warning naming the model modes the sensors cannot tell apart among the paired ones and
+// their neighbours (modes up to 1.5 x the highest measured frequency).
 void warn_aliased(const LinearProblem& p, const LinearEvaluation& at, LinearUpdateSummary& s) {
   const double f_top = 1.5 * p.measured.frequency_hz.maxCoeff();
   Eigen::Index count = 0;
   while (count < at.all_model_frequency_hz.size() && at.all_model_frequency_hz(count) <= f_top)
     ++count;
+  std::vector<char> paired(static_cast<size_t>(at.all_model_frequency_hz.size()), 0);
+  for (const ModePair& q : at.pairing.pairs) paired[static_cast<size_t>(q.model)] = 1;
+  std::vector<char> hidden(paired.size(), 0);
+  for (int j : at.hidden) hidden[static_cast<size_t>(j)] = 1;
+  std::vector<std::string> pairs;
   for (const AliasedModes& a :
        aliased_modes(at.model_at_sensors.leftCols(count), p.options.alias_mac)) {
-    s.warnings.push_back(fmt::format(
-        "model modes {} ({:.4g} Hz) and {} ({:.4g} Hz) look alike at the sensors (auto-MAC "
-        "{:.3f}): MAC cannot tell them apart, the frequency window must",
-        a.a + 1, at.all_model_frequency_hz(a.a), a.b + 1, at.all_model_frequency_hz(a.b), a.mac));
+    if (hidden[a.a] || hidden[a.b] || !(paired[a.a] || paired[a.b])) continue;
+    pairs.push_back(fmt::format("{} ({:.4g} Hz) and {} ({:.4g} Hz), auto-MAC {:.3f}", a.a + 1,
+                                at.all_model_frequency_hz(a.a), a.b + 1,
+                                at.all_model_frequency_hz(a.b), a.mac));
   }
+  if (pairs.empty()) return;
+  s.warnings.push_back(fmt::format(
+      "the sensors cannot tell these model modes apart by shape: {}; their pairs rest on "
+      "frequency and on following each mode's full shape, so add sensors that see them apart "
+      "for a MAC that confirms them",
+      fmt::join(pairs, "; ")));
 }
 
-// One-at-a-time sweeps around the result.
-void sweeps(const LinearProblem& p, const Eigen::VectorXd& theta, LinearUpdateSummary& s) {
+// One-at-a-time sweeps around the result, every pair followed by its full shape from the result
+// on a grid eight times finer than the sweep's.
+void sweeps(const LinearProblem& p, const TrackedPoint& result, LinearUpdateSummary& s) {
   const LinearUpdateOptions& o = p.options;
+  const int m = static_cast<int>(p.measured.frequency_hz.size());
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[k];
-    r.value = theta(k);
-    for (int i = 0; i < o.sweep_points; ++i) {
-      const double d = -o.sweep_decades + 2.0 * o.sweep_decades * i / (o.sweep_points - 1);
-      const double f = std::pow(10.0, d);
-      Eigen::VectorXd t = theta;
-      t(k) *= f;
-      try {
-        const LinearEvaluation e = p.evaluate(t);
-        r.sweep_factor.push_back(f);
-        r.sweep_rms.push_back(rms_error(e));
-        r.sweep_errors.push_back(e.residuals);
-      } catch (const InputError&) {
+    r.value = std::exp(result.x(k));
+    const int n = o.sweep_points;
+    std::vector<double> d(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) d[i] = -o.sweep_decades + 2.0 * o.sweep_decades * i / (n - 1);
+    r.sweep_factor.assign(static_cast<size_t>(n), 0.0);
+    r.sweep_rms.assign(static_cast<size_t>(n), std::nullopt);
+    r.sweep_errors.assign(static_cast<size_t>(n), std::vector<std::optional<double>>(m));
+    for (int i = 0; i < n; ++i) r.sweep_factor[i] = std::pow(10.0, d[i]);
+    // Outward from the result in each direction: the start point is the sweep point nearest
+    // the result (factor 1), reached along the sweep's own line.
+    auto walk = [&](int from, int to, int step) {
+      std::optional<TrackedPoint> at = result;
+      double last = 0;  // decades from the result
+      for (int i = from; i != to + step; i += step) {
+        if (!at) break;
+        Eigen::VectorXd x = result.x;
+        x(k) += d[i] * std::log(10.0);
+        const int substeps =
+            std::max(1, static_cast<int>(std::ceil(8 * std::abs(d[i] - last) * (n - 1) /
+                                                   (2 * o.sweep_decades))));
+        at = p.move(*at, x, substeps);
+        last = d[i];
+        if (!at) break;
+        const LinearEvaluation e = p.evaluate(*at);
+        for (const ModePair& q : e.pairing.pairs)
+          r.sweep_errors[i][static_cast<size_t>(q.measured)] = e.residuals(q.measured);
+        if (!e.pairing.pairs.empty()) r.sweep_rms[i] = rms_of(e);
       }
-    }
+    };
+    int mid = 0;
+    for (int i = 1; i < n; ++i)
+      if (std::abs(d[i]) < std::abs(d[mid])) mid = i;
+    walk(mid, n - 1, 1);
+    if (mid > 0) walk(mid - 1, 0, -1);
   }
 }
 
@@ -517,6 +704,13 @@ LinearUpdateStatus status_of(ceres::TerminationType tt) {
   if (tt == ceres::CONVERGENCE) return LinearUpdateStatus::kConverged;
   if (tt == ceres::NO_CONVERGENCE) return LinearUpdateStatus::kIterationLimit;
   return LinearUpdateStatus::kFailed;
+}
+
+std::string pair_text(const LinearEvaluation& e, int i) {
+  const int j = e.pairing.model_for(i);
+  if (j < 0) return "unpaired";
+  return fmt::format("model mode {} ({:.5g} Hz, MAC {:.3f})", j + 1, e.all_model_frequency_hz(j),
+                     e.mac(i, j));
 }
 
 }  // namespace
@@ -534,31 +728,170 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   LinearUpdateSummary local;
   LinearUpdateSummary& s = summary ? *summary : local;
   s = LinearUpdateSummary{};
+  s.rule = options.rule == LinearRule::kSmallest
+               ? fmt::format("smallest {} with every error within {:.3g} %", options.smallest_set,
+                             100 * options.tolerance)
+               : "least squares";
 
-  // The start, clamped into the bounds.
-  const Eigen::VectorXd begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
-  const LinearEvaluation first = p.evaluate(begin);
-  s.initial_cost = first.cost();
-  if (first.pairing.pairs.empty()) {
+  // Held sets: where the user says (or at their start).
+  const int n = p.size();
+  std::vector<char> held(static_cast<size_t>(n), 0);
+  Eigen::VectorXd begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
+  for (const ParameterHold& h : options.holds) {
+    const int k = set_index(names, h.name, "hold");
+    held[static_cast<size_t>(k)] = 1;
+    if (h.value > 0) begin(k) = h.value;
+  }
+  if (minimised >= 0 && held[static_cast<size_t>(minimised)])
+    throw InputError(fmt::format("the smallest rule: '{}' is held", options.smallest_set));
+
+  // The start: pairs by the rules.
+  TrackedPoint point = p.fresh(begin.array().log(), &s.start);
+  s.initial_cost = s.start.cost();
+  s.final = s.start;
+  s.final_cost = s.initial_cost;
+  s.final_mac = s.start.mac;
+  if (!s.start.ambiguity.empty()) {
+    s.status = LinearUpdateStatus::kAmbiguous;
+    s.ambiguity = "at the start, " + s.start.ambiguity;
+    return begin;
+  }
+  if (s.start.pairing.pairs.empty()) {
     s.status = LinearUpdateStatus::kTooFewPairs;
-    s.final_cost = s.initial_cost;
-    s.final = first;
     return begin;
   }
 
-  Eigen::VectorXd x = begin.array().log();
-  s.status = status_of(p.fit(x, -1, &s));
-  Eigen::VectorXd theta = x.array().exp();
-  LinearEvaluation at = p.evaluate(theta);
-  report_identifiability(p, at, s);
-  if (options.rule == LinearRule::kSmallest) {
-    smallest_rule(p, minimised, x, theta, at, s);
-  } else if (options.tolerance > 0) {
-    smallest_flat(p, theta, at, s);
+  // Least squares with pairs followed by shape. At its result the pairs are made afresh by the
+  // rules; where they differ, or where the sensors cannot tell two candidates apart, each
+  // candidate pairing is fitted too and the data decide: the lowest cost wins when it is lower
+  // by at least 9 (3 sigma) in chi-square units, 2 (c_other - c_best) / sigma_f^2; otherwise
+  // the pairs cannot be decided and the update stops saying which.
+  LinearEvaluation fresh_end;
+  std::vector<std::vector<int>> tried{point.columns};
+  s.status = status_of(fit(p, point, held, &s));
+  s.rounds = 1;
+  for (int check = 0; check < 4; ++check) {
+    TrackedPoint again = p.fresh(point.x, &fresh_end);
+    if (again.columns == point.columns && fresh_end.ambiguity.empty()) break;
+    std::vector<TrackedPoint> candidates;
+    auto add = [&](TrackedPoint c) {
+      if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) return;
+      tried.push_back(c.columns);
+      candidates.push_back(std::move(c));
+    };
+    if (fresh_end.ambiguity.empty()) {
+      add(again);
+    } else {
+      const int i = fresh_end.ambiguous_measured;
+      for (int c : fresh_end.ambiguous_candidates) {
+        TrackedPoint t = again;
+        for (int& col : t.columns)
+          if (col == c) col = again.columns[static_cast<size_t>(i)];  // a swap keeps 1:1
+        t.columns[static_cast<size_t>(i)] = c;
+        add(std::move(t));
+      }
+    }
+    const double c0 = p.evaluate(point).cost();
+    double best = c0, runner = INFINITY;
+    std::optional<TrackedPoint> winner;
+    std::vector<std::string> costs{fmt::format("{:.4g} as followed", c0)};
+    for (TrackedPoint& c : candidates) {
+      LinearUpdateSummary scratch;
+      const ceres::TerminationType tt = fit(p, c, held, &scratch);
+      ++s.rounds;
+      const double cost = p.evaluate(c).cost();
+      costs.push_back(fmt::format("{:.4g} with the sensors' pairs", cost));
+      if (cost < best) {
+        runner = best;
+        best = cost;
+        winner = std::move(c);
+        s.status = status_of(tt);
+        s.history.insert(s.history.end(), scratch.history.begin(), scratch.history.end());
+        s.theta_history.insert(s.theta_history.end(), scratch.theta_history.begin(),
+                               scratch.theta_history.end());
+        s.iterations += scratch.iterations;
+      } else {
+        runner = std::min(runner, cost);
+      }
+    }
+    const double sf2 = options.frequency_std * options.frequency_std;
+    const bool decided = 2 * (runner - best) / sf2 >= 9;
+    if (!decided) {
+      const LinearEvaluation followed = p.evaluate(winner ? *winner : point);
+      std::string why = fresh_end.ambiguity;
+      for (int i = 0; why.empty() && i < static_cast<int>(point.columns.size()); ++i) {
+        if (point.columns[i] == again.columns[i]) continue;
+        why = fmt::format(
+            "test mode {} ({:.5g} Hz) is followed by its shape to {}, but at the result the "
+            "sensors pair it with {}",
+            i + 1, measured.frequency_hz(i), pair_text(followed, i), pair_text(fresh_end, i));
+      }
+      s.status = LinearUpdateStatus::kAmbiguous;
+      s.ambiguity =
+          fmt::format("{}; fitting each pairing leaves costs {} that the data cannot tell apart",
+                      why, fmt::join(costs, ", "));
+      s.final = followed;
+      s.final_cost = followed.cost();
+      s.final_mac = followed.mac;
+      return (winner ? winner->x : point.x).array().exp();
+    }
+    if (!winner) {
+      // The pairs followed by shape fit decisively better than the sensors' own: kept, said.
+      s.warnings.push_back(fmt::format(
+          "at the result the sensors alone would pair differently ({}), but those pairs fit "
+          "worse (costs {}): kept the pairs followed by shape",
+          fresh_end.ambiguity.empty() ? "MAC and frequency" : fresh_end.ambiguity,
+          fmt::join(costs, ", ")));
+      break;
+    }
+    point = std::move(*winner);
   }
+  // Flat sets are not identified by the frequencies: held (at their start) and the rest fitted
+  // again.
+  report_sensitivity(p, p.evaluate(point), s);
+  for (int k = 0; k < n; ++k) s.parameters[k].held_by_user = held[static_cast<size_t>(k)];
+  bool refit = false;
+  for (int k = 0; k < n; ++k) {
+    if (!s.parameters[k].flat || held[static_cast<size_t>(k)] || k == minimised) continue;
+    held[static_cast<size_t>(k)] = 1;
+    const double at = std::exp(point.x(k));
+    Eigen::VectorXd x = point.x;
+    x(k) = begin.array().log()(k);
+    if (std::optional<TrackedPoint> q = p.move(point, x, 8)) {
+      point = std::move(*q);
+      refit = true;
+      s.warnings.push_back(fmt::format(
+          "{} is flat (sensitivity {:.3g} < {:.3g}): the frequencies do not identify it; held "
+          "at {:.6g} (it had drifted to {:.6g}); hold it elsewhere with --hold {}=VALUE",
+          names[k], s.parameters[k].sensitivity, options.flat_sensitivity, std::exp(x(k)), at,
+          names[k]));
+    }
+  }
+  if (refit) fit(p, point, held, &s);
+  const LinearEvaluation least_squares = p.evaluate(point);
+
+  if (options.rule == LinearRule::kSmallest) {
+    smallest_rule(p, minimised, held, point, s);
+  } else if (options.tolerance > 0) {
+    smallest_flat(p, point, s);
+  }
+  const Eigen::VectorXd theta = point.x.array().exp();
+  LinearEvaluation at = p.evaluate(point);
+  at.hidden = fresh_end.hidden;
+  {
+    // Sensitivities and uncertainty of the result itself.
+    std::vector<char> flat(static_cast<size_t>(n));
+    for (int k = 0; k < n; ++k) flat[static_cast<size_t>(k)] = s.parameters[k].flat;
+    report_sensitivity(p, at, s);
+    for (int k = 0; k < n; ++k) {
+      s.parameters[k].flat = flat[static_cast<size_t>(k)];
+      s.parameters[k].held = held[static_cast<size_t>(k)];
+    }
+  }
+  report_uncertainty(p, at, least_squares, held, s);
   warn_bounds(p, theta, s);
   warn_aliased(p, at, s);
-  sweeps(p, theta, s);
+  sweeps(p, point, s);
   s.final_cost = at.cost();
   s.final_mac = at.mac;
   s.final = std::move(at);
@@ -566,12 +899,15 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
 }
 
 std::string LinearUpdateSummary::report() const {
-  static const char* names[] = {"converged", "iteration limit", "no mode paired", "failed"};
+  static const char* names[] = {"converged", "iteration limit", "no mode paired", "failed",
+                                "pairs cannot be decided"};
   std::string out = fmt::format(
-      "linear update: {}, {} iterations, cost {:.4g} -> {:.4g}, {} of {} measured modes paired, "
-      "largest frequency error {:.3g} %\n",
-      names[static_cast<int>(status)], iterations, initial_cost, final_cost,
-      final.pairing.pairs.size(), final.residuals.size(), 100 * final.max_error());
+      "linear update ({}): {}, {} iterations in {} round{}, cost {:.4g} -> {:.4g}, {} of {} "
+      "measured modes paired, largest frequency error {:.3g} %\n",
+      rule, names[static_cast<int>(status)], iterations, rounds, rounds == 1 ? "" : "s",
+      initial_cost, final_cost, final.pairing.pairs.size(), final.residuals.size(),
+      100 * final.max_error());
+  if (!ambiguity.empty()) out += fmt::format("  {}\n", ambiguity);
   out += "  measured  f_exp [Hz]  model mode  f_model [Hz]  error [%]    MAC\n";
   for (Eigen::Index i = 0; i < final.residuals.size(); ++i) {
     const int j = final.pairing.model_for(static_cast<int>(i));
@@ -584,11 +920,20 @@ std::string LinearUpdateSummary::report() const {
                        j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
                        final.mac.size() > 0 ? final.mac(i, j) : 0.0);
   }
+  if (degrees_of_freedom > 0)
+    out += fmt::format("  reduced chi-square {:.3g} over {} degrees of freedom\n", reduced_chi2,
+                       degrees_of_freedom);
   for (const ParameterReport& p : parameters) {
+    std::string what;
+    if (p.flat)
+      what = p.smallest_within_tolerance > 0 ? "  FLAT (not identified by the frequencies)"
+                                             : "  FLAT (not identified by the frequencies): held";
+    else if (p.held)
+      what = "  held";
+    else if (p.relative_std)
+      what = fmt::format("  +/- {:.3g} %", 100 * *p.relative_std);
     out += fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}", p.name, p.start, p.value,
-                       p.sensitivity,
-                       p.flat ? "  FLAT (not identified by the frequencies)"
-                              : fmt::format("  +/- {:.3g} %", 100 * p.relative_std));
+                       p.sensitivity, what);
     if (p.smallest_within_tolerance > 0) out += "  (smallest within tolerance)";
     out += "\n";
   }

@@ -4,33 +4,48 @@
 // model file names `name_k` ("spring.kz", or "iwan.rivet" whose elements enter at K_T):
 //     K(theta) = K_0 + sum_k theta_k S_k,   S_k = sum over its elements of e e^T, e = e_a - e_b.
 // Modes: K(theta) phi = omega^2 M phi, phi^T M phi = 1 (linear_modes.h), elastic modes only.
-// Pairing: at every evaluation the measured shapes (at the sensors) are paired with the model
-// shapes at the sensors by MAC (mac.h); residuals over measured modes i
-//     r_i = (f_model,p(i) - f_exp,i) / f_exp,i            (0 when i is unpaired)
+// Pairing (mac.h, pair_by_rules): at the start each measured shape is paired with a model mode
+// by sensor MAC, gated by frequency (|f_model/f_exp - 1| <= frequency_window, 0.5 by default)
+// and never with a mode invisible at the sensors; candidates alike at the sensors are told
+// apart by frequency, and when neither can tell them the update stops (kAmbiguous) naming
+// them. From then on every pair is followed by its full shape (mode_tracking.h: mass-weighted
+// MAC with the previous accepted step, the step halved until the continuation is clear), so a
+// pair never jumps to a mode that merely looks alike at a few sensors. At the result the pairs
+// are made afresh by the same rules; when they differ, the fit runs again from there with the
+// new pairs (at most three rounds), and pairs that still differ stop the update (kAmbiguous).
+// Residuals over measured modes i
+//     r_i = (f_model,p(i) - f_exp,i) / f_exp,i            (no residual when i is unpaired)
 // and the objective is 1/2 sum r_i^2. The optimiser (Ceres, trust region, bounds) works on
 // x_k = ln theta_k, with the analytic eigenvalue sensitivity
 //     d omega_i^2 / d theta_k = phi_i^T S_k phi_i,  so  d r_i / d x_k = theta_k phi_i^T S_k phi_i
 //                                                         / (8 pi^2 f_model f_exp).
 // Identifiability: s_k = max_i |d r_i / d x_k|, the largest relative frequency change per unit
 // change of ln theta_k; a parameter with s_k below flat_sensitivity is flat (the objective
-// does not see it). A one-at-a-time sweep (theta_k times 10^[-d, d], others held) shows
-// the RMS frequency error along each parameter (the paper's Figure 3). Relative standard
-// deviations come from (J^T J)^-1 sigma^2 over the identifiable parameters, sigma the
-// relative frequency uncertainty.
+// does not see it). A flat set is not identified: it is held at its start (or where `holds`
+// puts it) and the others are fitted again, so that no answer depends on where a flat set
+// drifted between bounds nobody chose. One-at-a-time sweeps (theta_k times 10^[-d, d], the
+// others held) follow every pair by its full shape from the result (the paper's Figure 3).
+// Uncertainty at the result: covariance (J^T J)^-1 sigma^2 over the fitted sets, sigma the
+// relative frequency uncertainty; with more pairs than fitted sets, the reduced chi-square
+//     chi2_red = sum (r_i / sigma)^2 / (pairs - fitted)
+// measures the scatter the model cannot explain (model-form error), and when it exceeds 1 the
+// covariance is scaled by it.
 // Smallest stiffness: with tolerance > 0, each flat parameter is then lowered to the
 // smallest value (bisection in ln theta) at which every paired |r_i| is within the
-// tolerance, instead of drifting to its upper bound.
+// tolerance; when even its lower bound meets the tolerance the frequencies do not bound it
+// and it stays held.
 // The paper's rule (LinearRule::kSmallest): minimise theta_m of one named set subject to every
 // paired |r_i| <= tolerance. Bisection on ln theta_m between its lower bound and the
-// least-squares value; at each trial theta_m the other sets are fitted by least squares (held
-// theta_m) and the trial is feasible when every paired error is within the tolerance and no
-// pair is lost. When even the least-squares fit exceeds the tolerance the rule says so and
-// keeps the least-squares result. A parameter that ends at a bound is reported with a warning.
-// Pairing may also require |f_model - f_exp| <= frequency_window f_exp; at the result the
-// auto-MAC of the model shapes at the sensors flags model modes the sensors cannot tell apart.
+// least-squares value; at each trial theta_m the other sets (flat ones held) are fitted by least
+// squares, and the trial is feasible when every paired error is within the tolerance. When
+// even the least-squares fit exceeds the tolerance the rule says so and keeps the
+// least-squares result. A parameter that ends at a bound is reported with a warning.
+// At the result the auto-MAC of the model shapes at the sensors flags model modes the sensors
+// cannot tell apart (told apart here by frequency and by following full shapes).
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +53,7 @@
 #include <Eigen/SparseCore>
 
 #include "jointlab/correlate/mac.h"
+#include "jointlab/correlate/mode_tracking.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/model_file.h"
 
@@ -78,7 +94,7 @@ struct MeasuredModes {
 
 /// One evaluation of the linear objective.
 struct LinearEvaluation {
-  Pairing pairing;                     ///< measured-model pairs by MAC
+  Pairing pairing;                     ///< measured-model pairs (by rules, or followed)
   Eigen::VectorXd model_frequency_hz;  ///< paired model frequency per measured mode (0: unpaired)
   Eigen::VectorXd residuals;           ///< r_i
   Eigen::MatrixXd jacobian;            ///< d r_i / d ln theta_k
@@ -86,18 +102,35 @@ struct LinearEvaluation {
   Eigen::VectorXd measured_frequency_hz;   ///< the measured frequencies
   Eigen::MatrixXd mac;                     ///< MAC, measured x elastic model modes
   Eigen::MatrixXd model_at_sensors;        ///< elastic model shapes at the sensors
+  std::vector<int> hidden;                 ///< model modes invisible at the sensors
+  std::string ambiguity;                   ///< pairing by rules: what it cannot decide, or ""
+  int ambiguous_measured = -1;             ///< the measured mode of `ambiguity` (-1: none)
+  std::vector<int> ambiguous_candidates;   ///< the model modes it cannot tell apart
   /// 1/2 sum r_i^2.
   double cost() const { return 0.5 * residuals.squaredNorm(); }
   /// Largest |r_i| over paired modes.
   double max_error() const;
 };
 
-/// Evaluates pairing, residuals and their analytic Jacobian at theta.
-/// With frequency_window > 0 a pair also needs |f_model / f_exp - 1| <= frequency_window.
+/// Evaluates pairing (pair_by_rules, afresh), residuals and their analytic Jacobian at theta.
+LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
+                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                 const PairingRules& rules);
+
+/// evaluate_linear() with the default rules but this MAC threshold and frequency window
+/// (0: no window).
 LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
                                  const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                                  const Eigen::Ref<const Eigen::VectorXd>& theta,
                                  double mac_threshold, double frequency_window = 0);
+
+/// Residuals and Jacobian at theta for given pairs (measured mode i with elastic model column
+/// columns[i], -1: unpaired), the model's elastic modes at theta given.
+LinearEvaluation evaluate_pairs(const StiffnessSets& sets, const std::vector<Sensor>& sensors,
+                                const MeasuredModes& measured,
+                                const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                const ElasticModes& modes, const std::vector<int>& columns);
 
 /// The stop rule of update_linear().
 enum class LinearRule {
@@ -112,6 +145,12 @@ struct ParameterBound {
   double upper = 0;  ///< largest stiffness, > lower
 };
 
+/// A set held at a value (0: at its start) instead of fitted.
+struct ParameterHold {
+  std::string name;  ///< element name ("spring.rz")
+  double value = 0;  ///< stiffness, > 0; 0: the model's
+};
+
 /// Settings of update_linear().
 struct LinearUpdateOptions {
   double mac_threshold = 0.6;  ///< pairs below this MAC are not made
@@ -119,35 +158,43 @@ struct LinearUpdateOptions {
   double upper_factor = 1e3;   ///< (both > 0, lower_factor < 1 < upper_factor)
   std::vector<ParameterBound> bounds;  ///< absolute bounds of named sets (override the factors)
   LinearRule rule = LinearRule::kLeastSquares;  ///< stop rule
-  std::string smallest_set;     ///< kSmallest: the set minimised (a name of the sets)
-  double frequency_window = 0;  ///< > 0: pairs also need |f_model/f_exp - 1| <= this
-  double alias_mac = 0.9;       ///< auto-MAC of two model modes at the sensors above: warned
-  int max_iterations = 100;     ///< Ceres iterations
+  std::string smallest_set;       ///< kSmallest: the set minimised (a name of the sets)
+  double frequency_window = 0.5;  ///< > 0: pairs also need |f_model/f_exp - 1| <= this
+  double visibility = 1e-6;       ///< model modes below this squared norm at the sensors (relative)
+                                  ///< are never paired by MAC (mac.h, PairingRules)
+  std::vector<ParameterHold> holds;  ///< sets held, not fitted
+  double alias_mac = 0.9;            ///< auto-MAC of two model modes at the sensors above: warned
+  int max_iterations = 100;          ///< Ceres iterations
   double tolerance = 0;  ///< > 0: flat sets lowered to the smallest within it; kSmallest's bound
   double flat_sensitivity = 1e-3;  ///< s_k below this: flat
   double frequency_std = 1e-3;     ///< relative frequency uncertainty for confidence
   double sweep_decades = 2;        ///< one-at-a-time sweep over theta * 10^[-d, d]
   int sweep_points = 9;            ///< points of the sweep (>= 2)
-  /// Called after each optimiser iteration with (iteration, cost).
-  std::function<void(int, double)> progress;
+  /// Called after each optimiser iteration with (iteration, cost, largest |r_i|).
+  std::function<void(int, double, double)> progress;
   /// What is wrong with these options, or "".
   std::string error() const;
 };
 
 /// What update_linear() found about one parameter.
 struct ParameterReport {
-  std::string name;         ///< element name
-  double start = 0;         ///< starting stiffness
-  double value = 0;         ///< updated stiffness
-  double sensitivity = 0;   ///< s_k at the solution
-  bool flat = false;        ///< s_k < flat_sensitivity
-  double relative_std = 0;  ///< one-sigma relative uncertainty (0 when flat: unbounded)
-  double smallest_within_tolerance = 0;       ///< set when the tolerance formulation lowered it
-  double lower = 0, upper = 0;                ///< its bounds
-  int at_bound = 0;                           ///< -1: ends at its lower bound, +1: upper, 0: inside
-  std::vector<double> sweep_factor;           ///< theta_k multipliers of the sweep
-  std::vector<double> sweep_rms;              ///< RMS relative frequency error at each multiplier
-  std::vector<Eigen::VectorXd> sweep_errors;  ///< r_i of every measured mode at each multiplier
+  std::string name;                      ///< element name
+  double start = 0;                      ///< starting stiffness
+  double value = 0;                      ///< updated stiffness
+  double sensitivity = 0;                ///< s_k at the solution
+  bool flat = false;                     ///< s_k < flat_sensitivity
+  bool held = false;                     ///< not fitted: held by the user, or flat
+  bool held_by_user = false;             ///< held by LinearUpdateOptions::holds
+  std::optional<double> relative_std;    ///< one-sigma relative uncertainty (none: not fitted)
+  double smallest_within_tolerance = 0;  ///< set when the tolerance formulation lowered it
+  double lower = 0, upper = 0;           ///< its bounds
+  int at_bound = 0;                      ///< -1: ends at its lower bound, +1: upper, 0: inside
+  std::vector<double> sweep_factor;      ///< theta_k multipliers of the sweep
+  /// RMS relative frequency error over the followed pairs at each multiplier (none: no pair)
+  std::vector<std::optional<double>> sweep_rms;
+  /// r_i of every measured mode at each multiplier, its pair followed by shape (none: unpaired
+  /// or not followed)
+  std::vector<std::vector<std::optional<double>>> sweep_errors;
 };
 
 /// Why update_linear() stopped.
@@ -156,6 +203,7 @@ enum class LinearUpdateStatus {
   kIterationLimit,  ///< max_iterations reached
   kTooFewPairs,     ///< fewer paired modes than needed to say anything (none)
   kFailed,          ///< the optimiser failed (numerical)
+  kAmbiguous,       ///< the pairs cannot be decided (see LinearUpdateSummary::ambiguity)
 };
 
 /// Outcome of update_linear().
@@ -166,7 +214,13 @@ struct LinearUpdateSummary {
   int iterations = 0;                                       ///< optimiser iterations
   std::vector<double> history;                 ///< objective after each iteration (first: start)
   std::vector<Eigen::VectorXd> theta_history;  ///< every set's stiffness at each history entry
+  std::string rule;                   ///< the rule that produced the result, for the headline
   bool tolerance_met = true;          ///< kSmallest: false when no stiffness meets the tolerance
+  std::string ambiguity;              ///< kAmbiguous: which modes, and why
+  int rounds = 0;                     ///< fits run (a new round when the pairs change)
+  double reduced_chi2 = 0;            ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
+  int degrees_of_freedom = 0;         ///< pairs - fitted sets
+  LinearEvaluation start;             ///< pairing and residuals at the start
   Eigen::MatrixXd final_mac;          ///< MAC (measured x elastic model modes) at the result
   std::vector<std::string> warnings;  ///< parameters at bounds, aliased modes, unmet tolerance
   std::vector<ParameterReport> parameters;  ///< per parameter
@@ -186,7 +240,8 @@ std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>&
                                         double threshold);
 
 /// Updates the named sets of `model` to the measured frequencies; returns theta.
-/// InputError for bad options, unknown sets or inconsistent sensors/measured shapes.
+/// InputError for bad options, unknown sets or inconsistent sensors/measured shapes (a
+/// measured mode whose shape is zero at every sensor while others have shapes among them).
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& sets,
                               const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                               const LinearUpdateOptions& options, LinearUpdateSummary* summary);

@@ -170,11 +170,14 @@ TEST(LinearUpdate, RecoversIdentifiableStiffnessAndReportsTheFlatOne) {
   EXPECT_TRUE(s.parameters[2].flat);
   EXPECT_GT(s.parameters[2].smallest_within_tolerance, 0.0);
   EXPECT_LE(s.final.max_error(), o.tolerance + 1e-12);
-  EXPECT_LT(s.parameters[0].relative_std, 0.02);
+  ASSERT_TRUE(s.parameters[0].relative_std.has_value());
+  EXPECT_LT(*s.parameters[0].relative_std, 0.02);
+  EXPECT_FALSE(s.parameters[2].relative_std.has_value());  // flat: held, no sigma
   EXPECT_LT(s.final_cost, s.initial_cost);
   // The sweep along the flat parameter barely moves the error above the tolerance point.
   ASSERT_EQ(s.parameters[2].sweep_rms.size(), 9u);
-  EXPECT_LT(s.parameters[2].sweep_rms.back() - s.parameters[2].sweep_rms[4], 1e-3);
+  ASSERT_TRUE(s.parameters[2].sweep_rms.back() && s.parameters[2].sweep_rms[4]);
+  EXPECT_LT(*s.parameters[2].sweep_rms.back() - *s.parameters[2].sweep_rms[4], 1e-3);
 }
 
 // The paper's rule on one set, against a scan: kflat alone (ka, kb at the truth), six modes with
@@ -260,7 +263,8 @@ TEST(LinearUpdate, WarnsWhenTheSensorsCannotTellModesApart) {
   LinearUpdateOptions o;
   LinearUpdateSummary s;
   update_linear(truth, kSets, one, meas, o, &s);
-  EXPECT_NE(s.report().find("look alike at the sensors"), std::string::npos) << s.report();
+  EXPECT_NE(s.report().find("cannot tell these model modes apart"), std::string::npos)
+      << s.report();
   const auto aliased = aliased_modes(s.final.model_at_sensors, 0.9);
   EXPECT_FALSE(aliased.empty());
   for (const AliasedModes& a : aliased) EXPECT_GE(a.mac, 0.9);

@@ -1,6 +1,7 @@
 #include "jointlab/correlate/mac.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -79,6 +80,101 @@ Pairing pair_modes(const Eigen::Ref<const Eigen::MatrixXd>& mac_matrix, double t
   for (int j = 0; j < cols; ++j) {
     if (!col_used[j]) out.unpaired_model.push_back(j);
   }
+  return out;
+}
+
+RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
+                          const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
+                          const std::vector<bool>& has_shape,
+                          const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
+                          const Eigen::Ref<const Eigen::VectorXd>& model_norm2,
+                          const PairingRules& rules) {
+  const int rows = static_cast<int>(mac.rows()), cols = static_cast<int>(mac.cols());
+  RulePairing out;
+  // Visibility against the most visible mode up to twice the highest test frequency.
+  const double f_top = rows > 0 ? 2.0 * test_frequency_hz.maxCoeff() : 0.0;
+  double top = 0;
+  for (int j = 0; j < cols; ++j)
+    if (model_frequency_hz(j) <= f_top || top == 0) top = std::max(top, model_norm2(j));
+  std::vector<char> visible(cols, 0);
+  for (int j = 0; j < cols; ++j) {
+    visible[j] = top > 0 && model_norm2(j) >= rules.visibility * top;
+    if (!visible[j]) out.hidden.push_back(j);
+  }
+  auto distance = [&](int i, int j) {
+    return std::abs(std::log(model_frequency_hz(j) / test_frequency_hz(i)));
+  };
+  auto in_window = [&](int i, int j) {
+    return model_frequency_hz(j) > 0 &&
+           (rules.frequency_window <= 0 ||
+            std::abs(model_frequency_hz(j) / test_frequency_hz(i) - 1) <= rules.frequency_window);
+  };
+  std::vector<char> row_used(rows, 0), col_used(cols, 0);
+  // The choice of measured mode i among the free model modes: column, its score, and the
+  // ambiguity if frequency cannot decide between candidates of (nearly) equal MAC.
+  struct Choice {
+    int col = -1;
+    double score = -1;
+    std::string ambiguity;
+    std::vector<int> tied;
+  };
+  auto choose = [&](int i) {
+    Choice c;
+    if (!has_shape[i]) {
+      for (int j = 0; j < cols; ++j)
+        if (!col_used[j] && in_window(i, j) && (c.col < 0 || distance(i, j) < distance(i, c.col)))
+          c.col = j;
+      c.score = c.col >= 0 ? 1.0 : -1.0;
+      return c;
+    }
+    std::vector<int> cand;
+    for (int j = 0; j < cols; ++j)
+      if (!col_used[j] && visible[j] && in_window(i, j) && mac(i, j) >= rules.mac_threshold)
+        cand.push_back(j);
+    if (cand.empty()) return c;
+    const double best = mac(i, *std::max_element(cand.begin(), cand.end(), [&](int a, int b) {
+                              return mac(i, a) < mac(i, b);
+                            }));
+    std::vector<int> tied;
+    for (int j : cand)
+      if (mac(i, j) >= best - rules.tie_mac) tied.push_back(j);
+    std::sort(tied.begin(), tied.end(),
+              [&](int a, int b) { return distance(i, a) < distance(i, b); });
+    c.col = tied.front();
+    c.score = mac(i, c.col);
+    if (tied.size() > 1 && !(distance(i, tied[0]) <= 0.5 * distance(i, tied[1]))) {
+      c.ambiguity = fmt::format(
+          "test mode {} ({:.5g} Hz): model modes {} ({:.5g} Hz, MAC {:.3f}) and {} ({:.5g} Hz, "
+          "MAC {:.3f}) look alike at the sensors and are about as close in frequency",
+          i + 1, test_frequency_hz(i), tied[0] + 1, model_frequency_hz(tied[0]), mac(i, tied[0]),
+          tied[1] + 1, model_frequency_hz(tied[1]), mac(i, tied[1]));
+      c.tied = tied;
+    }
+    return c;
+  };
+  while (true) {
+    int bi = -1;
+    Choice bc;
+    for (int i = 0; i < rows; ++i) {
+      if (row_used[i]) continue;
+      Choice c = choose(i);
+      if (c.col >= 0 && c.score > bc.score) bi = i, bc = std::move(c);
+    }
+    if (bi < 0) break;
+    if (!bc.ambiguity.empty() && out.ambiguity.empty()) {
+      out.ambiguity = bc.ambiguity;
+      out.ambiguous_measured = bi;
+      out.ambiguous_candidates = bc.tied;
+    }
+    row_used[bi] = col_used[bc.col] = 1;
+    out.pairing.pairs.push_back({bi, bc.col, mac(bi, bc.col)});
+  }
+  std::sort(out.pairing.pairs.begin(), out.pairing.pairs.end(),
+            [](const ModePair& a, const ModePair& b) { return a.measured < b.measured; });
+  for (int i = 0; i < rows; ++i)
+    if (!row_used[i]) out.pairing.unpaired_measured.push_back(i);
+  for (int j = 0; j < cols; ++j)
+    if (!col_used[j]) out.pairing.unpaired_model.push_back(j);
   return out;
 }
 

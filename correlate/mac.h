@@ -11,8 +11,11 @@
 // Pairing: greedy one-to-one assignment on the MAC matrix (largest entry first, then its
 // row and column are removed), keeping only pairs with MAC >= threshold. Measured or model
 // modes left without a partner are reported as unpaired. Greedy assignment is exact for the
-// well-separated MAC matrices that updating meets (one dominant entry per row); it is
-// recomputed at every optimiser evaluation so that modes that swap order stay paired by shape.
+// well-separated MAC matrices that updating meets (one dominant entry per row).
+// With few sensors MAC alone is not enough (distinct model modes look alike at the sensors,
+// and a mode with no motion at the sensors has no MAC at all, a 0/0): pair_by_rules() also
+// gates by frequency, never pairs an invisible mode, and says when it cannot decide. The
+// updating then follows each pair by its full shape (mode_tracking.h), not by MAC again.
 #pragma once
 
 #include <string>
@@ -55,5 +58,38 @@ struct Pairing {
 /// Greedy one-to-one pairing on a MAC matrix (rows measured, columns model); pairs below
 /// threshold are not made.
 Pairing pair_modes(const Eigen::Ref<const Eigen::MatrixXd>& mac_matrix, double threshold);
+
+/// How pair_by_rules() decides a pair.
+struct PairingRules {
+  double mac_threshold = 0.6;     ///< a pair needs at least this sensor MAC
+  double frequency_window = 0.5;  ///< and |f_model / f_test - 1| <= this (0: no window)
+  double visibility = 1e-6;       ///< a model mode whose squared norm at the sensors is below
+                                  ///< this times the largest (modes up to twice the highest
+                                  ///< test frequency) is invisible: never paired by MAC
+  double tie_mac = 0.05;          ///< candidates within this MAC of the best: frequency decides
+};
+
+/// The outcome of pair_by_rules(): the pairs, or why a pair cannot be decided.
+struct RulePairing {
+  Pairing pairing;              ///< the pairs made (MAC of each as in the sensor MAC matrix)
+  std::string ambiguity;        ///< non-empty: which modes cannot be told apart, and why
+  int ambiguous_measured = -1;  ///< the measured mode of `ambiguity` (-1: none)
+  std::vector<int> ambiguous_candidates;  ///< the model columns it cannot tell apart
+  std::vector<int> hidden;                ///< model columns invisible at the sensors
+};
+
+/// Pairs measured modes (rows of `mac`) with model modes (columns) one to one: a candidate is
+/// a visible model mode within the frequency window with MAC >= threshold; the measured mode
+/// with the strongest candidate is paired first. Candidates within tie_mac of the best are
+/// told apart by frequency (the nearest, when it is at most half as far in ln f as the next);
+/// when frequency cannot tell them either, `ambiguity` says so. A measured mode without a
+/// shape (`has_shape` false) pairs with the nearest visible-or-not model frequency in the
+/// window. `model_norm2` is each model mode's squared norm at the sensors.
+RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
+                          const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
+                          const std::vector<bool>& has_shape,
+                          const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
+                          const Eigen::Ref<const Eigen::VectorXd>& model_norm2,
+                          const PairingRules& rules);
 
 }  // namespace jointlab::correlate

@@ -29,11 +29,17 @@ std::string cell(const std::string& s) {
 
 void write_linear_parameters(const std::filesystem::path& path, const LinearUpdateSummary& s) {
   std::string t =
-      "name,initial,final,relative_std,sensitivity,identifiable,smallest_within_tolerance\n";
+      "name,initial,final,relative_std,sensitivity,identifiable,smallest_within_tolerance,"
+      "status\n";
   for (const ParameterReport& p : s.parameters) {
-    t += fmt::format("{},{},{},{},{},{},{}\n", cell(p.name), num(p.start), num(p.value),
-                     num(p.relative_std), num(p.sensitivity), p.flat ? 0 : 1,
-                     num(p.smallest_within_tolerance));
+    // Empty cells where there is no value: no standard deviation for a set not fitted.
+    t += fmt::format("{},{},{},{},{},{},{},{}\n", cell(p.name), num(p.start), num(p.value),
+                     p.relative_std ? num(*p.relative_std) : "", num(p.sensitivity), p.flat ? 0 : 1,
+                     p.smallest_within_tolerance > 0 ? num(p.smallest_within_tolerance) : "",
+                     p.held           ? (p.held_by_user ? "held" : "held (flat)")
+                     : p.at_bound < 0 ? "at lower bound"
+                     : p.at_bound > 0 ? "at upper bound"
+                                      : "fitted");
   }
   data::write_file_atomically(path, t);
 }
@@ -100,12 +106,15 @@ void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSu
   t += "\n";
   for (const ParameterReport& p : s.parameters) {
     for (size_t k = 0; k < p.sweep_factor.size(); ++k) {
-      t += fmt::format("{},{},{},{}", cell(p.name), num(p.sweep_factor[k]),
-                       num(p.sweep_factor[k] * p.value), num(p.sweep_rms[k]));
+      // Empty cells where a mode is unpaired or could not be followed by its shape.
+      t +=
+          fmt::format("{},{},{},{}", cell(p.name), num(p.sweep_factor[k]),
+                      num(p.sweep_factor[k] * p.value), p.sweep_rms[k] ? num(*p.sweep_rms[k]) : "");
       for (Eigen::Index i = 0; i < m; ++i) {
         t += ',';
-        if (k < p.sweep_errors.size() && i < p.sweep_errors[k].size())
-          t += num(p.sweep_errors[k](i));
+        const size_t c = static_cast<size_t>(i);
+        if (k < p.sweep_errors.size() && c < p.sweep_errors[k].size() && p.sweep_errors[k][c])
+          t += num(*p.sweep_errors[k][c]);
       }
       t += "\n";
     }
