@@ -36,16 +36,28 @@ void mac_figure(const correlate::LinearEvaluation& e, int cols, const std::strin
 void write_linear_figures(const correlate::LinearUpdateSummary& s, const fs::path& dir) {
   // Figure 2: the objective and every stiffness per iteration.
   if (!s.history.empty()) {
-    LinePanel objective{"objective 1/2 sum r_i^2 per iteration", "iteration", "objective [-]",
-                        false, true, {}, {}, ""};
+    LinePanel objective{"objective 1/2 sum r_i^2 per iteration",
+                        "iteration",
+                        "objective [-]",
+                        false,
+                        true,
+                        {},
+                        {},
+                        ""};
     LineSeries cost{"objective", {}, {}};
     for (size_t i = 0; i < s.history.size(); ++i) {
       cost.x.push_back(static_cast<double>(i));
       cost.y.emplace_back(s.history[i]);
     }
     objective.series.push_back(std::move(cost));
-    LinePanel stiffness{"stiffness of every set", "iteration", "stiffness [N/m or N m/rad]",
-                        false, true, {}, {}, ""};
+    LinePanel stiffness{"stiffness of every set",
+                        "iteration",
+                        "stiffness [N/m or N m/rad]",
+                        false,
+                        true,
+                        {},
+                        {},
+                        ""};
     for (size_t k = 0; k < s.parameters.size(); ++k) {
       LineSeries v{s.parameters[k].name, {}, {}};
       for (size_t i = 0; i < s.theta_history.size(); ++i) {
@@ -63,7 +75,12 @@ void write_linear_figures(const correlate::LinearUpdateSummary& s, const fs::pat
   for (const correlate::ParameterReport& p : s.parameters) {
     if (p.sweep_factor.empty()) continue;
     LinePanel panel{fmt::format("{} (result {:.4g})", p.name, p.value),
-                    "stiffness / result [-]", "frequency error [%]", true, false, {}, {1.0},
+                    "stiffness / result [-]",
+                    "frequency error [%]",
+                    true,
+                    false,
+                    {},
+                    {1.0},
                     "result"};
     const size_t m = static_cast<size_t>(s.final.measured_frequency_hz.size());
     for (size_t i = 0; i < m; ++i) {
@@ -81,8 +98,8 @@ void write_linear_figures(const correlate::LinearUpdateSummary& s, const fs::pat
     if (!panel.series.empty()) sweeps.push_back(std::move(panel));
   }
   if (!sweeps.empty())
-    plot_panels(sweeps, "one-at-a-time sweeps: each mode followed by its shape",
-                dir / "sweeps.png", {1150, sweeps.size() > 2 ? 900 : 600});
+    plot_panels(sweeps, "one-at-a-time sweeps: each mode followed by its shape", dir / "sweeps.png",
+                {1150, sweeps.size() > 2 ? 900 : 600});
   // Figure 4: the MAC at the start and at the result.
   const int cols = correlate::mac_columns(s);
   mac_figure(s.start, cols, "MAC at the start", dir / "mac_start.png");

@@ -47,5 +47,69 @@ TEST(Mac, PairingGivesEachModelModeOnce) {
   EXPECT_EQ(p.model_for(1), 1);
 }
 
+// pair_by_rules on hand-made MAC matrices: what each rule does, one at a time.
+struct RulesCase {
+  Eigen::MatrixXd mac;
+  Eigen::VectorXd f_test, f_model, norm2;
+  std::vector<bool> shape;
+  RulePairing run(const PairingRules& r = {}) const {
+    return pair_by_rules(mac, f_test, shape, f_model, norm2, r);
+  }
+};
+
+TEST(PairByRules, AModeInvisibleAtTheSensorsIsNeverPairedByMac) {
+  // Model mode 0 has no motion at the sensors (rounding-level norm, so its MAC is noise: here
+  // 1.0); model mode 1 is the visible one with MAC 0.9.
+  RulesCase c{Eigen::MatrixXd(1, 2),
+              Eigen::VectorXd::Constant(1, 100.0),
+              (Eigen::VectorXd(2) << 100.0, 105.0).finished(),
+              (Eigen::VectorXd(2) << 1e-30, 1.0).finished(),
+              {true}};
+  c.mac << 1.0, 0.9;
+  const RulePairing p = c.run();
+  EXPECT_EQ(p.pairing.model_for(0), 1);
+  EXPECT_EQ(p.hidden, std::vector<int>{0});
+  EXPECT_TRUE(p.ambiguity.empty());
+}
+
+TEST(PairByRules, ModesAlikeAtTheSensorsAreToldApartByFrequency) {
+  // Two model modes with MAC 0.99 and 0.97 (within tie_mac): the one at 101 Hz, not the one at
+  // 160 Hz, pairs with the 100 Hz test mode, although its MAC is the lower.
+  RulesCase c{Eigen::MatrixXd(1, 2),
+              Eigen::VectorXd::Constant(1, 100.0),
+              (Eigen::VectorXd(2) << 130.0, 101.0).finished(),
+              Eigen::VectorXd::Ones(2),
+              {true}};
+  c.mac << 0.99, 0.97;
+  RulePairing p = c.run();
+  EXPECT_EQ(p.pairing.model_for(0), 1);
+  EXPECT_TRUE(p.ambiguity.empty());
+  // As close in frequency (99 and 101 Hz): the pairing says it cannot decide, and between which.
+  c.f_model << 99.0, 101.0;
+  p = c.run();
+  EXPECT_NE(p.ambiguity.find("test mode 1"), std::string::npos) << p.ambiguity;
+  EXPECT_EQ(p.ambiguous_measured, 0);
+  EXPECT_EQ(p.ambiguous_candidates.size(), 2u);
+  // The frequency window removes a far mode before MAC is looked at: 300 Hz is outside +-50 %.
+  c.f_model << 300.0, 101.0;
+  c.mac << 1.0, 0.7;
+  EXPECT_EQ(c.run().pairing.model_for(0), 1);
+  PairingRules no_window;
+  no_window.frequency_window = 0;
+  EXPECT_EQ(c.run(no_window).pairing.model_for(0), 0);
+}
+
+TEST(PairByRules, AModeWithoutAShapePairsByFrequencyWithinTheWindow) {
+  RulesCase c{Eigen::MatrixXd::Zero(2, 3),
+              (Eigen::VectorXd(2) << 100.0, 400.0).finished(),
+              (Eigen::VectorXd(3) << 90.0, 120.0, 1000.0).finished(),
+              Eigen::VectorXd::Ones(3),
+              {false, false}};
+  const RulePairing p = c.run();
+  EXPECT_EQ(p.pairing.model_for(0), 0);
+  EXPECT_EQ(p.pairing.model_for(1), -1);  // 1000 Hz is 150 % away: unpaired, not forced
+  EXPECT_EQ(p.pairing.unpaired_measured, std::vector<int>{1});
+}
+
 }  // namespace
 }  // namespace jointlab::correlate

@@ -55,8 +55,8 @@ std::optional<FollowedModes> follow_path(
     ElasticModes trial = elastic_modes(mass, stiffness(next));
     ++now.solves;
     std::vector<int> cols;
-    if (trial.shapes.cols() > 0) cols = follow_modes(now.modes.shapes, trial.shapes, mass,
-                                                     now.columns, options);
+    if (trial.shapes.cols() > 0)
+      cols = follow_modes(now.modes.shapes, trial.shapes, mass, now.columns, options);
     bool ok = trial.shapes.cols() > 0;
     for (size_t t = 0; ok && t < cols.size(); ++t) ok = now.columns[t] < 0 || cols[t] >= 0;
     // Two tracked modes never continue as one.

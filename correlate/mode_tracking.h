@@ -34,9 +34,9 @@ ElasticModes elastic_modes(const Eigen::SparseMatrix<double>& mass,
 
 /// Settings of follow_modes() and follow_path().
 struct TrackingOptions {
-  double min_mac = 0.8;  ///< MAC_M with the previous step at least this
-  double margin = 0.3;   ///< and at least this above any other new mode's
-  int substeps = 1;      ///< follow_path(): walk the path in at least this many equal steps
+  double min_mac = 0.8;   ///< MAC_M with the previous step at least this
+  double margin = 0.3;    ///< and at least this above any other new mode's
+  int substeps = 1;       ///< follow_path(): walk the path in at least this many equal steps
   int max_halvings = 10;  ///< a step is halved at most this many times before a mode is lost
 };
 

@@ -39,8 +39,8 @@ TEST(ModeTracking, FollowsAModeThroughACrossing) {
   EXPECT_EQ(f->columns[1], 0);  // chain B's mode is now the lowest
   ASSERT_GE(f->columns[0], 1);
   EXPECT_GT(on_chain_a(f->modes.shapes.col(f->columns[0]), m.mass, a.n), 0.999);
-  EXPECT_TRUE(testing::Close(f->modes.frequency_hz(f->columns[0]),
-                             end.frequency_hz(f->columns[0]), 1e-12));
+  EXPECT_TRUE(
+      testing::Close(f->modes.frequency_hz(f->columns[0]), end.frequency_hz(f->columns[0]), 1e-12));
   // Pairing by frequency order would have kept index 0: chain B's mode.
   EXPECT_LT(on_chain_a(end.shapes.col(0), m.mass, a.n), 1e-3);
 }
