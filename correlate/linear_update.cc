@@ -230,10 +230,13 @@ void check_measured(const std::vector<Sensor>& sensors, const MeasuredModes& mea
         measured.shapes.cols(), measured.shapes.rows(), measured.frequency_hz.size(),
         sensors.size()));
   }
+  // "measured mode 2", with its label when that says more ("measured mode 2 (band2)").
   auto name = [&](Eigen::Index i) {
-    return static_cast<size_t>(i) < measured.labels.size() && !measured.labels[i].empty()
-               ? fmt::format("measured mode {} ({})", i + 1, measured.labels[i])
-               : fmt::format("measured mode {}", i + 1);
+    const std::string plain = fmt::format("measured mode {}", i + 1);
+    if (static_cast<size_t>(i) >= measured.labels.size()) return plain;
+    const std::string& l = measured.labels[static_cast<size_t>(i)];
+    if (l.empty() || l == fmt::format("mode {}", i + 1) || l == std::to_string(i + 1)) return plain;
+    return fmt::format("{} ({})", plain, l);
   };
   bool any_shape = false;
   for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
@@ -249,7 +252,7 @@ void check_measured(const std::vector<Sensor>& sensors, const MeasuredModes& mea
   for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
     if (measured.shapes.col(i).squaredNorm() > 0) continue;
     throw InputError(fmt::format(
-        "{} ({:.6g} Hz): its shape is zero at every sensor, so no MAC can pair it (0/0); give "
+        "{} at {:.6g} Hz: its shape is zero at every sensor, so no MAC can pair it (0/0); give "
         "its shape or leave the mode out",
         name(i), measured.frequency_hz(i)));
   }

@@ -258,6 +258,28 @@ std::vector<std::vector<std::string>> read_csv_cells(const fs::path& path) {
 // The paper's rule from the command line, and the same update from a plain modes table made
 // from the process run: the table carries the run's frequencies and its shapes made real
 // (the run's complex scaling divided out), so the two updates must agree to solver precision.
+// Pairs that cannot be decided, and shapes that cannot pair, stop the command with one line.
+// One sensor per chain sees every mode of a chain alike (MAC 1 with each); a test mode at
+// 236.8 Hz, the geometric mean of chain A's 201.9 and 277.9 Hz modes, is as close to both in
+// frequency: exit 2 naming the modes. An all-zero shape is refused naming its mode.
+TEST(UpdateCli, UndecidablePairsAndZeroShapesAreRefusedWithOneLine) {
+  const fs::path dir = testing::scratch_dir("update_linear_undecidable");
+  const std::string model = write_model(dir, correlate::two_chain_structure(), "model.toml");
+  std::ofstream(dir / "sensors.csv") << "channel,dof\na0,0\nb0,6\n";
+  std::ofstream(dir / "tie.csv") << "mode,frequency_hz,a0,b0\n1,236.8,1,0\n";
+  const std::string common = fmt::format("--sensors {} --set spring.ka --out {}",
+                                         (dir / "sensors.csv").string(), (dir / "out").string());
+  expect_one_line_error(fmt::format("update-linear {} --modes-table {} {}", model,
+                                    (dir / "tie.csv").string(), common),
+                        "the pairs cannot be decided: at the start, test mode 1 (236.8 Hz): model "
+                        "modes");
+  std::ofstream(dir / "zero.csv") << "mode,frequency_hz,a0,b0\n1,57.9,1,0\n2,59.9,0,0\n";
+  expect_one_line_error(fmt::format("update-linear {} --modes-table {} {}", model,
+                                    (dir / "zero.csv").string(), common),
+                        "measured mode 2 at 59.9 Hz: its shape is zero at every sensor");
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(UpdateCli, SmallestRuleWritesThePapersTablesAndAModesTableGivesTheSameUpdate) {
   const fs::path dir = testing::scratch_dir("update_linear_smallest_cli");
   correlate::TwoChainParameters truth;
