@@ -46,9 +46,8 @@ TEST(UpdateLinearBeam, FiveSensorsDefaultOptionsFindTheTruth) {
   const fs::path dir = testing::scratch_dir("update_linear_beam");
   const std::string description =
       (fs::path(testing::source_dir()) / "examples" / "riveted_beam" / "description.toml").string();
-  const testing::CommandResult b =
-      testing::run_jointlab(fmt::format("build-model {} --out {} --quiet --skip-check",
-                                        description, (dir / "model").string()));
+  const testing::CommandResult b = testing::run_jointlab(fmt::format(
+      "build-model {} --out {} --quiet --skip-check", description, (dir / "model").string()));
   ASSERT_EQ(b.status, 0) << b.err;
   const model::Model start = model::read_model(dir / "model" / "model.toml");
   std::string sensors_csv = "channel,dof\n";

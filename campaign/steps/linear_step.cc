@@ -91,10 +91,15 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
   // The measured modes it fits: those named in 'modes' (default every mode).
   correlate::MeasuredModes fitted;
   std::vector<Eigen::Index> keep;
-  for (size_t k = 0; k < c.modes.size(); ++k)
-    if (c.linear_update.fits(c.modes[k].name) &&
-        measured.frequency_hz(static_cast<Eigen::Index>(k)) > 0)
-      keep.push_back(static_cast<Eigen::Index>(k));
+  // A mode without a measured shape (no hit measured it at a sensor) cannot be paired by MAC:
+  // left out while other modes have shapes.
+  const bool any_shape = measured.shapes.squaredNorm() > 0;
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    const auto col = static_cast<Eigen::Index>(k);
+    if (c.linear_update.fits(c.modes[k].name) && measured.frequency_hz(col) > 0 &&
+        (!any_shape || measured.shapes.col(col).squaredNorm() > 0))
+      keep.push_back(col);
+  }
   if (keep.empty()) {
     step.note =
         "update.linear: no fitted mode has a measured linear frequency; linear updating skipped";
