@@ -373,7 +373,7 @@ void run_update_iwan(const IwanArgs& a) {
     // Every band's backbones with their scatter summary; targets built as `run` builds them.
     campaign::ModeBackbones mb =
         campaign::process_run_backbones(run, sensors, band, a.channels, campaign::ScatterOptions{});
-    mb.name = spec;
+    mb.name = "mode " + spec;
     mb.model_mode = t.mode;
     if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
     modes.push_back(std::move(mb));
@@ -409,8 +409,26 @@ void run_update_iwan(const IwanArgs& a) {
   }
   campaign::IwanTargetOptions target_options;
   target_options.amplitude = run.amplitude;
-  std::vector<correlate::IwanTarget> targets =
-      campaign::iwan_targets(m, sensors, modes, target_options).fitted;
+  const campaign::IwanTargets built = campaign::iwan_targets(m, sensors, modes, target_options);
+  // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
+  // say that rather than that nothing was measured.
+  if (modes.size() > 1) {
+    say(stdout, "slip screen (points where other modes slip the joints):\n{}",
+        built.screen_report(modes));
+  }
+  if (built.fitted.empty()) {
+    std::string per_mode;
+    for (size_t k = 0; k < modes.size(); ++k) {
+      per_mode += fmt::format("{}{}: {} of {}", per_mode.empty() ? "" : ", ", modes[k].name,
+                              built.points_screened[k].second, built.points_screened[k].first);
+    }
+    throw InputError(fmt::format(
+        "update-iwan: the slip screen leaves no backbone of at least two points: every point "
+        "where other modes carry over {:g} % of the joint slip is left out ({}); fit the modes "
+        "one at a time",
+        100 * target_options.max_slip_share, per_mode));
+  }
+  std::vector<correlate::IwanTarget> targets = built.fitted;
   fit_and_write(a, m, sensors, std::move(targets), run.amplitude, &measured, a.measured);
 }
 

@@ -558,6 +558,8 @@ void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>*
     ++tr.summary.rounds;
     if (cs.termination_type != ceres::CONVERGENCE) converged = false;
   }
+  // No local solve at all (the budget went to the samples) is no convergence either.
+  if (tr.summary.rounds == 0) converged = false;
   tr.summary.status = converged ? IwanUpdateStatus::kConverged : IwanUpdateStatus::kBudget;
 }
 
