@@ -43,30 +43,30 @@ BackboneTable read_backbone_table(const fs::path& path) {
   }
   for (size_t k = 0; k < 3; ++k) {
     if (col[k] < 0) {
-      throw InputError(where(
-          file, header_line,
-          fmt::format("no column '{}': a backbone table has the header "
-                      "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]",
-                      kNames[k])));
+      throw InputError(
+          where(file, header_line,
+                fmt::format("no column '{}': a backbone table has the header "
+                            "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]",
+                            kNames[k])));
     }
   }
   if ((col[3] < 0) != (col[4] < 0)) {
-    throw InputError(where(file, header_line,
-                           "give both frequency_std_hz and damping_std, or neither"));
+    throw InputError(
+        where(file, header_line, "give both frequency_std_hz and damping_std, or neither"));
   }
   const size_t needed = static_cast<size_t>(*std::max_element(col.begin(), col.end())) + 1;
   std::array<std::vector<double>, 5> values;
   std::vector<std::string> cells;
   std::string_view line;
   while (lines.next(line)) {
-    const std::string_view trimmed = line.substr(std::min(line.find_first_not_of(" \t"),
-                                                          line.size()));
+    const std::string_view trimmed =
+        line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
     if (trimmed.empty() || trimmed.front() == '#') continue;
     if (!splitter.split(line, cells)) continue;
     const long n = lines.line_no();
     if (cells.size() < needed) {
-      throw InputError(where(file, n, fmt::format("{} cells, the header needs at least {}",
-                                                  cells.size(), needed)));
+      throw InputError(where(
+          file, n, fmt::format("{} cells, the header needs at least {}", cells.size(), needed)));
     }
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (col[k] < 0) continue;
@@ -74,19 +74,17 @@ BackboneTable read_backbone_table(const fs::path& path) {
       const auto v = parse_double(cell);
       const bool uncertainty = k >= 3;
       if (!v || !std::isfinite(*v) || (uncertainty ? !(*v >= 0) : !(*v > 0))) {
-        throw InputError(where(
-            file, n,
-            fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,
-                        uncertainty ? ">= 0" : "> 0")));
+        throw InputError(where(file, n,
+                               fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,
+                                           uncertainty ? ">= 0" : "> 0")));
       }
       values[k].push_back(*v);
     }
   }
   const size_t points = values[0].size();
   if (points < 2) {
-    throw InputError(
-        where(file, 0, fmt::format("a backbone needs at least two points, the table has {}",
-                                    points)));
+    throw InputError(where(
+        file, 0, fmt::format("a backbone needs at least two points, the table has {}", points)));
   }
   std::vector<size_t> order(points);
   std::iota(order.begin(), order.end(), size_t{0});
@@ -99,7 +97,8 @@ BackboneTable read_backbone_table(const fs::path& path) {
   for (size_t k = 0; k < kNames.size(); ++k) {
     out[k]->setZero(static_cast<Eigen::Index>(points));
     if (values[k].empty()) continue;
-    for (size_t i = 0; i < points; ++i) (*out[k])(static_cast<Eigen::Index>(i)) = values[k][order[i]];
+    for (size_t i = 0; i < points; ++i)
+      (*out[k])(static_cast<Eigen::Index>(i)) = values[k][order[i]];
   }
   return t;
 }
