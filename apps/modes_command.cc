@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/print.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
@@ -33,6 +34,9 @@ void run_modes(const ModesArgs& args) {
                         rigid ? "rigid" : "elastic");
   }
   data::write_file_atomically(args.out, text);
+  // The structure's own damping is the same for every elastic mode: one line, not a column.
+  say(stdout, "modal damping ratio of every elastic mode: {:.6g} ({})\n", m.modal_ratio,
+      m.modal_ratio > 0 ? "the model's [damping] modal_ratio" : "the model has no [damping]");
 }
 
 }  // namespace
@@ -43,7 +47,8 @@ void add_modes_command(CLI::App& app) {
       "modes",
       "Linear modes of a model file with every joint at its linear stiffness (Iwan: Kt).\n"
       "Writes CSV mode,frequency_hz,kind in ascending frequency; rigid-body modes are\n"
-      "numbered 0 (kind 'rigid', frequency 0), elastic modes from 1.");
+      "numbered 0 (kind 'rigid', frequency 0), elastic modes from 1. Prints the damping\n"
+      "ratio of every elastic mode (the model's [damping] modal_ratio, 0 without one).");
   cmd->add_option("MODEL", args->model, "model file (TOML)")->required();
   cmd->add_option("--count", args->count, "number of modes, lowest first (default 20)")
       ->check(positive());

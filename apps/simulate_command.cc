@@ -28,6 +28,7 @@ struct SimulateArgs {
   model::SimulationOptions options;
   model::RecordOptions record;
   bool quiet = false;
+  bool modal_damping_given = false;
 };
 
 void run_simulate(SimulateArgs& args) {
@@ -37,6 +38,8 @@ void run_simulate(SimulateArgs& args) {
   };
   const model::Model m = model::read_model(args.model);
   model::SimulationOptions o = args.options;
+  // The model's own damping ([damping] modal_ratio) unless --modal-damping says otherwise.
+  if (!args.modal_damping_given) o.modal_damping = m.modal_ratio;
   o.pulse.dof = model::resolve_dof(m, args.impact, "--impact");
   o.sensors.clear();
   if (args.sensors.empty()) {
@@ -100,8 +103,14 @@ void add_simulate_command(CLI::App& app) {
                   "integration steps per sample (default 0: automatic, Newmark period error "
                   "of the first elastic mode below 1e-5, at least 4)")
       ->check(in_range(0, 100000));
-  cmd->add_option("--modal-damping", args->options.modal_damping,
-                  "damping ratio of every elastic mode (linear part; default 0)")
+  cmd->add_option_function<double>(
+         "--modal-damping",
+         [args](double z) {
+           args->options.modal_damping = z;
+           args->modal_damping_given = true;
+         },
+         "damping ratio of every elastic mode (linear part; default: the model's [damping] "
+         "modal_ratio, 0 without one)")
       ->check(in_range(0.0, 0.999));
   cmd->add_option("--rayleigh-mass", args->options.rayleigh_mass,
                   "alpha of C = alpha M + beta K [1/s] (default 0)")

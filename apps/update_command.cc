@@ -25,10 +25,12 @@
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/update_files.h"
+#include "jointlab/data/backbone_table.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/model_file_writer.h"
+#include "jointlab/model/sim/simulated_record.h"
 
 namespace jointlab::apps {
 namespace {
@@ -151,6 +153,9 @@ void run_update_linear(const LinearArgs& a) {
 struct IwanArgs {
   std::string model, measured, sensors, out, set, optimizer = "global-local", compare = "matched";
   std::vector<std::string> modes, channels, stepped_sine;
+  std::vector<std::string> backbones;  // --backbone tables
+  std::string amplitude, dof;          // --amplitude, --dof (of the --backbone tables)
+  std::string linear_damping = "hold";
   std::string stepped_sine_channel;
   int stepped_sine_mode = 0;
   std::vector<double> pareto;
@@ -198,8 +203,139 @@ correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjectiv
   return b;
 }
 
+// The fit and its files, whatever the measured data came from; `measured` (may be null) gives
+// the measured linear modes for the Pareto front's per-mode errors.
+void fit_and_write(const IwanArgs& a, const model::Model& m,
+                   const std::vector<correlate::Sensor>& sensors,
+                   std::vector<correlate::IwanTarget> targets,
+                   correlate::AmplitudeQuantity amplitude, const correlate::MeasuredModes* measured,
+                   const std::string& data_name) {
+  correlate::IwanUpdateOptions o = a.options;
+  o.amplitude = amplitude;
+  o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
+                : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
+                                             : correlate::IwanOptimizer::kGlobalLocal;
+  o.comparison = a.compare == "secant" ? correlate::IwanComparison::kSecant
+                                       : correlate::IwanComparison::kMatched;
+  o.fit_linear_damping = a.linear_damping == "fit";
+  // Long fits say how they go: every 250 evaluations, the best cost so far, on stderr.
+  o.progress = [](int evaluations, double best) {
+    if (evaluations % 250 == 0) {
+      say(stderr, "update-iwan: {} QSMA evaluations, best cost {:.6g}\n", evaluations, best);
+    }
+  };
+  correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o);
+  if (measured) objective.set_linear_modes(*measured, 0.6);  // every paired mode on the front
+  o.bounds = bounds_of(a, objective);
+  if (const std::string e = o.error(); !e.empty()) {
+    throw InputError(fmt::format("update-iwan: {}", e));
+  }
+  std::vector<correlate::ParetoPoint> front;
+  if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
+  // The fit `run` makes (beta held first, freed when the data reach macroslip).
+  const correlate::IwanUpdateSummary summary = campaign::fit_iwan(objective, o, nullptr);
+  const model::IwanParameters best = summary.best;
+  if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
+    throw InputError(fmt::format(
+        "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
+        "amplitudes of {}{}",
+        data_name,
+        o.fixed_gamma > 0
+            ? fmt::format(" with K_T held at --gamma {} x K_s = {:.6g} N/m", o.fixed_gamma,
+                          o.fixed_gamma * objective.reference_stiffness())
+            : std::string()));
+  }
+  make_out_dir(a.out);
+  model::write_model_file(fs::path(a.out) / "model.toml",
+                          objective.apply(best, summary.modal_ratio));
+  correlate::write_iwan_parameters(fs::path(a.out) / "parameters.csv", summary);
+  correlate::write_iwan_history(fs::path(a.out) / "history.csv", summary);
+  if (!front.empty()) correlate::write_pareto(fs::path(a.out) / "pareto.csv", front);
+  say(stdout, "{}", summary.report());
+  for (const correlate::ParetoPoint& p : front) {
+    say(stdout,
+        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
+        "error {:.3g} %, backbone cost {:.4g}{}\n",
+        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
+        p.backbone_cost, p.dominated ? " (dominated)" : "");
+    std::string modes = "    linear error per measured mode [%]:";
+    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
+      modes += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
+                                : fmt::format(" {}: unpaired", i + 1);
+    }
+    if (!p.mode_errors.empty()) say(stdout, "{}\n", modes);
+  }
+}
+
+// update-iwan on --backbone tables: one target, mode R, every table a curve of it.
+void run_update_iwan_tables(const IwanArgs& a) {
+  const model::Model m = model::read_model(a.model);
+  if (a.modes.size() != 1 || a.modes.front().find(':') != std::string::npos) {
+    throw InputError(
+        "update-iwan: with --backbone give one --mode R (the model mode every table belongs to)");
+  }
+  if (!a.stepped_sine.empty() || !a.channels.empty() || !a.measured.empty()) {
+    throw InputError(
+        "update-iwan: --backbone replaces --measured (with --channel and --stepped-sine)");
+  }
+  correlate::IwanTarget t;
+  try {
+    size_t used = 0;
+    t.mode = std::stoi(a.modes.front(), &used);
+    if (used != a.modes.front().size()) throw std::invalid_argument(a.modes.front());
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("--mode {}: expected R, an integer from 1", a.modes.front()));
+  }
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  const int elastic = linear.size() - linear.rigid_count;
+  if (t.mode < 1 || t.mode > elastic) {
+    throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes",
+                                 a.modes.front(), t.mode, a.model, elastic));
+  }
+  const std::string quantity = a.amplitude.empty() ? "modal" : a.amplitude;
+  correlate::AmplitudeQuantity amplitude = correlate::AmplitudeQuantity::kVelocity;
+  std::vector<correlate::Sensor> sensors;
+  if (quantity == "modal") {
+    if (!a.dof.empty()) {
+      throw InputError(
+          "--dof: a modal amplitude is measured at no DOF (give --amplitude "
+          "displacement, velocity or acceleration)");
+    }
+  } else {
+    if (a.dof.empty()) {
+      throw InputError(fmt::format(
+          "--amplitude {}: give --dof NODE:COMP (or a 0-based index), where it was measured",
+          quantity));
+    }
+    amplitude = quantity == "displacement" ? correlate::AmplitudeQuantity::kDisplacement
+                : quantity == "velocity"   ? correlate::AmplitudeQuantity::kVelocity
+                                           : correlate::AmplitudeQuantity::kAcceleration;
+    correlate::Sensor s;
+    s.dof = model::resolve_dof(m, a.dof, "--dof");
+    s.channel = model::dof_name(m, s.dof);
+    sensors.push_back(s);
+  }
+  for (const std::string& file : a.backbones) {
+    t.curves.push_back(
+        correlate::measured_backbone(data::read_backbone_table(file), sensors.empty() ? -1 : 0));
+  }
+  std::string names;
+  for (const std::string& file : a.backbones) names += (names.empty() ? "" : ", ") + file;
+  fit_and_write(a, m, sensors, {t}, amplitude, nullptr, names);
+}
+
 void run_update_iwan(const IwanArgs& a) {
   check_iwan_args(a);
+  if (!a.backbones.empty()) return run_update_iwan_tables(a);
+  if (a.measured.empty() || a.sensors.empty()) {
+    throw InputError(
+        "update-iwan: give --measured DIR with --sensors FILE, or --backbone FILE (repeatable)");
+  }
+  if (!a.amplitude.empty() || !a.dof.empty()) {
+    throw InputError(
+        "update-iwan: --amplitude and --dof describe --backbone tables; a --measured folder "
+        "records its own amplitude quantity and sensors");
+  }
   const model::Model m = model::read_model(a.model);
   const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
   const correlate::ProcessRun run = correlate::read_process_run(a.measured);
@@ -258,7 +394,7 @@ void run_update_iwan(const IwanArgs& a) {
     // Every band's backbones with their scatter summary; targets built as `run` builds them.
     campaign::ModeBackbones mb =
         campaign::process_run_backbones(run, sensors, band, a.channels, campaign::ScatterOptions{});
-    mb.name = spec;
+    mb.name = "mode " + spec;
     mb.model_mode = t.mode;
     if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
     modes.push_back(std::move(mb));
@@ -294,55 +430,27 @@ void run_update_iwan(const IwanArgs& a) {
   }
   campaign::IwanTargetOptions target_options;
   target_options.amplitude = run.amplitude;
-  std::vector<correlate::IwanTarget> targets =
-      campaign::iwan_targets(m, sensors, modes, target_options).fitted;
-  correlate::IwanUpdateOptions o = a.options;
-  o.amplitude = run.amplitude;
-  o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
-                : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
-                                             : correlate::IwanOptimizer::kGlobalLocal;
-  o.comparison = a.compare == "secant" ? correlate::IwanComparison::kSecant
-                                       : correlate::IwanComparison::kMatched;
-  correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o);
-  objective.set_linear_modes(measured, 0.6);  // every paired mode's error on the Pareto front
-  o.bounds = bounds_of(a, objective);
-  if (const std::string e = o.error(); !e.empty()) {
-    throw InputError(fmt::format("update-iwan: {}", e));
+  const campaign::IwanTargets built = campaign::iwan_targets(m, sensors, modes, target_options);
+  // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
+  // say that rather than that nothing was measured.
+  if (modes.size() > 1) {
+    say(stdout, "slip screen (points where other modes slip the joints):\n{}",
+        built.screen_report(modes));
   }
-  std::vector<correlate::ParetoPoint> front;
-  if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
-  // The fit `run` makes (beta held first, freed when the data reach macroslip).
-  const correlate::IwanUpdateSummary summary = campaign::fit_iwan(objective, o, nullptr);
-  const model::IwanParameters best = summary.best;
-  if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
-    throw InputError(fmt::format(
-        "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
-        "amplitudes of {}{}",
-        a.measured,
-        o.fixed_gamma > 0
-            ? fmt::format(" with K_T held at --gamma {} x K_s = {:.6g} N/m", o.fixed_gamma,
-                          o.fixed_gamma * objective.reference_stiffness())
-            : std::string()));
-  }
-  make_out_dir(a.out);
-  model::write_model_file(fs::path(a.out) / "model.toml", objective.apply(best));
-  correlate::write_iwan_parameters(fs::path(a.out) / "parameters.csv", summary);
-  correlate::write_iwan_history(fs::path(a.out) / "history.csv", summary);
-  if (!front.empty()) correlate::write_pareto(fs::path(a.out) / "pareto.csv", front);
-  say(stdout, "{}", summary.report());
-  for (const correlate::ParetoPoint& p : front) {
-    say(stdout,
-        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
-        "error {:.3g} %, backbone cost {:.4g}{}\n",
-        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
-        p.backbone_cost, p.dominated ? " (dominated)" : "");
-    std::string modes = "    linear error per measured mode [%]:";
-    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
-      modes += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
-                                : fmt::format(" {}: unpaired", i + 1);
+  if (built.fitted.empty()) {
+    std::string per_mode;
+    for (size_t k = 0; k < modes.size(); ++k) {
+      per_mode += fmt::format("{}{}: {} of {}", per_mode.empty() ? "" : ", ", modes[k].name,
+                              built.points_screened[k].second, built.points_screened[k].first);
     }
-    if (!p.mode_errors.empty()) say(stdout, "{}\n", modes);
+    throw InputError(fmt::format(
+        "update-iwan: the slip screen leaves no backbone of at least two points: every point "
+        "where other modes carry over {:g} % of the joint slip is left out ({}); fit the modes "
+        "one at a time",
+        100 * target_options.max_slip_share, per_mode));
   }
+  std::vector<correlate::IwanTarget> targets = built.fitted;
+  fit_and_write(a, m, sensors, std::move(targets), run.amplitude, &measured, a.measured);
 }
 
 // A LO:HI option of two finite numbers (each refused on its own when it is not one).
@@ -418,13 +526,33 @@ void add_update_commands(CLI::App& app) {
   CLI::App* iw = app.add_subcommand(
       "update-iwan",
       "Updates the four parameters of one Iwan set (Fs, Kt = gamma Ks, chi, beta) so QSMA\n"
-      "backbones match the measured ones. Reads DIR/summary.json and the band CSVs of\n"
-      "'jointlab process'; writes OUTDIR/model.toml, parameters.csv, history.csv (and\n"
-      "pareto.csv with --pareto), and prints a report.");
+      "backbones match the measured ones (and, with --linear-damping fit, the model's own\n"
+      "modal damping ratio). Reads DIR/summary.json and the band CSVs of 'jointlab process',\n"
+      "or --backbone tables; writes OUTDIR/model.toml, parameters.csv, history.csv (and\n"
+      "pareto.csv with --pareto), and prints a report (progress on stderr).");
   iw->add_option("MODEL", ia->model, "model file (TOML), linear stiffness already updated")
       ->required();
-  iw->add_option("--measured", ia->measured, "output directory of 'jointlab process'")->required();
-  iw->add_option("--sensors", ia->sensors, "sensors file: channel,dof[,sign]")->required();
+  iw->add_option("--measured", ia->measured,
+                 "output directory of 'jointlab process' (or give --backbone tables)");
+  iw->add_option("--sensors", ia->sensors, "sensors file: channel,dof[,sign] (with --measured)");
+  iw->add_option("--backbone", ia->backbones,
+                 "a measured backbone table, one curve per file: CSV amplitude,frequency_hz,"
+                 "damping_ratio[,frequency_std_hz,damping_std], rows in any order (repeatable; "
+                 "instead of --measured and --sensors)");
+  iw->add_option("--amplitude", ia->amplitude,
+                 "what the --backbone amplitude is: modal (default: the QSMA modal amplitude q "
+                 "of mode R), or displacement, velocity or acceleration at --dof")
+      ->check(CLI::IsMember({"modal", "displacement", "velocity", "acceleration"}));
+  iw->add_option("--dof", ia->dof,
+                 "model DOF (NODE:COMP label or 0-based index) the --backbone amplitude was "
+                 "measured at");
+  iw->add_option("--linear-damping", ia->linear_damping,
+                 "hold (default): keep the model's [damping] modal_ratio (none: 0); fit: "
+                 "identify it with the Iwan parameters, in [0, --linear-damping-max]")
+      ->check(CLI::IsMember({"hold", "fit"}));
+  iw->add_option("--linear-damping-max", ia->options.linear_damping_max,
+                 "upper bound of a fitted modal_ratio (default 0.05)")
+      ->check(CLI::Range(1e-9, 0.999));
   iw->add_option("--set", ia->set, "Iwan set to update (iwan.<name> or <name>)")->required();
   iw->add_option("--mode", ia->modes,
                  "elastic model mode R, with measured band BAND (default: the band paired by "

@@ -95,6 +95,17 @@ Eigen::VectorXd share_of_others(const std::vector<ModeBackbones>& modes, size_t 
 
 }  // namespace
 
+std::string IwanTargets::screen_report(const std::vector<ModeBackbones>& modes) const {
+  std::string out;
+  for (size_t k = 0; k < modes.size() && k < points_screened.size(); ++k) {
+    if (!modes[k].fitted || modes[k].model_mode <= 0) continue;
+    const auto [points, left_out] = points_screened[k];
+    out += fmt::format("  {}: {} of {} points left out where other modes carry the joint slip\n",
+                       modes[k].name, left_out, points);
+  }
+  return out;
+}
+
 size_t IwanTargets::curves() const {
   size_t n = 0;
   for (const IwanTarget& t : fitted) n += t.curves.size();
@@ -112,6 +123,7 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
   }
   SlipPatterns slips(m, sensors, modes, correlate::amplitude_power(o.amplitude));
   IwanTargets out;
+  out.points_screened.assign(modes.size(), {0, 0});
   for (size_t k = 0; k < modes.size(); ++k) {
     const ModeBackbones& mode = modes[k];
     if (mode.model_mode <= 0) continue;
@@ -129,7 +141,10 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
       std::vector<Eigen::Index> keep;
       for (Eigen::Index j = 0; j < cv.amplitude.size(); ++j)
         if (!mode.fitted || share(j) <= o.max_slip_share) keep.push_back(j);
-      out.screened += cv.amplitude.size() - static_cast<Eigen::Index>(keep.size());
+      const Eigen::Index left_out = cv.amplitude.size() - static_cast<Eigen::Index>(keep.size());
+      out.screened += left_out;
+      out.points_screened[k].first += cv.amplitude.size();
+      out.points_screened[k].second += left_out;
       if (keep.size() < 2) continue;
       const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
       MeasuredBackbone mb = correlate::sized_backbone(kind, mode.sensors[c], n);

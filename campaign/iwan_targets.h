@@ -63,7 +63,11 @@ struct IwanTargets {
   std::vector<correlate::IwanTarget> fitted;                    ///< the fitted modes' targets
   std::vector<std::pair<size_t, correlate::IwanTarget>> every;  ///< (mode index, target), all
   Eigen::Index screened = 0;  ///< points left out where other modes slip the joints
-  size_t curves() const;      ///< backbones over the fitted targets
+  /// Per mode (the order of `modes`): points it had and points the slip screen left out.
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> points_screened;
+  /// One line per fitted mode with a screen: "mode 1:1: 12 of 480 points left out ...".
+  std::string screen_report(const std::vector<ModeBackbones>& modes) const;
+  size_t curves() const;  ///< backbones over the fitted targets
 };
 
 /// Builds the targets of `modes` against `model` (the model the update starts from) with the

@@ -2,6 +2,8 @@
 // uncertainty, flagged hits left out, and the joint-slip screen.
 #include "jointlab/campaign/iwan_targets.h"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "jointlab/correlate/two_chain.h"
@@ -104,6 +106,20 @@ TEST(IwanTargets, PointsWhereAnotherModeSlipsTheJointsAreLeftOut) {
   EXPECT_EQ(kept.every.front().first, 0u);
   ASSERT_EQ(kept.every.front().second.curves.size(), 1u);
   EXPECT_EQ(kept.every.front().second.curves[0].amplitude.size(), 10);
+  // Three modes at once: each mode's count of points and of points left out, in its order,
+  // and one report line per fitted mode (issue 28: `--mode 1:1 --mode 2:2 --mode 3:3`).
+  const std::vector<ModeBackbones> three = {first, mode(chain_a[1], flat("hit", 150, 0.01, 100)),
+                                            mode(chain_a[1], flat("other", 150, 0.01))};
+  const IwanTargets t3 = iwan_targets(m, sensors, three, {});
+  ASSERT_EQ(t3.points_screened.size(), 3u);
+  EXPECT_EQ(t3.points_screened[0], std::make_pair(Eigen::Index{10}, Eigen::Index{10}));
+  EXPECT_EQ(t3.points_screened[2].first, 10);
+  EXPECT_EQ(t3.screened, t3.points_screened[0].second + t3.points_screened[1].second +
+                             t3.points_screened[2].second);
+  EXPECT_EQ(t3.fitted.size(), 2u);  // the first mode lost every point, the others are fitted
+  const std::string report = t3.screen_report(three);
+  EXPECT_NE(report.find(three[0].name + ": 10 of 10 points left out"), std::string::npos) << report;
+  EXPECT_EQ(std::count(report.begin(), report.end(), '\n'), 3) << report;
 }
 
 }  // namespace

@@ -52,7 +52,14 @@ std::string IwanUpdateOptions::error() const {
     return "fixed_beta must be a finite number >= 0";
   if (samples < 2) return "samples must be >= 2";
   if (!(contraction > 0 && contraction < 1)) return "contraction must be in (0, 1)";
-  if (max_evaluations < samples) return "max_evaluations must be >= samples";
+  if (max_evaluations < samples) {
+    return fmt::format(
+        "the evaluation budget (--evaluations, max_evaluations) {} must be at least the samples "
+        "of one round ({})",
+        max_evaluations, samples);
+  }
+  if (fit_linear_damping && !(linear_damping_max > 0 && linear_damping_max < 1))
+    return "linear_damping_max must be in (0, 1)";
   if (local_starts < 1) return "local_starts must be >= 1";
   if (threads < 0) return "threads must be >= 0 (0: every core)";
   if (!(frequency_floor > 0) || !(damping_floor > 0)) return "floors must be > 0";
@@ -69,7 +76,15 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
       amplitude_(options.amplitude),
       f_floor_(options.frequency_floor),
       z_floor_(options.damping_floor),
-      comparison_(options.comparison) {
+      comparison_(options.comparison),
+      fit_z_(options.fit_linear_damping),
+      z_model_(model.modal_ratio),
+      z_max_(options.linear_damping_max) {
+  if (fit_z_ && !(z_max_ > 0 && z_max_ < 1)) {
+    throw InputError(fmt::format(
+        "update-iwan: the upper bound of the fitted modal damping ratio, {}, must be in (0, 1)",
+        z_max_));
+  }
   bool found = false;
   for (const model::Joint& j : model.joints) {
     if (j.element != set_) continue;
@@ -87,26 +102,35 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
     if (t.mode < 1) throw InputError(fmt::format("mode {} must be >= 1", t.mode));
     if (t.curves.empty()) throw InputError(fmt::format("mode {}: no measured backbone", t.mode));
     for (const MeasuredBackbone& c : t.curves) {
-      if (c.sensor < 0 || c.sensor >= static_cast<int>(sensors_.size())) {
+      if (c.modal != t.curves.front().modal) {
+        throw InputError(fmt::format(
+            "mode {}: backbones of modal amplitude and of a sensor's amplitude cannot be fitted "
+            "as one mode's target",
+            t.mode));
+      }
+      if (!c.modal && (c.sensor < 0 || c.sensor >= static_cast<int>(sensors_.size()))) {
         throw InputError(fmt::format("mode {}: backbone sensor index out of range", t.mode));
       }
+      const std::string name = !c.source.empty() ? c.source
+                               : c.modal         ? std::string("modal amplitude")
+                                                 : "channel " + sensors_[c.sensor].channel;
       const Eigen::Index n = c.amplitude.size();
       if (n == 0 || c.frequency_hz.size() != n || c.damping_ratio.size() != n ||
           c.frequency_std_hz.size() != n || c.damping_std.size() != n) {
         throw InputError(
-            fmt::format("mode {}, channel {}: backbone columns empty or of unequal "
-                        "length",
-                        t.mode, sensors_[c.sensor].channel));
+            fmt::format("mode {}, {}: backbone columns empty or of unequal length", t.mode, name));
       }
       if ((c.amplitude.array() <= 0).any() || (c.frequency_hz.array() <= 0).any() ||
           !c.amplitude.allFinite() || !c.frequency_hz.allFinite() || !c.damping_ratio.allFinite()) {
-        throw InputError(
-            fmt::format("mode {}, channel {}: amplitudes and frequencies must be "
-                        "finite and > 0",
-                        t.mode, sensors_[c.sensor].channel));
+        throw InputError(fmt::format(
+            "mode {}, {}: amplitudes and frequencies must be finite and > 0", t.mode, name));
       }
       residual_count_ += 2 * static_cast<int>(n);
       residual_curve_.insert(residual_curve_.end(), 2 * static_cast<size_t>(n), curve_index++);
+      for (Eigen::Index j = 0; j < n; ++j) {
+        residual_amplitude_.push_back(c.amplitude(j));
+        residual_amplitude_.push_back(c.amplitude(j));
+      }
     }
   }
   // The linear model's set-up shared by every evaluation; a model it cannot serve (a mode
@@ -118,6 +142,12 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
   } catch (const InputError&) {
     set_model_.reset();
   }
+}
+
+model::Model IwanObjective::apply(const model::IwanParameters& p, double z) const {
+  model::Model m = apply(p);
+  m.modal_ratio = z;
+  return m;
 }
 
 model::Model IwanObjective::apply(const model::IwanParameters& p) const {
@@ -138,6 +168,17 @@ bool IwanObjective::residuals_from_scratch(const model::IwanParameters& p, doubl
   return evaluate(p, r, nullptr, true);
 }
 
+bool IwanObjective::residuals_at(const model::IwanParameters& p, double z, double* r) const {
+  return evaluate(p, r, nullptr, false, &z);
+}
+
+std::optional<double> IwanObjective::linear_damping(const model::IwanParameters& p) const {
+  std::vector<double> r(residual_count_);
+  double z = 0;
+  if (!evaluate(p, r.data(), nullptr, false, nullptr, &z)) return std::nullopt;
+  return z;
+}
+
 Eigen::Vector2d IwanObjective::slip_range(const model::IwanParameters& p) const {
   std::vector<double> r(residual_count_);
   Eigen::Vector2d slip(INFINITY, 0);
@@ -145,27 +186,36 @@ Eigen::Vector2d IwanObjective::slip_range(const model::IwanParameters& p) const 
 }
 
 bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip_range,
-                             bool from_scratch) const {
+                             bool from_scratch, const double* z_fixed, double* z_used) const {
   ++evaluations_;
   if (!model::iwan_parameter_error(p).empty()) return false;
-  const int pw = amplitude_power(amplitude_);
   const double n_total = residual_count_ / 2.0;
+  // The damping residuals are those of the joints alone plus the structure's own Z, added
+  // below: r_z,j = (zeta_J,j + Z - zeta_j) / (sigma_z,j sqrt(N)). Their positions and scales.
+  std::vector<int> z_index;
+  std::vector<double> z_scale;
+  z_index.reserve(static_cast<size_t>(n_total));
+  z_scale.reserve(static_cast<size_t>(n_total));
   try {
     std::optional<model::JointCondensation> shared;
     if (!from_scratch && set_model_) shared = set_model_->at(p);
-    const model::JointCondensation& jc = shared ? *shared : shared.emplace(apply(p));
+    model::JointCondensation& jc = shared ? *shared : shared.emplace(apply(p));
+    jc.set_linear_damping(0);
     const model::LinearModes& modes = jc.modes();
     int k = 0;
     for (const IwanTarget& t : targets_) {
       if (t.mode > jc.elastic_count()) return false;
       const int col = modes.rigid_count + t.mode - 1;
+      // A modal amplitude is q itself (power 0, unit shape); a sensor's is |phi_R[d]| q w^p.
+      const bool modal = t.curves.front().modal;
+      const int pw = modal ? 0 : amplitude_power(amplitude_);
       // Every point of every curve of this target on one QSMA curve: s = a / |phi_R[d]|.
       std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>> order;
       for (size_t ci = 0; ci < t.curves.size(); ++ci) {
         const MeasuredBackbone& c = t.curves[ci];
         // A mode that leaves the sensor still (to rounding: 1e-8 of its largest motion) is
         // not the one measured there.
-        const double ph = std::abs(modes.shapes(sensors_[c.sensor].dof, col));
+        const double ph = modal ? 1.0 : std::abs(modes.shapes(sensors_[c.sensor].dof, col));
         if (!(ph > 1e-8 * modes.shapes.col(col).cwiseAbs().maxCoeff())) return false;
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
           order.push_back({c.amplitude(j) / ph, {ci, j}});
@@ -200,6 +250,10 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
           const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
           const double sz = std::max(c.damping_std(j), z_floor_ * std::abs(c.damping_ratio(j)));
           r[k++] = (f - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
+          if (sz > 0) {
+            z_index.push_back(k);
+            z_scale.push_back(1 / (sz * std::sqrt(n_total)));
+          }
           r[k++] = sz > 0 ? (z - c.damping_ratio(j)) / (sz * std::sqrt(n_total)) : 0.0;
         }
       }
@@ -207,6 +261,19 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
   } catch (const InputError&) {
     return false;
   }
+  // The structure's own damping: given, the model's, or the best in [0, z_max] (the residuals
+  // are linear in Z with slopes z_scale: Z = -sum s_j r_j / sum s_j^2 minimises them).
+  double z = z_fixed ? *z_fixed : z_model_;
+  if (!z_fixed && fit_z_) {
+    double num = 0, den = 0;
+    for (size_t i = 0; i < z_index.size(); ++i) {
+      num -= z_scale[i] * r[z_index[i]];
+      den += z_scale[i] * z_scale[i];
+    }
+    z = den > 0 ? std::clamp(num / den, 0.0, z_max_) : 0.0;
+  }
+  for (size_t i = 0; i < z_index.size(); ++i) r[z_index[i]] += z * z_scale[i];
+  if (z_used) *z_used = z;
   for (int i = 0; i < residual_count_; ++i) {
     if (!std::isfinite(r[i])) return false;
   }
@@ -435,7 +502,9 @@ class BudgetCallback : public ceres::IterationCallback {
   int limit_;
 };
 
-void global_local(Tracker& tr, std::mt19937& rng) {
+// `extra` (may be null): a candidate already evaluated with its cost, refined by the local
+// solve whatever its rank among the samples (the constant-backbone candidate).
+void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>* extra) {
   const IwanUpdateOptions& o = tr.options;
   const Box full = initial_box(o);
   std::vector<std::pair<double, Vec4>> samples;
@@ -450,16 +519,21 @@ void global_local(Tracker& tr, std::mt19937& rng) {
   }
   std::sort(samples.begin(), samples.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
+  int starts = o.local_starts;
+  if (extra && extra->first < kPenalty) {
+    samples.insert(samples.begin() + std::min<size_t>(samples.size(), o.local_starts), *extra);
+    ++starts;
+  }
   const std::array<bool, 4> held = held_parameters(o);
   std::vector<int> constant;
   for (int k = 0; k < 4; ++k)
     if (held[k]) constant.push_back(k);
   bool converged = true;
-  for (int s = 0; s < o.local_starts && s < static_cast<int>(samples.size()); ++s) {
-    if (samples[s].first >= kPenalty) break;
+  for (int s = 0; s < starts && s < static_cast<int>(samples.size()); ++s) {
+    if (samples[s].first >= kPenalty) continue;
     const int remaining = o.max_evaluations - tr.used();
     if (remaining <= 9) break;
-    const int limit = tr.used() + remaining / (o.local_starts - s);
+    const int limit = tr.used() + remaining / (starts - s);
     Vec4 x = to_x(samples[s].second);
     for (int k = 0; k < 4; ++k)
       if (held[k]) x(k) = 0;  // a placeholder (IwanCost uses the held values)
@@ -484,87 +558,187 @@ void global_local(Tracker& tr, std::mt19937& rng) {
     ++tr.summary.rounds;
     if (cs.termination_type != ceres::CONVERGENCE) converged = false;
   }
+  // No local solve at all (the budget went to the samples) is no convergence either.
+  if (tr.summary.rounds == 0) converged = false;
   tr.summary.status = converged ? IwanUpdateStatus::kConverged : IwanUpdateStatus::kBudget;
 }
 
-// Covariance of x = (ln F_S, ln gamma, chi, ln beta) at v (ln gamma and ln K_T differ by a
-// constant); 0 rows and columns for held parameters, all 0 when unknown.
-// Gauss-Newton: (J^T J)^-1 / N (residuals are normalised by sigma sqrt(N)) times the reduced
-// chi-square. With G >= 3 curves also the cluster-robust covariance H^-1 (G/(G-1) sum_c g_c
-// g_c^T) H^-1, H = J^T J, g_c = J_c^T r_c over curve c's residuals: points along one hit's
-// backbone share that hit's offset, so the curves, not the points, are the independent samples;
-// each variance is then the larger of the two (G - 1 degrees of freedom estimate the spread
-// between curves poorly when G is small), with the cluster-robust correlations.
-Eigen::Matrix4d covariance(const IwanObjective& objective, const IwanUpdateOptions& options,
-                           const Vec4& v) {
-  const std::array<bool, 4> held = held_parameters(options);
-  std::vector<int> free;
-  for (int k = 0; k < 4; ++k)
-    if (!held[k]) free.push_back(k);
+// Newey-West (HAC) estimate of S = Var(sum of scores) for residuals r with Jacobian J: each
+// curve's points ordered by amplitude, the score of a point g_t = J_t^T r_t over its frequency
+// and damping residuals, S = sum over curves of sum_t g_t g_t^T + sum_{l=1..L} w_l (g_t g_{t-l}^T
+// + g_{t-l} g_t^T), Bartlett weights w_l = 1 - l / (L + 1). L is a tenth of the curve's points
+// (at least 1): a fixed share of the amplitude range, so the same curve sampled ten times more
+// densely covers the same correlation length and gives the same S, where the points of a curve
+// come from overlapping local fits and model-form error runs in long waves (method.md section 2
+// point 5).
+Eigen::MatrixXd hac_scores(const IwanObjective& objective, const Eigen::MatrixXd& J,
+                           const Eigen::VectorXd& r) {
+  const std::vector<int>& curve = objective.residual_curve();
+  const std::vector<double>& amp = objective.residual_amplitude();
+  const Eigen::Index nf = J.cols();
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(nf, nf);
+  const int m = static_cast<int>(curve.size());
+  for (int begin = 0; begin < m;) {
+    int end = begin;
+    while (end < m && curve[end] == curve[begin]) ++end;
+    // Points (residual pairs) of this curve by amplitude.
+    std::vector<int> points;
+    for (int i = begin; i < end; i += 2) points.push_back(i);
+    std::stable_sort(points.begin(), points.end(), [&](int a, int b) { return amp[a] < amp[b]; });
+    const int n = static_cast<int>(points.size());
+    Eigen::MatrixXd g(nf, n);
+    for (int t = 0; t < n; ++t) {
+      const int i = points[t];
+      g.col(t) = J.row(i).transpose() * r(i) + J.row(i + 1).transpose() * r(i + 1);
+    }
+    const int lags = std::max(1, static_cast<int>(std::ceil(n / 10.0)));
+    S += g * g.transpose();
+    for (int l = 1; l <= lags && l < n; ++l) {
+      const double w = 1.0 - l / (lags + 1.0);
+      const Eigen::MatrixXd G = g.rightCols(n - l) * g.leftCols(n - l).transpose();
+      S += w * (G + G.transpose());
+    }
+    begin = end;
+  }
+  return S;
+}
+
+// Integrated autocorrelation time of the residuals along the curves, tau = 1 + 2 sum_{l=1..L}
+// w_l rho_l (Bartlett weights and the bandwidth of hac_scores), rho_l the lag-l autocorrelation
+// of the frequency and of the damping residuals of each curve ordered by amplitude, pooled: N /
+// tau is the effective number of independent points. The same curve sampled ten times more
+// densely has tau about ten times larger, so Gauss-Newton times tau does not depend on density.
+double residual_correlation_time(const IwanObjective& objective, const Eigen::VectorXd& r) {
+  const std::vector<int>& curve = objective.residual_curve();
+  const std::vector<double>& amp = objective.residual_amplitude();
+  const int m = static_cast<int>(curve.size());
+  double c0 = 0, sum = 0;
+  for (int begin = 0; begin < m;) {
+    int end = begin;
+    while (end < m && curve[end] == curve[begin]) ++end;
+    std::vector<int> points;
+    for (int i = begin; i < end; i += 2) points.push_back(i);
+    std::stable_sort(points.begin(), points.end(), [&](int a, int b) { return amp[a] < amp[b]; });
+    const int n = static_cast<int>(points.size());
+    const int lags = std::max(1, static_cast<int>(std::ceil(n / 10.0)));
+    for (int part = 0; part < 2; ++part) {  // frequency, damping
+      for (int t = 0; t < n; ++t) c0 += r(points[t] + part) * r(points[t] + part);
+      for (int l = 1; l <= lags && l < n; ++l) {
+        double c = 0;
+        for (int t = l; t < n; ++t) c += r(points[t] + part) * r(points[t - l] + part);
+        sum += 2 * (1.0 - l / (lags + 1.0)) * c;
+      }
+    }
+    begin = end;
+  }
+  return c0 > 0 ? 1 + sum / c0 : 1.0;
+}
+
+// Covariance of x = (ln F_S, ln gamma, chi, ln beta[, Z]) at v and the structure's own damping z
+// (ln gamma and ln K_T differ by a constant), over the free parameters `free` (indices 0-3, and 4
+// for a fitted Z); empty when unknown. The larger, variance by variance, of
+// - the HAC sandwich H^-1 S H^-1, H = J^T J (hac_scores: robust to serially correlated
+//   residuals along each curve), with its correlations;
+// - Gauss-Newton (J^T J)^-1 / N (residuals are normalised by sigma sqrt(N)) times the reduced
+//   chi-square and the residuals' correlation time tau (N / tau independent points), at least
+//   times 1 (the stated noise is a floor, never shrunk): steadier than the sandwich for a
+//   parameter a few points decide (beta at the knee), and as independent of sampling density;
+// - with G >= 3 curves the cluster-robust H^-1 (G/(G-1) sum_c g_c g_c^T) H^-1, g_c = J_c^T r_c
+//   over curve c's residuals: points along one hit's backbone share that hit's offset, so the
+//   curves, not the points, are the independent samples.
+Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int>& free,
+                           const Vec4& v, double z, double* reduced_chi2) {
   const int m = objective.residual_count(), nf = static_cast<int>(free.size());
   const double Ks = objective.reference_stiffness();
   Eigen::MatrixXd J(m, nf);
   Eigen::VectorXd r(m);
   std::vector<double> rp(m), rm(m);
-  if (!objective.residuals(to_params(v, Ks), r.data())) return Eigen::Matrix4d::Zero();
+  if (!objective.residuals_at(to_params(v, Ks), z, r.data())) return {};
+  const double n_points = m / 2.0;
+  *reduced_chi2 = r.squaredNorm() * n_points / std::max(1, m - nf);
   const Vec4 x0 = to_x(v);
   for (int j = 0; j < nf; ++j) {
-    const double h = 1e-4;
+    // Z enters linearly: a step of 1e-4 of its range; the others in x as the local solve.
+    const double h = free[j] == 4 ? 1e-6 : 1e-4;
     Vec4 xp = x0, xm = x0;
-    xp(free[j]) += h;
-    xm(free[j]) -= h;
-    if (!objective.residuals(to_params(to_v(xp.data()), Ks), rp.data()) ||
-        !objective.residuals(to_params(to_v(xm.data()), Ks), rm.data())) {
-      return Eigen::Matrix4d::Zero();
+    double zp = z, zm = z;
+    if (free[j] == 4) {
+      zp += h;
+      zm -= h;
+    } else {
+      xp(free[j]) += h;
+      xm(free[j]) -= h;
+    }
+    if (!objective.residuals_at(to_params(to_v(xp.data()), Ks), zp, rp.data()) ||
+        !objective.residuals_at(to_params(to_v(xm.data()), Ks), zm, rm.data())) {
+      return {};
     }
     for (int i = 0; i < m; ++i) J(i, j) = (rp[i] - rm[i]) / (2 * h);
   }
   const Eigen::MatrixXd H = J.transpose() * J;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(H);
-  if (!lu.isInvertible()) return Eigen::Matrix4d::Zero();
+  if (!lu.isInvertible()) return {};
   const Eigen::MatrixXd Hi = lu.inverse();
+  const double tau = residual_correlation_time(objective, r);
+  const Eigen::MatrixXd gauss_newton = Hi / n_points * std::max(1.0, *reduced_chi2 * tau);
+  Eigen::MatrixXd robust = Hi * hac_scores(objective, J, r) * Hi;
   const std::vector<int>& curve = objective.residual_curve();
   const int n_curves = curve.empty() ? 0 : curve.back() + 1;
-  // Gauss-Newton: (J^T J)^-1 / N scaled by the reduced chi-square (about 1 in the scatter).
-  const double chi2 = r.squaredNorm() * (m / 2.0) / std::max(1, m - nf);
-  Eigen::MatrixXd cov = Hi / (m / 2.0) * chi2;
   if (n_curves >= 3) {
     Eigen::MatrixXd g = Eigen::MatrixXd::Zero(nf, n_curves);
     for (int i = 0; i < m; ++i) g.col(curve[i]) += J.row(i).transpose() * r(i);
-    const Eigen::MatrixXd B = g * g.transpose() * (n_curves / (n_curves - 1.0));
-    const Eigen::MatrixXd robust = Hi * B * Hi;
-    // Few curves estimate the scatter between them poorly (G - 1 degrees of freedom): each
-    // variance is the larger of the two, with the cluster-robust correlations.
+    const Eigen::MatrixXd cluster = Hi * (g * g.transpose() * (n_curves / (n_curves - 1.0))) * Hi;
+    // Few curves estimate the scatter between them poorly (G - 1 degrees of freedom): the
+    // cluster-robust correlations, each variance the larger of the two.
     Eigen::VectorXd d(nf);
     bool usable = true;
     for (int k = 0; k < nf; ++k) {
-      usable = usable && robust(k, k) > 0;
-      d(k) = robust(k, k) > 0 ? std::sqrt(std::max(1.0, cov(k, k) / robust(k, k))) : 0.0;
+      usable = usable && cluster(k, k) > 0;
+      d(k) = cluster(k, k) > 0 ? std::sqrt(std::max(1.0, robust(k, k) / cluster(k, k))) : 0.0;
     }
-    if (usable) cov = d.asDiagonal() * robust * d.asDiagonal();
+    if (usable) robust = d.asDiagonal() * cluster * d.asDiagonal();
   }
-  if (!cov.allFinite()) return Eigen::Matrix4d::Zero();
-  Eigen::Matrix4d out = Eigen::Matrix4d::Zero();
-  for (int i = 0; i < nf; ++i)
-    for (int j = 0; j < nf; ++j) out(free[i], free[j]) = cov(i, j);
-  return out;
+  Eigen::VectorXd d(nf);
+  for (int k = 0; k < nf; ++k) {
+    d(k) = robust(k, k) > 0 ? std::sqrt(std::max(1.0, gauss_newton(k, k) / robust(k, k))) : 0.0;
+  }
+  Eigen::MatrixXd cov = d.asDiagonal() * robust * d.asDiagonal();
+  for (int k = 0; k < nf; ++k)
+    if (!(robust(k, k) > 0)) cov(k, k) = gauss_newton(k, k);
+  if (!cov.allFinite()) return {};
+  return cov;
 }
 
-// The free parameters of v that end within 1e-3 of their range (in the search coordinates x)
-// of a bound, e.g. "Fs at its upper bound 2000 N".
-std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const Vec4& v) {
+// The free parameters of v (and a fitted Z) that end within 1e-3 of their range (in the search
+// coordinates x) of a bound, e.g. "Fs at its upper bound 2000 N"; `side` receives -1 / +1 per
+// parameter (F_S, K_T, chi, beta, Z) at its lower / upper bound.
+std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const Vec4& v,
+                                        std::optional<double> z, std::array<int, 5>& side) {
   const Box box = initial_box(options);
   const Vec4 x = to_x(v), lo = to_x(box.lo), hi = to_x(box.hi);
   static const char* names[] = {"Fs", "gamma (Kt/Ks)", "chi", "beta"};
   static const char* units[] = {" N", "", "", ""};
   std::vector<std::string> out;
+  side.fill(0);
   for (int k = 0; k < 4; ++k) {
     if (!(hi(k) > lo(k))) continue;  // held
     const double tol = 1e-3 * (hi(k) - lo(k));
     if (x(k) <= lo(k) + tol) {
+      side[k] = -1;
       out.push_back(fmt::format("{} at its lower bound {:.6g}{}", names[k], box.lo(k), units[k]));
     } else if (x(k) >= hi(k) - tol) {
+      side[k] = 1;
       out.push_back(fmt::format("{} at its upper bound {:.6g}{}", names[k], box.hi(k), units[k]));
+    }
+  }
+  if (z) {
+    const double zmax = options.linear_damping_max;
+    if (*z <= 1e-3 * zmax) {
+      side[4] = -1;
+      out.push_back("modal_ratio at its lower bound 0 (the joints explain all the damping)");
+    } else if (*z >= (1 - 1e-3) * zmax) {
+      side[4] = 1;
+      out.push_back(fmt::format("modal_ratio at its upper bound {:.6g}", zmax));
     }
   }
   return out;
@@ -577,7 +751,48 @@ void set_slips(const IwanObjective& objective, IwanUpdateSummary& s) {
   s.phi_max = model::Iwan(s.best).phi_max();
 }
 
+// The constant-backbone candidate of a fit with Z free: a joint that barely slips over the data
+// (F_S at its upper bound, chi at its largest: the microslip damping (a / phi_max)^(chi + 1) is
+// then smallest) with K_T placing the frequency (golden-section search of the cost on ln gamma),
+// and Z at its best. A linear damping with such a joint contains the constant model, so the fit
+// can never end worse than the best constant: this candidate is recorded and refined.
+std::pair<double, Vec4> constant_candidate(Tracker& tr) {
+  const IwanUpdateOptions& o = tr.options;
+  const Box box = initial_box(o);
+  const model::IwanParameters start = tr.objective.initial();
+  Vec4 v(box.hi(0), box.lo(1), box.hi(2), std::clamp(start.beta, box.lo(3), box.hi(3)));
+  if (o.fixed_beta) v(3) = *o.fixed_beta;
+  auto at = [&](double ln_gamma) {
+    Vec4 w = v;
+    w(1) = std::exp(ln_gamma);
+    return tr.eval({w}).front();
+  };
+  if (box.hi(1) > box.lo(1)) {
+    const double phi = (std::sqrt(5.0) - 1) / 2;
+    double a = std::log(box.lo(1)), b = std::log(box.hi(1));
+    double c = b - phi * (b - a), d = a + phi * (b - a);
+    double fc = at(c), fd = at(d);
+    for (int i = 0; i < 30 && !tr.spent(); ++i) {
+      if (fc < fd) {
+        b = d, d = c, fd = fc;
+        c = b - phi * (b - a);
+        fc = at(c);
+      } else {
+        a = c, c = d, fc = fd;
+        d = a + phi * (b - a);
+        fd = at(d);
+      }
+    }
+    v(1) = std::exp(fc < fd ? c : d);
+  }
+  return {tr.eval({v}).front(), v};
+}
+
 }  // namespace
+
+bool IwanUpdateSummary::misfit() const {
+  return reduced_chi2 > 1 + 3 * std::sqrt(2.0 / std::max<size_t>(1, residuals));
+}
 
 model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
                                   IwanUpdateSummary* summary) {
@@ -587,9 +802,19 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   s = IwanUpdateSummary{};
   s.optimizer = options.optimizer;
   s.start = objective.initial();
+  s.held = held_parameters(options);
+  s.modal_ratio_start = objective.model_linear_damping();
+  s.modal_ratio_fitted = objective.fits_linear_damping();
+  s.residuals = static_cast<size_t>(objective.residual_count());
+  s.reference_stiffness = objective.reference_stiffness();
   Tracker tr{objective, options, s, objective.evaluations()};
   s.initial_cost = objective.cost(s.start);
   std::mt19937 rng(options.seed);
+  std::optional<std::pair<double, Vec4>> constant;
+  if (objective.fits_linear_damping()) {
+    constant = constant_candidate(tr);
+    s.constant_cost = constant->first;
+  }
   switch (options.optimizer) {
     case IwanOptimizer::kPaper:
       monte_carlo(tr, false, rng);
@@ -598,7 +823,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
       monte_carlo(tr, true, rng);
       break;
     case IwanOptimizer::kGlobalLocal:
-      global_local(tr, rng);
+      global_local(tr, rng, constant ? &*constant : nullptr);
       break;
   }
   s.evaluations = tr.used();
@@ -608,8 +833,10 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   if (options.fixed_beta) start.beta = *options.fixed_beta;
   if (!(tr.best < kPenalty)) {
     s.status = IwanUpdateStatus::kNoValidPoint;
+    s.improved = false;
     s.best = start;
     s.final_cost = objective.cost(start);
+    s.modal_ratio = objective.linear_damping(start).value_or(s.modal_ratio_start);
     return start;
   }
   // The start is a candidate too when it lies in the search box (held parameters at their
@@ -627,22 +854,38 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
                             : start.Kt == s.start.Kt && start.beta == s.start.beta
                                 ? s.initial_cost
                                 : objective.cost(start);
+  Vec4 best_v;
   if (start_cost <= tr.best) {
     s.improved = false;
+    best_v = start_v;
     s.best = start;
     s.final_cost = start_cost;
-    s.linear_error = objective.linear_error(s.best);
-    set_slips(objective, s);
-    return s.best;
+  } else {
+    // Inside the box also after the round trip through the search coordinates (exp(log(60))
+    // is 59.99999999999999).
+    best_v = tr.best_v.cwiseMax(box.lo).cwiseMin(box.hi);
+    s.best = to_params(best_v, Ks);
+    s.final_cost = tr.best;
   }
-  // Inside the box also after the round trip through the search coordinates (exp(log(60))
-  // is 59.99999999999999).
-  tr.best_v = tr.best_v.cwiseMax(box.lo).cwiseMin(box.hi);
-  s.best = to_params(tr.best_v, Ks);
-  s.final_cost = tr.best;
-  s.at_bounds = bounds_reached(options, tr.best_v);
+  s.modal_ratio = objective.linear_damping(s.best).value_or(s.modal_ratio_start);
+  s.at_bounds = bounds_reached(
+      options, best_v, s.modal_ratio_fitted ? std::optional<double>(s.modal_ratio) : std::nullopt,
+      s.bound_side);
+  if (!s.improved) s.at_bounds.clear(), s.bound_side.fill(0);  // the start: not a fit's end
   s.linear_error = objective.linear_error(s.best);
-  s.covariance = covariance(objective, options, tr.best_v);
+  std::vector<int> free;
+  for (int k = 0; k < 4; ++k)
+    if (!s.held[k]) free.push_back(k);
+  if (s.modal_ratio_fitted) free.push_back(4);
+  const Eigen::MatrixXd cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2);
+  if (cov.size() > 0) {
+    for (size_t i = 0; i < free.size(); ++i) {
+      for (size_t j = 0; j < free.size(); ++j) {
+        if (free[i] < 4 && free[j] < 4) s.covariance(free[i], free[j]) = cov(i, j);
+      }
+      if (free[i] == 4) s.modal_ratio_std = std::sqrt(std::max(cov(i, i), 0.0));
+    }
+  }
   for (int k = 0; k < 4; ++k) {
     const double sd = std::sqrt(std::max(s.covariance(k, k), 0.0));
     s.relative_std(k) = k != 2 ? sd : std::abs(s.best.chi) > 0 ? sd / std::abs(s.best.chi) : 0.0;
@@ -652,36 +895,57 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
 }
 
 std::string IwanUpdateSummary::report() const {
-  static const char* names[] = {"converged", "evaluation budget spent", "no valid sample"};
+  const bool monte_carlo = optimizer != IwanOptimizer::kGlobalLocal;
+  const std::string outcome = status == IwanUpdateStatus::kNoValidPoint ? "no valid sample"
+                              : !improved          ? "no candidate improved on the start"
+                              : !at_bounds.empty() ? "stopped at a bound of the search range"
+                              : status == IwanUpdateStatus::kBudget ? "evaluation budget spent"
+                              : monte_carlo ? "converged (a Monte Carlo round brought no gain)"
+                                            : "converged (every local solve met its tolerance)";
   std::string out = fmt::format(
-      "Iwan update: {}, {} QSMA evaluations, {} rounds, cost {:.4g} -> {:.4g}, linear frequency "
-      "error {:.3g} %\n  Fs {:.6g} -> {:.6g} N, Kt {:.6g} -> {:.6g} N/m, chi {:.4g} -> {:.4g}, "
-      "beta {:.4g} -> {:.4g}\n",
-      status == IwanUpdateStatus::kConverged && !at_bounds.empty()
-          ? "stopped at a bound of the search range"
-          : names[static_cast<int>(status)],
-      evaluations, rounds, initial_cost, final_cost, 100 * linear_error, start.Fs, best.Fs,
-      start.Kt, best.Kt, start.chi, best.chi, start.beta, best.beta);
+      "Iwan update: {}, {} QSMA evaluations, {} {}, cost {:.4g} -> {:.4g}, linear frequency "
+      "error {:.3g} %\n",
+      outcome, evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements",
+      initial_cost, final_cost, 100 * linear_error);
+  // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
+  auto sigma = [&](int k) -> std::string {
+    if (held[k]) return " (held)";
+    if (!improved || !(relative_std(k) > 0)) return " (sigma unknown)";
+    return fmt::format(" +/- {:.2g} %", 100 * relative_std(k));
+  };
+  out += fmt::format(
+      "  Fs {:.6g} -> {:.6g} N{}, Kt {:.6g} -> {:.6g} N/m{}, chi {:.4g} -> {:.4g}{}, beta {:.4g} "
+      "-> {:.4g}{}\n",
+      start.Fs, best.Fs, sigma(0), start.Kt, best.Kt, sigma(1), start.chi, best.chi, sigma(2),
+      start.beta, best.beta, sigma(3));
+  if (modal_ratio_fitted) {
+    out += fmt::format(
+        "  modal_ratio (the structure's own damping) {:.4g} -> {:.4g}{}; the best constant "
+        "backbone (joint barely slipping) costs {:.4g}\n",
+        modal_ratio_start, modal_ratio,
+        modal_ratio_std > 0 ? fmt::format(" +/- {:.2g}", modal_ratio_std) : " (sigma unknown)",
+        constant_cost);
+  } else if (modal_ratio_start > 0) {
+    out += fmt::format("  modal_ratio {:.4g} held (the model's own damping, in every damping)\n",
+                       modal_ratio_start);
+  }
   if (!improved || status == IwanUpdateStatus::kNoValidPoint) {
     out += fmt::format(
-        "  no sample improved on the start: the result is the start{}. {}\n",
+        "  the result is the start{}. {}\n",
         status == IwanUpdateStatus::kNoValidPoint ? " (no sample could be evaluated)" : "",
         optimizer == IwanOptimizer::kGlobalLocal
             ? "Widen the bounds or give a better start."
             : "The Monte Carlo's uniform samples rarely land near the optimum in wide bounds: "
               "use the global-local optimiser (--optimizer global-local).");
   }
-  if (!at_bounds.empty()) {
-    std::string which;
-    for (const std::string& b : at_bounds) which += (which.empty() ? "" : ", ") + b;
-    out += fmt::format(
-        "  the fit ends at a bound: {}; the best fit may lie outside the range, widen it\n", which);
+  for (const std::string& b : at_bounds) {
+    out += fmt::format("  WARNING: {}: the best fit may lie outside the range, widen it\n", b);
   }
-  if (relative_std.any()) {
-    out += fmt::format(
-        "  one-sigma relative uncertainty: Fs {:.2g} %, Kt {:.2g} %, chi {:.2g} %, beta {:.2g} % "
-        "(0: held or unknown)\n",
-        100 * relative_std(0), 100 * relative_std(1), 100 * relative_std(2), 100 * relative_std(3));
+  if (improved && reduced_chi2 > 0) {
+    out += fmt::format("  reduced chi-square {:.3g}", reduced_chi2);
+    out += misfit() ? ": WARNING the model does not describe the data within their stated noise; "
+                      "the uncertainties (scaled by it) are a lower bound\n"
+                    : " (the model describes the data within their stated noise)\n";
   }
   if (top_slip > 0 && phi_max > 0) {
     out += fmt::format(

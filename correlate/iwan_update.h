@@ -30,6 +30,7 @@
 // gives the linear-frequency error |f_model,R - f_lin,exp| / f_lin,exp and the backbone cost.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -68,7 +69,11 @@ enum class IwanComparison {
 /// One measured backbone curve: points of one channel (or pooled hits of it).
 struct MeasuredBackbone {
   BackboneKind kind = BackboneKind::kRingdown;  ///< how it was measured
-  int sensor = 0;                    ///< index into the sensors: where the amplitude is measured
+  int sensor = 0;  ///< index into the sensors: where the amplitude is measured
+  /// True: `amplitude` is the QSMA modal amplitude q of the target's mode (mass-normalised
+  /// shape; no sensor, `sensor` unused, the amplitude quantity of the options does not apply).
+  bool modal = false;
+  std::string source;                ///< where it was read (file), for messages; may be empty
   Eigen::VectorXd amplitude;         ///< amplitude a_j (SI units of the quantity), > 0
   Eigen::VectorXd frequency_hz;      ///< f_j [Hz]
   Eigen::VectorXd damping_ratio;     ///< zeta_j
@@ -118,6 +123,13 @@ struct IwanUpdateOptions {
   int threads = 0;
   /// Called after every evaluation with (evaluations, best cost so far).
   std::function<void(int, double)> progress;
+  /// The structure's own damping (Model::modal_ratio Z, added to every model damping):
+  /// false holds the model's; true identifies it with the Iwan parameters, in
+  /// [0, linear_damping_max]. Damping residuals are linear in Z, so at any Iwan parameters the
+  /// best Z is the weighted mean of the measured damping minus the joints' (clamped to its
+  /// range): every candidate is scored at its own best Z (variable projection).
+  bool fit_linear_damping = false;
+  double linear_damping_max = 0.05;  ///< upper bound of a fitted Z
   /// What is wrong with these options, or "".
   std::string error() const;
 };
@@ -145,8 +157,20 @@ class IwanObjective {
   /// (every mode, a new factorisation) and each amplitude bracketed by full static solves
   /// (qsma_at.h); the reference the fast evaluation is checked and timed against.
   bool residuals_from_scratch(const model::IwanParameters& p, double* r) const;
+  /// Residuals at p with the structure's own damping ratio at z (not fitted, not the model's):
+  /// the Jacobian column of Z and the covariance need it held. Thread-safe.
+  bool residuals_at(const model::IwanParameters& p, double z, double* r) const;
   /// Sum of squared residuals at p (a large finite penalty if it cannot be evaluated).
   double cost(const model::IwanParameters& p) const;
+  /// The structure's own damping ratio Z the residuals at p use: the model's when held, the
+  /// best one in [0, linear_damping_max] at p when fitted; nullopt if p cannot be evaluated.
+  std::optional<double> linear_damping(const model::IwanParameters& p) const;
+  /// True when the objective identifies Z (IwanUpdateOptions::fit_linear_damping).
+  bool fits_linear_damping() const { return fit_z_; }
+  /// The model's own damping ratio (Model::modal_ratio).
+  double model_linear_damping() const { return z_model_; }
+  /// Amplitude of the point each residual belongs to (in its curve's quantity).
+  const std::vector<double>& residual_amplitude() const { return residual_amplitude_; }
   /// Largest joint slip [m] (QSMA max_slip) at the lowest and at the highest measured amplitude
   /// over the targets, at p; (0, 0) if the model cannot be evaluated there.
   Eigen::Vector2d slip_range(const model::IwanParameters& p) const;
@@ -161,8 +185,10 @@ class IwanObjective {
   std::vector<std::optional<double>> linear_errors(const model::IwanParameters& p) const;
   /// QSMA evaluations so far.
   int evaluations() const { return evaluations_; }
-  /// A copy of the model with the set at p.
+  /// A copy of the model with the set at p (the model's own damping unchanged).
   model::Model apply(const model::IwanParameters& p) const;
+  /// A copy of the model with the set at p and its own damping ratio at z.
+  model::Model apply(const model::IwanParameters& p, double z) const;
 
  private:
   const model::Model* model_;
@@ -176,12 +202,17 @@ class IwanObjective {
   model::IwanParameters initial_;
   int residual_count_ = 0;
   std::vector<int> residual_curve_;
+  std::vector<double> residual_amplitude_;
+  bool fit_z_ = false;
+  double z_model_ = 0, z_max_ = 0.05;
   MeasuredModes linear_modes_;
   double linear_mac_ = 0.6;
   std::shared_ptr<const model::IwanSetModel> set_model_;  // null: every evaluation from scratch
   mutable std::atomic<int> evaluations_ = 0;
-  bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip,
-                bool from_scratch) const;
+  // Residuals at p; z_fixed (not null) sets the structure's own damping, else the model's or
+  // the best (fitted); z_used (not null) receives it.
+  bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip, bool from_scratch,
+                const double* z_fixed = nullptr, double* z_used = nullptr) const;
 };
 
 /// Why update_iwan() stopped.
@@ -212,14 +243,37 @@ struct IwanUpdateSummary {
   bool improved = true;  ///< false: no sample beat the start (held parameters at their values)
   /// Free parameters that end at a bound of the search box, e.g. "Fs at its upper bound 2000 N".
   std::vector<std::string> at_bounds;
+  /// Per parameter (F_S, K_T, chi, beta, modal_ratio): -1 at its lower bound, +1 at its upper
+  /// bound, 0 inside (or held).
+  std::array<int, 5> bound_side{};
+  /// Which of (F_S, K_T, chi, beta) the options held (their sigma is not a number).
+  std::array<bool, 4> held{};
   /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
-  /// unknown or held): with three or more curves the cluster-robust (sandwich) covariance with
-  /// one cluster per curve, so the scatter between curves, not the number of points along them,
-  /// sets it; with fewer curves the Gauss-Newton covariance.
+  /// unknown or held): the larger of a serial-correlation robust (Newey-West, HAC) sandwich over
+  /// each curve's points ordered by amplitude, with a bandwidth of a tenth of the curve so that
+  /// it does not depend on how densely the curve is sampled, and the Gauss-Newton covariance
+  /// scaled by the reduced chi-square when that exceeds 1; with three or more curves the
+  /// cluster-robust covariance (one cluster per curve) as a further lower limit.
   Eigen::Vector4d relative_std = Eigen::Vector4d::Zero();
   /// Covariance of x = (ln F_S, ln K_T, chi, ln beta) behind relative_std (0 rows and columns
   /// for held parameters; all 0 when unknown).
   Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();
+  double modal_ratio_start = 0;     ///< the model's own damping ratio Z
+  double modal_ratio = 0;           ///< Z at best: fitted, else the model's
+  bool modal_ratio_fitted = false;  ///< Z was identified (IwanUpdateOptions::fit_linear_damping)
+  double modal_ratio_std = 0;       ///< one-sigma absolute uncertainty of a fitted Z (0: unknown)
+  /// The best constant-backbone candidate's cost (a joint that barely slips, the frequency
+  /// matched, Z fitted); 0 when Z is not fitted. The result is never worse.
+  double constant_cost = 0;
+  /// Reduced chi-square at best: sum of squared normalised residuals over (2N - free
+  /// parameters); about 1 when the model describes the data within their stated noise.
+  double reduced_chi2 = 0;
+  double reference_stiffness = 0;  ///< K_s: gamma = K_T / K_s [N/m]
+  size_t residuals = 0;            ///< number of residuals (2 per measured point)
+  /// True when reduced_chi2 is significantly above 1 (by more than 3 of its standard deviations
+  /// sqrt(2 / dof)): the model does not describe the data within their noise and the sigma is a
+  /// lower bound.
+  bool misfit() const;
   double bottom_slip = 0;  ///< largest joint slip at the lowest measured amplitude, at best [m]
   double top_slip = 0;     ///< largest joint slip at the highest measured amplitude, at best [m]
   double phi_max = 0;      ///< the slip at which an element reaches macroslip, at best [m]

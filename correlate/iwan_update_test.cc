@@ -9,7 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/qsma_at.h"
 #include "jointlab/correlate/two_chain.h"
+#include "jointlab/model/joint_condensation.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::correlate {
@@ -523,7 +526,7 @@ TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
   EXPECT_FALSE(sum.improved);
   EXPECT_EQ(p.Fs, 20.0);
   EXPECT_TRUE(sum.at_bounds.empty());
-  EXPECT_NE(sum.report().find("no sample improved"), std::string::npos) << sum.report();
+  EXPECT_NE(sum.report().find("no candidate improved"), std::string::npos) << sum.report();
   EXPECT_NE(sum.report().find("global-local"), std::string::npos) << sum.report();
   // gamma held at 0.8 while the start is at 1: never the start's K_T.
   o.fixed_gamma = 0.8;
@@ -550,15 +553,177 @@ TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
     EXPECT_LE(p.Fs, 80.0);
     EXPECT_EQ(sum.best.Fs, p.Fs);
     EXPECT_TRUE(sum.improved);
-    EXPECT_EQ(sum.report().find("no sample improved"), std::string::npos) << sum.report();
+    EXPECT_EQ(sum.report().find("no candidate improved"), std::string::npos) << sum.report();
     if (method == IwanOptimizer::kPaper) continue;  // its samples rarely land on a bound
     ASSERT_FALSE(sum.at_bounds.empty()) << sum.report();
     EXPECT_EQ(sum.at_bounds.front(), "Fs at its lower bound 60 N") << sum.report();
-    EXPECT_NE(sum.report().find("the fit ends at a bound: Fs at its lower bound 60 N"),
-              std::string::npos)
+    EXPECT_NE(sum.report().find("WARNING: Fs at its lower bound 60 N"), std::string::npos)
         << sum.report();
     EXPECT_EQ(sum.report().find("converged"), std::string::npos) << sum.report();
   }
+}
+
+// The one-mode model of issue 28's check: unit modal mass, a spring k0 in parallel with one
+// Iwan element to ground, its own damping Z (Model::modal_ratio).
+model::Model one_mode(double k0, const model::IwanParameters& p, double z) {
+  model::Model m;
+  m.mass.resize(1, 1);
+  m.mass.insert(0, 0) = 1.0;
+  m.stiffness.resize(1, 1);
+  m.stiffness.insert(0, 0) = k0;
+  m.joints.push_back(model::Joint{0, model::kGround, "iwan.j", p.Kt, model::Iwan(p)});
+  m.modal_ratio = z;
+  return m;
+}
+
+// Ring-down backbones of the truth in modal amplitude q (QSMA's ring-down pair plus Z), `points`
+// log-spaced from q_lo to q_hi, with relative Gaussian noise of sd f_noise in frequency and
+// z_noise in damping (the std columns say so).
+MeasuredBackbone modal_backbone(const model::Model& truth, int points, double q_lo, double q_hi,
+                                double f_noise, double z_noise, unsigned seed) {
+  const model::JointCondensation jc(truth);
+  std::vector<double> q(static_cast<size_t>(points));
+  for (int i = 0; i < points; ++i)
+    q[static_cast<size_t>(i)] = q_lo * std::pow(q_hi / q_lo, i / (points - 1.0));
+  const std::vector<QsmaAtPoint> at = qsma_at(jc, 1, 0, q, AmplitudeFrequency::kFirstHarmonic);
+  EXPECT_EQ(at.size(), q.size());
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  MeasuredBackbone b = sized_backbone(BackboneKind::kRingdown, 0, points);
+  b.modal = true;
+  for (int i = 0; i < points; ++i) {
+    const model::QsmaPoint& p = at[static_cast<size_t>(i)].point;
+    b.amplitude(i) = q[static_cast<size_t>(i)];
+    b.frequency_hz(i) = p.ringdown_frequency_hz * (1 + f_noise * n(rng));
+    b.damping_ratio(i) = p.ringdown_damping_ratio * (1 + z_noise * n(rng));
+    b.frequency_std_hz(i) = f_noise * p.ringdown_frequency_hz;
+    b.damping_std(i) = z_noise * p.ringdown_damping_ratio;
+  }
+  return b;
+}
+
+// The same curve ten times more densely: linear interpolation in ln q of every column.
+MeasuredBackbone denser(const MeasuredBackbone& b, int factor) {
+  const Eigen::Index n = b.amplitude.size(), m = (n - 1) * factor + 1;
+  MeasuredBackbone d = sized_backbone(b.kind, b.sensor, m);
+  d.modal = b.modal;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::Index k = std::min(i / factor, n - 2);
+    const double w = static_cast<double>(i - k * factor) / factor;
+    auto lerp = [&](const Eigen::VectorXd& v) { return (1 - w) * v(k) + w * v(k + 1); };
+    d.amplitude(i) =
+        std::exp((1 - w) * std::log(b.amplitude(k)) + w * std::log(b.amplitude(k + 1)));
+    d.frequency_hz(i) = lerp(b.frequency_hz);
+    d.damping_ratio(i) = lerp(b.damping_ratio);
+    d.frequency_std_hz(i) = lerp(b.frequency_std_hz);
+    d.damping_std(i) = lerp(b.damping_std);
+  }
+  return d;
+}
+
+// Truth of the damping-floor checks: 177 Hz, K_T 4 % of the stiffness, F_S 0.5 N (phi_max
+// 1.8e-5 m), chi -0.5, beta 0.5 and a floor Z = 5e-4 (the joints' damping runs from 1e-5 at
+// the lowest amplitude, far below Z, to 3e-2 past phi_max: both the floor and the joint shape
+// the curves).
+struct FloorTruth {
+  double k_total = std::pow(2 * M_PI * 177.0, 2);
+  model::IwanParameters iwan{0.5, 0.04 * std::pow(2 * M_PI * 177.0, 2), -0.5, 0.5};
+  double k0 = 0.96 * k_total;
+  double z = 5e-4;
+  model::Model truth() const { return one_mode(k0, iwan, z); }
+  // The model the fit starts from: every Iwan parameter off (F_S x3, K_T x0.8, chi -0.3, beta
+  // 2) and no floor.
+  model::Model start() const { return one_mode(k0, {iwan.Fs * 3, iwan.Kt * 0.8, -0.3, 2.0}, 0.0); }
+  // Three hits of 60 points each from q = 1e-8 m to 1.5, 2 and 2.5 phi_max, 1e-4 frequency and
+  // 2 % damping noise.
+  IwanTarget target(int points = 60, int hits = 3) const {
+    IwanTarget t;
+    const double phi = model::Iwan(iwan).phi_max();
+    for (int h = 0; h < hits; ++h)
+      t.curves.push_back(
+          modal_backbone(truth(), points, 1e-8, (1.5 + 0.5 * h) * phi, 1e-4, 0.02, 11 + h));
+    return t;
+  }
+  IwanUpdateOptions options() const {
+    IwanUpdateOptions o;
+    o.fit_linear_damping = true;
+    o.bounds = {iwan.Fs / 300, iwan.Fs * 300, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+    o.max_evaluations = 1500;
+    return o;
+  }
+};
+
+// --linear-damping fit on noisy backbones of a planted joint and floor: every parameter, the
+// floor included, within 2 % of the truth and within 3 of its stated sigma. With 180 points
+// at 2 % damping and 1e-4 frequency noise the stated sigma are 0.1-1 %, so 2 % is the issue's
+// acceptance with room, and 3 sigma a test of the sigma itself (a sigma ten times too small
+// would fail it).
+TEST(IwanUpdate, FitsTheStructuresOwnDampingWithTheJoint) {
+  const FloorTruth t;
+  const model::Model start = t.start();
+  const IwanObjective obj(start, "j", {}, {t.target()}, t.options());
+  IwanUpdateSummary s;
+  const model::IwanParameters p = update_iwan(obj, t.options(), &s);
+  RecordProperty("report", s.report());
+  std::printf("%s", s.report().c_str());
+  ASSERT_TRUE(s.improved) << s.report();
+  EXPECT_TRUE(s.at_bounds.empty()) << s.report();
+  const double truth[] = {t.iwan.Fs, t.iwan.Kt, t.iwan.chi, t.iwan.beta};
+  const double found[] = {p.Fs, p.Kt, p.chi, p.beta};
+  for (int k = 0; k < 4; ++k) {
+    const double rel = std::abs(found[k] / truth[k] - 1);
+    EXPECT_LT(rel, 0.02) << k << "\n" << s.report();
+    ASSERT_GT(s.relative_std(k), 0) << k;
+    EXPECT_LT(rel, 3 * s.relative_std(k)) << k << "\n" << s.report();
+  }
+  EXPECT_LT(std::abs(s.modal_ratio / t.z - 1), 0.02) << s.report();
+  ASSERT_GT(s.modal_ratio_std, 0);
+  EXPECT_LT(std::abs(s.modal_ratio - t.z), 3 * s.modal_ratio_std) << s.report();
+  // Never worse than the best constant backbone (a candidate of the fit).
+  EXPECT_LE(s.final_cost, s.constant_cost);
+  // The updated model carries the floor.
+  EXPECT_EQ(obj.apply(p, s.modal_ratio).modal_ratio, s.modal_ratio);
+}
+
+// Held (the default), Z is the model's: the truth's Z is used in every damping, so the truth
+// scores as the noise does, and a fit from the truth's model stays there.
+TEST(IwanUpdate, HeldLinearDampingIsTheModels) {
+  const FloorTruth t;
+  IwanUpdateOptions o = t.options();
+  o.fit_linear_damping = false;
+  const IwanObjective with(t.truth(), "j", {}, {t.target()}, o);
+  EXPECT_EQ(with.linear_damping(t.iwan).value(), t.z);
+  // Noise only: about 2 (two residuals of unit variance per point over N).
+  EXPECT_LT(with.cost(t.iwan), 3.0);
+  model::Model no_floor = t.truth();
+  no_floor.modal_ratio = 0;
+  const IwanObjective without(no_floor, "j", {}, {t.target()}, o);
+  EXPECT_GT(without.cost(t.iwan), 10.0);
+}
+
+// The sigma does not shrink with sampling density (method.md section 2 point 5): the same
+// noisy curve resampled ten times more densely gives each sigma within 30 % of the sparse
+// fit's, where independent-point (Gauss-Newton) sigma would shrink by sqrt(10) = 3.2.
+TEST(IwanUpdate, SigmaDoesNotDependOnTheSamplingDensity) {
+  const FloorTruth t;
+  const IwanTarget sparse = t.target(40, 1);
+  IwanTarget dense = sparse;
+  dense.curves[0] = denser(sparse.curves[0], 10);
+  IwanUpdateSummary ss, sd;
+  const model::Model start = t.start();
+  IwanUpdateOptions o = t.options();
+  o.max_evaluations = 3000;
+  update_iwan(IwanObjective(start, "j", {}, {sparse}, o), o, &ss);
+  update_iwan(IwanObjective(start, "j", {}, {dense}, o), o, &sd);
+  std::printf("sparse:\n%sdense:\n%s", ss.report().c_str(), sd.report().c_str());
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_GT(ss.relative_std(k), 0) << k;
+    EXPECT_NEAR(sd.relative_std(k) / ss.relative_std(k), 1.0, 0.3) << k;
+    RecordProperty("sigma_ratio_" + std::to_string(k),
+                   std::to_string(sd.relative_std(k) / ss.relative_std(k)));
+  }
+  ASSERT_GT(ss.modal_ratio_std, 0);
+  EXPECT_NEAR(sd.modal_ratio_std / ss.modal_ratio_std, 1.0, 0.3);
 }
 
 TEST(IwanUpdate, BadInputIsReported) {

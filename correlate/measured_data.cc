@@ -449,4 +449,18 @@ int measured_mode_of(const model::Model& model, const std::vector<Sensor>& senso
   return -1;
 }
 
+MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor) {
+  MeasuredBackbone b;
+  b.kind = BackboneKind::kRingdown;
+  b.modal = sensor < 0;
+  b.sensor = sensor < 0 ? 0 : sensor;
+  b.source = table.source;
+  b.amplitude = table.amplitude;
+  b.frequency_hz = table.frequency_hz;
+  b.damping_ratio = table.damping_ratio;
+  b.frequency_std_hz = table.frequency_std_hz;
+  b.damping_std = table.damping_std;
+  return b;
+}
+
 }  // namespace jointlab::correlate

@@ -24,6 +24,7 @@
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/sensors.h"
+#include "jointlab/data/backbone_table.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
@@ -91,6 +92,10 @@ MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index poin
 /// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`;
 /// InputError naming the file and line.
 MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor);
+
+/// A backbone table (data/backbone_table.h, read at the edge) as a measured ring-down backbone:
+/// at sensor index `sensor`, or of the modal amplitude q when `sensor` is negative.
+MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor);
 
 /// Every backbone of band `band` on the selected channels (empty: each file's reference
 /// channel), each at its sensor; InputError when a selected channel is not a sensor or no

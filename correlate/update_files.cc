@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -124,14 +125,43 @@ void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSu
 
 void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSummary& s,
                            double identifiable_std) {
-  const char* names[] = {"Fs", "Kt", "chi", "beta"};
-  const double start[] = {s.start.Fs, s.start.Kt, s.start.chi, s.start.beta};
-  const double best[] = {s.best.Fs, s.best.Kt, s.best.chi, s.best.beta};
-  std::string t = "name,initial,final,relative_std,identifiable\n";
-  for (int k = 0; k < 4; ++k) {
-    const double r = s.relative_std(k);
-    t += fmt::format("{},{},{},{},{}\n", names[k], num(start[k]), num(best[k]), num(r),
-                     r > 0 && r <= identifiable_std ? 1 : 0);
+  struct Row {
+    const char* name;
+    double initial, final, relative_std;  // relative_std < 0: none (held or unknown)
+    bool held, separately_identified;
+    int bound;
+  };
+  auto rel = [&](int k) { return s.held[k] || !s.improved ? -1.0 : s.relative_std(k); };
+  const double ks = s.reference_stiffness;
+  // Below phi_max the data fix K_T, chi and R only: Fs and beta are not identified separately.
+  const bool micro = s.microslip_only();
+  std::vector<Row> rows = {
+      {"Fs", s.start.Fs, s.best.Fs, rel(0), s.held[0], !micro, s.bound_side[0]},
+      {"Kt", s.start.Kt, s.best.Kt, rel(1), s.held[1], true, s.bound_side[1]},
+      {"chi", s.start.chi, s.best.chi, rel(2), s.held[2], true, s.bound_side[2]},
+      {"beta", s.start.beta, s.best.beta, rel(3), s.held[3], !micro, s.bound_side[3]},
+  };
+  if (ks > 0) {
+    rows.push_back(
+        {"gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held[1], true, s.bound_side[1]});
+  }
+  if (s.modal_ratio_fitted) {
+    rows.push_back({"modal_ratio", s.modal_ratio_start, s.modal_ratio,
+                    s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
+                        ? s.modal_ratio_std / s.modal_ratio
+                        : -1.0,
+                    false, true, s.bound_side[4]});
+  }
+  std::string t = "name,initial,final,relative_std,identifiable,held,at_bound\n";
+  for (const Row& r : rows) {
+    const bool known = r.relative_std > 0;
+    t += fmt::format("{},{},{},{},{},{},{}\n", r.name, num(r.initial), num(r.final),
+                     known ? num(r.relative_std) : "",
+                     known && r.separately_identified && r.relative_std <= identifiable_std ? 1 : 0,
+                     r.held ? 1 : 0,
+                     r.bound < 0   ? "lower"
+                     : r.bound > 0 ? "upper"
+                                   : "");
   }
   data::write_file_atomically(path, t);
 }

@@ -4,9 +4,12 @@
 //   linear: name,initial,final,relative_std,sensitivity,identifiable,smallest_within_tolerance
 //     (relative_std 0 and identifiable 0 for a flat parameter; smallest_within_tolerance 0
 //     unless the tolerance formulation lowered it);
-//   Iwan:   name,initial,final,relative_std,identifiable  for Fs [N], Kt [N/m], chi, beta
-//     (relative_std from the Gauss-Newton covariance, 0 where unknown; identifiable 1 when
-//     0 < relative_std <= identifiable_std).
+//   Iwan:   name,initial,final,relative_std,identifiable,held,at_bound  for Fs [N], Kt [N/m],
+//     chi, beta, gamma = K_T / K_s and, when fitted, modal_ratio (relative_std from the
+//     covariance of iwan_update.h, empty where held or unknown; identifiable 1 when
+//     0 < relative_std <= identifiable_std and, for Fs and beta, the data reach macroslip;
+//     held 1 for a parameter the options held; at_bound "lower" or "upper" for a parameter the
+//     fit left at a bound of its search range, else empty).
 // history.csv: linear  iteration,objective,<set>...  (iteration 0: the start; every set's
 //                      stiffness after each iteration, then each feasible step of the
 //                      smallest rule);

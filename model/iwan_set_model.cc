@@ -56,7 +56,10 @@ int count_below(const Eigen::MatrixXd& u, const Eigen::VectorXd& d, const Eigen:
 }  // namespace
 
 IwanSetModel::IwanSetModel(const Model& model, const std::string& set, int elastic_count)
-    : joints_(model.joints), set_(set), elastic_count_(elastic_count) {
+    : joints_(model.joints),
+      set_(set),
+      modal_ratio_(model.modal_ratio),
+      elastic_count_(elastic_count) {
   ModesOptions one;
   one.elastic_count = 1;
   const JointCondensation base(model, one);
@@ -193,7 +196,9 @@ std::optional<JointCondensation> IwanSetModel::at(const IwanParameters& p) const
       modes.shapes.col(rigid + k) = phi;
     }
   }
-  return JointCondensation(joints, std::move(modes), std::move(kc));
+  JointCondensation out(joints, std::move(modes), std::move(kc));
+  out.set_linear_damping(modal_ratio_);
+  return out;
 }
 
 }  // namespace jointlab::model

@@ -57,6 +57,7 @@ class IwanSetModel {
 
   std::vector<Joint> joints_;
   std::string set_;
+  double modal_ratio_ = 0;       // the model's own damping, carried into every condensation
   std::vector<int> coordinate_;  // per joint: its Iwan coordinate (-1: not of the set)
   int elastic_count_ = 0;
   LinearModes modes_;          // every mode of the model

@@ -101,6 +101,7 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
     throw InputError("QSMA: the model has no Iwan joint (every joint is a linear spring)");
   }
   modes_ = linear_modes(model, modes_options);
+  linear_damping_ = model.modal_ratio;
   set_coordinates(model.joints);
   const int nj = size();
   const Eigen::Index n = model.size();

@@ -81,6 +81,12 @@ class JointCondensation {
   /// Smallest chi + 1 over every element (slowest microslip power law).
   double smallest_chi_plus_one() const { return chi1_min_; }
 
+  /// The structure's own modal damping ratio Z (Model::modal_ratio), added to every QSMA
+  /// damping column (qsma.h); 0 by default and for the parts constructor.
+  double linear_damping() const { return linear_damping_; }
+  /// Sets Z (0 <= Z < 1, checked by the caller).
+  void set_linear_damping(double z) { linear_damping_ = z; }
+
   /// Linear (zero-load) stiffness of coordinate j: the sum of its elements' K_T [N/m].
   double linear_stiffness(int j) const { return kt_(j); }
 
@@ -138,6 +144,7 @@ class JointCondensation {
   Eigen::MatrixXd flexibility_, stiffness_, joint_shapes_;
   Eigen::VectorXd phi_max_, kt_;
   double phi_max_min_ = 0, chi1_min_ = 1;
+  double linear_damping_ = 0;
 };
 
 }  // namespace jointlab::model

@@ -94,7 +94,9 @@ void write_pair(const std::string& stem, double m1, double m2, double k0) {
 
 // Checks every CSV row of a QSMA curve against the closed form of method.md section 3 with
 // mass mu. The CSV carries 10 significant digits (rounding 5e-10); 1e-6 is the acceptance.
-void expect_closed_form_csv(const fs::path& csv, double k0, double mu) {
+// With `modal_ratio` Z the model's own damping adds Z to every damping column (method.md
+// section 2 point 4) and leaves the frequencies alone.
+void expect_closed_form_csv(const fs::path& csv, double k0, double mu, double modal_ratio = 0) {
   std::string header;
   const auto rows = read_csv(csv, &header);
   EXPECT_EQ(header,
@@ -106,11 +108,13 @@ void expect_closed_form_csv(const fs::path& csv, double k0, double mu) {
     const double x = rows[i][4];
     const double force = k0 * x + iwan.force(x);
     EXPECT_TRUE(Close(rows[i][2], std::sqrt(force / (mu * x)) / kTwoPi, 1e-6)) << i;
-    EXPECT_TRUE(Close(rows[i][3], iwan.dissipation(x) / (kTwoPi * force * x), 1e-6)) << i;
+    EXPECT_TRUE(Close(rows[i][3], modal_ratio + iwan.dissipation(x) / (kTwoPi * force * x), 1e-6))
+        << i;
     EXPECT_TRUE(Close(rows[i][1], std::sqrt(mu) * x, 1e-6)) << i;
     // What a ring-down shows: D / (2 pi x dE/dx), dE/dx = x (k0 + F'(x)) (energy form).
-    EXPECT_TRUE(
-        Close(rows[i][6], iwan.dissipation(x) / (kTwoPi * x * x * (k0 + iwan.tangent(x))), 1e-6))
+    EXPECT_TRUE(Close(rows[i][6],
+                      modal_ratio + iwan.dissipation(x) / (kTwoPi * x * x * (k0 + iwan.tangent(x))),
+                      1e-6))
         << i;
     if (i > 0) {
       EXPECT_GT(rows[i][1], rows[i - 1][1]);
@@ -128,6 +132,21 @@ TEST(ModelCommands, QsmaOfMassOnSpringWithIwanToGround) {
   const Outcome r = run("qsma sdof.toml --mode 1 --points 40 --out sdof.csv");
   EXPECT_EQ(r.status, 0) << r.err;
   expect_closed_form_csv(dir() / "sdof.csv", k0, m);
+}
+
+// [damping] modal_ratio: the closed form plus Z in both damping columns. Z = 3e-3 is of the
+// order of the joint damping over the curve (1e-4 .. 1e-1), so a column that missed it, or
+// counted it twice, is off by far more than the 1e-6 acceptance at every point.
+TEST(ModelCommands, QsmaAddsTheModalDampingRatioToEveryDampingColumn) {
+  const double m = 0.5, k0 = 1.0e6, z = 3.0e-3;
+  write("sdofz_M.mtx", "%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 0.5\n");
+  write("sdofz_K.mtx", "%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1.0e6\n");
+  write("sdofz.toml", "[matrices]\nmass = \"sdofz_M.mtx\"\nstiffness = \"sdofz_K.mtx\"\n" +
+                          kIwanTable + "\n[damping]\nmodal_ratio = 3.0e-3\n" +
+                          "\n[[joint]]\na = 0\nb = \"ground\"\nelement = \"iwan.rivet\"\n");
+  const Outcome r = run("qsma sdofz.toml --mode 1 --points 40 --out sdofz.csv");
+  EXPECT_EQ(r.status, 0) << r.err;
+  expect_closed_form_csv(dir() / "sdofz.csv", k0, m, z);
 }
 
 TEST(ModelCommands, QsmaOfTwoFreeMassesUsesTheReducedMass) {
@@ -216,6 +235,16 @@ TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
        "iwan.rivet: beta = -0.5 must be >= 0"},
       {"mass", model("singular.mtx", stiff, kIwanTable, joint),
        "matrices.mass: 'singular.mtx' is not positive definite"},
+      {"zeta_negative", model(mass, stiff, kIwanTable + "[damping]\nmodal_ratio = -1e-3\n", joint),
+       "bad_zeta_negative.toml:10: damping.modal_ratio = -0.001 must be a damping ratio"},
+      {"zeta_percent", model(mass, stiff, kIwanTable + "[damping]\nmodal_ratio = 5.0\n", joint),
+       "damping.modal_ratio = 5 must be a damping ratio, 0 <= Z < 1"},
+      {"zeta_nan", model(mass, stiff, kIwanTable + "[damping]\nmodal_ratio = nan\n", joint),
+       "damping.modal_ratio = nan must be a damping ratio"},
+      {"zeta_text", model(mass, stiff, kIwanTable + "[damping]\nmodal_ratio = \"low\"\n", joint),
+       "damping.modal_ratio must be a number"},
+      {"zeta_key", model(mass, stiff, kIwanTable + "[damping]\nratio = 0.01\n", joint),
+       "damping: unknown key 'ratio'"},
   };
   for (const Case& c : cases) {
     const std::string file = "bad_" + c.name + ".toml";

@@ -219,6 +219,10 @@ void validate_model(const Model& model, const std::string& source) {
     }
     if (!(j.stiffness > 0)) ctx.fail(0L, fmt::format("joint {}: stiffness must be > 0", i + 1));
   }
+  if (!std::isfinite(model.modal_ratio) || !(model.modal_ratio >= 0 && model.modal_ratio < 1)) {
+    ctx.fail(0L,
+             fmt::format("modal_ratio {} must be a damping ratio, 0 <= Z < 1", model.modal_ratio));
+  }
 }
 
 Model read_model(const fs::path& path) {
@@ -231,7 +235,7 @@ Model read_model(const fs::path& path) {
     ctx.fail(static_cast<long>(e.source().begin.line),
              fmt::format("TOML syntax: {}", e.description()));
   }
-  reject_unknown_keys(ctx, doc, "model file", {"matrices", "iwan", "spring", "joint"});
+  reject_unknown_keys(ctx, doc, "model file", {"matrices", "iwan", "spring", "damping", "joint"});
 
   // [matrices]
   const toml::table* mats = doc["matrices"].as_table();
@@ -322,6 +326,22 @@ Model read_model(const fs::path& path) {
         ctx.fail(value, fmt::format("{} = {} must be {}> 0", name, k,
                                     std::isfinite(k) ? "" : "a finite number "));
       springs.emplace(name, k);
+    }
+  }
+
+  // [damping]
+  if (const toml::node* node = doc.get("damping")) {
+    const toml::table* t = node->as_table();
+    if (!t) ctx.fail(*node, "damping must be a table ([damping] with modal_ratio)");
+    reject_unknown_keys(ctx, *t, "damping", {"modal_ratio"});
+    if (const toml::node* z = t->get("modal_ratio")) {
+      const double v = number(ctx, *z, "damping.modal_ratio");
+      if (!std::isfinite(v) || !(v >= 0 && v < 1)) {
+        ctx.fail(*z, fmt::format("damping.modal_ratio = {} must be a damping ratio, 0 <= Z < 1 "
+                                 "(a fraction, not percent)",
+                                 v));
+      }
+      model.modal_ratio = v;
     }
   }
 

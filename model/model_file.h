@@ -39,6 +39,10 @@ struct Model {
   Eigen::SparseMatrix<double> stiffness;  ///< K [N/m] without joints, symmetric
   std::vector<Joint> joints;              ///< every joint element
   std::vector<std::string> dof_labels;    ///< "node:component" per index, or empty
+  /// The structure's own linear (viscous) damping: the damping ratio Z of every elastic mode
+  /// ([damping] modal_ratio; 0 <= Z < 1, 0 when the file has none). It adds to the joints'
+  /// damping in every QSMA damping column (method.md section 2, point 4).
+  double modal_ratio = 0;
 
   /// Number of matrix DOFs.
   Eigen::Index size() const { return mass.rows(); }

@@ -110,6 +110,9 @@ std::string model_file_text(const Model& model, const std::string& mass_path,
       t += fmt::format("{} = {}\n", key(suffix(name, "spring.")), toml_float(j->stiffness));
     }
   }
+  if (model.modal_ratio != 0) {
+    t += fmt::format("\n[damping]\nmodal_ratio = {}\n", toml_float(model.modal_ratio));
+  }
   for (size_t i = 0; i < model.joints.size(); ++i) {
     const Joint& j = model.joints[i];
     const std::string note =

@@ -66,6 +66,7 @@ void expect_same(const Model& r, const Model& m) {
     }
   }
   EXPECT_EQ(r.dof_labels, m.dof_labels);
+  EXPECT_EQ(r.modal_ratio, m.modal_ratio);  // exact round trip
 }
 
 TEST(ModelFileWriter, RoundTripsWithMatricesWrittenBeside) {
@@ -77,6 +78,22 @@ TEST(ModelFileWriter, RoundTripsWithMatricesWrittenBeside) {
     EXPECT_EQ(fs::exists(d / "dof_labels.csv"), labels);
     expect_same(read_model(d / "model.toml"), m);
   }
+}
+
+// The structure's own damping ([damping] modal_ratio) is written back exactly; a model without
+// it gets no [damping] table (and reads back 0).
+TEST(ModelFileWriter, RoundTripsTheModalDampingRatio) {
+  const fs::path d = fresh("damping");
+  Model m = three_dofs(false);
+  m.modal_ratio = 6.7e-4 / 3;
+  write_model_file(d / "model.toml", m);
+  EXPECT_NE(jointlab::testing::read_file(d / "model.toml").find("[damping]\nmodal_ratio = "),
+            std::string::npos);
+  expect_same(read_model(d / "model.toml"), m);
+  m.modal_ratio = 0;
+  write_model_file(d / "model.toml", m);
+  EXPECT_EQ(jointlab::testing::read_file(d / "model.toml").find("[damping]"), std::string::npos);
+  expect_same(read_model(d / "model.toml"), m);
 }
 
 TEST(ModelFileWriter, ReferencesExistingMatricesByRelativePath) {

@@ -564,6 +564,12 @@ QsmaPoint qsma_point_with_tangent(const JointCondensation& m, const QsmaMode& mo
   const double dq = (1 + p.dot(dh.cwiseProduct(t))) / omega2;
   const double dE = alpha + t.dot(h - r.cwiseProduct(dh)) / dq;
   pt.ringdown_damping_ratio = d / (kTwoPi * q * dE);
+  // The structure's own damping Z adds to each (method.md section 2 point 4): a viscous modal
+  // damping dissipates 2 pi Z q dE/dq per cycle, so to first order every ratio gains Z.
+  const double z = m.linear_damping();
+  pt.damping_ratio += z;
+  pt.ringdown_damping_ratio += z;
+  pt.harmonic_damping_ratio += z;
   return pt;
 }
 

@@ -33,6 +33,10 @@
 //   ringdown_frequency_hz = omega_1 / (2 pi) (the damping is too light to shift it), and
 //     harmonic_damping_ratio = D / (2 pi omega_1^2 q^2) = D / (2 pi k_1 q^2),
 //   k_1 = omega_1^2 the first-harmonic modal stiffness (unit modal mass).
+// The structure's own damping (Model::modal_ratio Z, JointCondensation::linear_damping()) adds
+// to each damping column: a viscous modal damping loses 2 pi Z q dE/dq per cycle, so to first
+// order damping_ratio, ringdown_damping_ratio and harmonic_damping_ratio each gain Z
+// (method.md section 2 point 4); frequencies are left alone (Z^2 shifts below 1e-6 here).
 // For one mass on a spring k0 with an Iwan element these are exactly (k0 + k_1)/m,
 // D / (2 pi x^2 (k0 + F'(x))) and D / (2 pi (k0 + k_1) x^2) (model/qsma_test.cc).
 //

@@ -569,7 +569,8 @@ TEST(RunCli, RunAndUpdateIwanGiveTheSameParameters) {
     std::getline(ls, value, ',');
     final[name] = std::stod(value);
   }
-  ASSERT_EQ(final.size(), 4u);
+  ASSERT_EQ(final.size(), 5u);  // Fs, Kt, chi, beta and gamma = Kt / Ks
+  EXPECT_TRUE(testing::Close(final["gamma"], r.Kt / step.summary.reference_stiffness, 1e-9));
   EXPECT_TRUE(testing::Close(final["Fs"], r.Fs, 1e-9)) << final["Fs"] << " vs " << r.Fs;
   EXPECT_TRUE(testing::Close(final["Kt"], r.Kt, 1e-9)) << final["Kt"] << " vs " << r.Kt;
   EXPECT_TRUE(testing::Close(final["chi"], r.chi, 1e-9)) << final["chi"] << " vs " << r.chi;

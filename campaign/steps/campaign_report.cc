@@ -330,6 +330,10 @@ ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Trut
     row(set + " chi", p0.chi, p1.chi, truth.iwan.chi, iwan_ran);
     row(set + " beta", p0.beta, p1.beta, truth.iwan.beta, iwan_ran);
     if (iwan_ran && r.iwan.beta_held) pt.rows.back()[2] += " (held)";
+    if (iwan_ran && r.iwan.summary.modal_ratio_fitted) {
+      row("modal_ratio (own damping)", r.iwan.summary.modal_ratio_start, r.iwan.summary.modal_ratio,
+          0, true);
+    }
   }
   for (const std::string& name : c.linear_update.sets) {
     if (name.rfind("spring.", 0) != 0) continue;

@@ -27,6 +27,15 @@ correlate::IwanComparison comparison(const UpdateSettings& in, const std::string
   in.fail(key, s, fmt::format("must be \"matched\" or \"secant\", not \"{}\"", v));
 }
 
+// [update.iwan] linear_damping: "hold" (the model's [damping] modal_ratio) or "fit".
+bool fit_linear_damping(const UpdateSettings& in, const std::string& key,
+                        const CampaignSetting& s) {
+  const std::string& v = in.text(key, s);
+  if (v == "hold") return false;
+  if (v == "fit") return true;
+  in.fail(key, s, fmt::format("must be \"hold\" or \"fit\", not \"{}\"", v));
+}
+
 }  // namespace
 
 void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOptions& to) {
@@ -52,10 +61,14 @@ void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOpt
       to.max_slip_share = in.number(key, s);
     else if (key == "compare")
       io.comparison = comparison(in, key, s);
+    else if (key == "linear_damping")
+      io.fit_linear_damping = fit_linear_damping(in, key, s);
+    else if (key == "linear_damping_max")
+      io.linear_damping_max = in.number(key, s);
     else
       in.unknown(key, s,
                  "gamma, beta, max_evaluations, samples, local_starts, seed, "
-                 "max_slip_share, compare");
+                 "max_slip_share, compare, linear_damping, linear_damping_max");
   }
   if (const std::string e = io.error(); !e.empty())
     throw InputError(where(c.file.string(), 0, "update.iwan: " + e));
@@ -186,7 +199,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   step.summary = fit_iwan(objective, io, say);
   step.beta_held = step.summary.microslip_only() || io.fixed_beta.has_value();
   step.curves = static_cast<int>(targets.curves());
-  step.updated = objective.apply(step.summary.best);
+  step.updated = objective.apply(step.summary.best, step.summary.modal_ratio);
   if (!c.truth.empty()) step.cost_known = objective.cost(read_truth(c.truth).iwan);
   // Each mode's backbone cost at the start and at the result, fitted or not: a mode the
   // one-mode QSMA cannot describe (its joints moved by another mode) stands out.

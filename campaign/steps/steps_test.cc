@@ -283,6 +283,27 @@ TEST_F(Steps, IwanUpdateFromTheTruth) {
 // The choice reaches the fit: from the truth, the ring-down hits' cost against the model's
 // ring-down pair (matched) and against its secant pair differ (measured: 319.5 against
 // 339.4), the matched one the lower, since the hits are ring-downs of that model.
+// `linear_damping`: "hold" by default, "fit" identifies the model's own damping as
+// update-iwan --linear-damping fit; anything else is refused at its line by name.
+TEST_F(Steps, IwanLinearDampingSetting) {
+  correlate::IwanUpdateOptions io;
+  IwanTargetOptions to;
+  iwan_update_options(*campaign_, io, to);
+  EXPECT_FALSE(io.fit_linear_damping);
+  Campaign fit = *campaign_;
+  fit.iwan_update.settings["linear_damping"] = CampaignSetting{std::string("fit"), 14};
+  fit.iwan_update.settings["linear_damping_max"] = CampaignSetting{0.01, 15};
+  iwan_update_options(fit, io, to);
+  EXPECT_TRUE(io.fit_linear_damping);
+  EXPECT_EQ(io.linear_damping_max, 0.01);
+  Campaign bad = *campaign_;
+  bad.iwan_update.settings["linear_damping"] = CampaignSetting{std::string("free"), 14};
+  EXPECT_NE(testing::input_error_of([&] {
+              iwan_update_options(bad, io, to);
+            }).find(":14: update.iwan.linear_damping must be \"hold\" or \"fit\", not \"free\""),
+            std::string::npos);
+}
+
 TEST_F(Steps, IwanCompareSetting) {
   correlate::IwanUpdateOptions io;
   IwanTargetOptions to;

@@ -1,0 +1,106 @@
+#include "jointlab/data/backbone_table.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <string_view>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
+
+namespace jointlab::data {
+
+namespace fs = std::filesystem;
+
+BackboneTable read_backbone_table(const fs::path& path) {
+  const std::string file = path.string();
+  const auto text = read_text_file(path);
+  if (!text) throw InputError(where(file, 0, "cannot open the backbone table"));
+  TextLines lines(strip_bom(*text));
+  const std::string_view header = read_preamble(lines, file, [](const auto&, const auto&) {});
+  const long header_line = lines.line_no();
+  const char delim = detect_delimiter(header);
+  CsvLineSplitter splitter(delim);
+  // Columns: the three required, then the two optional uncertainties.
+  static constexpr std::array<const char*, 5> kNames = {
+      "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz", "damping_std"};
+  std::array<int, 5> col;
+  col.fill(-1);
+  const std::vector<std::string> fields = splitter.split(header);
+  for (size_t i = 0; i < fields.size(); ++i) {
+    const std::string name = split_name_unit(fields[i], file, header_line).first;
+    for (size_t k = 0; k < kNames.size(); ++k) {
+      if (name != kNames[k]) continue;
+      if (col[k] >= 0) {
+        throw InputError(where(file, header_line, fmt::format("column '{}' appears twice", name)));
+      }
+      col[k] = static_cast<int>(i);
+    }
+  }
+  for (size_t k = 0; k < 3; ++k) {
+    if (col[k] < 0) {
+      throw InputError(
+          where(file, header_line,
+                fmt::format("no column '{}': a backbone table has the header "
+                            "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]",
+                            kNames[k])));
+    }
+  }
+  if ((col[3] < 0) != (col[4] < 0)) {
+    throw InputError(
+        where(file, header_line, "give both frequency_std_hz and damping_std, or neither"));
+  }
+  const size_t needed = static_cast<size_t>(*std::max_element(col.begin(), col.end())) + 1;
+  std::array<std::vector<double>, 5> values;
+  std::vector<std::string> cells;
+  std::string_view line;
+  while (lines.next(line)) {
+    const std::string_view trimmed =
+        line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
+    if (trimmed.empty() || trimmed.front() == '#') continue;
+    if (!splitter.split(line, cells)) continue;
+    const long n = lines.line_no();
+    if (cells.size() < needed) {
+      throw InputError(where(
+          file, n, fmt::format("{} cells, the header needs at least {}", cells.size(), needed)));
+    }
+    for (size_t k = 0; k < kNames.size(); ++k) {
+      if (col[k] < 0) continue;
+      const std::string& cell = cells[static_cast<size_t>(col[k])];
+      const auto v = parse_double(cell);
+      const bool uncertainty = k >= 3;
+      if (!v || !std::isfinite(*v) || (uncertainty ? !(*v >= 0) : !(*v > 0))) {
+        throw InputError(where(file, n,
+                               fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,
+                                           uncertainty ? ">= 0" : "> 0")));
+      }
+      values[k].push_back(*v);
+    }
+  }
+  const size_t points = values[0].size();
+  if (points < 2) {
+    throw InputError(where(
+        file, 0, fmt::format("a backbone needs at least two points, the table has {}", points)));
+  }
+  std::vector<size_t> order(points);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return values[0][a] < values[0][b]; });
+  BackboneTable t;
+  t.source = file;
+  Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
+                            &t.damping_std};
+  for (size_t k = 0; k < kNames.size(); ++k) {
+    out[k]->setZero(static_cast<Eigen::Index>(points));
+    if (values[k].empty()) continue;
+    for (size_t i = 0; i < points; ++i)
+      (*out[k])(static_cast<Eigen::Index>(i)) = values[k][order[i]];
+  }
+  return t;
+}
+
+}  // namespace jointlab::data

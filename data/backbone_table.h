@@ -1,0 +1,37 @@
+// A measured backbone as a plain table, from any source (docs/update-iwan.md, "--backbone"):
+// one curve (one hit or test) per file, a lab's own tool, a script or a paper's table.
+//
+// CSV (comma, semicolon or tab; optional "# key: value" lines and blank lines before the header):
+//     amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]
+// further columns ignored, columns in any order, a header field may carry a unit in brackets
+// ("amplitude [m/s]": the unit is not converted, the amplitude is SI of the quantity the caller
+// names). Rows in any order; the table returned has them by increasing amplitude. Every
+// amplitude, frequency [Hz] and damping ratio (a fraction) must be finite and > 0; the
+// uncertainties, when present, finite and >= 0 (0: the caller's floor). Any defect is an
+// InputError "file:line: what" naming the column.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <Eigen/Core>
+
+namespace jointlab::data {
+
+/// One backbone curve, amplitude increasing.
+struct BackboneTable {
+  std::string source;                ///< the file it was read from
+  Eigen::VectorXd amplitude;         ///< a_j, > 0 (SI of the quantity named by the caller)
+  Eigen::VectorXd frequency_hz;      ///< f_j [Hz], > 0
+  Eigen::VectorXd damping_ratio;     ///< zeta_j, > 0
+  Eigen::VectorXd frequency_std_hz;  ///< sigma_f,j [Hz] >= 0 (all 0 without the column)
+  Eigen::VectorXd damping_std;       ///< sigma_z,j >= 0 (all 0 without the column)
+  /// Number of points.
+  Eigen::Index size() const { return amplitude.size(); }
+};
+
+/// Reads a backbone table; InputError "file:line: what" on any defect (above), and when the
+/// file holds fewer than two points.
+BackboneTable read_backbone_table(const std::filesystem::path& path);
+
+}  // namespace jointlab::data
