@@ -325,6 +325,63 @@ std::vector<std::optional<double>> IwanObjective::linear_errors(
   return out;
 }
 
+std::vector<std::vector<std::optional<double>>> IwanObjective::linear_errors_along(
+    const std::vector<double>& gammas) const {
+  const size_t m = static_cast<size_t>(linear_modes_.frequency_hz.size());
+  std::vector<std::vector<std::optional<double>>> out(gammas.size());
+  if (m == 0) return out;
+  const StiffnessSets sets(*model_, {set_});
+  const double k0 = sets.initial()(0);
+  PairingRules rules;
+  rules.mac_threshold = linear_mac_;
+  const Eigen::VectorXd theta0 = Eigen::VectorXd::Constant(1, k0);
+  const LinearEvaluation at0 =
+      evaluate_linear(sets, *model_, sensors_, linear_modes_, theta0, rules);
+  std::vector<int> columns(m, -1);
+  for (const ModePair& q : at0.pairing.pairs) columns[static_cast<size_t>(q.measured)] = q.model;
+  const ElasticModes modes0 = elastic_modes(model_->mass, sets.stiffness(theta0));
+  // Walk up from gamma = 1 through the larger gammas in ascending order, then down through the
+  // smaller ones in descending order.
+  std::vector<size_t> order(gammas.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return gammas[a] < gammas[b]; });
+  auto walk = [&](const std::vector<size_t>& along) {
+    ElasticModes now = modes0;
+    std::vector<int> cols = columns;
+    double g_now = 1.0;
+    for (size_t i : along) {
+      const double g = gammas[i];
+      const double a = std::log(g_now), b = std::log(g);
+      TrackingOptions t;
+      t.substeps = std::max(1, static_cast<int>(std::ceil(std::abs(b - a) / 0.05)));
+      const auto path = [&](double s) {
+        return sets.stiffness(Eigen::VectorXd::Constant(1, k0 * std::exp(a + s * (b - a))));
+      };
+      std::optional<FollowedModes> f;
+      try {
+        f = follow_path(path, model_->mass, now, cols, t);
+      } catch (const InputError&) {
+      }
+      if (!f) return;  // lost: this gamma and those beyond have no followed pairs
+      now = std::move(f->modes);
+      cols = std::move(f->columns);
+      g_now = g;
+      const LinearEvaluation e = evaluate_pairs(sets, sensors_, linear_modes_,
+                                                Eigen::VectorXd::Constant(1, k0 * g), now, cols);
+      out[i].resize(m);
+      for (const ModePair& q : e.pairing.pairs)
+        out[i][static_cast<size_t>(q.measured)] = e.residuals(q.measured);
+    }
+  };
+  std::vector<size_t> up, down;
+  for (size_t i : order) (gammas[i] >= 1.0 ? up : down).push_back(i);
+  std::reverse(down.begin(), down.end());
+  walk(up);
+  walk(down);
+  for (auto& v : out) v.resize(m);
+  return out;
+}
+
 namespace {
 
 // The search vector v = (F_S, gamma, chi, beta).
@@ -977,9 +1034,19 @@ std::vector<ParetoPoint> pareto_front(const IwanObjective& objective,
           g, g * objective.reference_stiffness()));
     }
     p.linear_error = s.linear_error;
-    p.mode_errors = objective.linear_errors(p.params);
     p.backbone_cost = s.final_cost;
     out.push_back(p);
+  }
+  // Every measured linear mode's error, its pair followed by shape along the gammas; the
+  // linear error of a point is the largest of them when there are any.
+  const std::vector<std::vector<std::optional<double>>> along =
+      objective.linear_errors_along(gammas);
+  for (size_t i = 0; i < out.size(); ++i) {
+    out[i].mode_errors = along[i];
+    double largest = -1;
+    for (const std::optional<double>& e : along[i])
+      if (e) largest = std::max(largest, std::abs(*e));
+    if (largest >= 0) out[i].linear_error = largest;
   }
   for (ParetoPoint& a : out) {
     for (const ParetoPoint& b : out) {

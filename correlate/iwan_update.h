@@ -183,6 +183,12 @@ class IwanObjective {
   /// (f_model - f_exp) / f_exp of every measured linear mode at p, MAC-paired (empty:
   /// unpaired); empty without set_linear_modes().
   std::vector<std::optional<double>> linear_errors(const model::IwanParameters& p) const;
+  /// linear_errors() at K_T = gamma K_s for each gamma, the pairs made by the pairing rules at
+  /// gamma = 1 (the model as given) and followed from there by their full shapes along the
+  /// gammas (mode_tracking.h), as the linear update follows them; empty entries: unpaired or
+  /// not followed. Only K_T moves the linear modes, so F_S, chi and beta do not enter.
+  std::vector<std::vector<std::optional<double>>> linear_errors_along(
+      const std::vector<double>& gammas) const;
   /// QSMA evaluations so far.
   int evaluations() const { return evaluations_; }
   /// A copy of the model with the set at p (the model's own damping unchanged).
@@ -296,10 +302,12 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
 struct ParetoPoint {
   double gamma = 0;              ///< K_T / K_s held
   model::IwanParameters params;  ///< the best parameters at this gamma
-  double linear_error = 0;       ///< relative linear-frequency error
+  double linear_error = 0;       ///< largest |relative linear-frequency error| over every
+                                 ///< paired measured linear mode (else the fitted modes')
   double backbone_cost = 0;      ///< the backbone cost
   /// Linear-frequency error of every measured linear mode (IwanObjective::set_linear_modes),
-  /// (f_model - f_exp) / f_exp of its MAC-paired model mode; empty entries: unpaired.
+  /// (f_model - f_exp) / f_exp of its paired model mode, followed by shape along the gammas
+  /// (IwanObjective::linear_errors_along); empty entries: unpaired or not followed.
   std::vector<std::optional<double>> mode_errors;
   bool dominated = false;  ///< another point is better in both
 };
