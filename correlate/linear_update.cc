@@ -716,6 +716,112 @@ std::string pair_text(const LinearEvaluation& e, int i) {
                      e.mac(i, j));
 }
 
+// The pairings to try where the rules pair `at` (made afresh at `point`) ambiguously: one per
+// candidate of the ambiguous measured mode (a swap keeps the pairs one to one); else `point`.
+std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point,
+                                             const LinearEvaluation& at) {
+  if (at.ambiguity.empty()) return {point};
+  std::vector<TrackedPoint> out;
+  const size_t i = static_cast<size_t>(at.ambiguous_measured);
+  for (int c : at.ambiguous_candidates) {
+    TrackedPoint t = point;
+    for (int& col : t.columns)
+      if (col == c) col = point.columns[i];
+    t.columns[i] = c;
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// The outcome of settle().
+struct Settled {
+  TrackedPoint point;
+  LinearUpdateSummary record;  // history, iterations, warnings
+  LinearUpdateStatus status = LinearUpdateStatus::kFailed;
+  double cost = 0;
+  int rounds = 0;
+  std::string ambiguity;  // non-empty: the pairs cannot be decided
+  LinearEvaluation fresh_end;
+};
+
+// Least squares with pairs followed by shape from `point`. At its result the pairs are made
+// afresh by the rules; where they differ, or where the sensors cannot tell two candidates
+// apart (a twisting mode veering with a bending mode), each candidate pairing is fitted too
+// and the data decide: the lowest cost wins when it is lower by at least 9 (3 sigma) in
+// chi-square units, 2 (c_other - c_best) / sigma_f^2; otherwise the pairs cannot be decided.
+Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<char>& held) {
+  Settled out;
+  const MeasuredModes& measured = p.measured;
+  std::vector<std::vector<int>> tried{point.columns};
+  out.status = status_of(fit(p, point, held, &out.record));
+  out.rounds = 1;
+  for (int check = 0; check < 4; ++check) {
+    TrackedPoint again = p.fresh(point.x, &out.fresh_end);
+    const LinearEvaluation& fresh_end = out.fresh_end;
+    if (again.columns == point.columns && fresh_end.ambiguity.empty()) break;
+    std::vector<TrackedPoint> candidates;
+    for (TrackedPoint& c : candidate_pairings(again, fresh_end)) {
+      if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) continue;
+      tried.push_back(c.columns);
+      candidates.push_back(std::move(c));
+    }
+    const double c0 = p.evaluate(point).cost();
+    double best = c0, runner = INFINITY;
+    std::optional<TrackedPoint> winner;
+    std::vector<std::string> costs{fmt::format("{:.4g} as followed", c0)};
+    for (TrackedPoint& c : candidates) {
+      LinearUpdateSummary scratch;
+      const ceres::TerminationType tt = fit(p, c, held, &scratch);
+      ++out.rounds;
+      const double cost = p.evaluate(c).cost();
+      costs.push_back(fmt::format("{:.4g} with the sensors' pairs", cost));
+      if (cost < best) {
+        runner = best;
+        best = cost;
+        winner = std::move(c);
+        out.status = status_of(tt);
+        out.record.history.insert(out.record.history.end(), scratch.history.begin(),
+                                  scratch.history.end());
+        out.record.theta_history.insert(out.record.theta_history.end(),
+                                        scratch.theta_history.begin(), scratch.theta_history.end());
+        out.record.iterations += scratch.iterations;
+      } else {
+        runner = std::min(runner, cost);
+      }
+    }
+    const double sf2 = p.options.frequency_std * p.options.frequency_std;
+    if (!(2 * (runner - best) / sf2 >= 9)) {
+      const LinearEvaluation followed = p.evaluate(winner ? *winner : point);
+      std::string why = fresh_end.ambiguity;
+      for (int i = 0; why.empty() && i < static_cast<int>(point.columns.size()); ++i) {
+        if (point.columns[i] == again.columns[i]) continue;
+        why = fmt::format(
+            "test mode {} ({:.5g} Hz) is followed by its shape to {}, but at the result the "
+            "sensors pair it with {}",
+            i + 1, measured.frequency_hz(i), pair_text(followed, i), pair_text(fresh_end, i));
+      }
+      out.ambiguity =
+          fmt::format("{}; fitting each pairing leaves costs {} that the data cannot tell apart",
+                      why, fmt::join(costs, ", "));
+      if (winner) point = std::move(*winner);
+      break;
+    }
+    if (!winner) {
+      // The pairs followed by shape fit decisively better than the sensors' own: kept, said.
+      out.record.warnings.push_back(fmt::format(
+          "at the result the sensors alone would pair differently ({}), but those pairs fit "
+          "worse (costs {}): kept the pairs followed by shape",
+          fresh_end.ambiguity.empty() ? "MAC and frequency" : fresh_end.ambiguity,
+          fmt::join(costs, ", ")));
+      break;
+    }
+    point = std::move(*winner);
+  }
+  out.point = std::move(point);
+  out.cost = p.evaluate(out.point).cost();
+  return out;
+}
+
 }  // namespace
 
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
@@ -754,101 +860,52 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   s.final = s.start;
   s.final_cost = s.initial_cost;
   s.final_mac = s.start.mac;
-  if (!s.start.ambiguity.empty()) {
-    s.status = LinearUpdateStatus::kAmbiguous;
-    s.ambiguity = "at the start, " + s.start.ambiguity;
-    return begin;
-  }
   if (s.start.pairing.pairs.empty()) {
     s.status = LinearUpdateStatus::kTooFewPairs;
     return begin;
   }
 
-  // Least squares with pairs followed by shape. At its result the pairs are made afresh by the
-  // rules; where they differ, or where the sensors cannot tell two candidates apart, each
-  // candidate pairing is fitted too and the data decide: the lowest cost wins when it is lower
-  // by at least 9 (3 sigma) in chi-square units, 2 (c_other - c_best) / sigma_f^2; otherwise
-  // the pairs cannot be decided and the update stops saying which.
-  LinearEvaluation fresh_end;
-  std::vector<std::vector<int>> tried{point.columns};
-  s.status = status_of(fit(p, point, held, &s));
-  s.rounds = 1;
-  for (int check = 0; check < 4; ++check) {
-    TrackedPoint again = p.fresh(point.x, &fresh_end);
-    if (again.columns == point.columns && fresh_end.ambiguity.empty()) break;
-    std::vector<TrackedPoint> candidates;
-    auto add = [&](TrackedPoint c) {
-      if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) return;
-      tried.push_back(c.columns);
-      candidates.push_back(std::move(c));
-    };
-    if (fresh_end.ambiguity.empty()) {
-      add(again);
-    } else {
-      const int i = fresh_end.ambiguous_measured;
-      for (int c : fresh_end.ambiguous_candidates) {
-        TrackedPoint t = again;
-        for (int& col : t.columns)
-          if (col == c) col = again.columns[static_cast<size_t>(i)];  // a swap keeps 1:1
-        t.columns[static_cast<size_t>(i)] = c;
-        add(std::move(t));
-      }
-    }
-    const double c0 = p.evaluate(point).cost();
-    double best = c0, runner = INFINITY;
-    std::optional<TrackedPoint> winner;
-    std::vector<std::string> costs{fmt::format("{:.4g} as followed", c0)};
-    for (TrackedPoint& c : candidates) {
-      LinearUpdateSummary scratch;
-      const ceres::TerminationType tt = fit(p, c, held, &scratch);
-      ++s.rounds;
-      const double cost = p.evaluate(c).cost();
-      costs.push_back(fmt::format("{:.4g} with the sensors' pairs", cost));
-      if (cost < best) {
-        runner = best;
-        best = cost;
-        winner = std::move(c);
-        s.status = status_of(tt);
-        s.history.insert(s.history.end(), scratch.history.begin(), scratch.history.end());
-        s.theta_history.insert(s.theta_history.end(), scratch.theta_history.begin(),
-                               scratch.theta_history.end());
-        s.iterations += scratch.iterations;
-      } else {
-        runner = std::min(runner, cost);
-      }
-    }
-    const double sf2 = options.frequency_std * options.frequency_std;
-    const bool decided = 2 * (runner - best) / sf2 >= 9;
-    if (!decided) {
-      const LinearEvaluation followed = p.evaluate(winner ? *winner : point);
-      std::string why = fresh_end.ambiguity;
-      for (int i = 0; why.empty() && i < static_cast<int>(point.columns.size()); ++i) {
-        if (point.columns[i] == again.columns[i]) continue;
-        why = fmt::format(
-            "test mode {} ({:.5g} Hz) is followed by its shape to {}, but at the result the "
-            "sensors pair it with {}",
-            i + 1, measured.frequency_hz(i), pair_text(followed, i), pair_text(fresh_end, i));
-      }
-      s.status = LinearUpdateStatus::kAmbiguous;
-      s.ambiguity =
-          fmt::format("{}; fitting each pairing leaves costs {} that the data cannot tell apart",
-                      why, fmt::join(costs, ", "));
-      s.final = followed;
-      s.final_cost = followed.cost();
-      s.final_mac = followed.mac;
-      return (winner ? winner->x : point.x).array().exp();
-    }
-    if (!winner) {
-      // The pairs followed by shape fit decisively better than the sensors' own: kept, said.
-      s.warnings.push_back(fmt::format(
-          "at the result the sensors alone would pair differently ({}), but those pairs fit "
-          "worse (costs {}): kept the pairs followed by shape",
-          fresh_end.ambiguity.empty() ? "MAC and frequency" : fresh_end.ambiguity,
-          fmt::join(costs, ", ")));
-      break;
-    }
-    point = std::move(*winner);
+  // Least squares with pairs followed by shape (settle(), below), from the start's pairs; when
+  // the sensors cannot tell two candidates apart at the start, from each candidate pairing,
+  // and the data decide between the results as they do at a result.
+  const double sf2 = options.frequency_std * options.frequency_std;
+  std::vector<Settled> outcomes;
+  for (TrackedPoint& c : candidate_pairings(point, s.start)) outcomes.push_back(settle(p, c, held));
+  size_t win = 0;
+  for (size_t k = 1; k < outcomes.size(); ++k)
+    if (outcomes[k].cost < outcomes[win].cost) win = k;
+  std::vector<std::string> start_costs;
+  bool decided = true;
+  for (size_t k = 0; k < outcomes.size(); ++k) {
+    start_costs.push_back(fmt::format("{:.4g}", outcomes[k].cost));
+    if (k != win && outcomes[k].point.columns != outcomes[win].point.columns &&
+        2 * (outcomes[k].cost - outcomes[win].cost) / sf2 < 9)
+      decided = false;
   }
+  Settled& o = outcomes[win];
+  s.status = o.status;
+  s.iterations = o.record.iterations;
+  s.history.insert(s.history.end(), o.record.history.begin(), o.record.history.end());
+  s.theta_history.insert(s.theta_history.end(), o.record.theta_history.begin(),
+                         o.record.theta_history.end());
+  s.warnings = o.record.warnings;
+  s.rounds = o.rounds;
+  point = o.point;
+  if (!decided && o.ambiguity.empty())
+    o.ambiguity = fmt::format(
+        "at the start, {}; fitting each candidate pairing leaves costs {} that the data cannot "
+        "tell apart",
+        s.start.ambiguity, fmt::join(start_costs, ", "));
+  if (!o.ambiguity.empty()) {
+    s.status = LinearUpdateStatus::kAmbiguous;
+    s.ambiguity = o.ambiguity;
+    s.final = p.evaluate(point);
+    s.final_cost = s.final.cost();
+    s.final_mac = s.final.mac;
+    return point.x.array().exp();
+  }
+  LinearEvaluation fresh_end = std::move(o.fresh_end);
+
   // Flat sets are not identified by the frequencies: held (at their start) and the rest fitted
   // again.
   report_sensitivity(p, p.evaluate(point), s);

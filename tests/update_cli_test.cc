@@ -262,21 +262,31 @@ std::vector<std::vector<std::string>> read_csv_cells(const fs::path& path) {
 // The paper's rule from the command line, and the same update from a plain modes table made
 // from the process run: the table carries the run's frequencies and its shapes made real
 // (the run's complex scaling divided out), so the two updates must agree to solver precision.
-// Pairs that cannot be decided, and shapes that cannot pair, stop the command with one line.
-// One sensor per chain sees every mode of a chain alike (MAC 1 with each); a test mode at
-// 236.8 Hz, the geometric mean of chain A's 201.9 and 277.9 Hz modes, is as close to both in
-// frequency: exit 2 naming the modes. An all-zero shape is refused naming its mode.
-TEST(UpdateCli, UndecidablePairsAndZeroShapesAreRefusedWithOneLine) {
+// Pairs that cannot be decided, and shapes that cannot pair, stop the command with exit 2.
+// One sensor per chain (a0, b0) and a test shape [1, 1]: MAC 0.5 with every mode of either
+// chain (threshold 0.4 here). At 58.856 Hz, the geometric mean of chain A's first mode (57.898
+// Hz) and chain B's (59.830 Hz), frequency cannot tell them apart either, and ka can bring the
+// one, kb the other, exactly onto it: both pairings fit to a cost of about 0, the data cannot
+// decide, and the command says so in its last line after its progress lines. An all-zero shape
+// is refused before any work, with one line naming its mode.
+TEST(UpdateCli, UndecidablePairsAndZeroShapesAreRefused) {
   const fs::path dir = testing::scratch_dir("update_linear_undecidable");
   const std::string model = write_model(dir, correlate::two_chain_structure(), "model.toml");
   std::ofstream(dir / "sensors.csv") << "channel,dof\na0,0\nb0,6\n";
-  std::ofstream(dir / "tie.csv") << "mode,frequency_hz,a0,b0\n1,236.8,1,0\n";
-  const std::string common = fmt::format("--sensors {} --set spring.ka --out {}",
+  std::ofstream(dir / "tie.csv") << "mode,frequency_hz,a0,b0\n1,58.856,1,1\n";
+  const std::string common = fmt::format("--sensors {} --set spring.ka --set spring.kb --out {}",
                                          (dir / "sensors.csv").string(), (dir / "out").string());
-  expect_one_line_error(fmt::format("update-linear {} --modes-table {} {}", model,
-                                    (dir / "tie.csv").string(), common),
-                        "the pairs cannot be decided: at the start, test mode 1 (236.8 Hz): model "
-                        "modes");
+  const testing::CommandResult r =
+      testing::run_jointlab(fmt::format("update-linear {} --modes-table {} {} --mac-threshold 0.4",
+                                        model, (dir / "tie.csv").string(), common));
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  const size_t last = r.err.rfind('\n', r.err.size() - 2);
+  const std::string last_line = r.err.substr(last == std::string::npos ? 0 : last + 1);
+  EXPECT_NE(last_line.find("the pairs cannot be decided: at the start, test mode 1 (58.856 Hz)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(last_line.find("that the data cannot tell apart"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
   std::ofstream(dir / "zero.csv") << "mode,frequency_hz,a0,b0\n1,57.9,1,0\n2,59.9,0,0\n";
   expect_one_line_error(fmt::format("update-linear {} --modes-table {} {}", model,
                                     (dir / "zero.csv").string(), common),
