@@ -759,12 +759,30 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
     TrackedPoint again = p.fresh(point.x, &out.fresh_end);
     const LinearEvaluation& fresh_end = out.fresh_end;
     if (again.columns == point.columns && fresh_end.ambiguity.empty()) break;
+    // A pairing that leaves a followed mode unpaired would win on cost by dropping a residual:
+    // it is not a candidate; the weak pair is said instead.
+    const auto pairs_of = [](const TrackedPoint& t) {
+      return std::count_if(t.columns.begin(), t.columns.end(), [](int c) { return c >= 0; });
+    };
     std::vector<TrackedPoint> candidates;
     for (TrackedPoint& c : candidate_pairings(again, fresh_end)) {
       if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) continue;
       tried.push_back(c.columns);
+      if (pairs_of(c) < pairs_of(point)) {
+        const LinearEvaluation followed = p.evaluate(point);
+        for (size_t i = 0; i < c.columns.size(); ++i) {
+          if (c.columns[i] >= 0 || point.columns[i] < 0) continue;
+          out.record.warnings.push_back(fmt::format(
+              "test mode {} ({:.5g} Hz) is followed by its shape to {}, below the MAC threshold "
+              "at the result: check its measured shape",
+              i + 1, measured.frequency_hz(static_cast<Eigen::Index>(i)),
+              pair_text(followed, static_cast<int>(i))));
+        }
+        continue;
+      }
       candidates.push_back(std::move(c));
     }
+    if (candidates.empty() && fresh_end.ambiguity.empty()) break;
     const double c0 = p.evaluate(point).cost();
     double best = c0, runner = INFINITY;
     std::optional<TrackedPoint> winner;
