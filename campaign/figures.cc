@@ -497,7 +497,7 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
   // Room on the left for the longest row label ("test 1 (127.9 Hz)").
   size_t longest = 0;
   for (const std::string& r : rows) longest = std::max(longest, r.size());
-  const double left = std::clamp(0.04 + 0.0115 * static_cast<double>(longest), 0.22, 0.40);
+  const double left = std::clamp(0.05 + 0.012 * static_cast<double>(longest), 0.22, 0.40);
   Plot plot(file, size);
   plvpor(left, 0.92, 0.16, 0.86);
   plwind(0, static_cast<PLFLT>(nc), 0, static_cast<PLFLT>(nr));
@@ -538,7 +538,7 @@ void plot_mac(const Eigen::Ref<const Eigen::MatrixXd>& mac, const std::vector<st
     plmtex("lv", 1.0, 1.0 - (i + 0.5) / static_cast<double>(nr), 1.0, rows[i].c_str());
   plschr(0, 1.15);
   plmtex("b", stagger ? 4.0 : 3.2, 0.5, 0.5, "model mode");
-  plmtex("l", std::max(8.0, 0.62 * static_cast<double>(longest) + 2.0), 0.5, 0.5, "measured mode");
+  plmtex("l", std::max(8.0, 0.45 * static_cast<double>(longest) + 1.5), 0.5, 0.5, "measured mode");
   plmtex("t", 2.4, 0.5, 0.5, title.c_str());
   plschr(0, 0.9);
   plmtex("t", 0.8, 0.5, 0.5,
