@@ -16,27 +16,31 @@ std::string backbone_file_name(const std::string& source, const std::string& cha
          data::file_name_part(channel) + ".band" + std::to_string(band) + ".csv";
 }
 
+data::Table backbone_table(const Backbone& b, const RingdownOptions& options) {
+  data::Table t;
+  t.add("time_s", b.time_s);
+  t.add("amplitude", b.amplitude);
+  t.add("frequency_hz", b.frequency_hz);
+  t.add("damping_ratio", b.damping);
+  t.add("frequency_std_hz", b.frequency_std_hz);
+  t.add("damping_std", b.damping_std);
+  t.add("damped_frequency_hz", b.damped_frequency_hz);
+  t.add("decay_rate_1_per_s", b.decay_rate);
+  t.add("displacement_m", b.displacement);
+  t.add("snr", b.snr);
+  t.add("window_s", b.window_s);
+  t.add("harmonic", b.harmonic.cast<double>());
+  // The k of the *_std columns, named in the header row itself: a comment line above it
+  // would become the header of readers that take the first line (numpy, pandas).
+  t.add("coverage_factor", Eigen::VectorXd::Constant(b.size(), options.coverage_factor));
+  return t;
+}
+
 void write_backbones(const std::filesystem::path& dir, const RecordResult& result,
                      const RingdownOptions& options) {
   for (const ChannelBand& r : result.results) {
     if (r.ringdown.summary.status != RingdownStatus::kOk) continue;
-    const Backbone& b = r.ringdown.backbone;
-    data::Table t;
-    t.add("time_s", b.time_s);
-    t.add("amplitude", b.amplitude);
-    t.add("frequency_hz", b.frequency_hz);
-    t.add("damping_ratio", b.damping);
-    t.add("frequency_std_hz", b.frequency_std_hz);
-    t.add("damping_std", b.damping_std);
-    t.add("damped_frequency_hz", b.damped_frequency_hz);
-    t.add("decay_rate_1_per_s", b.decay_rate);
-    t.add("displacement_m", b.displacement);
-    t.add("snr", b.snr);
-    t.add("window_s", b.window_s);
-    t.add("harmonic", b.harmonic.cast<double>());
-    // The k of the *_std columns, named in the header row itself: a comment line above it
-    // would become the header of readers that take the first line (numpy, pandas).
-    t.add("coverage_factor", Eigen::VectorXd::Constant(b.size(), options.coverage_factor));
+    const data::Table t = backbone_table(r.ringdown.backbone, options);
     const std::string name = backbone_file_name(result.source, r.channel, r.band_index);
     if (name.size() > data::kMaxFileNameBytes) {
       throw InputError(fmt::format(

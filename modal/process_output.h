@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "jointlab/data/table_writer.h"
 #include "jointlab/modal/process.h"
 
 namespace jointlab::modal {
@@ -19,6 +20,9 @@ namespace jointlab::modal {
 /// Name of the backbone CSV of one channel and band: "<stem>.<channel>.band<k>.csv", stem and
 /// channel as data::file_name_part gives them (summary.json names the file the same).
 std::string backbone_file_name(const std::string& source, const std::string& channel, int band);
+
+/// The columns of one backbone CSV, named as in the file (the Python module returns them).
+data::Table backbone_table(const Backbone& backbone, const RingdownOptions& options);
 
 /// Writes the backbone CSVs of `result` into `dir` (no file for a channel-band without a span);
 /// InputError if a name would be longer than data::kMaxFileNameBytes.

@@ -6,7 +6,7 @@
 
 namespace jointlab::model {
 
-void write_qsma_csv(const std::filesystem::path& path, const std::vector<QsmaPoint>& curve) {
+data::Table qsma_table(const std::vector<QsmaPoint>& curve) {
   const auto n = static_cast<Eigen::Index>(curve.size());
   Eigen::VectorXd f(n), q(n), hz(n), zeta(n), slip(n), rd_hz(n), rd_zeta(n), h_zeta(n);
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -25,7 +25,11 @@ void write_qsma_csv(const std::filesystem::path& path, const std::vector<QsmaPoi
   table.add("ringdown_frequency_hz", rd_hz);
   table.add("ringdown_damping_ratio", rd_zeta);
   table.add("harmonic_damping_ratio", h_zeta);
-  data::write_table(path, table);
+  return table;
+}
+
+void write_qsma_csv(const std::filesystem::path& path, const std::vector<QsmaPoint>& curve) {
+  data::write_table(path, qsma_table(curve));
 }
 
 }  // namespace jointlab::model

@@ -11,6 +11,7 @@ packages=(
   libplplot-dev plplot-driver-cairo libgtest-dev libbenchmark-dev
   libboost-dev
   python3-scipy
+  pybind11-dev python3-pybind11 python3-numpy python3-pytest
   clang libclang-rt-14-dev
 )
 

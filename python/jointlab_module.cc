@@ -1,0 +1,306 @@
+// The `jointlab` Python module: the library's process, modes, QSMA and record reading with
+// numpy arrays in and out, the same options and defaults as the command line, and the command
+// line's one-line messages as jointlab.InputError (a ValueError). Argument conversion only: every
+// number comes from the library the program uses (style.md 13).
+#include <complex>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "jointlab/core/error.h"
+#include "jointlab/core/units.h"
+#include "jointlab/data/read_record.h"
+#include "jointlab/data/table_writer.h"
+#include "jointlab/modal/process.h"
+#include "jointlab/modal/process_output.h"
+#include "jointlab/model/joint_condensation.h"
+#include "jointlab/model/linear_modes.h"
+#include "jointlab/model/model_file.h"
+#include "jointlab/model/qsma.h"
+#include "jointlab/model/qsma_output.h"
+
+namespace py = pybind11;
+
+namespace jointlab::python {
+namespace {
+
+// A numpy array over the vector's own storage: the vector moves into a capsule that numpy
+// frees with the array, so nothing is copied.
+py::array_t<double> to_numpy(Eigen::VectorXd v) {
+  auto* owned = new Eigen::VectorXd(std::move(v));
+  py::capsule free(owned, [](void* p) { delete static_cast<Eigen::VectorXd*>(p); });
+  return py::array_t<double>(owned->size(), owned->data(), free);
+}
+
+// A table's columns as a dict of numpy arrays, named as the CSV's header.
+py::dict to_dict(data::Table table) {
+  py::dict out;
+  for (size_t i = 0; i < table.names.size(); ++i)
+    out[py::str(table.names[i])] = to_numpy(std::move(table.columns[i]));
+  return out;
+}
+
+// "acceleration", "velocity" or "displacement", as --quantity and --amplitude take them.
+Quantity motion(const std::string& option, const std::string& text) {
+  if (text == "acceleration") return Quantity::kAcceleration;
+  if (text == "velocity") return Quantity::kVelocity;
+  if (text == "displacement") return Quantity::kDisplacement;
+  throw InputError(fmt::format("{}={}: expected acceleration, velocity or displacement", option,
+                               text.empty() ? "''" : text));
+}
+
+// Progress to a Python callable (or nowhere): the GIL is taken for the call only, and a pending
+// Ctrl-C ends the work with KeyboardInterrupt.
+void report(const py::object& progress, const std::string& line) {
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  if (!progress.is_none()) progress(line);
+}
+
+/// One backbone of process(): its identity, linear values and columns (set as attributes).
+struct Backbone {
+  std::string file;                    // the record processed
+  std::string channel;                 // its channel
+  int band = 0;                        // 1-based band
+  double linear_frequency_hz = 0;      // natural frequency at zero amplitude [Hz]
+  double linear_damping_ratio = 0;     // damping ratio at zero amplitude
+  std::complex<double> complex_amplitude;  // operating-shape entry [m]
+  std::string report;                  // the summary paragraph of the band
+};
+
+py::list process(const std::vector<std::string>& files,
+                 const std::optional<std::vector<std::pair<double, double>>>& bands, int modes,
+                 const std::optional<std::vector<std::string>>& channels,
+                 const std::optional<std::string>& quantity, const std::string& amplitude,
+                 const py::object& progress) {
+  modal::ProcessOptions opt;
+  if (bands) {
+    for (const auto& [lo, hi] : *bands) {
+      if (!(std::isfinite(lo) && std::isfinite(hi) && lo > 0 && hi > lo))
+        throw InputError(fmt::format("--band {:g}:{:g}: need 0 < LO < HI (Hz)", lo, hi));
+      opt.bands.push_back({lo, hi});
+    }
+  }
+  opt.modes = modes;
+  if (channels) opt.channels = *channels;
+  if (quantity) opt.quantity = motion("quantity", *quantity);
+  opt.ringdown.amplitude = motion("amplitude", amplitude);
+  if (std::string why = opt.check(); !why.empty()) throw InputError(why);
+  if (files.empty()) throw InputError("process: no file given");
+  std::vector<modal::RecordResult> results;
+  {
+    py::gil_scoped_release release;
+    signal::FftCache cache;
+    for (const std::string& f : files) {
+      report(progress, fmt::format("process: {}", f));
+      const data::Record rec = data::read_record(f);
+      results.push_back(modal::process_record(rec, opt, cache));
+    }
+  }
+  py::list out;
+  for (const modal::RecordResult& r : results) {
+    for (const modal::ChannelBand& c : r.results) {
+      if (c.ringdown.summary.status != modal::RingdownStatus::kOk) continue;
+      const modal::RingdownSummary& s = c.ringdown.summary;
+      py::object b = py::cast(Backbone{r.source, c.channel, c.band_index, s.linear_frequency_hz,
+                                       s.linear_damping, c.complex_amplitude, s.report()});
+      py::dict columns = to_dict(modal::backbone_table(c.ringdown.backbone, opt.ringdown));
+      for (auto item : columns) b.attr(item.first) = item.second;
+      out.append(b);
+    }
+  }
+  if (out.empty()) {
+    std::string why;
+    for (const modal::RecordResult& r : results)
+      for (size_t k = 0; k < r.bands.size() && why.empty(); ++k)
+        why = modal::band_without_backbone(r, static_cast<int>(k) + 1);
+    throw InputError(fmt::format("process: no backbone at any channel, band or file; {}", why));
+  }
+  return out;
+}
+
+py::dict read_record(const std::string& path) {
+  data::Record rec;
+  {
+    py::gil_scoped_release release;
+    rec = data::read_record(path);
+  }
+  py::dict out;
+  out["source"] = rec.source;
+  out["sample_rate_hz"] = rec.fs;
+  out["t0_s"] = rec.t0;
+  py::list names, units, quantities;
+  py::dict data;
+  for (data::Channel& c : rec.channels) {
+    names.append(c.name);
+    units.append(c.unit);
+    quantities.append(c.quantity ? py::object(py::str(quantity_name(*c.quantity))) : py::none());
+    data[py::str(c.name)] = to_numpy(std::move(c.samples));
+  }
+  out["channels"] = names;
+  out["units"] = units;
+  out["quantities"] = quantities;
+  out["data"] = data;
+  out["metadata"] = rec.metadata;
+  return out;
+}
+
+/// A model file, read once.
+class Model {
+ public:
+  explicit Model(const std::string& path) : path_(path), model_(model::read_model(path)) {}
+  const std::string& path() const { return path_; }
+
+  py::array_t<double> modes(int count) const {
+    if (count < 1) throw InputError(fmt::format("--count {}: must be >= 1", count));
+    model::ModesOptions options;
+    options.count = count;
+    model::LinearModes modes;
+    {
+      py::gil_scoped_release release;
+      modes = model::linear_modes(model_, options);
+    }
+    Eigen::VectorXd f(modes.size() - modes.rigid_count);
+    for (Eigen::Index i = 0; i < f.size(); ++i)
+      f(i) = modes.frequency_hz(modes.rigid_count + static_cast<int>(i));
+    return to_numpy(std::move(f));
+  }
+
+  py::dict qsma(int mode, int points, std::optional<double> qmin,
+                std::optional<double> qmax) const {
+    model::QsmaOptions options;
+    options.points = points;
+    options.q_min = qmin.value_or(0.0);
+    options.q_max = qmax.value_or(0.0);
+    if (mode < 1) throw InputError(fmt::format("--mode {}: elastic modes count from 1", mode));
+    if ((qmin && !(*qmin > 0)) || (qmax && !(*qmax > 0)))
+      throw InputError("qsma: qmin and qmax must be > 0");
+    if (const std::string e = options.error(); !e.empty())
+      throw InputError(fmt::format("qsma: {}", e));
+    if (model_.iwan_count() == 0)
+      throw InputError(where(path_, 0, "the model has no Iwan joint; QSMA needs one"));
+    std::vector<model::QsmaPoint> curve;
+    model::QsmaSummary summary;
+    {
+      py::gil_scoped_release release;
+      model::ModesOptions modes;
+      modes.elastic_count = mode;
+      const model::JointCondensation condensed(model_, modes);
+      curve = model::qsma(condensed, mode, options, &summary);
+    }
+    if (curve.empty()) throw InputError(fmt::format("qsma: {}", summary.message));
+    py::dict out = to_dict(model::qsma_table(curve));
+    out["message"] = summary.message;
+    return out;
+  }
+
+ private:
+  std::string path_;
+  model::Model model_;
+};
+
+}  // namespace
+}  // namespace jointlab::python
+
+PYBIND11_MODULE(jointlab, m) {
+  using namespace jointlab::python;
+  m.doc() = R"(jointlab: amplitude-dependent frequency and damping of jointed structures.
+
+The same library as the `jointlab` program: ring-down processing, linear modes and
+Quasi-Static Modal Analysis of Iwan-jointed models. SI units everywhere; arrays are numpy
+arrays named as the program's CSV columns. A user's mistake raises jointlab.InputError (a
+ValueError) with the program's one-line message. Nothing is printed unless a progress
+callable is given.
+
+    import jointlab
+    bb = jointlab.process(["hammer_impact.csv"], bands=[(70, 90)], channels=["acc1"])
+    print(bb[0].linear_frequency_hz, bb[0].frequency_hz[:5], bb[0].damping_ratio[:5])
+    model = jointlab.Model("model.toml")
+    print(model.modes(count=5))               # elastic natural frequencies [Hz]
+    curve = model.qsma(mode=1, points=60)     # dict of numpy arrays
+)";
+  py::register_exception<jointlab::InputError>(m, "InputError", PyExc_ValueError);
+
+  py::class_<Backbone>(m, "Backbone", py::dynamic_attr(),
+                       "One backbone of process(): .file, .channel, .band (1-based), "
+                       ".linear_frequency_hz [Hz], .linear_damping_ratio, .complex_amplitude [m] "
+                       "(operating-shape entry), .report, and numpy arrays named as the backbone "
+                       "CSV's columns: .time_s [s], .amplitude [SI of the amplitude quantity], "
+                       ".frequency_hz [Hz], .damping_ratio, .frequency_std_hz [Hz], .damping_std "
+                       "(expanded, k = .coverage_factor), .damped_frequency_hz, "
+                       ".decay_rate_1_per_s, .displacement_m, .snr, .window_s, .harmonic.")
+      .def_readonly("file", &Backbone::file)
+      .def_readonly("channel", &Backbone::channel)
+      .def_readonly("band", &Backbone::band)
+      .def_readonly("linear_frequency_hz", &Backbone::linear_frequency_hz)
+      .def_readonly("linear_damping_ratio", &Backbone::linear_damping_ratio)
+      .def_readonly("complex_amplitude", &Backbone::complex_amplitude)
+      .def_readonly("report", &Backbone::report)
+      .def("__repr__", [](const Backbone& b) {
+        return fmt::format("<jointlab.Backbone {} {} band {}: {:.6g} Hz, zeta {:.4g}>", b.file,
+                           b.channel, b.band, b.linear_frequency_hz, b.linear_damping_ratio);
+      });
+
+  m.def("process", &process, py::arg("files"), py::arg("bands") = py::none(),
+        py::arg("modes") = 0, py::arg("channels") = py::none(), py::arg("quantity") = py::none(),
+        py::arg("amplitude") = "velocity", py::arg("progress") = py::none(),
+        R"(Impact ring-downs -> natural frequency and damping versus amplitude (`jointlab process`).
+
+files      list of test files (CSV, UFF 58, MATLAB .mat), one hit each
+bands      list of (lo, hi) in Hz, one per mode; or modes=N for the N strongest peaks
+channels   channel names to process (default: every non-force channel)
+quantity   'acceleration', 'velocity' or 'displacement' for channels without a unit
+amplitude  quantity of the amplitude column: 'velocity' (default), 'displacement' [m],
+           'acceleration' [m/s^2]
+progress   callable taking one line of text, or None (silent)
+
+Returns a list of jointlab.Backbone, one per file x channel x band with a kept span, in the
+order of the files, then bands, then channels. Each carries numpy arrays named as the CSV's
+columns (time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz, damping_std, ...)
+and its linear values (linear_frequency_hz, linear_damping_ratio).
+
+    bb = jointlab.process(["hit1.csv"], bands=[(70, 90)], quantity="acceleration")
+    import matplotlib.pyplot as plt
+    plt.semilogx(bb[0].amplitude, bb[0].frequency_hz)
+)");
+
+  m.def("read_record", &read_record, py::arg("path"),
+        R"(Reads a test file (CSV, UFF 58 ASCII or binary, MATLAB .mat) as the program does.
+
+Returns a dict: 'source', 'sample_rate_hz' [Hz], 't0_s' [s], 'channels' (names), 'units' (as
+written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy array, SI units),
+'metadata' (the file's '# key: value' lines).
+
+    rec = jointlab.read_record("hammer_impact.csv")
+    acc1 = rec["data"]["acc1"]          # m/s^2
+)");
+
+  py::class_<Model>(m, "Model", R"(A model file (TOML with Matrix Market matrices), read once.
+
+    model = jointlab.Model("model.toml")
+    model.modes(count=10)               # elastic natural frequencies [Hz]
+    curve = model.qsma(mode=1, points=60)
+    curve["frequency_hz"], curve["damping_ratio"]
+)")
+      .def(py::init<const std::string&>(), py::arg("path"))
+      .def_property_readonly("path", &Model::path)
+      .def("modes", &Model::modes, py::arg("count") = 20,
+           R"(The elastic natural frequencies [Hz] among the lowest `count` modes (as `jointlab modes
+--count`, rigid-body modes left out), every joint at its linear stiffness, ascending.)")
+      .def("qsma", &Model::qsma, py::arg("mode"), py::arg("points") = 50,
+           py::arg("qmin") = py::none(), py::arg("qmax") = py::none(),
+           R"(Quasi-Static Modal Analysis of elastic mode `mode` (from 1), as `jointlab qsma`.
+
+points      number of points (default 50)
+qmin, qmax  modal amplitude range (default: microslip to macroslip or the limit load)
+
+Returns a dict of numpy arrays named as the qsma CSV's columns: force_amplitude,
+modal_amplitude, frequency_hz [Hz], damping_ratio, max_slip [m], ringdown_frequency_hz,
+ringdown_damping_ratio, harmonic_damping_ratio; and 'message' (why the curve ends).)");
+}

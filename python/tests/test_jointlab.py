@@ -1,0 +1,127 @@
+"""The Python module against the command line's output on the same input, and its error paths.
+
+Run by `make test` (ctest runs pytest with PYTHONPATH=build/python). Every call is compared with
+the CSV the program writes for the same input: within 1e-9 relative (the CSV keeps 10
+significant digits, so up to 5e-10 of rounding).
+"""
+import csv
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import jointlab
+
+SOURCE = pathlib.Path(os.environ.get("JOINTLAB_SOURCE_DIR", pathlib.Path(__file__).parents[2]))
+BINARY = pathlib.Path(os.environ.get("JOINTLAB_BINARY_DIR", SOURCE / "build"))
+PROGRAM = BINARY / "bin" / "jointlab"
+RECORD = SOURCE / "data" / "examples" / "brake-reuss-beam" / "hammer_impact.csv"
+
+
+def run(*args):
+    return subprocess.run([str(PROGRAM), *map(str, args)], capture_output=True, text=True)
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    header, values = rows[0], np.array(rows[1:], dtype=float)
+    return {name: values[:, k] for k, name in enumerate(header)}
+
+
+def assert_close(actual, expected, rel=1e-9):
+    actual, expected = np.asarray(actual), np.asarray(expected)
+    assert actual.shape == expected.shape
+    np.testing.assert_allclose(actual, expected, rtol=rel, atol=0)
+
+
+def two_mass_model(directory):
+    """Two masses (1 kg each) on springs, an Iwan joint between mass 1 and ground."""
+    d = pathlib.Path(directory)
+    (d / "M.mtx").write_text(
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 1.0\n2 2 1.0\n")
+    (d / "K.mtx").write_text(
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 3\n"
+        "1 1 2.0e5\n2 1 -1.0e5\n2 2 1.0e5\n")
+    (d / "model.toml").write_text(
+        '[matrices]\nmass = "M.mtx"\nstiffness = "K.mtx"\n\n'
+        "[iwan.j]\nFs = 20.0\nKt = 5.0e4\nchi = -0.5\nbeta = 1.0\n\n"
+        '[[joint]]\na = 0\nb = "ground"\nelement = "iwan.j"\n')
+    return d / "model.toml"
+
+
+def test_process_equals_the_command_line(tmp_path):
+    out = tmp_path / "cli"
+    r = run("process", RECORD, "--channel", "acc1", "--channel", "acc3", "--band", "70:90",
+            "--out", out)
+    assert r.returncode == 0, r.stderr
+    backbones = jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1", "acc3"])
+    assert [b.channel for b in backbones] == ["acc1", "acc3"]
+    for b in backbones:
+        assert b.band == 1
+        csv_columns = read_csv(out / f"hammer_impact.{b.channel}.band1.csv")
+        for name in ("time_s", "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
+                     "damping_std"):
+            assert_close(getattr(b, name), csv_columns[name])
+        assert 78 < b.linear_frequency_hz < 83  # the Brake-Reuss beam's first mode, ~80.5 Hz
+        assert 0 < b.linear_damping_ratio < 0.05
+
+
+def test_qsma_and_modes_equal_the_command_line(tmp_path):
+    model = two_mass_model(tmp_path)
+    r = run("qsma", model, "--mode", "1", "--points", "30", "--out", tmp_path / "q.csv")
+    assert r.returncode == 0, r.stderr
+    expected = read_csv(tmp_path / "q.csv")
+    curve = jointlab.Model(str(model)).qsma(mode=1, points=30)
+    for name, values in expected.items():
+        assert_close(curve[name], values)
+    r = run("modes", model, "--out", tmp_path / "m.csv")
+    assert r.returncode == 0, r.stderr
+    with open(tmp_path / "m.csv", newline="") as f:
+        rows = list(csv.DictReader(f))  # mode,frequency_hz,kind
+    elastic = [float(r["frequency_hz"]) for r in rows if r["kind"] == "elastic"]
+    assert_close(jointlab.Model(str(model)).modes(count=20), elastic)
+
+
+def test_read_record_gives_channels_in_si(tmp_path):
+    rec = jointlab.read_record(str(RECORD))
+    assert rec["sample_rate_hz"] > 0
+    assert "acc1" in rec["channels"]
+    data = rec["data"]["acc1"]
+    assert isinstance(data, np.ndarray) and data.dtype == np.float64 and data.size > 1000
+
+
+def test_a_malformed_file_raises_a_value_error_naming_it(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,acc1 [g]\n0,1\nnot a number,2\n")
+    with pytest.raises(ValueError, match="bad.csv"):
+        jointlab.process([str(bad)], bands=[(70, 90)])
+    r = run("process", bad, "--band", "70:90", "--out", tmp_path / "o")
+    assert r.returncode == 2
+    with pytest.raises(jointlab.InputError) as e:
+        jointlab.process([str(bad)], bands=[(70, 90)])
+    assert str(e.value) in r.stderr  # the command line's own line
+
+
+def test_each_error_path_raises_input_error(tmp_path):
+    with pytest.raises(jointlab.InputError, match="need 0 < LO < HI"):
+        jointlab.process([str(RECORD)], bands=[(90, 70)])
+    with pytest.raises(jointlab.InputError, match="expected acceleration, velocity"):
+        jointlab.process([str(RECORD)], bands=[(70, 90)], amplitude="speed")
+    with pytest.raises(jointlab.InputError):
+        jointlab.Model(str(tmp_path / "missing.toml"))
+    model = jointlab.Model(str(two_mass_model(tmp_path)))
+    with pytest.raises(jointlab.InputError, match="--mode 0"):
+        model.qsma(mode=0)
+    with pytest.raises(jointlab.InputError, match="qmin and qmax"):
+        model.qsma(mode=1, qmin=-1.0)
+
+
+def test_progress_is_silent_unless_asked(capfd):
+    lines = []
+    jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1"], progress=lines.append)
+    assert lines == [f"process: {RECORD}"]
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
