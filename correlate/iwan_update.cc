@@ -144,6 +144,72 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
   }
 }
 
+ModelBackbone model_backbone(const model::JointCondensation& jc, int mode, double phi, int power,
+                             BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
+                             int points) {
+  if (mode < 1 || mode > jc.elastic_count())
+    throw InputError(fmt::format("mode {} does not exist: the model has {} elastic modes", mode,
+                                 jc.elastic_count()));
+  if (!(phi > 0) || !(a_lo > 0) || !(a_hi >= a_lo) || points < 2)
+    throw InputError("model backbone: need phi > 0, 0 < a_lo <= a_hi and two points or more");
+  const bool matched = comparison == IwanComparison::kMatched;
+  std::vector<double> s(static_cast<size_t>(points));
+  for (int i = 0; i < points; ++i)
+    s[static_cast<size_t>(i)] = a_lo * std::pow(a_hi / a_lo, i / (points - 1.0)) / phi;
+  const std::vector<QsmaAtPoint> at =
+      qsma_at(jc, mode, power, s,
+              matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant);
+  ModelBackbone out;
+  std::vector<size_t> keep;
+  for (size_t i = 0; i < at.size(); ++i)
+    if (at[i].reached) keep.push_back(i);
+  out.clipped = keep.size() < s.size();
+  const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
+  out.amplitude.resize(n);
+  out.frequency_hz.resize(n);
+  out.damping_ratio.resize(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const model::QsmaPoint& q = at[keep[static_cast<size_t>(j)]].point;
+    out.amplitude(j) = s[keep[static_cast<size_t>(j)]] * phi;
+    out.frequency_hz(j) = matched ? q.ringdown_frequency_hz : q.frequency_hz;
+    out.damping_ratio(j) = !matched                             ? q.damping_ratio
+                           : kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
+                                                                : q.ringdown_damping_ratio;
+  }
+  return out;
+}
+
+std::vector<ModelBackbone> IwanObjective::model_curves(const model::IwanParameters& p, double z,
+                                                       int points) const {
+  const model::Model m = apply(p, z);
+  int highest = 0;
+  for (const IwanTarget& t : targets_) highest = std::max(highest, t.mode);
+  model::ModesOptions mo;
+  mo.elastic_count = highest;
+  const model::JointCondensation jc(m, mo);
+  std::vector<ModelBackbone> out;
+  for (const IwanTarget& t : targets_) {
+    double lo = INFINITY, hi = 0;
+    for (const MeasuredBackbone& c : t.curves) {
+      lo = std::min(lo, c.amplitude.minCoeff());
+      hi = std::max(hi, c.amplitude.maxCoeff());
+    }
+    const MeasuredBackbone& first = t.curves.front();
+    const int col = jc.modes().rigid_count + t.mode - 1;
+    const double phi =
+        first.modal ? 1.0 : std::abs(jc.modes().shapes(sensors_[first.sensor].dof, col));
+    const int pw = first.modal ? 0 : amplitude_power(amplitude_);
+    try {
+      out.push_back(model_backbone(jc, t.mode, phi, pw, first.kind, comparison_, lo, hi, points));
+    } catch (const InputError&) {
+      ModelBackbone none;
+      none.clipped = true;
+      out.push_back(none);
+    }
+  }
+  return out;
+}
+
 model::Model IwanObjective::apply(const model::IwanParameters& p, double z) const {
   model::Model m = apply(p);
   m.modal_ratio = z;

@@ -44,6 +44,7 @@
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/iwan_set_model.h"
+#include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
@@ -134,6 +135,24 @@ struct IwanUpdateOptions {
   std::string error() const;
 };
 
+/// A model's backbone as a measured one of `kind` would show it (the ring-down or steady-state
+/// pair; with IwanComparison::kSecant the secant pair), in the measured amplitude a =
+/// |phi| q omega^power (phi the shape at the measuring DOF, 1 and power 0 for the modal
+/// amplitude), at `points` amplitudes log-spaced over [a_lo, a_hi]; the model's own damping
+/// (JointCondensation::linear_damping) included.
+struct ModelBackbone {
+  Eigen::VectorXd amplitude;      ///< a [SI of the measured amplitude]
+  Eigen::VectorXd frequency_hz;   ///< f [Hz]
+  Eigen::VectorXd damping_ratio;  ///< zeta
+  bool clipped = false;  ///< true: the model does not reach the top of the range (no static
+                         ///< solution past its largest load) or fails below it; the curve stops
+};
+
+/// model_backbone() of elastic mode `mode` (1-based); InputError if there is no such mode.
+ModelBackbone model_backbone(const model::JointCondensation& model, int mode, double phi, int power,
+                             BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
+                             int points);
+
 /// The objective: QSMA of the set at given parameters against the measured backbones.
 class IwanObjective {
  public:
@@ -189,6 +208,12 @@ class IwanObjective {
   model::Model apply(const model::IwanParameters& p) const;
   /// A copy of the model with the set at p and its own damping ratio at z.
   model::Model apply(const model::IwanParameters& p, double z) const;
+  /// Per target, the model at (p, z) over its measured amplitude range (model_backbone(), with
+  /// its first curve's sensor, kind and the comparison of the options).
+  std::vector<ModelBackbone> model_curves(const model::IwanParameters& p, double z,
+                                          int points = 80) const;
+  /// The targets (the measured backbones).
+  const std::vector<IwanTarget>& targets() const { return targets_; }
 
  private:
   const model::Model* model_;
