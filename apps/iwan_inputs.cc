@@ -18,8 +18,8 @@ namespace {
 
 IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std::string& command) {
   if (a.modes.size() != 1 || a.modes.front().find(':') != std::string::npos) {
-    throw InputError(
-        command + ": with --backbone give one --mode R (the model mode every table belongs to)");
+    throw InputError(command +
+                     ": with --backbone give one --mode R (the model mode every table belongs to)");
   }
   if (!a.stepped_sine.empty() || !a.channels.empty() || !a.measured.empty()) {
     throw InputError(command +
@@ -209,6 +209,5 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   in.data_name = a.measured;
   return in;
 }
-
 
 }  // namespace jointlab::apps

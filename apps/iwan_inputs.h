@@ -28,12 +28,12 @@ struct IwanInputArgs {
 
 /// The measured backbones as targets.
 struct IwanInputs {
-  std::vector<correlate::Sensor> sensors;     ///< the sensors (one DOF for --dof, none: modal)
+  std::vector<correlate::Sensor> sensors;      ///< the sensors (one DOF for --dof, none: modal)
   std::vector<correlate::IwanTarget> targets;  ///< the fitted modes' targets
   correlate::AmplitudeQuantity amplitude = correlate::AmplitudeQuantity::kVelocity;
-  bool modal = false;                                 ///< amplitudes are modal (q)
+  bool modal = false;                                ///< amplitudes are modal (q)
   std::optional<correlate::MeasuredModes> measured;  ///< the measured linear modes (process)
-  std::string data_name;                              ///< for messages
+  std::string data_name;                             ///< for messages
 };
 
 /// Reads the measured side named by `a` against model `m`; InputError prefixed by `command`.

@@ -19,10 +19,10 @@ namespace jointlab::campaign {
 
 /// What one comparison figure shows.
 struct BackboneComparison {
-  std::string title;                                ///< top line ("mode 1")
-  std::string amplitude_label;                      ///< x axis ("modal amplitude q [m kg^1/2]")
+  std::string title;                                  ///< top line ("mode 1")
+  std::string amplitude_label;                        ///< x axis ("modal amplitude q [m kg^1/2]")
   std::vector<correlate::MeasuredBackbone> measured;  ///< the measured curves
-  std::vector<ModelCurve> models;                   ///< labelled model curves
+  std::vector<ModelCurve> models;                     ///< labelled model curves
 };
 
 /// The x-axis label of a measured amplitude: modal, or the quantity named by `quantity`.
