@@ -212,6 +212,12 @@ class IwanObjective {
   /// its first curve's sensor, kind and the comparison of the options).
   std::vector<ModelBackbone> model_curves(const model::IwanParameters& p, double z,
                                           int points = 80) const;
+  /// Relative RMS errors (frequency, damping) of the model at (p, z) over every measured
+  /// point, (f_model - f_j) / f_j and (zeta_model - zeta_j) / zeta_j; nullopt if p cannot be
+  /// evaluated.
+  std::optional<Eigen::Vector2d> rms_errors(const model::IwanParameters& p, double z) const;
+  /// The same for the best constants (the constant minimising each relative RMS).
+  Eigen::Vector2d constant_rms_errors() const;
   /// The targets (the measured backbones).
   const std::vector<IwanTarget>& targets() const { return targets_; }
 
@@ -236,8 +242,11 @@ class IwanObjective {
   mutable std::atomic<int> evaluations_ = 0;
   // Residuals at p; z_fixed (not null) sets the structure's own damping, else the model's or
   // the best (fitted); z_used (not null) receives it.
+  // values (not null, residual_count long) receives the model's frequency and damping (Z
+  // included) in the residuals' order.
   bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip, bool from_scratch,
-                const double* z_fixed = nullptr, double* z_used = nullptr) const;
+                const double* z_fixed = nullptr, double* z_used = nullptr,
+                double* values = nullptr) const;
 };
 
 /// Why update_iwan() stopped.
@@ -290,6 +299,10 @@ struct IwanUpdateSummary {
   /// The best constant-backbone candidate's cost (a joint that barely slips, the frequency
   /// matched, Z fitted); 0 when Z is not fitted. The result is never worse.
   double constant_cost = 0;
+  /// Relative RMS errors of frequency and damping at best over every point (0 when unknown),
+  /// and of the best constants (the constant-backbone model's floor to beat).
+  Eigen::Vector2d rms_errors = Eigen::Vector2d::Zero();
+  Eigen::Vector2d constant_rms_errors = Eigen::Vector2d::Zero();
   /// Reduced chi-square at best: sum of squared normalised residuals over (2N - free
   /// parameters); about 1 when the model describes the data within their stated noise.
   double reduced_chi2 = 0;
