@@ -196,6 +196,13 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
                   100 * to.max_slip_share));
   io.bounds = correlate::default_iwan_bounds(objective.initial());
+  // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
+  if (progress) {
+    io.progress = [&](int evaluations, double best) {
+      if (evaluations % 250 == 0)
+        say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
+    };
+  }
   step.summary = fit_iwan(objective, io, say);
   step.beta_held = step.summary.microslip_only() || io.fixed_beta.has_value();
   step.curves = static_cast<int>(targets.curves());
