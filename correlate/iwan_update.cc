@@ -916,6 +916,8 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   s.modal_ratio_fitted = objective.fits_linear_damping();
   s.residuals = static_cast<size_t>(objective.residual_count());
   s.reference_stiffness = objective.reference_stiffness();
+  s.linear_known = std::any_of(objective.targets().begin(), objective.targets().end(),
+                               [](const IwanTarget& t) { return t.linear_frequency_hz > 0; });
   Tracker tr{objective, options, s, objective.evaluations()};
   s.initial_cost = objective.cost(s.start);
   std::mt19937 rng(options.seed);
@@ -1021,10 +1023,11 @@ std::string IwanUpdateSummary::report() const {
                               : monte_carlo ? "converged (a Monte Carlo round brought no gain)"
                                             : "converged (every local solve met its tolerance)";
   std::string out = fmt::format(
-      "Iwan update: {}, {} QSMA evaluations, {} {}, cost {:.4g} -> {:.4g}, linear frequency "
-      "error {:.3g} %\n",
-      outcome, evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements",
-      initial_cost, final_cost, 100 * linear_error);
+      "Iwan update: {}, {} QSMA evaluations, {} {}, cost {:.4g} -> {:.4g}, {}\n", outcome,
+      evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements", initial_cost,
+      final_cost,
+      linear_known ? fmt::format("linear frequency error {:.3g} %", 100 * linear_error)
+                   : std::string("no measured linear frequency to compare"));
   // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
   auto sigma = [&](int k) -> std::string {
     if (held[k]) return " (held)";

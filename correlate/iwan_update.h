@@ -270,9 +270,10 @@ struct IwanUpdateSummary {
   model::IwanParameters best;                                 ///< the updated parameters
   double initial_cost = 0;                                    ///< cost at start
   double final_cost = 0;                                      ///< cost at best
-  double linear_error = 0;  ///< relative linear-frequency error at best
-  int evaluations = 0;      ///< QSMA evaluations
-  int rounds = 0;           ///< Monte Carlo rounds or local starts
+  double linear_error = 0;    ///< relative linear-frequency error at best
+  bool linear_known = false;  ///< some target has a measured linear frequency (else no error)
+  int evaluations = 0;        ///< QSMA evaluations
+  int rounds = 0;             ///< Monte Carlo rounds or local starts
   IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;  ///< the method used
   bool improved = true;  ///< false: no sample beat the start (held parameters at their values)
   /// Free parameters that end at a bound of the search box, e.g. "Fs at its upper bound 2000 N".
