@@ -57,7 +57,8 @@ struct Hit {
   std::vector<double> frequency_hz;                    // per band
   std::vector<Eigen::VectorXcd> shape;                 // per band, at kSensors
   std::vector<std::string> reference;                  // per band
-  std::vector<correlate::MeasuredBackbone> backbones;  // band 1, at their sensor
+  std::vector<correlate::MeasuredBackbone> backbones;  // at their sensor
+  std::vector<int> backbone_bands;                     // per backbone (none: band 1)
 };
 
 void write_process_output(const fs::path& dir, const std::vector<Hit>& hits) {
@@ -94,14 +95,16 @@ void write_process_output(const fs::path& dir, const std::vector<Hit>& hits) {
     }
     j.end_array();
     j.key("outputs").begin_array();
-    for (const correlate::MeasuredBackbone& c : h.backbones) {
+    for (size_t bi = 0; bi < h.backbones.size(); ++bi) {
+      const correlate::MeasuredBackbone& c = h.backbones[bi];
+      const int band = bi < h.backbone_bands.size() ? h.backbone_bands[bi] : 1;
       const std::string channel = kSensors[static_cast<size_t>(c.sensor)].channel;
       const std::string file =
-          fmt::format("{}.{}.band1.csv", fs::path(h.source).stem().string(), channel);
+          fmt::format("{}.{}.band{}.csv", fs::path(h.source).stem().string(), channel, band);
       j.begin_object();
       j.key("channel").value(channel);
       j.key("measured_quantity").value("acceleration");
-      j.key("band").value(1);
+      j.key("band").value(band);
       j.key("noise_floor_m").value(1e-9);
       j.key("file").value(file);
       j.key("points").value(static_cast<long>(c.amplitude.size()));
@@ -655,6 +658,53 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
       fmt::format("update-iwan {} --set j --mode 1 --out {}", model, (dir / "bad").string()),
       "give --measured DIR with --sensors FILE, or --backbone FILE");
   EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// Three modes at once (issue 28: `--mode 1:1 --mode 2:2 --mode 3:3` failed with "no measured
+// backbone to update against"): chain A's first three modes, each measured in a hit of its own
+// (so no other mode slips the joints in it and the screen leaves every point), fitted together.
+// The report lists each mode's screen; the fit runs on all three.
+TEST(UpdateCli, IwanFitsThreeModesAtOnce) {
+  const fs::path dir = testing::scratch_dir("update_iwan_three_modes");
+  correlate::TwoChainParameters truth;
+  truth.iwan = true;
+  const model::Model m = correlate::two_chain_structure(truth);
+  const model::LinearModes lm = model::linear_modes(m.mass, m.linear_stiffness());
+  std::vector<int> chain_a;  // elastic mode numbers of chain A's modes
+  for (int j = lm.rigid_count; j < lm.size() && chain_a.size() < 3; ++j)
+    if (lm.shapes.col(j).head(6).norm() > lm.shapes.col(j).tail(6).norm())
+      chain_a.push_back(j - lm.rigid_count + 1);
+  ASSERT_EQ(chain_a.size(), 3u);
+  const Hit linear = linear_hit(m, chain_a.back());
+  std::vector<Hit> hits;
+  for (size_t k = 0; k < 3; ++k) {
+    Hit h = linear;
+    h.source = fmt::format("hit{}.csv", k + 1);
+    const int band = chain_a[k];
+    const int sensor =
+        correlate::find_sensor(kSensors, linear.reference[static_cast<size_t>(band - 1)]);
+    h.backbones.push_back(correlate::synthetic_backbone(
+        m, band, kSensors, sensor, AmplitudeQuantity::kVelocity, 20, 0.5, 2e-4, 0.02, 40 + k));
+    h.backbone_bands.push_back(band);
+    hits.push_back(h);
+  }
+  write_process_output(dir / "measured", hits);
+  testing::write_text((dir / "sensors.csv").string(), sensors_text());
+  const std::string model = write_model(dir, m, "m.toml");
+  std::string modes;
+  for (int r : chain_a) modes += fmt::format(" --mode {}:{}", r, r);
+  const testing::CommandResult r = testing::run_jointlab(fmt::format(
+      "update-iwan {} --measured {} --sensors {} --set iwan.rivet{} --evaluations 200 --out {}",
+      model, (dir / "measured").string(), (dir / "sensors.csv").string(), modes,
+      (dir / "out").string()));
+  ASSERT_EQ(r.status, 0) << r.err << r.out;
+  for (int k : chain_a) {
+    EXPECT_NE(r.out.find(fmt::format("mode {}:{}: 0 of 20 points left out", k, k)),
+              std::string::npos)
+        << r.out;
+  }
+  EXPECT_TRUE(fs::exists(dir / "out" / "parameters.csv"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "backbones_3.png"));
 }
 
 }  // namespace
