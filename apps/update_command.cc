@@ -1,5 +1,7 @@
 // `jointlab update-linear` and `jointlab update-iwan`: model updating against the output of
-// `jointlab process` (docs/update-linear.md, docs/update-iwan.md). Argument parsing only:
+// `jointlab process` or, for update-iwan, backbone tables (docs/update-linear.md,
+// docs/update-iwan.md; update-iwan's measured side is read by iwan_inputs.h, shared with
+// `compare`). Argument parsing only:
 // reading measured data (correlate/measured_data.h), the updates (linear_update.h,
 // iwan_update.h) and the files written (update_files.h, model/model_file_writer.h) are
 // library code.
@@ -26,12 +28,10 @@
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/update_files.h"
-#include "jointlab/data/backbone_table.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/model_file_writer.h"
-#include "jointlab/model/sim/simulated_record.h"
 
 namespace jointlab::apps {
 namespace {
