@@ -104,6 +104,9 @@ void add_simulate_command(CLI::App& app);
 /// `jointlab update-linear` and `jointlab update-iwan`: model updating against process output.
 void add_update_commands(CLI::App& app);
 
+/// Registers `compare`: model backbones over measured ones (compare_command.cc).
+void add_compare_command(CLI::App& app);
+
 /// `jointlab run`: a test campaign from hammer-test files to the report.
 void add_run_command(CLI::App& app);
 

@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   jointlab::apps::add_qsma_command(app);
   jointlab::apps::add_simulate_command(app);
   jointlab::apps::add_update_commands(app);
+  jointlab::apps::add_compare_command(app);
   jointlab::apps::add_run_command(app);
   // A mistyped command name would otherwise be reported as a missing one.
   bool known = argc < 2 || argv[1][0] == '-';

@@ -1,5 +1,7 @@
 // `jointlab update-linear` and `jointlab update-iwan`: model updating against the output of
-// `jointlab process` (docs/update-linear.md, docs/update-iwan.md). Argument parsing only:
+// `jointlab process` or, for update-iwan, backbone tables (docs/update-linear.md,
+// docs/update-iwan.md; update-iwan's measured side is read by iwan_inputs.h, shared with
+// `compare`). Argument parsing only:
 // reading measured data (correlate/measured_data.h), the updates (linear_update.h,
 // iwan_update.h) and the files written (update_files.h, model/model_file_writer.h) are
 // library code.
@@ -14,7 +16,9 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
+#include "jointlab/apps/iwan_inputs.h"
 #include "jointlab/apps/print.h"
+#include "jointlab/campaign/backbone_comparison.h"
 #include "jointlab/campaign/figures.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/campaign/steps/iwan_step.h"
@@ -25,12 +29,10 @@
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/update_files.h"
-#include "jointlab/data/backbone_table.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/model_file_writer.h"
-#include "jointlab/model/sim/simulated_record.h"
 
 namespace jointlab::apps {
 namespace {
@@ -150,14 +152,9 @@ void run_update_linear(const LinearArgs& a) {
   say(stdout, "{}", summary.report());
 }
 
-struct IwanArgs {
-  std::string model, measured, sensors, out, set, optimizer = "global-local", compare = "matched";
-  std::vector<std::string> modes, channels, stepped_sine;
-  std::vector<std::string> backbones;  // --backbone tables
-  std::string amplitude, dof;          // --amplitude, --dof (of the --backbone tables)
+struct IwanArgs : IwanInputArgs {
+  std::string out, set, optimizer = "global-local", compare = "matched";
   std::string linear_damping = "hold";
-  std::string stepped_sine_channel;
-  int stepped_sine_mode = 0;
   std::vector<double> pareto;
   std::vector<double> fs_range, gamma_range{0.05, 2.0}, chi_range{-0.95, 0.0},
       beta_range{0.01, 100.0};
@@ -203,15 +200,12 @@ correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjectiv
   return b;
 }
 
-// The fit and its files, whatever the measured data came from; `measured` (may be null) gives
-// the measured linear modes for the Pareto front's per-mode errors.
-void fit_and_write(const IwanArgs& a, const model::Model& m,
-                   const std::vector<correlate::Sensor>& sensors,
-                   std::vector<correlate::IwanTarget> targets,
-                   correlate::AmplitudeQuantity amplitude, const correlate::MeasuredModes* measured,
-                   const std::string& data_name) {
+// The fit and its files, whatever the measured data came from (the measured linear modes, when
+// known, give the Pareto front's per-mode errors).
+void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& in) {
+  const std::string& data_name = in.data_name;
   correlate::IwanUpdateOptions o = a.options;
-  o.amplitude = amplitude;
+  o.amplitude = in.amplitude;
   o.optimizer = a.optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
                 : a.optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
                                              : correlate::IwanOptimizer::kGlobalLocal;
@@ -224,8 +218,8 @@ void fit_and_write(const IwanArgs& a, const model::Model& m,
       say(stderr, "update-iwan: {} QSMA evaluations, best cost {:.6g}\n", evaluations, best);
     }
   };
-  correlate::IwanObjective objective(m, a.set, sensors, std::move(targets), o);
-  if (measured) objective.set_linear_modes(*measured, 0.6);  // every paired mode on the front
+  correlate::IwanObjective objective(m, a.set, in.sensors, in.targets, o);
+  if (in.measured) objective.set_linear_modes(*in.measured, 0.6);  // every paired mode's error
   o.bounds = bounds_of(a, objective);
   if (const std::string e = o.error(); !e.empty()) {
     throw InputError(fmt::format("update-iwan: {}", e));
@@ -251,6 +245,23 @@ void fit_and_write(const IwanArgs& a, const model::Model& m,
   correlate::write_iwan_parameters(fs::path(a.out) / "parameters.csv", summary);
   correlate::write_iwan_history(fs::path(a.out) / "history.csv", summary);
   if (!front.empty()) correlate::write_pareto(fs::path(a.out) / "pareto.csv", front);
+  // backbones.png (one figure per mode: backbones_<k>.png past the first): the measured
+  // backbones with the model at the start and at the result.
+  const auto start = objective.model_curves(summary.start, summary.modal_ratio_start);
+  const auto result = objective.model_curves(best, summary.modal_ratio);
+  for (size_t k = 0; k < objective.targets().size(); ++k) {
+    const correlate::IwanTarget& t = objective.targets()[k];
+    campaign::BackboneComparison c;
+    c.title = fmt::format("mode {}: measured and model (update-iwan)", t.mode);
+    c.amplitude_label = campaign::amplitude_axis_label(in.modal, in.amplitude);
+    c.measured = t.curves;
+    for (const auto& [label, curve] :
+         {std::pair{"model at the start", &start[k]}, std::pair{"model updated", &result[k]}}) {
+      c.models.push_back({label, curve->amplitude, curve->frequency_hz, curve->damping_ratio});
+    }
+    const std::string name = k == 0 ? "backbones" : fmt::format("backbones_{}", k + 1);
+    campaign::plot_backbone_comparison(c, fs::path(a.out) / (name + ".png"), {});
+  }
   say(stdout, "{}", summary.report());
   for (const correlate::ParetoPoint& p : front) {
     say(stdout,
@@ -267,190 +278,11 @@ void fit_and_write(const IwanArgs& a, const model::Model& m,
   }
 }
 
-// update-iwan on --backbone tables: one target, mode R, every table a curve of it.
-void run_update_iwan_tables(const IwanArgs& a) {
-  const model::Model m = model::read_model(a.model);
-  if (a.modes.size() != 1 || a.modes.front().find(':') != std::string::npos) {
-    throw InputError(
-        "update-iwan: with --backbone give one --mode R (the model mode every table belongs to)");
-  }
-  if (!a.stepped_sine.empty() || !a.channels.empty() || !a.measured.empty()) {
-    throw InputError(
-        "update-iwan: --backbone replaces --measured (with --channel and --stepped-sine)");
-  }
-  correlate::IwanTarget t;
-  try {
-    size_t used = 0;
-    t.mode = std::stoi(a.modes.front(), &used);
-    if (used != a.modes.front().size()) throw std::invalid_argument(a.modes.front());
-  } catch (const std::exception&) {
-    throw InputError(fmt::format("--mode {}: expected R, an integer from 1", a.modes.front()));
-  }
-  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
-  const int elastic = linear.size() - linear.rigid_count;
-  if (t.mode < 1 || t.mode > elastic) {
-    throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes",
-                                 a.modes.front(), t.mode, a.model, elastic));
-  }
-  const std::string quantity = a.amplitude.empty() ? "modal" : a.amplitude;
-  correlate::AmplitudeQuantity amplitude = correlate::AmplitudeQuantity::kVelocity;
-  std::vector<correlate::Sensor> sensors;
-  if (quantity == "modal") {
-    if (!a.dof.empty()) {
-      throw InputError(
-          "--dof: a modal amplitude is measured at no DOF (give --amplitude "
-          "displacement, velocity or acceleration)");
-    }
-  } else {
-    if (a.dof.empty()) {
-      throw InputError(fmt::format(
-          "--amplitude {}: give --dof NODE:COMP (or a 0-based index), where it was measured",
-          quantity));
-    }
-    amplitude = quantity == "displacement" ? correlate::AmplitudeQuantity::kDisplacement
-                : quantity == "velocity"   ? correlate::AmplitudeQuantity::kVelocity
-                                           : correlate::AmplitudeQuantity::kAcceleration;
-    correlate::Sensor s;
-    s.dof = model::resolve_dof(m, a.dof, "--dof");
-    s.channel = model::dof_name(m, s.dof);
-    sensors.push_back(s);
-  }
-  for (const std::string& file : a.backbones) {
-    t.curves.push_back(
-        correlate::measured_backbone(data::read_backbone_table(file), sensors.empty() ? -1 : 0));
-  }
-  std::string names;
-  for (const std::string& file : a.backbones) names += (names.empty() ? "" : ", ") + file;
-  fit_and_write(a, m, sensors, {t}, amplitude, nullptr, names);
-}
-
 void run_update_iwan(const IwanArgs& a) {
   check_iwan_args(a);
-  if (!a.backbones.empty()) return run_update_iwan_tables(a);
-  if (a.measured.empty() || a.sensors.empty()) {
-    throw InputError(
-        "update-iwan: give --measured DIR with --sensors FILE, or --backbone FILE (repeatable)");
-  }
-  if (!a.amplitude.empty() || !a.dof.empty()) {
-    throw InputError(
-        "update-iwan: --amplitude and --dof describe --backbone tables; a --measured folder "
-        "records its own amplitude quantity and sensors");
-  }
   const model::Model m = model::read_model(a.model);
-  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
-  const correlate::ProcessRun run = correlate::read_process_run(a.measured);
-  std::vector<int> bands;
-  const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
-  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
-  const int elastic = linear.size() - linear.rigid_count;
-  std::vector<campaign::ModeBackbones> modes;
-  for (const std::string& spec : a.modes) {
-    correlate::IwanTarget t;
-    int band = 0;
-    const size_t colon = spec.find(':');
-    try {
-      size_t used = 0;
-      t.mode = std::stoi(spec.substr(0, colon), &used);
-      if (used != spec.substr(0, colon).size()) throw std::invalid_argument(spec);
-      if (colon != std::string::npos) {
-        band = std::stoi(spec.substr(colon + 1), &used);
-        if (used != spec.size() - colon - 1) throw std::invalid_argument(spec);
-      }
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("--mode {}: expected R or R:BAND (integers from 1)", spec));
-    }
-    if (t.mode < 1 || (colon != std::string::npos && band < 1)) {
-      throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
-    }
-    if (t.mode > elastic) {
-      throw InputError(
-          fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes (1 to {})",
-                      spec, t.mode, a.model, elastic, elastic));
-    }
-    if (colon != std::string::npos &&
-        std::none_of(run.bands.begin(), run.bands.end(),
-                     [&](const correlate::ProcessBand& b) { return b.band == band; })) {
-      std::set<int> numbers;
-      for (const correlate::ProcessBand& b : run.bands) numbers.insert(b.band);
-      std::string have;
-      for (int b : numbers) have += (have.empty() ? "" : ", ") + std::to_string(b);
-      throw InputError(fmt::format("--mode {}: {} has no band {} (bands: {})", spec, a.measured,
-                                   band, have.empty() ? "none" : have));
-    }
-    int col = -1;
-    if (colon == std::string::npos) {
-      col = correlate::measured_mode_of(m, sensors, measured, t.mode, 0.6);
-      if (col < 0) {
-        throw InputError(
-            fmt::format("--mode {}: no measured band pairs with model mode {} by MAC; give R:BAND",
-                        spec, t.mode));
-      }
-      band = bands[static_cast<size_t>(col)];
-    } else {
-      for (size_t i = 0; i < bands.size(); ++i) {
-        if (bands[i] == band) col = static_cast<int>(i);
-      }
-    }
-    // Every band's backbones with their scatter summary; targets built as `run` builds them.
-    campaign::ModeBackbones mb =
-        campaign::process_run_backbones(run, sensors, band, a.channels, campaign::ScatterOptions{});
-    mb.name = "mode " + spec;
-    mb.model_mode = t.mode;
-    if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
-    modes.push_back(std::move(mb));
-  }
-  if (!a.stepped_sine.empty()) {
-    int sensor = 0;
-    if (!a.stepped_sine_channel.empty()) {
-      sensor = correlate::find_sensor(sensors, a.stepped_sine_channel);
-      if (sensor < 0) {
-        throw InputError(fmt::format("--stepped-sine-channel {}: not in the sensors file {}",
-                                     a.stepped_sine_channel, a.sensors));
-      }
-    } else if (sensors.size() != 1) {
-      throw InputError(
-          "--stepped-sine: give --stepped-sine-channel, the sensor the sweeps' response was "
-          "measured at");
-    }
-    const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : modes.front().model_mode;
-    for (const std::string& dir : a.stepped_sine) {
-      const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
-      if (ss.amplitude != run.amplitude) {
-        throw InputError(fmt::format(
-            "--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
-            "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
-            dir, a.measured));
-      }
-      campaign::ModeBackbones mb =
-          campaign::stepped_sine_run_backbones(ss, sensor, campaign::ScatterOptions{});
-      mb.name = fmt::format("stepped sine {}", dir);
-      mb.model_mode = mode;
-      modes.push_back(std::move(mb));
-    }
-  }
-  campaign::IwanTargetOptions target_options;
-  target_options.amplitude = run.amplitude;
-  const campaign::IwanTargets built = campaign::iwan_targets(m, sensors, modes, target_options);
-  // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
-  // say that rather than that nothing was measured.
-  if (modes.size() > 1) {
-    say(stdout, "slip screen (points where other modes slip the joints):\n{}",
-        built.screen_report(modes));
-  }
-  if (built.fitted.empty()) {
-    std::string per_mode;
-    for (size_t k = 0; k < modes.size(); ++k) {
-      per_mode += fmt::format("{}{}: {} of {}", per_mode.empty() ? "" : ", ", modes[k].name,
-                              built.points_screened[k].second, built.points_screened[k].first);
-    }
-    throw InputError(fmt::format(
-        "update-iwan: the slip screen leaves no backbone of at least two points: every point "
-        "where other modes carry over {:g} % of the joint slip is left out ({}); fit the modes "
-        "one at a time",
-        100 * target_options.max_slip_share, per_mode));
-  }
-  std::vector<correlate::IwanTarget> targets = built.fitted;
-  fit_and_write(a, m, sensors, std::move(targets), run.amplitude, &measured, a.measured);
+  const IwanInputs in = read_iwan_inputs(m, a, "update-iwan");
+  fit_and_write(a, m, in);
 }
 
 // A LO:HI option of two finite numbers (each refused on its own when it is not one).

@@ -258,7 +258,8 @@ void read_modes(const Context& ctx, const toml::table& doc, Campaign& c) {
   if (!modes) ctx.fail("no [[mode]]");
   for (const toml::node& item : array(ctx, *modes, "[[mode]]")) {
     const toml::table& t = table(ctx, item, "[[mode]]");
-    reject_unknown(ctx, t, "[[mode]]", {"name", "band", "model_mode", "reference", "stepped_sine"});
+    reject_unknown(ctx, t, "[[mode]]",
+                   {"name", "band", "model_mode", "reference", "stepped_sine", "backbones"});
     CampaignMode m;
     m.name = fmt::format("mode {}", c.modes.size() + 1);
     if (const toml::node* v = t.get("name")) {
@@ -290,6 +291,14 @@ void read_modes(const Context& ctx, const toml::table& doc, Campaign& c) {
         if (!fs::is_regular_file(p))
           ctx.fail(f, fmt::format("mode.stepped_sine: no file {}", p.string()));
         m.stepped_sine.push_back(p);
+      }
+    }
+    if (const toml::node* v = t.get("backbones")) {
+      for (const toml::node& f : array(ctx, *v, "mode.backbones")) {
+        const fs::path p = ctx.resolve(text(ctx, f, "mode.backbones"));
+        if (!fs::is_regular_file(p))
+          ctx.fail(f, fmt::format("mode.backbones: no file {}", p.string()));
+        m.backbones.push_back(p);
       }
     }
     c.modes.push_back(m);

@@ -44,6 +44,10 @@ struct CampaignMode {
   /// Stepped-sine files of this mode (absolute; data/stepped_sine.h), the response measured at
   /// the reference channel: their backbones are fitted with the hammer hits'.
   std::vector<std::filesystem::path> stepped_sine;
+  /// Backbone tables of this mode (absolute; data/backbone_table.h, one curve each, from any
+  /// source), the amplitude of the campaign's `amplitude` quantity at the reference channel:
+  /// fitted with the hammer hits' backbones (ring-down backbones).
+  std::vector<std::filesystem::path> backbones;
 };
 
 /// Where the model comes from: a model file, or a riveted-beam description to build.

@@ -144,6 +144,72 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
   }
 }
 
+ModelBackbone model_backbone(const model::JointCondensation& jc, int mode, double phi, int power,
+                             BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
+                             int points) {
+  if (mode < 1 || mode > jc.elastic_count())
+    throw InputError(fmt::format("mode {} does not exist: the model has {} elastic modes", mode,
+                                 jc.elastic_count()));
+  if (!(phi > 0) || !(a_lo > 0) || !(a_hi >= a_lo) || points < 2)
+    throw InputError("model backbone: need phi > 0, 0 < a_lo <= a_hi and two points or more");
+  const bool matched = comparison == IwanComparison::kMatched;
+  std::vector<double> s(static_cast<size_t>(points));
+  for (int i = 0; i < points; ++i)
+    s[static_cast<size_t>(i)] = a_lo * std::pow(a_hi / a_lo, i / (points - 1.0)) / phi;
+  const std::vector<QsmaAtPoint> at =
+      qsma_at(jc, mode, power, s,
+              matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant);
+  ModelBackbone out;
+  std::vector<size_t> keep;
+  for (size_t i = 0; i < at.size(); ++i)
+    if (at[i].reached) keep.push_back(i);
+  out.clipped = keep.size() < s.size();
+  const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
+  out.amplitude.resize(n);
+  out.frequency_hz.resize(n);
+  out.damping_ratio.resize(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const model::QsmaPoint& q = at[keep[static_cast<size_t>(j)]].point;
+    out.amplitude(j) = s[keep[static_cast<size_t>(j)]] * phi;
+    out.frequency_hz(j) = matched ? q.ringdown_frequency_hz : q.frequency_hz;
+    out.damping_ratio(j) = !matched                             ? q.damping_ratio
+                           : kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
+                                                                : q.ringdown_damping_ratio;
+  }
+  return out;
+}
+
+std::vector<ModelBackbone> IwanObjective::model_curves(const model::IwanParameters& p, double z,
+                                                       int points) const {
+  const model::Model m = apply(p, z);
+  int highest = 0;
+  for (const IwanTarget& t : targets_) highest = std::max(highest, t.mode);
+  model::ModesOptions mo;
+  mo.elastic_count = highest;
+  const model::JointCondensation jc(m, mo);
+  std::vector<ModelBackbone> out;
+  for (const IwanTarget& t : targets_) {
+    double lo = INFINITY, hi = 0;
+    for (const MeasuredBackbone& c : t.curves) {
+      lo = std::min(lo, c.amplitude.minCoeff());
+      hi = std::max(hi, c.amplitude.maxCoeff());
+    }
+    const MeasuredBackbone& first = t.curves.front();
+    const int col = jc.modes().rigid_count + t.mode - 1;
+    const double phi =
+        first.modal ? 1.0 : std::abs(jc.modes().shapes(sensors_[first.sensor].dof, col));
+    const int pw = first.modal ? 0 : amplitude_power(amplitude_);
+    try {
+      out.push_back(model_backbone(jc, t.mode, phi, pw, first.kind, comparison_, lo, hi, points));
+    } catch (const InputError&) {
+      ModelBackbone none;
+      none.clipped = true;
+      out.push_back(none);
+    }
+  }
+  return out;
+}
+
 model::Model IwanObjective::apply(const model::IwanParameters& p, double z) const {
   model::Model m = apply(p);
   m.modal_ratio = z;
@@ -172,6 +238,42 @@ bool IwanObjective::residuals_at(const model::IwanParameters& p, double z, doubl
   return evaluate(p, r, nullptr, false, &z);
 }
 
+std::optional<Eigen::Vector2d> IwanObjective::rms_errors(const model::IwanParameters& p,
+                                                         double z) const {
+  std::vector<double> r(residual_count_), v(residual_count_);
+  if (!evaluate(p, r.data(), nullptr, false, &z, nullptr, v.data())) return std::nullopt;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  int k = 0;
+  for (const IwanTarget& t : targets_) {
+    for (const MeasuredBackbone& c : t.curves) {
+      for (Eigen::Index j = 0; j < c.amplitude.size(); ++j, k += 2) {
+        sum(0) += std::pow(v[k] / c.frequency_hz(j) - 1, 2);
+        sum(1) += std::pow(v[k + 1] / c.damping_ratio(j) - 1, 2);
+      }
+    }
+  }
+  return (sum / (residual_count_ / 2.0)).cwiseSqrt();
+}
+
+Eigen::Vector2d IwanObjective::constant_rms_errors() const {
+  // The constant c minimising sum ((c - y_j) / y_j)^2 is sum (1/y_j) / sum (1/y_j^2).
+  Eigen::Vector2d out;
+  for (int part = 0; part < 2; ++part) {
+    double s1 = 0, s2 = 0;
+    std::vector<double> y;
+    for (const IwanTarget& t : targets_)
+      for (const MeasuredBackbone& c : t.curves)
+        for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
+          y.push_back(part == 0 ? c.frequency_hz(j) : c.damping_ratio(j));
+    for (double v : y) s1 += 1 / v, s2 += 1 / (v * v);
+    const double best = s1 / s2;
+    double e = 0;
+    for (double v : y) e += std::pow(best / v - 1, 2);
+    out(part) = std::sqrt(e / static_cast<double>(y.size()));
+  }
+  return out;
+}
+
 std::optional<double> IwanObjective::linear_damping(const model::IwanParameters& p) const {
   std::vector<double> r(residual_count_);
   double z = 0;
@@ -186,7 +288,8 @@ Eigen::Vector2d IwanObjective::slip_range(const model::IwanParameters& p) const 
 }
 
 bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip_range,
-                             bool from_scratch, const double* z_fixed, double* z_used) const {
+                             bool from_scratch, const double* z_fixed, double* z_used,
+                             double* values) const {
   ++evaluations_;
   if (!model::iwan_parameter_error(p).empty()) return false;
   const double n_total = residual_count_ / 2.0;
@@ -249,6 +352,10 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
                                                                   : q.ringdown_damping_ratio;
           const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
           const double sz = std::max(c.damping_std(j), z_floor_ * std::abs(c.damping_ratio(j)));
+          if (values) {
+            values[k] = f;
+            values[k + 1] = z;
+          }
           r[k++] = (f - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
           if (sz > 0) {
             z_index.push_back(k);
@@ -273,6 +380,8 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
     z = den > 0 ? std::clamp(num / den, 0.0, z_max_) : 0.0;
   }
   for (size_t i = 0; i < z_index.size(); ++i) r[z_index[i]] += z * z_scale[i];
+  if (values)
+    for (int i = 1; i < residual_count_; i += 2) values[i] += z;
   if (z_used) *z_used = z;
   for (int i = 0; i < residual_count_; ++i) {
     if (!std::isfinite(r[i])) return false;
@@ -864,6 +973,8 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   s.modal_ratio_fitted = objective.fits_linear_damping();
   s.residuals = static_cast<size_t>(objective.residual_count());
   s.reference_stiffness = objective.reference_stiffness();
+  s.linear_known = std::any_of(objective.targets().begin(), objective.targets().end(),
+                               [](const IwanTarget& t) { return t.linear_frequency_hz > 0; });
   Tracker tr{objective, options, s, objective.evaluations()};
   s.initial_cost = objective.cost(s.start);
   std::mt19937 rng(options.seed);
@@ -930,11 +1041,21 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
       s.bound_side);
   if (!s.improved) s.at_bounds.clear(), s.bound_side.fill(0);  // the start: not a fit's end
   s.linear_error = objective.linear_error(s.best);
+  set_slips(objective, s);
+  if (const auto e = objective.rms_errors(s.best, s.modal_ratio)) s.rms_errors = *e;
+  s.constant_rms_errors = objective.constant_rms_errors();
   std::vector<int> free;
   for (int k = 0; k < 4; ++k)
     if (!s.held[k]) free.push_back(k);
   if (s.modal_ratio_fitted) free.push_back(4);
-  const Eigen::MatrixXd cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2);
+  Eigen::MatrixXd cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2);
+  // Microslip data fix R, not F_S and beta apart (a flat direction: H singular or nearly so):
+  // the covariance of the others with beta held (F_S then stands for R), beta's sigma unknown.
+  const auto beta = std::find(free.begin(), free.end(), 3);
+  if (beta != free.end() && (cov.size() == 0 || s.microslip_only())) {
+    free.erase(beta);
+    cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2);
+  }
   if (cov.size() > 0) {
     for (size_t i = 0; i < free.size(); ++i) {
       for (size_t j = 0; j < free.size(); ++j) {
@@ -947,7 +1068,6 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     const double sd = std::sqrt(std::max(s.covariance(k, k), 0.0));
     s.relative_std(k) = k != 2 ? sd : std::abs(s.best.chi) > 0 ? sd / std::abs(s.best.chi) : 0.0;
   }
-  set_slips(objective, s);
   return s.best;
 }
 
@@ -960,10 +1080,11 @@ std::string IwanUpdateSummary::report() const {
                               : monte_carlo ? "converged (a Monte Carlo round brought no gain)"
                                             : "converged (every local solve met its tolerance)";
   std::string out = fmt::format(
-      "Iwan update: {}, {} QSMA evaluations, {} {}, cost {:.4g} -> {:.4g}, linear frequency "
-      "error {:.3g} %\n",
-      outcome, evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements",
-      initial_cost, final_cost, 100 * linear_error);
+      "Iwan update: {}, {} QSMA evaluations, {} {}, cost {:.4g} -> {:.4g}, {}\n", outcome,
+      evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements", initial_cost,
+      final_cost,
+      linear_known ? fmt::format("linear frequency error {:.3g} %", 100 * linear_error)
+                   : std::string("no measured linear frequency to compare"));
   // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
   auto sigma = [&](int k) -> std::string {
     if (held[k]) return " (held)";
@@ -997,6 +1118,12 @@ std::string IwanUpdateSummary::report() const {
   }
   for (const std::string& b : at_bounds) {
     out += fmt::format("  WARNING: {}: the best fit may lie outside the range, widen it\n", b);
+  }
+  if (rms_errors.any()) {
+    out += fmt::format(
+        "  relative RMS error: frequency {:.3g}, damping {:.3g} (the best constants: {:.3g}, "
+        "{:.3g})\n",
+        rms_errors(0), rms_errors(1), constant_rms_errors(0), constant_rms_errors(1));
   }
   if (improved && reduced_chi2 > 0) {
     out += fmt::format("  reduced chi-square {:.3g}", reduced_chi2);

@@ -44,6 +44,7 @@
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/iwan_set_model.h"
+#include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
@@ -134,6 +135,24 @@ struct IwanUpdateOptions {
   std::string error() const;
 };
 
+/// A model's backbone as a measured one of `kind` would show it (the ring-down or steady-state
+/// pair; with IwanComparison::kSecant the secant pair), in the measured amplitude a =
+/// |phi| q omega^power (phi the shape at the measuring DOF, 1 and power 0 for the modal
+/// amplitude), at `points` amplitudes log-spaced over [a_lo, a_hi]; the model's own damping
+/// (JointCondensation::linear_damping) included.
+struct ModelBackbone {
+  Eigen::VectorXd amplitude;      ///< a [SI of the measured amplitude]
+  Eigen::VectorXd frequency_hz;   ///< f [Hz]
+  Eigen::VectorXd damping_ratio;  ///< zeta
+  bool clipped = false;  ///< true: the model does not reach the top of the range (no static
+                         ///< solution past its largest load) or fails below it; the curve stops
+};
+
+/// model_backbone() of elastic mode `mode` (1-based); InputError if there is no such mode.
+ModelBackbone model_backbone(const model::JointCondensation& model, int mode, double phi, int power,
+                             BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
+                             int points);
+
 /// The objective: QSMA of the set at given parameters against the measured backbones.
 class IwanObjective {
  public:
@@ -195,6 +214,18 @@ class IwanObjective {
   model::Model apply(const model::IwanParameters& p) const;
   /// A copy of the model with the set at p and its own damping ratio at z.
   model::Model apply(const model::IwanParameters& p, double z) const;
+  /// Per target, the model at (p, z) over its measured amplitude range (model_backbone(), with
+  /// its first curve's sensor, kind and the comparison of the options).
+  std::vector<ModelBackbone> model_curves(const model::IwanParameters& p, double z,
+                                          int points = 80) const;
+  /// Relative RMS errors (frequency, damping) of the model at (p, z) over every measured
+  /// point, (f_model - f_j) / f_j and (zeta_model - zeta_j) / zeta_j; nullopt if p cannot be
+  /// evaluated.
+  std::optional<Eigen::Vector2d> rms_errors(const model::IwanParameters& p, double z) const;
+  /// The same for the best constants (the constant minimising each relative RMS).
+  Eigen::Vector2d constant_rms_errors() const;
+  /// The targets (the measured backbones).
+  const std::vector<IwanTarget>& targets() const { return targets_; }
 
  private:
   const model::Model* model_;
@@ -217,8 +248,11 @@ class IwanObjective {
   mutable std::atomic<int> evaluations_ = 0;
   // Residuals at p; z_fixed (not null) sets the structure's own damping, else the model's or
   // the best (fitted); z_used (not null) receives it.
+  // values (not null, residual_count long) receives the model's frequency and damping (Z
+  // included) in the residuals' order.
   bool evaluate(const model::IwanParameters& p, double* r, Eigen::Vector2d* slip, bool from_scratch,
-                const double* z_fixed = nullptr, double* z_used = nullptr) const;
+                const double* z_fixed = nullptr, double* z_used = nullptr,
+                double* values = nullptr) const;
 };
 
 /// Why update_iwan() stopped.
@@ -242,9 +276,10 @@ struct IwanUpdateSummary {
   model::IwanParameters best;                                 ///< the updated parameters
   double initial_cost = 0;                                    ///< cost at start
   double final_cost = 0;                                      ///< cost at best
-  double linear_error = 0;  ///< relative linear-frequency error at best
-  int evaluations = 0;      ///< QSMA evaluations
-  int rounds = 0;           ///< Monte Carlo rounds or local starts
+  double linear_error = 0;    ///< relative linear-frequency error at best
+  bool linear_known = false;  ///< some target has a measured linear frequency (else no error)
+  int evaluations = 0;        ///< QSMA evaluations
+  int rounds = 0;             ///< Monte Carlo rounds or local starts
   IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;  ///< the method used
   bool improved = true;  ///< false: no sample beat the start (held parameters at their values)
   /// Free parameters that end at a bound of the search box, e.g. "Fs at its upper bound 2000 N".
@@ -271,6 +306,10 @@ struct IwanUpdateSummary {
   /// The best constant-backbone candidate's cost (a joint that barely slips, the frequency
   /// matched, Z fitted); 0 when Z is not fitted. The result is never worse.
   double constant_cost = 0;
+  /// Relative RMS errors of frequency and damping at best over every point (0 when unknown),
+  /// and of the best constants (the constant-backbone model's floor to beat).
+  Eigen::Vector2d rms_errors = Eigen::Vector2d::Zero();
+  Eigen::Vector2d constant_rms_errors = Eigen::Vector2d::Zero();
   /// Reduced chi-square at best: sum of squared normalised residuals over (2N - free
   /// parameters); about 1 when the model describes the data within their stated noise.
   double reduced_chi2 = 0;

@@ -52,6 +52,46 @@ class Curve {
 
   double omega2() const { return omega2_; }
 
+  // Puts a state whose coordinate lies within 1e-8 of an element's phi_max on the side of the
+  // kink the requested amplitude (ln s = target) is on: a converged state is within 1e-10 of
+  // the target in ln s, which near the kink may put r on the other side, where the Iwan tangent
+  // (and with it the ring-down damping) differs. Where the kink lies is extrapolated along the
+  // tangent dr/dalpha with the running slope d ln s / d ln alpha; the state is moved along the
+  // tangent to 1e-12 inside the requested side (an equilibrium error of order 1e-20) and its
+  // tangent and first-harmonic stiffness are left to be recomputed there.
+  void to_side_of(double target, double slope, State& st) const {
+    if (st.tangent.size() != st.r.size()) return;
+    for (const auto& [j, phi] : kinks_) {
+      const double r = st.r(j), t = st.tangent(j);
+      if (std::abs(std::abs(r) - phi) > 1e-8 * phi) continue;
+      const double sign = r < 0 ? -1.0 : 1.0;
+      if (!(sign * t > 0)) continue;  // the coordinate does not move with the load here
+      const double d_kink = (sign * phi - r) / t;  // alpha step to the kink
+      // d ln s / d alpha on the state's side: d ln q = (1 + p^T diag(h') t) / (omega_r^2 q)
+      // d alpha; the secant frequency adds (power / 2) (d ln alpha - d ln q), the first
+      // harmonic's change is of the order of the damping and left out.
+      Eigen::VectorXd h, dh;
+      m_.softening(st.r, h, dh);
+      const double q = (st.alpha + p_.dot(h)) / omega2_;
+      const double dlnq = (1 + p_.dot(dh.cwiseProduct(st.tangent))) / (omega2_ * q);
+      const double half = 0.5 * power_;
+      const double dlns =
+          frequency_ == AmplitudeFrequency::kSecant ? (1 - half) * dlnq + half / st.alpha : dlnq;
+      const double ln_s_kink = st.ln_s + (dlns > 0 ? dlns : slope / st.alpha) * d_kink;
+      const bool want_below = target < ln_s_kink;
+      const bool below = std::abs(r) < phi;
+      if (want_below == below) continue;
+      const double goal = sign * phi * (want_below ? 1 - 1e-12 : 1 + 1e-12);
+      const double step = (goal - r) / t;
+      st.alpha += step;
+      st.r += step * st.tangent;
+      st.exact_tangent = false;
+      st.tangent.resize(0);
+      st.k1.resize(0);
+      return;
+    }
+  }
+
   // Solves at alpha continuing from `from` (alpha 0: the unloaded structure).
   bool solve(double alpha, const State* from, State& out) const {
     out.alpha = alpha;
@@ -349,6 +389,12 @@ std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode
       } else if (!find(curve, target, at, slope, &reached)) {
         return {};
       }
+    }
+    if (reached && curve.near_kink(at.r)) {
+      State sided = at;
+      curve.to_side_of(std::log(s), slope, sided);
+      out.push_back({curve.point(sided), reached});
+      continue;
     }
     out.push_back({curve.point(at), reached});
   }

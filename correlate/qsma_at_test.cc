@@ -146,6 +146,37 @@ TEST(QsmaAt, FirstHarmonicAmplitudesGiveTheRingdownAndHarmonicColumns) {
 
 // A single mass on an Iwan element to ground (and nothing else): the load cannot exceed F_S, so
 // the amplitudes grow without bound as alpha approaches it. Below they are exact.
+// A point within 1e-11 of phi_max reports the ring-down damping of the side its amplitude is on
+// (issue 28: one 1e-10 below phi_max gave the post-knee 1.264e-2 instead of 9.374e-3). One mass
+// (q = x) on k0 with an Iwan element: below phi_max dE/dx = x (k0 + F'(x)), F' = K_T -
+// R x^(chi+1) / (chi+1); above it F' = 0, so the two sides differ by the tangent K_T - R ...
+// (here 30 % of the damping) while the amplitudes differ by 2e-11: each side to 1e-6.
+TEST(QsmaAt, APointAtTheKneeReportsTheSideItsAmplitudeIsOn) {
+  const model::IwanParameters iw{40.0, 2.0e6, -0.5, 0.2};
+  const double k0 = 1.0e6;
+  model::Model m;
+  m.mass.resize(1, 1);
+  m.mass.insert(0, 0) = 1.0;
+  m.stiffness.resize(1, 1);
+  m.stiffness.insert(0, 0) = k0;
+  m.joints.push_back(model::Joint{0, model::kGround, "iwan.j", iw.Kt, model::Iwan(iw)});
+  const model::JointCondensation jc(m);
+  const model::Iwan iwan(iw);
+  const double phi = iwan.phi_max();
+  for (const double eps : {1e-11, 3e-11, 1e-10}) {
+    for (const int side : {-1, 1}) {
+      const double x = phi * (1 + side * eps);
+      const auto at = qsma_at(jc, 1, 0, {0.5 * phi, x}, AmplitudeFrequency::kFirstHarmonic);
+      ASSERT_EQ(at.size(), 2u);
+      const double tangent = side < 0 ? iwan.tangent(phi * (1 - 1e-9)) : 0.0;
+      const double expected = iwan.dissipation(x) / (2 * std::numbers::pi * x * x * (k0 + tangent));
+      EXPECT_TRUE(testing::Close(at[1].point.ringdown_damping_ratio, expected, 1e-6))
+          << "eps " << eps << " side " << side << ": " << at[1].point.ringdown_damping_ratio
+          << " vs " << expected;
+    }
+  }
+}
+
 TEST(QsmaAt, AmplitudesUpToTheLimitLoad) {
   model::Model m;
   m.mass.resize(1, 1);

@@ -7,6 +7,7 @@
 #include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/update_settings.h"
 #include "jointlab/core/error.h"
+#include "jointlab/data/backbone_table.h"
 #include "jointlab/modal/stepped_sine_output.h"
 
 namespace jointlab::campaign {
@@ -108,6 +109,31 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     sine.linear_frequency_hz = modes[k].linear_frequency_hz;
     modes.push_back(std::move(sine));
   }
+  // Each mode's backbone tables (any source): one more entry of the same model mode, one curve
+  // per table at the reference channel, each point weighed by its own uncertainty.
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    if (c.modes[k].backbones.empty()) continue;
+    ModeBackbones tables;
+    tables.name = c.modes[k].name + " (backbone tables)";
+    tables.model_mode = c.modes[k].model_mode;
+    tables.fitted = c.iwan_update.fits(c.modes[k].name);
+    tables.linear_frequency_hz = modes[k].linear_frequency_hz;
+    for (const std::filesystem::path& f : c.modes[k].backbones) {
+      const data::BackboneTable t = data::read_backbone_table(f);
+      Curve cv;
+      cv.id = "table " + f.filename().string();  // never a hit's id: no slip screen across
+      cv.amplitude = t.amplitude;
+      cv.frequency_hz = t.frequency_hz;
+      cv.damping = t.damping_ratio;
+      cv.time_s = Eigen::VectorXd::Zero(t.size());
+      tables.curves.push_back(std::move(cv));
+      tables.frequency_std_hz.push_back(t.frequency_std_hz);
+      tables.damping_std.push_back(t.damping_std);
+      tables.sensors.push_back(m.reference[k]);
+    }
+    tables.scatter = summarize_scatter(tables.curves, ScatterOptions{});
+    modes.push_back(std::move(tables));
+  }
   return modes;
 }
 
@@ -196,6 +222,13 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
                   100 * to.max_slip_share));
   io.bounds = correlate::default_iwan_bounds(objective.initial());
+  // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
+  if (progress) {
+    io.progress = [&](int evaluations, double best) {
+      if (evaluations % 250 == 0)
+        say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
+    };
+  }
   step.summary = fit_iwan(objective, io, say);
   step.beta_held = step.summary.microslip_only() || io.fixed_beta.has_value();
   step.curves = static_cast<int>(targets.curves());

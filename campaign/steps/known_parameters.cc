@@ -185,7 +185,8 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
   }
   s.tables.push_back(tb);
   std::string verdict =
-      missed.empty()
+      judged == 0 ? std::string("no quantity was identified by an update, so none is judged")
+      : missed.empty()
           ? fmt::format("the update recovers all {} identified quantities within the tolerance",
                         judged)
           : fmt::format("the update recovers {} of {} identified quantities; NOT recovered: {}",
@@ -201,9 +202,13 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
   s.paragraphs.push_back(fmt::format(
       "Known parameters ({}): {}. Tolerance: twice the planted one-sigma hit-to-hit scatter "
       "(Kt {:.1f} %, Fs {:.1f} %); where none was planted (chi, beta), twice the update's own "
-      "one-sigma uncertainty, which the planted scatter causes (cluster-robust: the {} hits' "
-      "backbones are the independent samples, not their points).{}",
-      truth_name, verdict, 100 * k.truth.scatter_kt, 100 * k.truth.scatter_fs, k.curves, micro));
+      "one-sigma uncertainty, which the planted scatter causes{}.{}",
+      truth_name, verdict, 100 * k.truth.scatter_kt, 100 * k.truth.scatter_fs,
+      k.curves > 0 ? fmt::format(" (robust to correlated points: the {} hits' backbones, not "
+                                 "their points, are the independent samples)",
+                                 k.curves)
+                   : std::string(),
+      micro));
 }
 
 }  // namespace jointlab::campaign

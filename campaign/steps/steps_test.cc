@@ -285,6 +285,30 @@ TEST_F(Steps, IwanUpdateFromTheTruth) {
 // 339.4), the matched one the lower, since the hits are ring-downs of that model.
 // `linear_damping`: "hold" by default, "fit" identifies the model's own damping as
 // update-iwan --linear-damping fit; anything else is refused at its line by name.
+// [[mode]] backbones = [...]: each table becomes one more curve of the mode's model mode at
+// its reference channel, with its own uncertainties (here one hit's backbone written as a table,
+// rows reversed: the reader sorts them).
+TEST_F(Steps, ModeBackboneTablesJoinTheIwanTargets) {
+  const Curve& hit = measured_->curves[0].front();
+  const fs::path table = testing::scratch_path("campaign_steps_tables", "table.csv");
+  std::string text = "amplitude,frequency_hz,damping_ratio\n";
+  for (Eigen::Index i = 0; i < hit.amplitude.size(); ++i)
+    text += fmt::format("{:.17g},{:.17g},{:.17g}\n", hit.amplitude(i), hit.frequency_hz(i),
+                        hit.damping(i));
+  testing::write_text(table.string(), text);
+  Campaign c = *campaign_;
+  c.modes[0].backbones = {table};
+  const std::vector<ModeBackbones> modes = campaign_backbones(c, *measured_);
+  ASSERT_EQ(modes.size(), campaign_backbones(*campaign_, *measured_).size() + 1);
+  const ModeBackbones& t = modes.back();
+  EXPECT_EQ(t.model_mode, c.modes[0].model_mode);
+  ASSERT_EQ(t.curves.size(), 1u);
+  EXPECT_EQ(t.sensors, std::vector<int>{measured_->reference[0]});
+  ASSERT_EQ(t.curves[0].amplitude.size(), hit.amplitude.size());
+  EXPECT_EQ(t.curves[0].amplitude.minCoeff(), hit.amplitude.minCoeff());
+  EXPECT_EQ(t.curves[0].amplitude(0), hit.amplitude.minCoeff());  // sorted
+}
+
 TEST_F(Steps, IwanLinearDampingSetting) {
   correlate::IwanUpdateOptions io;
   IwanTargetOptions to;

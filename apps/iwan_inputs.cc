@@ -1,0 +1,213 @@
+#include "jointlab/apps/iwan_inputs.h"
+
+#include <algorithm>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "jointlab/apps/print.h"
+#include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/core/error.h"
+#include "jointlab/correlate/measured_data.h"
+#include "jointlab/data/backbone_table.h"
+#include "jointlab/model/linear_modes.h"
+#include "jointlab/model/sim/simulated_record.h"
+
+namespace jointlab::apps {
+namespace {
+
+IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std::string& command) {
+  if (a.modes.size() != 1 || a.modes.front().find(':') != std::string::npos) {
+    throw InputError(command +
+                     ": with --backbone give one --mode R (the model mode every table belongs to)");
+  }
+  if (!a.stepped_sine.empty() || !a.channels.empty() || !a.measured.empty()) {
+    throw InputError(command +
+                     ": --backbone replaces --measured (with --channel and --stepped-sine)");
+  }
+  correlate::IwanTarget t;
+  try {
+    size_t used = 0;
+    t.mode = std::stoi(a.modes.front(), &used);
+    if (used != a.modes.front().size()) throw std::invalid_argument(a.modes.front());
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("--mode {}: expected R, an integer from 1", a.modes.front()));
+  }
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  const int elastic = linear.size() - linear.rigid_count;
+  if (t.mode < 1 || t.mode > elastic) {
+    throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes",
+                                 a.modes.front(), t.mode, a.model, elastic));
+  }
+  const std::string quantity = a.amplitude.empty() ? "modal" : a.amplitude;
+  correlate::AmplitudeQuantity amplitude = correlate::AmplitudeQuantity::kVelocity;
+  std::vector<correlate::Sensor> sensors;
+  if (quantity == "modal") {
+    if (!a.dof.empty()) {
+      throw InputError(
+          "--dof: a modal amplitude is measured at no DOF (give --amplitude "
+          "displacement, velocity or acceleration)");
+    }
+  } else {
+    if (a.dof.empty()) {
+      throw InputError(fmt::format(
+          "--amplitude {}: give --dof NODE:COMP (or a 0-based index), where it was measured",
+          quantity));
+    }
+    amplitude = quantity == "displacement" ? correlate::AmplitudeQuantity::kDisplacement
+                : quantity == "velocity"   ? correlate::AmplitudeQuantity::kVelocity
+                                           : correlate::AmplitudeQuantity::kAcceleration;
+    correlate::Sensor s;
+    s.dof = model::resolve_dof(m, a.dof, "--dof");
+    s.channel = model::dof_name(m, s.dof);
+    sensors.push_back(s);
+  }
+  for (const std::string& file : a.backbones) {
+    t.curves.push_back(
+        correlate::measured_backbone(data::read_backbone_table(file), sensors.empty() ? -1 : 0));
+  }
+  IwanInputs in;
+  for (const std::string& file : a.backbones)
+    in.data_name += (in.data_name.empty() ? "" : ", ") + file;
+  in.sensors = std::move(sensors);
+  in.targets = {std::move(t)};
+  in.amplitude = amplitude;
+  in.modal = quantity == "modal";
+  return in;
+}
+
+}  // namespace
+
+IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
+                            const std::string& command) {
+  if (!a.backbones.empty()) return table_inputs(m, a, command);
+  if (a.measured.empty() || a.sensors.empty()) {
+    throw InputError(command +
+                     ": give --measured DIR with --sensors FILE, or --backbone FILE (repeatable)");
+  }
+  if (!a.amplitude.empty() || !a.dof.empty()) {
+    throw InputError(command +
+                     ": --amplitude and --dof describe --backbone tables; a --measured folder "
+                     "records its own amplitude quantity and sensors");
+  }
+  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
+  const correlate::ProcessRun run = correlate::read_process_run(a.measured);
+  std::vector<int> bands;
+  const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  const int elastic = linear.size() - linear.rigid_count;
+  std::vector<campaign::ModeBackbones> modes;
+  for (const std::string& spec : a.modes) {
+    correlate::IwanTarget t;
+    int band = 0;
+    const size_t colon = spec.find(':');
+    try {
+      size_t used = 0;
+      t.mode = std::stoi(spec.substr(0, colon), &used);
+      if (used != spec.substr(0, colon).size()) throw std::invalid_argument(spec);
+      if (colon != std::string::npos) {
+        band = std::stoi(spec.substr(colon + 1), &used);
+        if (used != spec.size() - colon - 1) throw std::invalid_argument(spec);
+      }
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("--mode {}: expected R or R:BAND (integers from 1)", spec));
+    }
+    if (t.mode < 1 || (colon != std::string::npos && band < 1)) {
+      throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
+    }
+    if (t.mode > elastic) {
+      throw InputError(
+          fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes (1 to {})",
+                      spec, t.mode, a.model, elastic, elastic));
+    }
+    if (colon != std::string::npos &&
+        std::none_of(run.bands.begin(), run.bands.end(),
+                     [&](const correlate::ProcessBand& b) { return b.band == band; })) {
+      std::set<int> numbers;
+      for (const correlate::ProcessBand& b : run.bands) numbers.insert(b.band);
+      std::string have;
+      for (int b : numbers) have += (have.empty() ? "" : ", ") + std::to_string(b);
+      throw InputError(fmt::format("--mode {}: {} has no band {} (bands: {})", spec, a.measured,
+                                   band, have.empty() ? "none" : have));
+    }
+    int col = -1;
+    if (colon == std::string::npos) {
+      col = correlate::measured_mode_of(m, sensors, measured, t.mode, 0.6);
+      if (col < 0) {
+        throw InputError(
+            fmt::format("--mode {}: no measured band pairs with model mode {} by MAC; give R:BAND",
+                        spec, t.mode));
+      }
+      band = bands[static_cast<size_t>(col)];
+    } else {
+      for (size_t i = 0; i < bands.size(); ++i) {
+        if (bands[i] == band) col = static_cast<int>(i);
+      }
+    }
+    // Every band's backbones with their scatter summary; targets built as `run` builds them.
+    campaign::ModeBackbones mb =
+        campaign::process_run_backbones(run, sensors, band, a.channels, campaign::ScatterOptions{});
+    mb.name = "mode " + spec;
+    mb.model_mode = t.mode;
+    if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
+    modes.push_back(std::move(mb));
+  }
+  if (!a.stepped_sine.empty()) {
+    int sensor = 0;
+    if (!a.stepped_sine_channel.empty()) {
+      sensor = correlate::find_sensor(sensors, a.stepped_sine_channel);
+      if (sensor < 0) {
+        throw InputError(fmt::format("--stepped-sine-channel {}: not in the sensors file {}",
+                                     a.stepped_sine_channel, a.sensors));
+      }
+    } else if (sensors.size() != 1) {
+      throw InputError(
+          "--stepped-sine: give --stepped-sine-channel, the sensor the sweeps' response was "
+          "measured at");
+    }
+    const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : modes.front().model_mode;
+    for (const std::string& dir : a.stepped_sine) {
+      const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
+      if (ss.amplitude != run.amplitude) {
+        throw InputError(fmt::format(
+            "--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
+            "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
+            dir, a.measured));
+      }
+      campaign::ModeBackbones mb =
+          campaign::stepped_sine_run_backbones(ss, sensor, campaign::ScatterOptions{});
+      mb.name = fmt::format("stepped sine {}", dir);
+      mb.model_mode = mode;
+      modes.push_back(std::move(mb));
+    }
+  }
+  campaign::IwanTargetOptions target_options;
+  target_options.amplitude = run.amplitude;
+  const campaign::IwanTargets built = campaign::iwan_targets(m, sensors, modes, target_options);
+  // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
+  // say that rather than that nothing was measured.
+  if (modes.size() > 1) {
+    say(stdout, "slip screen (points where other modes slip the joints):\n{}",
+        built.screen_report(modes));
+  }
+  if (built.fitted.empty()) {
+    std::string per_mode;
+    for (size_t k = 0; k < modes.size(); ++k) {
+      per_mode += fmt::format("{}{}: {} of {}", per_mode.empty() ? "" : ", ", modes[k].name,
+                              built.points_screened[k].second, built.points_screened[k].first);
+    }
+    throw InputError(fmt::format(
+        "{}: the slip screen leaves no backbone of at least two points: every point where other "
+        "modes carry over {:g} % of the joint slip is left out ({}); fit the modes one at a time",
+        command, 100 * target_options.max_slip_share, per_mode));
+  }
+  IwanInputs in;
+  in.sensors = sensors;
+  in.targets = built.fitted;
+  in.amplitude = run.amplitude;
+  in.measured = measured;
+  in.data_name = a.measured;
+  return in;
+}
+
+}  // namespace jointlab::apps

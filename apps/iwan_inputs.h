@@ -1,0 +1,44 @@
+// The measured side of `update-iwan` and `compare`: a `process` folder with its sensors (and
+// stepped-sine folders), or plain backbone tables (data/backbone_table.h) of a modal amplitude or
+// of a quantity at a model DOF, turned into the Iwan update's targets (campaign/iwan_targets.h
+// for a process folder, as `run` builds them). Argument handling only: the readers and the
+// targets are library code.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/correlate/linear_update.h"
+#include "jointlab/correlate/sensors.h"
+#include "jointlab/model/model_file.h"
+
+namespace jointlab::apps {
+
+/// The options naming the measured backbones.
+struct IwanInputArgs {
+  std::string model, measured, sensors;
+  std::vector<std::string> modes, channels, stepped_sine;
+  std::vector<std::string> backbones;  ///< --backbone tables
+  std::string amplitude, dof;          ///< --amplitude, --dof (of the --backbone tables)
+  std::string stepped_sine_channel;
+  int stepped_sine_mode = 0;
+};
+
+/// The measured backbones as targets.
+struct IwanInputs {
+  std::vector<correlate::Sensor> sensors;      ///< the sensors (one DOF for --dof, none: modal)
+  std::vector<correlate::IwanTarget> targets;  ///< the fitted modes' targets
+  correlate::AmplitudeQuantity amplitude = correlate::AmplitudeQuantity::kVelocity;
+  bool modal = false;                                ///< amplitudes are modal (q)
+  std::optional<correlate::MeasuredModes> measured;  ///< the measured linear modes (process)
+  std::string data_name;                             ///< for messages
+};
+
+/// Reads the measured side named by `a` against model `m`; InputError prefixed by `command`.
+/// With several process modes it prints, per mode, the points the slip screen leaves out.
+IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
+                            const std::string& command);
+
+}  // namespace jointlab::apps
