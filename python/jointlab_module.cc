@@ -15,6 +15,9 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
+#include "jointlab/correlate/linear_update.h"
+#include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/sensors.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/data/table_writer.h"
 #include "jointlab/modal/process.h"
@@ -22,6 +25,7 @@
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
+#include "jointlab/model/model_file_writer.h"
 #include "jointlab/model/qsma.h"
 #include "jointlab/model/qsma_output.h"
 
@@ -65,13 +69,13 @@ void report(const py::object& progress, const std::string& line) {
 
 /// One backbone of process(): its identity, linear values and columns (set as attributes).
 struct Backbone {
-  std::string file;                    // the record processed
-  std::string channel;                 // its channel
-  int band = 0;                        // 1-based band
-  double linear_frequency_hz = 0;      // natural frequency at zero amplitude [Hz]
-  double linear_damping_ratio = 0;     // damping ratio at zero amplitude
+  std::string file;                        // the record processed
+  std::string channel;                     // its channel
+  int band = 0;                            // 1-based band
+  double linear_frequency_hz = 0;          // natural frequency at zero amplitude [Hz]
+  double linear_damping_ratio = 0;         // damping ratio at zero amplitude
   std::complex<double> complex_amplitude;  // operating-shape entry [m]
-  std::string report;                  // the summary paragraph of the band
+  std::string report;                      // the summary paragraph of the band
 };
 
 py::list process(const std::vector<std::string>& files,
@@ -205,6 +209,105 @@ class Model {
   model::Model model_;
 };
 
+// update-linear: the same inputs, options and defaults as the command; the result as Python
+// values, and the updated model file written when `out` is given.
+py::dict update_linear(const std::string& model_path, const std::vector<std::string>& sets,
+                       const std::string& sensors_path, const std::optional<std::string>& measured,
+                       const std::optional<std::string>& modes_table, const std::string& rule,
+                       const std::optional<std::string>& minimize, double tolerance,
+                       double frequency_window, double mac_threshold, double frequency_std,
+                       const std::vector<std::string>& hold, const std::optional<std::string>& out,
+                       const py::object& progress) {
+  correlate::LinearUpdateOptions o;
+  o.frequency_window = frequency_window;
+  o.mac_threshold = mac_threshold;
+  o.frequency_std = frequency_std;
+  o.tolerance = tolerance;
+  if (rule == "smallest") {
+    o.rule = correlate::LinearRule::kSmallest;
+    if (!minimize) throw InputError("update-linear: --rule smallest needs --minimize NAME");
+    o.smallest_set = *minimize;
+    if (!(o.tolerance > 0)) o.tolerance = 0.01;  // the paper's 1 %, as the command
+  } else if (rule != "least-squares") {
+    throw InputError(fmt::format("--rule {}: expected least-squares or smallest", rule));
+  }
+  for (const std::string& h : hold) {
+    const size_t eq = h.rfind('=');
+    correlate::ParameterHold ph{h.substr(0, eq), 0};
+    if (eq != std::string::npos) {
+      try {
+        ph.value = std::stod(h.substr(eq + 1));
+      } catch (const std::exception&) {
+        throw InputError(fmt::format("--hold {}: expected NAME[=VALUE]", h));
+      }
+    }
+    o.holds.push_back(ph);
+  }
+  if (const std::string e = o.error(); !e.empty())
+    throw InputError(fmt::format("update-linear: {}", e));
+  if (measured.has_value() == modes_table.has_value())
+    throw InputError("update-linear: give either --measured DIR or --modes-table FILE");
+  o.progress = [&progress](int iteration, double cost, double largest) {
+    report(progress, fmt::format("update-linear: iteration {}, cost {:.4g}, largest frequency "
+                                 "error {:.3g} %",
+                                 iteration, cost, 100 * largest));
+  };
+  correlate::LinearUpdateSummary s;
+  Eigen::VectorXd theta;
+  model::Model updated;
+  {
+    py::gil_scoped_release release;
+    const model::Model m = model::read_model(model_path);
+    const std::vector<correlate::Sensor> sensors = correlate::read_sensors(sensors_path, m);
+    const correlate::MeasuredModes meas =
+        measured ? correlate::measured_modes(correlate::read_process_run(*measured), sensors)
+                 : correlate::read_modes_table(*modes_table, sensors, nullptr);
+    theta = correlate::update_linear(m, sets, sensors, meas, o, &s);
+    if (s.status == correlate::LinearUpdateStatus::kTooFewPairs)
+      throw InputError(fmt::format("update-linear: no measured mode of {} pairs with a model mode",
+                                   measured ? *measured : *modes_table));
+    if (s.status == correlate::LinearUpdateStatus::kAmbiguous)
+      throw InputError(fmt::format("update-linear: the pairs cannot be decided: {}", s.ambiguity));
+    updated = correlate::StiffnessSets(m, sets).apply(theta);
+    if (out) model::write_model_file(std::filesystem::path(*out), updated);
+  }
+  py::dict parameters;
+  for (const correlate::ParameterReport& p : s.parameters) {
+    py::dict d;
+    d["initial"] = p.start;
+    d["final"] = p.value;
+    d["relative_std"] = p.relative_std ? py::object(py::float_(*p.relative_std)) : py::none();
+    d["sensitivity"] = p.sensitivity;
+    d["flat"] = p.flat;
+    d["held"] = p.held;
+    d["at_bound"] = p.at_bound;
+    parameters[py::str(p.name)] = d;
+  }
+  py::list modes;
+  const correlate::LinearEvaluation& e = s.final;
+  for (Eigen::Index i = 0; i < e.measured_frequency_hz.size(); ++i) {
+    const int j = e.pairing.model_for(static_cast<int>(i));
+    py::dict d;
+    d["measured"] = i + 1;
+    d["frequency_hz"] = e.measured_frequency_hz(i);
+    d["model_mode"] = j < 0 ? py::object(py::none()) : py::object(py::int_(j + 1));
+    d["model_frequency_hz"] =
+        j < 0 ? py::object(py::none()) : py::object(py::float_(e.model_frequency_hz(i)));
+    d["error"] = j < 0 ? py::object(py::none()) : py::object(py::float_(e.residuals(i)));
+    d["mac"] = j < 0 ? py::object(py::none()) : py::object(py::float_(e.mac(i, j)));
+    modes.append(d);
+  }
+  py::dict result;
+  result["parameters"] = parameters;
+  result["modes"] = modes;
+  result["rule"] = s.rule;
+  result["converged"] = s.status == correlate::LinearUpdateStatus::kConverged;
+  result["reduced_chi2"] = s.reduced_chi2;
+  result["warnings"] = s.warnings;
+  result["report"] = s.report();
+  return result;
+}
+
 }  // namespace
 }  // namespace jointlab::python
 
@@ -247,8 +350,8 @@ callable is given.
                            b.channel, b.band, b.linear_frequency_hz, b.linear_damping_ratio);
       });
 
-  m.def("process", &process, py::arg("files"), py::arg("bands") = py::none(),
-        py::arg("modes") = 0, py::arg("channels") = py::none(), py::arg("quantity") = py::none(),
+  m.def("process", &process, py::arg("files"), py::arg("bands") = py::none(), py::arg("modes") = 0,
+        py::arg("channels") = py::none(), py::arg("quantity") = py::none(),
         py::arg("amplitude") = "velocity", py::arg("progress") = py::none(),
         R"(Impact ring-downs -> natural frequency and damping versus amplitude (`jointlab process`).
 
@@ -281,6 +384,33 @@ written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy arra
     acc1 = rec["data"]["acc1"]          # m/s^2
 )");
 
+  m.def(
+      "update_linear", &update_linear, py::arg("model"), py::arg("sets"), py::arg("sensors"),
+      py::arg("measured") = py::none(), py::arg("modes_table") = py::none(),
+      py::arg("rule") = "least-squares", py::arg("minimize") = py::none(),
+      py::arg("tolerance") = 0.0, py::arg("frequency_window") = 0.5, py::arg("mac_threshold") = 0.6,
+      py::arg("frequency_std") = 1e-3, py::arg("hold") = std::vector<std::string>{},
+      py::arg("out") = py::none(), py::arg("progress") = py::none(),
+      R"(Updates named joint stiffness sets to measured linear frequencies (`jointlab update-linear`).
+
+model          model file (TOML)
+sets           element names to update, e.g. ["iwan.rivet", "spring.rz"]
+sensors        sensors file (channel,dof[,sign])
+measured       a `jointlab process` output folder, or modes_table: mode,frequency_hz[,<channel>...]
+rule           'least-squares' (default) or 'smallest' (with minimize=NAME, tolerance default 0.01)
+frequency_window, mac_threshold, frequency_std, hold=["NAME[=VALUE]"]: as the command's options
+out            write the updated model file here (its matrices beside it), or None
+
+Pairs are made by sensor MAC within the frequency window and followed by full shape (see
+docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final, relative_std or
+None, sensitivity, flat, held, at_bound), 'modes' (measured, frequency_hz, model_mode,
+model_frequency_hz, error, mac; None where unpaired), 'rule', 'converged', 'reduced_chi2',
+'warnings', 'report'. Undecidable pairs raise InputError naming the modes.
+
+    r = jointlab.update_linear("model.toml", ["iwan.rivet"], "sensors.csv", measured="processed")
+    r["parameters"]["iwan.rivet"]["final"]
+)");
+
   py::class_<Model>(m, "Model", R"(A model file (TOML with Matrix Market matrices), read once.
 
     model = jointlab.Model("model.toml")
@@ -290,8 +420,9 @@ written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy arra
 )")
       .def(py::init<const std::string&>(), py::arg("path"))
       .def_property_readonly("path", &Model::path)
-      .def("modes", &Model::modes, py::arg("count") = 20,
-           R"(The elastic natural frequencies [Hz] among the lowest `count` modes (as `jointlab modes
+      .def(
+          "modes", &Model::modes, py::arg("count") = 20,
+          R"(The elastic natural frequencies [Hz] among the lowest `count` modes (as `jointlab modes
 --count`, rigid-body modes left out), every joint at its linear stiffness, ascending.)")
       .def("qsma", &Model::qsma, py::arg("mode"), py::arg("points") = 50,
            py::arg("qmin") = py::none(), py::arg("qmax") = py::none(),

@@ -125,3 +125,49 @@ def test_progress_is_silent_unless_asked(capfd):
     assert lines == [f"process: {RECORD}"]
     out, err = capfd.readouterr()
     assert out == "" and err == ""
+
+
+def two_mass_spring_model(directory, kj):
+    """Two 1 kg masses, each on a 1e5 N/m ground spring, joined by the joint spring.kj."""
+    d = pathlib.Path(directory)
+    (d / "M.mtx").write_text(
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 1.0\n2 2 1.0\n")
+    (d / "K.mtx").write_text(
+        "%%MatrixMarket matrix coordinate real symmetric\n2 2 2\n1 1 1.0e5\n2 2 2.0e5\n")
+    (d / "model.toml").write_text(
+        '[matrices]\nmass = "M.mtx"\nstiffness = "K.mtx"\n\n'
+        f"[spring]\nkj = {kj!r}\n\n"
+        '[[joint]]\na = 0\nb = 1\nelement = "spring.kj"\n')
+    return d / "model.toml"
+
+
+def test_update_linear_equals_the_command_line(tmp_path):
+    # Measured: the two modes of the truth kj = 4e4 N/m with their shapes at both masses.
+    truth = 4e4
+    k = np.array([[1e5 + truth, -truth], [-truth, 2e5 + truth]])
+    w2, phi = np.linalg.eigh(k)
+    table = tmp_path / "modes.csv"
+    table.write_text("mode,frequency_hz,s0,s1\n" + "".join(
+        f"{i + 1},{np.sqrt(w2[i]) / (2 * np.pi)!r},{phi[0, i]!r},{phi[1, i]!r}\n"
+        for i in range(2)))
+    (tmp_path / "sensors.csv").write_text("channel,dof\ns0,0\ns1,1\n")
+    model = two_mass_spring_model(tmp_path, 1.2e5)
+    r = run("update-linear", model, "--modes-table", table, "--sensors", tmp_path / "sensors.csv",
+            "--set", "spring.kj", "--out", tmp_path / "cli")
+    assert r.returncode == 0, r.stderr
+    with open(tmp_path / "cli" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    lines = []
+    result = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                                    modes_table=str(table), progress=lines.append)
+    p = result["parameters"]["spring.kj"]
+    assert_close(p["final"], float(cli["spring.kj"]["final"]))
+    assert abs(p["final"] / truth - 1) < 1e-6  # noise-free data: the truth
+    assert result["converged"]
+    assert [m["model_mode"] for m in result["modes"]] == [1, 2]
+    assert lines and lines[0].startswith("update-linear: iteration")
+    # A shape that is zero at every sensor is refused as by the command.
+    table.write_text("mode,frequency_hz,s0,s1\n1,50.0,0,0\n2,80.0,1,1\n")
+    with pytest.raises(jointlab.InputError, match="zero at every sensor"):
+        jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                               modes_table=str(table))
