@@ -6,6 +6,7 @@
 #include <string>
 
 #include <fmt/format.h>
+#include <glog/logging.h>
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
@@ -14,6 +15,11 @@
 #include "jointlab/core/text.h"
 
 int main(int argc, char** argv) {
+  // Ceres logs through glog; the optimisers' outcomes reach the user through their summaries,
+  // so its own lines (a rejected trial point, "Logging before InitGoogleLogging") stay out of
+  // the program's stderr.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  google::InitGoogleLogging(argc > 0 ? argv[0] : "jointlab");
   CLI::App app{
       "jointlab: amplitude-dependent natural frequency and damping of jointed structures.\n"
       "Test side: 'process' turns impact ring-downs into backbones (frequency and damping\n"

@@ -715,6 +715,7 @@ void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>*
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
     so.max_num_iterations = 50;
+    so.logging_type = ceres::SILENT;  // outcomes reach the user through the summary
     so.function_tolerance = 1e-10;
     so.parameter_tolerance = 1e-8;
     BudgetCallback cb(tr, limit);

@@ -441,6 +441,7 @@ ceres::TerminationType fit(const LinearProblem& p, TrackedPoint& point,
   ceres::Solver::Options so;
   so.max_num_iterations = p.options.max_iterations;
   so.linear_solver_type = ceres::DENSE_QR;
+  so.logging_type = ceres::SILENT;  // outcomes reach the user through the summary
   so.function_tolerance = 1e-12;
   so.gradient_tolerance = 1e-14;
   so.parameter_tolerance = 1e-10;
