@@ -730,6 +730,24 @@ void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>*
   tr.summary.status = converged ? IwanUpdateStatus::kConverged : IwanUpdateStatus::kBudget;
 }
 
+// The points of each curve (the index of each point's frequency residual; its damping residual
+// follows), ordered by amplitude: the order serial correlation runs in.
+std::vector<std::vector<int>> points_by_amplitude(const IwanObjective& objective) {
+  const std::vector<int>& curve = objective.residual_curve();
+  const std::vector<double>& amp = objective.residual_amplitude();
+  const int m = static_cast<int>(curve.size());
+  std::vector<std::vector<int>> out;
+  for (int begin = 0; begin < m;) {
+    int end = begin;
+    while (end < m && curve[end] == curve[begin]) ++end;
+    std::vector<int>& points = out.emplace_back();
+    for (int i = begin; i < end; i += 2) points.push_back(i);
+    std::stable_sort(points.begin(), points.end(), [&](int a, int b) { return amp[a] < amp[b]; });
+    begin = end;
+  }
+  return out;
+}
+
 // Newey-West (HAC) estimate of S = Var(sum of scores) for residuals r with Jacobian J: each
 // curve's points ordered by amplitude, the score of a point g_t = J_t^T r_t over its frequency
 // and damping residuals, S = sum over curves of sum_t g_t g_t^T + sum_{l=1..L} w_l (g_t g_{t-l}^T
@@ -740,18 +758,9 @@ void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>*
 // point 5).
 Eigen::MatrixXd hac_scores(const IwanObjective& objective, const Eigen::MatrixXd& J,
                            const Eigen::VectorXd& r) {
-  const std::vector<int>& curve = objective.residual_curve();
-  const std::vector<double>& amp = objective.residual_amplitude();
   const Eigen::Index nf = J.cols();
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(nf, nf);
-  const int m = static_cast<int>(curve.size());
-  for (int begin = 0; begin < m;) {
-    int end = begin;
-    while (end < m && curve[end] == curve[begin]) ++end;
-    // Points (residual pairs) of this curve by amplitude.
-    std::vector<int> points;
-    for (int i = begin; i < end; i += 2) points.push_back(i);
-    std::stable_sort(points.begin(), points.end(), [&](int a, int b) { return amp[a] < amp[b]; });
+  for (const std::vector<int>& points : points_by_amplitude(objective)) {
     const int n = static_cast<int>(points.size());
     Eigen::MatrixXd g(nf, n);
     for (int t = 0; t < n; ++t) {
@@ -765,7 +774,6 @@ Eigen::MatrixXd hac_scores(const IwanObjective& objective, const Eigen::MatrixXd
       const Eigen::MatrixXd G = g.rightCols(n - l) * g.leftCols(n - l).transpose();
       S += w * (G + G.transpose());
     }
-    begin = end;
   }
   return S;
 }
@@ -776,16 +784,8 @@ Eigen::MatrixXd hac_scores(const IwanObjective& objective, const Eigen::MatrixXd
 // tau is the effective number of independent points. The same curve sampled ten times more
 // densely has tau about ten times larger, so Gauss-Newton times tau does not depend on density.
 double residual_correlation_time(const IwanObjective& objective, const Eigen::VectorXd& r) {
-  const std::vector<int>& curve = objective.residual_curve();
-  const std::vector<double>& amp = objective.residual_amplitude();
-  const int m = static_cast<int>(curve.size());
   double c0 = 0, sum = 0;
-  for (int begin = 0; begin < m;) {
-    int end = begin;
-    while (end < m && curve[end] == curve[begin]) ++end;
-    std::vector<int> points;
-    for (int i = begin; i < end; i += 2) points.push_back(i);
-    std::stable_sort(points.begin(), points.end(), [&](int a, int b) { return amp[a] < amp[b]; });
+  for (const std::vector<int>& points : points_by_amplitude(objective)) {
     const int n = static_cast<int>(points.size());
     const int lags = std::max(1, static_cast<int>(std::ceil(n / 10.0)));
     for (int part = 0; part < 2; ++part) {  // frequency, damping
@@ -796,7 +796,6 @@ double residual_correlation_time(const IwanObjective& objective, const Eigen::Ve
         sum += 2 * (1.0 - l / (lags + 1.0)) * c;
       }
     }
-    begin = end;
   }
   return c0 > 0 ? 1 + sum / c0 : 1.0;
 }
