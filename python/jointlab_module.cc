@@ -15,11 +15,14 @@
 
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
+#include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
+#include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
+#include "jointlab/data/backbone_table.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/data/table_writer.h"
 #include "jointlab/modal/process.h"
@@ -30,6 +33,7 @@
 #include "jointlab/model/model_file_writer.h"
 #include "jointlab/model/qsma.h"
 #include "jointlab/model/qsma_output.h"
+#include "jointlab/model/sim/simulated_record.h"
 
 namespace py = pybind11;
 
@@ -342,6 +346,137 @@ py::dict run(const std::string& campaign_file, const std::string& out, bool forc
   return d;
 }
 
+// A LO:HI range inside a parameter's domain (model/iwan.h), as update-iwan checks it.
+void check_range(const char* option, const std::optional<std::pair<double, double>>& r,
+                 const char* parameter, const char* shown) {
+  if (!r) return;
+  const model::ParameterDomain d = model::iwan_parameter_domain(parameter);
+  if (!(d.contains(r->first) && d.contains(r->second) && r->first < r->second))
+    throw InputError(fmt::format("{} {}:{}: need LO < HI with both {} {}", option, r->first,
+                                 r->second, shown, d.text()));
+}
+
+// update-iwan with backbone tables (contract.md, data/backbone_table.h): the options and
+// defaults of the command; the fit `run` and the command make (campaign::fit_iwan).
+py::dict update_iwan(const std::string& model_path, const std::string& set, int mode,
+                     const std::vector<std::string>& backbones, const std::string& amplitude,
+                     const std::optional<std::string>& dof, const std::string& linear_damping,
+                     const std::optional<std::pair<double, double>>& fs_range,
+                     const std::pair<double, double>& gamma_range,
+                     const std::pair<double, double>& chi_range,
+                     const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
+                     const std::optional<std::string>& out, const py::object& progress) {
+  if (backbones.empty()) throw InputError("update-iwan: give at least one backbone table");
+  if (linear_damping != "hold" && linear_damping != "fit")
+    throw InputError(fmt::format("--linear-damping {}: expected hold or fit", linear_damping));
+  check_range("--fs-range", fs_range, "Fs", "Fs");
+  check_range("--gamma-range", gamma_range, "Kt", "Kt/Ks");
+  check_range("--chi-range", chi_range, "chi", "chi");
+  check_range("--beta-range", beta_range, "beta", "beta");
+  if (!(beta_range.first > 0))
+    throw InputError(
+        fmt::format("--beta-range {}:{}: need 0 < LO < HI (beta is searched on a log scale)",
+                    beta_range.first, beta_range.second));
+  correlate::IwanUpdateSummary summary;
+  model::Model updated;
+  {
+    py::gil_scoped_release release;
+    const model::Model m = model::read_model(model_path);
+    const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+    const int elastic = linear.size() - linear.rigid_count;
+    if (mode < 1 || mode > elastic)
+      throw InputError(
+          fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic "
+                      "modes",
+                      mode, mode, model_path, elastic));
+    correlate::IwanUpdateOptions o;
+    std::vector<correlate::Sensor> sensors;
+    if (amplitude == "modal") {
+      if (dof)
+        throw InputError(
+            "--dof: a modal amplitude is measured at no DOF (give --amplitude displacement, "
+            "velocity or acceleration)");
+    } else {
+      o.amplitude = amplitude == "displacement" ? correlate::AmplitudeQuantity::kDisplacement
+                    : amplitude == "velocity"   ? correlate::AmplitudeQuantity::kVelocity
+                    : amplitude == "acceleration"
+                        ? correlate::AmplitudeQuantity::kAcceleration
+                        : throw InputError(fmt::format("--amplitude {}: expected modal, "
+                                                       "displacement, velocity or acceleration",
+                                                       amplitude));
+      if (!dof)
+        throw InputError(fmt::format(
+            "--amplitude {}: give --dof NODE:COMP (or a 0-based index), where it was measured",
+            amplitude));
+      correlate::Sensor sensor;
+      sensor.dof = model::resolve_dof(m, *dof, "--dof");
+      sensor.channel = model::dof_name(m, sensor.dof);
+      sensors.push_back(sensor);
+    }
+    correlate::IwanTarget target;
+    target.mode = mode;
+    for (const std::string& f : backbones)
+      target.curves.push_back(
+          correlate::measured_backbone(data::read_backbone_table(f), sensors.empty() ? -1 : 0));
+    o.fit_linear_damping = linear_damping == "fit";
+    o.max_evaluations = evaluations;
+    o.seed = seed;
+    o.progress = [&progress](int n, double best) {
+      if (n % 250 == 0)
+        report(progress,
+               fmt::format("update-iwan: {} QSMA evaluations, best cost {:.6g}", n, best));
+    };
+    correlate::IwanObjective objective(m, set, sensors, {target}, o);
+    correlate::IwanBounds b = correlate::default_iwan_bounds(objective.initial());
+    if (fs_range) b.Fs_min = fs_range->first, b.Fs_max = fs_range->second;
+    b.gamma_min = gamma_range.first, b.gamma_max = gamma_range.second;
+    b.chi_min = chi_range.first, b.chi_max = chi_range.second;
+    b.beta_min = beta_range.first, b.beta_max = beta_range.second;
+    o.bounds = b;
+    if (const std::string e = o.error(); !e.empty())
+      throw InputError(fmt::format("update-iwan: {}", e));
+    summary = campaign::fit_iwan(objective, o, nullptr);
+    if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint)
+      throw InputError(
+          "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
+          "amplitudes");
+    updated = objective.apply(summary.best, summary.modal_ratio);
+    if (out) model::write_model_file(std::filesystem::path(*out), updated);
+  }
+  py::dict parameters;
+  const char* names[] = {"Fs", "Kt", "chi", "beta"};
+  const double start[] = {summary.start.Fs, summary.start.Kt, summary.start.chi,
+                          summary.start.beta};
+  const double best[] = {summary.best.Fs, summary.best.Kt, summary.best.chi, summary.best.beta};
+  for (int k = 0; k < 4; ++k) {
+    py::dict d;
+    d["initial"] = start[k];
+    d["final"] = best[k];
+    const double r = summary.relative_std(k);
+    d["relative_std"] =
+        summary.held[static_cast<size_t>(k)] || !(r > 0) ? py::object(py::none()) : py::float_(r);
+    d["held"] = summary.held[static_cast<size_t>(k)];
+    d["at_bound"] = summary.bound_side[static_cast<size_t>(k)];
+    parameters[names[k]] = d;
+  }
+  py::dict z;
+  z["initial"] = summary.modal_ratio_start;
+  z["final"] = summary.modal_ratio;
+  z["std"] = summary.modal_ratio_fitted && summary.modal_ratio_std > 0
+                 ? py::object(py::float_(summary.modal_ratio_std))
+                 : py::object(py::none());
+  z["fitted"] = summary.modal_ratio_fitted;
+  parameters["modal_ratio"] = z;
+  py::dict result;
+  result["parameters"] = parameters;
+  result["cost"] = summary.final_cost;
+  result["initial_cost"] = summary.initial_cost;
+  result["evaluations"] = summary.evaluations;
+  result["warnings"] = summary.at_bounds;
+  result["report"] = summary.report();
+  return result;
+}
+
 }  // namespace
 }  // namespace jointlab::python
 
@@ -443,6 +578,34 @@ model_frequency_hz, error, mac; None where unpaired), 'rule', 'converged', 'redu
 
     r = jointlab.update_linear("model.toml", ["iwan.rivet"], "sensors.csv", measured="processed")
     r["parameters"]["iwan.rivet"]["final"]
+)");
+
+  m.def("update_iwan", &update_iwan, py::arg("model"), py::arg("set"), py::arg("mode"),
+        py::arg("backbones"), py::arg("amplitude") = "modal", py::arg("dof") = py::none(),
+        py::arg("linear_damping") = "hold", py::arg("fs_range") = py::none(),
+        py::arg("gamma_range") = std::pair<double, double>{0.05, 2.0},
+        py::arg("chi_range") = std::pair<double, double>{-0.95, 0.0},
+        py::arg("beta_range") = std::pair<double, double>{0.01, 100.0},
+        py::arg("evaluations") = 1500, py::arg("seed") = 1u, py::arg("out") = py::none(),
+        py::arg("progress") = py::none(),
+        R"(Updates one Iwan set to measured backbone tables (`jointlab update-iwan --backbone`).
+
+model           model file (TOML), linear stiffness already updated
+set             the Iwan set ('iwan.rivet' or 'rivet')
+mode            the elastic model mode every table belongs to (from 1)
+backbones       CSV tables amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]
+amplitude       'modal' (QSMA modal amplitude q, default) or 'displacement' [m], 'velocity'
+                [m/s], 'acceleration' [m/s^2] at model DOF `dof` ('NODE:COMP' or an index)
+linear_damping  'hold' (the model's [damping] modal_ratio) or 'fit' (identified with the joint)
+fs_range, gamma_range, chi_range, beta_range, evaluations, seed: as the command's options
+out             write the updated model file here, or None
+
+Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
+None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost',
+'evaluations', 'warnings' (parameters at a bound), 'report'.
+
+    r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
+    r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]
 )");
 
   m.def("run", &run, py::arg("campaign"), py::arg("out"), py::arg("force") = false,

@@ -188,3 +188,39 @@ def test_run_equals_the_command_line(tmp_path):
         assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     with pytest.raises(jointlab.InputError, match="missing.toml"):
         jointlab.run(str(tmp_path / "missing.toml"), str(tmp_path / "none"))
+
+
+def test_update_iwan_equals_the_command_line(tmp_path):
+    # A one-mode model (unit mass, 3.3e5 N/m, an Iwan joint to ground) and its own ring-down
+    # QSMA columns as a backbone table: the command and the call end at the same parameters.
+    d = tmp_path
+    (d / "M.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 1.0\n")
+    (d / "K.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 3.3e5\n")
+    body = ('[matrices]\nmass = "M.mtx"\nstiffness = "K.mtx"\n\n'
+            "[iwan.j]\nFs = {fs}\nKt = {kt}\nchi = {chi}\nbeta = 1.5\n\n"
+            '[[joint]]\na = 0\nb = "ground"\nelement = "iwan.j"\n')
+    (d / "truth.toml").write_text(body.format(fs=30.0, kt=1.4e4, chi=-0.5))
+    (d / "start.toml").write_text(body.format(fs=60.0, kt=1.2e4, chi=-0.3))
+    r = run("qsma", d / "truth.toml", "--mode", "1", "--points", "40", "--qmin", "1e-5",
+            "--qmax", "1e-3", "--out", d / "q.csv")
+    assert r.returncode == 0, r.stderr
+    q = read_csv(d / "q.csv")
+    with open(d / "bb.csv", "w") as f:
+        f.write("amplitude,frequency_hz,damping_ratio\n")
+        for a, fr, z in zip(q["modal_amplitude"], q["ringdown_frequency_hz"],
+                            q["ringdown_damping_ratio"]):
+            f.write(f"{a!r},{fr!r},{z!r}\n")
+    r = run("update-iwan", d / "start.toml", "--set", "iwan.j", "--mode", "1", "--backbone",
+            d / "bb.csv", "--evaluations", "400", "--out", d / "cli")
+    assert r.returncode == 0, r.stderr
+    with open(d / "cli" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    result = jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "bb.csv")],
+                                  evaluations=400)
+    for name in ("Fs", "Kt", "chi", "beta"):
+        assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    with pytest.raises(jointlab.InputError, match="--mode 2: model mode 2 does not exist"):
+        jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 2, [str(d / "bb.csv")])
+    (d / "neg.csv").write_text("amplitude,frequency_hz,damping_ratio\n1e-4,93.0,-1e-5\n")
+    with pytest.raises(jointlab.InputError, match="neg.csv:2"):
+        jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "neg.csv")])
