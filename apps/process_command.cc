@@ -142,6 +142,20 @@ void run_process(const ProcessArgs& args) {
       }
     }
     if (!some) empty.push_back(why);
+    // A band whose reference channel has a backbone but no linear values fails the same way
+    // (summary.json says why instead of writing 0 for them).
+    for (const auto& r : results) {
+      if (!some || b >= r.bands.size()) continue;
+      for (const modal::ChannelBand& c : r.results) {
+        const modal::RingdownSummary& s = c.ringdown.summary;
+        if (c.band_index != static_cast<int>(b) + 1 || c.channel != r.reference[b] ||
+            s.status != modal::RingdownStatus::kOk || s.has_linear())
+          continue;
+        empty.push_back(fmt::format("band {} ({:g}:{:g} Hz): {}{}: {}", b + 1, r.bands[b].lo,
+                                    r.bands[b].hi, results.size() > 1 ? r.source + " " : "",
+                                    c.channel, s.linear_reason));
+      }
+    }
   }
   if (!empty.empty()) {
     throw InputError(
@@ -205,7 +219,8 @@ void add_process_command(CLI::App& app) {
                   "fraction of the strongest channel's amplitude (near a node its damping would\n"
                   "follow the mode shape's change); 0 keeps every channel")
       ->check(in_range(0.0, 0.99));
-  cmd->add_option("--threads", args->threads, "worker threads (default: every core)");
+  cmd->add_option("--threads", args->threads, "worker threads (default 0: every core)")
+      ->check(in_range(0, 1024));
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {
     if (args->bands.empty() && args->modes == 0) {
