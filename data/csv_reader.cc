@@ -117,11 +117,21 @@ Header read_header(std::string_view line, long line_no, const std::string& name,
   Header h;
   h.line = line_no;
   h.delim = detect_delimiter(line);
+  if (std::count(line.begin(), line.end(), '"') % 2 != 0) {
+    throw InputError(where(name, line_no, "the header row has an unbalanced quote (\")"));
+  }
   std::vector<std::string> fields = CsvLineSplitter(h.delim).split(line);
   h.trailing = fields.size() > 1 && trim(fields.back()).empty();
   if (h.trailing) fields.pop_back();
   for (const std::string& f : fields) {
     h.cols.push_back(parse_header_field(f, name, h.line));
+    // What is left of a quoted field followed by more text ("" [m/s^2]) is no name.
+    if (h.cols.back().name.find('"') != std::string::npos) {
+      throw InputError(where(name, h.line,
+                             fmt::format("header field {} ('{}') has a stray quote; quote whole "
+                                         "fields (\"acc1 [g]\") or none",
+                                         h.cols.size(), shorten(f))));
+    }
     if (h.cols.back().is_time) {
       if (h.time_col >= 0) throw InputError(where(name, h.line, "two 'time' columns"));
       h.time_col = static_cast<int>(h.cols.size()) - 1;
@@ -325,6 +335,13 @@ Record parse_csv_text(std::string_view text, const std::string& name,
   TextLines lines(text);
   const std::string_view header_row =
       read_preamble(lines, name, [&](const std::string& key, const std::string& value) {
+        // The time base is stated once: a second "# fs:" or "# t0:" line is refused, not left
+        // to silently win over the first.
+        if ((key == "fs" || key == "t0") && rec.metadata.count(key)) {
+          throw InputError(where(name, lines.line_no(),
+                                 fmt::format("a second '# {}:' line ({}); state the time base once",
+                                             key, shorten(value))));
+        }
         rec.metadata[key] = value;
         if (key == "fs") fs_meta = {parse_fs(value, name, lines.line_no()), lines.line_no()};
       });
