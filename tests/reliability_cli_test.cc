@@ -751,6 +751,37 @@ TEST(SteppedSineEmpty, NoBackboneAtAllExitsTwo) {
   EXPECT_TRUE(fs::exists(dir + "/o/summary.json"));
 }
 
+// process killed after its commit point (its staging folder renamed to .process.commit, the
+// files half moved) leaves a folder that may mix two runs: update-linear and update-iwan
+// --measured refuse it, saying to re-run process (they once read such a mix with exit 0); a
+// re-run completes the commit and the folder reads again.
+TEST(KilledCommit, ReadersRefuseAFolderMidCommit) {
+  const std::string dir = scratch_dir("rel_killed_commit");
+  write_text(dir + "/hit.csv", ringdown_csv());
+  const std::string process = "process " + dir + "/hit.csv --band 70:90 --out " + dir + "/p";
+  ASSERT_EQ(run_jointlab(process).status, 0);
+  fs::create_directory(dir + "/p/.process.commit");
+  write_text(dir + "/p/.process.commit/.manifest", "hit.acc1.band1.csv\nsummary.json\n");
+  write_text(dir + "/p/.process.commit/summary.json", "{}");
+  const std::string model = write_model(dir, "-0.5");
+  write_text(dir + "/s.csv", "channel,dof\nacc1,0\n");
+  const std::string measured = " --measured " + dir + "/p --sensors " + dir + "/s.csv";
+  const std::string mix =
+      "/p: a 'process' run was killed while putting its results in place (.process.commit is "
+      "left): the folder may mix old and new results; re-run process into it";
+  expect_error(run_jointlab("update-iwan " + model + " --set iwan.rivet --mode 1" + measured +
+                            " --out " + dir + "/u"),
+               mix);
+  expect_error(run_jointlab("update-linear " + model + " --set spring.kz" + measured + " --out " +
+                            dir + "/l"),
+               mix);
+  ASSERT_EQ(run_jointlab(process).status, 0);
+  EXPECT_FALSE(fs::exists(dir + "/p/.process.commit"));
+  const CommandResult again = run_jointlab("update-iwan " + model + " --set iwan.rivet --mode 1" +
+                                           measured + " --out " + dir + "/u");
+  EXPECT_EQ(again.err.find("killed"), std::string::npos) << again.err;
+}
+
 TEST(ArgumentErrors, NegativeThreadsAreNamedWithReadableBounds) {
   const std::string dir = scratch_dir("rel_threads");
   write_text(dir + "/hit.csv", ringdown_csv());
