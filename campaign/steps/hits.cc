@@ -73,8 +73,8 @@ struct LinearColumns {
         ok(band),
         f(Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN())),
         z(f),
-        re(band),
-        im(band),
+        re(f),
+        im(f),
         t0(f),
         t1(f),
         dec(f) {}
@@ -89,7 +89,8 @@ struct LinearColumns {
     t.add({{"band", band}, {"channel", chan}, {"ok", ok}});
     t.add_optional("linear_frequency_hz", f);
     t.add_optional("linear_damping", z);
-    t.add({{"amplitude_re_m", re}, {"amplitude_im_m", im}});
+    t.add_optional("amplitude_re_m", re);
+    t.add_optional("amplitude_im_m", im);
     t.add_optional("span_start_s", t0);
     t.add_optional("span_end_s", t1);
     t.add_optional("decades", dec);
@@ -113,8 +114,10 @@ void write_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
     l.ok(i) = good;
     l.f(i) = rs.has_linear() ? rs.linear_frequency_hz : kAbsent;
     l.z(i) = rs.has_linear() ? rs.linear_damping : kAbsent;
-    l.re(i) = std::isfinite(cb.complex_amplitude.real()) ? cb.complex_amplitude.real() : 0.0;
-    l.im(i) = std::isfinite(cb.complex_amplitude.imag()) ? cb.complex_amplitude.imag() : 0.0;
+    const bool shape =
+        std::isfinite(cb.complex_amplitude.real()) && std::isfinite(cb.complex_amplitude.imag());
+    l.re(i) = shape ? cb.complex_amplitude.real() : kAbsent;
+    l.im(i) = shape ? cb.complex_amplitude.imag() : kAbsent;
     l.t0(i) = good ? rs.span_start_s : kAbsent;
     l.t1(i) = good ? rs.span_end_s : kAbsent;
     l.dec(i) = good ? rs.amplitude_decades : kAbsent;
@@ -214,18 +217,19 @@ HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file
   const auto& t0 = t.column("span_start_s", lin);
   const auto& t1 = t.column("span_end_s", lin);
   const auto& dec = t.column("decades", lin);
+  // Absent cells (NaN) stay out of every number: has_linear says whether f and z exist, and
+  // an absent shape entry is 0 in memory (linear_modes() skips a zero reference).
+  const auto or0 = [](double v) { return std::isnan(v) ? 0.0 : v; };
   for (size_t i = 0; i < band.size(); ++i) {
-    const int b = static_cast<int>(band[i]) - 1, ch = static_cast<int>(chan[i]);
-    if (b < 0 || b >= static_cast<int>(nb) || ch < 0 || ch >= static_cast<int>(nc)) continue;
-    // Absent cells (NaN) stay out of every number: has_linear says whether f and z exist.
-    const auto or0 = [](double v) { return std::isnan(v) ? 0.0 : v; };
-    if (!std::isfinite(band[i]) || !std::isfinite(chan[i]) || !std::isfinite(ok[i]) ||
-        !std::isfinite(re[i]) || !std::isfinite(im[i]))
+    if (!std::isfinite(band[i]) || !std::isfinite(chan[i]) || !std::isfinite(ok[i]))
       throw InputError(where(lin.string(), static_cast<long>(i) + 2,
                              "a required cell is empty (delete the file to recompute it)"));
-    h.linear[b][ch] = {ok[i] > 0.5, or0(f[i]),  or0(z[i]),   {re[i], im[i]},
-                       or0(t0[i]),  or0(t1[i]), or0(dec[i]), ""};
-    h.linear[b][ch].has_linear = ok[i] > 0.5 && std::isfinite(f[i]) && std::isfinite(z[i]);
+    const int b = static_cast<int>(band[i]) - 1, ch = static_cast<int>(chan[i]);
+    if (b < 0 || b >= static_cast<int>(nb) || ch < 0 || ch >= static_cast<int>(nc)) continue;
+    LinearEntry& le = h.linear[b][ch];
+    le = {ok[i] > 0.5, or0(f[i]),  or0(z[i]),   {or0(re[i]), or0(im[i])},
+          or0(t0[i]),  or0(t1[i]), or0(dec[i]), ""};
+    le.has_linear = ok[i] > 0.5 && std::isfinite(f[i]) && std::isfinite(z[i]);
   }
   std::ifstream reasons(dir / (h.stem + ".reasons.txt"));
   int rb = 0, rc = 0;
