@@ -6,8 +6,10 @@
 #include <functional>
 #include <iterator>
 #include <mutex>
+#include <new>
 #include <regex>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -101,8 +103,23 @@ void run_process(const ProcessArgs& args) {
   parallel_for(
       args.files.size(), args.threads, [] { return signal::FftCache{}; },
       [&](size_t i, signal::FftCache& cache) {
-        const data::Record rec = data::read_record(args.files[i]);
-        results[i] = modal::process_record(rec, opt, cache);
+        try {
+          const data::Record rec = data::read_record(args.files[i]);
+          results[i] = modal::process_record(rec, opt, cache);
+        } catch (const std::bad_alloc&) {
+          // Named, not "internal error: std::bad_alloc": which record did not fit.
+          std::error_code ec;
+          const auto bytes = std::filesystem::file_size(args.files[i], ec);
+          throw InputError(where(
+              args.files[i], 0,
+              fmt::format("out of memory while reading and processing this record ({:.3g} MB on "
+                          "disk, {} file(s) at once); give it alone with --threads 1, or a "
+                          "shorter record",
+                          ec ? 0.0 : static_cast<double>(bytes) / 1e6,
+                          std::min<size_t>(
+                              args.files.size(),
+                              args.threads ? args.threads : std::thread::hardware_concurrency()))));
+        }
         modal::write_backbones(out, results[i], opt.ringdown);
         // A line per channel and band, written in blocks (a record may hold 1e5 channels).
         std::lock_guard<std::mutex> lock(print);
