@@ -120,18 +120,32 @@ Header read_header(std::string_view line, long line_no, const std::string& name,
   if (std::count(line.begin(), line.end(), '"') % 2 != 0) {
     throw InputError(where(name, line_no, "the header row has an unbalanced quote (\")"));
   }
+  // Each raw field is unquoted or quoted whole: what is left of a quoted field followed by
+  // more text (time,"" [m/s^2]) would become a name of stray quotes.
+  bool quoted = false;
+  size_t start = 0, field = 1;
+  for (size_t i = 0; i <= line.size(); ++i) {
+    if (i < line.size() && line[i] == '"') {
+      quoted = !quoted;
+      continue;
+    }
+    if (i < line.size() && (quoted || line[i] != h.delim)) continue;
+    const std::string_view raw = trim(line.substr(start, i - start));
+    if (raw.find('"') != std::string_view::npos &&
+        !(raw.size() >= 2 && raw.front() == '"' && raw.back() == '"')) {
+      throw InputError(where(name, line_no,
+                             fmt::format("header field {} ({}) has a stray quote; quote whole "
+                                         "fields (\"acc1 [g]\") or none",
+                                         field, shorten(raw))));
+    }
+    start = i + 1;
+    ++field;
+  }
   std::vector<std::string> fields = CsvLineSplitter(h.delim).split(line);
   h.trailing = fields.size() > 1 && trim(fields.back()).empty();
   if (h.trailing) fields.pop_back();
   for (const std::string& f : fields) {
     h.cols.push_back(parse_header_field(f, name, h.line));
-    // What is left of a quoted field followed by more text ("" [m/s^2]) is no name.
-    if (h.cols.back().name.find('"') != std::string::npos) {
-      throw InputError(where(name, h.line,
-                             fmt::format("header field {} ('{}') has a stray quote; quote whole "
-                                         "fields (\"acc1 [g]\") or none",
-                                         h.cols.size(), shorten(f))));
-    }
     if (h.cols.back().is_time) {
       if (h.time_col >= 0) throw InputError(where(name, h.line, "two 'time' columns"));
       h.time_col = static_cast<int>(h.cols.size()) - 1;
