@@ -719,6 +719,36 @@ TEST(NoMadeUpZeros, HeavilyDampedModeGivesItsLinearValues) {
   for (const auto& row : rows) EXPECT_EQ(row.at(11), 0) << "a point marked harmonic";
 }
 
+// A band that holds only the second harmonic of a stronger 80 Hz mode (0.1 of it, phase
+// locked): every point is superharmonic, so there is nothing to fit linear values on.
+// summary.json says why instead of writing 0 +- 0, and process exits 2 naming the band.
+TEST(NoMadeUpZeros, ABandOfSuperharmonicsHasNoLinearValuesAndSaysWhy) {
+  const std::string dir = scratch_dir("rel_superharmonic");
+  std::string text = "time,acc1 [m/s^2]\n";
+  for (int k = 0; k < 4000; ++k) {
+    const double t = k * 1e-3, w = 2 * M_PI * 80;
+    text +=
+        fmt::format("{},{}\n", t,
+                    std::exp(-t) * std::sin(w * t) + 0.1 * std::exp(-2 * t) * std::sin(2 * w * t));
+  }
+  write_text(dir + "/hit.csv", text);
+  const CommandResult r =
+      run_jointlab("process " + dir + "/hit.csv --band 140:180 --out " + dir + "/o");
+  expect_error(r,
+               "band 1 (140:180 Hz): acc1: no linear values: every one of the 80 points follows a "
+               "multiple of a stronger mode's frequency (superharmonic); everything else is "
+               "written to " +
+                   dir + "/o");
+  const data::JsonValue summary = data::read_json(dir + "/o/summary.json");
+  const data::JsonValue& band = summary.find("files")->items().at(0).find("bands")->items().at(0);
+  EXPECT_EQ(band.find("linear_frequency_hz"), nullptr);
+  EXPECT_EQ(band.find("linear_damping_ratio"), nullptr);
+  ASSERT_NE(band.find("linear_reason"), nullptr);
+  EXPECT_NE(band.find("linear_reason")->string().find("superharmonic"), std::string::npos);
+  const std::string json = testing::read_file(dir + "/o/summary.json");
+  EXPECT_EQ(json.find("\"linear_frequency_hz\""), std::string::npos) << "a made-up value";
+}
+
 // A record on Unix time (1.7e9 s) keeps distinct backbone times: time_s is written in full
 // precision (10 significant digits once gave 76 rows 5 distinct times).
 TEST(BackboneTimes, AreWrittenInFullPrecision) {
