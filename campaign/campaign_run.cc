@@ -88,14 +88,14 @@ void carry_over(const fs::path& from, const fs::path& to) {
       std::error_code space_ec;
       const fs::space_info space = fs::space(to, space_ec);
       if (ec == std::errc::no_space_on_device || (!space_ec && space.available < needed)) {
-        throw InputError(where(to.string(), 0,
-                               fmt::format("cannot copy the previous results from {}: no space "
-                                           "left on device ({} bytes free, {} needed)",
-                                           (from / name).string(), space.available, needed)));
+        throw InputError(where(from.string(), 0,
+                               fmt::format("cannot copy the previous results ({}) for reuse: no "
+                                           "space left on device ({} bytes free, {} needed)",
+                                           name, space.available, needed)));
       }
       throw InputError(where(
-          (from / name).string(), 0,
-          fmt::format("cannot copy the previous results into {}: {}", to.string(), ec.message())));
+          from.string(), 0,
+          fmt::format("cannot copy the previous results ({}) for reuse: {}", name, ec.message())));
     }
   }
 }
