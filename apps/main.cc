@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <new>
 #include <string>
 
 #include <fmt/format.h>
@@ -62,6 +63,9 @@ int main(int argc, char** argv) {
   } catch (const jointlab::InputError& e) {
     // Readers cut names in their messages; this bounds whatever else a message quotes.
     jointlab::apps::say(stderr, "jointlab: error: {}\n", jointlab::shorten(e.what(), 2000));
+    return 2;
+  } catch (const std::bad_alloc&) {
+    jointlab::apps::say(stderr, "jointlab: error: out of memory\n");
     return 2;
   } catch (const std::exception& e) {
     jointlab::apps::say(stderr, "jointlab: internal error: {}\n",

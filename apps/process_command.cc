@@ -6,8 +6,10 @@
 #include <functional>
 #include <iterator>
 #include <mutex>
+#include <new>
 #include <regex>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -101,8 +103,23 @@ void run_process(const ProcessArgs& args) {
   parallel_for(
       args.files.size(), args.threads, [] { return signal::FftCache{}; },
       [&](size_t i, signal::FftCache& cache) {
-        const data::Record rec = data::read_record(args.files[i]);
-        results[i] = modal::process_record(rec, opt, cache);
+        try {
+          const data::Record rec = data::read_record(args.files[i]);
+          results[i] = modal::process_record(rec, opt, cache);
+        } catch (const std::bad_alloc&) {
+          // Named, not "internal error: std::bad_alloc": which record did not fit.
+          std::error_code ec;
+          const auto bytes = std::filesystem::file_size(args.files[i], ec);
+          throw InputError(where(
+              args.files[i], 0,
+              fmt::format("out of memory while reading and processing this record ({:.3g} MB on "
+                          "disk, {} file(s) at once); give it alone with --threads 1, or a "
+                          "shorter record",
+                          ec ? 0.0 : static_cast<double>(bytes) / 1e6,
+                          std::min<size_t>(
+                              args.files.size(),
+                              args.threads ? args.threads : std::thread::hardware_concurrency()))));
+        }
         modal::write_backbones(out, results[i], opt.ringdown);
         // A line per channel and band, written in blocks (a record may hold 1e5 channels).
         std::lock_guard<std::mutex> lock(print);
@@ -142,6 +159,20 @@ void run_process(const ProcessArgs& args) {
       }
     }
     if (!some) empty.push_back(why);
+    // A band whose reference channel has a backbone but no linear values fails the same way
+    // (summary.json says why instead of writing 0 for them).
+    for (const auto& r : results) {
+      if (!some || b >= r.bands.size()) continue;
+      for (const modal::ChannelBand& c : r.results) {
+        const modal::RingdownSummary& s = c.ringdown.summary;
+        if (c.band_index != static_cast<int>(b) + 1 || c.channel != r.reference[b] ||
+            s.status != modal::RingdownStatus::kOk || s.has_linear())
+          continue;
+        empty.push_back(fmt::format("band {} ({:g}:{:g} Hz): {}{}: {}", b + 1, r.bands[b].lo,
+                                    r.bands[b].hi, results.size() > 1 ? r.source + " " : "",
+                                    c.channel, s.linear_reason));
+      }
+    }
   }
   if (!empty.empty()) {
     throw InputError(
@@ -205,7 +236,8 @@ void add_process_command(CLI::App& app) {
                   "fraction of the strongest channel's amplitude (near a node its damping would\n"
                   "follow the mode shape's change); 0 keeps every channel")
       ->check(in_range(0.0, 0.99));
-  cmd->add_option("--threads", args->threads, "worker threads (default: every core)");
+  cmd->add_option("--threads", args->threads, "worker threads (default 0: every core)")
+      ->check(in_range(0, 1024));
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {
     if (args->bands.empty() && args->modes == 0) {

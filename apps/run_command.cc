@@ -84,7 +84,8 @@ void add_run_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->add_flag("--force", args->force, "recompute everything, even up-to-date outputs");
-  cmd->add_option("--threads", args->threads, "workers for processing hits (default: every core)");
+  cmd->add_option("--threads", args->threads, "workers for processing hits (default 0: every core)")
+      ->check(in_range(0, 1024));
   cmd->add_flag("--quiet", args->quiet, "no progress messages on stderr");
   cmd->callback([args] { run_run(*args); });
 }

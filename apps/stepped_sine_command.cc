@@ -128,6 +128,13 @@ void run_stepped_sine(const SteppedSineArgs& args) {
   }
   say(stdout, "jointlab stepped-sine: {} backbone file(s) and summary.json written to {}\n",
       written, out.string());
+  // As process: no backbone at all fails the command (summary.json says why per file).
+  if (written == 0) {
+    throw InputError(fmt::format(
+        "stepped-sine: no backbone from any of the {} file(s): no point is usable (their "
+        "reasons are above and in {}/summary.json)",
+        results.size(), out.string()));
+  }
 }
 
 }  // namespace

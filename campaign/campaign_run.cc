@@ -76,8 +76,26 @@ void carry_over(const fs::path& from, const fs::path& to) {
     std::error_code ec;
     fs::copy(from / name, to / name, fs::copy_options::recursive, ec);
     if (ec) {
-      throw InputError(
-          where((from / name).string(), 0, "cannot copy the previous results: " + ec.message()));
+      // A full disk shows as ENOSPC or, through some file systems, as EIO: say which folder
+      // ran out and by how much rather than "Input/output error".
+      std::uintmax_t needed = 0;
+      std::error_code walk;
+      for (fs::recursive_directory_iterator it(from / name, walk), end; !walk && it != end;
+           it.increment(walk)) {
+        std::error_code size_ec;
+        if (it->is_regular_file(size_ec)) needed += it->file_size(size_ec);
+      }
+      std::error_code space_ec;
+      const fs::space_info space = fs::space(to, space_ec);
+      if (ec == std::errc::no_space_on_device || (!space_ec && space.available < needed)) {
+        throw InputError(where(from.string(), 0,
+                               fmt::format("cannot copy the previous results ({}) for reuse: no "
+                                           "space left on device ({} bytes free, {} needed)",
+                                           name, space.available, needed)));
+      }
+      throw InputError(where(
+          from.string(), 0,
+          fmt::format("cannot copy the previous results ({}) for reuse: {}", name, ec.message())));
     }
   }
 }

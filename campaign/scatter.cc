@@ -299,11 +299,14 @@ void write_scatter_hits_csv(const std::filesystem::path& path, const ScatterSumm
       "hit,group,bins,frequency_deviation,damping_deviation,frequency_z,damping_z,"
       "linear_frequency_hz,linear_damping,linear_frequency_z,linear_damping_z,outlier,reason\n";
   for (const HitDeviation& h : s.hits) {
-    text += fmt::format(
-        "{},{},{},{:.10g},{:.10g},{:.4g},{:.4g},{:.10g},{:.10g},{:.4g},{:.4g},{},\"{}\"\n", h.id,
-        h.group, h.bins, h.frequency_deviation, h.damping_deviation, h.frequency_z, h.damping_z,
-        h.linear_frequency_hz, h.linear_damping, h.linear_frequency_z, h.linear_damping_z,
-        h.outlier ? 1 : 0, h.reason);
+    // A hit without linear values has empty cells there, never 0 standing in for "none".
+    const std::string linear =
+        h.has_linear ? fmt::format("{:.10g},{:.10g},{:.4g},{:.4g}", h.linear_frequency_hz,
+                                   h.linear_damping, h.linear_frequency_z, h.linear_damping_z)
+                     : ",,,";
+    text += fmt::format("{},{},{},{:.10g},{:.10g},{:.4g},{:.4g},{},{},\"{}\"\n", h.id, h.group,
+                        h.bins, h.frequency_deviation, h.damping_deviation, h.frequency_z,
+                        h.damping_z, linear, h.outlier ? 1 : 0, h.reason);
   }
   data::write_file_atomically(path, text);
 }

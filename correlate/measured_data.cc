@@ -10,6 +10,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/data/csv_lines.h"
 #include "jointlab/data/json_reader.h"
+#include "jointlab/data/output_stage.h"
 #include "jointlab/model/linear_modes.h"
 
 namespace jointlab::correlate {
@@ -96,6 +97,8 @@ JsonValue read_summary(const fs::path& dir, const std::string& program) {
     throw InputError(
         fmt::format("{}: missing (expected a '{}' output directory)", path.string(), program));
   }
+  // A folder a killed commit left half old, half new is refused, never read as one run.
+  data::require_complete_outputs(dir);
   JsonValue doc = data::read_json(path);
   if (!doc.is_object()) Fields{path.string()}.fail("document", "expected an object");
   return doc;

@@ -132,7 +132,22 @@ void for_each_csv_line(
   }
 }
 
+void require_regular_file(const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);  // follows symbolic links
+  if (ec || !fs::exists(st) || fs::is_regular_file(st)) return;
+  const char* kind = fs::is_directory(st)        ? "a directory"
+                     : fs::is_fifo(st)           ? "a FIFO (named pipe)"
+                     : fs::is_character_file(st) ? "a character device"
+                     : fs::is_block_file(st)     ? "a block device"
+                     : fs::is_socket(st)         ? "a socket"
+                                                 : "not a regular file";
+  throw InputError(where(path.string(), 0, fmt::format("is {}, not a file; give a file", kind)));
+}
+
 std::optional<std::string> read_text_file(const std::filesystem::path& path) {
+  require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
   std::ostringstream ss;

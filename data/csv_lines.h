@@ -82,7 +82,14 @@ void for_each_csv_line(
     const std::function<void(const std::vector<std::string>& cells, long line)>& on_line,
     char delim = ',');
 
-/// The whole content of a file; nullopt if it cannot be opened or read.
+/// The whole content of a file; nullopt if it cannot be opened or read; InputError (as
+/// require_regular_file) for what is not a regular file.
 std::optional<std::string> read_text_file(const std::filesystem::path& path);
+
+/// InputError "PATH: is a directory, not a file" (a FIFO, a device, a socket likewise) when
+/// `path` exists and is not a regular file, before anything is read: a FIFO would block,
+/// /dev/zero would fill memory, a directory would read as empty. A missing path passes (the
+/// reader's own "cannot open" follows).
+void require_regular_file(const std::filesystem::path& path);
 
 }  // namespace jointlab::data

@@ -117,6 +117,30 @@ Header read_header(std::string_view line, long line_no, const std::string& name,
   Header h;
   h.line = line_no;
   h.delim = detect_delimiter(line);
+  if (std::count(line.begin(), line.end(), '"') % 2 != 0) {
+    throw InputError(where(name, line_no, "the header row has an unbalanced quote (\")"));
+  }
+  // Each raw field is unquoted or quoted whole: what is left of a quoted field followed by
+  // more text (time,"" [m/s^2]) would become a name of stray quotes.
+  bool quoted = false;
+  size_t start = 0, field = 1;
+  for (size_t i = 0; i <= line.size(); ++i) {
+    if (i < line.size() && line[i] == '"') {
+      quoted = !quoted;
+      continue;
+    }
+    if (i < line.size() && (quoted || line[i] != h.delim)) continue;
+    const std::string_view raw = trim(line.substr(start, i - start));
+    if (raw.find('"') != std::string_view::npos &&
+        !(raw.size() >= 2 && raw.front() == '"' && raw.back() == '"')) {
+      throw InputError(where(name, line_no,
+                             fmt::format("header field {} ({}) has a stray quote; quote whole "
+                                         "fields (\"acc1 [g]\") or none",
+                                         field, shorten(raw))));
+    }
+    start = i + 1;
+    ++field;
+  }
   std::vector<std::string> fields = CsvLineSplitter(h.delim).split(line);
   h.trailing = fields.size() > 1 && trim(fields.back()).empty();
   if (h.trailing) fields.pop_back();
@@ -325,6 +349,13 @@ Record parse_csv_text(std::string_view text, const std::string& name,
   TextLines lines(text);
   const std::string_view header_row =
       read_preamble(lines, name, [&](const std::string& key, const std::string& value) {
+        // The time base is stated once: a second "# fs:" or "# t0:" line is refused, not left
+        // to silently win over the first.
+        if ((key == "fs" || key == "t0") && rec.metadata.count(key)) {
+          throw InputError(where(name, lines.line_no(),
+                                 fmt::format("a second '# {}:' line ({}); state the time base once",
+                                             key, shorten(value))));
+        }
         rec.metadata[key] = value;
         if (key == "fs") fs_meta = {parse_fs(value, name, lines.line_no()), lines.line_no()};
       });

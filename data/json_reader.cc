@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 
 namespace jointlab::data {
 
@@ -306,6 +307,7 @@ JsonValue parse_json(std::string_view text, const std::string& name) {
 }
 
 JsonValue read_json(const std::filesystem::path& path) {
+  require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot open the file", path.string()));
   std::ostringstream ss;

@@ -19,6 +19,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/memory.h"
 #include "jointlab/data/atomic_file.h"
+#include "jointlab/data/csv_lines.h"
 
 namespace jointlab::data {
 namespace {
@@ -105,6 +106,7 @@ class Reader {
 
 Eigen::SparseMatrix<double> read_matrix_market(const std::filesystem::path& path,
                                                long max_dimension) {
+  require_regular_file(path);
   Reader reader(path);
   std::string banner;
   if (!reader.raw_line(banner)) reader.fail("empty file, expected a %%MatrixMarket banner");

@@ -80,6 +80,23 @@ void roll_forward(const fs::path& dir, const fs::path& commit_dir, const std::st
 
 }  // namespace
 
+void require_complete_outputs(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const std::string suffix = ".commit";
+    if (name.size() > suffix.size() + 1 && name.front() == '.' &&
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      const std::string command = name.substr(1, name.size() - suffix.size() - 1);
+      throw InputError(
+          where(dir.string(), 0,
+                fmt::format("a '{0}' run was killed while putting its results in place ({1} is "
+                            "left): the folder may mix old and new results; re-run {0} into it",
+                            command, name)));
+    }
+  }
+}
+
 OutputStage::OutputStage(fs::path dir, std::string command,
                          std::function<bool(const std::string&)> owned)
     : dir_(std::move(dir)), command_(std::move(command)), owned_(std::move(owned)) {

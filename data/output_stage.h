@@ -53,4 +53,11 @@ class OutputStage {
   bool committed_ = false;
 };
 
+/// For readers of a command's output folder: InputError naming `dir` when it holds an
+/// unfinished commit (DIR/.<command>.commit: a run was killed while moving its outputs into
+/// place, so the folder may mix old and new results), saying to re-run the command, whose
+/// OutputStage completes the commit first. A folder without one holds exactly one run's
+/// outputs (the rename to .<command>.commit is the commit point).
+void require_complete_outputs(const std::filesystem::path& dir);
+
 }  // namespace jointlab::data

@@ -156,10 +156,19 @@ TEST(OutputStage, KilledRunsAreCleanedUpOrCompletedByTheNext) {
   for (const auto& [name, text] : before)
     EXPECT_EQ(after_kill.at(name), text);  // ... beside the old set
 
-  // A run killed after its commit point (staging folder renamed, files not yet moved).
+  // Killed before its commit point, the folder is still exactly the old set for a reader.
+  EXPECT_NO_THROW(require_complete_outputs(dir));
+
+  // A run killed after its commit point (staging folder renamed, files not yet moved): a
+  // reader refuses the folder, saying to re-run, until the next run completes the commit.
   fs::create_directory(dir / ".cmd.commit");
   put(dir / ".cmd.commit" / ".manifest", "b.csv\n");
   put(dir / ".cmd.commit" / "b.csv", "new");
+  const std::string m = testing::input_error_of([&] { require_complete_outputs(dir); });
+  EXPECT_NE(m.find("a 'cmd' run was killed while putting its results in place (.cmd.commit is "
+                   "left): the folder may mix old and new results; re-run cmd into it"),
+            std::string::npos)
+      << m;
   {
     OutputStage next(dir, "cmd");  // completes the commit and removes the leftovers
     EXPECT_EQ(snapshot(dir),
@@ -169,6 +178,7 @@ TEST(OutputStage, KilledRunsAreCleanedUpOrCompletedByTheNext) {
   }
   EXPECT_EQ(snapshot(dir),
             (std::map<std::string, std::string>{{".cmd.outputs", "b.csv\n"}, {"b.csv", "new"}}));
+  EXPECT_NO_THROW(require_complete_outputs(dir));
 }
 
 TEST(OutputStage, ARunningWritersFilesAreSpared) {

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/data/csv_reader.h"
 #include "jointlab/data/mat_file.h"
 #include "jointlab/data/uff58.h"
@@ -51,6 +52,7 @@ bool looks_like_uff(const std::string& head) {
 }  // namespace
 
 FileFormat detect_format(const std::filesystem::path& path) {
+  require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(where(path.string(), 0, "cannot open file"));
   std::string head(1024, '\0');

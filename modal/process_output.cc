@@ -18,7 +18,7 @@ std::string backbone_file_name(const std::string& source, const std::string& cha
 
 data::Table backbone_table(const Backbone& b, const RingdownOptions& options) {
   data::Table t;
-  t.add("time_s", b.time_s);
+  t.add_exact("time_s", b.time_s);  // full precision: a Unix-time record keeps its steps
   t.add("amplitude", b.amplitude);
   t.add("frequency_hz", b.frequency_hz);
   t.add("damping_ratio", b.damping);
@@ -59,6 +59,10 @@ namespace {
 // lowest amplitude (linear_reference_amplitude), its expanded uncertainty and the amplitudes
 // the fit spans.
 void write_linear(data::JsonWriter& j, const RingdownSummary& s) {
+  if (!s.linear_reason.empty()) {  // absent with its reason, never 0 standing in for "none"
+    j.key("linear_reason").value(s.linear_reason);
+    return;
+  }
   j.numbers({{"linear_frequency_hz", s.linear_frequency_hz},
              {"linear_frequency_std_hz", s.linear_frequency_std_hz},
              {"linear_damping_ratio", s.linear_damping},

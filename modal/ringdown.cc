@@ -129,6 +129,13 @@ std::string RingdownOptions::check() const {
 
 std::string RingdownSummary::report() const {
   if (status != RingdownStatus::kOk) return "no backbone: " + message;
+  if (!linear_reason.empty()) {
+    return fmt::format(
+        "kept {:.4f} s to {:.4f} s ({:.2f} decades of amplitude); noise floor "
+        "{:.3e} m; {}{}{}",
+        span_start_s, span_end_s, amplitude_decades, noise_floor_m, linear_reason,
+        message.empty() ? "" : "; ", message);
+  }
   return fmt::format(
       "kept {:.4f} s to {:.4f} s ({:.2f} decades of amplitude); noise floor {:.3e} m; "
       "linear (at amplitude {:.3g}, the lowest of a straight-line fit up to {:.3g}): frequency "
@@ -917,6 +924,28 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   return fmt::format("the strongest spectral peak in the band is at {:.2f} Hz", fp);
 }
 
+// True when the channel's spectrum has its largest magnitude over `sub` strictly inside it
+// (two bins or more from either edge): a mode of its own there. A heavily damped mode above
+// the range only leaks its tail into it, rising towards the upper edge, and its displacement
+// (integrated twice from acceleration) can then outweigh the mode's own band: a 100 Hz mode
+// of 5 % damping in 80:120 Hz once had every point flagged as following twice a "mode" at
+// 40:60 Hz that is not there.
+bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub) {
+  const double df = channel.fs / static_cast<double>(channel.n_fft);
+  const Eigen::Index last = channel.spectrum.size() - 1;
+  const auto bin = [&](double f) {
+    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 0, last);
+  };
+  const Eigen::Index k0 = bin(sub.lo), k1 = bin(sub.hi);
+  if (k1 <= k0 + 4) return true;  // too few bins to tell: leave the decision to the fits
+  const SpectrumMagnitudes mag(channel.spectrum, k0, k1);
+  Eigen::Index kp = k0;
+  for (Eigen::Index k = k0 + 1; k <= k1; ++k) {
+    if (mag.greater(k, kp)) kp = k;
+  }
+  return kp >= k0 + 2 && kp <= k1 - 2;
+}
+
 // Marks the points of `bb` that follow n times (n = 2, 3) the frequency of a stronger
 // mode: the channel's own band [lo/n, hi/n] carries a larger displacement envelope
 // there and n times its frequency is within the point's frequency uncertainty.
@@ -929,6 +958,7 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
   for (int n = 2; n <= 3; ++n) {
     const signal::Band sub{band.lo / n, band.hi / n};
     if (band_settling_s(sub, options.taper) > duration) continue;
+    if (!has_interior_peak(channel, sub)) continue;
     const signal::BandSignal zs = band_signal(channel, measured, sub, options, cache);
     const EnvelopePhase ep = envelope_phase(zs.baseband, zs.carrier_hz, zs.dt);
     const double correlation = std::max(1.0, 1.0 / (zs.dt * zs.noise_bandwidth_hz));
@@ -966,14 +996,24 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
   const double inflate = std::sqrt(options.points_per_window);
   const Limit lf = low_amplitude_limit(bb, bb.frequency_hz, bb.frequency_std_hz / k, inflate);
   const Limit lz = low_amplitude_limit(bb, bb.damping, bb.damping_std / k, inflate);
+  if (lf.lo < 0 || lz.lo < 0) {
+    sum.linear_reason = fmt::format(
+        "no linear values: every one of the {} points follows a multiple of a stronger mode's "
+        "frequency (superharmonic)",
+        bb.size());
+    return;
+  }
+  if (!std::isfinite(lf.value) || !std::isfinite(lz.value) || !std::isfinite(lf.std) ||
+      !std::isfinite(lz.std) || !(lf.value > 0)) {
+    sum.linear_reason = "no linear values: the low-amplitude fit is not finite";
+    return;
+  }
   sum.linear_frequency_hz = lf.value;
   sum.linear_frequency_std_hz = k * lf.std;
   sum.linear_damping = lz.value;
   sum.linear_damping_std = k * lz.std;
-  if (lf.lo >= 0) {
-    sum.linear_fit_min = bb.amplitude(lf.lo);
-    sum.linear_fit_max = bb.amplitude(lf.hi);
-  }
+  sum.linear_fit_min = bb.amplitude(lf.lo);
+  sum.linear_fit_max = bb.amplitude(lf.hi);
 }
 
 // Notes for the summary: what was left out at the start and why, and superharmonic points.

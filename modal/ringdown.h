@@ -103,8 +103,13 @@ struct RingdownSummary {
   double linear_frequency_std_hz = 0.0;  ///< its expanded uncertainty (k sigma) [Hz]
   double linear_damping = 0.0;           ///< damping ratio in the limit of zero amplitude
   double linear_damping_std = 0.0;       ///< its expanded uncertainty (k sigma)
-  double linear_fit_min = 0.0;   ///< lowest amplitude of the fit behind the linear values [SI]
-  double linear_fit_max = 0.0;   ///< highest amplitude of that fit [SI]
+  double linear_fit_min = 0.0;  ///< lowest amplitude of the fit behind the linear values [SI]
+  double linear_fit_max = 0.0;  ///< highest amplitude of that fit [SI]
+  /// Why the band has no linear values ("" when it has them: the four linear_* values above
+  /// and the fit range are measured only then; never read them otherwise).
+  std::string linear_reason;
+  /// True when the linear values were measured.
+  bool has_linear() const { return status == RingdownStatus::kOk && linear_reason.empty(); }
   int superharmonic_points = 0;  ///< points following a multiple of a stronger mode
   double carrier_hz = 0.0;       ///< dominant frequency in the band [Hz]
   /// One paragraph for a person.

@@ -51,11 +51,16 @@ double slip_fraction_stiffness(double t) {
   return (t - std::sin(t) * std::cos(t)) / std::numbers::pi;
 }
 
-double g_of_ratio(double s) { return s >= 1 ? 1.0 : slip_fraction_stiffness(std::acos(1 - 2 * s)); }
+// acos(1 - 2 s) written as 2 asin(sqrt(s)): the same angle, without 1 - 2 s rounding to 1 (and
+// the angle to 0) for s below 1e-16, where a slip amplitude of 2e19 phi_max once made the
+// first-harmonic stiffness 0 * inf = NaN.
+double slip_angle(double s) { return 2 * std::asin(std::sqrt(std::clamp(s, 0.0, 1.0))); }
+
+double g_of_ratio(double s) { return s >= 1 ? 1.0 : slip_fraction_stiffness(slip_angle(s)); }
 
 // J(b) = int_0^b s^chi g(s) ds = int_0^T sin^(2 chi)(t/2) g(t) sin(t)/2 dt, t = T u^3.
 double slip_integral(double chi, double b) {
-  const double big_t = std::acos(1 - 2 * std::min(b, 1.0));
+  const double big_t = slip_angle(b);
   double sum = 0;
   for (int i = 0; i < kNodes; ++i) {
     const double u = rule().x[i], t = big_t * u * u * u;
@@ -92,7 +97,7 @@ double IwanCycle::first_harmonic_stiffness(double amplitude, double* slope) cons
   const double j = slip_integral(chi, b);
   const double g = g_of_ratio(b);
   if (slope) {
-    const double t = std::acos(1 - 2 * b);
+    const double t = slip_angle(b);
     // J'(b) = b^chi g(b) and g'(b) = 4 sin(t) / pi; b decreases as -b / A.
     const double dg = 4 * std::sin(t) / std::numbers::pi;
     *slope = sign *

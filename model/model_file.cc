@@ -227,6 +227,7 @@ void validate_model(const Model& model, const std::string& source) {
 
 Model read_model(const fs::path& path) {
   const Context ctx{path.string()};
+  data::require_regular_file(path);
   toml::table doc;
   try {
     doc = toml::parse_file(path.string());

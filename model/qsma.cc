@@ -232,6 +232,7 @@ std::vector<QsmaPoint> linear_curve(double omega2, int mode, const QsmaOptions& 
 // Step 1: a start well inside microslip (damping within microslip_deviation / 5 ... of its
 // power law), moved down to q_min when that lies lower. alpha = 0 when no load is carried.
 State find_start(Problem& problem, const JointCondensation& model, const QsmaOptions& options) {
+  constexpr double kStartSlip = 0.1;  // largest |r_j| / phi_max_j of the automatic start
   const State zero = problem.zero();
   double alpha = 1e-3 * model.smallest_phi_max() / problem.c().lpNorm<Eigen::Infinity>();
   const double target = options.microslip_deviation;
@@ -243,22 +244,35 @@ State find_start(Problem& problem, const JointCondensation& model, const QsmaOpt
       alpha /= 10;
       continue;
     }
+    // A joint far softer than the structure (K_T / k0 = 2e-4) keeps its damping on the power
+    // law up to macroslip (dev <= K_T / k0 there): the deviation alone would raise the start
+    // without bound. Past kStartSlip of an element's phi_max is no longer "well inside".
+    const double slip = std::exp(problem.onset_margin(s));
+    if (slip > kStartSlip) {
+      alpha *= 0.5 * kStartSlip / slip;
+      continue;
+    }
     const double dev = problem.microslip_deviation(s);
     if (dev <= target) {
       if (!have_best || s.alpha > best.alpha) best = s;
       have_best = true;
-      if (dev >= 0.2 * target) break;
+      if (dev >= 0.2 * target || slip >= 0.2 * kStartSlip) break;
     }
-    // dev grows as alpha^(chi+1): aim at half the allowed deviation.
+    // dev grows as alpha^(chi+1): aim at half the allowed deviation, and no further than
+    // kStartSlip (the slip grows at most as fast as alpha below it).
     const double factor =
         dev > 0 ? std::pow(0.5 * target / dev, 1 / model.smallest_chi_plus_one()) : 10.0;
-    alpha *= std::clamp(factor, 1e-8, 1e8);
+    alpha *= std::clamp(std::min(factor, 0.5 * kStartSlip / slip), 1e-8, 1e8);
   }
   if (!have_best && !problem.solve(alpha, zero, best)) best = zero;  // no microslip start
   if (options.q_min > 0) {
+    // Down to q_min: q is nearly linear in alpha here, so each step lands at or just below
+    // half of q_min (a fixed factor of 4 once needed more than 200 steps from a high start).
     for (int it = 0; it < 200 && best.alpha > 0 && best.q > options.q_min; ++it) {
       State s;
-      if (problem.solve(best.alpha / 4, zero, s)) best = s;
+      const double factor = std::min(0.25, 0.5 * options.q_min / best.q);
+      if (!problem.solve(best.alpha * factor, zero, s)) break;
+      best = s;
     }
   }
   return best;
@@ -273,6 +287,8 @@ struct March {
   State before_macroslip, after_macroslip;
 };
 
+constexpr int kMaxDoublings = 2100;
+
 // Step 2: march up by doubling until the curve must stop, then bracket the end.
 March march_to_end(Problem& problem, const QsmaOptions& options, const State& start, int mode,
                    QsmaSummary* summary) {
@@ -280,7 +296,9 @@ March march_to_end(Problem& problem, const QsmaOptions& options, const State& st
   m.levels.push_back(start);
   State hi;
   Stop reason = Stop::kNone;
-  for (int it = 0; it < 200; ++it) {
+  // Doubling spans the whole double range in 2100 steps (each a few microseconds): a q_max
+  // of 1e100 is reached, not cut off silently after 2^200 of the start.
+  for (int it = 0; it < kMaxDoublings; ++it) {
     State next;
     const double alpha = 2 * m.levels.back().alpha;
     const bool ok = std::isfinite(alpha) && problem.solve(alpha, m.levels.back(), next);
@@ -301,8 +319,8 @@ March march_to_end(Problem& problem, const QsmaOptions& options, const State& st
   if (reason == Stop::kNone) {
     summary->termination = QsmaTermination::kFullMacroslip;
     summary->message = fmt::format(
-        "mode {}: not every Iwan element reached macroslip within 2^200 of the starting load",
-        mode);
+        "mode {}: not every Iwan element reached macroslip within 2^{} of the starting load", mode,
+        kMaxDoublings);
     return m;
   }
   // Bisection in ln alpha: a finite bracket closes to limit_tolerance in well under 200
@@ -421,24 +439,39 @@ Grid output_grid(Problem& problem, const QsmaOptions& options, const March& m, c
 }
 
 // Step 5: solve at every grid level, continuing from the previous one, and evaluate it.
-std::vector<QsmaPoint> evaluate_grid(Problem& problem, const Grid& g) {
+// A grid level far above the previous one (a range of many decades on few points) is solved
+// from the highest converged march level below it instead, at most a doubling away. A level
+// that still fails, or a point with a non-finite column, ends the curve there and the summary
+// says so (qsma() then reports the shortfall).
+std::vector<QsmaPoint> evaluate_grid(Problem& problem, const Grid& g, const March& m, int mode,
+                                     QsmaSummary* summary) {
   std::vector<QsmaPoint> curve;
   State cur;
   for (size_t i = 0; i < g.alphas.size(); ++i) {
     State s;
     const auto pin =
         std::find_if(g.pinned.begin(), g.pinned.end(), [&](const auto& p) { return p.first == i; });
+    bool ok = true;
     if (pin != g.pinned.end()) {
       s = pin->second;
     } else if (!problem.solve(g.alphas[i], cur, s)) {
-      break;  // cannot happen below a converged end level; keep the curve consistent
+      const State* from = nullptr;
+      for (const State& level : m.levels) {
+        if (level.alpha <= g.alphas[i] && (!from || level.alpha > from->alpha)) from = &level;
+      }
+      ok = from && problem.solve(g.alphas[i], *from, s);
     }
-    const QsmaPoint pt = problem.point(s);
-    // Never a non-finite number in a curve: end it before (cannot happen for joints the
-    // structure lets move, see the check in qsma()).
-    if (!std::isfinite(pt.frequency_hz) || !std::isfinite(pt.damping_ratio) ||
+    const QsmaPoint pt = ok ? problem.point(s) : QsmaPoint{};
+    // Never a non-finite number in a curve: end it before.
+    if (!ok || !std::isfinite(pt.frequency_hz) || !std::isfinite(pt.damping_ratio) ||
         !std::isfinite(pt.ringdown_frequency_hz) || !std::isfinite(pt.ringdown_damping_ratio) ||
-        !std::isfinite(pt.harmonic_damping_ratio) || !std::isfinite(pt.max_slip)) {
+        !std::isfinite(pt.harmonic_damping_ratio) || !std::isfinite(pt.max_slip) ||
+        !(pt.modal_amplitude > 0)) {
+      summary->message = fmt::format(
+          "mode {}: {} at force amplitude {:.6g} (point {} of {}); the curve cannot go on", mode,
+          ok ? "a column is not a finite number" : "no static solution found", g.alphas[i], i + 1,
+          g.alphas.size());
+      summary->incomplete = true;
       break;
     }
     curve.push_back(pt);
@@ -615,7 +648,23 @@ std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const Qsma
   State first;
   if (!find_first(problem, options, march, start, mode, summary, &first)) return {};
   const Grid grid = output_grid(problem, options, march, first, summary->termination);
-  std::vector<QsmaPoint> curve = evaluate_grid(problem, grid);
+  std::vector<QsmaPoint> curve = evaluate_grid(problem, grid, march, mode, summary);
+  // Amplitude strictly increases along a curve: equal or falling neighbours mean the range
+  // collapsed (a start that could not be moved to q_min once gave 11 identical rows).
+  for (size_t i = 1; i < curve.size() && !summary->incomplete; ++i) {
+    if (!(curve[i].modal_amplitude > curve[i - 1].modal_amplitude)) {
+      summary->message = fmt::format(
+          "mode {}: points {} and {} have modal amplitudes {:.17g} and {:.17g}, not increasing; "
+          "the curve cannot be resolved there",
+          mode, i, i + 1, curve[i - 1].modal_amplitude, curve[i].modal_amplitude);
+      summary->incomplete = true;
+    }
+  }
+  if (summary->incomplete || curve.empty()) {
+    summary->incomplete = true;
+    if (summary->message.empty()) summary->message = fmt::format("mode {}: no point", mode);
+    return {};
+  }
   finish_summary(curve, mode, options, summary);
   return curve;
 }

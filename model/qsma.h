@@ -106,6 +106,10 @@ struct QsmaSummary {
   int solves = 0;                  ///< static solves, including range search and bracketing
   int newton_iterations = 0;       ///< Hessian factorizations over every solve
   std::string message;             ///< one line on the termination
+  /// True when a level of the output grid could not be solved or evaluated: qsma() then
+  /// returns no curve and `message` says where (a curve short of its points is never
+  /// returned as if complete).
+  bool incomplete = false;
 
   /// A short paragraph: termination, end load, work done.
   std::string report() const;

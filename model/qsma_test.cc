@@ -281,6 +281,54 @@ TEST(Qsma, QmaxPastFullMacroslipContinuesOnTheMacroslipBranch) {
   expect_closed_form(limited, iwan, 0.0, mu);
 }
 
+// A joint far softer than the structure (the one-mode equivalent of a bolted-beam fit:
+// K_T / k0 = 1.9e-4, phi_max = 959 m): its damping stays on the microslip power law up to
+// macroslip, which once drove the automatic start to alpha ~ 1e125 (a crash on the empty
+// curve) and left 11 identical rows for q in [1e-7, 1e-3]. Both ranges now follow the closed
+// form (1e-6, as for every SDOF curve here) with distinct, increasing amplitudes.
+TEST(Qsma, AJointFarSofterThanTheStructureFollowsTheClosedForm) {
+  const IwanParameters soft{5.1e4, 66.9, -0.52, 2.29};
+  const double k0 = 3.47e5;
+  const JointCondensation model(sdof(1.0, k0, soft));
+  QsmaSummary summary;
+  const auto full = qsma(model, 1, QsmaOptions{}, &summary);
+  EXPECT_EQ(full.size(), 50u) << summary.report();
+  expect_closed_form(full, Iwan(soft), k0, 1.0);
+  EXPECT_EQ(summary.termination, QsmaTermination::kFullMacroslip) << summary.report();
+  // The start is well inside microslip: at most 10 % of phi_max.
+  EXPECT_LE(full.front().max_slip, 0.1 * Iwan(soft).phi_max());
+  QsmaOptions options;
+  options.q_min = 1e-7;
+  options.q_max = 1e-3;
+  options.points = 11;
+  const auto range = qsma(model, 1, options, &summary);
+  ASSERT_EQ(range.size(), 11u) << summary.report();
+  expect_closed_form(range, Iwan(soft), k0, 1.0);
+  EXPECT_TRUE(Close(range.front().modal_amplitude, 1e-7, 1e-10));
+  EXPECT_TRUE(Close(range.back().modal_amplitude, 1e-3, 1e-10));
+  // q_max = 1e100: reached (the spring carries any load), not cut off after 2^200 of the start.
+  options.q_max = 1e100;
+  options.points = 50;
+  const auto huge = qsma(model, 1, options, &summary);
+  ASSERT_EQ(huge.size(), 50u) << summary.report();
+  EXPECT_EQ(summary.termination, QsmaTermination::kReachedQmax) << summary.report();
+  EXPECT_TRUE(Close(huge.back().modal_amplitude, 1e100, 1e-10));
+  // The secant pair against the closed form (the quadrature behind the first-harmonic closed
+  // form does not reach 1e100 phi_max); every column finite, amplitude increasing.
+  const Iwan iwan(soft);
+  for (size_t i = 0; i < huge.size(); ++i) {
+    const QsmaPoint& p = huge[i];
+    const double x = p.max_slip, force = k0 * x + iwan.force(x);
+    EXPECT_TRUE(Close(p.frequency_hz, std::sqrt(force / x) / kTwoPi, 1e-6)) << i;
+    EXPECT_TRUE(Close(p.damping_ratio, iwan.dissipation(x) / (kTwoPi * force * x), 1e-6)) << i;
+    for (double v : {p.ringdown_frequency_hz, p.ringdown_damping_ratio, p.harmonic_damping_ratio})
+      EXPECT_TRUE(std::isfinite(v)) << i;
+    if (i > 0) {
+      EXPECT_GT(p.modal_amplitude, huge[i - 1].modal_amplitude) << i;
+    }
+  }
+}
+
 TEST(Qsma, BadModeAndOptions) {
   const JointCondensation model(sdof(1.0, 1e6, kRivet));
   QsmaSummary summary;

@@ -1,7 +1,10 @@
 // LD_PRELOAD shim for tests: write(2) and writev(2) to a regular file whose path contains
-// $JOINTLAB_FAIL_WRITES_TO fail with ENOSPC, as they do on a full disk. Lets a test run
+// $JOINTLAB_FAIL_WRITES_TO fail with ENOSPC, as they do on a full disk; so do sendfile(2) and
+// copy_file_range(2), how std::filesystem::copy fills a file, to a path containing
+// $JOINTLAB_FAIL_COPIES_TO. Lets a test run
 // the unmodified jointlab command into a "full disk" without a small filesystem.
 #include <dlfcn.h>
+#include <sys/sendfile.h>
 #include <sys/stat.h>
 #include <sys/uio.h>
 #include <unistd.h>
@@ -14,8 +17,8 @@
 
 namespace {
 
-bool fails(int fd) {
-  const char* pattern = std::getenv("JOINTLAB_FAIL_WRITES_TO");
+bool fails(int fd, const char* variable = "JOINTLAB_FAIL_WRITES_TO") {
+  const char* pattern = std::getenv(variable);
   if (!pattern || !*pattern) return false;
   struct stat st {};
   if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return false;
@@ -47,4 +50,25 @@ extern "C" ssize_t writev(int fd, const struct iovec* iov, int iovcnt) {
     return -1;
   }
   return real(fd, iov, iovcnt);
+}
+
+extern "C" ssize_t sendfile(int out_fd, int in_fd, off_t* offset, size_t count) {
+  using Fn = ssize_t (*)(int, int, off_t*, size_t);
+  static const Fn real = reinterpret_cast<Fn>(dlsym(RTLD_NEXT, "sendfile"));
+  if (fails(out_fd, "JOINTLAB_FAIL_COPIES_TO")) {
+    errno = ENOSPC;
+    return -1;
+  }
+  return real(out_fd, in_fd, offset, count);
+}
+
+extern "C" ssize_t copy_file_range(int in_fd, off_t* in_off, int out_fd, off_t* out_off, size_t len,
+                                   unsigned flags) {
+  using Fn = ssize_t (*)(int, off_t*, int, off_t*, size_t, unsigned);
+  static const Fn real = reinterpret_cast<Fn>(dlsym(RTLD_NEXT, "copy_file_range"));
+  if (fails(out_fd, "JOINTLAB_FAIL_COPIES_TO")) {
+    errno = ENOSPC;
+    return -1;
+  }
+  return real(in_fd, in_off, out_fd, out_off, len, flags);
 }

@@ -197,14 +197,16 @@ std::string band_moved(const testing::SmallCampaign& s, const std::string& campa
 // `run` of the small campaign into `out` with every write(2) to a file whose path holds
 // `fails` refused as on a full disk (tests/fail_writes.cc).
 testing::CommandResult run_on_full_disk(const testing::SmallCampaign& s, const fs::path& out,
-                                        const std::string& fails) {
+                                        const std::string& fails,
+                                        const std::string& variable = "JOINTLAB_FAIL_WRITES_TO") {
   const std::string shim = testing::binary_dir() + "/tests/libjointlab_fail_writes.so";
   EXPECT_TRUE(fs::exists(shim));
   const fs::path err = s.dir / "full_disk.err";
   const std::string cmd = fmt::format(
-      "LD_PRELOAD={} ASAN_OPTIONS=verify_asan_link_order=0 JOINTLAB_FAIL_WRITES_TO={} "
+      "LD_PRELOAD={} ASAN_OPTIONS=verify_asan_link_order=0 {}={} "
       "{}/bin/jointlab run {} --out {} --quiet > /dev/null 2> {}",
-      shim, fails, testing::binary_dir(), s.campaign.string(), out.string(), err.string());
+      shim, variable, fails, testing::binary_dir(), s.campaign.string(), out.string(),
+      err.string());
   const int raw = std::system(cmd.c_str());
   testing::CommandResult r;
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -237,6 +239,16 @@ TEST(RunCli, AFailedRunLeavesThePreviousResults) {
     EXPECT_EQ(bad.err.find(".run.stage"), std::string::npos) << bad.err;
     EXPECT_EQ(tree(out), before) << fails;
   }
+  // Full before anything is written: copying the previous model and hits for reuse fails.
+  // The line names the output folder and says the disk is full (it once said "cannot copy
+  // the previous results: Input/output error").
+  const testing::CommandResult full =
+      run_on_full_disk(s, out, ".run.stage-", "JOINTLAB_FAIL_COPIES_TO");
+  EXPECT_EQ(full.status, 2) << full.err;
+  EXPECT_NE(full.err.find(out.string() + ": cannot copy the previous results ("), std::string::npos)
+      << full.err;
+  EXPECT_NE(full.err.find("no space left on device"), std::string::npos) << full.err;
+  EXPECT_EQ(tree(out), before);
   testing::write_text(s.campaign.string(), campaign);
   const testing::CommandResult again = testing::run_jointlab(cmd);
   ASSERT_EQ(again.status, 0) << again.err;

@@ -22,6 +22,8 @@ std::string g6(double v) { return fmt::format("{:.6g}", v); }
 // A damping ratio or its spread to significant digits (a fixed number of decimals prints
 // 0.00057 - 0.00057 for an interval of 5.68e-4 - 5.74e-4).
 std::string zeta(double v) { return fmt::format("{:.3g}", v); }
+// A spread in significant digits: a deviation of 3e-5 Hz is not "0.0000 Hz".
+std::string spread(double v) { return fmt::format("{:.2g}", v); }
 std::string pct(double v) { return fmt::format("{:+.3f} %", v); }
 
 // At the very top of the report: each hit that could not be read or processed, and why.
@@ -245,7 +247,7 @@ ReportSection scatter_section(const Campaign& c, const MeasuredSide& m, size_t k
   for (const ScatterBin& b : sc.bins) {
     bt.rows.push_back(
         {fmt::format("{:.3g}", b.amplitude_center), std::to_string(b.curves),
-         fmt::format("{:.4f}", b.frequency_hz.mean), fmt::format("{:.4f}", b.frequency_hz.std),
+         fmt::format("{:.4f}", b.frequency_hz.mean), spread(b.frequency_hz.std),
          fmt::format("{:.4f} - {:.4f}", b.frequency_hz.ci_low, b.frequency_hz.ci_high),
          zeta(b.damping.mean), zeta(b.damping.std),
          fmt::format("{} - {}", zeta(b.damping.ci_low), zeta(b.damping.ci_high))});
@@ -267,8 +269,8 @@ ReportSection scatter_section(const Campaign& c, const MeasuredSide& m, size_t k
   if (!c.modes[k].stepped_sine.empty()) s.tables.push_back(sine_against_hammer(c, m, k));
   s.paragraphs.push_back(fmt::format(
       "Linear (low-amplitude) values over {} hit(s): frequency {:.4f} Hz, standard deviation "
-      "{:.4f} Hz, interval {:.4f} - {:.4f} Hz; damping ratio {}, standard deviation {}.",
-      sc.linear_count, sc.linear_frequency_hz.mean, sc.linear_frequency_hz.std,
+      "{} Hz, interval {:.4f} - {:.4f} Hz; damping ratio {}, standard deviation {}.",
+      sc.linear_count, sc.linear_frequency_hz.mean, spread(sc.linear_frequency_hz.std),
       sc.linear_frequency_hz.ci_low, sc.linear_frequency_hz.ci_high, zeta(sc.linear_damping.mean),
       zeta(sc.linear_damping.std)));
   s.figures.push_back(figures.backbone[k]);
@@ -284,7 +286,7 @@ ReportTable frequency_table(const Campaign& c, const MeasuredSide& m, const Mode
     if (r.start.frequency_hz[k] <= 0 || m.scatter[k].linear_count == 0) continue;
     const double fe = m.scatter[k].linear_frequency_hz.mean;
     ft.rows.push_back({c.modes[k].name, fmt::format("{:.4f}", fe),
-                       fmt::format("{:.4f}", m.scatter[k].linear_frequency_hz.std),
+                       spread(m.scatter[k].linear_frequency_hz.std),
                        fmt::format("{:.4f}", r.start.frequency_hz[k]),
                        pct(100 * (r.start.frequency_hz[k] - fe) / fe),
                        r.have_updated ? fmt::format("{:.4f}", r.after.frequency_hz[k]) : "-",

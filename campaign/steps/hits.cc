@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <optional>
 
 #include <fmt/format.h>
@@ -62,20 +63,21 @@ std::string one_line(std::string text) {
   return text;
 }
 
-// The linear data of a hit's cache, `n` rows of zeros to fill (columns: hits.h), and its
-// reasons, one line "<band> <channel index> <why>" per band and channel without a backbone.
+// The linear data of a hit's cache, `n` rows to fill (columns: hits.h; the measured values
+// start absent, the indices and shape at 0), and its reasons, one line
+// "<band> <channel index> <why>" per band and channel without a backbone.
 struct LinearColumns {
   explicit LinearColumns(Eigen::Index n)
       : band(Eigen::VectorXd::Zero(n)),
         chan(band),
         ok(band),
-        f(band),
-        z(band),
-        re(band),
-        im(band),
-        t0(band),
-        t1(band),
-        dec(band) {}
+        f(Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN())),
+        z(f),
+        re(f),
+        im(f),
+        t0(f),
+        t1(f),
+        dec(f) {}
   Eigen::VectorXd band, chan, ok, f, z, re, im, t0, t1, dec;
   std::string reasons;
 
@@ -83,16 +85,15 @@ struct LinearColumns {
   void write(const fs::path& dir, const fs::path& file) const {
     data::write_file_atomically(dir / (file.stem().string() + ".reasons.txt"), reasons);
     data::Table t;
-    t.add({{"band", band},
-           {"channel", chan},
-           {"ok", ok},
-           {"linear_frequency_hz", f},
-           {"linear_damping", z},
-           {"amplitude_re_m", re},
-           {"amplitude_im_m", im},
-           {"span_start_s", t0},
-           {"span_end_s", t1},
-           {"decades", dec}});
+    // Values a channel did not measure are absent (empty cells), never 0 for "none".
+    t.add({{"band", band}, {"channel", chan}, {"ok", ok}});
+    t.add_optional("linear_frequency_hz", f);
+    t.add_optional("linear_damping", z);
+    t.add_optional("amplitude_re_m", re);
+    t.add_optional("amplitude_im_m", im);
+    t.add_optional("span_start_s", t0);
+    t.add_optional("span_end_s", t1);
+    t.add_optional("decades", dec);
     data::write_table(dir / (file.stem().string() + ".linear.csv"), t);
   }
 };
@@ -109,14 +110,17 @@ void write_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
       if (c.channels[k].name == cb.channel) l.chan(i) = static_cast<double>(k);
     const modal::RingdownSummary& rs = cb.ringdown.summary;
     const bool good = rs.status == modal::RingdownStatus::kOk;
+    constexpr double kAbsent = std::numeric_limits<double>::quiet_NaN();
     l.ok(i) = good;
-    l.f(i) = good ? rs.linear_frequency_hz : 0.0;
-    l.z(i) = good ? rs.linear_damping : 0.0;
-    l.re(i) = std::isfinite(cb.complex_amplitude.real()) ? cb.complex_amplitude.real() : 0.0;
-    l.im(i) = std::isfinite(cb.complex_amplitude.imag()) ? cb.complex_amplitude.imag() : 0.0;
-    l.t0(i) = good ? rs.span_start_s : 0.0;
-    l.t1(i) = good ? rs.span_end_s : 0.0;
-    l.dec(i) = good ? rs.amplitude_decades : 0.0;
+    l.f(i) = rs.has_linear() ? rs.linear_frequency_hz : kAbsent;
+    l.z(i) = rs.has_linear() ? rs.linear_damping : kAbsent;
+    const bool shape =
+        std::isfinite(cb.complex_amplitude.real()) && std::isfinite(cb.complex_amplitude.imag());
+    l.re(i) = shape ? cb.complex_amplitude.real() : kAbsent;
+    l.im(i) = shape ? cb.complex_amplitude.imag() : kAbsent;
+    l.t0(i) = good ? rs.span_start_s : kAbsent;
+    l.t1(i) = good ? rs.span_end_s : kAbsent;
+    l.dec(i) = good ? rs.amplitude_decades : kAbsent;
     if (!good) {
       const std::string why = one_line(rs.message.empty() ? "no span kept" : rs.message);
       l.reasons += fmt::format("{} {} {}\n", cb.band_index, static_cast<int>(l.chan(i)), why);
@@ -202,7 +206,7 @@ HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file
   h.curves.assign(nb, std::vector<correlate::Curve>(nc));
   h.point_std.assign(nb, std::vector<PointStd>(nc));
   const fs::path lin = dir / (h.stem + ".linear.csv");
-  const NumericTable t = read_numeric_table(lin);
+  const NumericTable t = read_numeric_table(lin, /*allow_empty=*/true);
   const auto& band = t.column("band", lin);
   const auto& chan = t.column("channel", lin);
   const auto& ok = t.column("ok", lin);
@@ -213,10 +217,19 @@ HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file
   const auto& t0 = t.column("span_start_s", lin);
   const auto& t1 = t.column("span_end_s", lin);
   const auto& dec = t.column("decades", lin);
+  // Absent cells (NaN) stay out of every number: has_linear says whether f and z exist, and
+  // an absent shape entry is 0 in memory (linear_modes() skips a zero reference).
+  const auto or0 = [](double v) { return std::isnan(v) ? 0.0 : v; };
   for (size_t i = 0; i < band.size(); ++i) {
+    if (!std::isfinite(band[i]) || !std::isfinite(chan[i]) || !std::isfinite(ok[i]))
+      throw InputError(where(lin.string(), static_cast<long>(i) + 2,
+                             "a required cell is empty (delete the file to recompute it)"));
     const int b = static_cast<int>(band[i]) - 1, ch = static_cast<int>(chan[i]);
     if (b < 0 || b >= static_cast<int>(nb) || ch < 0 || ch >= static_cast<int>(nc)) continue;
-    h.linear[b][ch] = {ok[i] > 0.5, f[i], z[i], {re[i], im[i]}, t0[i], t1[i], dec[i], ""};
+    LinearEntry& le = h.linear[b][ch];
+    le = {ok[i] > 0.5, or0(f[i]),  or0(z[i]),   {or0(re[i]), or0(im[i])},
+          or0(t0[i]),  or0(t1[i]), or0(dec[i]), ""};
+    le.has_linear = ok[i] > 0.5 && std::isfinite(f[i]) && std::isfinite(z[i]);
   }
   std::ifstream reasons(dir / (h.stem + ".reasons.txt"));
   int rb = 0, rc = 0;
@@ -238,7 +251,7 @@ HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file
       }
       cv.id = h.stem;
       cv.group = g.name;
-      cv.has_linear = le.ok;
+      cv.has_linear = le.has_linear;
       cv.linear_frequency_hz = le.frequency_hz;
       cv.linear_damping = le.damping;
     }

@@ -34,6 +34,7 @@ struct LinearEntry {
   double span_end_s = 0;           ///< last kept point [s] (when ok)
   double decades = 0;              ///< decades of amplitude kept (when ok)
   std::string reason;              ///< why there is no backbone (when not ok)
+  bool has_linear = false;         ///< frequency_hz and damping were measured (else absent)
 };
 
 /// Each point's own uncertainty as `process` reports it (empty: unknown).

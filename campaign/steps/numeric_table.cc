@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -20,7 +21,7 @@ const std::vector<double>& NumericTable::column(const std::string& name,
       fmt::format("{}: no column '{}' (delete the file to recompute it)", file.string(), name));
 }
 
-NumericTable read_numeric_table(const fs::path& path) {
+NumericTable read_numeric_table(const fs::path& path, bool allow_empty) {
   const auto text = data::read_text_file(path);
   if (!text) throw InputError(fmt::format("{}: cannot read", path.string()));
   NumericTable t;
@@ -35,6 +36,10 @@ NumericTable read_numeric_table(const fs::path& path) {
     if (cells.size() != t.columns.size())
       throw InputError(where(path.string(), row, "wrong number of cells"));
     for (size_t c = 0; c < cells.size(); ++c) {
+      if (allow_empty && cells[c].empty()) {
+        t.columns[c].push_back(std::numeric_limits<double>::quiet_NaN());
+        continue;
+      }
       const auto v = data::parse_double(cells[c]);
       if (!v || !std::isfinite(*v))
         throw InputError(where(path.string(), row,

@@ -23,7 +23,9 @@ struct NumericTable {
 };
 
 /// Reads a numeric CSV; InputError naming the file and row when a cell is not a finite number.
-NumericTable read_numeric_table(const std::filesystem::path& path);
+/// With allow_empty, an empty cell is an absent value (data::Table::add_optional) and reads as
+/// NaN: the caller tests for it before any use.
+NumericTable read_numeric_table(const std::filesystem::path& path, bool allow_empty = false);
 
 /// A backbone file of `process`: the curve and each point's own uncertainty.
 struct BackboneFile {

@@ -172,7 +172,14 @@ TEST_F(Steps, AHitThatCannotBeReadIsLeftOut) {
     EXPECT_EQ(le.reason, c.groups[0].files[1].string() +
                              ":3: " + f.why.substr(std::string("line 3: ").size()));
     EXPECT_EQ(hits[1].curves[0][ch].amplitude.size(), 0) << ch;
+    EXPECT_FALSE(hits[1].curves[0][ch].has_linear) << ch;
+    EXPECT_TRUE(hits[0].curves[0][ch].has_linear) << ch;
   }
+  // The failed hit's cache leaves what it did not measure empty, never 0 for "none": each row
+  // is band,channel,ok=0 and seven empty cells.
+  const std::string cache = testing::read_file(dir / "out" / "hits" / "all" / "bad.linear.csv");
+  EXPECT_NE(cache.find("\n1,0,0,,,,,,,\n"), std::string::npos) << cache;
+  EXPECT_NE(cache.find("\n1,1,0,,,,,,,\n"), std::string::npos) << cache;
   for (const char* stale : {"bad.acc_1.band1.csv", "bad.acc_5.band1.csv", "bad.stamp"})
     EXPECT_FALSE(fs::exists(dir / "out" / "hits" / "all" / stale)) << stale;
   RunSummary again;

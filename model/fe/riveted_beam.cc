@@ -10,6 +10,7 @@
 #include <toml++/toml.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/model/fe/strip_mesh.h"
 #include "jointlab/model/iwan.h"
 
@@ -123,6 +124,7 @@ RivetedBeamDescription default_riveted_beam() {
 
 RivetedBeamDescription read_riveted_beam_description(const std::filesystem::path& path) {
   const Reader r{path.string()};
+  data::require_regular_file(path);
   toml::table doc;
   try {
     doc = toml::parse_file(path.string());

@@ -29,6 +29,14 @@ std::string SimulationOptions::error(Eigen::Index size) const {
     return fmt::format("impact DOF {} is outside the model's 0..{}", pulse.dof, size - 1);
   }
   if (!(std::isfinite(pulse.force) && pulse.force != 0)) return "force must be finite and nonzero";
+  // Energies are squares of the response: beyond 1e100 N (or below 1e-100 N) they leave double
+  // precision (--force 1e300 once wrote accelerations of 3.6e301 with an energy closure of NaN).
+  if (!(std::abs(pulse.force) <= 1e100 && std::abs(pulse.force) >= 1e-100)) {
+    return fmt::format(
+        "force {:g} N is outside the magnitudes 1e-100 to 1e100 N a record can hold "
+        "(its energies are squares of the response)",
+        pulse.force);
+  }
   if (!(pulse.duration > 0 && std::isfinite(pulse.duration))) return "pulse length must be > 0";
   if (!(pulse.start >= 0 && std::isfinite(pulse.start))) return "pulse start must be >= 0";
   if (sensors.empty()) return "no sensor DOF given";
@@ -349,6 +357,16 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
         "({:.4g} Hz): the Newmark update would lose the acceleration to rounding; lower "
         "--fs (at most {:.3g} Hz with {} substeps) or --substeps",
         dt, w1 / (2 * std::numbers::pi), w1 / (sub * 1e-6), sub));
+  }
+
+  // A pulse shorter than two steps falls between them: its samples are all zero (--pulse
+  // 1e-300 once wrote an all-zero record whose header said 10 N).
+  if (options.pulse.duration < 2 * dt) {
+    throw InputError(fmt::format(
+        "simulate: the pulse of {:.3g} s is shorter than two time steps ({:.3g} s each, {} "
+        "substeps per sample): the impact would not reach the model; lengthen --pulse or raise "
+        "--substeps",
+        options.pulse.duration, dt, sub));
   }
 
   const Eigen::VectorXd khat = (b.w2.array() + 2 * c.array() / dt + 4 / (dt * dt)).matrix();
