@@ -423,7 +423,7 @@ void add_update_commands(CLI::App& app) {
   iw->add_option("--threads", ia->options.threads,
                  "threads evaluating samples (default 0: every core); the result does not "
                  "depend on it")
-      ->check(CLI::NonNegativeNumber);
+      ->check(in_range(0, 1024));
   range_option(iw, "--fs-range", ia->fs_range, "Fs bounds LO:HI [N] (default start/30:start*30)");
   range_option(iw, "--gamma-range", ia->gamma_range, "Kt/Ks bounds LO:HI (default 0.05:2)");
   range_option(iw, "--chi-range", ia->chi_range, "chi bounds LO:HI (default -0.95:0)");

@@ -30,6 +30,10 @@ void add_joint(Triplets& t, const model::Joint& j, double k) {
 
 StiffnessSets::StiffnessSets(const model::Model& model, std::vector<std::string> names)
     : model_(&model), names_(std::move(names)) {
+  for (size_t k = 0; k < names_.size(); ++k)
+    for (size_t l = 0; l < k; ++l)
+      if (names_[k] == names_[l])
+        throw InputError(fmt::format("parameter set '{}' is named twice", names_[k]));
   const Eigen::Index n = model.size();
   initial_ = Eigen::VectorXd::Zero(size());
   std::vector<Triplets> pat(names_.size());

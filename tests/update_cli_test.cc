@@ -290,6 +290,14 @@ TEST(UpdateCli, UndecidablePairsAndZeroShapesAreRefused) {
       << r.err;
   EXPECT_NE(last_line.find("that the data cannot tell apart"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
+  // A set named twice, and a negative thread count, each say so in one line.
+  expect_one_line_error(fmt::format("update-linear {} --modes-table {} {} --set spring.ka", model,
+                                    (dir / "tie.csv").string(), common),
+                        "parameter set 'spring.ka' is named twice");
+  expect_one_line_error(
+      fmt::format("update-iwan {} --set rivet --mode 1 --backbone {} --threads -1 --out {}", model,
+                  (dir / "tie.csv").string(), (dir / "out").string()),
+      "-1 is not between 0 and 1024");
   std::ofstream(dir / "zero.csv") << "mode,frequency_hz,a0,b0\n1,57.9,1,0\n2,59.9,0,0\n";
   expect_one_line_error(fmt::format("update-linear {} --modes-table {} {}", model,
                                     (dir / "zero.csv").string(), common),
