@@ -142,16 +142,20 @@ LinearEvaluation evaluate_pairs(const StiffnessSets& sets, const std::vector<Sen
   return e;
 }
 
-LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
-                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
-                                 const PairingRules& rules) {
-  const ElasticModes modes = elastic_modes(model.mass, sets.stiffness(theta));
+namespace {
+
+// The evaluation at theta, `modes` its elastic modes, with the pairs made afresh by the rules;
+// `columns` receives the model column of each measured mode (-1: unpaired).
+LinearEvaluation evaluate_by_rules(const StiffnessSets& sets, const std::vector<Sensor>& sensors,
+                                   const MeasuredModes& measured,
+                                   const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                   const ElasticModes& modes, const PairingRules& rules,
+                                   std::vector<int>& columns) {
   const Eigen::MatrixXd at = shapes_at_sensors(sensors, modes.shapes);
   const RulePairing rp =
       pair_by_rules(mac_matrix(measured.shapes, at), measured.frequency_hz, shapes_given(measured),
                     modes.frequency_hz, norms_at_sensors(at), rules);
-  std::vector<int> columns(static_cast<size_t>(measured.frequency_hz.size()), -1);
+  columns.assign(static_cast<size_t>(measured.frequency_hz.size()), -1);
   for (const ModePair& p : rp.pairing.pairs) columns[static_cast<size_t>(p.measured)] = p.model;
   LinearEvaluation e = evaluate_pairs(sets, sensors, measured, theta, modes, columns);
   e.hidden = rp.hidden;
@@ -159,6 +163,17 @@ LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& 
   e.ambiguous_measured = rp.ambiguous_measured;
   e.ambiguous_candidates = rp.ambiguous_candidates;
   return e;
+}
+
+}  // namespace
+
+LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
+                                 const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                                 const Eigen::Ref<const Eigen::VectorXd>& theta,
+                                 const PairingRules& rules) {
+  std::vector<int> columns;
+  return evaluate_by_rules(sets, sensors, measured, theta,
+                           elastic_modes(model.mass, sets.stiffness(theta)), rules, columns);
 }
 
 LinearEvaluation evaluate_linear(const StiffnessSets& sets, const model::Model& model,
@@ -298,23 +313,11 @@ struct LinearProblem {
     return r;
   }
 
-  // The point at x with its pairs made afresh by the rules.
-  TrackedPoint fresh(const Eigen::VectorXd& x, LinearEvaluation* e = nullptr) const {
+  // The point at x with its pairs made afresh by the rules; e receives the evaluation there.
+  TrackedPoint fresh(const Eigen::VectorXd& x, LinearEvaluation& e) const {
     const Eigen::VectorXd theta = x.array().exp();
     TrackedPoint p{x, elastic_modes(model.mass, sets.stiffness(theta)), {}};
-    const Eigen::MatrixXd at = shapes_at_sensors(sensors, p.modes.shapes);
-    const RulePairing rp =
-        pair_by_rules(mac_matrix(measured.shapes, at), measured.frequency_hz,
-                      shapes_given(measured), p.modes.frequency_hz, norms_at_sensors(at), rules());
-    p.columns.assign(static_cast<size_t>(measured.frequency_hz.size()), -1);
-    for (const ModePair& q : rp.pairing.pairs) p.columns[static_cast<size_t>(q.measured)] = q.model;
-    if (e) {
-      *e = evaluate_pairs(sets, sensors, measured, theta, p.modes, p.columns);
-      e->hidden = rp.hidden;
-      e->ambiguity = rp.ambiguity;
-      e->ambiguous_measured = rp.ambiguous_measured;
-      e->ambiguous_candidates = rp.ambiguous_candidates;
-    }
+    e = evaluate_by_rules(sets, sensors, measured, theta, p.modes, rules(), p.columns);
     return p;
   }
 
@@ -761,7 +764,7 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
   out.status = status_of(fit(p, point, held, &out.record));
   out.rounds = 1;
   for (int check = 0; check < 4; ++check) {
-    TrackedPoint again = p.fresh(point.x, &out.fresh_end);
+    TrackedPoint again = p.fresh(point.x, out.fresh_end);
     const LinearEvaluation& fresh_end = out.fresh_end;
     if (again.columns == point.columns && fresh_end.ambiguity.empty()) break;
     // A pairing that leaves a followed mode unpaired would win on cost by dropping a residual:
@@ -878,7 +881,7 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     throw InputError(fmt::format("the smallest rule: '{}' is held", options.smallest_set));
 
   // The start: pairs by the rules.
-  TrackedPoint point = p.fresh(begin.array().log(), &s.start);
+  TrackedPoint point = p.fresh(begin.array().log(), s.start);
   s.initial_cost = s.start.cost();
   s.final = s.start;
   s.final_cost = s.initial_cost;
