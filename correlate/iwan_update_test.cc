@@ -565,19 +565,6 @@ TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
   }
 }
 
-// The one-mode model of issue 28's check: unit modal mass, a spring k0 in parallel with one
-// Iwan element to ground, its own damping Z (Model::modal_ratio).
-model::Model one_mode(double k0, const model::IwanParameters& p, double z) {
-  model::Model m;
-  m.mass.resize(1, 1);
-  m.mass.insert(0, 0) = 1.0;
-  m.stiffness.resize(1, 1);
-  m.stiffness.insert(0, 0) = k0;
-  m.joints.push_back(model::Joint{0, model::kGround, "iwan.j", p.Kt, model::Iwan(p)});
-  m.modal_ratio = z;
-  return m;
-}
-
 // Ring-down backbones of the truth in modal amplitude q (QSMA's ring-down pair plus Z), `points`
 // log-spaced from q_lo to q_hi, with relative Gaussian noise of sd f_noise in frequency and
 // z_noise in damping (the std columns say so).
@@ -632,10 +619,12 @@ struct FloorTruth {
   model::IwanParameters iwan{0.5, 0.04 * std::pow(2 * M_PI * 177.0, 2), -0.5, 0.5};
   double k0 = 0.96 * k_total;
   double z = 5e-4;
-  model::Model truth() const { return one_mode(k0, iwan, z); }
+  model::Model truth() const { return one_mode_structure(k0, iwan, z); }
   // The model the fit starts from: every Iwan parameter off (F_S x3, K_T x0.8, chi -0.3, beta
   // 2) and no floor.
-  model::Model start() const { return one_mode(k0, {iwan.Fs * 3, iwan.Kt * 0.8, -0.3, 2.0}, 0.0); }
+  model::Model start() const {
+    return one_mode_structure(k0, {iwan.Fs * 3, iwan.Kt * 0.8, -0.3, 2.0}, 0.0);
+  }
   // Three hits of 60 points each from q = 1e-8 m to 1.5, 2 and 2.5 phi_max, 1e-4 frequency and
   // 2 % damping noise.
   IwanTarget target(int points = 60, int hits = 3) const {

@@ -154,13 +154,7 @@ TEST(QsmaAt, FirstHarmonicAmplitudesGiveTheRingdownAndHarmonicColumns) {
 TEST(QsmaAt, APointAtTheKneeReportsTheSideItsAmplitudeIsOn) {
   const model::IwanParameters iw{40.0, 2.0e6, -0.5, 0.2};
   const double k0 = 1.0e6;
-  model::Model m;
-  m.mass.resize(1, 1);
-  m.mass.insert(0, 0) = 1.0;
-  m.stiffness.resize(1, 1);
-  m.stiffness.insert(0, 0) = k0;
-  m.joints.push_back(model::Joint{0, model::kGround, "iwan.j", iw.Kt, model::Iwan(iw)});
-  const model::JointCondensation jc(m);
+  const model::JointCondensation jc(one_mode_structure(k0, iw));
   const model::Iwan iwan(iw);
   const double phi = iwan.phi_max();
   for (const double eps : {1e-11, 3e-11, 1e-10}) {

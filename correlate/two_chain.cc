@@ -12,6 +12,17 @@
 
 namespace jointlab::correlate {
 
+model::Model one_mode_structure(double k0, const model::IwanParameters& p, double z) {
+  model::Model m;
+  m.mass.resize(1, 1);
+  m.mass.insert(0, 0) = 1.0;
+  m.stiffness.resize(1, 1);
+  m.stiffness.insert(0, 0) = k0;
+  m.joints.push_back(model::Joint{0, model::kGround, "iwan.j", p.Kt, model::Iwan(p)});
+  m.modal_ratio = z;
+  return m;
+}
+
 model::Model two_chain_structure(const TwoChainParameters& p) {
   const int n = p.n < 6 ? 6 : p.n;
   const int size = 2 * n;

@@ -36,6 +36,10 @@ struct TwoChainParameters {
 /// Builds the two-chain model (validated).
 model::Model two_chain_structure(const TwoChainParameters& p = {});
 
+/// A one-mode model: unit modal mass, a spring k0 [N/m] in parallel with one Iwan element
+/// "iwan.j" (parameters p) to ground, and the structure's own damping ratio z (modal_ratio).
+model::Model one_mode_structure(double k0, const model::IwanParameters& p, double z = 0);
+
 /// A backbone of elastic mode `mode` of `model` as `process` would report it at sensor
 /// `sensor`: `points` points log-spaced in modal amplitude over the two decades below `top` times
 /// the end of the automatic QSMA range (a ring-down's span), the amplitude converted to `quantity`,

@@ -570,20 +570,9 @@ TEST(UpdateCli, IwanFitsHammerAndSteppedSineTogether) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
-// A one-mode model (unit modal mass, k0 in parallel with an Iwan element to ground) and a plain
-// backbone table of its QSMA ring-down pair in modal amplitude, with its own damping Z added, as
-// another lab's tool would give it: rows in no particular order, 1e-4 / 2 % noise.
-model::Model one_mode_model(const model::IwanParameters& p, double k0, double z) {
-  model::Model m;
-  m.mass.resize(1, 1);
-  m.mass.insert(0, 0) = 1.0;
-  m.stiffness.resize(1, 1);
-  m.stiffness.insert(0, 0) = k0;
-  m.joints.push_back(model::Joint{0, model::kGround, "iwan.j", p.Kt, model::Iwan(p)});
-  m.modal_ratio = z;
-  return m;
-}
-
+// A plain backbone table of a one-mode model's (correlate::one_mode_structure) QSMA ring-down pair
+// in modal amplitude, with its own damping Z added, as another lab's tool would give it: rows in no
+// particular order, 1e-4 / 2 % noise.
 void write_backbone_table(const fs::path& path, const model::Model& truth, int points, double top,
                           unsigned seed) {
   const model::JointCondensation jc(truth);
@@ -617,11 +606,12 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
   const double k_total = std::pow(2 * M_PI * 177.0, 2);
   const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
   const double z = 5e-4, phi = model::Iwan(truth).phi_max();
-  const model::Model m = one_mode_model(truth, 0.96 * k_total, z);
+  const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, z);
   write_backbone_table(dir / "hit1.csv", m, 40, 1.5 * phi, 31);
   write_backbone_table(dir / "hit2.csv", m, 40, 2.5 * phi, 32);
   const std::string model = write_model(
-      dir, one_mode_model({1.5, 0.8 * truth.Kt, -0.3, 2.0}, 0.96 * k_total, 0), "s.toml");
+      dir, correlate::one_mode_structure(0.96 * k_total, {1.5, 0.8 * truth.Kt, -0.3, 2.0}, 0),
+      "s.toml");
   const std::string common =
       fmt::format("update-iwan {} --set j --mode 1 --backbone {} --backbone {} --fs-range 0.005:50",
                   model, (dir / "hit1.csv").string(), (dir / "hit2.csv").string());
