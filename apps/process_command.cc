@@ -85,6 +85,11 @@ void run_process(const ProcessArgs& args) {
   opt.ringdown.max_damping_rel_std = args.max_damping_std;
   opt.ringdown.coverage_factor = args.coverage_factor;
   opt.min_share = args.min_share;
+  // Files first, one worker each; the threads left over go to each record's channels.
+  const unsigned threads =
+      args.threads ? args.threads : std::max(1u, std::thread::hardware_concurrency());
+  opt.threads = std::max<unsigned>(
+      1, threads / static_cast<unsigned>(std::min<size_t>(args.files.size(), threads)));
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
 
   namespace fs = std::filesystem;
@@ -236,7 +241,10 @@ void add_process_command(CLI::App& app) {
                   "fraction of the strongest channel's amplitude (near a node its damping would\n"
                   "follow the mode shape's change); 0 keeps every channel")
       ->check(in_range(0.0, 0.99));
-  cmd->add_option("--threads", args->threads, "worker threads (default 0: every core)")
+  cmd->add_option(
+         "--threads", args->threads,
+         "worker threads, shared out over the files and then each file's channels (default 0:\n"
+         "every core); the results do not depend on it")
       ->check(in_range(0, 1024));
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {

@@ -30,10 +30,11 @@ jointlab::data::Record make_record() {
 }
 
 // Times process_record on `rec` in the bands of the three modes of
-// three_mode_record(60 Hz): 60, 162 and 366 Hz.
-void time_process(benchmark::State& state, const jointlab::data::Record& rec) {
+// three_mode_record(60 Hz): 60, 162 and 366 Hz, with `threads` channel workers.
+void time_process(benchmark::State& state, const jointlab::data::Record& rec, unsigned threads) {
   jointlab::modal::ProcessOptions opt;
   opt.bands = {{48, 72}, {140, 185}, {320, 410}};
+  opt.threads = threads;
   jointlab::signal::FftCache cache;
   for (auto _ : state) {
     auto result = jointlab::modal::process_record(rec, opt, cache);
@@ -42,22 +43,23 @@ void time_process(benchmark::State& state, const jointlab::data::Record& rec) {
 }
 
 void BM_ProcessRecord(benchmark::State& state) {
-  time_process(state, make_record());
+  time_process(state, make_record(), 1);
   state.SetLabel("8 channels x 3 bands, 30720 samples");
 }
 BENCHMARK(BM_ProcessRecord)->Unit(benchmark::kMillisecond);
 
 // The same on a record read from $JOINTLAB_BENCH_RECORD (bench/compare_scipy.sh
-// writes one and times the SciPy baseline on it too); skipped when unset.
+// writes one and times the SciPy baseline on it too); skipped when unset. The argument
+// is the number of channel workers: 1 (as the single-threaded baseline) and 2.
 void BM_ProcessFile(benchmark::State& state) {
   const char* path = std::getenv("JOINTLAB_BENCH_RECORD");
   if (!path) {
     state.SkipWithError("JOINTLAB_BENCH_RECORD not set");
     return;
   }
-  time_process(state, jointlab::data::read_record(path));
+  time_process(state, jointlab::data::read_record(path), static_cast<unsigned>(state.range(0)));
 }
-BENCHMARK(BM_ProcessFile)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProcessFile)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -1,15 +1,20 @@
 #include "jointlab/modal/process.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <complex>
+#include <memory>
+#include <mutex>
 #include <numbers>
 #include <optional>
+#include <thread>
 #include <unordered_map>
 
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/parallel.h"
 #include "jointlab/signal/spectrum.h"
 
 namespace jointlab::modal {
@@ -47,10 +52,10 @@ void keep_record_span(BandOfChannel& c, double begin, double end) {
   c.first = j0;
 }
 
-// The band's analytic signal of a channel at absolute time t, by cubic (Lagrange)
-// interpolation of its baseband: the coarse grid samples the baseband at 8 times its
-// width, where the cubic's error is below 1e-3.
-std::complex<double> band_value(const BandOfChannel& channel, double t) {
+// The baseband of a channel's band signal at absolute time t, by cubic (Lagrange)
+// interpolation: the coarse grid samples the baseband at 8 times its width, where the
+// cubic's error is below 1e-3.
+std::complex<double> baseband_value(const BandOfChannel& channel, double t) {
   const signal::BandSignal& z = channel.z;
   const double x = (t - channel.t0) / z.dt - static_cast<double>(channel.first);
   const Eigen::Index n = z.baseband.size();
@@ -65,7 +70,12 @@ std::complex<double> band_value(const BandOfChannel& channel, double t) {
     }
     v += w * z.baseband(j + k);
   }
-  return v * std::polar(1.0, 2 * std::numbers::pi * z.carrier_hz * (t - channel.t0));
+  return v;
+}
+
+// The carrier's phase of a channel's band signal at absolute time t.
+double carrier_phase(const BandOfChannel& channel, double t) {
+  return 2 * std::numbers::pi * channel.z.carrier_hz * (t - channel.t0);
 }
 
 // Channel b's band signal against channel a's over [t1, t2] (a's coarse grid):
@@ -82,9 +92,17 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   Projection p;
   std::complex<double> ab = 0.0;
   double aa = 0, bb = 0;
+  // a = a_base e^{i phi_a}, b = b_base e^{i phi_b}: |a| and |b| need no carrier, and
+  // conj(a) b only the difference of the carriers' phases, constant when the carriers are
+  // equal (two sines per point were a twentieth of process's time).
+  const bool same_carrier = ca.z.carrier_hz == cb.z.carrier_hz;
+  const std::complex<double> constant_turn =
+      std::polar(1.0, carrier_phase(cb, t1) - carrier_phase(ca, t1));
   for (double t = t1; t <= t2 + 1e-12; t += ca.z.dt) {
-    const std::complex<double> a = band_value(ca, t), b = band_value(cb, t);
-    ab += std::conj(a) * b;
+    const std::complex<double> a = baseband_value(ca, t), b = baseband_value(cb, t);
+    const std::complex<double> turn =
+        same_carrier ? constant_turn : std::polar(1.0, carrier_phase(cb, t) - carrier_phase(ca, t));
+    ab += std::conj(a) * b * turn;
     aa += std::norm(a);
     bb += std::norm(b);
   }
@@ -92,7 +110,7 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   p.ratio = ab / aa;
   const double c = std::abs(ab) / std::sqrt(aa) / std::sqrt(bb);  // aa * bb may overflow
   p.coherence = c * c;
-  p.amplitude = p.ratio * std::abs(band_value(ca, t1)) / cb.scale;
+  p.amplitude = p.ratio * std::abs(baseband_value(ca, t1)) / cb.scale;
   p.ratio *= ca.scale / cb.scale;
   if (!std::isfinite(std::abs(p.amplitude)) || !std::isfinite(std::abs(p.ratio))) return {};
   return p;
@@ -289,17 +307,47 @@ struct ChannelSet {
   }
 };
 
+// The FFT workspaces of a record's channel workers: the caller's for the first worker,
+// the others made on first use and kept for every band of the record (plans are not
+// shared between threads).
+class Workspaces {
+ public:
+  Workspaces(signal::FftCache& first, unsigned threads)
+      : first_(first),
+        threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())),
+        others_(threads_ - 1) {}
+  /// Runs body(i, cache) for i in [0, n), each worker with its own cache.
+  template <typename Body>
+  void run(size_t n, Body body) {
+    std::atomic<unsigned> next{0};
+    parallel_for(
+        n, threads_,
+        [&]() -> signal::FftCache* {
+          const unsigned w = next++;
+          if (w == 0) return &first_;
+          if (!others_[w - 1]) others_[w - 1] = std::make_unique<signal::FftCache>();
+          return others_[w - 1].get();
+        },
+        [&](size_t i, signal::FftCache* cache) { body(i, *cache); });
+  }
+
+ private:
+  signal::FftCache& first_;
+  unsigned threads_;
+  std::vector<std::unique_ptr<signal::FftCache>> others_;
+};
+
 // Pass 1, every requested channel in turn: its spectrum (dropped before the next channel's)
 // and backbones into results[first + i]; the band signal is kept only where a backbone was
 // found.
 std::vector<std::optional<BandOfChannel>> extract_band(const ChannelSet& set,
                                                        const signal::Band& band, int band_index,
                                                        const PrepareOptions& prepare,
-                                                       ChannelBand* results,
-                                                       signal::FftCache& cache) {
+                                                       ChannelBand* results, Workspaces& workers) {
   std::vector<std::optional<BandOfChannel>> kept(set.all.size());
-  for (size_t c = 0; c < set.all.size(); ++c) {
-    if (set.requests[c].empty()) continue;
+  // Channels are independent: each worker writes only its channel's results and slot.
+  workers.run(set.all.size(), [&](size_t c, signal::FftCache& cache) {
+    if (set.requests[c].empty()) return;
     const ChannelSpectrum spectrum = set.spectrum(c, prepare, cache);
     for (const size_t i : set.requests[c]) {
       ChannelBand& r = results[i];
@@ -311,7 +359,7 @@ std::vector<std::optional<BandOfChannel>> extract_band(const ChannelSet& set,
         kept[c] = set.band_of(spectrum, std::move(r.ringdown.band));
       r.ringdown.band = signal::BandSignal{};
     }
-  }
+  });
   return kept;
 }
 
@@ -336,14 +384,15 @@ std::vector<double> shapes_and_shares(const ChannelSet& set, const signal::Band&
                                       const PrepareOptions& prepare,
                                       const std::vector<std::optional<BandOfChannel>>& kept,
                                       size_t ref, ChannelBand* results, size_t n,
-                                      signal::FftCache& cache) {
+                                      Workspaces& workers) {
   const Ringdown& rr = results[ref].ringdown;
   const BandOfChannel& reference = *kept[set.index_of[ref]];
   std::vector<double> share(n, 1.0);
+  std::mutex share_lock;  // the smallest share wins, whichever worker finds it first
   std::vector<size_t> with_backbone;
   for (size_t i = 0; i < n; ++i)
     if (results[i].ringdown.summary.status == RingdownStatus::kOk) with_backbone.push_back(i);
-  for (size_t d = 0; d < set.all.size(); ++d) {
+  workers.run(set.all.size(), [&](size_t d, signal::FftCache& cache) {
     std::optional<BandOfChannel> again;
     if (!kept[d]) {
       const ChannelSpectrum spectrum = set.spectrum(d, prepare, cache);
@@ -355,17 +404,18 @@ std::vector<double> shapes_and_shares(const ChannelSet& set, const signal::Band&
       results[i].complex_amplitude =
           projection(reference, zd, rr.summary.span_start_s, rr.summary.span_end_s).amplitude;
     }
-    if (set.options.min_share == 0) continue;
+    if (set.options.min_share == 0) return;
     for (const size_t i : with_backbone) {
       const size_t c = set.index_of[i];
       if (c == d) continue;
       const RingdownSummary& rs = results[i].ringdown.summary;
       const Projection p = projection(*kept[c], zd, rs.span_start_s, rs.span_end_s);
       if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
+        const std::lock_guard<std::mutex> lock(share_lock);
         share[i] = std::min(share[i], 1.0 / std::abs(p.ratio));
       }
     }
-  }
+  });
   return share;
 }
 
@@ -410,6 +460,7 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   // need the same share one). The nodal test compares a channel with every response
   // channel of the file, requested or not.
   const ChannelSet set(record, options, chans);
+  Workspaces workers(cache, options.threads);
   for (size_t b = 0; b < out.bands.size(); ++b) {
     const signal::Band& band = out.bands[b];
     const PrepareOptions prepare = prepare_for({band}, options.ringdown.taper, options.prepare);
@@ -417,12 +468,12 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     out.results.resize(first + chans.size());
     ChannelBand* results = out.results.data() + first;
     const std::vector<std::optional<BandOfChannel>> kept =
-        extract_band(set, band, static_cast<int>(b) + 1, prepare, results, cache);
+        extract_band(set, band, static_cast<int>(b) + 1, prepare, results, workers);
     const size_t ref = reference_channel(results, chans.size());
     out.reference.push_back(results[ref].channel);
     if (results[ref].ringdown.summary.status != RingdownStatus::kOk) continue;  // no nodal test
     const std::vector<double> share =
-        shapes_and_shares(set, band, prepare, kept, ref, results, chans.size(), cache);
+        shapes_and_shares(set, band, prepare, kept, ref, results, chans.size(), workers);
     drop_near_nodes(share, options.min_share, results);
   }
   return out;

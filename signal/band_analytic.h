@@ -71,8 +71,8 @@ struct BandWeights {
   double noise_bandwidth_hz = 0.0;           ///< integral of G(f)^2 over f > 0 [Hz]
 };
 
-/// Reusable FFT plans keyed by transform size, the last filter gain computed and the last
-/// few bands' weights (every channel of a record shares them); one workspace per thread.
+/// Reusable FFT plans keyed by transform size, the last few filter gains computed and the
+/// last few bands' weights (every channel of a record shares them); one workspace per thread.
 class FftCache {
  public:
   /// The Fft of length n, created on first use.
@@ -90,20 +90,26 @@ class FftCache {
     slot = {key, make()};
     return slot.second;
   }
-  /// The gain vector made by `make` for `key`, recomputed only when the key changes.
+  /// The gain vector made by `make` for `key`, kept for the last few keys (a record's
+  /// low-pass and its bands' gains on the gain correction's grids alternate).
   template <typename Make>
-  const Eigen::VectorXd& gain(const Eigen::Vector4d& key, Make make) {
-    if (!(gain_key_ == key) || gain_.size() == 0) {
-      gain_ = make();
-      gain_key_ = key;
+  const Eigen::VectorXd& gain(const std::array<double, 8>& key, Make make) {
+    for (auto& [k, g] : gains_)
+      if (k == key) return g;
+    if (gains_.size() < kGainsKept) {
+      gains_.emplace_back(key, make());
+      return gains_.back().second;
     }
-    return gain_;
+    auto& slot = gains_[next_gain_++ % kGainsKept];
+    slot = {key, make()};
+    return slot.second;
   }
 
  private:
   std::map<Eigen::Index, Fft> ffts_;
-  Eigen::Vector4d gain_key_ = Eigen::Vector4d::Constant(-1.0);
-  Eigen::VectorXd gain_;
+  static constexpr size_t kGainsKept = 4;
+  std::vector<std::pair<std::array<double, 8>, Eigen::VectorXd>> gains_;
+  size_t next_gain_ = 0;
   static constexpr size_t kWeightsKept = 8;  // bands and their superharmonic bands
   std::vector<std::pair<std::array<double, 8>, BandWeights>> weights_;
   size_t next_weights_ = 0;

@@ -67,19 +67,18 @@ Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, d
   Fft& fft = cache.get(nfft);
   Eigen::VectorXcd X = fft.forward(x);
   // The gain is shared by every channel of a record: computed once per size and edge.
-  const Eigen::VectorXd& g =
-      cache.gain(Eigen::Vector4d(static_cast<double>(nfft), fs, f_pass, f_stop), [&] {
-        const double df = fs / static_cast<double>(nfft);
-        const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
-        Eigen::VectorXd gain(X.size());
-        for (Eigen::Index k = 0; k < X.size(); ++k) {
-          const double f = static_cast<double>(k) * df;
-          gain(k) = f < mid - 9 * sd   ? 1.0
-                    : f > mid + 9 * sd ? 0.0
-                                       : 0.5 * std::erfc((f - mid) / (std::sqrt(2.0) * sd));
-        }
-        return gain;
-      });
+  const Eigen::VectorXd& g = cache.gain({0.0, static_cast<double>(nfft), fs, f_pass, f_stop}, [&] {
+    const double df = fs / static_cast<double>(nfft);
+    const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
+    Eigen::VectorXd gain(X.size());
+    for (Eigen::Index k = 0; k < X.size(); ++k) {
+      const double f = static_cast<double>(k) * df;
+      gain(k) = f < mid - 9 * sd   ? 1.0
+                : f > mid + 9 * sd ? 0.0
+                                   : 0.5 * std::erfc((f - mid) / (std::sqrt(2.0) * sd));
+    }
+    return gain;
+  });
   X.array() *= g.array();
   return fft.inverse_real(X).head(n);
 }
