@@ -71,6 +71,29 @@ struct BandWeights {
   double noise_bandwidth_hz = 0.0;           ///< integral of G(f)^2 over f > 0 [Hz]
 };
 
+/// The values made for the last `Kept` keys, the oldest replaced first.
+template <typename Value, size_t Kept>
+class RecentValues {
+ public:
+  /// The value made by `make` for `key`, made only if it is not kept.
+  template <typename Make>
+  const Value& get(const std::array<double, 8>& key, Make make) {
+    for (auto& [k, v] : kept_)
+      if (k == key) return v;
+    if (kept_.size() < Kept) {
+      kept_.emplace_back(key, make());
+      return kept_.back().second;
+    }
+    auto& slot = kept_[next_++ % Kept];
+    slot = {key, make()};
+    return slot.second;
+  }
+
+ private:
+  std::vector<std::pair<std::array<double, 8>, Value>> kept_;
+  size_t next_ = 0;
+};
+
 /// Reusable FFT plans keyed by transform size, the last few filter gains computed and the
 /// last few bands' weights (every channel of a record shares them); one workspace per thread.
 class FftCache {
@@ -80,39 +103,19 @@ class FftCache {
   /// The weights made by `make` for `key`, kept for the last few keys.
   template <typename Make>
   const BandWeights& band_weights(const std::array<double, 8>& key, Make make) {
-    for (auto& [k, w] : weights_)
-      if (k == key) return w;
-    if (weights_.size() < kWeightsKept) {
-      weights_.emplace_back(key, make());
-      return weights_.back().second;
-    }
-    auto& slot = weights_[next_weights_++ % kWeightsKept];
-    slot = {key, make()};
-    return slot.second;
+    return weights_.get(key, make);
   }
   /// The gain vector made by `make` for `key`, kept for the last few keys (a record's
   /// low-pass and its bands' gains on the gain correction's grids alternate).
   template <typename Make>
   const Eigen::VectorXd& gain(const std::array<double, 8>& key, Make make) {
-    for (auto& [k, g] : gains_)
-      if (k == key) return g;
-    if (gains_.size() < kGainsKept) {
-      gains_.emplace_back(key, make());
-      return gains_.back().second;
-    }
-    auto& slot = gains_[next_gain_++ % kGainsKept];
-    slot = {key, make()};
-    return slot.second;
+    return gains_.get(key, make);
   }
 
  private:
   std::map<Eigen::Index, Fft> ffts_;
-  static constexpr size_t kGainsKept = 4;
-  std::vector<std::pair<std::array<double, 8>, Eigen::VectorXd>> gains_;
-  size_t next_gain_ = 0;
-  static constexpr size_t kWeightsKept = 8;  // bands and their superharmonic bands
-  std::vector<std::pair<std::array<double, 8>, BandWeights>> weights_;
-  size_t next_weights_ = 0;
+  RecentValues<Eigen::VectorXd, 4> gains_;
+  RecentValues<BandWeights, 8> weights_;  // bands and their superharmonic bands
 };
 
 /// Analytic signal of `band` from the one-sided spectrum of an n-sample record padded to n_fft.
