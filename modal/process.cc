@@ -313,9 +313,7 @@ struct ChannelSet {
 class Workspaces {
  public:
   Workspaces(signal::FftCache& first, unsigned threads)
-      : first_(first),
-        threads_(threads ? threads : std::max(1u, std::thread::hardware_concurrency())),
-        others_(threads_ - 1) {}
+      : first_(first), threads_(std::max(1u, threads)), others_(threads_ - 1) {}
   /// Runs body(i, cache) for i in [0, n), each worker with its own cache.
   template <typename Body>
   void run(size_t n, Body body) {
@@ -460,7 +458,13 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   // need the same share one). The nodal test compares a channel with every response
   // channel of the file, requested or not.
   const ChannelSet set(record, options, chans);
-  Workspaces workers(cache, options.threads);
+  // Each channel worker holds a channel's spectra (about 100 bytes a sample): a long record
+  // gets fewer workers, so that together they stay near a gigabyte.
+  constexpr double kWorkerSamples = 1e7;
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const auto by_memory = static_cast<unsigned>(
+      std::clamp(kWorkerSamples / static_cast<double>(record.size()), 1.0, 1024.0));
+  Workspaces workers(cache, std::min(options.threads ? options.threads : cores, by_memory));
   for (size_t b = 0; b < out.bands.size(); ++b) {
     const signal::Band& band = out.bands[b];
     const PrepareOptions prepare = prepare_for({band}, options.ringdown.taper, options.prepare);
