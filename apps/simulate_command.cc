@@ -49,6 +49,9 @@ void run_simulate(SimulateArgs& args) {
       o.sensors.push_back(model::resolve_dof(m, s, "--sensors"));
   }
   if (const std::string e = args.record.error(); !e.empty()) throw InputError("simulate: --" + e);
+  // Everything the record's writing could refuse, refused before the simulation's seconds.
+  model::check_sensors(m, o.sensors);
+  data::check_record_destination(args.out);
   if (!args.quiet) {
     o.progress = [&](const std::string& s) { say(stderr, "[{:6.1f} s] {}\n", elapsed(), s); };
     say(stderr, "[{:6.1f} s] {}: {} DOFs, {} joints ({} Iwan); impact at {} with {} N\n", elapsed(),

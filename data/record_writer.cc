@@ -78,15 +78,49 @@ void write_csv_record(const std::filesystem::path& path, const Record& record) {
   write_file_atomically(path, format_csv_record(record, path.string()));
 }
 
-void write_record(const std::filesystem::path& path, const Record& record) {
+namespace {
+
+enum class RecordFormat { kCsv, kUff, kMat };
+
+// The format `path`'s extension names; InputError naming the file otherwise.
+RecordFormat record_format(const std::filesystem::path& path) {
   const std::string ext = lower(path.extension().string());
-  if (ext == ".csv" || ext == ".txt") return write_csv_record(path, record);
-  if (ext == ".uff" || ext == ".unv" || ext == ".uf") return write_uff58(path, record, false);
-  if (ext == ".mat") return write_mat(path, record);
+  if (ext == ".csv" || ext == ".txt") return RecordFormat::kCsv;
+  if (ext == ".uff" || ext == ".unv" || ext == ".uf") return RecordFormat::kUff;
+  if (ext == ".mat") return RecordFormat::kMat;
   throw InputError(where(path.string(), 0,
                          fmt::format("cannot tell the format to write from "
                                      "extension '{}' (.csv, .uff, .mat)",
                                      ext)));
+}
+
+}  // namespace
+
+void check_record_destination(const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    throw InputError(
+        where(path.string(), 0, "is a folder: give a file name to write the record to"));
+  }
+  record_format(path);
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec)) {
+    throw InputError(
+        where(path.string(), 0,
+              fmt::format("the folder '{}' does not exist: create it first", dir.string())));
+  }
+}
+
+void write_record(const std::filesystem::path& path, const Record& record) {
+  switch (record_format(path)) {
+    case RecordFormat::kCsv:
+      return write_csv_record(path, record);
+    case RecordFormat::kUff:
+      return write_uff58(path, record, false);
+    case RecordFormat::kMat:
+      return write_mat(path, record);
+  }
 }
 
 }  // namespace jointlab::data

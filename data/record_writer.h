@@ -23,6 +23,10 @@ std::string format_csv_record(const Record& record, const std::string& name = "r
 /// Writes a record as a contract CSV file, atomically.
 void write_csv_record(const std::filesystem::path& path, const Record& record);
 
+/// Refuses (InputError naming the file), before any work, a path write_record could not
+/// write: an extension naming no format, a folder, or a folder that does not exist.
+void check_record_destination(const std::filesystem::path& path);
+
 /// Writes a record in the format its extension names: .csv, .uff/.unv (ASCII 58), .mat (v5).
 void write_record(const std::filesystem::path& path, const Record& record);
 

@@ -641,6 +641,31 @@ TEST(SimulateLimits, ForcesAndPulsesItCannotRepresentAreRefused) {
   EXPECT_FALSE(fs::exists(dir + "/sim.csv"));
 }
 
+// What would stop simulate from writing its record is refused before the simulation runs
+// (two sensors on one channel and an unknown extension once failed only after seconds of
+// work): without --quiet, the first progress line ("... impact at ...") would have come first.
+TEST(SimulateLimits, WhatTheRecordCannotBeIsRefusedBeforeSimulating) {
+  const std::string dir = scratch_dir("rel_sim_before");
+  const std::string model = write_model(dir, "-0.5");
+  const std::string sim = "simulate " + model + " --impact 0 --force 10 --duration 0.5 --fs 2000 ";
+  const auto refused_first = [](const CommandResult& r, const std::string& fragment) {
+    expect_error(r, fragment);
+    EXPECT_EQ(r.err.find("impact at"), std::string::npos) << r.err.substr(0, 500);
+  };
+  refused_first(run_jointlab(sim + "--sensors 0 --sensors 0 --out " + dir + "/s.csv"),
+                "simulate: sensor 0 is given twice");
+  refused_first(run_jointlab(sim + "--out " + dir + "/s.xls"),
+                "s.xls: cannot tell the format to write from extension '.xls' (.csv, .uff, .mat)");
+  refused_first(run_jointlab(sim + "--out " + dir + "/no/such/s.csv"),
+                "the folder '" + dir + "/no/such' does not exist: create it first");
+  refused_first(run_jointlab(sim + "--out " + dir), "is a folder: give a file name");
+  EXPECT_FALSE(fs::exists(dir + "/s.csv"));
+  // The check passes what write_record writes.
+  const CommandResult ok = run_jointlab(sim + "--out " + dir + "/s.uff");
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  EXPECT_NE(ok.err.find("impact at"), std::string::npos) << ok.err;
+}
+
 // What is not a regular file is refused before it is read, naming it: a FIFO once hung, a
 // directory read as "empty file" or as the default beam description, /dev/zero read 2 GB.
 TEST(Readers, WhatIsNotARegularFileIsRefusedBeforeReading) {

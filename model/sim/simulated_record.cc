@@ -62,24 +62,29 @@ std::string RecordOptions::error() const {
   return "";
 }
 
+void check_sensors(const Model& model, const std::vector<Eigen::Index>& sensors) {
+  std::set<std::string> names;
+  for (const Eigen::Index dof : sensors) {
+    if (!names.insert(sensor_channel_name(model, dof)).second) {
+      throw InputError(fmt::format("simulate: sensor {} is given twice", dof_name(model, dof)));
+    }
+  }
+}
+
 data::Record make_simulated_record(const Model& model, const SimulationOptions& simulation,
                                    const SimulatedResponse& response,
                                    const SimulationSummary& summary, const RecordOptions& options) {
   if (const std::string e = options.error(); !e.empty()) throw InputError("simulate: " + e);
+  check_sensors(model, simulation.sensors);
   data::Record rec;
   rec.fs = response.fs;
   rec.t0 = 0;
   rec.source = options.model_name;
-  std::set<std::string> names;
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (size_t k = 0; k < simulation.sensors.size(); ++k) {
     data::Channel ch;
     ch.name = sensor_channel_name(model, simulation.sensors[k]);
-    if (!names.insert(ch.name).second) {
-      throw InputError(fmt::format("simulate: sensor {} is given twice",
-                                   dof_name(model, simulation.sensors[k])));
-    }
     ch.quantity = Quantity::kAcceleration;
     ch.unit = si_unit(Quantity::kAcceleration);
     ch.samples = response.acceleration.col(static_cast<Eigen::Index>(k));

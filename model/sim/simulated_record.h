@@ -42,6 +42,9 @@ struct RecordOptions {
   std::string error() const;
 };
 
+/// InputError if two of `sensors` are one channel (checked before a simulation runs).
+void check_sensors(const Model& model, const std::vector<Eigen::Index>& sensors);
+
 /// The record of a simulated ring-down; InputError for bad options or duplicate sensors.
 data::Record make_simulated_record(const Model& model, const SimulationOptions& simulation,
                                    const SimulatedResponse& response,
