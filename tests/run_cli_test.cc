@@ -404,6 +404,22 @@ TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   replace_setting(m.model, "chi = ", "chi = 5.0");
   err = refused_before_hits(m, chi_dir);
   EXPECT_NE(err.find("chi = 5 must be in (-1, 0]"), std::string::npos) << err;
+  // A truth file that does not parse and a stepped-sine file that is not one: read before
+  // the hits (each once stopped a run after its minutes of processing), named with its line.
+  const fs::path truth_dir = testing::scratch_dir("run_cli_bad_truth");
+  const testing::SmallCampaign t = testing::make_small_campaign(truth_dir, "", {10});
+  testing::write_text((truth_dir / "truth.toml").string(), "[iwan]\nFs = 3\\n");
+  replace_setting(t.campaign, "name = \"two chains\"",
+                  "name = \"two chains\"\ntruth = \"truth.toml\"");
+  err = refused_before_hits(t, truth_dir);
+  EXPECT_NE(err.find("truth.toml:2:"), std::string::npos) << err;
+  const fs::path sine_dir = testing::scratch_dir("run_cli_bad_sine");
+  const testing::SmallCampaign ss = testing::make_small_campaign(sine_dir, "", {10});
+  testing::write_text((sine_dir / "sweeps.csv").string(), "frequency_hz,force\n1,2\n");
+  replace_setting(ss.campaign, "model_mode = ",
+                  fmt::format("model_mode = {}\nstepped_sine = [\"sweeps.csv\"]", ss.model_mode));
+  err = refused_before_hits(ss, sine_dir);
+  EXPECT_NE(err.find("sweeps.csv"), std::string::npos) << err;
 }
 
 // A band with no mode in it: everything else is written, the report's top says "no backbone"

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/linear_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/linear_update.h"
@@ -10,6 +11,12 @@
 namespace jointlab::campaign {
 
 void validate_settings(const Campaign& c) {
+  // The truth file and the stepped-sine files are read now, not after the hits: a defect
+  // in one of them once stopped a run only after its minutes of processing.
+  read_truth(c.truth);
+  for (size_t k = 0; k < c.modes.size(); ++k) {
+    if (!c.modes[k].stepped_sine.empty()) stepped_sine_backbones(c, k, 0);
+  }
   if (c.linear_update.enabled) linear_update_options(c);
   if (c.iwan_update.enabled) {
     correlate::IwanUpdateOptions io;

@@ -13,7 +13,8 @@
 
 namespace jointlab::campaign {
 
-/// Checks what needs no model: the settings of [update.linear] and [update.iwan].
+/// Checks what needs no model, before any hit is processed: the truth file, the stepped-sine
+/// files and the settings of [update.linear] and [update.iwan].
 void validate_settings(const Campaign& campaign);
 
 /// Reads the model file and checks the campaign against it; returns the model with the
