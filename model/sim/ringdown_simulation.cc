@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -403,7 +404,14 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
 
   record(0);
   const long total_steps = static_cast<long>(n_samples - 1) * sub;
+  // Progress every tenth of the steps, and at least every 5 s of wall time with the time
+  // still to go: a fine step (--substeps) may take hours, and its first tenth as long.
   const long progress_every = std::max<long>(1, total_steps / 10);
+  const auto started = std::chrono::steady_clock::now();
+  auto last_report = started;
+  const auto seconds = [](auto from, auto to) {
+    return std::chrono::duration<double>(to - from).count();
+  };
   for (long m = 1; m <= total_steps; ++m) {
     const double t = static_cast<double>(m) * dt;
     const double p = options.pulse(t);
@@ -442,11 +450,17 @@ SimulatedResponse simulate_ringdown(const Model& model, const SimulationOptions&
     eta = eta_p, vel = vel_new, acc = acc_new;
     ++sum.steps;
     if (m % sub == 0) record(m / sub);
-    if (options.progress && m % progress_every == 0) {
-      options.progress(fmt::format(
-          "t = {:.3f} s of {:.3f} s ({:.0f} %), joint dissipation {:.4e} J", t,
-          (n_samples - 1) / options.fs,
-          100.0 * static_cast<double>(m) / static_cast<double>(total_steps), en.joint_dissipated));
+    if (options.progress && (m % progress_every == 0 || m % 1024 == 0)) {
+      const auto now = std::chrono::steady_clock::now();
+      if (m % progress_every == 0 || seconds(last_report, now) >= 5.0) {
+        last_report = now;
+        const double done = static_cast<double>(m) / static_cast<double>(total_steps);
+        options.progress(fmt::format(
+            "t = {:.3f} s of {:.3f} s ({:.1f} %, about {:.0f} s to go), joint dissipation "
+            "{:.4e} J",
+            t, (n_samples - 1) / options.fs, 100.0 * done,
+            seconds(started, now) * (1 - done) / done, en.joint_dissipated));
+      }
     }
   }
 
