@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <random>
 #include <string>
@@ -191,6 +192,134 @@ TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
       EXPECT_LE(ez[ez.size() / 2], 0.10) << band.lo << " seed " << seed;
       EXPECT_LE(ez.back(), 0.10) << band.lo << " seed " << seed;
     }
+  }
+}
+
+// The twin of a real LMS hammer record (issue 26): 51.2 kHz, 2.55 s, acceleration, a
+// 0.1 s pre-trigger. Mode 1 drifts from 149.9 Hz at 200 m/s^2 to 151.7 Hz at 3.6 m/s^2
+// (frequency rising 1.2 % as it decays) while its damping falls from 0.38 % to 0.14 %; a
+// linear mode at 412 Hz rings beside it; white noise of 4 m/s^2 per sample puts the
+// band's noise floor near 0.1 m/s^2, so the mode starts 60 dB above it. Its authors'
+// band, 148.9:158.9 Hz, puts the mode 1-3 Hz above the lower edge. `neighbour_hz` > 0
+// adds a linear mode there (100 m/s^2 at the impact, damping 0.3 %).
+struct LmsTwin {
+  double fs = 51200;
+  Eigen::VectorXd x;         // acceleration [m/s^2]
+  testing::SlowFlowMode m1;  // the planted backbone (displacement amplitude)
+};
+
+LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0) {
+  LmsTwin t;
+  const Eigen::Index n = static_cast<Eigen::Index>(2.55 * t.fs);
+  const Eigen::Index pre = static_cast<Eigen::Index>(0.1 * t.fs);
+  const double two_pi = 2 * std::numbers::pi;
+  const double a_hi = 200 / std::pow(two_pi * 149.9, 2), a_lo = 3.6 / std::pow(two_pi * 151.7, 2);
+  const auto slip = [](double a) {
+    const double x = std::pow(a / 4e-5, 0.8);
+    return x / (1 + x);
+  };
+  const double s_hi = slip(a_hi), s_lo = slip(a_lo);
+  const auto part = [=](double a) { return (slip(a) - s_lo) / (s_hi - s_lo); };
+  t.m1.omega_n = [=](double a) { return two_pi * (151.7 - 1.8 * part(a)); };
+  t.m1.zeta = [=](double a) { return 0.0014 + 0.0024 * part(a); };
+  t.m1.a0 = 350 / std::pow(two_pi * 149.6, 2);
+  t.m1.theta0 = 0.2;
+  const auto linear = [&](double f, double zeta, double acc0, double theta0) {
+    testing::SlowFlowMode m;
+    m.omega_n = [=](double) { return two_pi * f; };
+    m.zeta = [=](double) { return zeta; };
+    m.a0 = acc0 / std::pow(two_pi * f, 2);
+    m.theta0 = theta0;
+    return testing::slow_flow(m, t.fs, n - pre).acceleration;
+  };
+  Eigen::VectorXd ring = testing::slow_flow(t.m1, t.fs, n - pre).acceleration;
+  ring += linear(412.0, 0.004, 150.0, 1.1);
+  if (neighbour_hz > 0) ring += linear(neighbour_hz, 0.003, 100.0, 2.3);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 4.0);
+  t.x.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) t.x(k) = (k < pre ? 0.0 : ring(k - pre)) + g(rng);
+  return t;
+}
+
+// Median relative errors of a backbone against the planted one, and its worst damping error.
+struct Medians {
+  double f = 0, z = 0, z_max = 0;
+};
+
+Medians medians(const Backbone& b, const testing::SlowFlowMode& m) {
+  std::vector<double> ef, ez;
+  for (Eigen::Index i = 0; i < b.size(); ++i) {
+    const double a = b.displacement(i);
+    ef.push_back(std::abs(b.frequency_hz(i) / (m.omega_n(a) / (2 * std::numbers::pi)) - 1));
+    ez.push_back(std::abs(b.damping(i) / m.zeta(a) - 1));
+  }
+  if (ef.empty()) return {1, 1, 1};
+  std::sort(ef.begin(), ef.end());
+  std::sort(ez.begin(), ez.end());
+  return {ef[ef.size() / 2], ez[ez.size() / 2], ez.back()};
+}
+
+// Issue 26's first part: the twin of the LMS record read with its authors' band
+// 148.9:158.9 Hz. A band says which mode; the mode must be read wherever it sits inside it.
+// Acceptance: at least 1.2 decades kept (the authors kept 1.5 over 0.3-2 s), median errors
+// within 0.05 % in frequency and 5 % in damping of the planted backbone.
+TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeKeepsItsSpan) {
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    const LmsTwin t = lms_twin(seed);
+    const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+    if (std::getenv("JOINTLAB_TEST_VERBOSE")) {
+      const Ringdown w = extract_band(t.x, t.fs, Quantity::kAcceleration, {130, 175});
+      const Medians ew = medians(w.backbone, t.m1);
+      std::printf("  wide band: %.2f decades %.2f-%.2f s, f %.1e z %.3f: %s\n",
+                  w.summary.amplitude_decades, w.summary.span_start_s, w.summary.span_end_s, ew.f,
+                  ew.z, w.summary.message.c_str());
+      for (Eigen::Index i = 0; i < r.backbone.size(); i += 3)
+        std::printf("  %.3f %.3e %.3f %.5f\n", r.backbone.time_s(i), r.backbone.displacement(i),
+                    r.backbone.frequency_hz(i), r.backbone.damping(i));
+    }
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const Medians e = medians(r.backbone, t.m1);
+    std::printf(
+        "LMS twin seed %u: %ld points, %.2f decades, %.2f-%.2f s, median f err %.1e, median z "
+        "err %.3f, max z err %.3f\n  %s\n",
+        seed, long(r.backbone.size()), r.summary.amplitude_decades, r.summary.span_start_s,
+        r.summary.span_end_s, e.f, e.z, e.z_max, r.summary.message.c_str());
+    EXPECT_GE(r.summary.amplitude_decades, 1.2) << "seed " << seed;
+    EXPECT_LE(e.f, 5e-4) << "seed " << seed;
+    EXPECT_LE(e.z, 0.05) << "seed " << seed;
+  }
+}
+
+// The same twin with a linear mode just below the typed band, at 146 Hz (100 m/s^2 at the
+// impact, damping 0.3 %: its spectral peak 2.9 Hz below the band's lower edge, 3.9 Hz below
+// mode 1). The band may not follow mode 1 toward it: it stops where its gain at the
+// neighbour's peak is 1e-4 (the summary names the neighbour), so whatever is kept is mode
+// 1's: every frequency within 0.05 % (a neighbour passed at a tenth of mode 1's size would
+// swing it by 0.1 x 4 Hz / 150 Hz = 0.3 %) and the median damping within 5 %. Measured: no
+// span on seed 1 and 0.14 decades on seed 2 (median damping error 2 %), as without the band
+// following modes: held at 147.2:157.7 Hz the filter settles in 1.2 s while the record's
+// backward continuation holds for 0.45 s, and the mode has decayed too far by then (a steeper
+// edge on the neighbour's side alone would keep more). On seed 2 the peak is placed at
+// 145.0 Hz, 1 Hz below the neighbour's (the smoothed spectrum still rises there).
+TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
+  for (const unsigned seed : {1u, 2u}) {
+    const LmsTwin t = lms_twin(seed, 146.0);
+    const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+    std::printf("LMS twin + neighbour seed %u: %ld points, %.2f decades: %s\n", seed,
+                long(r.backbone.size()), r.summary.amplitude_decades, r.summary.message.c_str());
+    EXPECT_NE(r.summary.message.find("neighbouring mode's spectral peak at 14"), std::string::npos);
+    if (r.summary.status != RingdownStatus::kOk) continue;
+    const Medians e = medians(r.backbone, t.m1);
+    double worst_f = 0;
+    for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+      const double f = t.m1.omega_n(r.backbone.displacement(i)) / (2 * std::numbers::pi);
+      worst_f = std::max(worst_f, std::abs(r.backbone.frequency_hz(i) / f - 1));
+    }
+    std::printf("  median f err %.1e, worst %.1e, median z err %.3f, max %.3f\n", e.f, worst_f, e.z,
+                e.z_max);
+    EXPECT_LE(worst_f, 5e-4) << "seed " << seed;
+    EXPECT_LE(e.z, 0.05) << "seed " << seed;
   }
 }
 
