@@ -1199,6 +1199,208 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
   return {std::move(valid), weak_note, gain_note};
 }
 
+// The mode's track through a band: the lowest and highest frequency it runs through above
+// the noise threshold, and its largest decay rate, from fits over the shortest window every
+// half window along the usable span (a tenth of the cost of the estimates proper). Only
+// frequencies inside the band count: the band says which mode.
+struct ModeTrack {
+  double f_lo = 0, f_hi = 0, sigma = 0;  // [Hz], [Hz], [1/s]
+  int points = 0;
+};
+
+ModeTrack track_mode(const signal::BandSignal& bs, const BandSetting& s) {
+  ModeTrack tr;
+  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
+  const double noise = noise_floor(ep, s);
+  tr.f_lo = std::numeric_limits<double>::infinity();
+  tr.f_hi = -tr.f_lo;
+  for (double c = s.start + s.w_min / 2; c <= s.stop - s.w_min / 2; c += s.w_min / 2) {
+    const Estimate e = estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, c, s.w_min, s.correlation,
+                                        noise, s.options.degree);
+    const double f = e.omega_d / kTwoPi;
+    if (!(std::exp(e.log_amp) >= s.options.snr_min * noise) || !std::isfinite(e.sigma) ||
+        !(f >= s.band.lo && f <= s.band.hi)) {
+      continue;
+    }
+    tr.f_lo = std::min(tr.f_lo, f);
+    tr.f_hi = std::max(tr.f_hi, f);
+    tr.sigma = std::max(tr.sigma, e.sigma);
+    ++tr.points;
+  }
+  return tr;
+}
+
+// The nearest peak of another mode in the channel's spectrum, walking away from the mode in
+// direction `dir` (-1 down, +1 up) as far as `to` [Hz]. The power spectrum is smoothed over
+// the mode's half-power half-width sigma / 2 pi (at least five bins); the walk starts at its
+// largest value inside the typed band (the mode the band names) and a neighbour is a local
+// maximum standing kRise times above the lowest level between it and the mode and kAbove
+// times above the spectrum's lower decile around the band (so that the ripple of the noise
+// floor is no peak). A mode's own skirt falls away from it, but a decaying, drifting mode's
+// spectrum ripples by up to 2.5 times in power (LMS twin, ringdown_test.cc); a linear mode
+// 4 Hz below a drifting one of three times its size rose 4-5 times above the valley
+// between them. Returns its frequency, or 0 when there is none.
+double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, double sigma,
+                      int dir, double to) {
+  constexpr double kRise = 3.5, kAbove = 10.0;
+  const double df = channel.fs / static_cast<double>(channel.n_fft);
+  const Eigen::Index half =
+      std::max<Eigen::Index>(2, static_cast<Eigen::Index>(std::round(sigma / kTwoPi / df)));
+  const Eigen::Index last = channel.spectrum.size() - 1 - half;
+  if (last <= half) return 0.0;
+  const auto bin = [&](double f) {
+    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), half, last);
+  };
+  const auto power = [&](Eigen::Index k) {
+    double p = 0;
+    for (Eigen::Index i = k - half; i <= k + half; ++i) p += std::norm(channel.spectrum(i));
+    return p;
+  };
+  const double width = band.hi - band.lo;
+  std::vector<double> around;
+  for (Eigen::Index k = bin(band.lo - width); k <= bin(band.hi + width); ++k) {
+    around.push_back(power(k));
+  }
+  const double low = quantile(around, 0.1);
+  Eigen::Index k0 = bin(band.lo);
+  for (Eigen::Index k = bin(band.lo); k <= bin(band.hi); ++k) {
+    if (power(k) > power(k0)) k0 = k;
+  }
+  const Eigen::Index k1 = bin(to);
+  double valley = power(k0);
+  for (Eigen::Index k = k0; dir * (k1 - k) > 0; k += dir) {
+    const double p = power(k + dir);
+    valley = std::min(valley, p);
+    if (p > kRise * valley && p > kAbove * low) {
+      // Up the neighbour's flank to its top.
+      Eigen::Index top = k + dir;
+      while (dir * (k1 - top) > 0 && power(top + dir) > power(top)) top += dir;
+      return static_cast<double>(top) * df;
+    }
+  }
+  return 0.0;
+}
+
+// The band the mode is read through. The band a user types says which mode, not where the
+// filter's edges must be: when the mode's track (ModeTrack) leaves less than kMargin of its
+// half-power half-widths (sigma / 2 pi) between it and the points where the band's gain
+// reaches 0.98 (lo + w, hi - w), the band is moved, its width kept (so the filter's
+// settling time and noise bandwidth stay), just far enough to hold the track with that
+// margin in its flat part, and widened only if the track with its margins is wider than the
+// flat part. It moves at most the margin plus an edge width beyond the typed edge, never
+// so far that its gain at a neighbouring mode's spectral peak exceeds kNeighbourGain (it
+// stops short of such a mode and says so), never past zero or the Nyquist frequency. Once
+// moved, the track is read again through the new band (a mode seen on the edge may run
+// further), at most twice. Returns the typed band when the mode sits in its flat part.
+struct FollowedBand {
+  signal::Band band;
+  std::string note;           // what was moved and why; "" when the typed band is read
+  signal::BandSignal signal;  // the moved band's signal (empty when not moved)
+};
+
+FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
+                         const signal::Band& typed, const RingdownOptions& options,
+                         const signal::BandSignal& typed_signal, signal::FftCache& cache) {
+  constexpr double kMargin = 3.0;
+  // Gain 1e-4 lies 0.93 w below lo + w / 2 (the Gaussian edge's std is w / 4): 0.43 w below lo.
+  constexpr double kNeighbourReach = 0.43;
+  constexpr int kRounds = 3;
+  constexpr double kMaxWiden = 3.0;
+  FollowedBand out{typed, {}, {}};
+  const double t = options.taper;
+  double f_lo = std::numeric_limits<double>::infinity(), f_hi = -f_lo, sigma = 0;
+  double held_by = 0;  // a neighbouring mode's peak that stopped the band [Hz]
+  for (int round = 0; round < kRounds; ++round) {
+    const signal::BandSignal& bs = round == 0 ? typed_signal : out.signal;
+    const BandSetting s = band_setting(channel, out.band, options, bs);
+    if (s.stop - s.start < 2 * s.w_min) break;
+    ModeTrack tr = track_mode(bs, s);
+    if (tr.points == 0) break;
+    // Inside the typed band only (the moved one may reach beyond it).
+    f_lo = std::clamp(std::min(f_lo, tr.f_lo), typed.lo, typed.hi);
+    f_hi = std::clamp(std::max(f_hi, tr.f_hi), typed.lo, typed.hi);
+    sigma = std::max(sigma, tr.sigma);
+    const double m = std::min(kMargin * sigma / kTwoPi, t * (typed.hi - typed.lo));
+    const double need_lo = f_lo - m, need_hi = f_hi + m;
+    const signal::Band& b = out.band;
+    const double w_now = t * (b.hi - b.lo);
+    const bool low_short = b.lo + w_now > need_lo + 1e-9,
+               high_short = b.hi - w_now < need_hi - 1e-9;
+    if (!low_short && !high_short) break;
+    // The flat part [lo + w, hi - w] of a band of width W is (1 - 2 t) W wide. Where the
+    // typed band's filter settles longer than the record's backward continuation holds,
+    // the start of the decay (its largest amplitudes) is lost to it: the moved band is
+    // widened (up to kMaxWiden times) until it settles within the continuation.
+    const double typed_width = typed.hi - typed.lo;
+    double width = std::max(typed_width, (need_hi - need_lo) / (1 - 2 * t));
+    if (channel.continued_begin_s < band_settling_s(typed, t)) {
+      const double settles = 3.0 / (t * std::max(channel.continued_begin_s, 1e-9));
+      width = std::max(width, std::min(settles, kMaxWiden * typed_width));
+    }
+    const double w = t * width;
+    // Toward the side the mode is short of, then whatever the other side needs.
+    signal::Band next;
+    if (low_short) {
+      next.lo = std::min(b.lo, need_lo - w);
+      next.hi = std::max(next.lo + width, need_hi + w);
+    } else {
+      next.hi = std::max(b.hi, need_hi + w);
+      next.lo = std::min(next.hi - width, need_lo - w);
+    }
+    // Neighbouring modes beyond the typed band's edges hold the band back: its gain at
+    // their spectral peaks stays below 1e-4 (lo at least kNeighbourReach w above a peak
+    // below). A wider band has a softer edge, so a held side keeps the narrowest edge
+    // that still leaves the mode's need flat (never narrower than the typed band's).
+    const double nb_lo = next.lo < typed.lo ? neighbour_peak(channel, typed, sigma, -1,
+                                                             next.lo - kNeighbourReach * w)
+                                            : 0.0;
+    const double nb_hi =
+        next.hi > typed.hi ? neighbour_peak(channel, typed, sigma, 1, next.hi + kNeighbourReach * w)
+                           : 0.0;
+    const auto held_width = [&](double room) {
+      return std::max(typed_width, std::min(width, room / ((1 + kNeighbourReach) * t)));
+    };
+    if (nb_lo > 0 && next.lo < nb_lo + kNeighbourReach * w) {
+      held_by = nb_lo;
+      const double wl = held_width(need_lo - nb_lo);
+      next.lo = std::min(typed.lo, nb_lo + kNeighbourReach * t * wl);
+      next.hi = std::max(next.lo + wl, std::min(next.hi, need_hi + t * wl));
+    }
+    if (nb_hi > 0 && next.hi > nb_hi - kNeighbourReach * w) {
+      held_by = nb_hi;
+      const double wh = held_width(nb_hi - need_hi);
+      next.hi = std::max(typed.hi, nb_hi - kNeighbourReach * t * wh);
+      next.lo = nb_lo > 0 ? next.lo : std::min(next.hi - wh, std::max(next.lo, need_lo - t * wh));
+    }
+    next.lo = std::max(next.lo, 0.5 * typed.lo);
+    next.hi = std::min(next.hi, 0.5 * channel.fs);
+    if (!(next.hi > next.lo) ||
+        (std::abs(next.lo - b.lo) < 1e-3 * width && std::abs(next.hi - b.hi) < 1e-3 * width)) {
+      break;
+    }
+    out.band = next;
+    out.signal = band_signal(channel, measured, out.band, options, cache);
+  }
+  if (out.band.lo != typed.lo || out.band.hi != typed.hi) {
+    out.note = fmt::format(
+        "read through {:.2f}:{:.2f} Hz, the band moved to follow the mode (it runs from {:.2f} to "
+        "{:.2f} Hz, near the typed band's edge; the filter's gain is divided out)",
+        out.band.lo, out.band.hi, f_lo, f_hi);
+    if (held_by > 0) {
+      out.note += fmt::format(
+          "; held back by a neighbouring mode's spectral peak at {:.2f} Hz (gain there at most "
+          "1e-4)",
+          held_by);
+    }
+  } else if (held_by > 0) {
+    out.note = fmt::format(
+        "the band was not moved toward the mode's side: a neighbouring mode's spectral peak at "
+        "{:.2f} Hz",
+        held_by);
+  }
+  return out;
+}
+
 }  // namespace
 
 signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
@@ -1238,15 +1440,21 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
     return out;
   }
-  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
-  const double noise = noise_floor(ep, s);
+  // The mode is read through a band that follows it (follow_mode); out.band stays the typed
+  // band's signal, which the shapes and the nodal test compare across channels.
+  const FollowedBand followed = follow_mode(channel, measured, band, options, bs, cache);
+  const signal::Band& read = followed.band;
+  const signal::BandSignal& zb = followed.signal.baseband.size() > 0 ? followed.signal : bs;
+  const BandSetting sr = band_setting(channel, read, options, zb);
+  const EnvelopePhase ep = envelope_phase(zb.baseband, zb.carrier_hz, zb.dt);
+  const double noise = noise_floor(ep, sr);
   sum.noise_floor_m = noise / channel.scale;
 
   const CorrectedEstimates corr =
-      corrected_estimates(channel, band, options, bs, s, noise, measured, cache);
+      corrected_estimates(channel, read, options, zb, sr, noise, measured, cache);
   const std::vector<Estimate>& est = corr.est;
   const GainCorrection& previous = corr.previous;
-  const Screening screened = screen_estimates(corr, s, noise, options);
+  const Screening screened = screen_estimates(corr, sr, noise, options);
   const std::vector<char>& valid = screened.valid;
   const std::string& weak_note = screened.weak_note;
   const std::string& gain_note = screened.gain_note;
@@ -1260,11 +1468,12 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
         noise / channel.scale, advice.empty() ? "" : "; ", advice, gain_note.empty() ? "" : "; ",
         gain_note + (weak_note.empty() ? "" : (gain_note.empty() ? "" : "; ") + weak_note));
+    if (!followed.note.empty()) sum.message += "; " + followed.note;
     return out;
   }
   out.backbone = backbone_of(est, valid, run, channel.t0, noise, options);
   Backbone& bb = out.backbone;
-  mark_superharmonics(bb, channel, measured, band, options, cache);
+  mark_superharmonics(bb, channel, measured, read, options, cache);
   const Eigen::Index n = bb.size();
   sum.status = RingdownStatus::kOk;
   sum.span_start_s = bb.time_s(0);
@@ -1272,7 +1481,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
   sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
   set_linear_values(sum, bb, options);
-  std::vector<std::string> notes = span_notes(s, est, run, previous, noise, sum);
+  std::vector<std::string> notes = span_notes(sr, est, run, previous, noise, sum);
+  if (!followed.note.empty()) notes.insert(notes.begin(), followed.note);
   if (!gain_note.empty()) notes.push_back(gain_note);
   if (!weak_note.empty()) notes.push_back(weak_note);
   for (const std::string& note : notes) sum.message += (sum.message.empty() ? "" : "; ") + note;
