@@ -597,6 +597,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   return g;
 }
 
+// The gain correction's iteration stops once ln r changes by less than this over the span.
+constexpr double kGainConverged = 1e-4;
+
 // Model errors taken across one window of neighbouring estimates, added to each
 // estimate's uncertainty:
 // - A point's amplitude is uncertain too; along a backbone that bends, that moves
@@ -604,8 +607,14 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
 //   (d omega_d / d ln A) std(ln A) for omega_d.
 // - The gain correction rests on estimates it corrects: the change of ln r between
 //   its last two iterations, fitted over the point's window as the signal was and
-//   scaled by `tail` (what a geometric series of such changes still adds), is the
-//   slope error still left.
+//   scaled by the tail 1 / (1 - q) of a geometric series of such changes, is the slope
+//   error still left. q is the ratio of the last change to the one before (`earlier`
+//   to `previous`) over the point's own window, so that estimates the correction cannot
+//   settle (an envelope that grows while two modes exchange energy) leave points a
+//   settling time away alone (q taken over the whole span once made every point's
+//   uncertainty infinite and a 1:2 internal resonance lost its whole backbone); the tail
+//   is unbounded where the changes do not shrink, and 10 where they no longer
+//   shrink but are already below kGainConverged.
 // - Between the impact and the first estimate (and the last one and the record's end)
 //   the mode is not estimated, but the zero-phase filter reaches a settling time into
 //   that part: the difference between the correction with the model held there (`gain`)
@@ -615,19 +624,22 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
 // Returns, per estimate, what the gain correction adds to sigma's uncertainty.
 std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorrection& gain,
                                      const GainCorrection& previous,
-                                     const GainCorrection& continued, double tail, double dt,
-                                     Eigen::Index grid, int degree) {
+                                     const GainCorrection& continued, const GainCorrection& earlier,
+                                     double dt, Eigen::Index grid, int degree) {
   const size_t ne = est.size();
   std::vector<double> gain_term(ne, 0.0);
   if (ne < 2) return gain_term;
   const double spacing = (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1);
   Eigen::VectorXd step_re(grid), step_im(grid), ends_re(grid), ends_im(grid);
+  Eigen::VectorXd step_abs = Eigen::VectorXd::Zero(grid), before_abs = step_abs;
   if (gain.active) {
     for (Eigen::Index j = 0; j < grid; ++j) {
       const double t = static_cast<double>(j) * dt;
       const std::complex<double> step = gain.log_at(t) - previous.log_at(t);
       step_re(j) = step.real();
       step_im(j) = step.imag();
+      step_abs(j) = std::abs(step);
+      if (earlier.active) before_abs(j) = std::abs(previous.log_at(t) - earlier.log_at(t));
       const std::complex<double> ends = continued.log_at(t) - gain.log_at(t);
       ends_re(j) = ends.real();
       ends_im(j) = ends.imag();
@@ -654,6 +666,16 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
           signal::fit_local_pair(re, im, 0.0, dt, e.centre, half, degree, 1.0, stride, offset);
       return std::array<double, 2>{a.slope, b.slope};
     };
+    const auto j0 =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre - half) / dt), 0, grid - 1);
+    const auto j1 =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + half) / dt), j0, grid - 1);
+    const double now = step_abs.segment(j0, j1 - j0 + 1).maxCoeff();
+    const double before = before_abs.segment(j0, j1 - j0 + 1).maxCoeff();
+    const double q = earlier.active && before > 0 ? now / before : 0.0;
+    const double tail = q < 0.9                ? 1.0 / (1.0 - q)
+                        : now < kGainConverged ? 10.0
+                                               : std::numeric_limits<double>::infinity();
     const auto scaled = [tail](double x) { return x == 0 ? 0.0 : tail * std::abs(x); };
     const auto [step_s, step_w] = slopes(step_re, step_im);
     const auto [ends_s, ends_w] = slopes(ends_re, ends_im);
@@ -1118,12 +1140,13 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   // about half per pass where the mode's own width is comparable to the band's edge).
   // The estimates kept are those of the last pass, made with `previous`; what is left
   // to the fixed point is about the last change times 1 / (1 - q), q the ratio of the
-  // last two changes (a geometric tail), and unbounded if the changes do not shrink.
+  // last two changes (a geometric tail, taken over each point's window in
+  // add_model_errors), and unbounded if the changes do not shrink.
   constexpr int kMaxPasses = 12;
-  constexpr double kConverged = 1e-4;
-  double change = std::numeric_limits<double>::infinity(), tail = 1.0;
+  GainCorrection earlier;
   for (int pass = 0; pass < kMaxPasses && gain.active; ++pass) {
     est = redo(gain);
+    if (pass > 0) earlier = std::move(previous);
     previous = gain;
     gain = correct(est);
     if (!gain.active) break;
@@ -1134,15 +1157,12 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
     for (Eigen::Index j = j0; j < j1; ++j) {
       now = std::max(now, std::abs(gain.log_r(j) - previous.log_r(j)));
     }
-    const double q = pass > 0 ? now / change : 0.0;
-    tail = q < 0.9 ? 1.0 / (1.0 - q) : std::numeric_limits<double>::infinity();
-    change = now;
-    if (change < kConverged) break;
+    if (now < kGainConverged) break;
   }
   const GainCorrection continued =
       gain.active ? gain_correction(est, s, noise, bs.baseband.size(), bs.carrier_hz, cache, true)
                   : GainCorrection{};
-  const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, tail,
+  const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, earlier,
                                                          bs.dt, bs.baseband.size(), options.degree);
   return {std::move(est), previous, gain_term};
 }
