@@ -323,6 +323,122 @@ TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
   }
 }
 
+// Issue 26's second part: a 1:2 internal resonance (tests/synthetic.h): mode 1 at 122 Hz
+// struck, mode 2 at 243 Hz taking energy from it and giving it back while mode 1 is large,
+// velocity at 5120 Hz, noise 1e-5 m/s per sample, read in 110:135 Hz. What mode 1's own
+// envelope shows above the noise threshold is log10(its largest amplitude / (snr_min x the
+// band's noise floor)), its exact amplitude taken from the simulation. While the two modes
+// exchange energy the envelope decays by damping plus transfer (its decay rate there is
+// 25-175 % above mode 1's own, or negative while mode 1 takes energy back): no backbone,
+// and those points are left out. So the span is measured against what the envelope shows
+// from the end of the exchange on (the last time the simulated envelope's decay rate,
+// smoothed over 0.1 s, is more than 5 % off mode 1's own): at least 0.8 of it. Against the
+// whole envelope the span was 0.55-0.81 (reported, not required); before the gain
+// correction's tail was judged per window, one case (alpha 2e9) had no backbone at all.
+// The points kept must be mode 1's linear values: median frequency within 0.05 % and
+// median damping within 10 % (measured 0.3-2.1 %, and 5.5 % for alpha 3e9 with mode 2
+// lightly damped, whose exchange dies out only at 1.7 s: the points kept from 0.9 s on still
+// carry some transfer).
+TEST(RingdownInternalResonance, ModeOneKeepsWhatItsEnvelopeShows) {
+  struct Case {
+    double alpha, zeta2;
+  };
+  for (const Case c : {Case{1e9, 0.006}, Case{2e9, 0.006}, Case{3e9, 0.002}}) {
+    for (const unsigned seed : {1u, 2u}) {
+      const testing::InternalResonanceRecord rec =
+          testing::internal_resonance_record(c.alpha, 6.5e-5, c.zeta2, 1e-5, seed);
+      const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+      ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+      const double threshold = RingdownOptions{}.snr_min * r.summary.noise_floor_m;
+      const double whole = std::log10(rec.amplitude1.maxCoeff() / threshold);
+      // The end of the exchange: ln A1 averaged over 0.1 s, its slope over 0.1 s.
+      const auto half = static_cast<Eigen::Index>(0.05 * rec.fs);
+      const Eigen::Index n = rec.amplitude1.size();
+      Eigen::VectorXd smooth = Eigen::VectorXd::Zero(n);
+      for (Eigen::Index k = half; k + half < n; ++k) {
+        if (rec.amplitude1(k - half) > 0) {
+          smooth(k) = rec.amplitude1.segment(k - half, 2 * half + 1).array().log().mean();
+        }
+      }
+      const double sigma1 = rec.zeta1 * 2 * std::numbers::pi * rec.f1_hz;
+      Eigen::Index free_from = 2 * half;
+      for (Eigen::Index k = 2 * half; k + 2 * half < n && rec.amplitude1(k) > threshold; ++k) {
+        const double sigma = -(smooth(k + half) - smooth(k - half)) / (0.1 * (1 - 1 / rec.fs));
+        if (std::abs(sigma / sigma1 - 1) > 0.05) free_from = k;
+      }
+      const double free = std::log10(rec.amplitude1(free_from) / threshold);
+      std::vector<double> ef, ez;
+      const Backbone& b = r.backbone;
+      for (Eigen::Index i = 0; i < b.size(); ++i) {
+        ef.push_back(std::abs(b.frequency_hz(i) / rec.f1_hz - 1));
+        ez.push_back(std::abs(b.damping(i) / rec.zeta1 - 1));
+      }
+      std::sort(ef.begin(), ef.end());
+      std::sort(ez.begin(), ez.end());
+      std::printf(
+          "internal resonance alpha %.0e zeta2 %.3f seed %u: %.2f decades, %.2f-%.2f s; the "
+          "envelope shows %.2f (%.2f of it kept), %.2f after the exchange ends at %.2f s (%.2f "
+          "kept); median f err %.1e, median z err %.3f\n  %s\n",
+          c.alpha, c.zeta2, seed, r.summary.amplitude_decades, r.summary.span_start_s,
+          r.summary.span_end_s, whole, r.summary.amplitude_decades / whole, free,
+          static_cast<double>(free_from) / rec.fs, r.summary.amplitude_decades / free,
+          ef[ef.size() / 2], ez[ez.size() / 2], r.summary.message.c_str());
+      EXPECT_GE(r.summary.amplitude_decades, 0.8 * free) << c.alpha << " seed " << seed;
+      EXPECT_LE(ef[ef.size() / 2], 5e-4) << c.alpha << " seed " << seed;
+      EXPECT_LE(ez[ez.size() / 2], 0.10) << c.alpha << " seed " << seed;
+    }
+  }
+}
+
+// The same resonance read in mode 2's band, 230:260 Hz, with mode 2 damped more (0.6 %)
+// than twice mode 1 (2 x 0.3 %): once mode 2's own ring-down has died, the band sees mode
+// 1's square, locked at 2 f1 and decaying at 2 sigma1. Those points must be marked
+// (harmonic 2), not read as mode 2: of the points decaying within 15 % of 2 sigma1 at a
+// frequency within 0.1 Hz of 2 f1 (f1 read in mode 1's band at the same time), at least 3
+// in 4 are marked; no marked point lies more than 0.3 Hz from 2 f1 (mode 2 is 1 Hz from
+// it). Before the tolerance allowed for the pull of mode 2's residue 3 of 12 points were
+// marked. (With alpha 2e9 the exchange lasts until 0.8 s and mode 2's band keeps only
+// three points, too few to test.)
+TEST(RingdownInternalResonance, ModeTwosBandMarksModeOnesHarmonic) {
+  const double alpha = 1e9;
+  for (const unsigned seed : {1u, 2u}) {
+    const testing::InternalResonanceRecord rec =
+        testing::internal_resonance_record(alpha, 6.5e-5, 0.006, 1e-5, seed);
+    const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {230, 260});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const Backbone& b = r.backbone;
+    // Mode 1's damped frequency at each time, from its own band.
+    const Ringdown r1 = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+    ASSERT_EQ(r1.summary.status, RingdownStatus::kOk) << r1.summary.message;
+    const Backbone& b1 = r1.backbone;
+    const auto f1_at = [&](double t) {
+      Eigen::Index k = 1;
+      while (k + 1 < b1.size() && b1.time_s(k) < t) ++k;
+      const double w =
+          std::clamp((t - b1.time_s(k - 1)) / (b1.time_s(k) - b1.time_s(k - 1)), 0.0, 1.0);
+      return (1 - w) * b1.damped_frequency_hz(k - 1) + w * b1.damped_frequency_hz(k);
+    };
+    const double two_sigma1 = 2 * rec.zeta1 * 2 * std::numbers::pi * rec.f1_hz;
+    int harmonic_like = 0, marked = 0;
+    for (Eigen::Index i = 0; i < b.size(); ++i) {
+      const double off = std::abs(b.damped_frequency_hz(i) - 2 * f1_at(b.time_s(i)));
+      std::printf("  %.3f s: %.4f Hz, decay %.2f /s, harmonic %d\n", b.time_s(i),
+                  b.damped_frequency_hz(i), b.decay_rate(i), b.harmonic(i));
+      if (std::abs(b.decay_rate(i) / two_sigma1 - 1) <= 0.15 && off <= 0.1) {
+        ++harmonic_like;
+        marked += b.harmonic(i) == 2;
+      }
+      if (b.harmonic(i) != 0) {
+        EXPECT_LE(off, 0.3) << b.time_s(i);
+      }
+    }
+    std::printf("mode 2's band, seed %u: %d of %d harmonic-like points marked; %s\n", seed, marked,
+                harmonic_like, r.summary.message.c_str());
+    EXPECT_GE(harmonic_like, 3) << seed;
+    EXPECT_GE(marked, 0.75 * harmonic_like) << seed;
+  }
+}
+
 // A linear mode (80 Hz, damping 0.2 %, noise 1e-3 of the peak): the linear values, the
 // straight-line fit of the backbone's lower half at its lowest amplitude, must hold the truth
 // within their stated (k = 3) uncertainty, which must be below 1e-4 in frequency and
