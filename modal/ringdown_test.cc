@@ -122,10 +122,11 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
 // rests on the mode before the first estimate, which the filter reaches but no estimate
 // describes. Held there, it left the first points 12 % off (+12, +8, -8 %); the difference
 // to the model continued along its line back to the impact now counts in their
-// uncertainty, and they drop out. Measured: 0.91, 0.42 and 0.71 decades (seed 11 had 1.57
-// with the 12 % points), median damping errors 0.6-0.9 %, worst 1.9, 1.7 and 1.6 %.
-// Required: every frequency within 0.05 %, the median damping within 1 %, every damping
-// within 10 %.
+// uncertainty, and they drop out. That left 0.91, 0.42 and 0.71 decades. Since the band
+// follows the mode (it is read through about 73:87 Hz, the track held in the flat part):
+// 1.65, 1.83 and 1.96 decades, median damping errors 0.31-0.42 %, worst 1.0, 2.1 and 1.2 %.
+// Required: 1.2 decades, every frequency within 0.05 %, the median damping within 1 %,
+// every damping within 10 %.
 TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
   for (const unsigned seed : {11u, 12u, 13u}) {
     const testing::ThreeModeRecord rec = testing::three_mode_record(80.0, 6.0, 1e-3, seed, 0.1);
@@ -135,7 +136,7 @@ TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
     const Errors e = score(r, rec.first);
     print("band edge", Method::kHilbert, 80.0, false, seed, e);
     std::printf("  note: %s\n", r.summary.message.c_str());
-    EXPECT_GE(e.decades, 0.4) << "seed " << seed;
+    EXPECT_GE(e.decades, 1.2) << "seed " << seed;
     EXPECT_LE(e.median_z, 0.01) << "seed " << seed;
     EXPECT_LE(e.max_z, 0.10) << "seed " << seed;
     EXPECT_LE(e.max_f, 5e-4) << "seed " << seed;
