@@ -1323,14 +1323,19 @@ double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, 
 // The band the mode is read through. The band a user types says which mode, not where the
 // filter's edges must be: when the mode's track (ModeTrack) leaves less than kMargin of its
 // half-power half-widths (sigma / 2 pi) between it and the points where the band's gain
-// reaches 0.98 (lo + w, hi - w), the band is moved, its width kept (so the filter's
-// settling time and noise bandwidth stay), just far enough to hold the track with that
-// margin in its flat part, and widened only if the track with its margins is wider than the
-// flat part. It moves at most the margin plus an edge width beyond the typed edge, never
-// so far that its gain at a neighbouring mode's spectral peak exceeds kNeighbourGain (it
-// stops short of such a mode and says so), never past zero or the Nyquist frequency. Once
-// moved, the track is read again through the new band (a mode seen on the edge may run
-// further), at most twice. Returns the typed band when the mode sits in its flat part.
+// reaches 0.98 (lo + w, hi - w), the band is moved just far enough to hold the track with
+// that margin in its flat part, toward the side the mode is short of. Its width is kept
+// (the filter's settling time and noise bandwidth stay) unless the track with its margins
+// is wider than the flat part, or the typed band's filter settles longer than the record's
+// backward continuation holds (the start of the decay, its largest amplitudes, would be
+// lost): then it is widened, at most kMaxWiden times, until it settles within it. (With a
+// margin of 2 and no widening the LMS twin in ringdown_test.cc kept 0.96-1.57 decades, with
+// 3 and 3 times 1.38-1.61.) A side that moves beyond the typed band stops where its gain at
+// a neighbouring mode's spectral peak (neighbour_peak) is 1e-4, with the narrowest edge that
+// still leaves the mode's need flat, and the summary names that mode; the band never goes
+// below half the typed lower edge or past the Nyquist frequency. Once moved, the track is
+// read again through the new band (a mode seen on the edge may run further), in at most
+// kRounds rounds. Returns the typed band when the mode sits in its flat part.
 struct FollowedBand {
   signal::Band band;
   std::string note;           // what was moved and why; "" when the typed band is read
