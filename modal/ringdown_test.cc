@@ -300,9 +300,10 @@ TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeKeepsItsSpan) {
 // swing it by 0.1 x 4 Hz / 150 Hz = 0.3 %) and the median damping within 5 %. Measured: no
 // span on seed 1 and 0.14 decades on seed 2 (median damping error 2 %), as without the band
 // following modes: held at 147.2:157.7 Hz the filter settles in 1.2 s while the record's
-// backward continuation holds for 0.45 s, and the mode has decayed too far by then (a steeper
-// edge on the neighbour's side alone would keep more). On seed 2 the peak is placed at
-// 145.0 Hz, 1 Hz below the neighbour's (the smoothed spectrum still rises there).
+// backward continuation holds for 0.45 s, and the mode has decayed too far by then. That
+// limit is the neighbour's: an edge steep enough to pass 150 Hz and stop 146 Hz rings for
+// about a second whichever side it is on. On seed 2 the peak is placed at 145.0 Hz, 1 Hz
+// below the neighbour's (the smoothed spectrum still rises there).
 TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
   for (const unsigned seed : {1u, 2u}) {
     const LmsTwin t = lms_twin(seed, 146.0);
