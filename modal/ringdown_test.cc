@@ -292,36 +292,45 @@ TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeKeepsItsSpan) {
   }
 }
 
-// The same twin with a linear mode just below the typed band, at 146 Hz (100 m/s^2 at the
-// impact, damping 0.3 %: its spectral peak 2.9 Hz below the band's lower edge, 3.9 Hz below
-// mode 1). The band may not follow mode 1 toward it: it stops where its gain at the
-// neighbour's peak is 1e-4 (the summary names the neighbour), so whatever is kept is mode
-// 1's: every frequency within 0.05 % (a neighbour passed at a tenth of mode 1's size would
-// swing it by 0.1 x 4 Hz / 150 Hz = 0.3 %) and the median damping within 5 %. Measured: no
-// span on seed 1 and 0.14 decades on seed 2 (median damping error 2 %), as without the band
-// following modes: held at 147.2:157.7 Hz the filter settles in 1.2 s while the record's
-// backward continuation holds for 0.45 s, and the mode has decayed too far by then. That
-// limit is the neighbour's: an edge steep enough to pass 150 Hz and stop 146 Hz rings for
-// about a second whichever side it is on. On seed 2 the peak is placed at 145.0 Hz, 1 Hz
-// below the neighbour's (the smoothed spectrum still rises there).
+// The same twin with a linear mode below the typed band, at 146, 144 or 140 Hz (100 m/s^2 at
+// the impact, damping 0.3 %: 2.9 to 8.9 Hz below the band's lower edge). The band may not
+// follow mode 1 onto it: it stops where its gain at the neighbour's spectral peak is 1e-4
+// (the summary names the neighbour), so whatever is kept is mode 1's: every frequency
+// within 0.05 % (a neighbour passed at a tenth of mode 1's size would swing it by
+// 0.1 x 4 Hz / 150 Hz = 0.3 %) and the median damping within 5 %; with the neighbour 9 Hz
+// below the band, issue 26's 1.2 decades. Measured: 140 Hz 1.35-1.45 decades, 144 Hz
+// 0.54-0.84, 146 Hz none on seed 1 and 0.14 on seed 2, worst frequency error 7.3e-5,
+// median damping errors at most 0.9 %. The closer the neighbour, the narrower the band
+// must stay on its side and the longer its filter settles (1.2 s for 146 Hz), while the
+// record's backward continuation holds for 0.45 s: an edge that passes 150 Hz and stops
+// 146 Hz rings for about a second whichever side it is on. (On seed 2 the 146 Hz peak is
+// placed at 145.0 Hz, where the smoothed spectrum still rises.)
 TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
-  for (const unsigned seed : {1u, 2u}) {
-    const LmsTwin t = lms_twin(seed, 146.0);
-    const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
-    std::printf("LMS twin + neighbour seed %u: %ld points, %.2f decades: %s\n", seed,
-                long(r.backbone.size()), r.summary.amplitude_decades, r.summary.message.c_str());
-    EXPECT_NE(r.summary.message.find("neighbouring mode's spectral peak at 14"), std::string::npos);
-    if (r.summary.status != RingdownStatus::kOk) continue;
-    const Medians e = medians(r.backbone, t.m1);
-    double worst_f = 0;
-    for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
-      const double f = t.m1.omega_n(r.backbone.displacement(i)) / (2 * std::numbers::pi);
-      worst_f = std::max(worst_f, std::abs(r.backbone.frequency_hz(i) / f - 1));
+  for (const double neighbour : {146.0, 144.0, 140.0}) {
+    for (const unsigned seed : {1u, 2u}) {
+      const LmsTwin t = lms_twin(seed, neighbour);
+      const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+      std::printf("LMS twin + neighbour at %.0f Hz, seed %u: %ld points, %.2f decades: %s\n",
+                  neighbour, seed, long(r.backbone.size()), r.summary.amplitude_decades,
+                  r.summary.message.c_str());
+      EXPECT_NE(r.summary.message.find("neighbouring mode's spectral peak at 1"),
+                std::string::npos);
+      if (neighbour == 140.0) {
+        ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+        EXPECT_GE(r.summary.amplitude_decades, 1.2) << "seed " << seed;
+      }
+      if (r.summary.status != RingdownStatus::kOk) continue;
+      const Medians e = medians(r.backbone, t.m1);
+      double worst_f = 0;
+      for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+        const double f = t.m1.omega_n(r.backbone.displacement(i)) / (2 * std::numbers::pi);
+        worst_f = std::max(worst_f, std::abs(r.backbone.frequency_hz(i) / f - 1));
+      }
+      std::printf("  median f err %.1e, worst %.1e, median z err %.3f, max %.3f\n", e.f, worst_f,
+                  e.z, e.z_max);
+      EXPECT_LE(worst_f, 5e-4) << neighbour << " seed " << seed;
+      EXPECT_LE(e.z, 0.05) << neighbour << " seed " << seed;
     }
-    std::printf("  median f err %.1e, worst %.1e, median z err %.3f, max %.3f\n", e.f, worst_f, e.z,
-                e.z_max);
-    EXPECT_LE(worst_f, 5e-4) << "seed " << seed;
-    EXPECT_LE(e.z, 0.05) << "seed " << seed;
   }
 }
 
