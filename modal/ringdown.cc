@@ -618,6 +618,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   return g;
 }
 
+// The gain correction's iteration stops once ln r changes by less than this over the span.
+constexpr double kGainConverged = 1e-4;
+
 // Model errors taken across one window of neighbouring estimates, added to each
 // estimate's uncertainty:
 // - A point's amplitude is uncertain too; along a backbone that bends, that moves
@@ -625,8 +628,14 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
 //   (d omega_d / d ln A) std(ln A) for omega_d.
 // - The gain correction rests on estimates it corrects: the change of ln r between
 //   its last two iterations, fitted over the point's window as the signal was and
-//   scaled by `tail` (what a geometric series of such changes still adds), is the
-//   slope error still left.
+//   scaled by the tail 1 / (1 - q) of a geometric series of such changes, is the slope
+//   error still left. q is the ratio of the last change to the one before (`earlier`
+//   to `previous`) over the point's own window, so that estimates the correction cannot
+//   settle (an envelope that grows while two modes exchange energy) leave points a
+//   settling time away alone (q taken over the whole span once made every point's
+//   uncertainty infinite and a 1:2 internal resonance lost its whole backbone); the tail
+//   is unbounded where the changes do not shrink, and 10 where they no longer
+//   shrink but are already below kGainConverged.
 // - Between the impact and the first estimate (and the last one and the record's end)
 //   the mode is not estimated, but the zero-phase filter reaches a settling time into
 //   that part: the difference between the correction with the model held there (`gain`)
@@ -636,19 +645,22 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
 // Returns, per estimate, what the gain correction adds to sigma's uncertainty.
 std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorrection& gain,
                                      const GainCorrection& previous,
-                                     const GainCorrection& continued, double tail, double dt,
-                                     Eigen::Index grid, int degree) {
+                                     const GainCorrection& continued, const GainCorrection& earlier,
+                                     double dt, Eigen::Index grid, int degree) {
   const size_t ne = est.size();
   std::vector<double> gain_term(ne, 0.0);
   if (ne < 2) return gain_term;
   const double spacing = (est[ne - 1].t - est[0].t) / static_cast<double>(ne - 1);
   Eigen::VectorXd step_re(grid), step_im(grid), ends_re(grid), ends_im(grid);
+  Eigen::VectorXd step_abs = Eigen::VectorXd::Zero(grid), before_abs = step_abs;
   if (gain.active) {
     for (Eigen::Index j = 0; j < grid; ++j) {
       const double t = static_cast<double>(j) * dt;
       const std::complex<double> step = gain.log_at(t) - previous.log_at(t);
       step_re(j) = step.real();
       step_im(j) = step.imag();
+      step_abs(j) = std::abs(step);
+      if (earlier.active) before_abs(j) = std::abs(previous.log_at(t) - earlier.log_at(t));
       const std::complex<double> ends = continued.log_at(t) - gain.log_at(t);
       ends_re(j) = ends.real();
       ends_im(j) = ends.imag();
@@ -675,6 +687,16 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
           signal::fit_local_pair(re, im, 0.0, dt, e.centre, half, degree, 1.0, stride, offset);
       return std::array<double, 2>{a.slope, b.slope};
     };
+    const auto j0 =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre - half) / dt), 0, grid - 1);
+    const auto j1 =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + half) / dt), j0, grid - 1);
+    const double now = step_abs.segment(j0, j1 - j0 + 1).maxCoeff();
+    const double before = before_abs.segment(j0, j1 - j0 + 1).maxCoeff();
+    const double q = earlier.active && before > 0 ? now / before : 0.0;
+    const double tail = q < 0.9                ? 1.0 / (1.0 - q)
+                        : now < kGainConverged ? 10.0
+                                               : std::numeric_limits<double>::infinity();
     const auto scaled = [tail](double x) { return x == 0 ? 0.0 : tail * std::abs(x); };
     const auto [step_s, step_w] = slopes(step_re, step_im);
     const auto [ends_s, ends_w] = slopes(ends_re, ends_im);
@@ -690,12 +712,17 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
 
 // The kept points: the longest run of valid estimates, bridging gaps of at most
 // kMaxGap points (one point whose uncertainty strays over the limit is dropped on
-// its own rather than cutting the span in two). Returns [begin, end) and the count.
+// its own rather than cutting the span in two) and any gap whose points all stand above
+// the noise threshold (`above`): those are dropped for their own reasons (the envelope
+// not decaying or its decay not known to the limit, as while two modes exchange energy),
+// not for noise, and the decay on either side of them is still the mode's. (Cutting there
+// lost mode 2's locked harmonic after 0.5 s in the internal-resonance twin.) Returns
+// [begin, end) and the count of valid points in it.
 struct Run {
   size_t begin = 0, end = 0, count = 0;
 };
 
-Run longest_run(const std::vector<char>& valid) {
+Run longest_run(const std::vector<char>& valid, const std::vector<char>& above) {
   constexpr size_t kMaxGap = 2;
   Run best;
   for (size_t i = 0; i < valid.size();) {
@@ -708,7 +735,7 @@ Run longest_run(const std::vector<char>& valid) {
       if (valid[j]) {
         ++count;
         last = j;
-      } else if (j - last > kMaxGap) {
+      } else if (j - last > kMaxGap && !above[j]) {
         break;
       }
       ++j;
@@ -969,8 +996,16 @@ bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub) 
 
 // Marks the points of `bb` that follow n times (n = 2, 3) the frequency of a stronger
 // mode: the channel's own band [lo/n, hi/n] carries a larger displacement envelope
-// there and n times its frequency is within the point's frequency uncertainty.
+// there and n times its frequency is within the point's frequency uncertainty, widened
+// by kPull of the point's half-power half-width (decay rate / 2 pi). The widening is for
+// a band that holds the locked harmonic and what is left of its own mode: in a 1:2
+// internal resonance (122 and 243 Hz, ringdown_test.cc) mode 2's band follows 2 f1 once
+// its free part has decayed, but a residue of the free mode a tenth of the harmonic's
+// size, 1 Hz away, pulls the read frequency 0.04-0.07 Hz off 2 f1, three times the
+// points' stated uncertainty; an independent mode 1 Hz from 2 f1 stays well outside.
 // Uses this band and channel alone.
+constexpr double kPull = 0.1;
+
 void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity measured,
                          const signal::Band& band, const RingdownOptions& options,
                          signal::FftCache& cache) {
@@ -1002,7 +1037,9 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
                                  correlation, 1, std::clamp((t - c) / (w / 2), -1.0, 1.0));
       const double f_sub = fp.slope / kTwoPi;
       const double u_sub = std::hypot(fp.slope_std, fp.slope_change) / kTwoPi;
-      const double tol = std::hypot(bb.frequency_std_hz(i), options.coverage_factor * n * u_sub);
+      const double tol =
+          std::hypot(std::hypot(bb.frequency_std_hz(i), options.coverage_factor * n * u_sub),
+                     kPull * bb.decay_rate(i) / kTwoPi);
       if (std::exp(fa.value) > bb.displacement(i) &&
           std::abs(bb.damped_frequency_hz(i) - n * f_sub) <= tol) {
         bb.harmonic(i) = n;
@@ -1139,12 +1176,13 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   // about half per pass where the mode's own width is comparable to the band's edge).
   // The estimates kept are those of the last pass, made with `previous`; what is left
   // to the fixed point is about the last change times 1 / (1 - q), q the ratio of the
-  // last two changes (a geometric tail), and unbounded if the changes do not shrink.
+  // last two changes (a geometric tail, taken over each point's window in
+  // add_model_errors), and unbounded if the changes do not shrink.
   constexpr int kMaxPasses = 12;
-  constexpr double kConverged = 1e-4;
-  double change = std::numeric_limits<double>::infinity(), tail = 1.0;
+  GainCorrection earlier;
   for (int pass = 0; pass < kMaxPasses && gain.active; ++pass) {
     est = redo(gain);
+    if (pass > 0) earlier = std::move(previous);
     previous = gain;
     gain = correct(est);
     if (!gain.active) break;
@@ -1155,15 +1193,12 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
     for (Eigen::Index j = j0; j < j1; ++j) {
       now = std::max(now, std::abs(gain.log_r(j) - previous.log_r(j)));
     }
-    const double q = pass > 0 ? now / change : 0.0;
-    tail = q < 0.9 ? 1.0 / (1.0 - q) : std::numeric_limits<double>::infinity();
-    change = now;
-    if (change < kConverged) break;
+    if (now < kGainConverged) break;
   }
   const GainCorrection continued =
       gain.active ? gain_correction(est, s, noise, bs.baseband.size(), bs.carrier_hz, cache, true)
                   : GainCorrection{};
-  const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, tail,
+  const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, earlier,
                                                          bs.dt, bs.baseband.size(), options.degree);
   return {std::move(est), previous, gain_term};
 }
@@ -1171,6 +1206,7 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
 // Which estimates may form the backbone, with notes on those left out for the band's gain.
 struct Screening {
   std::vector<char> valid;  ///< per estimate
+  std::vector<char> above;  ///< per estimate: the envelope above the noise threshold
   std::string weak_note;    ///< points where the band passes less than half of the mode
   std::string gain_note;    ///< points whose gain correction is not known well enough
 };
@@ -1182,12 +1218,13 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
   const std::vector<Estimate>& est = c.est;
   const GainCorrection& previous = c.previous;
   const std::vector<double>& gain_term = c.gain_term;
-  std::vector<char> valid(est.size()), gain_limited(est.size(), 0);
+  std::vector<char> valid(est.size()), gain_limited(est.size(), 0), above(est.size(), 0);
   size_t weak = 0;
   for (size_t i = 0; i < est.size(); ++i) {
     const Estimate& e = est[i];
     const double noise_i = noise / previous.abs_at(e.t);  // the correction est carries
     const double limit = options.max_damping_rel_std * e.sigma;
+    above[i] = std::exp(e.log_amp) >= options.snr_min * noise_i;
     // Where the band passes less than kMinPassed of the mode, dividing by r lifts the
     // noise and whatever else the band holds above the mode's own share ...
     constexpr double kMinPassed = 0.5;
@@ -1220,7 +1257,216 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
                          "{} points left out where the correction for the band's gain was not "
                          "known to the damping limit (the mode on the band's steep edge)",
                          limited);
-  return {std::move(valid), weak_note, gain_note};
+  return {std::move(valid), std::move(above), weak_note, gain_note};
+}
+
+// The mode's track through a band: the lowest and highest frequency it runs through above
+// the noise threshold, and its largest decay rate, from fits over the shortest window every
+// half window along the usable span (a tenth of the cost of the estimates proper). Only
+// frequencies inside the band count: the band says which mode.
+struct ModeTrack {
+  double f_lo = 0, f_hi = 0, sigma = 0;  // [Hz], [Hz], [1/s]
+  int points = 0;
+};
+
+ModeTrack track_mode(const signal::BandSignal& bs, const BandSetting& s) {
+  ModeTrack tr;
+  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
+  const double noise = noise_floor(ep, s);
+  tr.f_lo = std::numeric_limits<double>::infinity();
+  tr.f_hi = -tr.f_lo;
+  for (double c = s.start + s.w_min / 2; c <= s.stop - s.w_min / 2; c += s.w_min / 2) {
+    const Estimate e = estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, c, s.w_min, s.correlation,
+                                        noise, s.options.degree);
+    const double f = e.omega_d / kTwoPi;
+    // A point counts once it decays and its frequency is known to its half-power half-width
+    // (estimates where two modes exchange energy swing by more).
+    if (!(std::exp(e.log_amp) >= s.options.snr_min * noise) || !(e.sigma > 0) ||
+        !(e.omega_d_std <= e.sigma) || !(f >= s.band.lo && f <= s.band.hi)) {
+      continue;
+    }
+    tr.f_lo = std::min(tr.f_lo, f);
+    tr.f_hi = std::max(tr.f_hi, f);
+    tr.sigma = std::max(tr.sigma, e.sigma);
+    ++tr.points;
+  }
+  return tr;
+}
+
+// The nearest peak of another mode in the channel's spectrum, walking away from the mode in
+// direction `dir` (-1 down, +1 up) as far as `to` [Hz]. The power spectrum is smoothed over
+// the mode's half-power half-width sigma / 2 pi (at least five bins); the walk starts at its
+// largest value inside the typed band (the mode the band names) and a neighbour is a local
+// maximum standing kRise times above the lowest level between it and the mode and kAbove
+// times above the spectrum's lower decile around the band (so that the ripple of the noise
+// floor is no peak). A mode's own skirt falls away from it, but a decaying, drifting mode's
+// spectrum ripples by up to 2.5 times in power (LMS twin, ringdown_test.cc); a linear mode
+// 4 Hz below a drifting one of three times its size rose 4-5 times above the valley
+// between them. Returns its frequency, or 0 when there is none.
+double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, double sigma,
+                      int dir, double to) {
+  constexpr double kRise = 3.5, kAbove = 10.0;
+  const double df = channel.fs / static_cast<double>(channel.n_fft);
+  const Eigen::Index half =
+      std::max<Eigen::Index>(2, static_cast<Eigen::Index>(std::round(sigma / kTwoPi / df)));
+  const Eigen::Index last = channel.spectrum.size() - 1 - half;
+  if (last <= half) return 0.0;
+  const auto bin = [&](double f) {
+    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), half, last);
+  };
+  const auto power = [&](Eigen::Index k) {
+    double p = 0;
+    for (Eigen::Index i = k - half; i <= k + half; ++i) p += std::norm(channel.spectrum(i));
+    return p;
+  };
+  const double width = band.hi - band.lo;
+  std::vector<double> around;
+  for (Eigen::Index k = bin(band.lo - width); k <= bin(band.hi + width); ++k) {
+    around.push_back(power(k));
+  }
+  const double low = quantile(around, 0.1);
+  Eigen::Index k0 = bin(band.lo);
+  for (Eigen::Index k = bin(band.lo); k <= bin(band.hi); ++k) {
+    if (power(k) > power(k0)) k0 = k;
+  }
+  const Eigen::Index k1 = bin(to);
+  double valley = power(k0);
+  for (Eigen::Index k = k0; dir * (k1 - k) > 0; k += dir) {
+    const double p = power(k + dir);
+    valley = std::min(valley, p);
+    if (p > kRise * valley && p > kAbove * low) {
+      // Up the neighbour's flank to its top.
+      Eigen::Index top = k + dir;
+      while (dir * (k1 - top) > 0 && power(top + dir) > power(top)) top += dir;
+      return static_cast<double>(top) * df;
+    }
+  }
+  return 0.0;
+}
+
+// The band the mode is read through. The band a user types says which mode, not where the
+// filter's edges must be: when the mode's track (ModeTrack) leaves less than kMargin of its
+// half-power half-widths (sigma / 2 pi) between it and the points where the band's gain
+// reaches 0.98 (lo + w, hi - w), the band is moved just far enough to hold the track with
+// that margin in its flat part, toward the side the mode is short of. Its width is kept
+// (the filter's settling time and noise bandwidth stay) unless the track with its margins
+// is wider than the flat part, or the typed band's filter settles longer than the record's
+// backward continuation holds (the start of the decay, its largest amplitudes, would be
+// lost): then it is widened, at most kMaxWiden times, until it settles within it. (With a
+// margin of 2 and no widening the LMS twin in ringdown_test.cc kept 0.96-1.57 decades, with
+// 3 and 3 times 1.38-1.61.) A side that moves beyond the typed band stops where its gain at
+// a neighbouring mode's spectral peak (neighbour_peak) is 1e-4, with the narrowest edge that
+// still leaves the mode's need flat, and the summary names that mode; the band never goes
+// below half the typed lower edge or past the Nyquist frequency. Once moved, the track is
+// read again through the new band (a mode seen on the edge may run further), in at most
+// kRounds rounds. Returns the typed band when the mode sits in its flat part.
+struct FollowedBand {
+  signal::Band band;
+  std::string note;           // what was moved and why; "" when the typed band is read
+  signal::BandSignal signal;  // the moved band's signal (empty when not moved)
+};
+
+FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
+                         const signal::Band& typed, const RingdownOptions& options,
+                         const signal::BandSignal& typed_signal, signal::FftCache& cache) {
+  constexpr double kMargin = 3.0;
+  // Gain 1e-4 lies 0.93 w below lo + w / 2 (the Gaussian edge's std is w / 4): 0.43 w below lo.
+  constexpr double kNeighbourReach = 0.43;
+  constexpr int kRounds = 3;
+  constexpr double kMaxWiden = 3.0;
+  FollowedBand out{typed, {}, {}};
+  const double t = options.taper;
+  double f_lo = std::numeric_limits<double>::infinity(), f_hi = -f_lo, sigma = 0;
+  double held_by = 0;  // a neighbouring mode's peak that stopped the band [Hz]
+  for (int round = 0; round < kRounds; ++round) {
+    const signal::BandSignal& bs = round == 0 ? typed_signal : out.signal;
+    const BandSetting s = band_setting(channel, out.band, options, bs);
+    if (s.stop - s.start < 2 * s.w_min) break;
+    ModeTrack tr = track_mode(bs, s);
+    if (tr.points == 0) break;
+    // Inside the typed band only (the moved one may reach beyond it).
+    f_lo = std::clamp(std::min(f_lo, tr.f_lo), typed.lo, typed.hi);
+    f_hi = std::clamp(std::max(f_hi, tr.f_hi), typed.lo, typed.hi);
+    sigma = std::max(sigma, tr.sigma);
+    const double m = std::min(kMargin * sigma / kTwoPi, t * (typed.hi - typed.lo));
+    const double need_lo = f_lo - m, need_hi = f_hi + m;
+    const signal::Band& b = out.band;
+    const double w_now = t * (b.hi - b.lo);
+    const bool low_short = b.lo + w_now > need_lo + 1e-9,
+               high_short = b.hi - w_now < need_hi - 1e-9;
+    if (!low_short && !high_short) break;
+    // The flat part [lo + w, hi - w] of a band of width W is (1 - 2 t) W wide. Where the
+    // typed band's filter settles longer than the record's backward continuation holds,
+    // the start of the decay (its largest amplitudes) is lost to it: the moved band is
+    // widened (up to kMaxWiden times) until it settles within the continuation.
+    const double typed_width = typed.hi - typed.lo;
+    double width = std::max(typed_width, (need_hi - need_lo) / (1 - 2 * t));
+    if (channel.continued_begin_s < band_settling_s(typed, t)) {
+      const double settles = 3.0 / (t * std::max(channel.continued_begin_s, 1e-9));
+      width = std::max(width, std::min(settles, kMaxWiden * typed_width));
+    }
+    const double w = t * width;
+    // Toward the side the mode is short of, then whatever the other side needs.
+    signal::Band next;
+    if (low_short) {
+      next.lo = std::min(b.lo, need_lo - w);
+      next.hi = std::max(next.lo + width, need_hi + w);
+    } else {
+      next.hi = std::max(b.hi, need_hi + w);
+      next.lo = std::min(next.hi - width, need_lo - w);
+    }
+    // Neighbouring modes beyond the typed band's edges hold the band back: its gain at
+    // their spectral peaks stays below 1e-4 (lo at least kNeighbourReach w above a peak
+    // below). A wider band has a softer edge, so a held side keeps the narrowest edge
+    // that still leaves the mode's need flat (never narrower than the typed band's).
+    const double nb_lo = next.lo < typed.lo ? neighbour_peak(channel, typed, sigma, -1,
+                                                             next.lo - kNeighbourReach * w)
+                                            : 0.0;
+    const double nb_hi =
+        next.hi > typed.hi ? neighbour_peak(channel, typed, sigma, 1, next.hi + kNeighbourReach * w)
+                           : 0.0;
+    const auto held_width = [&](double room) {
+      return std::max(typed_width, std::min(width, room / ((1 + kNeighbourReach) * t)));
+    };
+    if (nb_lo > 0 && next.lo < nb_lo + kNeighbourReach * w) {
+      held_by = nb_lo;
+      const double wl = held_width(need_lo - nb_lo);
+      next.lo = std::min(typed.lo, nb_lo + kNeighbourReach * t * wl);
+      next.hi = std::max(next.lo + wl, std::min(next.hi, need_hi + t * wl));
+    }
+    if (nb_hi > 0 && next.hi > nb_hi - kNeighbourReach * w) {
+      held_by = nb_hi;
+      const double wh = held_width(nb_hi - need_hi);
+      next.hi = std::max(typed.hi, nb_hi - kNeighbourReach * t * wh);
+      next.lo = nb_lo > 0 ? next.lo : std::min(next.hi - wh, std::max(next.lo, need_lo - t * wh));
+    }
+    next.lo = std::max(next.lo, 0.5 * typed.lo);
+    next.hi = std::min(next.hi, 0.5 * channel.fs);
+    if (!(next.hi > next.lo) ||
+        (std::abs(next.lo - b.lo) < 1e-3 * width && std::abs(next.hi - b.hi) < 1e-3 * width)) {
+      break;
+    }
+    out.band = next;
+    out.signal = band_signal(channel, measured, out.band, options, cache);
+  }
+  if (out.band.lo != typed.lo || out.band.hi != typed.hi) {
+    out.note = fmt::format(
+        "read through {:.2f}:{:.2f} Hz, the band moved to follow the mode (it runs from {:.2f} to "
+        "{:.2f} Hz, near the typed band's edge; the filter's gain is divided out)",
+        out.band.lo, out.band.hi, f_lo, f_hi);
+    if (held_by > 0) {
+      out.note += fmt::format(
+          "; held back by a neighbouring mode's spectral peak at {:.2f} Hz (gain there at most "
+          "1e-4)",
+          held_by);
+    }
+  } else if (held_by > 0) {
+    out.note = fmt::format(
+        "the band was not moved toward the mode's side: a neighbouring mode's spectral peak at "
+        "{:.2f} Hz",
+        held_by);
+  }
+  return out;
 }
 
 }  // namespace
@@ -1262,19 +1508,25 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
     return out;
   }
-  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
-  const double noise = noise_floor(ep, s);
+  // The mode is read through a band that follows it (follow_mode); out.band stays the typed
+  // band's signal, which the shapes and the nodal test compare across channels.
+  const FollowedBand followed = follow_mode(channel, measured, band, options, bs, cache);
+  const signal::Band& read = followed.band;
+  const signal::BandSignal& zb = followed.signal.baseband.size() > 0 ? followed.signal : bs;
+  const BandSetting sr = band_setting(channel, read, options, zb);
+  const EnvelopePhase ep = envelope_phase(zb.baseband, zb.carrier_hz, zb.dt);
+  const double noise = noise_floor(ep, sr);
   sum.noise_floor_m = noise / channel.scale;
 
   const CorrectedEstimates corr =
-      corrected_estimates(channel, band, options, bs, s, noise, measured, cache);
+      corrected_estimates(channel, read, options, zb, sr, noise, measured, cache);
   const std::vector<Estimate>& est = corr.est;
   const GainCorrection& previous = corr.previous;
-  const Screening screened = screen_estimates(corr, s, noise, options);
+  const Screening screened = screen_estimates(corr, sr, noise, options);
   const std::vector<char>& valid = screened.valid;
   const std::string& weak_note = screened.weak_note;
   const std::string& gain_note = screened.gain_note;
-  const Run run = longest_run(valid);
+  const Run run = longest_run(valid, screened.above);
   if (run.count < 2) {
     const std::string advice = spectral_advice(channel, band, options.taper, cache);
     sum.message = fmt::format(
@@ -1284,11 +1536,12 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
         noise / channel.scale, advice.empty() ? "" : "; ", advice, gain_note.empty() ? "" : "; ",
         gain_note + (weak_note.empty() ? "" : (gain_note.empty() ? "" : "; ") + weak_note));
+    if (!followed.note.empty()) sum.message += "; " + followed.note;
     return out;
   }
   out.backbone = backbone_of(est, valid, run, channel.t0, noise, options);
   Backbone& bb = out.backbone;
-  mark_superharmonics(bb, channel, measured, band, options, cache);
+  mark_superharmonics(bb, channel, measured, read, options, cache);
   const Eigen::Index n = bb.size();
   sum.status = RingdownStatus::kOk;
   sum.span_start_s = bb.time_s(0);
@@ -1296,7 +1549,14 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
   sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
   set_linear_values(sum, bb, options);
-  std::vector<std::string> notes = span_notes(s, est, run, previous, noise, sum);
+  std::vector<std::string> notes = span_notes(sr, est, run, previous, noise, sum);
+  if (run.end - run.begin > run.count) {
+    notes.push_back(fmt::format(
+        "{} points inside the span left out, above the noise: the envelope not decaying or its "
+        "damping not known to the {:.1f} % limit there",
+        run.end - run.begin - run.count, 100 * options.max_damping_rel_std));
+  }
+  if (!followed.note.empty()) notes.insert(notes.begin(), followed.note);
   if (!gain_note.empty()) notes.push_back(gain_note);
   if (!weak_note.empty()) notes.push_back(weak_note);
   for (const std::string& note : notes) sum.message += (sum.message.empty() ? "" : "; ") + note;

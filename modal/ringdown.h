@@ -30,6 +30,11 @@
 //    (two backbone shapes, 40/80/150 Hz, from displacement and acceleration) k = 2 covered
 //    95-99 % of all points but fewer than 90 % of one record's points in 29 records; k = 3
 //    left one record below 90 %.
+// The band a user gives says which mode. Where the mode's track comes within three
+// half-power half-widths of the band's sloping edge, the mode is read through a band moved
+// (and, if the typed band's filter would lose the start of the decay, widened) to hold it
+// in its flat part, never toward a neighbouring mode's spectral peak beyond the typed band;
+// Ringdown::band stays the typed band's signal (shapes compare channels through it).
 // The amplitude column is A * omega_n^k for displacement (k = 0), velocity (1)
 // or acceleration (2) amplitude.
 //

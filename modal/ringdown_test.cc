@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <random>
 #include <string>
@@ -121,10 +122,11 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
 // rests on the mode before the first estimate, which the filter reaches but no estimate
 // describes. Held there, it left the first points 12 % off (+12, +8, -8 %); the difference
 // to the model continued along its line back to the impact now counts in their
-// uncertainty, and they drop out. Measured: 0.91, 0.42 and 0.71 decades (seed 11 had 1.57
-// with the 12 % points), median damping errors 0.6-0.9 %, worst 1.9, 1.7 and 1.6 %.
-// Required: every frequency within 0.05 %, the median damping within 1 %, every damping
-// within 10 %.
+// uncertainty, and they drop out. That left 0.91, 0.42 and 0.71 decades. Since the band
+// follows the mode (it is read through about 73:87 Hz, the track held in the flat part):
+// 1.65, 1.83 and 1.96 decades, median damping errors 0.31-0.42 %, worst 1.0, 2.1 and 1.2 %.
+// Required: 1.2 decades, every frequency within 0.05 %, the median damping within 1 %,
+// every damping within 10 %.
 TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
   for (const unsigned seed : {11u, 12u, 13u}) {
     const testing::ThreeModeRecord rec = testing::three_mode_record(80.0, 6.0, 1e-3, seed, 0.1);
@@ -134,7 +136,7 @@ TEST(RingdownBandEdge, DividesOutTheGainOrLeavesThePointOut) {
     const Errors e = score(r, rec.first);
     print("band edge", Method::kHilbert, 80.0, false, seed, e);
     std::printf("  note: %s\n", r.summary.message.c_str());
-    EXPECT_GE(e.decades, 0.4) << "seed " << seed;
+    EXPECT_GE(e.decades, 1.2) << "seed " << seed;
     EXPECT_LE(e.median_z, 0.01) << "seed " << seed;
     EXPECT_LE(e.max_z, 0.10) << "seed " << seed;
     EXPECT_LE(e.max_f, 5e-4) << "seed " << seed;
@@ -191,6 +193,260 @@ TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
       EXPECT_LE(ez[ez.size() / 2], 0.10) << band.lo << " seed " << seed;
       EXPECT_LE(ez.back(), 0.10) << band.lo << " seed " << seed;
     }
+  }
+}
+
+// The twin of a real LMS hammer record (issue 26): 51.2 kHz, 2.55 s, acceleration, a
+// 0.1 s pre-trigger. Mode 1 drifts from 149.9 Hz at 200 m/s^2 to 151.7 Hz at 3.6 m/s^2
+// (frequency rising 1.2 % as it decays) while its damping falls from 0.38 % to 0.14 %; a
+// linear mode at 412 Hz rings beside it; white noise of 4 m/s^2 per sample puts the
+// band's noise floor near 0.1 m/s^2, so the mode starts 60 dB above it. Its authors'
+// band, 148.9:158.9 Hz, puts the mode 1-3 Hz above the lower edge. `neighbour_hz` > 0
+// adds a linear mode there (100 m/s^2 at the impact, damping 0.3 %).
+struct LmsTwin {
+  double fs = 51200;
+  Eigen::VectorXd x;         // acceleration [m/s^2]
+  testing::SlowFlowMode m1;  // the planted backbone (displacement amplitude)
+};
+
+LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0) {
+  LmsTwin t;
+  const Eigen::Index n = static_cast<Eigen::Index>(2.55 * t.fs);
+  const Eigen::Index pre = static_cast<Eigen::Index>(0.1 * t.fs);
+  const double two_pi = 2 * std::numbers::pi;
+  const double a_hi = 200 / std::pow(two_pi * 149.9, 2), a_lo = 3.6 / std::pow(two_pi * 151.7, 2);
+  const auto slip = [](double a) {
+    const double x = std::pow(a / 4e-5, 0.8);
+    return x / (1 + x);
+  };
+  const double s_hi = slip(a_hi), s_lo = slip(a_lo);
+  const auto part = [=](double a) { return (slip(a) - s_lo) / (s_hi - s_lo); };
+  t.m1.omega_n = [=](double a) { return two_pi * (151.7 - 1.8 * part(a)); };
+  t.m1.zeta = [=](double a) { return 0.0014 + 0.0024 * part(a); };
+  t.m1.a0 = 350 / std::pow(two_pi * 149.6, 2);
+  t.m1.theta0 = 0.2;
+  const auto linear = [&](double f, double zeta, double acc0, double theta0) {
+    testing::SlowFlowMode m;
+    m.omega_n = [=](double) { return two_pi * f; };
+    m.zeta = [=](double) { return zeta; };
+    m.a0 = acc0 / std::pow(two_pi * f, 2);
+    m.theta0 = theta0;
+    return testing::slow_flow(m, t.fs, n - pre).acceleration;
+  };
+  Eigen::VectorXd ring = testing::slow_flow(t.m1, t.fs, n - pre).acceleration;
+  ring += linear(412.0, 0.004, 150.0, 1.1);
+  if (neighbour_hz > 0) ring += linear(neighbour_hz, 0.003, 100.0, 2.3);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 4.0);
+  t.x.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) t.x(k) = (k < pre ? 0.0 : ring(k - pre)) + g(rng);
+  return t;
+}
+
+// Median relative errors of a backbone against the planted one, and its worst damping error.
+struct Medians {
+  double f = 0, z = 0, z_max = 0;
+};
+
+Medians medians(const Backbone& b, const testing::SlowFlowMode& m) {
+  std::vector<double> ef, ez;
+  for (Eigen::Index i = 0; i < b.size(); ++i) {
+    const double a = b.displacement(i);
+    ef.push_back(std::abs(b.frequency_hz(i) / (m.omega_n(a) / (2 * std::numbers::pi)) - 1));
+    ez.push_back(std::abs(b.damping(i) / m.zeta(a) - 1));
+  }
+  if (ef.empty()) return {1, 1, 1};
+  std::sort(ef.begin(), ef.end());
+  std::sort(ez.begin(), ez.end());
+  return {ef[ef.size() / 2], ez[ez.size() / 2], ez.back()};
+}
+
+// Issue 26's first part: the twin of the LMS record read with its authors' band
+// 148.9:158.9 Hz. A band says which mode; the mode must be read wherever it sits inside it.
+// Acceptance: at least 1.2 decades kept (the authors kept 1.5 over 0.3-2 s), median errors
+// within 0.05 % in frequency and 5 % in damping of the planted backbone.
+TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeKeepsItsSpan) {
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    const LmsTwin t = lms_twin(seed);
+    const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+    if (std::getenv("JOINTLAB_TEST_VERBOSE")) {
+      const Ringdown w = extract_band(t.x, t.fs, Quantity::kAcceleration, {130, 175});
+      const Medians ew = medians(w.backbone, t.m1);
+      std::printf("  wide band: %.2f decades %.2f-%.2f s, f %.1e z %.3f: %s\n",
+                  w.summary.amplitude_decades, w.summary.span_start_s, w.summary.span_end_s, ew.f,
+                  ew.z, w.summary.message.c_str());
+      for (Eigen::Index i = 0; i < r.backbone.size(); i += 3)
+        std::printf("  %.3f %.3e %.3f %.5f\n", r.backbone.time_s(i), r.backbone.displacement(i),
+                    r.backbone.frequency_hz(i), r.backbone.damping(i));
+    }
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const Medians e = medians(r.backbone, t.m1);
+    std::printf(
+        "LMS twin seed %u: %ld points, %.2f decades, %.2f-%.2f s, median f err %.1e, median z "
+        "err %.3f, max z err %.3f\n  %s\n",
+        seed, long(r.backbone.size()), r.summary.amplitude_decades, r.summary.span_start_s,
+        r.summary.span_end_s, e.f, e.z, e.z_max, r.summary.message.c_str());
+    EXPECT_GE(r.summary.amplitude_decades, 1.2) << "seed " << seed;
+    EXPECT_LE(e.f, 5e-4) << "seed " << seed;
+    EXPECT_LE(e.z, 0.05) << "seed " << seed;
+  }
+}
+
+// The same twin with a linear mode below the typed band, at 146, 144 or 140 Hz (100 m/s^2 at
+// the impact, damping 0.3 %: 2.9 to 8.9 Hz below the band's lower edge). The band may not
+// follow mode 1 onto it: it stops where its gain at the neighbour's spectral peak is 1e-4
+// (the summary names the neighbour), so whatever is kept is mode 1's: every frequency
+// within 0.05 % (a neighbour passed at a tenth of mode 1's size would swing it by
+// 0.1 x 4 Hz / 150 Hz = 0.3 %) and the median damping within 5 %; with the neighbour 9 Hz
+// below the band, issue 26's 1.2 decades. Measured: 140 Hz 1.35-1.45 decades, 144 Hz
+// 0.54-0.84, 146 Hz none on seed 1 and 0.14 on seed 2, worst frequency error 7.3e-5,
+// median damping errors at most 0.9 %. The closer the neighbour, the narrower the band
+// must stay on its side and the longer its filter settles (1.2 s for 146 Hz), while the
+// record's backward continuation holds for 0.45 s: an edge that passes 150 Hz and stops
+// 146 Hz rings for about a second whichever side it is on. (On seed 2 the 146 Hz peak is
+// placed at 145.0 Hz, where the smoothed spectrum still rises.)
+TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
+  for (const double neighbour : {146.0, 144.0, 140.0}) {
+    for (const unsigned seed : {1u, 2u}) {
+      const LmsTwin t = lms_twin(seed, neighbour);
+      const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+      std::printf("LMS twin + neighbour at %.0f Hz, seed %u: %ld points, %.2f decades: %s\n",
+                  neighbour, seed, long(r.backbone.size()), r.summary.amplitude_decades,
+                  r.summary.message.c_str());
+      EXPECT_NE(r.summary.message.find("neighbouring mode's spectral peak at 1"),
+                std::string::npos);
+      if (neighbour == 140.0) {
+        ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+        EXPECT_GE(r.summary.amplitude_decades, 1.2) << "seed " << seed;
+      }
+      if (r.summary.status != RingdownStatus::kOk) continue;
+      const Medians e = medians(r.backbone, t.m1);
+      double worst_f = 0;
+      for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+        const double f = t.m1.omega_n(r.backbone.displacement(i)) / (2 * std::numbers::pi);
+        worst_f = std::max(worst_f, std::abs(r.backbone.frequency_hz(i) / f - 1));
+      }
+      std::printf("  median f err %.1e, worst %.1e, median z err %.3f, max %.3f\n", e.f, worst_f,
+                  e.z, e.z_max);
+      EXPECT_LE(worst_f, 5e-4) << neighbour << " seed " << seed;
+      EXPECT_LE(e.z, 0.05) << neighbour << " seed " << seed;
+    }
+  }
+}
+
+// Issue 26's second part: a 1:2 internal resonance (tests/synthetic.h): mode 1 at 122 Hz
+// struck, mode 2 at 243 Hz taking energy from it and giving it back while mode 1 is large,
+// velocity at 5120 Hz, noise 1e-5 m/s per sample, read in 110:135 Hz. What mode 1's own
+// envelope shows above the noise threshold is log10(its largest amplitude / (snr_min x the
+// band's noise floor)), its exact amplitude taken from the simulation. While the two modes
+// exchange energy the envelope decays by damping plus transfer (its decay rate there is
+// 25-175 % above mode 1's own, or negative while mode 1 takes energy back): no backbone,
+// and those points are left out. So the span is measured against what the envelope shows
+// from the end of the exchange on (the last time the simulated envelope's decay rate,
+// smoothed over 0.1 s, is more than 5 % off mode 1's own): at least 0.8 of it. Against the
+// whole envelope the span was 0.55-0.81 (reported, not required); before the gain
+// correction's tail was judged per window, one case (alpha 2e9) had no backbone at all.
+// The points kept must be mode 1's linear values: median frequency within 0.05 % and
+// median damping within 10 % (measured 0.3-2.1 %, and 5.5 % for alpha 3e9 with mode 2
+// lightly damped, whose exchange dies out only at 1.7 s: the points kept from 0.9 s on still
+// carry some transfer).
+TEST(RingdownInternalResonance, ModeOneKeepsWhatItsEnvelopeShows) {
+  struct Case {
+    double alpha, zeta2;
+  };
+  for (const Case c : {Case{1e9, 0.006}, Case{2e9, 0.006}, Case{3e9, 0.002}}) {
+    for (const unsigned seed : {1u, 2u}) {
+      const testing::InternalResonanceRecord rec =
+          testing::internal_resonance_record(c.alpha, 6.5e-5, c.zeta2, 1e-5, seed);
+      const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+      ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+      const double threshold = RingdownOptions{}.snr_min * r.summary.noise_floor_m;
+      const double whole = std::log10(rec.amplitude1.maxCoeff() / threshold);
+      // The end of the exchange: ln A1 averaged over 0.1 s, its slope over 0.1 s.
+      const auto half = static_cast<Eigen::Index>(0.05 * rec.fs);
+      const Eigen::Index n = rec.amplitude1.size();
+      Eigen::VectorXd smooth = Eigen::VectorXd::Zero(n);
+      for (Eigen::Index k = half; k + half < n; ++k) {
+        if (rec.amplitude1(k - half) > 0) {
+          smooth(k) = rec.amplitude1.segment(k - half, 2 * half + 1).array().log().mean();
+        }
+      }
+      const double sigma1 = rec.zeta1 * 2 * std::numbers::pi * rec.f1_hz;
+      Eigen::Index free_from = 2 * half;
+      for (Eigen::Index k = 2 * half; k + 2 * half < n && rec.amplitude1(k) > threshold; ++k) {
+        const double sigma = -(smooth(k + half) - smooth(k - half)) / (0.1 * (1 - 1 / rec.fs));
+        if (std::abs(sigma / sigma1 - 1) > 0.05) free_from = k;
+      }
+      const double free = std::log10(rec.amplitude1(free_from) / threshold);
+      std::vector<double> ef, ez;
+      const Backbone& b = r.backbone;
+      for (Eigen::Index i = 0; i < b.size(); ++i) {
+        ef.push_back(std::abs(b.frequency_hz(i) / rec.f1_hz - 1));
+        ez.push_back(std::abs(b.damping(i) / rec.zeta1 - 1));
+      }
+      std::sort(ef.begin(), ef.end());
+      std::sort(ez.begin(), ez.end());
+      std::printf(
+          "internal resonance alpha %.0e zeta2 %.3f seed %u: %.2f decades, %.2f-%.2f s; the "
+          "envelope shows %.2f (%.2f of it kept), %.2f after the exchange ends at %.2f s (%.2f "
+          "kept); median f err %.1e, median z err %.3f\n  %s\n",
+          c.alpha, c.zeta2, seed, r.summary.amplitude_decades, r.summary.span_start_s,
+          r.summary.span_end_s, whole, r.summary.amplitude_decades / whole, free,
+          static_cast<double>(free_from) / rec.fs, r.summary.amplitude_decades / free,
+          ef[ef.size() / 2], ez[ez.size() / 2], r.summary.message.c_str());
+      EXPECT_GE(r.summary.amplitude_decades, 0.8 * free) << c.alpha << " seed " << seed;
+      EXPECT_LE(ef[ef.size() / 2], 5e-4) << c.alpha << " seed " << seed;
+      EXPECT_LE(ez[ez.size() / 2], 0.10) << c.alpha << " seed " << seed;
+    }
+  }
+}
+
+// The same resonance read in mode 2's band, 230:260 Hz, with mode 2 damped more (0.6 %)
+// than twice mode 1 (2 x 0.3 %): once mode 2's own ring-down has died, the band sees mode
+// 1's square, locked at 2 f1 and decaying at 2 sigma1. Those points must be marked
+// (harmonic 2), not read as mode 2: of the points decaying within 15 % of 2 sigma1 at a
+// frequency within 0.1 Hz of 2 f1 (f1 read in mode 1's band at the same time), at least 3
+// in 4 are marked; no marked point lies more than 0.3 Hz from 2 f1 (mode 2 is 1 Hz from
+// it). Before the tolerance allowed for the pull of mode 2's residue 3 of 12 points were
+// marked. (With alpha 2e9 the exchange lasts until 0.8 s and mode 2's band keeps only
+// three points, too few to test.)
+TEST(RingdownInternalResonance, ModeTwosBandMarksModeOnesHarmonic) {
+  const double alpha = 1e9;
+  for (const unsigned seed : {1u, 2u}) {
+    const testing::InternalResonanceRecord rec =
+        testing::internal_resonance_record(alpha, 6.5e-5, 0.006, 1e-5, seed);
+    const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {230, 260});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const Backbone& b = r.backbone;
+    // Mode 1's damped frequency at each time, from its own band.
+    const Ringdown r1 = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+    ASSERT_EQ(r1.summary.status, RingdownStatus::kOk) << r1.summary.message;
+    const Backbone& b1 = r1.backbone;
+    const auto f1_at = [&](double t) {
+      Eigen::Index k = 1;
+      while (k + 1 < b1.size() && b1.time_s(k) < t) ++k;
+      const double w =
+          std::clamp((t - b1.time_s(k - 1)) / (b1.time_s(k) - b1.time_s(k - 1)), 0.0, 1.0);
+      return (1 - w) * b1.damped_frequency_hz(k - 1) + w * b1.damped_frequency_hz(k);
+    };
+    const double two_sigma1 = 2 * rec.zeta1 * 2 * std::numbers::pi * rec.f1_hz;
+    int harmonic_like = 0, marked = 0;
+    for (Eigen::Index i = 0; i < b.size(); ++i) {
+      const double off = std::abs(b.damped_frequency_hz(i) - 2 * f1_at(b.time_s(i)));
+      std::printf("  %.3f s: %.4f Hz, decay %.2f /s, harmonic %d\n", b.time_s(i),
+                  b.damped_frequency_hz(i), b.decay_rate(i), b.harmonic(i));
+      if (std::abs(b.decay_rate(i) / two_sigma1 - 1) <= 0.15 && off <= 0.1) {
+        ++harmonic_like;
+        marked += b.harmonic(i) == 2;
+      }
+      if (b.harmonic(i) != 0) {
+        EXPECT_LE(off, 0.3) << b.time_s(i);
+      }
+    }
+    std::printf("mode 2's band, seed %u: %d of %d harmonic-like points marked; %s\n", seed, marked,
+                harmonic_like, r.summary.message.c_str());
+    EXPECT_GE(harmonic_like, 3) << seed;
+    EXPECT_GE(marked, 0.75 * harmonic_like) << seed;
   }
 }
 

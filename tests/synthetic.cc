@@ -1,5 +1,6 @@
 #include "jointlab/tests/synthetic.h"
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -83,6 +84,43 @@ ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise,
     r.displacement(k) += nd * g(rng);
     r.acceleration(k) += na * g(rng);
   }
+  return r;
+}
+
+InternalResonanceRecord internal_resonance_record(double alpha, double x10, double zeta2,
+                                                  double noise, unsigned seed, double duration_s) {
+  InternalResonanceRecord r;
+  const Eigen::Index n = static_cast<Eigen::Index>(std::round(duration_s * r.fs));
+  const Eigen::Index pre = static_cast<Eigen::Index>(std::round(0.05 * r.fs));
+  const double w1 = 2 * std::numbers::pi * r.f1_hz, w2 = 2 * std::numbers::pi * r.f2_hz;
+  const double z1 = r.zeta1;
+  using State = std::array<double, 4>;  // x1, v1, x2, v2
+  const auto rate = [&](const State& y) {
+    return State{y[1], -2 * z1 * w1 * y[1] - w1 * w1 * y[0] - alpha * y[0] * y[2], y[3],
+                 -2 * zeta2 * w2 * y[3] - w2 * w2 * y[2] - 0.5 * alpha * y[0] * y[0]};
+  };
+  const auto axpy = [](const State& y, double h, const State& k) {
+    return State{y[0] + h * k[0], y[1] + h * k[1], y[2] + h * k[2], y[3] + h * k[3]};
+  };
+  constexpr int kSteps = 8;
+  const double h = 1.0 / (r.fs * kSteps);
+  State y{x10, 0.0, 0.0, 0.0};
+  r.velocity = Eigen::VectorXd::Zero(n);
+  r.amplitude1 = Eigen::VectorXd::Zero(n);
+  r.amplitude2 = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index k = pre; k < n; ++k) {
+    r.velocity(k) = y[1] + 0.7 * y[3];
+    r.amplitude1(k) = std::hypot(y[0], y[1] / w1);
+    r.amplitude2(k) = std::hypot(y[2], y[3] / w2);
+    for (int s = 0; s < kSteps; ++s) {
+      const State k1 = rate(y), k2 = rate(axpy(y, h / 2, k1)), k3 = rate(axpy(y, h / 2, k2)),
+                  k4 = rate(axpy(y, h, k3));
+      for (int i = 0; i < 4; ++i) y[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    }
+  }
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, noise);
+  for (Eigen::Index k = 0; k < n; ++k) r.velocity(k) += g(rng);
   return r;
 }
 
