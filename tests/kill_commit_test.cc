@@ -156,7 +156,8 @@ std::string differences(const Tree& a, const Tree& b) {
 }
 
 struct Outcomes {
-  int old = 0, fresh = 0, refused = 0, unkilled = 0;
+  int old = 0, fresh = 0, refused = 0;
+  int unkilled = 0;  // runs that ended before their kill landed (tried again)
 };
 
 // 16 kills of `command` (whose complete results are `old_results` in `start`, copied to `dir`
@@ -169,10 +170,16 @@ Outcomes kill_loop(const std::string& command, const fs::path& start, const fs::
     const Trigger trigger = k % 2 == 0 ? Trigger::kAnyChange : Trigger::kResults;
     SCOPED_TRACE(fmt::format("kill {} ({})", k + 1,
                              trigger == Trigger::kAnyChange ? "first change" : "first result"));
-    restore(start, dir);
-    if (!run_killed(words(command), dir, trigger)) {
-      ++o.unkilled;  // it ended before the change the kill waited for: the property is untested
-      ADD_FAILURE() << "not killed";
+    // On a busy machine the command may end before the kill lands: tried again (up to 10
+    // times), so that every outcome counted is that of a kill.
+    bool killed = false;
+    for (int attempt = 0; attempt < 10 && !killed; ++attempt) {
+      restore(start, dir);
+      killed = run_killed(words(command), dir, trigger);
+      if (!killed) ++o.unkilled;
+    }
+    if (!killed) {
+      ADD_FAILURE() << "ended before the kill 10 times";
       continue;
     }
     const Tree after = results(dir);
@@ -240,8 +247,8 @@ TEST_F(KilledCommit, ProcessFolderIsOldNewOrRefused) {
       s.model.string(), out.string(), s.sensors.string(), s.model_mode, (dir_ / "iwan").string());
   const Outcomes o = kill_loop(new_command, start, out, old_results, new_results, reader);
   RecordProperty("outcomes", fmt::format("old {}, new {}, refused {}", o.old, o.fresh, o.refused));
-  std::printf("process: 16 kills: %d old, %d new, %d refused by the next reader\n", o.old, o.fresh,
-              o.refused);
+  std::printf("process: 16 kills: %d old, %d new, %d refused by the next reader (%d tried again)\n",
+              o.old, o.fresh, o.refused, o.unkilled);
   EXPECT_EQ(o.old + o.fresh + o.refused, 16);
 }
 
@@ -276,8 +283,8 @@ TEST_F(KilledCommit, RunFolderIsOldNewOrRefused) {
       (dir_ / "iwan").string());
   const Outcomes o = kill_loop(new_command, start, out, old_results, new_results, reader);
   RecordProperty("outcomes", fmt::format("old {}, new {}, refused {}", o.old, o.fresh, o.refused));
-  std::printf("run: 16 kills: %d old, %d new, %d refused by the next reader\n", o.old, o.fresh,
-              o.refused);
+  std::printf("run: 16 kills: %d old, %d new, %d refused by the next reader (%d tried again)\n",
+              o.old, o.fresh, o.refused, o.unkilled);
   EXPECT_EQ(o.old + o.fresh + o.refused, 16);
 }
 
