@@ -113,17 +113,10 @@ void run_process(const ProcessArgs& args) {
           results[i] = modal::process_record(rec, opt, cache);
         } catch (const std::bad_alloc&) {
           // Named, not "internal error: std::bad_alloc": which record did not fit.
-          std::error_code ec;
-          const auto bytes = std::filesystem::file_size(args.files[i], ec);
-          throw InputError(where(
-              args.files[i], 0,
-              fmt::format("out of memory while reading and processing this record ({:.3g} MB on "
-                          "disk, {} file(s) at once); give it alone with --threads 1, or a "
-                          "shorter record",
-                          ec ? 0.0 : static_cast<double>(bytes) / 1e6,
-                          std::min<size_t>(
-                              args.files.size(),
-                              args.threads ? args.threads : std::thread::hardware_concurrency()))));
+          throw InputError(data::out_of_memory_message(
+              args.files[i],
+              std::min<size_t>(args.files.size(),
+                               args.threads ? args.threads : std::thread::hardware_concurrency())));
         }
         modal::write_backbones(out, results[i], opt.ringdown);
         // A line per channel and band, written in blocks (a record may hold 1e5 channels).

@@ -10,6 +10,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
+#include "jointlab/data/output_stage.h"
 
 namespace jointlab::data {
 
@@ -134,6 +135,8 @@ void for_each_csv_line(
 
 void require_regular_file(const std::filesystem::path& path) {
   namespace fs = std::filesystem;
+  // Every reader comes here first: an output a killed commit may have left mixed is refused.
+  require_committed(path);
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);  // follows symbolic links
   if (ec || !fs::exists(st) || fs::is_regular_file(st)) return;

@@ -89,7 +89,8 @@ std::optional<std::string> read_text_file(const std::filesystem::path& path);
 /// InputError "PATH: is a directory, not a file" (a FIFO, a device, a socket likewise) when
 /// `path` exists and is not a regular file, before anything is read: a FIFO would block,
 /// /dev/zero would fill memory, a directory would read as empty. A missing path passes (the
-/// reader's own "cannot open" follows).
+/// reader's own "cannot open" follows). First, InputError (require_committed, output_stage.h)
+/// when `path` is an output that a killed commit may have left half old, half new.
 void require_regular_file(const std::filesystem::path& path);
 
 }  // namespace jointlab::data

@@ -8,8 +8,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <functional>
+#include <new>
 #include <optional>
 #include <tuple>
 #include <unordered_set>
@@ -404,7 +406,11 @@ Record read_csv(const std::filesystem::path& path) {
     return parse_csv("", path.string());
   }
   void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+  const int error = errno;
   ::close(fd);
+  // Out of address space (ulimit -v) mapping it is running out of memory: std::bad_alloc, which
+  // the commands turn into their one line naming the file.
+  if (map == MAP_FAILED && error == ENOMEM) throw std::bad_alloc();
   if (map == MAP_FAILED) throw InputError(where(path.string(), 0, "cannot read file"));
   struct Unmap {
     void* p;

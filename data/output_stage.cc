@@ -20,6 +20,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The commands that commit their outputs through an OutputStage (require_committed looks for
+// their unfinished commits).
+constexpr const char* kCommittingCommands[] = {"process", "run", "build-model"};
+
 // Serialises the commits (and their recovery) of concurrent runs into one folder.
 class FolderLock {
  public:
@@ -50,9 +54,15 @@ void roll_forward(const fs::path& dir, const fs::path& commit_dir, const std::st
                   const std::function<bool(const std::string&)>& owned) {
   const fs::path manifest = commit_dir / ".manifest";
   const fs::path record = dir / fmt::format(".{}.outputs", command);
+  std::error_code ec;
+  // Killed after the manifest became the record: every new output is in place already (an
+  // empty "fresh" list here would remove them all).
+  if (!fs::exists(manifest)) {
+    fs::remove_all(commit_dir, ec);
+    return;
+  }
   const std::set<std::string> fresh = read_list(manifest);
   std::set<std::string> old = read_list(record);
-  std::error_code ec;
   if (owned && !fs::exists(record)) {  // a folder written before outputs were recorded
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
@@ -94,6 +104,33 @@ void require_complete_outputs(const fs::path& dir) {
                             "left): the folder may mix old and new results; re-run {0} into it",
                             command, name)));
     }
+  }
+}
+
+void require_committed(const fs::path& file) {
+  std::error_code ec;
+  const fs::path path = fs::absolute(file, ec).lexically_normal();
+  if (ec || path.empty()) return;
+  // `inner`: the entry of `dir` that holds the file (its first component below dir).
+  fs::path inner = path.filename();
+  for (fs::path dir = path.parent_path(); !dir.empty(); dir = dir.parent_path()) {
+    for (const char* command : kCommittingCommands) {
+      const fs::path pending = dir / fmt::format(".{}.commit", command);
+      if (!fs::exists(pending, ec)) continue;
+      // Only the interrupted command's outputs, old or new, may be mixed; other files of the
+      // folder (its inputs, the user's) are read as usual.
+      std::set<std::string> outputs = read_list(pending / ".manifest");
+      outputs.merge(read_list(dir / fmt::format(".{}.outputs", command)));
+      if (!outputs.count(inner.string())) continue;
+      throw InputError(where(
+          file.string(), 0,
+          fmt::format("this is a result of a '{0}' run into {1} that was killed while putting its "
+                      "results in place ({2} is left): the folder may mix old and new results; "
+                      "re-run {0} into {1}",
+                      command, dir.string(), pending.filename().string())));
+    }
+    if (dir == dir.parent_path()) break;
+    inner = dir.filename();
   }
 }
 

@@ -60,4 +60,13 @@ class OutputStage {
 /// outputs (the rename to .<command>.commit is the commit point).
 void require_complete_outputs(const std::filesystem::path& dir);
 
+/// For every reader of a file, before reading it (require_regular_file calls it): InputError
+/// naming `file` when it lies in an output of a `process`, `run` or `build-model` commit that
+/// was killed half-way (an ancestor folder DIR holds DIR/.<command>.commit and the entry of
+/// DIR that holds `file` is among that command's old or new outputs), saying to re-run the
+/// command into DIR. So a reader of anything in `run`'s folder (DIR/hits/..., DIR/model/...)
+/// sees one run's results or refuses, as summary.json's readers do for `process`. Other files
+/// of such a folder (the inputs, the user's own) are not refused.
+void require_committed(const std::filesystem::path& file);
+
 }  // namespace jointlab::data

@@ -181,6 +181,50 @@ TEST(OutputStage, KilledRunsAreCleanedUpOrCompletedByTheNext) {
   EXPECT_NO_THROW(require_complete_outputs(dir));
 }
 
+// A reader of any file inside a `run` folder whose commit was killed half-way (hits/, model/,
+// ...) refuses it with one line saying to re-run; the folder's other files (inputs) are read.
+TEST(OutputStage, ReadersRefuseTheOutputsOfAnUnfinishedCommitAtAnyDepth) {
+  const fs::path dir = fresh_dir("run-readers");
+  {
+    OutputStage s(dir, "run");
+    fs::create_directories(s.path() / "hits" / "all");
+    put(s.path() / "hits" / "all" / "hit1.a.band1.csv", "old");
+    put(s.path() / "report.md", "old");
+    s.commit();
+  }
+  put(dir / "campaign.toml", "an input beside the outputs");
+  EXPECT_NO_THROW(require_committed(dir / "hits" / "all" / "hit1.a.band1.csv"));
+  // Killed after the commit point: hits/ was already replaced, report.md not yet.
+  fs::create_directories(dir / ".run.commit");
+  put(dir / ".run.commit" / ".manifest", "hits\nreport.md\nscatter\n");
+  put(dir / ".run.commit" / "report.md", "new");
+  for (const fs::path& f : {dir / "hits" / "all" / "hit1.a.band1.csv", dir / "report.md",
+                            dir / "scatter" / "mode1.json"}) {  // a new output not there yet
+    const std::string m = testing::input_error_of([&] { require_committed(f); });
+    EXPECT_NE(m.find(f.string() + ": this is a result of a 'run' run into " + dir.string() +
+                     " that was killed while putting its results in place (.run.commit is "
+                     "left): the folder may mix old and new results; re-run run into " +
+                     dir.string()),
+              std::string::npos)
+        << m;
+  }
+  EXPECT_NO_THROW(require_committed(dir / "campaign.toml"));
+  EXPECT_NO_THROW(require_committed(fresh_dir("elsewhere") / "x.csv"));
+  { OutputStage next(dir, "run"); }  // completes the commit
+  EXPECT_NO_THROW(require_committed(dir / "report.md"));
+  EXPECT_EQ(testing::read_file(dir / "report.md"), "new");
+}
+
+// Killed between recording the new outputs and removing the commit folder: every new output is
+// in place, and the next run keeps them (it once removed them all).
+TEST(OutputStage, ACommitKilledAfterItsRecordKeepsTheNewOutputs) {
+  const fs::path dir = with_old_output("recorded");
+  fs::create_directories(dir / ".cmd.commit");  // its manifest is .cmd.outputs now
+  { OutputStage next(dir, "cmd"); }
+  EXPECT_EQ(snapshot(dir),
+            (std::map<std::string, std::string>{{".cmd.outputs", "a.csv\n"}, {"a.csv", "old"}}));
+}
+
 TEST(OutputStage, ARunningWritersFilesAreSpared) {
   const fs::path dir = fresh_dir("running");
   OutputStage running(dir, "cmd");

@@ -89,4 +89,14 @@ Record read_record(const std::filesystem::path& path) {
   throw InputError(where(path.string(), 0, "unknown file format"));
 }
 
+std::string out_of_memory_message(const std::filesystem::path& path, size_t at_once) {
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  return where(path.string(), 0,
+               fmt::format("out of memory while reading and processing this record ({:.3g} MB on "
+                           "disk, {} file(s) at once); give it alone with --threads 1, or a "
+                           "shorter record",
+                           ec ? 0.0 : static_cast<double>(bytes) / 1e6, at_once));
+}
+
 }  // namespace jointlab::data

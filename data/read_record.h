@@ -10,7 +10,9 @@
 // named channels, SI samples, one uniform time base (record.h).
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <string>
 
 #include "jointlab/data/record.h"
 
@@ -25,5 +27,10 @@ FileFormat detect_format(const std::filesystem::path& path);
 
 /// Reads a test file of any supported format into a record; InputError on any defect.
 Record read_record(const std::filesystem::path& path);
+
+/// What to say when reading or processing the record `path` ran out of memory (std::bad_alloc):
+/// one line naming the file, its size on disk and how many files were read at once (`at_once`),
+/// and what to do. `process` and `run` both say it.
+std::string out_of_memory_message(const std::filesystem::path& path, size_t at_once);
 
 }  // namespace jointlab::data

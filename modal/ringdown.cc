@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <utility>
@@ -179,59 +180,75 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   const Eigen::Index i_peak = impact >= 0 ? std::min(impact, n - 1) : impact_index(x);
   const Eigen::Index i_begin = std::min<Eigen::Index>(
       n - 1, i_peak + static_cast<Eigen::Index>(std::round(options.onset_skip_s * fs)));
+  const Eigen::Index m = n - i_begin;
   // Samples of 1e300 are finite but their squares are not (1e-300 likewise underflow): such
   // a channel is analysed at an exact power-of-two scale and extract_backbone scales back.
-  const double peak = x.segment(i_begin, n - i_begin).cwiseAbs().maxCoeff();
+  const double peak = x.segment(i_begin, m).cwiseAbs().maxCoeff();
   const double scale =
       peak > 1e100 || (peak > 0 && peak < 1e-100) ? std::ldexp(1.0, -std::ilogb(peak)) : 1.0;
-  const Eigen::VectorXd data = x.segment(i_begin, n - i_begin) * scale;
-  Eigen::VectorXd y = data.array() - data.mean();
+  const bool lowpass = options.lowpass_hz > 0 && 2 * options.lowpass_hz < 0.5 * fs;
+  const double f_stop = 2 * options.lowpass_hz;
   Eigen::Index guard = 0, lag = 1;
-  if (options.lowpass_hz > 0 && 2 * options.lowpass_hz < 0.5 * fs) {
-    const double f_stop = 2 * options.lowpass_hz;
-    y = signal::lowpass(y, fs, options.lowpass_hz, f_stop, cache);
+  if (lowpass) {
     // The edge's kernel exp(-2 pi^2 sd^2 t^2), sd = f_stop / 8, is below 1e-6 by 4 / sd.
     guard =
         static_cast<Eigen::Index>(std::ceil(4.0 / (f_stop / 8.0) / (2 * std::numbers::pi) * fs));
     lag = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(fs / (3 * f_stop)));
   }
-  guard = std::min(guard, y.size() / 4);
+  guard = std::min(guard, m / 4);
   const Eigen::Index ext = static_cast<Eigen::Index>(std::round(options.extend_s * fs));
   const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
   const Eigen::Index wanted = ext + guard;
+  const Eigen::Index kept = m - 2 * guard;  // the samples the continuations extend
+
+  ChannelSpectrum c;
+  c.scale = scale;
+  c.n_record = wanted + kept + wanted;
+  c.n_fft = signal::fast_size(2 * c.n_record);
+  // One buffer for the record, its low-pass and its spectrum, transformed in place: a long
+  // record's peak memory is its samples and this spectrum (2 doubles a sample), no copies.
+  const Eigen::Index n_lowpass = lowpass ? signal::fast_size(2 * m) : 0;
+  Eigen::VectorXcd buffer(std::max(c.n_fft, n_lowpass) / 2 + 1);
+  double* r = reinterpret_cast<double*>(buffer.data());
+  Eigen::Map<Eigen::VectorXd> y(r, m);
+  y = x.segment(i_begin, m) * scale;
+  y.array() -= y.mean();
+  if (lowpass) signal::lowpass_in_place(buffer.data(), m, fs, options.lowpass_hz, f_stop, cache);
   const auto extend = [&](int order, bool before, bool after) {
-    return signal::extend_record(y.segment(guard, y.size() - 2 * guard), before ? wanted : 0,
-                                 after ? wanted : 0, order, fit, 1e3, lag);
+    return signal::continue_record(y.segment(guard, kept), before ? wanted : 0, after ? wanted : 0,
+                                   order, fit, 1e3, lag);
   };
-  signal::Extension e = extend(options.ar_order, true, true);
+  signal::Continuation e = extend(options.ar_order, true, true);
   // A model with more poles than the record has modes fits some to the noise;
   // run backwards, a heavily damped one of those can blow up within the span the
   // band filters need. Lower orders (halving, down to 4) then take over that end
   // if they continue it further (an end already continued in full is not tried again).
   for (int order = options.ar_order / 2;
        order >= 4 && (e.before_valid < wanted || e.after_valid < wanted); order /= 2) {
-    const signal::Extension f = extend(order, e.before_valid < wanted, e.after_valid < wanted);
+    signal::Continuation f = extend(order, e.before_valid < wanted, e.after_valid < wanted);
     if (f.before_valid > e.before_valid) {
-      e.samples.head(wanted) = f.samples.head(wanted);
+      e.before = std::move(f.before);
       e.before_valid = f.before_valid;
     }
     if (f.after_valid > e.after_valid) {
-      e.samples.tail(wanted) = f.samples.tail(wanted);
+      e.after = std::move(f.after);
       e.after_valid = f.after_valid;
     }
   }
-
-  ChannelSpectrum c;
-  c.scale = scale;
-  c.n_record = e.samples.size();
-  c.n_fft = signal::fast_size(2 * c.n_record);
+  // The analysed record, before + kept + after, zero-padded to n_fft, then its spectrum.
+  std::memmove(r + wanted, r + guard, sizeof(double) * static_cast<size_t>(kept));
+  std::copy(e.before.data(), e.before.data() + wanted, r);
+  std::copy(e.after.data(), e.after.data() + wanted, r + wanted + kept);
+  std::fill(r + c.n_record, r + 2 * buffer.size(), 0.0);
+  cache.get(c.n_fft).forward_in_place(buffer.data());
+  buffer.conservativeResize(c.n_fft / 2 + 1);
   c.fs = fs;
-  c.t0 = t0 + static_cast<double>(i_begin - e.before + guard) / fs;
+  c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
   c.continued_begin_s = static_cast<double>(e.before_valid) / fs;
   c.continued_end_s = static_cast<double>(e.after_valid) / fs;
-  c.spectrum = cache.get(c.n_fft).forward(e.samples);
+  c.spectrum = std::move(buffer);
   return c;
 }
 

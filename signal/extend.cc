@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 #include <utility>
 
 #include <Eigen/Dense>
@@ -17,12 +18,13 @@ namespace {
 // backwards) it is cut: the faithful part before that point is kept, its last
 // half faded out by a half cosine, and zeros follow. Returns the samples and the
 // number of them that are an unfaded continuation.
-std::pair<Eigen::VectorXd, Eigen::Index> continue_forward(const Eigen::VectorXd& y,
-                                                          Eigen::Index count, int order,
-                                                          Eigen::Index fit_length,
-                                                          double max_growth, Eigen::Index lag) {
-  const Eigen::Index n = y.size();
-  const Eigen::Index len = std::min(fit_length, n);
+// Only the last fit_length samples of y are used (and copied): a record may be far longer.
+std::pair<Eigen::VectorXd, Eigen::Index> continue_forward(
+    const Eigen::Ref<const Eigen::VectorXd>& whole, Eigen::Index count, int order,
+    Eigen::Index fit_length, double max_growth, Eigen::Index lag) {
+  const Eigen::Index len = std::min(fit_length, whole.size());
+  const auto y = whole.tail(len);
+  const Eigen::Index n = len;
   const Eigen::Index span = order * lag;  // history one prediction needs
   if (count <= 0 || len < span + 4 * order) {
     return {Eigen::VectorXd::Zero(std::max<Eigen::Index>(count, 0)), 0};
@@ -68,25 +70,36 @@ std::pair<Eigen::VectorXd, Eigen::Index> continue_forward(const Eigen::VectorXd&
 
 }  // namespace
 
+Continuation continue_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
+                             Eigen::Index after, int order, Eigen::Index fit_length,
+                             double max_growth, Eigen::Index lag) {
+  assert(order >= 1 && before >= 0 && after >= 0 && lag >= 1);
+  Continuation c;
+  std::tie(c.after, c.after_valid) = continue_forward(x, after, order, fit_length, max_growth, lag);
+  // Backward continuation is forward continuation of the time-reversed record (of the samples
+  // it is fitted on).
+  const Eigen::VectorXd reversed = x.head(std::min(fit_length, x.size())).reverse();
+  auto [head, before_valid] =
+      continue_forward(reversed, before, order, fit_length, max_growth, lag);
+  c.before = head.reverse();
+  c.before_valid = before_valid;
+  return c;
+}
+
 Extension extend_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
                         Eigen::Index after, int order, Eigen::Index fit_length, double max_growth,
                         Eigen::Index lag) {
-  assert(order >= 1 && before >= 0 && after >= 0 && lag >= 1);
   const Eigen::Index n = x.size();
+  const Continuation c = continue_record(x, before, after, order, fit_length, max_growth, lag);
   Extension e;
   e.before = before;
   e.after = after;
   e.samples.resize(before + n + after);
+  e.samples.head(before) = c.before;
   e.samples.segment(before, n) = x;
-  auto [tail, after_valid] = continue_forward(x, after, order, fit_length, max_growth, lag);
-  e.samples.tail(after) = tail;
-  e.after_valid = after_valid;
-  // Backward continuation is forward continuation of the time-reversed record.
-  const Eigen::VectorXd reversed = x.reverse();
-  auto [head, before_valid] =
-      continue_forward(reversed, before, order, fit_length, max_growth, lag);
-  e.samples.head(before) = head.reverse();
-  e.before_valid = before_valid;
+  e.samples.tail(after) = c.after;
+  e.before_valid = c.before_valid;
+  e.after_valid = c.after_valid;
   return e;
 }
 

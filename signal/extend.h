@@ -26,6 +26,19 @@ struct Extension {
   Eigen::Index after_valid = 0;   ///< appended samples that are a faithful continuation
 };
 
+/// The continuations alone, without a copy of x (for records too long to copy).
+struct Continuation {
+  Eigen::VectorXd before;         ///< the samples before x[0], in time order
+  Eigen::VectorXd after;          ///< the samples after x[n-1]
+  Eigen::Index before_valid = 0;  ///< faithful samples of `before` (those next to x)
+  Eigen::Index after_valid = 0;   ///< faithful samples of `after` (those next to x)
+};
+
+/// What extend_record puts before and after x (the same numbers).
+Continuation continue_record(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index before,
+                             Eigen::Index after, int order, Eigen::Index fit_length,
+                             double max_growth = 20.0, Eigen::Index lag = 1);
+
 /// Continues x by `before` samples at its start and `after` at its end with AR
 /// models of `order` and sample spacing `lag` fitted over `fit_length` samples at
 /// each end. Where an extension grows beyond `max_growth` times the RMS of the

@@ -33,6 +33,26 @@ TEST(Extend, ContinuesDampedSinusoidsBothWays) {
   EXPECT_LT(worst, 1e-8);
 }
 
+// The continuations depend on the fit_length samples at each end alone, and continue_record
+// gives extend_record's, without a copy of the record.
+TEST(Extend, ContinuationsUseOnlyTheEnds) {
+  const double fs = 1000;
+  const Eigen::Index n = 20000, pad = 300, fit = 600;
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) x(k) = two_modes(k / fs) + 1e-4 * std::sin(0.77 * k * k);
+  const Continuation whole = continue_record(x, pad, pad, 8, fit);
+  const Continuation ends_after = continue_record(x.tail(fit), 0, pad, 8, fit);
+  const Continuation ends_before = continue_record(x.head(fit), pad, 0, 8, fit);
+  EXPECT_EQ(whole.after, ends_after.after);
+  EXPECT_EQ(whole.before, ends_before.before);
+  const Extension e = extend_record(x, pad, pad, 8, fit);
+  EXPECT_EQ(e.samples.head(pad), whole.before);
+  EXPECT_EQ(e.samples.tail(pad), whole.after);
+  EXPECT_EQ(e.samples.segment(pad, n), x);
+  EXPECT_EQ(e.before_valid, whole.before_valid);
+  EXPECT_EQ(e.after_valid, whole.after_valid);
+}
+
 TEST(Extend, UnstableContinuationIsDropped) {
   // White noise has no recursion: whatever the model predicts must not exceed
   // max_growth times the data; here growth 0 forces the fallback to zeros.

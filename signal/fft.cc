@@ -1,8 +1,10 @@
 #include "jointlab/signal/fft.h"
 
 #include <cassert>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <new>
 
 #include <fftw3.h>
 
@@ -19,6 +21,8 @@ std::mutex& planner_mutex() {
 
 struct Fft::Impl {
   Eigen::Index n = 0;
+  // Work buffers, each allocated on the first transform that needs it: a size used only in
+  // place (a record's spectrum) never holds a buffer of its own.
   double* real_in = nullptr;
   fftw_complex* half_out = nullptr;
   fftw_complex* full_in = nullptr;
@@ -26,28 +30,47 @@ struct Fft::Impl {
   fftw_plan r2c = nullptr;
   fftw_plan c2c_backward = nullptr;
   fftw_plan c2r = nullptr;
+  // In-place plans and the alignment of the array they were made for (FFTW runs a plan on
+  // another array only if it is aligned alike).
+  fftw_plan r2c_in_place = nullptr;
+  fftw_plan c2r_in_place = nullptr;
+  int r2c_alignment = -1, c2r_alignment = -1;
 
-  explicit Impl(Eigen::Index size) : n(size) {
-    std::lock_guard<std::mutex> lock(planner_mutex());
-    real_in = fftw_alloc_real(n);
-    half_out = fftw_alloc_complex(n / 2 + 1);
-    full_in = fftw_alloc_complex(n);
-    full_out = fftw_alloc_complex(n);
-  }
+  explicit Impl(Eigen::Index size) : n(size) {}
   ~Impl() {
     std::lock_guard<std::mutex> lock(planner_mutex());
-    for (fftw_plan p : {r2c, c2c_backward, c2r})
+    for (fftw_plan p : {r2c, c2c_backward, c2r, r2c_in_place, c2r_in_place})
       if (p) fftw_destroy_plan(p);
-    fftw_free(real_in);
-    fftw_free(half_out);
-    fftw_free(full_in);
-    fftw_free(full_out);
+    std::free(real_in);
+    std::free(half_out);
+    std::free(full_in);
+    std::free(full_out);
+  }
+  // FFTW aborts the program when an allocation of its own fails (planning a large size makes
+  // tables of 8-10 bytes a point): before planning, 12 bytes a point are asked for and given
+  // back, so that a lack of them is std::bad_alloc here, which callers can name.
+  void probe_planning_memory() const {
+    if (n < (Eigen::Index{1} << 16)) return;
+    void* volatile p = std::malloc(12 * static_cast<size_t>(n));  // kept
+    if (!p) throw std::bad_alloc();
+    std::free(p);
+  }
+  // SIMD-aligned like fftw_malloc's, which aborts where this throws std::bad_alloc.
+  template <typename T>
+  static void allocate(T*& p, Eigen::Index count) {
+    if (p) return;
+    void* q = nullptr;
+    if (posix_memalign(&q, 64, sizeof(T) * static_cast<size_t>(count)) != 0) throw std::bad_alloc();
+    p = static_cast<T*>(q);
   }
   // Each plan is made on its first use: most sizes need one or two of the three, and
   // planning costs more than a transform.
   fftw_plan forward_plan() {
     if (!r2c) {
       std::lock_guard<std::mutex> lock(planner_mutex());
+      allocate(real_in, n);
+      allocate(half_out, n / 2 + 1);
+      probe_planning_memory();
       r2c = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_in, half_out, FFTW_ESTIMATE);
     }
     return r2c;
@@ -55,6 +78,9 @@ struct Fft::Impl {
   fftw_plan complex_plan() {
     if (!c2c_backward) {
       std::lock_guard<std::mutex> lock(planner_mutex());
+      allocate(full_in, n);
+      allocate(full_out, n);
+      probe_planning_memory();
       c2c_backward =
           fftw_plan_dft_1d(static_cast<int>(n), full_in, full_out, FFTW_BACKWARD, FFTW_ESTIMATE);
     }
@@ -64,9 +90,38 @@ struct Fft::Impl {
   fftw_plan real_plan() {
     if (!c2r) {
       std::lock_guard<std::mutex> lock(planner_mutex());
+      allocate(full_in, n);
+      allocate(real_in, n);
+      probe_planning_memory();
       c2r = fftw_plan_dft_c2r_1d(static_cast<int>(n), full_in, real_in, FFTW_ESTIMATE);
     }
     return c2r;
+  }
+  void drop_in_place_plans() {
+    std::lock_guard<std::mutex> lock(planner_mutex());
+    for (fftw_plan* p : {&r2c_in_place, &c2r_in_place}) {
+      if (*p) fftw_destroy_plan(*p);
+      *p = nullptr;
+    }
+  }
+  // In-place plans on `data` (FFTW_ESTIMATE plans without touching it), made again for an
+  // array aligned otherwise.
+  fftw_plan in_place_plan(bool forward, std::complex<double>* data) {
+    auto* c = reinterpret_cast<fftw_complex*>(data);
+    auto* r = reinterpret_cast<double*>(data);
+    fftw_plan& plan = forward ? r2c_in_place : c2r_in_place;
+    int& alignment = forward ? r2c_alignment : c2r_alignment;
+    if (!plan || fftw_alignment_of(r) != alignment) {
+      std::lock_guard<std::mutex> lock(planner_mutex());
+      if (plan) fftw_destroy_plan(plan);
+      plan = nullptr;
+      probe_planning_memory();
+      plan = forward ? fftw_plan_dft_r2c_1d(static_cast<int>(n), r, c, FFTW_ESTIMATE)
+                     : fftw_plan_dft_c2r_1d(static_cast<int>(n), c, r, FFTW_ESTIMATE);
+      if (!plan) throw std::bad_alloc();
+      alignment = fftw_alignment_of(r);
+    }
+    return plan;
   }
 };
 
@@ -80,9 +135,10 @@ Eigen::Index Fft::size() const { return impl_->n; }
 Eigen::VectorXcd Fft::forward(const Eigen::Ref<const Eigen::VectorXd>& x) {
   const Eigen::Index n = impl_->n;
   assert(x.size() <= n);
+  const fftw_plan plan = impl_->forward_plan();  // allocates the buffers
   std::memset(impl_->real_in, 0, sizeof(double) * n);
   for (Eigen::Index j = 0; j < x.size(); ++j) impl_->real_in[j] = x(j);
-  fftw_execute(impl_->forward_plan());
+  fftw_execute(plan);
   Eigen::VectorXcd out(n / 2 + 1);
   for (Eigen::Index k = 0; k <= n / 2; ++k) {
     out(k) = {impl_->half_out[k][0], impl_->half_out[k][1]};
@@ -93,11 +149,12 @@ Eigen::VectorXcd Fft::forward(const Eigen::Ref<const Eigen::VectorXd>& x) {
 Eigen::VectorXcd Fft::inverse_complex(const Eigen::Ref<const Eigen::VectorXcd>& spectrum) {
   const Eigen::Index n = impl_->n;
   assert(spectrum.size() == n);
+  const fftw_plan plan = impl_->complex_plan();
   for (Eigen::Index k = 0; k < n; ++k) {
     impl_->full_in[k][0] = spectrum(k).real();
     impl_->full_in[k][1] = spectrum(k).imag();
   }
-  fftw_execute(impl_->complex_plan());
+  fftw_execute(plan);
   Eigen::VectorXcd out(n);
   const double scale = 1.0 / static_cast<double>(n);
   for (Eigen::Index j = 0; j < n; ++j) {
@@ -127,15 +184,40 @@ Eigen::VectorXcd Fft::inverse_complex_head(Eigen::Index count) {
 Eigen::VectorXd Fft::inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half_spectrum) {
   const Eigen::Index n = impl_->n;
   assert(half_spectrum.size() == n / 2 + 1);
+  const fftw_plan plan = impl_->real_plan();
   for (Eigen::Index k = 0; k <= n / 2; ++k) {
     impl_->full_in[k][0] = half_spectrum(k).real();
     impl_->full_in[k][1] = half_spectrum(k).imag();
   }
-  fftw_execute(impl_->real_plan());
+  fftw_execute(plan);
   Eigen::VectorXd out(n);
   const double scale = 1.0 / static_cast<double>(n);
   for (Eigen::Index j = 0; j < n; ++j) out(j) = impl_->real_in[j] * scale;
   return out;
+}
+
+namespace {
+
+// In-place plans of more points than this are made for one transform and destroyed after it:
+// FFTW's tables for a plan take about 8 bytes a point (a 4e7-point plan 350 MB), as much as
+// the record they transform, and a kept pair would double a long record's peak memory.
+constexpr Eigen::Index kLargestKeptPlan = Eigen::Index{1} << 22;
+
+}  // namespace
+
+void Fft::forward_in_place(std::complex<double>* data) {
+  fftw_plan p = impl_->in_place_plan(true, data);
+  fftw_execute_dft_r2c(p, reinterpret_cast<double*>(data), reinterpret_cast<fftw_complex*>(data));
+  if (impl_->n > kLargestKeptPlan) impl_->drop_in_place_plans();
+}
+
+void Fft::inverse_real_in_place(std::complex<double>* data) {
+  fftw_plan p = impl_->in_place_plan(false, data);
+  auto* r = reinterpret_cast<double*>(data);
+  fftw_execute_dft_c2r(p, reinterpret_cast<fftw_complex*>(data), r);
+  if (impl_->n > kLargestKeptPlan) impl_->drop_in_place_plans();
+  const double scale = 1.0 / static_cast<double>(impl_->n);
+  for (Eigen::Index j = 0; j < impl_->n; ++j) r[j] *= scale;
 }
 
 Eigen::Index fast_size(Eigen::Index n) {

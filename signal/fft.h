@@ -40,6 +40,13 @@ class Fft {
   Eigen::VectorXcd inverse_complex_head(Eigen::Index count);
   /// Real inverse of a one-sided spectrum X[0..n/2] (Hermitian symmetry implied), scaled by 1/n.
   Eigen::VectorXd inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half_spectrum);
+  /// In place, for records too long to copy: `data` holds n / 2 + 1 complex values; its first
+  /// n doubles, the real x (zero-padded by the caller), become the one-sided spectrum X[0..n/2]
+  /// (the same numbers as forward(x) up to rounding).
+  void forward_in_place(std::complex<double>* data);
+  /// In place: the one-sided spectrum X[0..n/2] in `data` (n / 2 + 1 complex values) becomes
+  /// its real inverse x[0..n), scaled by 1/n, in data's first n doubles.
+  void inverse_real_in_place(std::complex<double>* data);
 
  private:
   struct Impl;

@@ -32,6 +32,28 @@ TEST(Fft, ComplexInverseOfHermitianSpectrumRestoresSignal) {
   EXPECT_LT(back.imag().cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// In place (a long record's spectrum, no copy): the numbers of forward() and inverse_real(),
+// for even and odd sizes and for a size whose plans are made and dropped each time.
+TEST(Fft, InPlaceTransformsEqualTheCopyingOnes) {
+  for (const Eigen::Index n : {Eigen::Index{360}, Eigen::Index{945}, fast_size(4200000)}) {
+    SCOPED_TRACE(n);
+    const Eigen::VectorXd x = Eigen::VectorXd::Random(n * 2 / 3);
+    Fft fft(n);
+    const Eigen::VectorXcd X = fft.forward(x);
+    for (int again = 0; again < 2; ++again) {
+      Eigen::VectorXcd data(n / 2 + 1);
+      Eigen::Map<Eigen::VectorXd> real(reinterpret_cast<double*>(data.data()), 2 * data.size());
+      real.setZero();
+      real.head(x.size()) = x;
+      fft.forward_in_place(data.data());
+      EXPECT_LT((data - X).cwiseAbs().maxCoeff(), 1e-9 * X.cwiseAbs().maxCoeff());
+      fft.inverse_real_in_place(data.data());
+      EXPECT_LT((real.head(x.size()) - x).cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_LT(real.segment(x.size(), n - x.size()).cwiseAbs().maxCoeff(), 1e-12);
+    }
+  }
+}
+
 TEST(Fft, FastSizesHaveOnlySmallPrimes) {
   EXPECT_EQ(fast_size(1000), 1000);
   EXPECT_EQ(fast_size(1031), 1050);  // 2 * 3 * 5^2 * 7

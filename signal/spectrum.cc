@@ -60,6 +60,20 @@ std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd
   return chosen;
 }
 
+namespace {
+
+// The low-pass gain at bin k of an nfft-point transform.
+double lowpass_gain(Eigen::Index k, Eigen::Index nfft, double fs, double f_pass, double f_stop) {
+  const double df = fs / static_cast<double>(nfft);
+  const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
+  const double f = static_cast<double>(k) * df;
+  return f < mid - 9 * sd   ? 1.0
+         : f > mid + 9 * sd ? 0.0
+                            : 0.5 * std::erfc((f - mid) / (std::sqrt(2.0) * sd));
+}
+
+}  // namespace
+
 Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double f_pass,
                         double f_stop, FftCache& cache) {
   const Eigen::Index n = x.size();
@@ -68,19 +82,25 @@ Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, d
   Eigen::VectorXcd X = fft.forward(x);
   // The gain is shared by every channel of a record: computed once per size and edge.
   const Eigen::VectorXd& g = cache.gain({0.0, static_cast<double>(nfft), fs, f_pass, f_stop}, [&] {
-    const double df = fs / static_cast<double>(nfft);
-    const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
     Eigen::VectorXd gain(X.size());
-    for (Eigen::Index k = 0; k < X.size(); ++k) {
-      const double f = static_cast<double>(k) * df;
-      gain(k) = f < mid - 9 * sd   ? 1.0
-                : f > mid + 9 * sd ? 0.0
-                                   : 0.5 * std::erfc((f - mid) / (std::sqrt(2.0) * sd));
-    }
+    for (Eigen::Index k = 0; k < X.size(); ++k) gain(k) = lowpass_gain(k, nfft, fs, f_pass, f_stop);
     return gain;
   });
   X.array() *= g.array();
   return fft.inverse_real(X).head(n);
+}
+
+void lowpass_in_place(std::complex<double>* data, Eigen::Index n, double fs, double f_pass,
+                      double f_stop, FftCache& cache) {
+  const Eigen::Index nfft = fast_size(2 * n);
+  const Eigen::Index bins = nfft / 2 + 1;
+  auto* real = reinterpret_cast<double*>(data);
+  std::fill(real + n, real + 2 * bins, 0.0);
+  Fft& fft = cache.get(nfft);
+  fft.forward_in_place(data);
+  // The gain bin by bin: a stored gain would cost a copy of the record.
+  for (Eigen::Index k = 0; k < bins; ++k) data[k] *= lowpass_gain(k, nfft, fs, f_pass, f_stop);
+  fft.inverse_real_in_place(data);
 }
 
 Eigen::VectorXd integrate(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, int order,

@@ -5,6 +5,7 @@
 // power: |X_w[k]| * 2 / sum(w)). A record is zero-padded to a fast FFT size.
 #pragma once
 
+#include <complex>
 #include <vector>
 
 #include <Eigen/Core>
@@ -35,6 +36,12 @@ std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd
 /// to twice its length so the record does not wrap onto itself.
 Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double f_pass,
                         double f_stop, FftCache& cache);
+
+/// lowpass() in place, for records too long to copy: `data` holds fast_size(2 n) / 2 + 1
+/// complex values; x's n samples in its first n doubles become the low-passed samples (the
+/// same numbers as lowpass() up to rounding); the rest is overwritten.
+void lowpass_in_place(std::complex<double>* data, Eigen::Index n, double fs, double f_pass,
+                      double f_stop, FftCache& cache);
 
 /// Frequency-domain integration (order > 0) or differentiation (order < 0) of x,
 /// with everything below f_min [Hz] removed (integration has no DC). x is zero-padded

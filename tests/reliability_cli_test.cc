@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -835,6 +836,51 @@ TEST(KilledCommit, ReadersRefuseAFolderMidCommit) {
   const CommandResult again = run_jointlab("update-iwan " + model + " --set iwan.rivet --mode 1" +
                                            measured + " --out " + dir + "/u");
   EXPECT_EQ(again.err.find("killed"), std::string::npos) << again.err;
+}
+
+// Out of memory (an address-space limit, ulimit -v), whatever runs out first (mapping the
+// file, the columns, the spectrum, FFTW's plans): one line naming the record, exit status 2,
+// never "internal error: std::bad_alloc" nor FFTW's abort (exit 134) in its own planning. A
+// one-channel record of 1e6 samples under limits from 80 MB to 512 MB.
+TEST(OutOfMemory, TheRecordIsNamedAtEveryLimit) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space";
+#endif
+  const std::string dir = scratch_dir("out_of_memory");
+  const std::string path = dir + "/long.csv";
+  {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fputs("# fs: 10000\nacc1 [m/s^2]\n", f);
+    for (int k = 0; k < 1000000; ++k) {
+      const double t = k * 1e-4;
+      std::fprintf(
+          f, "%.9g\n",
+          std::exp(-2 * M_PI * t) * std::sin(2 * M_PI * 100 * t) + 1e-4 * std::sin(0.7 * k * k));
+    }
+    std::fclose(f);
+  }
+  std::map<int, int> statuses;
+  for (const int mb : {80, 100, 120, 140, 160, 192, 256, 512}) {
+    SCOPED_TRACE(fmt::format("ulimit -v {} MB", mb));
+    const std::string cmd = fmt::format(
+        "ulimit -v {}; exec {}/bin/jointlab process {} --band 80:120 --threads 1 --out {}/out "
+        ">/dev/null 2>{}/err.txt",
+        mb * 1024, binary_dir(), path, dir, dir);
+    const int raw = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(raw)) << "killed by signal " << WTERMSIG(raw);
+    const int status = WEXITSTATUS(raw);
+    statuses[mb] = status;
+    const std::string err = testing::read_file(dir + "/err.txt");
+    if (status == 0) continue;
+    EXPECT_EQ(status, 2) << err;
+    EXPECT_EQ(err, fmt::format("jointlab: error: {}: out of memory while reading and processing "
+                               "this record ({:.3g} MB on disk, 1 file(s) at once); give it alone "
+                               "with --threads 1, or a shorter record\n",
+                               path, static_cast<double>(fs::file_size(path)) / 1e6));
+  }
+  EXPECT_EQ(statuses[80], 2);   // the limits reach from too little ...
+  EXPECT_EQ(statuses[512], 0);  // ... to enough
 }
 
 TEST(ArgumentErrors, NegativeThreadsAreNamedWithReadableBounds) {

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <new>
 #include <optional>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -185,6 +187,9 @@ std::string process_hit(const Campaign& c, const fs::path& file, const fs::path&
     r = analyse_hit(c, opt, file, cache);
   } catch (const InputError& e) {
     why = one_line(e.what());
+  } catch (const std::bad_alloc&) {
+    // Named and left out like any hit that cannot be processed (hits run one per thread).
+    why = data::out_of_memory_message(file, std::max(1u, std::thread::hardware_concurrency()));
   }
   fs::create_directories(dir);
   if (r) {
