@@ -307,13 +307,14 @@ struct ChannelSet {
   }
 };
 
-// The FFT workspaces of a record's channel workers: the caller's for the first worker,
-// the others made on first use and kept for every band of the record (plans are not
-// shared between threads).
+// The FFT workspaces of a record's channel workers: the caller's for the first worker, its
+// helpers' (kept with it, plans and all, for the next record) for the others.
 class Workspaces {
  public:
   Workspaces(signal::FftCache& first, unsigned threads)
-      : first_(first), threads_(std::max(1u, threads)), others_(threads_ - 1) {}
+      : first_(first), threads_(std::max(1u, threads)) {
+    for (unsigned w = 1; w < threads_; ++w) first_.helper(w - 1);  // made here, not in a worker
+  }
   /// Runs body(i, cache) for i in [0, n), each worker with its own cache.
   template <typename Body>
   void run(size_t n, Body body) {
@@ -322,9 +323,7 @@ class Workspaces {
         n, threads_,
         [&]() -> signal::FftCache* {
           const unsigned w = next++;
-          if (w == 0) return &first_;
-          if (!others_[w - 1]) others_[w - 1] = std::make_unique<signal::FftCache>();
-          return others_[w - 1].get();
+          return w == 0 ? &first_ : &first_.helper(w - 1);
         },
         [&](size_t i, signal::FftCache* cache) { body(i, *cache); });
   }
@@ -332,7 +331,6 @@ class Workspaces {
  private:
   signal::FftCache& first_;
   unsigned threads_;
-  std::vector<std::unique_ptr<signal::FftCache>> others_;
 };
 
 // Pass 1, every requested channel in turn: its spectrum (dropped before the next channel's)

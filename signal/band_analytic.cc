@@ -59,6 +59,11 @@ Fft& FftCache::get(Eigen::Index n) {
   return it->second;
 }
 
+FftCache& FftCache::helper(size_t i) {
+  while (helpers_.size() <= i) helpers_.push_back(std::make_unique<FftCache>());
+  return *helpers_[i];
+}
+
 namespace {
 
 // The band's bins and their factors for a spectrum of n_fft bins at fs.

@@ -23,6 +23,7 @@
 #include <array>
 #include <complex>
 #include <map>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -100,6 +101,9 @@ class FftCache {
  public:
   /// The Fft of length n, created on first use.
   Fft& get(Eigen::Index n);
+  /// The workspace of this one's i-th helper thread, created on first use and kept with this
+  /// one (its plans then serve every record the helper works on).
+  FftCache& helper(size_t i);
   /// The weights made by `make` for `key`, kept for the last few keys.
   template <typename Make>
   const BandWeights& band_weights(const std::array<double, 8>& key, Make make) {
@@ -114,6 +118,7 @@ class FftCache {
 
  private:
   std::map<Eigen::Index, Fft> ffts_;
+  std::vector<std::unique_ptr<FftCache>> helpers_;
   RecentValues<Eigen::VectorXd, 4> gains_;
   RecentValues<BandWeights, 8> weights_;  // bands and their superharmonic bands
 };
