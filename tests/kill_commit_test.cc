@@ -219,6 +219,26 @@ class KilledCommit : public ::testing::Test {
   static inline testing::SmallCampaign* campaign_ = nullptr;
 };
 
+// The old command's results, then the new command's from the same start; then the new
+// command killed 16 times at the first change of `out`: each time the folder holds the old or
+// the new results, or `reader` refuses it (kill_loop).
+void expect_old_new_or_refused(const char* name, const std::string& old_command,
+                               const std::string& new_command, const fs::path& out,
+                               const fs::path& start, const std::string& reader) {
+  ASSERT_EQ(testing::run_jointlab(old_command).status, 0);
+  const Tree old_results = results(out);
+  restore(out, start);
+  ASSERT_EQ(testing::run_jointlab(new_command).status, 0);
+  const Tree new_results = results(out);
+  ASSERT_NE(old_results, new_results);
+  const Outcomes o = kill_loop(new_command, start, out, old_results, new_results, reader);
+  ::testing::Test::RecordProperty(
+      "outcomes", fmt::format("old {}, new {}, refused {}", o.old, o.fresh, o.refused));
+  std::printf("%s: 16 kills: %d old, %d new, %d refused by the next reader (%d tried again)\n",
+              name, o.old, o.fresh, o.refused, o.unkilled);
+  EXPECT_EQ(o.old + o.fresh + o.refused, 16);
+}
+
 TEST_F(KilledCommit, ProcessFolderIsOldNewOrRefused) {
   const testing::SmallCampaign& s = *campaign_;
   const fs::path out = dir_ / "process", start = dir_ / "process.start";
@@ -235,21 +255,11 @@ TEST_F(KilledCommit, ProcessFolderIsOldNewOrRefused) {
   const std::string new_command =
       fmt::format("process{} --band {:.3f}:{:.3f} --band {:.3f}:{:.3f} --out {}", files, 0.8 * f,
                   1.2 * f, 0.9 * f, 1.1 * f, out.string());
-  ASSERT_EQ(testing::run_jointlab(old_command).status, 0);
-  const Tree old_results = results(out);
-  restore(out, start);
-  ASSERT_EQ(testing::run_jointlab(new_command).status, 0);
-  const Tree new_results = results(out);
-  ASSERT_NE(old_results, new_results);
   const std::string reader = fmt::format(
       "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode {}:1 --channel acc_5 "
       "--evaluations 10 --out {}",
       s.model.string(), out.string(), s.sensors.string(), s.model_mode, (dir_ / "iwan").string());
-  const Outcomes o = kill_loop(new_command, start, out, old_results, new_results, reader);
-  RecordProperty("outcomes", fmt::format("old {}, new {}, refused {}", o.old, o.fresh, o.refused));
-  std::printf("process: 16 kills: %d old, %d new, %d refused by the next reader (%d tried again)\n",
-              o.old, o.fresh, o.refused, o.unkilled);
-  EXPECT_EQ(o.old + o.fresh + o.refused, 16);
+  expect_old_new_or_refused("process", old_command, new_command, out, start, reader);
 }
 
 TEST_F(KilledCommit, RunFolderIsOldNewOrRefused) {
@@ -270,22 +280,12 @@ TEST_F(KilledCommit, RunFolderIsOldNewOrRefused) {
       fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string());
   const std::string new_command =
       fmt::format("run {} --out {} --quiet", new_campaign.string(), out.string());
-  ASSERT_EQ(testing::run_jointlab(old_command).status, 0);
-  const Tree old_results = results(out);
-  restore(out, start);
-  ASSERT_EQ(testing::run_jointlab(new_command).status, 0);
-  const Tree new_results = results(out);
-  ASSERT_NE(old_results, new_results);
   // A reader of a run's backbone (update-iwan --backbone, as compare and the Python module).
   const std::string reader = fmt::format(
       "update-iwan {} --set iwan.rivet --mode {} --backbone {} --evaluations 10 --out {}",
       s.model.string(), s.model_mode, (out / "hits/all/hit1.acc_5.band1.csv").string(),
       (dir_ / "iwan").string());
-  const Outcomes o = kill_loop(new_command, start, out, old_results, new_results, reader);
-  RecordProperty("outcomes", fmt::format("old {}, new {}, refused {}", o.old, o.fresh, o.refused));
-  std::printf("run: 16 kills: %d old, %d new, %d refused by the next reader (%d tried again)\n",
-              o.old, o.fresh, o.refused, o.unkilled);
-  EXPECT_EQ(o.old + o.fresh + o.refused, 16);
+  expect_old_new_or_refused("run", old_command, new_command, out, start, reader);
 }
 
 }  // namespace
