@@ -1549,11 +1549,14 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     sum.message = fmt::format(
         "no span of the envelope stays above {} x the noise floor with a "
         "decaying fit whose damping is known to {:.0f} % (peak envelope "
-        "{:.3e} m, noise floor {:.3e} m){}{}{}{}",
+        "{:.3e} m, noise floor {:.3e} m)",
         options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
-        noise / channel.scale, advice.empty() ? "" : "; ", advice, gain_note.empty() ? "" : "; ",
-        gain_note + (weak_note.empty() ? "" : (gain_note.empty() ? "" : "; ") + weak_note));
-    if (!followed.note.empty()) sum.message += "; " + followed.note;
+        noise / channel.scale);
+    // Each note that applies, "; " between them (an advice followed by the weak-gain note once
+    // ran together as "... 96.75 Hz20 points left out").
+    for (const std::string* note : {&advice, &gain_note, &weak_note, &followed.note}) {
+      if (!note->empty()) sum.message += "; " + *note;
+    }
     return out;
   }
   out.backbone = backbone_of(est, valid, run, channel.t0, noise, options);

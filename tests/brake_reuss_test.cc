@@ -5,6 +5,7 @@
 // mode, so whatever it reports must agree with acc1 within its own stated
 // uncertainty (or it may refuse or keep a short span).
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -212,6 +213,35 @@ TEST(BrakeReuss, AModeOnItsBandsEdgeReadsAsInTheCentredBand) {
       EXPECT_LE(ez[ez.size() / 2], 0.01) << channel;
     }
   }
+}
+
+// A band beside the mode (81:99 Hz, the mode at 80.4 Hz outside its half-gain points) gives no
+// backbone, and each reason is its own clause: the spectral advice and the count of points
+// the band passes too weakly once ran together ("... 96.75 Hz20 points left out ...").
+TEST(BrakeReuss, ABandBesideTheModeSaysEachReasonApart) {
+  const data::Record rec = data::read_record(testing::source_dir() +
+                                             "/data/examples/brake-reuss-beam/hammer_impact.csv");
+  signal::FftCache cache;
+  modal::ProcessOptions opt;
+  opt.bands = {{81, 99}};
+  const modal::RecordResult res = modal::process_record(rec, opt, cache);
+  int advised = 0;
+  for (const modal::ChannelBand& r : res.results) {
+    const std::string& m = r.ringdown.summary.message;
+    SCOPED_TRACE(r.channel + ": " + m);
+    EXPECT_NE(r.ringdown.summary.status, modal::RingdownStatus::kOk);
+    if (m.find("no mode in the band") == std::string::npos) continue;
+    ++advised;
+    const size_t weak = m.find("points left out where the band passes less than half");
+    if (weak == std::string::npos) continue;
+    // "; <count> points left out": the clause starts after a separator.
+    const size_t start = m.rfind("; ", weak);
+    ASSERT_NE(start, std::string::npos);
+    EXPECT_TRUE(std::all_of(m.begin() + static_cast<long>(start) + 2,
+                            m.begin() + static_cast<long>(weak) - 1,
+                            [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }));
+  }
+  EXPECT_GE(advised, 2);
 }
 
 }  // namespace
