@@ -96,7 +96,8 @@ void require_complete_outputs(const fs::path& dir) {
     const std::string name = it->path().filename().string();
     const std::string suffix = ".commit";
     if (name.size() > suffix.size() + 1 && name.front() == '.' &&
-        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0 &&
+        fs::exists(it->path() / ".manifest", ec)) {  // without it: nothing or all moved
       const std::string command = name.substr(1, name.size() - suffix.size() - 1);
       throw InputError(
           where(dir.string(), 0,
@@ -109,14 +110,17 @@ void require_complete_outputs(const fs::path& dir) {
 
 void require_committed(const fs::path& file) {
   std::error_code ec;
-  const fs::path path = fs::absolute(file, ec).lexically_normal();
+  // Links resolved: a path through a link to the folder is the folder.
+  const fs::path path = fs::weakly_canonical(fs::absolute(file, ec), ec);
   if (ec || path.empty()) return;
   // `inner`: the entry of `dir` that holds the file (its first component below dir).
   fs::path inner = path.filename();
   for (fs::path dir = path.parent_path(); !dir.empty(); dir = dir.parent_path()) {
     for (const char* command : kCommittingCommands) {
       const fs::path pending = dir / fmt::format(".{}.commit", command);
-      if (!fs::exists(pending, ec)) continue;
+      // Without its manifest a commit folder has moved nothing yet or everything already
+      // (roll_forward): the folder holds one run's results.
+      if (!fs::exists(pending, ec) || !fs::exists(pending / ".manifest", ec)) continue;
       // Only the interrupted command's outputs, old or new, may be mixed; other files of the
       // folder (its inputs, the user's) are read as usual.
       std::set<std::string> outputs = read_list(pending / ".manifest");

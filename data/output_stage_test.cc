@@ -258,5 +258,27 @@ TEST(AtomicFile, TemporaryNames) {
   EXPECT_FALSE(is_temporary_name("process.stage-89abcdef"));
 }
 
+// Killed after its manifest became the outputs record but before the empty commit folder was
+// removed: every new output is in place, so readers read the folder (it was refused, although
+// it held one run's results alone).
+TEST(OutputStage, ACommitFolderWithoutItsManifestIsNotRefused) {
+  const fs::path dir = fresh_dir("done-not-cleaned");
+  {
+    OutputStage s(dir, "run");
+    put(s.path() / "report.md", "new");
+    s.commit();
+  }
+  fs::create_directories(dir / ".run.commit");
+  EXPECT_NO_THROW(require_committed(dir / "report.md"));
+  EXPECT_NO_THROW(require_complete_outputs(dir));
+  // Through a link to the folder, an unfinished commit is seen all the same.
+  put(dir / ".run.commit" / ".manifest", "report.md\n");
+  const fs::path link = dir.parent_path() / (dir.filename().string() + "-link");
+  fs::remove(link);
+  fs::create_directory_symlink(dir, link);
+  EXPECT_THROW(require_committed(link / "report.md"), InputError);
+  fs::remove(link);
+}
+
 }  // namespace
 }  // namespace jointlab::data

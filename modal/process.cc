@@ -456,12 +456,17 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   // need the same share one). The nodal test compares a channel with every response
   // channel of the file, requested or not.
   const ChannelSet set(record, options, chans);
-  // Each channel worker holds a channel's spectra (about 100 bytes a sample): a long record
-  // gets fewer workers, so that together they stay near a gigabyte.
-  constexpr double kWorkerSamples = 1e7;
+  // Each channel worker holds a channel's continued record and spectra (about 50 bytes a
+  // sample of the continued record, which a narrow band's continuation makes several times
+  // the record): a long record gets fewer workers, so that together they stay near 1 GB.
+  constexpr double kWorkerSamples = 2e7;
+  double continued = static_cast<double>(record.size());
+  for (const signal::Band& b : out.bands) {
+    const double extend_s = prepare_for({b}, options.ringdown.taper, options.prepare).extend_s;
+    continued = std::max(continued, static_cast<double>(record.size()) + 2 * extend_s * record.fs);
+  }
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const auto by_memory = static_cast<unsigned>(
-      std::clamp(kWorkerSamples / static_cast<double>(record.size()), 1.0, 1024.0));
+  const auto by_memory = static_cast<unsigned>(std::clamp(kWorkerSamples / continued, 1.0, 1024.0));
   Workspaces workers(cache, std::min(options.threads ? options.threads : cores, by_memory));
   for (size_t b = 0; b < out.bands.size(); ++b) {
     const signal::Band& band = out.bands[b];

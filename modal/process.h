@@ -37,8 +37,9 @@ struct ProcessOptions {
   RingdownOptions ringdown;           ///< backbone extraction settings
   PrepareOptions prepare;             ///< onset trimming and continuation
   double min_share = 0.1;  ///< weakest channel share of a mode that still gives a backbone
-  /// Workers for the record's channels (0: every core); at most 1e7 / the record's samples,
-  /// as each holds one channel's spectra. The results do not depend on it.
+  /// Workers for the record's channels (0: every core); at most 2e7 / the samples of the
+  /// record continued for its narrowest band, as each holds one channel's continued record
+  /// and spectra. The results do not depend on it.
   unsigned threads = 1;
   /// Empty if usable, else what is wrong.
   std::string check() const;

@@ -710,7 +710,10 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
         std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + half) / dt), j0, grid - 1);
     const double now = step_abs.segment(j0, j1 - j0 + 1).maxCoeff();
     const double before = before_abs.segment(j0, j1 - j0 + 1).maxCoeff();
-    const double q = earlier.active && before > 0 ? now / before : 0.0;
+    const double q = !earlier.active ? 0.0
+                     : before > 0    ? now / before
+                     : now > 0       ? std::numeric_limits<double>::infinity()
+                                     : 0.0;
     const double tail = q < 0.9                ? 1.0 / (1.0 - q)
                         : now < kGainConverged ? 10.0
                                                : std::numeric_limits<double>::infinity();
@@ -733,14 +736,26 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
 // the noise threshold (`above`): those are dropped for their own reasons (the envelope
 // not decaying or its decay not known to the limit, as while two modes exchange energy),
 // not for noise, and the decay on either side of them is still the mode's. (Cutting there
-// lost mode 2's locked harmonic after 0.5 s in the internal-resonance twin.) Returns
-// [begin, end) and the count of valid points in it.
+// lost mode 2's locked harmonic after 0.5 s in the internal-resonance twin.) A longer gap
+// is bridged only where the frequency on its two sides agrees within two half-power
+// half-widths (or three of its uncertainties): a band holding two resolved modes that beat
+// through the gap would otherwise join one mode's points to the other's. (Mode 2's free
+// ring-down and mode 1's locked harmonic in mode 2's band differ by 0.7 Hz, 1.02 half-widths.) Returns [begin, end) and
+// the count of valid points in it.
 struct Run {
   size_t begin = 0, end = 0, count = 0;
 };
 
-Run longest_run(const std::vector<char>& valid, const std::vector<char>& above) {
+Run longest_run(const std::vector<Estimate>& est, const std::vector<char>& valid,
+                const std::vector<char>& above) {
   constexpr size_t kMaxGap = 2;
+  // Whether the valid points a and b (a < b) can be one mode's across the gap between them.
+  const auto same_mode = [&est](size_t a, size_t b) {
+    const Estimate &p = est[a], &q = est[b];
+    const double width = 0.5 * (std::abs(p.sigma) + std::abs(q.sigma));
+    const double tolerance = std::max(2 * width, 3.0 * std::hypot(p.omega_d_std, q.omega_d_std));
+    return std::abs(p.omega_d - q.omega_d) <= tolerance;
+  };
   Run best;
   for (size_t i = 0; i < valid.size();) {
     if (!valid[i]) {
@@ -750,6 +765,7 @@ Run longest_run(const std::vector<char>& valid, const std::vector<char>& above) 
     size_t j = i, count = 0, last = i;
     while (j < valid.size()) {
       if (valid[j]) {
+        if (j - last > kMaxGap + 1 && !same_mode(last, j)) break;
         ++count;
         last = j;
       } else if (j - last > kMaxGap && !above[j]) {
@@ -1020,8 +1036,11 @@ bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub) 
 // its free part has decayed, but a residue of the free mode a tenth of the harmonic's
 // size, 1 Hz away, pulls the read frequency 0.04-0.07 Hz off 2 f1, three times the
 // points' stated uncertainty; an independent mode 1 Hz from 2 f1 stays well outside.
+// The widening is at most kMaxPull of the frequency (0.1 %, above the twin's 0.03 %): for a
+// heavily damped mode a tenth of its half-width would reach a separate mode a hertz away.
 // Uses this band and channel alone.
 constexpr double kPull = 0.1;
+constexpr double kMaxPull = 1e-3;
 
 void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity measured,
                          const signal::Band& band, const RingdownOptions& options,
@@ -1054,9 +1073,9 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
                                  correlation, 1, std::clamp((t - c) / (w / 2), -1.0, 1.0));
       const double f_sub = fp.slope / kTwoPi;
       const double u_sub = std::hypot(fp.slope_std, fp.slope_change) / kTwoPi;
-      const double tol =
-          std::hypot(std::hypot(bb.frequency_std_hz(i), options.coverage_factor * n * u_sub),
-                     kPull * bb.decay_rate(i) / kTwoPi);
+      const double tol = std::hypot(
+          std::hypot(bb.frequency_std_hz(i), options.coverage_factor * n * u_sub),
+          std::min(kPull * bb.decay_rate(i) / kTwoPi, kMaxPull * bb.damped_frequency_hz(i)));
       if (std::exp(fa.value) > bb.displacement(i) &&
           std::abs(bb.damped_frequency_hz(i) - n * f_sub) <= tol) {
         bb.harmonic(i) = n;
@@ -1331,12 +1350,25 @@ double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, 
   const auto bin = [&](double f) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), half, last);
   };
-  const auto power = [&](Eigen::Index k) {
-    double p = 0;
-    for (Eigen::Index i = k - half; i <= k + half; ++i) p += std::norm(channel.spectrum(i));
-    return p;
-  };
   const double width = band.hi - band.lo;
+  // The power summed over 2 half + 1 bins around every bin searched, once: a sliding sum,
+  // summed afresh every window length (so its rounding stays that of the window's largest
+  // power). Summing each window anew at every look took bins x window operations (1e9 for
+  // a long record and a wide band).
+  const Eigen::Index k_min = std::min(bin(band.lo - width), bin(to));
+  const Eigen::Index k_max = std::max(bin(band.hi + width), bin(to));
+  std::vector<double> summed(static_cast<size_t>(k_max - k_min + 1));
+  double sliding = 0;
+  for (Eigen::Index k = k_min; k <= k_max; ++k) {
+    if ((k - k_min) % (2 * half + 1) == 0) {
+      sliding = 0;
+      for (Eigen::Index i = k - half; i <= k + half; ++i) sliding += std::norm(channel.spectrum(i));
+    } else {
+      sliding += std::norm(channel.spectrum(k + half)) - std::norm(channel.spectrum(k - half - 1));
+    }
+    summed[static_cast<size_t>(k - k_min)] = sliding;
+  }
+  const auto power = [&](Eigen::Index k) { return summed[static_cast<size_t>(k - k_min)]; };
   std::vector<double> around;
   for (Eigen::Index k = bin(band.lo - width); k <= bin(band.hi + width); ++k) {
     around.push_back(power(k));
@@ -1543,7 +1575,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   const std::vector<char>& valid = screened.valid;
   const std::string& weak_note = screened.weak_note;
   const std::string& gain_note = screened.gain_note;
-  const Run run = longest_run(valid, screened.above);
+  const Run run = longest_run(est, valid, screened.above);
   if (run.count < 2) {
     const std::string advice = spectral_advice(channel, band, options.taper, cache);
     sum.message = fmt::format(

@@ -88,7 +88,7 @@ py::list process(const std::vector<std::string>& files,
                  const std::optional<std::vector<std::pair<double, double>>>& bands, int modes,
                  const std::optional<std::vector<std::string>>& channels,
                  const std::optional<std::string>& quantity, const std::string& amplitude,
-                 unsigned threads, const py::object& progress) {
+                 const py::object& progress, unsigned threads) {
   modal::ProcessOptions opt;
   opt.threads = threads;
   if (bands) {
@@ -522,7 +522,7 @@ callable is given.
 
   m.def("process", &process, py::arg("files"), py::arg("bands") = py::none(), py::arg("modes") = 0,
         py::arg("channels") = py::none(), py::arg("quantity") = py::none(),
-        py::arg("amplitude") = "velocity", py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("amplitude") = "velocity", py::arg("progress") = py::none(), py::arg("threads") = 0,
         R"(Impact ring-downs -> natural frequency and damping versus amplitude (`jointlab process`).
 
 files      list of test files (CSV, UFF 58, MATLAB .mat), one hit each
@@ -531,8 +531,8 @@ channels   channel names to process (default: every non-force channel)
 quantity   'acceleration', 'velocity' or 'displacement' for channels without a unit
 amplitude  quantity of the amplitude column: 'velocity' (default), 'displacement' [m],
            'acceleration' [m/s^2]
-threads    workers for each file's channels (0: every core); the results do not depend on it
 progress   callable taking one line of text, or None (silent)
+threads    workers for each file's channels (0: every core); the results do not depend on it
 
 Returns a list of jointlab.Backbone, one per file x channel x band with a kept span, in the
 order of the files, then bands, then channels. Each carries numpy arrays named as the CSV's

@@ -2,6 +2,7 @@
 
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 namespace jointlab::signal {
@@ -54,9 +55,24 @@ std::complex<double> band_gain(const Band& band, double taper, std::complex<doub
 }
 
 Fft& FftCache::get(Eigen::Index n) {
+  // Every record's channels bring sizes of their own (their impacts differ): the least
+  // recently used size goes once kSizesKept are held, so a long campaign's workspace does not
+  // grow with every hit. The last sizes asked for stay, so a reference a caller holds while it
+  // asks for one more size remains valid.
+  constexpr size_t kSizesKept = 16;
+  ++clock_;
   auto it = ffts_.find(n);
-  if (it == ffts_.end()) it = ffts_.emplace(n, Fft(n)).first;
-  return it->second;
+  if (it == ffts_.end()) {
+    if (ffts_.size() >= kSizesKept) {
+      auto oldest = ffts_.begin();
+      for (auto k = ffts_.begin(); k != ffts_.end(); ++k)
+        if (k->second.second < oldest->second.second) oldest = k;
+      ffts_.erase(oldest);
+    }
+    it = ffts_.emplace(n, std::pair<Fft, std::uint64_t>(Fft(n), 0)).first;
+  }
+  it->second.second = clock_;
+  return it->second.first;
 }
 
 FftCache& FftCache::helper(size_t i) {

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <complex>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <utility>
@@ -117,7 +118,8 @@ class FftCache {
   }
 
  private:
-  std::map<Eigen::Index, Fft> ffts_;
+  std::map<Eigen::Index, std::pair<Fft, std::uint64_t>> ffts_;  // and when last asked for
+  std::uint64_t clock_ = 0;
   std::vector<std::unique_ptr<FftCache>> helpers_;
   RecentValues<Eigen::VectorXd, 4> gains_;
   RecentValues<BandWeights, 8> weights_;  // bands and their superharmonic bands

@@ -48,7 +48,9 @@ struct Fft::Impl {
   }
   // FFTW aborts the program when an allocation of its own fails (planning a large size makes
   // tables of 8-10 bytes a point): before planning, 12 bytes a point are asked for and given
-  // back, so that a lack of them is std::bad_alloc here, which callers can name.
+  // back, so that a lack of them is std::bad_alloc here, which callers can name. A best
+  // effort: where the system promises memory it has not got (Linux overcommit), the probe
+  // succeeds and FFTW may still abort when it touches its tables.
   void probe_planning_memory() const {
     if (n < (Eigen::Index{1} << 16)) return;
     void* volatile p = std::malloc(12 * static_cast<size_t>(n));  // kept

@@ -179,7 +179,7 @@ FailedHit left_out(const fs::path& file, const std::string& group, const std::st
 }  // namespace
 
 std::string process_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
-                        signal::FftCache& cache) {
+                        signal::FftCache& cache, size_t at_once) {
   const modal::ProcessOptions opt = process_options(c);
   std::optional<modal::RecordResult> r;
   std::string why;
@@ -188,8 +188,8 @@ std::string process_hit(const Campaign& c, const fs::path& file, const fs::path&
   } catch (const InputError& e) {
     why = one_line(e.what());
   } catch (const std::bad_alloc&) {
-    // Named and left out like any hit that cannot be processed (hits run one per thread).
-    why = data::out_of_memory_message(file, std::max(1u, std::thread::hardware_concurrency()));
+    // Named and left out like any hit that cannot be processed.
+    why = data::out_of_memory_message(file, at_once);
   }
   fs::create_directories(dir);
   if (r) {
@@ -305,12 +305,14 @@ std::vector<HitData> process_hits(const Campaign& c, const fs::path& out, const 
                     summary.hits_reused));
     // Each job owns its entry: why its hit could not be read or processed (empty: it was).
     std::vector<std::string> failed(todo.size());
+    const size_t at_once = std::min<size_t>(
+        todo.size(), o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency()));
     parallel_for(
         todo.size(), o.threads, [] { return signal::FftCache{}; },
         [&](size_t i, signal::FftCache& cache) {
           const Job& j = jobs[todo[i]];
           const fs::path dir = hit_dir(out, j.group->name);
-          failed[i] = process_hit(c, j.file, dir, cache);
+          failed[i] = process_hit(c, j.file, dir, cache, at_once);
           if (failed[i].empty())
             write_stamp(dir / (j.file.stem().string() + ".stamp"), stamps[todo[i]]);
         });

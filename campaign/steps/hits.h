@@ -60,9 +60,11 @@ std::filesystem::path hit_dir(const std::filesystem::path& out, const std::strin
 /// Returns "" or, when the file cannot be read or processed, why (one line, naming the file),
 /// its cache then that of a hit without a backbone at any band and channel for that reason,
 /// without its earlier backbones and stamp. InputError for the campaign's settings or a cache
-/// that cannot be written.
+/// that cannot be written. `at_once`: how many hits are processed at the same time (said when
+/// one runs out of memory).
 std::string process_hit(const Campaign& campaign, const std::filesystem::path& file,
-                        const std::filesystem::path& dir, signal::FftCache& cache);
+                        const std::filesystem::path& dir, signal::FftCache& cache,
+                        size_t at_once = 1);
 
 /// Reads one hit's cache from `dir`.
 HitData load_hit(const Campaign& campaign, const CampaignGroup& group,
