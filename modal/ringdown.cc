@@ -740,8 +740,8 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
 // is bridged only where the frequency on its two sides agrees within two half-power
 // half-widths (or three of its uncertainties): a band holding two resolved modes that beat
 // through the gap would otherwise join one mode's points to the other's. (Mode 2's free
-// ring-down and mode 1's locked harmonic in mode 2's band differ by 0.7 Hz, 1.02 half-widths.) Returns [begin, end) and
-// the count of valid points in it.
+// ring-down and mode 1's locked harmonic in mode 2's band differ by 0.7 Hz, 1.02 half-widths.)
+// Returns [begin, end) and the count of valid points in it.
 struct Run {
   size_t begin = 0, end = 0, count = 0;
 };
