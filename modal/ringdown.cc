@@ -1602,11 +1602,22 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
   set_linear_values(sum, bb, options);
   std::vector<std::string> notes = span_notes(sr, est, run, previous, noise, sum);
-  if (run.end - run.begin > run.count) {
+  // Points inside the run that are not valid: those above the noise for their decay, the few
+  // of a short gap for the noise (each said apart).
+  size_t left_above = 0, left_below = 0;
+  for (size_t k = run.begin; k < run.end; ++k) {
+    if (!valid[k]) ++(screened.above[k] ? left_above : left_below);
+  }
+  if (left_above > 0) {
     notes.push_back(fmt::format(
         "{} points inside the span left out, above the noise: the envelope not decaying or its "
         "damping not known to the {:.1f} % limit there",
-        run.end - run.begin - run.count, 100 * options.max_damping_rel_std));
+        left_above, 100 * options.max_damping_rel_std));
+  }
+  if (left_below > 0) {
+    notes.push_back(fmt::format(
+        "{} points inside the span left out below the noise threshold (at most 2 in a row)",
+        left_below));
   }
   if (!followed.note.empty()) notes.insert(notes.begin(), followed.note);
   if (!gain_note.empty()) notes.push_back(gain_note);
