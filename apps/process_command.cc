@@ -9,7 +9,6 @@
 #include <new>
 #include <regex>
 #include <string>
-#include <thread>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -86,8 +85,7 @@ void run_process(const ProcessArgs& args) {
   opt.ringdown.coverage_factor = args.coverage_factor;
   opt.min_share = args.min_share;
   // Files first, one worker each; the threads left over go to each record's channels.
-  const unsigned threads =
-      args.threads ? args.threads : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads = threads_or_cores(args.threads);
   opt.threads = std::max<unsigned>(
       1, threads / static_cast<unsigned>(std::min<size_t>(args.files.size(), threads)));
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
@@ -114,9 +112,7 @@ void run_process(const ProcessArgs& args) {
         } catch (const std::bad_alloc&) {
           // Named, not "internal error: std::bad_alloc": which record did not fit.
           throw InputError(data::out_of_memory_message(
-              args.files[i],
-              std::min<size_t>(args.files.size(),
-                               args.threads ? args.threads : std::thread::hardware_concurrency())));
+              args.files[i], std::min<size_t>(args.files.size(), threads_or_cores(args.threads))));
         }
         modal::write_backbones(out, results[i], opt.ringdown);
         // A line per channel and band, written in blocks (a record may hold 1e5 channels).

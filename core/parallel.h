@@ -17,12 +17,16 @@
 
 namespace jointlab {
 
+/// The worker count a `--threads` value asks for: itself, or every core (at least 1) for 0.
+inline unsigned threads_or_cores(unsigned threads) {
+  return threads ? threads : std::max(1u, std::thread::hardware_concurrency());
+}
+
 /// Runs body(i, state) for i in [0, n) on worker threads, each with its own make_state().
 template <typename MakeState, typename Body>
 void parallel_for(std::size_t n, unsigned threads, MakeState make_state, Body body) {
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const unsigned workers = static_cast<unsigned>(
-      std::min<std::size_t>(threads ? threads : cores, std::max<std::size_t>(n, 1)));
+      std::min<std::size_t>(threads_or_cores(threads), std::max<std::size_t>(n, 1)));
   std::vector<std::exception_ptr> errors(n);
   std::atomic<std::size_t> next{0};
   auto work = [&] {

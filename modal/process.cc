@@ -8,7 +8,6 @@
 #include <mutex>
 #include <numbers>
 #include <optional>
-#include <thread>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -465,9 +464,8 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     const double extend_s = prepare_for({b}, options.ringdown.taper, options.prepare).extend_s;
     continued = std::max(continued, static_cast<double>(record.size()) + 2 * extend_s * record.fs);
   }
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const auto by_memory = static_cast<unsigned>(std::clamp(kWorkerSamples / continued, 1.0, 1024.0));
-  Workspaces workers(cache, std::min(options.threads ? options.threads : cores, by_memory));
+  Workspaces workers(cache, std::min(threads_or_cores(options.threads), by_memory));
   for (size_t b = 0; b < out.bands.size(); ++b) {
     const signal::Band& band = out.bands[b];
     const PrepareOptions prepare = prepare_for({band}, options.ringdown.taper, options.prepare);

@@ -7,7 +7,6 @@
 #include <limits>
 #include <new>
 #include <optional>
-#include <thread>
 
 #include <fmt/format.h>
 
@@ -305,8 +304,7 @@ std::vector<HitData> process_hits(const Campaign& c, const fs::path& out, const 
                     summary.hits_reused));
     // Each job owns its entry: why its hit could not be read or processed (empty: it was).
     std::vector<std::string> failed(todo.size());
-    const size_t at_once = std::min<size_t>(
-        todo.size(), o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency()));
+    const size_t at_once = std::min<size_t>(todo.size(), threads_or_cores(o.threads));
     parallel_for(
         todo.size(), o.threads, [] { return signal::FftCache{}; },
         [&](size_t i, signal::FftCache& cache) {
