@@ -24,9 +24,8 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
                                          double offset) {
   constexpr int q = Q;      // columns of the fit
   constexpr int p = Q + 2;  // columns of the largest refit
-  using MatQ = Eigen::Matrix<double, q, q>;
   using VecQ = Eigen::Matrix<double, q, 1>;
-  using MatQ1 = Eigen::Matrix<double, q + 1, q + 1>;
+  using MatQ = Eigen::Matrix<double, q, q>;
   using VecQ1 = Eigen::Matrix<double, q + 1, 1>;
   using MatP = Eigen::Matrix<double, p, p>;
   using VecP = Eigen::Matrix<double, p, 1>;
@@ -38,66 +37,94 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
   assert(stride >= 1);
   const Eigen::Index n = (i1 - i0) / stride + 1;
   assert(n >= p);
+  const double inv_h = 1.0 / half_width;
+  const auto tau_of = [&](Eigen::Index i) {
+    return (t_first + static_cast<double>(i0 + i * stride) * dt - centre) * inv_h;
+  };
 
-  // Normal equations from power sums: (X'WX)_jk = sum w tau^(j+k), likewise
-  // X'W^2X and X'Wy. Scalar loops with no heap traffic: this runs thousands of
-  // times per backbone.
-  double s1[2 * p] = {}, s2w[2 * p] = {}, sy[K][p] = {};
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Index idx = i0 + i * stride;
-    const double tau = (t_first + static_cast<double>(idx) * dt - centre) / half_width;
+  // Normal equations from power sums: (X'WX)_jk = sum w tau^(j+k), likewise X'W^2X and
+  // X'Wy. Two samples at a time in one SSE2 register pair (GCC vector extension), and
+  // three passes, each with few enough running sums to stay in registers: one pass over
+  // all 30 sums, one sample at a time, spilled them and waited on each power's multiply.
+  using V2 = double __attribute__((vector_size(16)));
+  const auto pair_at = [n](Eigen::Index i, auto value) {  // samples i, i + 1 (0 past n)
+    const V2 v = {value(i), i + 1 < n ? value(i + 1) : 0.0};
+    return v;
+  };
+  const auto weight = [&](Eigen::Index i) {
+    const double tau = tau_of(i);
     const double u = std::max(0.0, 1.0 - tau * tau);
-    const double w = u * u;
-    double wy[K];
-    for (int k = 0; k < K; ++k) wy[k] = w * (*ys[k])(idx);
-    // Powers of tau: X'WX needs them to 2p - 2, X'Wy to p - 1 and X'W^2X (the
-    // sandwich of the degree-q fit only) to 2q - 2. Separate fixed-count loops
-    // unroll fully.
-    double pw[2 * p - 1];
-    pw[0] = 1.0;
-    for (int m = 1; m < 2 * p - 1; ++m) pw[m] = pw[m - 1] * tau;
-    for (int m = 0; m < 2 * p - 1; ++m) s1[m] += w * pw[m];
-    const double w2 = w * w;
-    for (int m = 0; m < 2 * q - 1; ++m) s2w[m] += w2 * pw[m];
-    for (int k = 0; k < K; ++k) {
-      for (int m = 0; m < p; ++m) sy[k][m] += wy[k] * pw[m];
+    return u * u;
+  };
+  double s1[2 * p - 1], s2w[2 * q - 1], sy[K][p];
+  {
+    V2 acc[2 * p - 1] = {};
+    for (Eigen::Index i = 0; i < n; i += 2) {
+      const V2 tau = pair_at(i, tau_of);
+      V2 pw = pair_at(i, weight);
+      for (int m = 0; m < 2 * p - 1; ++m) {
+        acc[m] += pw;
+        pw *= tau;
+      }
     }
+    for (int m = 0; m < 2 * p - 1; ++m) s1[m] = acc[m][0] + acc[m][1];
   }
+  {
+    V2 acc[2 * q - 1] = {};
+    for (Eigen::Index i = 0; i < n; i += 2) {
+      const V2 tau = pair_at(i, tau_of);
+      const V2 w = pair_at(i, weight);
+      V2 pw = w * w;
+      for (int m = 0; m < 2 * q - 1; ++m) {
+        acc[m] += pw;
+        pw *= tau;
+      }
+    }
+    for (int m = 0; m < 2 * q - 1; ++m) s2w[m] = acc[m][0] + acc[m][1];
+  }
+  {
+    V2 acc[K][p] = {};
+    for (Eigen::Index i = 0; i < n; i += 2) {
+      const V2 tau = pair_at(i, tau_of);
+      const V2 w = pair_at(i, weight);
+      V2 pw[K];
+      for (int k = 0; k < K; ++k) {
+        pw[k] = w * pair_at(i, [&](Eigen::Index j) { return (*ys[k])(i0 + j * stride); });
+      }
+      for (int m = 0; m < p; ++m) {
+        for (int k = 0; k < K; ++k) {
+          acc[k][m] += pw[k];
+          pw[k] *= tau;
+        }
+      }
+    }
+    for (int k = 0; k < K; ++k)
+      for (int m = 0; m < p; ++m) sy[k][m] = acc[k][m][0] + acc[k][m][1];
+  }
+  // One Cholesky factor of the largest normal matrix holds those of the smaller fits in its
+  // leading blocks (no pivoting: the weighted power sums of a window of at least p samples
+  // are positive definite). Where rounding makes it fail, the pivoted LDLT decides.
   MatP A;
-  MatQ M;
   for (int j = 0; j < p; ++j) {
     for (int c = 0; c < p; ++c) A(j, c) = s1[j + c];
   }
+  MatQ M;
   for (int j = 0; j < q; ++j) {
     for (int c = 0; c < q; ++c) M(j, c) = s2w[j + c];
   }
-  const Eigen::LDLT<MatQ> ldlt(A.template topLeftCorner<q, q>());
-  const Eigen::LDLT<MatQ1> ldlt1(A.template topLeftCorner<q + 1, q + 1>());
-  const Eigen::LDLT<MatP> ldlt2(A);
-  const MatQ Ainv = ldlt.solve(MatQ::Identity());
-  const MatQ sandwich = Ainv * M * Ainv;
-
-  std::array<VecQ, K> beta;
-  for (int k = 0; k < K; ++k) beta[k] = ldlt.solve(Eigen::Map<const VecQ>(sy[k]));
-  // Weighted residual sums of squares from a second pass (numerically safer
-  // than expanding y'Wy - beta'X'Wy for nearly exact fits).
-  double sw = 0, swr2[K] = {};
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Index idx = i0 + i * stride;
-    const double tau = (t_first + static_cast<double>(idx) * dt - centre) / half_width;
-    const double u = std::max(0.0, 1.0 - tau * tau);
-    const double w = u * u;
-    sw += w;
-    for (int k = 0; k < K; ++k) {
-      double fit = 0, pw = 1.0;
-      for (int j = 0; j < q; ++j) {
-        fit += beta[k](j) * pw;
-        pw *= tau;
-      }
-      const double r = (*ys[k])(idx)-fit;
-      swr2[k] += w * r * r;
+  const Eigen::LLT<MatP> llt(A);
+  // Solves the leading r x r block's system for b.
+  const auto solve = [&](auto b) {
+    constexpr int r = decltype(b)::RowsAtCompileTime;
+    if (llt.info() == Eigen::Success) {
+      const auto L = llt.matrixLLT().template topLeftCorner<r, r>();
+      L.template triangularView<Eigen::Lower>().solveInPlace(b);
+      L.template triangularView<Eigen::Lower>().transpose().solveInPlace(b);
+      return b;
     }
-  }
+    using Mat = Eigen::Matrix<double, r, r>;
+    return decltype(b)(Eigen::LDLT<Mat>(A.template topLeftCorner<r, r>()).solve(b));
+  };
   // Value and slope at tau0 = offset: g_v' beta and g_s' beta / h.
   const auto basis = [offset](auto& gv, auto& gs) {
     gv.setZero();
@@ -115,6 +142,27 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
   basis(gv, gs);
   basis(gv1, gs1);
   basis(gv2, gs2);
+  // Sandwich quadratic forms g' A^-1 M A^-1 g from one solve per g.
+  const VecQ av = solve(gv), as = solve(gs);
+  const double var_value = av.dot(M * av), var_slope = as.dot(M * as);
+
+  std::array<VecQ, K> beta;
+  for (int k = 0; k < K; ++k) beta[k] = solve(VecQ(Eigen::Map<const VecQ>(sy[k])));
+  // Weighted residual sums of squares from a second pass (numerically safer
+  // than expanding y'Wy - beta'X'Wy for nearly exact fits).
+  double sw = 0, swr2[K] = {};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double tau = tau_of(i);
+    const double u = std::max(0.0, 1.0 - tau * tau);
+    const double w = u * u;
+    sw += w;
+    for (int k = 0; k < K; ++k) {
+      double fit = beta[k](q - 1);
+      for (int j = q - 2; j >= 0; --j) fit = fit * tau + beta[k](j);
+      const double r = (*ys[k])(i0 + i * stride) - fit;
+      swr2[k] += w * r * r;
+    }
+  }
   std::array<LocalFit, K> out;
   for (int k = 0; k < K; ++k) {
     const double s2 = swr2[k] / sw;
@@ -122,12 +170,12 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
     LocalFit& f = out[k];
     f.samples = static_cast<int>(n);
     f.value = gv.dot(beta[k]);
-    f.value_std = std::sqrt(std::max(0.0, gv.dot(sandwich * gv) * scale));
+    f.value_std = std::sqrt(std::max(0.0, var_value * scale));
     f.slope = gs.dot(beta[k]) / half_width;
-    f.slope_std = std::sqrt(std::max(0.0, gs.dot(sandwich * gs) * scale)) / half_width;
+    f.slope_std = std::sqrt(std::max(0.0, var_slope * scale)) / half_width;
     f.residual_rms = std::sqrt(s2);
-    const VecQ1 beta1 = ldlt1.solve(Eigen::Map<const VecQ1>(sy[k]));
-    const VecP beta2 = ldlt2.solve(Eigen::Map<const VecP>(sy[k]));
+    const VecQ1 beta1 = solve(VecQ1(Eigen::Map<const VecQ1>(sy[k])));
+    const VecP beta2 = solve(VecP(Eigen::Map<const VecP>(sy[k])));
     f.slope_change = std::abs(gs2.dot(beta2) - gs.dot(beta[k])) / half_width;
     f.value_change = std::abs(gv1.dot(beta1) - f.value);
   }
