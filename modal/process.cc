@@ -332,30 +332,42 @@ class Workspaces {
   unsigned threads_;
 };
 
-// Pass 1, every requested channel in turn: its spectrum (dropped before the next channel's)
-// and backbones into results[first + i]; the band signal is kept only where a backbone was
-// found.
-std::vector<std::optional<BandOfChannel>> extract_band(const ChannelSet& set,
-                                                       const signal::Band& band, int band_index,
-                                                       const PrepareOptions& prepare,
-                                                       ChannelBand* results, Workspaces& workers) {
-  std::vector<std::optional<BandOfChannel>> kept(set.all.size());
-  // Channels are independent: each worker writes only its channel's results and slot.
-  workers.run(set.all.size(), [&](size_t c, signal::FftCache& cache) {
+// Every band's results and kept band signals: results[band * requests + i] for request i,
+// kept[band][c] for channel c of the set.
+struct BandResults {
+  std::vector<ChannelBand>& results;
+  size_t requests = 0;
+  std::vector<std::vector<std::optional<BandOfChannel>>> kept;
+  ChannelBand* of(size_t band) { return results.data() + band * requests; }
+};
+
+// Pass 1, every band of every requested channel, as independent jobs (one barrier for all
+// bands: a barrier per band left a worker idle while the other finished the band's slowest
+// channel): the channel's spectrum for the band (dropped when the job ends) and its
+// backbones; the band signal is kept only where a backbone was found.
+void extract_bands(const ChannelSet& set, const std::vector<signal::Band>& bands,
+                   const std::vector<PrepareOptions>& prepare, BandResults& out,
+                   Workspaces& workers) {
+  const size_t channels = set.all.size();
+  out.kept.assign(bands.size(), std::vector<std::optional<BandOfChannel>>(channels));
+  // Each job writes only its band and channel's results and slot.
+  workers.run(bands.size() * channels, [&](size_t job, signal::FftCache& cache) {
+    const size_t b = job / channels, c = job % channels;
     if (set.requests[c].empty()) return;
-    const ChannelSpectrum spectrum = set.spectrum(c, prepare, cache);
+    const ChannelSpectrum spectrum = set.spectrum(c, prepare[b], cache);
+    ChannelBand* results = out.of(b);
+    std::optional<BandOfChannel>& kept = out.kept[b][c];
     for (const size_t i : set.requests[c]) {
       ChannelBand& r = results[i];
       r.channel = set.all[c]->name;
       r.measured = set.measured_by(c);
-      r.band_index = band_index;
-      r.ringdown = extract_backbone(spectrum, r.measured, band, set.options.ringdown, cache);
-      if (r.ringdown.summary.status == RingdownStatus::kOk && !kept[c])
-        kept[c] = set.band_of(spectrum, std::move(r.ringdown.band));
+      r.band_index = static_cast<int>(b) + 1;
+      r.ringdown = extract_backbone(spectrum, r.measured, bands[b], set.options.ringdown, cache);
+      if (r.ringdown.summary.status == RingdownStatus::kOk && !kept)
+        kept = set.band_of(spectrum, std::move(r.ringdown.band));
       r.ringdown.band = signal::BandSignal{};
     }
   });
-  return kept;
 }
 
 // The reference channel: the widest kept span (ties: the first).
@@ -369,30 +381,39 @@ size_t reference_channel(const ChannelBand* results, size_t n) {
   return ref;
 }
 
-// Pass 2, every response channel against the kept ones: each channel's shape entry
-// (projected on the reference over its span) and, for each channel with a backbone,
-// the largest share another coherent channel of the file sees of the mode over that
-// channel's own span. A channel without a kept band signal is analysed again here and
-// dropped after its projections, so memory holds only the channels with backbones.
-// Returns each request's share (1 where not computed).
-std::vector<double> shapes_and_shares(const ChannelSet& set, const signal::Band& band,
-                                      const PrepareOptions& prepare,
-                                      const std::vector<std::optional<BandOfChannel>>& kept,
-                                      size_t ref, ChannelBand* results, size_t n,
-                                      Workspaces& workers) {
-  const Ringdown& rr = results[ref].ringdown;
-  const BandOfChannel& reference = *kept[set.index_of[ref]];
-  std::vector<double> share(n, 1.0);
+// Pass 2, every response channel against the kept ones, for every band with a reference
+// (`ref[band]`, or none) as independent jobs: each channel's shape entry (projected on the
+// reference over its span) and, for each channel with a backbone, the largest share
+// another coherent channel of the file sees of the mode over that channel's own span. A
+// channel without a kept band signal is analysed again here and dropped after its
+// projections, so memory holds only the channels with backbones.
+// Returns each band's shares of each request (1 where not computed).
+std::vector<std::vector<double>> shapes_and_shares(const ChannelSet& set,
+                                                   const std::vector<signal::Band>& bands,
+                                                   const std::vector<PrepareOptions>& prepare,
+                                                   const std::vector<std::optional<size_t>>& ref,
+                                                   BandResults& out, Workspaces& workers) {
+  const size_t n = out.requests, channels = set.all.size();
+  std::vector<std::vector<double>> share(bands.size(), std::vector<double>(n, 1.0));
   std::mutex share_lock;  // the smallest share wins, whichever worker finds it first
-  std::vector<size_t> with_backbone;
-  for (size_t i = 0; i < n; ++i)
-    if (results[i].ringdown.summary.status == RingdownStatus::kOk) with_backbone.push_back(i);
-  workers.run(set.all.size(), [&](size_t d, signal::FftCache& cache) {
+  std::vector<std::vector<size_t>> with_backbone(bands.size());
+  for (size_t b = 0; b < bands.size(); ++b) {
+    for (size_t i = 0; i < n; ++i)
+      if (out.of(b)[i].ringdown.summary.status == RingdownStatus::kOk)
+        with_backbone[b].push_back(i);
+  }
+  workers.run(bands.size() * channels, [&](size_t job, signal::FftCache& cache) {
+    const size_t b = job / channels, d = job % channels;
+    if (!ref[b]) return;  // no backbone in this band: no shapes, no nodal test
+    ChannelBand* results = out.of(b);
+    const std::vector<std::optional<BandOfChannel>>& kept = out.kept[b];
+    const Ringdown& rr = results[*ref[b]].ringdown;
+    const BandOfChannel& reference = *kept[set.index_of[*ref[b]]];
     std::optional<BandOfChannel> again;
     if (!kept[d]) {
-      const ChannelSpectrum spectrum = set.spectrum(d, prepare, cache);
-      again = set.band_of(
-          spectrum, band_signal(spectrum, set.measured_by(d), band, set.options.ringdown, cache));
+      const ChannelSpectrum spectrum = set.spectrum(d, prepare[b], cache);
+      again = set.band_of(spectrum, band_signal(spectrum, set.measured_by(d), bands[b],
+                                                set.options.ringdown, cache));
     }
     const BandOfChannel& zd = kept[d] ? *kept[d] : *again;
     for (const size_t i : set.requests[d]) {
@@ -400,14 +421,14 @@ std::vector<double> shapes_and_shares(const ChannelSet& set, const signal::Band&
           projection(reference, zd, rr.summary.span_start_s, rr.summary.span_end_s).amplitude;
     }
     if (set.options.min_share == 0) return;
-    for (const size_t i : with_backbone) {
+    for (const size_t i : with_backbone[b]) {
       const size_t c = set.index_of[i];
       if (c == d) continue;
       const RingdownSummary& rs = results[i].ringdown.summary;
       const Projection p = projection(*kept[c], zd, rs.span_start_s, rs.span_end_s);
       if (p.coherence >= kMinCoherence && std::abs(p.ratio) > 0) {
         const std::lock_guard<std::mutex> lock(share_lock);
-        share[i] = std::min(share[i], 1.0 / std::abs(p.ratio));
+        share[b][i] = std::min(share[b][i], 1.0 / std::abs(p.ratio));
       }
     }
   });
@@ -466,20 +487,23 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   }
   const auto by_memory = static_cast<unsigned>(std::clamp(kWorkerSamples / continued, 1.0, 1024.0));
   Workspaces workers(cache, std::min(threads_or_cores(options.threads), by_memory));
+  std::vector<PrepareOptions> prepare;
+  for (const signal::Band& band : out.bands)
+    prepare.push_back(prepare_for({band}, options.ringdown.taper, options.prepare));
+  out.results.resize(out.bands.size() * chans.size());
+  BandResults bands{out.results, chans.size(), {}};
+  extract_bands(set, out.bands, prepare, bands, workers);
+  std::vector<std::optional<size_t>> ref(out.bands.size());
   for (size_t b = 0; b < out.bands.size(); ++b) {
-    const signal::Band& band = out.bands[b];
-    const PrepareOptions prepare = prepare_for({band}, options.ringdown.taper, options.prepare);
-    const size_t first = out.results.size();
-    out.results.resize(first + chans.size());
-    ChannelBand* results = out.results.data() + first;
-    const std::vector<std::optional<BandOfChannel>> kept =
-        extract_band(set, band, static_cast<int>(b) + 1, prepare, results, workers);
-    const size_t ref = reference_channel(results, chans.size());
-    out.reference.push_back(results[ref].channel);
-    if (results[ref].ringdown.summary.status != RingdownStatus::kOk) continue;  // no nodal test
-    const std::vector<double> share =
-        shapes_and_shares(set, band, prepare, kept, ref, results, chans.size(), workers);
-    drop_near_nodes(share, options.min_share, results);
+    const ChannelBand* results = bands.of(b);
+    const size_t r = reference_channel(results, chans.size());
+    out.reference.push_back(results[r].channel);
+    if (results[r].ringdown.summary.status == RingdownStatus::kOk) ref[b] = r;
+  }
+  const std::vector<std::vector<double>> share =
+      shapes_and_shares(set, out.bands, prepare, ref, bands, workers);
+  for (size_t b = 0; b < out.bands.size(); ++b) {
+    if (ref[b]) drop_near_nodes(share[b], options.min_share, bands.of(b));
   }
   return out;
 }
