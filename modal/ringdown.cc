@@ -1186,8 +1186,8 @@ struct CorrectedEstimates {
 // the gain), passes on the band signal divided by that effect (GainCorrection).
 CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const signal::Band& band,
                                        const RingdownOptions& options, const signal::BandSignal& bs,
-                                       const BandSetting& s, double noise, Quantity measured,
-                                       signal::FftCache& cache) {
+                                       const EnvelopePhase& ep, const BandSetting& s, double noise,
+                                       Quantity measured, signal::FftCache& cache) {
   signal::BandSignal full;
   if (options.method == Method::kPeaks) {
     signal::BandOptions fo;
@@ -1204,7 +1204,11 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   const auto redo = [&](const GainCorrection& g) {
     return estimates_of(corrected(z.baseband, z.dt, g), z.carrier_hz, s, noise, g);
   };
-  std::vector<Estimate> est = estimates_of(z.baseband, z.carrier_hz, s, noise, {});
+  // The first pass: on bs's envelope and phase `ep` (made by the caller) for the Hilbert
+  // method.
+  std::vector<Estimate> est = options.method == Method::kHilbert
+                                  ? hilbert_estimates(ep, s, noise, {})
+                                  : estimates_of(z.baseband, z.carrier_hz, s, noise, {});
   GainCorrection previous;
   GainCorrection gain = correct(est);
   // Iterated until ln r changes by less than kConverged anywhere in the span (each
@@ -1305,10 +1309,8 @@ struct ModeTrack {
   int points = 0;
 };
 
-ModeTrack track_mode(const signal::BandSignal& bs, const BandSetting& s) {
+ModeTrack track_mode(const EnvelopePhase& ep, double noise, const BandSetting& s) {
   ModeTrack tr;
-  const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
-  const double noise = noise_floor(ep, s);
   tr.f_lo = std::numeric_limits<double>::infinity();
   tr.f_hi = -tr.f_lo;
   for (double c = s.start + s.w_min / 2; c <= s.stop - s.w_min / 2; c += s.w_min / 2) {
@@ -1417,7 +1419,8 @@ struct FollowedBand {
 
 FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
                          const signal::Band& typed, const RingdownOptions& options,
-                         const signal::BandSignal& typed_signal, signal::FftCache& cache) {
+                         const signal::BandSignal& typed_signal, const EnvelopePhase& typed_ep,
+                         double typed_noise, signal::FftCache& cache) {
   constexpr double kMargin = 3.0;
   // Gain 1e-4 lies 0.93 w below lo + w / 2 (the Gaussian edge's std is w / 4): 0.43 w below lo.
   constexpr double kNeighbourReach = 0.43;
@@ -1431,7 +1434,13 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
     const signal::BandSignal& bs = round == 0 ? typed_signal : out.signal;
     const BandSetting s = band_setting(channel, out.band, options, bs);
     if (s.stop - s.start < 2 * s.w_min) break;
-    ModeTrack tr = track_mode(bs, s);
+    ModeTrack tr;
+    if (round == 0) {
+      tr = track_mode(typed_ep, typed_noise, s);
+    } else {
+      const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
+      tr = track_mode(ep, noise_floor(ep, s), s);
+    }
     if (tr.points == 0) break;
     // Inside the typed band only (the moved one may reach beyond it).
     f_lo = std::clamp(std::min(f_lo, tr.f_lo), typed.lo, typed.hi);
@@ -1559,16 +1568,24 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   }
   // The mode is read through a band that follows it (follow_mode); out.band stays the typed
   // band's signal, which the shapes and the nodal test compare across channels.
-  const FollowedBand followed = follow_mode(channel, measured, band, options, bs, cache);
+  // The typed band's envelope, phase and noise floor serve the mode's track and, where the
+  // band is not moved, the estimates (each made once).
+  const EnvelopePhase typed_ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
+  const double typed_noise = noise_floor(typed_ep, s);
+  const FollowedBand followed =
+      follow_mode(channel, measured, band, options, bs, typed_ep, typed_noise, cache);
   const signal::Band& read = followed.band;
-  const signal::BandSignal& zb = followed.signal.baseband.size() > 0 ? followed.signal : bs;
+  const bool moved = followed.signal.baseband.size() > 0;
+  const signal::BandSignal& zb = moved ? followed.signal : bs;
   const BandSetting sr = band_setting(channel, read, options, zb);
-  const EnvelopePhase ep = envelope_phase(zb.baseband, zb.carrier_hz, zb.dt);
-  const double noise = noise_floor(ep, sr);
+  const EnvelopePhase moved_ep =
+      moved ? envelope_phase(zb.baseband, zb.carrier_hz, zb.dt) : EnvelopePhase{};
+  const EnvelopePhase& ep = moved ? moved_ep : typed_ep;
+  const double noise = moved ? noise_floor(ep, sr) : typed_noise;
   sum.noise_floor_m = noise / channel.scale;
 
   const CorrectedEstimates corr =
-      corrected_estimates(channel, read, options, zb, sr, noise, measured, cache);
+      corrected_estimates(channel, read, options, zb, ep, sr, noise, measured, cache);
   const std::vector<Estimate>& est = corr.est;
   const GainCorrection& previous = corr.previous;
   const Screening screened = screen_estimates(corr, sr, noise, options);
