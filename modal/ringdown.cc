@@ -575,20 +575,31 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   Eigen::VectorXd log_m(grid);  // m past the grid is zero padding
   Eigen::VectorXd phase(grid);
   double la = 0, ph = 0;
+  // Inside [t.front(), t.back()], at() interpolates between t[k - 1] and t[k], the first
+  // estimate after x: found by walking along with the grid, not searched anew at each point.
+  size_t k = 1;
+  const auto inside = [&](const std::vector<double>& v, double x) {
+    const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
+    return (1 - w) * v[k - 1] + w * v[k];
+  };
   for (Eigen::Index j = 0; j < grid; ++j) {
     const double x = static_cast<double>(j) * s.dt;
     const bool near = x > t.front() - reach && x < t.back() + reach;
     log_m(j) = la;
     phase(j) = ph;
-    la -= (near ? kTwoPi * std::max(0.0, at(d, x)) : 0.0) * s.dt;
-    ph += kTwoPi * (at(f, x) - carrier_hz) * s.dt;
+    const bool between = x > t.front() && x < t.back();
+    if (between) {
+      while (t[k] <= x) ++k;
+    }
+    la -= (near ? kTwoPi * std::max(0.0, between ? inside(d, x) : at(d, x)) : 0.0) * s.dt;
+    ph += kTwoPi * ((between ? inside(f, x) : at(f, x)) - carrier_hz) * s.dt;
   }
   const double top = log_m.maxCoeff();
   // m = |m| u, u = e^{i phase}: r = band(m) / m = band(m) conj(u) / |m| needs no complex
   // division, and |r| no hypot (both a tenth of process's time together).
   Eigen::VectorXd mag(grid);
   Eigen::VectorXcd unit(grid);
-  Eigen::VectorXcd m = Eigen::VectorXcd::Zero(n);
+  Eigen::VectorXcd m(grid);  // zero padded to n in the transform's input
   for (Eigen::Index j = 0; j < grid; ++j) {
     mag(j) = std::exp(std::max(-700.0, log_m(j) - top));
     unit(j) = std::polar(1.0, phase(j));
@@ -596,7 +607,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   }
   // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)).
   signal::Fft& fft = cache.get(n);
-  Eigen::VectorXcd spec = fft.inverse_complex(m.conjugate()).conjugate() * static_cast<double>(n);
+  std::complex<double>* input = fft.complex_input();
+  for (Eigen::Index j = 0; j < grid; ++j) input[j] = std::conj(m(j));
+  Eigen::VectorXcd spec = fft.inverse_complex_head(n).conjugate() * static_cast<double>(n);
   // The band's gain at each bin around the carrier: the same for every pass and channel.
   const Eigen::VectorXd& gain = cache.gain(
       {1.0, static_cast<double>(n), s.dt, carrier_hz, s.band.lo, s.band.hi, s.options.taper}, [&] {
@@ -609,7 +622,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
         return g;
       });
   spec.array() *= gain.array();
-  const Eigen::VectorXcd filtered = fft.inverse_complex(spec);
+  input = fft.complex_input();
+  std::copy(spec.data(), spec.data() + n, input);
+  const Eigen::VectorXcd filtered = fft.inverse_complex_head(grid);
   g.log_r.resize(grid);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (Eigen::Index j = 0; j < grid; ++j) {
