@@ -713,12 +713,6 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
     const double offset = std::clamp((e.t - e.centre) / half, -1.0, 1.0);
     const Eigen::Index stride =
         std::max<Eigen::Index>(1, static_cast<Eigen::Index>(e.window / dt) / 48);
-    // Real and imaginary parts share one design (one pass over the window for both).
-    const auto slopes = [&](const Eigen::VectorXd& re, const Eigen::VectorXd& im) {
-      const auto [a, b] =
-          signal::fit_local_pair(re, im, 0.0, dt, e.centre, half, degree, 1.0, stride, offset);
-      return std::array<double, 2>{a.slope, b.slope};
-    };
     const auto j0 =
         std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre - half) / dt), 0, grid - 1);
     const auto j1 =
@@ -733,10 +727,12 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
                         : now < kGainConverged ? 10.0
                                                : std::numeric_limits<double>::infinity();
     const auto scaled = [tail](double x) { return x == 0 ? 0.0 : tail * std::abs(x); };
-    const auto [step_s, step_w] = slopes(step_re, step_im);
-    const auto [ends_s, ends_w] = slopes(ends_re, ends_im);
-    gain_term[i] = std::hypot(scaled(step_s), ends_s);
-    add_w[i] = std::hypot(add_w[i], std::hypot(scaled(step_w), ends_w));
+    // The four series share one design (its weights and factors made once).
+    const auto [step_s, step_w, ends_s, ends_w] =
+        signal::fit_local_quad({&step_re, &step_im, &ends_re, &ends_im}, 0.0, dt, e.centre, half,
+                               degree, 1.0, stride, offset);
+    gain_term[i] = std::hypot(scaled(step_s.slope), ends_s.slope);
+    add_w[i] = std::hypot(add_w[i], std::hypot(scaled(step_w.slope), ends_w.slope));
   }
   for (size_t i = 0; i < ne; ++i) {
     est[i].sigma_std = std::hypot(std::hypot(est[i].sigma_std, add_s[i]), gain_term[i]);

@@ -1,5 +1,6 @@
 #include "jointlab/signal/local_poly.h"
 
+#include <algorithm>
 #include <array>
 #include <cassert>
 #include <cmath>
@@ -82,23 +83,25 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
     }
     for (int m = 0; m < 2 * q - 1; ++m) s2w[m] = acc[m][0] + acc[m][1];
   }
-  {
+  // Two series a pass: more running sums would spill.
+  for (int k0 = 0; k0 < K; k0 += 2) {
+    const int k1 = std::min(K, k0 + 2);
     V2 acc[K][p] = {};
     for (Eigen::Index i = 0; i < n; i += 2) {
       const V2 tau = pair_at(i, tau_of);
       const V2 w = pair_at(i, weight);
       V2 pw[K];
-      for (int k = 0; k < K; ++k) {
+      for (int k = k0; k < k1; ++k) {
         pw[k] = w * pair_at(i, [&](Eigen::Index j) { return (*ys[k])(i0 + j * stride); });
       }
       for (int m = 0; m < p; ++m) {
-        for (int k = 0; k < K; ++k) {
+        for (int k = k0; k < k1; ++k) {
           acc[k][m] += pw[k];
           pw[k] *= tau;
         }
       }
     }
-    for (int k = 0; k < K; ++k)
+    for (int k = k0; k < k1; ++k)
       for (int m = 0; m < p; ++m) sy[k][m] = acc[k][m][0] + acc[k][m][1];
   }
   // One Cholesky factor of the largest normal matrix holds those of the smaller fits in its
@@ -218,6 +221,16 @@ std::array<LocalFit, 2> fit_local_pair(const Eigen::VectorXd& y1, const Eigen::V
   assert(std::abs(offset) <= 1.0);
   return dispatch<2>({&y1, &y2}, t_first, dt, centre, half_width, degree, correlation, stride,
                      offset);
+}
+
+std::array<LocalFit, 4> fit_local_quad(const std::array<const Eigen::VectorXd*, 4>& ys,
+                                       double t_first, double dt, double centre, double half_width,
+                                       int degree, double correlation, Eigen::Index stride,
+                                       double offset) {
+  assert(std::all_of(ys.begin(), ys.end(),
+                     [&](const Eigen::VectorXd* y) { return y->size() == ys[0]->size(); }));
+  assert(std::abs(offset) <= 1.0);
+  return dispatch<4>(ys, t_first, dt, centre, half_width, degree, correlation, stride, offset);
 }
 
 }  // namespace jointlab::signal

@@ -45,4 +45,10 @@ std::array<LocalFit, 2> fit_local_pair(const Eigen::VectorXd& y1, const Eigen::V
                                        int degree, double correlation, Eigen::Index stride = 1,
                                        double offset = 0.0);
 
+/// The same fit of four series on one grid (each series' numbers as fit_local_pair gives them).
+std::array<LocalFit, 4> fit_local_quad(const std::array<const Eigen::VectorXd*, 4>& ys,
+                                       double t_first, double dt, double centre, double half_width,
+                                       int degree, double correlation, Eigen::Index stride = 1,
+                                       double offset = 0.0);
+
 }  // namespace jointlab::signal

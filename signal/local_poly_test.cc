@@ -144,6 +144,19 @@ TEST(LocalPoly, AgreesWithADenseWeightedLeastSquaresFit) {
           const double centre = 1.9 + 0.013 * degree;
           const auto [a, b] =
               fit_local_pair(y1, y2, 0.0, dt, centre, h, degree, 1.0, stride, offset);
+          // Four series in one call: each one's numbers exactly as the pair gives them.
+          const auto quad =
+              fit_local_quad({&y2, &y1, &y1, &y2}, 0.0, dt, centre, h, degree, 1.0, stride, offset);
+          for (const auto& [x, ref] : {std::pair{quad[0], b}, std::pair{quad[1], a},
+                                       std::pair{quad[2], a}, std::pair{quad[3], b}}) {
+            EXPECT_EQ(x.value, ref.value);
+            EXPECT_EQ(x.slope, ref.slope);
+            EXPECT_EQ(x.value_std, ref.value_std);
+            EXPECT_EQ(x.slope_std, ref.slope_std);
+            EXPECT_EQ(x.value_change, ref.value_change);
+            EXPECT_EQ(x.slope_change, ref.slope_change);
+            EXPECT_EQ(x.residual_rms, ref.residual_rms);
+          }
           for (const auto& [fit, y] : {std::pair{a, &y1}, std::pair{b, &y2}}) {
             const LocalFit d = dense(*y, centre, h, degree, stride, offset, degree + 1);
             const LocalFit d1 = dense(*y, centre, h, degree, stride, offset, degree + 2);
