@@ -152,10 +152,17 @@ double band_settling_s(const signal::Band& band, double taper) {
 
 PrepareOptions prepare_for(const std::vector<signal::Band>& bands, double taper,
                            PrepareOptions base) {
+  // A long record's padding: its ends are pad_s apart through every filter read from the
+  // spectrum. The slowest is the superharmonic check's third of a band (mark_superharmonics),
+  // settling 3 times slower; twice its settling time takes its kernel from exp(-11) to
+  // exp(-44), 5e-20 (the exponent grows as the square of the time), so the record's start,
+  // its largest samples, adds nothing to its end, its noise. Moved bands are only wider.
+  constexpr double kPadSettlings = 2 * 3;
   double top = 0;
   for (const signal::Band& b : bands) {
     top = std::max(top, b.hi);
     base.extend_s = std::max(base.extend_s, 1.1 * band_settling_s(b, taper));
+    base.pad_s = std::max(base.pad_s, kPadSettlings * band_settling_s(b, taper));
   }
   if (base.lowpass_hz == 0) base.lowpass_hz = 1.5 * top;
   return base;
@@ -172,6 +179,32 @@ Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x) {
   while (i + 1 < quarter && std::abs(centred(i)) < 0.5 * peak) ++i;
   return i;
 }
+
+namespace {
+
+// Transform sizes of a channel's spectrum and of its low-pass.
+struct Padding {
+  Eigen::Index n_fft = 0, n_lowpass = 0;
+};
+
+// Sizes for an analysed record of n_record samples whose m measured samples are low-passed
+// and then lose `guard` at each end. Twice the lengths, unless the record is long: then the
+// spectrum is padded by options.pad_s (prepare_for) and the low-pass by two guards, so that
+// a kept sample is three guards from the other end through the low-pass's kernel, whose
+// Gaussian factor exp(-8) at one guard is exp(-72) there.
+Padding padding(Eigen::Index n_record, Eigen::Index m, Eigen::Index guard, double fs,
+                const PrepareOptions& options) {
+  if (n_record <= options.pad_above || !(options.pad_s > 0)) {
+    return {signal::fast_size(2 * n_record), signal::fast_size(2 * m)};
+  }
+  const double wanted = std::ceil(options.pad_s * fs);
+  const Eigen::Index pad = wanted < static_cast<double>(n_record)
+                               ? static_cast<Eigen::Index>(wanted)
+                               : n_record;  // never more than the short records' padding
+  return {signal::fast_size(n_record + pad), signal::fast_size(m + std::min(2 * guard, m))};
+}
+
+}  // namespace
 
 ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
                                  const PrepareOptions& options, signal::FftCache& cache,
@@ -204,16 +237,19 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   ChannelSpectrum c;
   c.scale = scale;
   c.n_record = wanted + kept + wanted;
-  c.n_fft = signal::fast_size(2 * c.n_record);
+  const Padding pad = padding(c.n_record, m, guard, fs, options);
+  c.n_fft = pad.n_fft;
   // One buffer for the record, its low-pass and its spectrum, transformed in place: a long
-  // record's peak memory is its samples and this spectrum (2 doubles a sample), no copies.
-  const Eigen::Index n_lowpass = lowpass ? signal::fast_size(2 * m) : 0;
+  // record's peak memory is its samples and this spectrum (1 double a sample), no copies.
+  const Eigen::Index n_lowpass = lowpass ? pad.n_lowpass : 0;
   Eigen::VectorXcd buffer(std::max(c.n_fft, n_lowpass) / 2 + 1);
   double* r = reinterpret_cast<double*>(buffer.data());
   Eigen::Map<Eigen::VectorXd> y(r, m);
   y = x.segment(i_begin, m) * scale;
   y.array() -= y.mean();
-  if (lowpass) signal::lowpass_in_place(buffer.data(), m, fs, options.lowpass_hz, f_stop, cache);
+  if (lowpass) {
+    signal::lowpass_in_place(buffer.data(), m, n_lowpass, fs, options.lowpass_hz, f_stop, cache);
+  }
   const auto extend = [&](int order, bool before, bool after) {
     return signal::continue_record(y.segment(guard, kept), before ? wanted : 0, after ? wanted : 0,
                                    order, fit, 1e3, lag);
