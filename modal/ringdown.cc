@@ -185,6 +185,7 @@ namespace {
 // Transform sizes of a channel's spectrum and of its low-pass.
 struct Padding {
   Eigen::Index n_fft = 0, n_lowpass = 0;
+  bool long_record = false;  // padded by pad_s, not to twice its length
 };
 
 // Sizes for an analysed record of n_record samples whose m measured samples are low-passed
@@ -196,14 +197,27 @@ struct Padding {
 Padding padding(Eigen::Index n_record, Eigen::Index m, Eigen::Index guard, double fs,
                 const PrepareOptions& options) {
   if (n_record <= options.pad_above || !(options.pad_s > 0)) {
-    return {signal::fast_size(2 * n_record), signal::fast_size(2 * m)};
+    return {signal::fast_size(2 * n_record), signal::fast_size(2 * m), false};
   }
   const double wanted = std::ceil(options.pad_s * fs);
   const Eigen::Index pad = wanted < static_cast<double>(n_record)
                                ? static_cast<Eigen::Index>(wanted)
                                : n_record;  // never more than the short records' padding
   const auto even = [](Eigen::Index k) { return 2 * signal::fast_size((k + 1) / 2); };
-  return {even(n_record + pad), even(m + std::min(2 * guard, m))};
+  return {even(n_record + pad), even(m + std::min(2 * guard, m)), true};
+}
+
+// The bins of channel c's spectrum that are kept. A long low-passed record keeps those up to
+// where the low-pass's gain is zero (lowpass_hz to twice it, Gaussian edge of standard
+// deviation lowpass_hz / 4: zero from 3.75 lowpass_hz, 5.6 times the highest band edge with
+// prepare_for's low-pass): above them the record holds nothing but the rounding of its
+// continuations' joins, and the spectrum then costs a few per cent of the record instead
+// of a double a sample for the rest of its extraction. Readers take missing bins as zero.
+Eigen::Index stored_bins(const ChannelSpectrum& c, bool cut, double lowpass_hz) {
+  const Eigen::Index all = c.n_fft / 2 + 1;
+  if (!cut) return all;
+  const double df = c.fs / static_cast<double>(c.n_fft);
+  return std::min(all, static_cast<Eigen::Index>(std::ceil(3.75 * lowpass_hz / df)) + 2);
 }
 
 }  // namespace
@@ -238,6 +252,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
 
   ChannelSpectrum c;
   c.scale = scale;
+  c.fs = fs;
   c.n_record = wanted + kept + wanted;
   const Padding pad = padding(c.n_record, m, guard, fs, options);
   c.n_fft = pad.n_fft;
@@ -279,8 +294,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   std::copy(e.after.data(), e.after.data() + wanted, r + wanted + kept);
   std::fill(r + c.n_record, r + 2 * buffer.size(), 0.0);
   cache.get(c.n_fft).forward_in_place(buffer.data());
-  buffer.conservativeResize(c.n_fft / 2 + 1);
-  c.fs = fs;
+  buffer.conservativeResize(stored_bins(c, pad.long_record && lowpass, options.lowpass_hz));
   c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
@@ -935,7 +949,9 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
 // bins: 2 zeta f for a decaying mode. (The continuation runs the decay backwards too; its
 // spectrum read 0.77-0.79 times 2 zeta f on modes of 0.3-3 % damping.)
 double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCache& cache) {
-  const Eigen::VectorXd y = cache.get(channel.n_fft).inverse_real(channel.spectrum);
+  Eigen::VectorXcd all = Eigen::VectorXcd::Zero(channel.n_fft / 2 + 1);  // bins not kept: 0
+  all.head(channel.spectrum.size()) = channel.spectrum;
+  const Eigen::VectorXd y = cache.get(channel.n_fft).inverse_real(all);
   const auto at = [&](double t) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(t * channel.fs)), 0,
                                     channel.n_record - 1);

@@ -148,7 +148,9 @@ struct PrepareOptions {
 /// bound when continued backwards, are not continued at all; the low-pass's own
 /// settling time at each end is continued too and not counted as data.
 struct ChannelSpectrum {
-  Eigen::VectorXcd spectrum;  ///< one-sided spectrum of the zero-padded analysed record
+  /// One-sided spectrum of the zero-padded analysed record; bins past its size are zero (a
+  /// long record keeps those its low-pass leaves anything in).
+  Eigen::VectorXcd spectrum;
   Eigen::Index n_record = 0;  ///< samples analysed (continuations included)
   Eigen::Index n_fft = 0;     ///< padded length (twice n_record, or n_record and pad_s if long)
   double fs = 0.0;            ///< sample rate [Hz]
