@@ -623,7 +623,13 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
     const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
     return (1 - w) * v[k - 1] + w * v[k];
   };
-  const Eigen::Index n = signal::fast_size(2 * grid);
+  // Zero-padded to twice the grid; a long record's channel (padded by pad_s itself) by three
+  // settling times, where the band's kernel is down to exp(-100): the model's start, its
+  // largest part, then adds nothing to r where the model has decayed by decades.
+  const bool long_record = s.channel.n_fft < 2 * s.channel.n_record;
+  const Eigen::Index n =
+      long_record ? signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt)))
+                  : signal::fast_size(2 * grid);
   Eigen::VectorXd log_m(grid);  // m past the grid is zero padding
   Eigen::VectorXd phase(grid);
   double la = 0, ph = 0;
@@ -638,17 +644,18 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   const double top = log_m.maxCoeff();
   // m = |m| u, u = e^{i phase}: r = band(m) / m = band(m) conj(u) / |m| needs no complex
   // division, and |r| no hypot (both a tenth of process's time together).
+  // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)),
+  // conj m written straight into the transform's input (m past the grid is zero padding).
   Eigen::VectorXd mag(grid);
   Eigen::VectorXcd unit(grid);
-  Eigen::VectorXcd m = Eigen::VectorXcd::Zero(n);
+  signal::Fft& fft = cache.get(n);
+  std::complex<double>* conj_m = fft.complex_input();
   for (Eigen::Index j = 0; j < grid; ++j) {
     mag(j) = std::exp(std::max(-700.0, log_m(j) - top));
     unit(j) = std::polar(1.0, phase(j));
-    m(j) = mag(j) * unit(j);
+    conj_m[j] = std::conj(mag(j) * unit(j));
   }
-  // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)).
-  signal::Fft& fft = cache.get(n);
-  Eigen::VectorXcd spec = fft.inverse_complex(m.conjugate()).conjugate() * static_cast<double>(n);
+  Eigen::VectorXcd spec = fft.inverse_complex_head(n).conjugate() * static_cast<double>(n);
   // The band's gain at each bin around the carrier: the same for every pass and channel.
   const Eigen::VectorXd& gain = cache.gain(
       {1.0, static_cast<double>(n), s.dt, carrier_hz, s.band.lo, s.band.hi, s.options.taper}, [&] {
@@ -660,8 +667,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
         }
         return g;
       });
-  spec.array() *= gain.array();
-  const Eigen::VectorXcd filtered = fft.inverse_complex(spec);
+  std::complex<double>* filter_in = fft.complex_input();
+  for (Eigen::Index k = 0; k < n; ++k) filter_in[k] = spec(k) * gain(k);
+  const Eigen::VectorXcd filtered = fft.inverse_complex_head(grid);  // the padding dropped
   g.log_r.resize(grid);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (Eigen::Index j = 0; j < grid; ++j) {
