@@ -478,7 +478,8 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   const ChannelSet set(record, options, chans);
   // Each channel worker holds a channel's continued record and spectra (about 50 bytes a
   // sample of the continued record, which a narrow band's continuation makes several times
-  // the record): a long record gets fewer workers, so that together they stay near 1 GB.
+  // the record; about 15 beside the samples above 2^22 samples, padded by pad_s): a long
+  // record gets fewer workers, so that together they stay near 1 GB.
   constexpr double kWorkerSamples = 2e7;
   double continued = static_cast<double>(record.size());
   for (const signal::Band& b : out.bands) {

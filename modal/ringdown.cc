@@ -152,10 +152,17 @@ double band_settling_s(const signal::Band& band, double taper) {
 
 PrepareOptions prepare_for(const std::vector<signal::Band>& bands, double taper,
                            PrepareOptions base) {
+  // A long record's padding: its ends are pad_s apart through every filter read from the
+  // spectrum. The slowest is the superharmonic check's third of a band (mark_superharmonics),
+  // settling 3 times slower; twice its settling time takes its kernel from exp(-11) to
+  // exp(-44), 5e-20 (the exponent grows as the square of the time), so the record's start,
+  // its largest samples, adds nothing to its end, its noise. Moved bands are only wider.
+  constexpr double kPadSettlings = 2 * 3;
   double top = 0;
   for (const signal::Band& b : bands) {
     top = std::max(top, b.hi);
     base.extend_s = std::max(base.extend_s, 1.1 * band_settling_s(b, taper));
+    base.pad_s = std::max(base.pad_s, kPadSettlings * band_settling_s(b, taper));
   }
   if (base.lowpass_hz == 0) base.lowpass_hz = 1.5 * top;
   return base;
@@ -172,6 +179,48 @@ Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x) {
   while (i + 1 < quarter && std::abs(centred(i)) < 0.5 * peak) ++i;
   return i;
 }
+
+namespace {
+
+// Transform sizes of a channel's spectrum and of its low-pass.
+struct Padding {
+  Eigen::Index n_fft = 0, n_lowpass = 0;
+  bool long_record = false;  // padded by pad_s, not to twice its length
+};
+
+// Sizes for an analysed record of n_record samples whose m measured samples are low-passed
+// and then lose `guard` at each end. Twice the lengths, unless the record is long: then the
+// spectrum is padded by options.pad_s (prepare_for) and the low-pass by two guards, so that
+// a kept sample is three guards from the other end through the low-pass's kernel, whose
+// Gaussian factor exp(-8) at one guard is exp(-72) there. Long sizes are even: FFTW's
+// tables for them are then a fifth as large (signal::Fft::forward_in_place).
+Padding padding(Eigen::Index n_record, Eigen::Index m, Eigen::Index guard, double fs,
+                const PrepareOptions& options) {
+  if (n_record <= options.pad_above || !(options.pad_s > 0)) {
+    return {signal::fast_size(2 * n_record), signal::fast_size(2 * m), false};
+  }
+  const double wanted = std::ceil(options.pad_s * fs);
+  const Eigen::Index pad = wanted < static_cast<double>(n_record)
+                               ? static_cast<Eigen::Index>(wanted)
+                               : n_record;  // never more than the short records' padding
+  const auto even = [](Eigen::Index k) { return 2 * signal::fast_size((k + 1) / 2); };
+  return {even(n_record + pad), even(m + std::min(2 * guard, m)), true};
+}
+
+// The bins of channel c's spectrum that are kept. A long low-passed record keeps those up to
+// where the low-pass's gain is zero (lowpass_hz to twice it, Gaussian edge of standard
+// deviation lowpass_hz / 4: zero from 3.75 lowpass_hz, 5.6 times the highest band edge with
+// prepare_for's low-pass): above them the record holds nothing but the rounding of its
+// continuations' joins, and the spectrum then costs a few per cent of the record instead
+// of a double a sample for the rest of its extraction. Readers take missing bins as zero.
+Eigen::Index stored_bins(const ChannelSpectrum& c, bool cut, double lowpass_hz) {
+  const Eigen::Index all = c.n_fft / 2 + 1;
+  if (!cut) return all;
+  const double df = c.fs / static_cast<double>(c.n_fft);
+  return std::min(all, static_cast<Eigen::Index>(std::ceil(3.75 * lowpass_hz / df)) + 2);
+}
+
+}  // namespace
 
 ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
                                  const PrepareOptions& options, signal::FftCache& cache,
@@ -203,17 +252,21 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
 
   ChannelSpectrum c;
   c.scale = scale;
+  c.fs = fs;
   c.n_record = wanted + kept + wanted;
-  c.n_fft = signal::fast_size(2 * c.n_record);
+  const Padding pad = padding(c.n_record, m, guard, fs, options);
+  c.n_fft = pad.n_fft;
   // One buffer for the record, its low-pass and its spectrum, transformed in place: a long
-  // record's peak memory is its samples and this spectrum (2 doubles a sample), no copies.
-  const Eigen::Index n_lowpass = lowpass ? signal::fast_size(2 * m) : 0;
+  // record's peak memory is its samples and this spectrum (1 double a sample), no copies.
+  const Eigen::Index n_lowpass = lowpass ? pad.n_lowpass : 0;
   Eigen::VectorXcd buffer(std::max(c.n_fft, n_lowpass) / 2 + 1);
   double* r = reinterpret_cast<double*>(buffer.data());
   Eigen::Map<Eigen::VectorXd> y(r, m);
   y = x.segment(i_begin, m) * scale;
   y.array() -= y.mean();
-  if (lowpass) signal::lowpass_in_place(buffer.data(), m, fs, options.lowpass_hz, f_stop, cache);
+  if (lowpass) {
+    signal::lowpass_in_place(buffer.data(), m, n_lowpass, fs, options.lowpass_hz, f_stop, cache);
+  }
   const auto extend = [&](int order, bool before, bool after) {
     return signal::continue_record(y.segment(guard, kept), before ? wanted : 0, after ? wanted : 0,
                                    order, fit, 1e3, lag);
@@ -241,8 +294,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   std::copy(e.after.data(), e.after.data() + wanted, r + wanted + kept);
   std::fill(r + c.n_record, r + 2 * buffer.size(), 0.0);
   cache.get(c.n_fft).forward_in_place(buffer.data());
-  buffer.conservativeResize(c.n_fft / 2 + 1);
-  c.fs = fs;
+  buffer.conservativeResize(stored_bins(c, pad.long_record && lowpass, options.lowpass_hz));
   c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
@@ -571,7 +623,13 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
     const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
     return (1 - w) * v[k - 1] + w * v[k];
   };
-  const Eigen::Index n = signal::fast_size(2 * grid);
+  // Zero-padded to twice the grid; a long record's channel (padded by pad_s itself) by three
+  // settling times, where the band's kernel is down to exp(-100): the model's start, its
+  // largest part, then adds nothing to r where the model has decayed by decades.
+  const bool long_record = s.channel.n_fft < 2 * s.channel.n_record;
+  const Eigen::Index n =
+      long_record ? signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt)))
+                  : signal::fast_size(2 * grid);
   Eigen::VectorXd log_m(grid);  // m past the grid is zero padding
   Eigen::VectorXd phase(grid);
   double la = 0, ph = 0;
@@ -597,18 +655,17 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   const double top = log_m.maxCoeff();
   // m = |m| u, u = e^{i phase}: r = band(m) / m = band(m) conj(u) / |m| needs no complex
   // division, and |r| no hypot (both a tenth of process's time together).
+  // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)),
+  // conj m written straight into the transform's input (m past the grid is zero padding).
   Eigen::VectorXd mag(grid);
   Eigen::VectorXcd unit(grid);
-  Eigen::VectorXcd m(grid);  // zero padded to n in the transform's input
+  signal::Fft& fft = cache.get(n);
+  std::complex<double>* conj_m = fft.complex_input();
   for (Eigen::Index j = 0; j < grid; ++j) {
     mag(j) = std::exp(std::max(-700.0, log_m(j) - top));
     unit(j) = std::polar(1.0, phase(j));
-    m(j) = mag(j) * unit(j);
+    conj_m[j] = std::conj(mag(j) * unit(j));
   }
-  // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)).
-  signal::Fft& fft = cache.get(n);
-  std::complex<double>* input = fft.complex_input();
-  for (Eigen::Index j = 0; j < grid; ++j) input[j] = std::conj(m(j));
   Eigen::VectorXcd spec = fft.inverse_complex_head(n).conjugate() * static_cast<double>(n);
   // The band's gain at each bin around the carrier: the same for every pass and channel.
   const Eigen::VectorXd& gain = cache.gain(
@@ -621,10 +678,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
         }
         return g;
       });
-  spec.array() *= gain.array();
-  input = fft.complex_input();
-  std::copy(spec.data(), spec.data() + n, input);
-  const Eigen::VectorXcd filtered = fft.inverse_complex_head(grid);
+  std::complex<double>* filter_in = fft.complex_input();
+  for (Eigen::Index k = 0; k < n; ++k) filter_in[k] = spec(k) * gain(k);
+  const Eigen::VectorXcd filtered = fft.inverse_complex_head(grid);  // the padding dropped
   g.log_r.resize(grid);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (Eigen::Index j = 0; j < grid; ++j) {
@@ -903,12 +959,35 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
   return out;
 }
 
+// The one-sided spectrum of the analysed record's samples [i0, i0 + count), zero-padded to
+// n points (set here). A short record's is padded to 4 times their length for resolution.
+// A long record's bins, a record's duration apart, need no finer grid: its samples are
+// taken out of the spectrum and transformed again in one buffer, in place (padded to 4x
+// it was 130 bytes a sample, five times the rest of the record's analysis).
+Eigen::VectorXcd measured_spectrum(const ChannelSpectrum& channel, Eigen::Index i0,
+                                   Eigen::Index count, signal::FftCache& cache, Eigen::Index& n) {
+  if (channel.n_fft >= 2 * channel.n_record) {
+    const Eigen::VectorXd y = cache.get(channel.n_fft).inverse_real(channel.spectrum);
+    n = signal::fast_size(4 * count);
+    return cache.get(n).forward(y.segment(i0, count));
+  }
+  Eigen::VectorXcd buffer = Eigen::VectorXcd::Zero(channel.n_fft / 2 + 1);  // bins not kept: 0
+  buffer.head(channel.spectrum.size()) = channel.spectrum;
+  cache.get(channel.n_fft).inverse_real_in_place(buffer.data());
+  double* r = reinterpret_cast<double*>(buffer.data());
+  std::memmove(r, r + i0, sizeof(double) * static_cast<size_t>(count));
+  n = 2 * signal::fast_size((count + 1) / 2);  // even, at most n_fft
+  std::fill(r + count, r + 2 * buffer.size(), 0.0);
+  cache.get(n).forward_in_place(buffer.data());
+  buffer.conservativeResize(n / 2 + 1);
+  return buffer;
+}
+
 // Full half-power width [Hz] of the spectral peak nearest `fp` in the measured part of the
-// record alone, zero-padded to 4x for resolution, the crossings interpolated linearly between
-// bins: 2 zeta f for a decaying mode. (The continuation runs the decay backwards too; its
-// spectrum read 0.77-0.79 times 2 zeta f on modes of 0.3-3 % damping.)
+// record alone (measured_spectrum), the crossings interpolated linearly between bins: 2 zeta f
+// for a decaying mode. (The continuation runs the decay backwards too; its spectrum read
+// 0.77-0.79 times 2 zeta f on modes of 0.3-3 % damping.)
 double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCache& cache) {
-  const Eigen::VectorXd y = cache.get(channel.n_fft).inverse_real(channel.spectrum);
   const auto at = [&](double t) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(t * channel.fs)), 0,
                                     channel.n_record - 1);
@@ -916,8 +995,8 @@ double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCa
   const Eigen::Index i0 = at(channel.data_begin_s - channel.t0);
   const Eigen::Index i1 = at(channel.data_end_s - channel.t0);
   if (i1 <= i0 + 4) return 0.0;
-  const Eigen::Index n = signal::fast_size(4 * (i1 - i0 + 1));
-  const Eigen::VectorXcd x = cache.get(n).forward(y.segment(i0, i1 - i0 + 1));
+  Eigen::Index n = 0;
+  const Eigen::VectorXcd x = measured_spectrum(channel, i0, i1 - i0 + 1, cache, n);
   const double df = channel.fs / static_cast<double>(n);
   const auto mag = [&](Eigen::Index k) { return std::abs(x(k)); };
   Eigen::Index kp =

@@ -128,6 +128,13 @@ struct PrepareOptions {
   int ar_order = 32;            ///< order of the continuation model (lower if it blows up)
   double ar_fit_s = 0.25;       ///< data the continuation model is fitted on [s]
   double lowpass_hz = 0.0;      ///< content kept for the continuation (0: everything) [Hz]
+  /// Zero padding of a long record's spectrum [s], what the slowest band filter read from it
+  /// needs to die out between the record's ends (0: twice the record; prepare_for sets it).
+  double pad_s = 0.0;
+  /// Records of more analysed samples than this are padded by pad_s alone: twice a record
+  /// of 2e7 samples made its spectrum and FFTW's tables 33 bytes a sample. Shorter ones are
+  /// padded to twice their length, the finer bins their results were first made with.
+  Eigen::Index pad_above = Eigen::Index{1} << 22;
 };
 
 /// The spectrum of one channel, computed once and shared by all its bands.
@@ -141,13 +148,15 @@ struct PrepareOptions {
 /// bound when continued backwards, are not continued at all; the low-pass's own
 /// settling time at each end is continued too and not counted as data.
 struct ChannelSpectrum {
-  Eigen::VectorXcd spectrum;       ///< one-sided spectrum of the zero-padded analysed record
-  Eigen::Index n_record = 0;       ///< samples analysed (continuations included)
-  Eigen::Index n_fft = 0;          ///< padded length (at least twice n_record)
-  double fs = 0.0;                 ///< sample rate [Hz]
-  double t0 = 0.0;                 ///< time of the analysed record's first sample [s]
-  double data_begin_s = 0.0;       ///< first measured sample used [s]
-  double data_end_s = 0.0;         ///< last measured sample [s]
+  /// One-sided spectrum of the zero-padded analysed record; bins past its size are zero (a
+  /// long record keeps those its low-pass leaves anything in).
+  Eigen::VectorXcd spectrum;
+  Eigen::Index n_record = 0;  ///< samples analysed (continuations included)
+  Eigen::Index n_fft = 0;     ///< padded length (twice n_record, or n_record and pad_s if long)
+  double fs = 0.0;            ///< sample rate [Hz]
+  double t0 = 0.0;            ///< time of the analysed record's first sample [s]
+  double data_begin_s = 0.0;  ///< first measured sample used [s]
+  double data_end_s = 0.0;    ///< last measured sample [s]
   double continued_begin_s = 0.0;  ///< faithful continuation before the data [s]
   double continued_end_s = 0.0;    ///< faithful continuation after the data [s]
   /// The analysed samples are the record's times this power of two: 1 unless the channel's
@@ -170,7 +179,7 @@ double band_settling_s(const signal::Band& band, double taper);
 /// The continuation settings `bands` need, from `base`: unless base sets a low-pass,
 /// content up to 1.5 times the highest band edge; continued over at least 1.1 times
 /// the slowest band filter's settling time, so that no band loses data to its own
-/// transient (process_record uses these).
+/// transient; a long record padded by at least 6 such times (process_record uses these).
 PrepareOptions prepare_for(const std::vector<signal::Band>& bands, double taper,
                            PrepareOptions base = {});
 

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -51,9 +52,11 @@ Errors score(const Ringdown& r, const testing::SlowFlowMode& truth) {
 // Runs one record of `measured` through the extraction in `band`, reporting
 // displacement amplitude, with the record preparation process_record uses.
 Ringdown extract_band(const Eigen::VectorXd& x, double fs, Quantity measured,
-                      const signal::Band& band, Method method = Method::kHilbert) {
+                      const signal::Band& band, Method method = Method::kHilbert,
+                      bool long_path = false) {
   signal::FftCache cache;
-  const PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);
+  PrepareOptions prep = prepare_for({band}, RingdownOptions{}.taper);
+  if (long_path) prep.pad_above = 0;  // padded as a record above 2^22 samples is
   const ChannelSpectrum cs = channel_spectrum(x, fs, 0.0, prep, cache);
   RingdownOptions opt;
   opt.amplitude = Quantity::kDisplacement;
@@ -111,6 +114,140 @@ TEST(RingdownNoiseFloor, MatchesTheBandNoiseOfNarrowAndWideBands) {
       }
     }
   }
+}
+
+// A 20 s acceleration record at fs: a 100 Hz ring-down (damping 0.2 %) from 0.1 m/s^2 and
+// a 45 Hz one a tenth as strong, into noise of 1e-6 m/s^2.
+Eigen::VectorXd two_mode_ringdown(double fs) {
+  const double zeta = 0.002;
+  const Eigen::Index n = static_cast<Eigen::Index>(20 * fs);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 1e-6);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) = noise(rng);
+    for (const auto& [f, a] : {std::pair{100.0, 0.1}, std::pair{45.0, 0.01}}) {
+      const double w = 2 * std::numbers::pi * f;
+      x(k) += a * std::exp(-zeta * w * t) * std::cos(w * t + 0.3);
+    }
+  }
+  return x;
+}
+
+// A long record's spectrum is padded by PrepareOptions::pad_s (six settling times of the
+// band's filter) instead of to twice its length. A 20 s record: a 100 Hz ring-down (damping
+// 0.2 %) from 0.1 m/s^2 into noise of 1e-6, and a 45 Hz mode a tenth as strong, so that the
+// superharmonic check's half and third of the band (the slowest filters read from the
+// spectrum) see a mode too. Its analysed record (continuations included) padded by pad_s
+// gives, at every sample, the band's analytic signal and those of its half and third of the
+// twice-padded spectrum but for rounding: the third's kernel is down to 5e-20 across the
+// padding, so the start adds below 1e-18 of itself to the end; transforms of 8e4 points
+// round to about 1e-15 of the largest value. Required: 1e-12 of the largest value
+// everywhere, and over the last second (the noise alone) 1e-6 of its RMS. Padded by a
+// quarter of a settling time instead, the start leaks onto the end by far more (the check
+// sees a wrap).
+TEST(RingdownLongRecord, PaddingBySettlingTimesGivesTheTwicePaddedBandSignals) {
+  const double fs = 2000;
+  const Eigen::VectorXd x = two_mode_ringdown(fs);
+  const signal::Band band{80, 120};
+  const RingdownOptions options;
+  const PrepareOptions prepare = prepare_for({band}, options.taper);
+  signal::FftCache cache;
+  const ChannelSpectrum twice = channel_spectrum(x, fs, 0.0, prepare, cache);
+  ASSERT_GE(twice.n_fft, 2 * twice.n_record);
+  const Eigen::VectorXd y =
+      cache.get(twice.n_fft).inverse_real(twice.spectrum).head(twice.n_record);
+  const auto padded_by = [&](double pad_s) {
+    ChannelSpectrum c = twice;
+    c.n_fft = signal::fast_size(c.n_record + static_cast<Eigen::Index>(std::ceil(pad_s * fs)));
+    c.spectrum = cache.get(c.n_fft).forward(y);
+    return c;
+  };
+  const ChannelSpectrum padded = padded_by(prepare.pad_s);
+  const ChannelSpectrum short_pad = padded_by(band_settling_s(band, options.taper) / 4);
+  EXPECT_LT(padded.n_fft, twice.n_record + twice.n_record / 8);  // 21 s and 1.8 s of padding
+  signal::BandOptions full;
+  full.taper = options.taper;
+  full.order = 2;
+  full.full_rate = true;
+  const auto z = [&](const ChannelSpectrum& s, const signal::Band& k) {
+    return signal::band_analytic(s.spectrum, s.n_record, s.n_fft, s.fs, k, full, cache).baseband;
+  };
+  const Eigen::Index tail = static_cast<Eigen::Index>(fs);
+  for (const int part : {1, 2, 3}) {
+    const signal::Band k{band.lo / part, band.hi / part};
+    const Eigen::VectorXcd za = z(twice, k), zb = z(padded, k), zc = z(short_pad, k);
+    const double top = za.cwiseAbs().maxCoeff();
+    const double rms = za.tail(tail).norm() / std::sqrt(static_cast<double>(tail));
+    const double all = (za - zb).cwiseAbs().maxCoeff() / top;
+    const double end = (za - zb).tail(tail).cwiseAbs().maxCoeff() / rms;
+    const double wrapped = (za - zc).tail(tail).cwiseAbs().maxCoeff() / rms;
+    std::printf(
+        "band / %d: largest difference %.2e of the peak, %.2e of the end's noise; %.2e with a "
+        "quarter settling time\n",
+        part, all, end, wrapped);
+    EXPECT_LT(all, 1e-12) << "band / " << part;
+    EXPECT_LT(end, 1e-6) << "band / " << part;
+    EXPECT_GT(wrapped, 1e-2) << "band / " << part;
+  }
+}
+
+// channel_spectrum's long-record path (pad_above lowered to 0 so that a 20 s record takes
+// it): the low-pass padded by two guards, the spectrum by pad_s and cut where the low-pass's
+// gain is zero (above 675 Hz). Away from the ends (the continuations and two settling times
+// of the third's filter), the band's, its half's and its third's signals match the
+// twice-padded path's but for rounding (below 1e-13 of the peak; required 1e-12). The
+// continuations are linear predictions fitted to the ends: a rounding apart in their inputs
+// moves them (7e-7 of the peak at the noise-level end), as any change of transform size
+// would, and the backbones' linear values then differ by below 1e-9 (frequency) and 4e-7
+// (damping) of themselves, 1e-4 of their stated uncertainty (required a tenth).
+TEST(RingdownLongRecord, TheLongRecordPathKeepsTheBackbone) {
+  const double fs = 2000;
+  const Eigen::VectorXd x = two_mode_ringdown(fs);
+  const signal::Band band{80, 120};
+  RingdownOptions options;
+  options.amplitude = Quantity::kDisplacement;
+  const PrepareOptions twice = prepare_for({band}, options.taper);
+  PrepareOptions padded = twice;
+  padded.pad_above = 0;
+  signal::FftCache cache;
+  const ChannelSpectrum a = channel_spectrum(x, fs, 0.0, twice, cache);
+  const ChannelSpectrum b = channel_spectrum(x, fs, 0.0, padded, cache);
+  ASSERT_EQ(a.n_record, b.n_record);
+  EXPECT_LT(b.n_fft, b.n_record + b.n_record / 8);
+  EXPECT_EQ(a.spectrum.size(), a.n_fft / 2 + 1);
+  EXPECT_LT(b.spectrum.size(), b.n_fft / 2);
+  signal::BandOptions full;
+  full.taper = options.taper;
+  full.order = 2;
+  full.full_rate = true;
+  const auto z = [&](const ChannelSpectrum& s, const signal::Band& k) {
+    return signal::band_analytic(s.spectrum, s.n_record, s.n_fft, s.fs, k, full, cache).baseband;
+  };
+  const auto ends = static_cast<Eigen::Index>(std::ceil(
+      (twice.extend_s + 2 * band_settling_s({band.lo / 3, band.hi / 3}, options.taper)) * fs));
+  for (const int part : {1, 2, 3}) {
+    const signal::Band k{band.lo / part, band.hi / part};
+    const Eigen::VectorXcd za = z(a, k), zb = z(b, k);
+    const double middle = (za - zb).segment(ends, a.n_record - 2 * ends).cwiseAbs().maxCoeff() /
+                          za.cwiseAbs().maxCoeff();
+    std::printf("band / %d: away from the ends the signals differ by %.2e of the peak\n", part,
+                middle);
+    EXPECT_LT(middle, 1e-12) << "band / " << part;
+  }
+  const Ringdown ra = extract_backbone(a, Quantity::kAcceleration, band, options, cache);
+  const Ringdown rb = extract_backbone(b, Quantity::kAcceleration, band, options, cache);
+  ASSERT_TRUE(ra.summary.has_linear());
+  ASSERT_TRUE(rb.summary.has_linear());
+  const RingdownSummary &sa = ra.summary, &sb = rb.summary;
+  const double df = std::abs(sb.linear_frequency_hz - sa.linear_frequency_hz);
+  const double dz = std::abs(sb.linear_damping - sa.linear_damping);
+  std::printf("linear frequency %.9g and %.9g Hz (+- %.2g), damping %.9g and %.9g (+- %.2g)\n",
+              sa.linear_frequency_hz, sb.linear_frequency_hz, sa.linear_frequency_std_hz,
+              sa.linear_damping, sb.linear_damping, sa.linear_damping_std);
+  EXPECT_LT(df, 0.1 * sa.linear_frequency_std_hz);
+  EXPECT_LT(dz, 0.1 * sa.linear_damping_std);
 }
 
 // A band too narrow for the mode's drift: 77-85 Hz around a mode that falls from
@@ -561,13 +698,23 @@ TEST(RingdownAdvice, HalfPowerWidthOfAModeOfKnownDamping) {
              g(rng);
     }
     const double hp = 2 * zeta * f0;
-    const Ringdown narrow =
-        extract_band(x, fs, Quantity::kDisplacement, {f0 - 2 * hp, f0 + 2 * hp});
-    ASSERT_NE(narrow.summary.status, RingdownStatus::kOk) << zeta;
-    const std::string said = "narrower than 12 times the half-power width of its mode (";
-    const size_t at = narrow.summary.message.find(said);
-    ASSERT_NE(at, std::string::npos) << narrow.summary.message;
-    const double width = std::stod(narrow.summary.message.substr(at + said.size()));
+    const auto named_width = [&](bool long_path) {
+      const Ringdown narrow = extract_band(x, fs, Quantity::kDisplacement,
+                                           {f0 - 2 * hp, f0 + 2 * hp}, Method::kHilbert, long_path);
+      EXPECT_NE(narrow.summary.status, RingdownStatus::kOk) << zeta;
+      const std::string said = "narrower than 12 times the half-power width of its mode (";
+      const size_t at = narrow.summary.message.find(said);
+      EXPECT_NE(at, std::string::npos) << narrow.summary.message;
+      return at == std::string::npos ? 0.0
+                                     : std::stod(narrow.summary.message.substr(at + said.size()));
+    };
+    const double width = named_width(false);
+    // A long record's measured part is not padded to 4x (its bins are fine already): on 10 s
+    // the crossings still fall between bins 0.1 Hz apart.
+    const double long_width = named_width(true);
+    std::printf("zeta %.3f: half-power width %.3g Hz on the long record's path\n", zeta,
+                long_width);
+    EXPECT_NEAR(long_width / hp, 1.0, 0.05) << zeta;
     const Ringdown wide = extract_band(x, fs, Quantity::kDisplacement, {f0 - 6 * hp, f0 + 6 * hp});
     std::printf(
         "zeta %.3f: half-power width %.3g Hz named, %.3g Hz true; 12 widths: %.2f decades\n", zeta,

@@ -121,7 +121,7 @@ BandWeights band_weights(Eigen::Index n_fft, double fs, const Band& band,
 BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eigen::Index n_record,
                          Eigen::Index n_fft, double fs, const Band& band,
                          const BandOptions& options, FftCache& cache) {
-  assert(spectrum.size() == n_fft / 2 + 1);
+  assert(spectrum.size() <= n_fft / 2 + 1);
   assert(band.lo > 0 && band.hi > band.lo && band.hi <= fs / 2);
   // Every channel of a record has the same bins and factors: made once per band and size.
   const std::array<double, 8> key{static_cast<double>(n_fft),
@@ -143,7 +143,8 @@ BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eig
   // covering the record (the padding dropped).
   Fft& fft = cache.get(m);
   std::complex<double>* shifted = fft.complex_input();
-  for (size_t i = 0; i < w.bin.size(); ++i) shifted[w.index[i]] = w.factor[i] * spectrum(w.bin[i]);
+  for (size_t i = 0; i < w.bin.size() && w.bin[i] < spectrum.size(); ++i)  // bins ascend
+    shifted[w.index[i]] = w.factor[i] * spectrum(w.bin[i]);
   const double duration = static_cast<double>(n_record - 1) / fs;
   const Eigen::Index keep = std::min<Eigen::Index>(
       m, static_cast<Eigen::Index>(std::floor(duration / out.dt + 1e-9)) + 1);

@@ -125,7 +125,8 @@ class FftCache {
   RecentValues<BandWeights, 8> weights_;  // bands and their superharmonic bands
 };
 
-/// Analytic signal of `band` from the one-sided spectrum of an n-sample record padded to n_fft.
+/// Analytic signal of `band` from the one-sided spectrum of an n-sample record padded to n_fft
+/// (bins past spectrum's size, at most n_fft / 2 + 1, taken as zero).
 BandSignal band_analytic(const Eigen::Ref<const Eigen::VectorXcd>& spectrum, Eigen::Index n_record,
                          Eigen::Index n_fft, double fs, const Band& band,
                          const BandOptions& options, FftCache& cache);

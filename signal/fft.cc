@@ -5,6 +5,8 @@
 #include <cstring>
 #include <mutex>
 #include <new>
+#include <utility>
+#include <vector>
 
 #include <fftw3.h>
 
@@ -51,9 +53,9 @@ struct Fft::Impl {
   // back, so that a lack of them is std::bad_alloc here, which callers can name. A best
   // effort: where the system promises memory it has not got (Linux overcommit), the probe
   // succeeds and FFTW may still abort when it touches its tables.
-  void probe_planning_memory() const {
+  void probe_planning_memory(size_t bytes_a_point = 12) const {
     if (n < (Eigen::Index{1} << 16)) return;
-    void* volatile p = std::malloc(12 * static_cast<size_t>(n));  // kept
+    void* volatile p = std::malloc(bytes_a_point * static_cast<size_t>(n));  // kept
     if (!p) throw std::bad_alloc();
     std::free(p);
   }
@@ -98,6 +100,19 @@ struct Fft::Impl {
       c2r = fftw_plan_dft_c2r_1d(static_cast<int>(n), full_in, real_in, FFTW_ESTIMATE);
     }
     return c2r;
+  }
+  bool halfcomplex() const;
+  // The halfcomplex plan of `kind` (FFTW_R2HC or FFTW_HC2R) in place on r, kept in the
+  // forward or inverse in-place slot.
+  fftw_plan halfcomplex_plan(fftw_r2r_kind kind, double* r) {
+    fftw_plan& plan = kind == FFTW_R2HC ? r2c_in_place : c2r_in_place;
+    std::lock_guard<std::mutex> lock(planner_mutex());
+    if (plan) fftw_destroy_plan(plan);
+    plan = nullptr;
+    probe_planning_memory(3);  // its tables take 1.8 bytes a point
+    plan = fftw_plan_r2r_1d(static_cast<int>(n), r, r, kind, FFTW_ESTIMATE);
+    if (!plan) throw std::bad_alloc();
+    return plan;
   }
   void drop_in_place_plans() {
     std::lock_guard<std::mutex> lock(planner_mutex());
@@ -205,21 +220,77 @@ namespace {
 // the record they transform, and a kept pair would double a long record's peak memory.
 constexpr Eigen::Index kLargestKeptPlan = Eigen::Index{1} << 22;
 
+// Moves a[i] to a[to(i)] for every i in [0, size), `to` a permutation: each cycle once, a bit
+// a value marking what has moved.
+template <typename To>
+void permute(double* a, Eigen::Index size, To to) {
+  std::vector<bool> moved(static_cast<size_t>(size), false);
+  for (Eigen::Index start = 0; start < size; ++start) {
+    if (moved[static_cast<size_t>(start)]) continue;
+    double carried = a[start];
+    Eigen::Index at = start;
+    do {
+      at = to(at);
+      std::swap(carried, a[at]);
+      moved[static_cast<size_t>(at)] = true;
+    } while (at != start);
+  }
+}
+
+// Where the value at i of FFTW's halfcomplex order for even n (Re X_0 .. Re X_{n/2}, then
+// Im X_{n/2-1} .. Im X_1; n and n + 1 hold the zero imaginary parts of X_0 and X_{n/2})
+// goes in the interleaved one-sided spectrum.
+Eigen::Index interleaved_place(Eigen::Index i, Eigen::Index n) {
+  if (i <= n / 2) return 2 * i;
+  if (i < n) return 2 * (n - i) + 1;
+  return i == n ? 1 : n + 1;
+}
+
+// Its inverse: where the interleaved value at d goes in halfcomplex order.
+Eigen::Index halfcomplex_place(Eigen::Index d, Eigen::Index n) {
+  if (d % 2 == 0) return d / 2;
+  if (d == 1) return n;
+  if (d == n + 1) return n + 1;
+  return n - (d - 1) / 2;
+}
+
 }  // namespace
 
+// Above kLargestKeptPlan an even size is transformed by FFTW's halfcomplex (r2r) plan, whose
+// tables take 1.8 bytes a point where the r2c plan's take 8.6 (measured at 2e7 points), and
+// the halfcomplex order is permuted in place into the interleaved one: a long record's
+// spectrum then costs little beyond its own buffer.
+bool Fft::Impl::halfcomplex() const { return n > kLargestKeptPlan && n % 2 == 0; }
+
 void Fft::forward_in_place(std::complex<double>* data) {
+  auto* r = reinterpret_cast<double*>(data);
+  if (impl_->halfcomplex()) {
+    const Eigen::Index n = impl_->n;
+    fftw_execute_r2r(impl_->halfcomplex_plan(FFTW_R2HC, r), r, r);
+    impl_->drop_in_place_plans();
+    r[n] = r[n + 1] = 0.0;
+    permute(r, n + 2, [n](Eigen::Index i) { return interleaved_place(i, n); });
+    return;
+  }
   fftw_plan p = impl_->in_place_plan(true, data);
-  fftw_execute_dft_r2c(p, reinterpret_cast<double*>(data), reinterpret_cast<fftw_complex*>(data));
+  fftw_execute_dft_r2c(p, r, reinterpret_cast<fftw_complex*>(data));
   if (impl_->n > kLargestKeptPlan) impl_->drop_in_place_plans();
 }
 
 void Fft::inverse_real_in_place(std::complex<double>* data) {
-  fftw_plan p = impl_->in_place_plan(false, data);
   auto* r = reinterpret_cast<double*>(data);
-  fftw_execute_dft_c2r(p, reinterpret_cast<fftw_complex*>(data), r);
-  if (impl_->n > kLargestKeptPlan) impl_->drop_in_place_plans();
-  const double scale = 1.0 / static_cast<double>(impl_->n);
-  for (Eigen::Index j = 0; j < impl_->n; ++j) r[j] *= scale;
+  const Eigen::Index n = impl_->n;
+  if (impl_->halfcomplex()) {
+    permute(r, n + 2, [n](Eigen::Index d) { return halfcomplex_place(d, n); });
+    fftw_execute_r2r(impl_->halfcomplex_plan(FFTW_HC2R, r), r, r);
+    impl_->drop_in_place_plans();
+  } else {
+    fftw_plan p = impl_->in_place_plan(false, data);
+    fftw_execute_dft_c2r(p, reinterpret_cast<fftw_complex*>(data), r);
+    if (n > kLargestKeptPlan) impl_->drop_in_place_plans();
+  }
+  const double scale = 1.0 / static_cast<double>(n);
+  for (Eigen::Index j = 0; j < n; ++j) r[j] *= scale;
 }
 
 Eigen::Index fast_size(Eigen::Index n) {

@@ -1,6 +1,7 @@
 #include "jointlab/signal/spectrum.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <numbers>
 
@@ -92,7 +93,12 @@ Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, d
 
 void lowpass_in_place(std::complex<double>* data, Eigen::Index n, double fs, double f_pass,
                       double f_stop, FftCache& cache) {
-  const Eigen::Index nfft = fast_size(2 * n);
+  lowpass_in_place(data, n, fast_size(2 * n), fs, f_pass, f_stop, cache);
+}
+
+void lowpass_in_place(std::complex<double>* data, Eigen::Index n, Eigen::Index nfft, double fs,
+                      double f_pass, double f_stop, FftCache& cache) {
+  assert(nfft >= n);
   const Eigen::Index bins = nfft / 2 + 1;
   auto* real = reinterpret_cast<double*>(data);
   std::fill(real + n, real + 2 * bins, 0.0);

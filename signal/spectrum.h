@@ -43,6 +43,13 @@ Eigen::VectorXd lowpass(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, d
 void lowpass_in_place(std::complex<double>* data, Eigen::Index n, double fs, double f_pass,
                       double f_stop, FftCache& cache);
 
+/// lowpass_in_place() on an nfft-point transform (nfft >= n; `data` holds nfft / 2 + 1
+/// complex values): the record is padded to nfft only, so each end leaks onto the other
+/// through the filter's kernel at nfft - n samples and more (a long record's caller pads by
+/// what the kernel needs to die out and drops the ends).
+void lowpass_in_place(std::complex<double>* data, Eigen::Index n, Eigen::Index nfft, double fs,
+                      double f_pass, double f_stop, FftCache& cache);
+
 /// Frequency-domain integration (order > 0) or differentiation (order < 0) of x,
 /// with everything below f_min [Hz] removed (integration has no DC). x is zero-padded
 /// to twice its length so the record does not wrap onto itself.
