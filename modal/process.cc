@@ -24,8 +24,10 @@ namespace {
 // corrupted sample, another source) and does not count in the nodal test.
 constexpr double kMinCoherence = 0.5;
 
-// Most samples one continued record may take (its spectrum then takes about 1.5 GB).
+// Most samples a record's channel may hold (5e7 peak at about 1.1 GB), and most its continued
+// record may take: the continuations at its ends add at most a fifth.
 constexpr double kMaxSamples = 5e7;
+constexpr double kMaxContinued = 1.2 * kMaxSamples;
 
 // What the shape and the nodal test need of one channel in one band: its band signal and
 // the time base and scale of the spectrum it came from. Channels are analysed one at a
@@ -125,18 +127,32 @@ void check_processable(const data::Record& record, const std::vector<signal::Ban
   // each band's filter must settle within the record.
   const double duration = static_cast<double>(record.size() - 1) / record.fs;
   const auto samples_for = [&](double extend_s) { return (duration + 2 * extend_s) * record.fs; };
-  if (!(samples_for(options.prepare.extend_s) <= kMaxSamples)) {
-    throw InputError(
-        where(record.source, 0,
-              fmt::format("sample rate {:.3g} Hz: analysing this record would take {:.3g} "
-                          "samples (at most {:.3g}); check the file's time column or fs",
-                          record.fs, samples_for(options.prepare.extend_s), kMaxSamples)));
+  if (static_cast<double>(record.size()) > kMaxSamples) {
+    throw InputError(where(record.source, 0,
+                           fmt::format("{} samples a channel: at most {:.0f} can be analysed",
+                                       record.size(), kMaxSamples)));
+  }
+  if (!(samples_for(options.prepare.extend_s) <= kMaxContinued)) {
+    throw InputError(where(
+        record.source, 0,
+        fmt::format("sample rate {:.3g} Hz: continuing this record's {} samples at its ends would "
+                    "take {:.0f} samples (at most {:.0f}); check the file's time column or fs",
+                    record.fs, record.size(), samples_for(options.prepare.extend_s),
+                    kMaxContinued)));
   }
   for (const signal::Band& b : bands) {
     const double settle = band_settling_s(b, options.ringdown.taper);
     const double samples =
         samples_for(prepare_for({b}, options.ringdown.taper, options.prepare).extend_s);
-    if (!(settle <= duration) || !(samples <= kMaxSamples)) {
+    if (settle <= duration && !(samples <= kMaxContinued)) {
+      throw InputError(where(
+          record.source, 0,
+          fmt::format("band {}:{} Hz: continuing this record's {} samples at its ends for the "
+                      "band's filter would take {:.0f} samples (at most {:.0f}); give a wider "
+                      "band or a shorter record",
+                      b.lo, b.hi, record.size(), samples, kMaxContinued)));
+    }
+    if (!(settle <= duration)) {
       throw InputError(where(
           record.source, 0,
           fmt::format("band {}:{} Hz is too narrow for this {:.3g} s record: its filter takes "
