@@ -348,13 +348,15 @@ class Workspaces {
   unsigned threads_;
 };
 
-// Every band's results and kept band signals: results[band * requests + i] for request i,
-// kept[band][c] for channel c of the set.
+// A group of bands' results and kept band signals, band b of the group being the record's
+// band first + b: results[(first + b) * requests + i] for request i, kept[b][c] for channel c
+// of the set.
 struct BandResults {
   std::vector<ChannelBand>& results;
   size_t requests = 0;
+  size_t first = 0;
   std::vector<std::vector<std::optional<BandOfChannel>>> kept;
-  ChannelBand* of(size_t band) { return results.data() + band * requests; }
+  ChannelBand* of(size_t band) { return results.data() + (first + band) * requests; }
 };
 
 // Pass 1, every band of every requested channel, as independent jobs (one barrier for all
@@ -377,7 +379,7 @@ void extract_bands(const ChannelSet& set, const std::vector<signal::Band>& bands
       ChannelBand& r = results[i];
       r.channel = set.all[c]->name;
       r.measured = set.measured_by(c);
-      r.band_index = static_cast<int>(b) + 1;
+      r.band_index = static_cast<int>(out.first + b) + 1;
       r.ringdown = extract_backbone(spectrum, r.measured, bands[b], set.options.ringdown, cache);
       if (r.ringdown.summary.status == RingdownStatus::kOk && !kept)
         kept = set.band_of(spectrum, std::move(r.ringdown.band));
@@ -504,23 +506,32 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   }
   const auto by_memory = static_cast<unsigned>(std::clamp(kWorkerSamples / continued, 1.0, 1024.0));
   Workspaces workers(cache, std::min(threads_or_cores(options.threads), by_memory));
-  std::vector<PrepareOptions> prepare;
-  for (const signal::Band& band : out.bands)
-    prepare.push_back(prepare_for({band}, options.ringdown.taper, options.prepare));
+  // Bands in groups of at most kJobsAtOnce band-channel jobs: a group's kept band signals
+  // are held until its nodal test (a record of many channels goes band by band).
+  constexpr size_t kJobsAtOnce = 256;
+  const size_t per_group = std::max<size_t>(1, kJobsAtOnce / std::max<size_t>(1, set.all.size()));
   out.results.resize(out.bands.size() * chans.size());
-  BandResults bands{out.results, chans.size(), {}};
-  extract_bands(set, out.bands, prepare, bands, workers);
-  std::vector<std::optional<size_t>> ref(out.bands.size());
-  for (size_t b = 0; b < out.bands.size(); ++b) {
-    const ChannelBand* results = bands.of(b);
-    const size_t r = reference_channel(results, chans.size());
-    out.reference.push_back(results[r].channel);
-    if (results[r].ringdown.summary.status == RingdownStatus::kOk) ref[b] = r;
-  }
-  const std::vector<std::vector<double>> share =
-      shapes_and_shares(set, out.bands, prepare, ref, bands, workers);
-  for (size_t b = 0; b < out.bands.size(); ++b) {
-    if (ref[b]) drop_near_nodes(share[b], options.min_share, bands.of(b));
+  for (size_t g0 = 0; g0 < out.bands.size(); g0 += per_group) {
+    const size_t g1 = std::min(out.bands.size(), g0 + per_group);
+    const std::vector<signal::Band> bands(out.bands.begin() + static_cast<std::ptrdiff_t>(g0),
+                                          out.bands.begin() + static_cast<std::ptrdiff_t>(g1));
+    std::vector<PrepareOptions> prepare;
+    for (const signal::Band& band : bands)
+      prepare.push_back(prepare_for({band}, options.ringdown.taper, options.prepare));
+    BandResults group{out.results, chans.size(), g0, {}};
+    extract_bands(set, bands, prepare, group, workers);
+    std::vector<std::optional<size_t>> ref(bands.size());
+    for (size_t b = 0; b < bands.size(); ++b) {
+      const ChannelBand* results = group.of(b);
+      const size_t r = reference_channel(results, chans.size());
+      out.reference.push_back(results[r].channel);
+      if (results[r].ringdown.summary.status == RingdownStatus::kOk) ref[b] = r;
+    }
+    const std::vector<std::vector<double>> share =
+        shapes_and_shares(set, bands, prepare, ref, group, workers);
+    for (size_t b = 0; b < bands.size(); ++b) {
+      if (ref[b]) drop_near_nodes(share[b], options.min_share, group.of(b));
+    }
   }
   return out;
 }

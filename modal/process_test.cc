@@ -268,5 +268,42 @@ TEST(Process, ChannelWorkersChangeNothing) {
   EXPECT_LT(dropped, static_cast<int>(one.results.size()));
 }
 
+// A band's outcome depends on that band alone, whether the record's bands run as one group of
+// jobs (a few channels) or one by one (more channels than 256 jobs hold): 260 channels in two
+// bands, and their first 8 alone, give each band what it gives requested alone, to the bit,
+// shape entries and the nodal test included.
+TEST(Process, BandsInGroupsOrOneByOneGiveWhatEachGivesAlone) {
+  const data::Record rec = many_channels(260, 250, [](int c, int k, double t) {
+    const double f = 150 + (c * 37) % 250, decay = 3 + c % 7;
+    return (1 + 0.01 * (c % 13)) * std::exp(-decay * t) * std::sin(2 * std::numbers::pi * f * t) +
+           0.5 * std::exp(-4 * t) * std::sin(2 * std::numbers::pi * 230 * t) +
+           1e-4 * std::sin(1234.5 * (k + 7.0 * c));
+  });
+  data::Record few = rec;
+  few.channels.resize(8);
+  for (const data::Record* r : {&rec, static_cast<const data::Record*>(&few)}) {
+    SCOPED_TRACE(fmt::format("{} channels", r->channels.size()));
+    ProcessOptions opt;
+    opt.bands = {{100, 420}, {150, 300}};
+    signal::FftCache cache;
+    const RecordResult both = process_record(*r, opt, cache);
+    ASSERT_EQ(both.results.size(), 2 * r->channels.size());
+    int with_backbone = 0;
+    for (size_t b = 0; b < 2; ++b) {
+      opt.bands = {both.bands[b]};
+      const RecordResult alone = process_record(*r, opt, cache);
+      EXPECT_EQ(alone.reference[0], both.reference[b]);
+      for (size_t c = 0; c < r->channels.size(); ++c) {
+        const ChannelBand& x = both.results[b * r->channels.size() + c];
+        EXPECT_EQ(x.band_index, static_cast<int>(b) + 1);
+        expect_same_channel(x, alone.results[c]);
+        EXPECT_EQ(x.complex_amplitude, alone.results[c].complex_amplitude);
+        with_backbone += x.ringdown.summary.status == RingdownStatus::kOk;
+      }
+    }
+    EXPECT_GT(with_backbone, 0);
+  }
+}
+
 }  // namespace
 }  // namespace jointlab::modal

@@ -967,7 +967,17 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
 Eigen::VectorXcd measured_spectrum(const ChannelSpectrum& channel, Eigen::Index i0,
                                    Eigen::Index count, signal::FftCache& cache, Eigen::Index& n) {
   if (channel.n_fft >= 2 * channel.n_record) {
-    const Eigen::VectorXd y = cache.get(channel.n_fft).inverse_real(channel.spectrum);
+    // A record short of its padding (a long record's settling times reaching past its own
+    // length) is padded as the short ones but its bins may still be cut: those are zero.
+    const Eigen::Index bins = channel.n_fft / 2 + 1;
+    Eigen::VectorXcd cut;
+    if (channel.spectrum.size() < bins) {
+      cut = Eigen::VectorXcd::Zero(bins);
+      cut.head(channel.spectrum.size()) = channel.spectrum;
+    }
+    const Eigen::VectorXd y =
+        cache.get(channel.n_fft)
+            .inverse_real(channel.spectrum.size() < bins ? cut : channel.spectrum);
     n = signal::fast_size(4 * count);
     return cache.get(n).forward(y.segment(i0, count));
   }

@@ -45,8 +45,8 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
 
   // Normal equations from power sums: (X'WX)_jk = sum w tau^(j+k), likewise X'W^2X and
   // X'Wy. Two samples at a time in one SSE2 register pair (GCC vector extension), and
-  // three passes, each with few enough running sums to stay in registers: one pass over
-  // all 30 sums, one sample at a time, spilled them and waited on each power's multiply.
+  // passes with few enough running sums to stay in registers: one pass over all 30 sums,
+  // one sample at a time, spilled them and waited on each power's multiply.
   using V2 = double __attribute__((vector_size(16)));
   const auto pair_at = [n](Eigen::Index i, auto value) {  // samples i, i + 1 (0 past n)
     const V2 v = {value(i), i + 1 < n ? value(i + 1) : 0.0};
@@ -70,19 +70,9 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
     }
     for (int m = 0; m < 2 * p - 1; ++m) s1[m] = acc[m][0] + acc[m][1];
   }
-  {
-    V2 acc[2 * q - 1] = {};
-    for (Eigen::Index i = 0; i < n; i += 2) {
-      const V2 tau = pair_at(i, tau_of);
-      const V2 w = pair_at(i, weight);
-      V2 pw = w * w;
-      for (int m = 0; m < 2 * q - 1; ++m) {
-        acc[m] += pw;
-        pw *= tau;
-      }
-    }
-    for (int m = 0; m < 2 * q - 1; ++m) s2w[m] = acc[m][0] + acc[m][1];
-  }
+  // w^2 tau^m = w tau^m (1 - tau^2)^2: the sums of X'W^2X are those of X'WX combined (the
+  // highest, m + 4 = 2p - 2, is there), no pass of their own.
+  for (int m = 0; m < 2 * q - 1; ++m) s2w[m] = s1[m] - 2 * s1[m + 2] + s1[m + 4];
   // Two series a pass: more running sums would spill.
   for (int k0 = 0; k0 < K; k0 += 2) {
     const int k1 = std::min(K, k0 + 2);
@@ -153,19 +143,22 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
   for (int k = 0; k < K; ++k) beta[k] = solve(VecQ(Eigen::Map<const VecQ>(sy[k])));
   // Weighted residual sums of squares from a second pass (numerically safer
   // than expanding y'Wy - beta'X'Wy for nearly exact fits).
-  double sw = 0, swr2[K] = {};
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double tau = tau_of(i);
-    const double u = std::max(0.0, 1.0 - tau * tau);
-    const double w = u * u;
-    sw += w;
+  // Two samples at a time like the sums (the pair past an odd count has weight 0).
+  V2 sum_w = {}, sum_wr2[K] = {};
+  for (Eigen::Index i = 0; i < n; i += 2) {
+    const V2 tau = pair_at(i, tau_of);
+    const V2 w = pair_at(i, weight);
+    sum_w += w;
     for (int k = 0; k < K; ++k) {
-      double fit = beta[k](q - 1);
+      V2 fit = {beta[k](q - 1), beta[k](q - 1)};
       for (int j = q - 2; j >= 0; --j) fit = fit * tau + beta[k](j);
-      const double r = (*ys[k])(i0 + i * stride) - fit;
-      swr2[k] += w * r * r;
+      const V2 r = pair_at(i, [&](Eigen::Index l) { return (*ys[k])(i0 + l * stride); }) - fit;
+      sum_wr2[k] += w * r * r;
     }
   }
+  const double sw = sum_w[0] + sum_w[1];
+  double swr2[K];
+  for (int k = 0; k < K; ++k) swr2[k] = sum_wr2[k][0] + sum_wr2[k][1];
   std::array<LocalFit, K> out;
   for (int k = 0; k < K; ++k) {
     const double s2 = swr2[k] / sw;

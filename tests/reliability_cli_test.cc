@@ -1,7 +1,9 @@
 // The command under hostile input and failing disks: every error is one line with exit
 // status 2; sizes are refused before they are allocated; a command's outputs replace the
 // previous ones as a set or not at all, and temporaries of killed runs are removed.
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -881,6 +883,52 @@ TEST(OutOfMemory, TheRecordIsNamedAtEveryLimit) {
   }
   EXPECT_EQ(statuses[80], 2);   // the limits reach from too little ...
   EXPECT_EQ(statuses[512], 0);  // ... to enough
+}
+
+// A record's peak memory is at most three doubles a sample plus a fixed amount. A 5e6-sample
+// channel (above 2^22 analysed samples: the long-record path, padded by its filters' settling
+// times) is processed by the command in a child of its own, whose peak resident set
+// (wait4's ru_maxrss) must stay below 24 bytes a sample plus 40 MB: the program with its
+// libraries takes about 17 MB before it reads anything, and this record measured 131 MB
+// (243 MB when long records were padded to twice their length).
+TEST(OutOfMemory, ALongRecordPeaksBelowThreeDoublesASample) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer's shadow memory is not the program's";
+#endif
+  constexpr int kSamples = 5000000;
+  const std::string dir = scratch_dir("peak_memory");
+  const std::string path = dir + "/long.csv";
+  {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fputs("# fs: 10000\nacc1 [m/s^2]\n", f);
+    for (int k = 0; k < kSamples; ++k) {
+      const double t = k * 1e-4;
+      std::fprintf(f, "%.7g\n",
+                   100 * std::exp(-2 * M_PI * 0.1 * t) * std::sin(2 * M_PI * 100 * t) +
+                       1e-4 * std::sin(0.7 * k * k));
+    }
+    std::fclose(f);
+  }
+  const std::string binary = binary_dir() + "/bin/jointlab";
+  const std::string out = dir + "/out";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen("/dev/null", "w", stdout);
+    std::freopen((dir + "/err.txt").c_str(), "w", stderr);
+    execl(binary.c_str(), binary.c_str(), "process", path.c_str(), "--band", "80:120", "--threads",
+          "1", "--out", out.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  ASSERT_EQ(wait4(pid, &status, 0, &usage), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  ASSERT_EQ(WEXITSTATUS(status), 0) << testing::read_file(dir + "/err.txt");
+  const double peak = static_cast<double>(usage.ru_maxrss) * 1024;  // ru_maxrss is in kB
+  EXPECT_LE(peak, 24.0 * kSamples + 40e6) << fmt::format("{:.1f} bytes a sample", peak / kSamples);
+  EXPECT_TRUE(fs::exists(out + "/long.acc1.band1.csv"));
 }
 
 TEST(ArgumentErrors, NegativeThreadsAreNamedWithReadableBounds) {
