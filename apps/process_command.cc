@@ -84,7 +84,7 @@ void run_process(const ProcessArgs& args) {
   opt.ringdown.max_damping_rel_std = args.max_damping_std;
   opt.ringdown.coverage_factor = args.coverage_factor;
   opt.min_share = args.min_share;
-  // Files first, one worker each; the threads left over go to each record's channels.
+  // Files first, one worker each; the threads left over go to each record's bands and channels.
   const unsigned threads = threads_or_cores(args.threads);
   opt.threads = std::max<unsigned>(
       1, threads / static_cast<unsigned>(std::min<size_t>(args.files.size(), threads)));
@@ -232,8 +232,8 @@ void add_process_command(CLI::App& app) {
       ->check(in_range(0.0, 0.99));
   cmd->add_option(
          "--threads", args->threads,
-         "worker threads, shared out over the files and then each file's channels (default 0:\n"
-         "every core); the results do not depend on it")
+         "worker threads, shared out over the files and then each file's bands and channels\n"
+         "(default 0: every core); the results do not depend on it")
       ->check(in_range(0, 1024));
   cmd->add_option("--out", args->out, "output directory (created if missing)")->required();
   cmd->callback([args] {

@@ -532,7 +532,7 @@ quantity   'acceleration', 'velocity' or 'displacement' for channels without a u
 amplitude  quantity of the amplitude column: 'velocity' (default), 'displacement' [m],
            'acceleration' [m/s^2]
 progress   callable taking one line of text, or None (silent)
-threads    workers for each file's channels (0: every core); the results do not depend on it
+threads    workers for each file's bands and channels (0: every core); the results do not depend on it
 
 Returns a list of jointlab.Backbone, one per file x channel x band with a kept span, in the
 order of the files, then bands, then channels. Each carries numpy arrays named as the CSV's
