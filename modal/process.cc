@@ -499,10 +499,13 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   // the record; about 15 beside the samples above 2^22 samples, padded by pad_s): a long
   // record gets fewer workers, so that together they stay near 1 GB.
   constexpr double kWorkerSamples = 2e7;
+  std::vector<PrepareOptions> prepare;  // each band's own continuation and low-pass
+  for (const signal::Band& band : out.bands)
+    prepare.push_back(prepare_for({band}, options.ringdown.taper, options.prepare));
   double continued = static_cast<double>(record.size());
-  for (const signal::Band& b : out.bands) {
-    const double extend_s = prepare_for({b}, options.ringdown.taper, options.prepare).extend_s;
-    continued = std::max(continued, static_cast<double>(record.size()) + 2 * extend_s * record.fs);
+  for (const PrepareOptions& p : prepare) {
+    continued =
+        std::max(continued, static_cast<double>(record.size()) + 2 * p.extend_s * record.fs);
   }
   const auto by_memory = static_cast<unsigned>(std::clamp(kWorkerSamples / continued, 1.0, 1024.0));
   Workspaces workers(cache, std::min(threads_or_cores(options.threads), by_memory));
@@ -513,13 +516,11 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
   out.results.resize(out.bands.size() * chans.size());
   for (size_t g0 = 0; g0 < out.bands.size(); g0 += per_group) {
     const size_t g1 = std::min(out.bands.size(), g0 + per_group);
-    const std::vector<signal::Band> bands(out.bands.begin() + static_cast<std::ptrdiff_t>(g0),
-                                          out.bands.begin() + static_cast<std::ptrdiff_t>(g1));
-    std::vector<PrepareOptions> prepare;
-    for (const signal::Band& band : bands)
-      prepare.push_back(prepare_for({band}, options.ringdown.taper, options.prepare));
+    const auto from = static_cast<std::ptrdiff_t>(g0), to = static_cast<std::ptrdiff_t>(g1);
+    const std::vector<signal::Band> bands(out.bands.begin() + from, out.bands.begin() + to);
+    const std::vector<PrepareOptions> group_prepare(prepare.begin() + from, prepare.begin() + to);
     BandResults group{out.results, chans.size(), g0, {}};
-    extract_bands(set, bands, prepare, group, workers);
+    extract_bands(set, bands, group_prepare, group, workers);
     std::vector<std::optional<size_t>> ref(bands.size());
     for (size_t b = 0; b < bands.size(); ++b) {
       const ChannelBand* results = group.of(b);
@@ -528,7 +529,7 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
       if (results[r].ringdown.summary.status == RingdownStatus::kOk) ref[b] = r;
     }
     const std::vector<std::vector<double>> share =
-        shapes_and_shares(set, bands, prepare, ref, group, workers);
+        shapes_and_shares(set, bands, group_prepare, ref, group, workers);
     for (size_t b = 0; b < bands.size(); ++b) {
       if (ref[b]) drop_near_nodes(share[b], options.min_share, group.of(b));
     }

@@ -185,7 +185,6 @@ namespace {
 // Transform sizes of a channel's spectrum and of its low-pass.
 struct Padding {
   Eigen::Index n_fft = 0, n_lowpass = 0;
-  bool long_record = false;  // padded by pad_s, not to twice its length
 };
 
 // Sizes for an analysed record of n_record samples whose m measured samples are low-passed
@@ -197,14 +196,14 @@ struct Padding {
 Padding padding(Eigen::Index n_record, Eigen::Index m, Eigen::Index guard, double fs,
                 const PrepareOptions& options) {
   if (n_record <= options.pad_above || !(options.pad_s > 0)) {
-    return {signal::fast_size(2 * n_record), signal::fast_size(2 * m), false};
+    return {signal::fast_size(2 * n_record), signal::fast_size(2 * m)};
   }
   const double wanted = std::ceil(options.pad_s * fs);
   const Eigen::Index pad = wanted < static_cast<double>(n_record)
                                ? static_cast<Eigen::Index>(wanted)
                                : n_record;  // never more than the short records' padding
   const auto even = [](Eigen::Index k) { return 2 * signal::fast_size((k + 1) / 2); };
-  return {even(n_record + pad), even(m + std::min(2 * guard, m)), true};
+  return {even(n_record + pad), even(m + std::min(2 * guard, m))};
 }
 
 // The bins of channel c's spectrum that are kept. A long low-passed record keeps those up to
@@ -294,7 +293,9 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   std::copy(e.after.data(), e.after.data() + wanted, r + wanted + kept);
   std::fill(r + c.n_record, r + 2 * buffer.size(), 0.0);
   cache.get(c.n_fft).forward_in_place(buffer.data());
-  buffer.conservativeResize(stored_bins(c, pad.long_record && lowpass, options.lowpass_hz));
+  // Cut only where every reader takes the long record's way (ChannelSpectrum::padded_by_pad_s):
+  // a record whose settling times reach past its own length is padded as a short one, whole.
+  buffer.conservativeResize(stored_bins(c, c.padded_by_pad_s() && lowpass, options.lowpass_hz));
   c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
@@ -616,41 +617,33 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
                                  std::min(t.back() + reach, std::max(t.back(), data_end)));
     return v[end] + (v[k] - v[end]) / (t[k] - t[end]) * (xe - t[end]);
   };
+  // Between the estimates, t[k - 1] <= x < t[k]: k walks along with the grid (x only grows),
+  // not searched anew at each point.
+  size_t k = 1;
   const auto at = [&](const std::vector<double>& v, double x) {
     if (x <= t.front()) return continued ? line_from(v, 0, x) : v.front();
     if (x >= t.back()) return continued ? line_from(v, t.size() - 1, x) : v.back();
-    const size_t k = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
+    while (t[k] <= x) ++k;
     const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
     return (1 - w) * v[k - 1] + w * v[k];
   };
   // Zero-padded to twice the grid; a long record's channel (padded by pad_s itself) by three
   // settling times, where the band's kernel is down to exp(-100): the model's start, its
   // largest part, then adds nothing to r where the model has decayed by decades.
-  const bool long_record = s.channel.n_fft < 2 * s.channel.n_record;
   const Eigen::Index n =
-      long_record ? signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt)))
-                  : signal::fast_size(2 * grid);
+      s.channel.padded_by_pad_s()
+          ? signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt)))
+          : signal::fast_size(2 * grid);
   Eigen::VectorXd log_m(grid);  // m past the grid is zero padding
   Eigen::VectorXd phase(grid);
   double la = 0, ph = 0;
-  // Inside [t.front(), t.back()], at() interpolates between t[k - 1] and t[k], the first
-  // estimate after x: found by walking along with the grid, not searched anew at each point.
-  size_t k = 1;
-  const auto inside = [&](const std::vector<double>& v, double x) {
-    const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
-    return (1 - w) * v[k - 1] + w * v[k];
-  };
   for (Eigen::Index j = 0; j < grid; ++j) {
     const double x = static_cast<double>(j) * s.dt;
     const bool near = x > t.front() - reach && x < t.back() + reach;
     log_m(j) = la;
     phase(j) = ph;
-    const bool between = x > t.front() && x < t.back();
-    if (between) {
-      while (t[k] <= x) ++k;
-    }
-    la -= (near ? kTwoPi * std::max(0.0, between ? inside(d, x) : at(d, x)) : 0.0) * s.dt;
-    ph += kTwoPi * ((between ? inside(f, x) : at(f, x)) - carrier_hz) * s.dt;
+    la -= (near ? kTwoPi * std::max(0.0, at(d, x)) : 0.0) * s.dt;
+    ph += kTwoPi * (at(f, x) - carrier_hz) * s.dt;
   }
   const double top = log_m.maxCoeff();
   // m = |m| u, u = e^{i phase}: r = band(m) / m = band(m) conj(u) / |m| needs no complex
@@ -966,18 +959,8 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
 // it was 130 bytes a sample, five times the rest of the record's analysis).
 Eigen::VectorXcd measured_spectrum(const ChannelSpectrum& channel, Eigen::Index i0,
                                    Eigen::Index count, signal::FftCache& cache, Eigen::Index& n) {
-  if (channel.n_fft >= 2 * channel.n_record) {
-    // A record short of its padding (a long record's settling times reaching past its own
-    // length) is padded as the short ones but its bins may still be cut: those are zero.
-    const Eigen::Index bins = channel.n_fft / 2 + 1;
-    Eigen::VectorXcd cut;
-    if (channel.spectrum.size() < bins) {
-      cut = Eigen::VectorXcd::Zero(bins);
-      cut.head(channel.spectrum.size()) = channel.spectrum;
-    }
-    const Eigen::VectorXd y =
-        cache.get(channel.n_fft)
-            .inverse_real(channel.spectrum.size() < bins ? cut : channel.spectrum);
+  if (!channel.padded_by_pad_s()) {
+    const Eigen::VectorXd y = cache.get(channel.n_fft).inverse_real(channel.spectrum);
     n = signal::fast_size(4 * count);
     return cache.get(n).forward(y.segment(i0, count));
   }

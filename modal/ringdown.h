@@ -162,6 +162,10 @@ struct ChannelSpectrum {
   /// The analysed samples are the record's times this power of two: 1 unless the channel's
   /// magnitude lies outside [1e-100, 1e100], where squares would overflow or underflow.
   double scale = 1.0;
+
+  /// Padded by PrepareOptions::pad_s rather than to twice the record (a long record): only
+  /// then may the spectrum stop short of n_fft / 2 + 1 bins.
+  bool padded_by_pad_s() const { return n_fft < 2 * n_record; }
 };
 
 /// Backbone, summary and the band's displacement analytic signal.

@@ -141,9 +141,9 @@ std::array<LocalFit, K> fit_local_series(const std::array<const Eigen::VectorXd*
 
   std::array<VecQ, K> beta;
   for (int k = 0; k < K; ++k) beta[k] = solve(VecQ(Eigen::Map<const VecQ>(sy[k])));
-  // Weighted residual sums of squares from a second pass (numerically safer
-  // than expanding y'Wy - beta'X'Wy for nearly exact fits).
-  // Two samples at a time like the sums (the pair past an odd count has weight 0).
+  // Weighted residual sums of squares from a pass of their own (numerically safer than
+  // expanding y'Wy - beta'X'Wy for nearly exact fits), two samples at a time like the sums
+  // (the pair past an odd count has weight 0).
   V2 sum_w = {}, sum_wr2[K] = {};
   for (Eigen::Index i = 0; i < n; i += 2) {
     const V2 tau = pair_at(i, tau_of);
