@@ -25,6 +25,14 @@ add_library(jointlab_cholmod INTERFACE)
 target_include_directories(jointlab_cholmod SYSTEM INTERFACE ${CHOLMOD_INCLUDE_DIR})
 target_link_libraries(jointlab_cholmod INTERFACE ${CHOLMOD_LIBRARY})
 
+# glibc's vector maths library (part of libc6-dev), for signal/vector_math.cc; without it the
+# scalar libm functions do the same work.
+find_library(JOINTLAB_MVEC_LIBRARY mvec)
+set(JOINTLAB_LIBMVEC "")
+if(JOINTLAB_MVEC_LIBRARY AND CMAKE_SYSTEM_PROCESSOR MATCHES "x86_64|AMD64")
+  set(JOINTLAB_LIBMVEC mvec)
+endif()
+
 find_package(Threads REQUIRED)
 if(JOINTLAB_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -16,6 +16,7 @@
 #include "jointlab/signal/extend.h"
 #include "jointlab/signal/local_poly.h"
 #include "jointlab/signal/spectrum.h"
+#include "jointlab/signal/vector_math.h"
 
 namespace jointlab::modal {
 
@@ -313,21 +314,15 @@ struct EnvelopePhase {
   Eigen::VectorXd amp, log_amp, theta;
 };
 
-// The unwrapping's step at sample j > 0: -2 pi, 0 or +2 pi added to the phase from j on.
-// Two samples whose imaginary parts share a sign lie in one closed half plane, where the
-// difference of their arguments is within pi: arg() is needed only where the sign changes.
-double unwrap_step(const Eigen::VectorXcd& baseband, Eigen::Index j) {
-  if (std::signbit(baseband(j).imag()) == std::signbit(baseband(j - 1).imag())) return 0.0;
-  const double d = std::arg(baseband(j)) - std::arg(baseband(j - 1));
+// The unwrapping's step at sample j > 0, from the samples' imaginary parts and arguments:
+// -2 pi, 0 or +2 pi added to the phase from j on. Two samples whose imaginary parts share a
+// sign lie in one closed half plane, where the difference of their arguments is within pi.
+double unwrap_step(double im_before, double im, double arg_before, double arg) {
+  if (std::signbit(im) == std::signbit(im_before)) return 0.0;
+  const double d = arg - arg_before;
   if (d > std::numbers::pi) return -kTwoPi;
   if (d < -std::numbers::pi) return kTwoPi;
   return 0.0;
-}
-
-// The unwrapped phase at sample j with the unwrapping's offset there.
-double phase_at(const Eigen::VectorXcd& baseband, double carrier_hz, double dt, Eigen::Index j,
-                double offset) {
-  return std::arg(baseband(j)) + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
 }
 
 // |z| as sqrt(re^2 + im^2) where that cannot overflow or underflow, else std::abs (a
@@ -337,17 +332,24 @@ double magnitude(std::complex<double> z) {
   return n > 1e-290 && n < 1e290 ? std::sqrt(n) : std::abs(z);
 }
 
+// The logarithms and arguments of a signal's samples take one vector call each
+// (signal/vector_math.h): they were a sixth of process's time a sample at a time.
 EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz, double dt) {
+  const Eigen::Index n = baseband.size();
   EnvelopePhase ep;
-  ep.amp.resize(baseband.size());
-  ep.log_amp.resize(baseband.size());
-  ep.theta.resize(baseband.size());
-  double offset = 0;
-  for (Eigen::Index j = 0; j < baseband.size(); ++j) {
-    ep.amp(j) = magnitude(baseband(j));
-    ep.log_amp(j) = std::log(std::max(ep.amp(j), 1e-300));
-    if (j > 0) offset += unwrap_step(baseband, j);
-    ep.theta(j) = phase_at(baseband, carrier_hz, dt, j, offset);
+  ep.amp.resize(n);
+  ep.log_amp.resize(n);
+  ep.theta.resize(n);
+  for (Eigen::Index j = 0; j < n; ++j) ep.amp(j) = magnitude(baseband(j));
+  signal::log_array(ep.amp.array().max(1e-300), ep.log_amp.array());
+  const Eigen::ArrayXd re = baseband.real(), im = baseband.imag();
+  signal::atan2_array(im, re, ep.theta.array());  // the arguments, unwrapped below
+  double offset = 0, arg_before = 0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double arg = ep.theta(j);
+    if (j > 0) offset += unwrap_step(im(j - 1), im(j), arg_before, arg);
+    ep.theta(j) = arg + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
+    arg_before = arg;
   }
   return ep;
 }
@@ -358,11 +360,17 @@ EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz
 std::pair<double, double> phases_at(const Eigen::VectorXcd& baseband, double carrier_hz, double dt,
                                     Eigen::Index a, Eigen::Index b) {
   double offset = 0, at_a = 0;
+  const auto phase_at = [&](Eigen::Index j) {
+    return std::arg(baseband(j)) + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
+  };
   for (Eigen::Index j = 0; j <= b; ++j) {
-    if (j > 0) offset += unwrap_step(baseband, j);
-    if (j == a) at_a = phase_at(baseband, carrier_hz, dt, j, offset);
+    if (j > 0 && std::signbit(baseband(j).imag()) != std::signbit(baseband(j - 1).imag())) {
+      offset += unwrap_step(baseband(j - 1).imag(), baseband(j).imag(), std::arg(baseband(j - 1)),
+                            std::arg(baseband(j)));
+    }
+    if (j == a) at_a = phase_at(j);
   }
-  return {at_a, phase_at(baseband, carrier_hz, dt, b, offset)};
+  return {at_a, phase_at(b)};
 }
 
 // What the steps of one band's extraction share.
@@ -650,15 +658,13 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   // division, and |r| no hypot (both a tenth of process's time together).
   // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)),
   // conj m written straight into the transform's input (m past the grid is zero padding).
-  Eigen::VectorXd mag(grid);
-  Eigen::VectorXcd unit(grid);
+  // |m|, cos and sin of its phase: one vector call each (signal/vector_math.h).
+  Eigen::ArrayXd mag(grid), cos(grid), sin(grid);
+  signal::exp_array((log_m.array() - top).max(-700.0), mag);
+  signal::sincos_array(phase.array(), sin, cos);
   signal::Fft& fft = cache.get(n);
   std::complex<double>* conj_m = fft.complex_input();
-  for (Eigen::Index j = 0; j < grid; ++j) {
-    mag(j) = std::exp(std::max(-700.0, log_m(j) - top));
-    unit(j) = std::polar(1.0, phase(j));
-    conj_m[j] = std::conj(mag(j) * unit(j));
-  }
+  for (Eigen::Index j = 0; j < grid; ++j) conj_m[j] = {mag(j) * cos(j), -(mag(j) * sin(j))};
   Eigen::VectorXcd spec = fft.inverse_complex_head(n).conjugate() * static_cast<double>(n);
   // The band's gain at each bin around the carrier: the same for every pass and channel.
   const Eigen::VectorXd& gain = cache.gain(
@@ -674,16 +680,25 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   std::complex<double>* filter_in = fft.complex_input();
   for (Eigen::Index k = 0; k < n; ++k) filter_in[k] = spec(k) * gain(k);
   const Eigen::VectorXcd filtered = fft.inverse_complex_head(grid);  // the padding dropped
+  // r = band(m) conj(u) / |m|, then ln |r| + i arg r, the logarithms and arguments in one
+  // vector call each (std::log of a complex near |r| = 1 takes a slow exact path, a tenth of
+  // process's time once, for a precision far below what r is known to).
+  Eigen::ArrayXd r_re(grid), r_im(grid), abs_r(grid);
+  for (Eigen::Index j = 0; j < grid; ++j) {
+    const std::complex<double> r =
+        mag(j) > 1e-250 ? filtered(j) * std::complex<double>(cos(j), -sin(j)) / mag(j) : 1.0;
+    r_re(j) = r.real();
+    r_im(j) = r.imag();
+    abs_r(j) = std::sqrt(std::norm(r));  // |r| is near 1: no overflow to guard
+  }
+  Eigen::ArrayXd log_abs(grid), arg(grid);
+  signal::log_array(abs_r.max(1e-12), log_abs);
+  signal::atan2_array(r_im, r_re, arg);
   g.log_r.resize(grid);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (Eigen::Index j = 0; j < grid; ++j) {
-    const std::complex<double> r =
-        mag(j) > 1e-250 ? filtered(j) * std::conj(unit(j)) / mag(j) : 1.0;
-    // ln |r| + i arg r: std::log of a complex near |r| = 1 takes a slow exact path (a
-    // tenth of process's time) for a precision far below what r is known to.
-    const double ar = std::sqrt(std::norm(r));  // |r| is near 1: no overflow to guard
     std::complex<double> lr =
-        ar > 1e-12 ? std::complex<double>(std::log(ar), std::arg(r)) : std::log(1e-12);
+        abs_r(j) > 1e-12 ? std::complex<double>(log_abs(j), arg(j)) : std::log(1e-12);
     if (j > 0) {  // unwrap the phase
       lr.imag(lr.imag() + kTwoPi * std::round((g.log_r(j - 1).imag() - lr.imag()) / kTwoPi));
     }
@@ -740,8 +755,8 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
       const std::complex<double> step = gain.log_at(t) - previous.log_at(t);
       step_re(j) = step.real();
       step_im(j) = step.imag();
-      step_abs(j) = std::abs(step);
-      if (earlier.active) before_abs(j) = std::abs(previous.log_at(t) - earlier.log_at(t));
+      step_abs(j) = magnitude(step);
+      if (earlier.active) before_abs(j) = magnitude(previous.log_at(t) - earlier.log_at(t));
       const std::complex<double> ends = continued.log_at(t) - gain.log_at(t);
       ends_re(j) = ends.real();
       ends_im(j) = ends.imag();
@@ -887,11 +902,21 @@ std::vector<Estimate> estimates_of(const Eigen::VectorXcd& z, double carrier_hz,
 }
 
 // z divided by the gain correction at each sample (grid step dt from channel.t0).
+// (exp(-ln r) as exp(-Re ln r) (cos, sin)(-Im ln r), each one vector call.)
 Eigen::VectorXcd corrected(const Eigen::VectorXcd& z, double dt, const GainCorrection& gain) {
-  Eigen::VectorXcd out(z.size());
-  for (Eigen::Index j = 0; j < z.size(); ++j) {
-    out(j) = z(j) * std::exp(-gain.log_at(static_cast<double>(j) * dt));
+  const Eigen::Index n = z.size();
+  Eigen::ArrayXd minus_re(n), minus_im(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const std::complex<double> l = gain.log_at(static_cast<double>(j) * dt);
+    minus_re(j) = -l.real();
+    minus_im(j) = -l.imag();
   }
+  Eigen::ArrayXd scale(n), sin(n), cos(n);
+  signal::exp_array(minus_re, scale);
+  signal::sincos_array(minus_im, sin, cos);
+  Eigen::VectorXcd out(n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    out(j) = z(j) * std::complex<double>(scale(j) * cos(j), scale(j) * sin(j));
   return out;
 }
 
@@ -1314,7 +1339,7 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
         std::min<Eigen::Index>(gain.log_r.size(), static_cast<Eigen::Index>(s.stop / s.dt) + 1);
     double now = 0;
     for (Eigen::Index j = j0; j < j1; ++j) {
-      now = std::max(now, std::abs(gain.log_r(j) - previous.log_r(j)));
+      now = std::max(now, magnitude(gain.log_r(j) - previous.log_r(j)));
     }
     if (now < kGainConverged) break;
   }
