@@ -19,6 +19,11 @@ std::mutex& planner_mutex() {
   static std::mutex m;
   return m;
 }
+
+// In-place plans of more points than this are made for one transform and destroyed after it:
+// FFTW's tables for a plan take about 8 bytes a point (a 4e7-point plan 350 MB), as much as
+// the record they transform, and a kept pair would double a long record's peak memory.
+constexpr Eigen::Index kLargestKeptPlan = Eigen::Index{1} << 22;
 }  // namespace
 
 struct Fft::Impl {
@@ -33,16 +38,21 @@ struct Fft::Impl {
   fftw_plan c2c_backward = nullptr;
   fftw_plan c2r = nullptr;
   // In-place plans and the alignment of the array they were made for (FFTW runs a plan on
-  // another array only if it is aligned alike).
+  // another array only if it is aligned alike): the latest in these slots, earlier ones of
+  // other alignments kept below (a record's buffers come aligned one way or another, and
+  // making the plan again each time was a thirtieth of process's time).
   fftw_plan r2c_in_place = nullptr;
   fftw_plan c2r_in_place = nullptr;
   int r2c_alignment = -1, c2r_alignment = -1;
+  std::vector<std::pair<int, fftw_plan>> r2c_other, c2r_other;
 
   explicit Impl(Eigen::Index size) : n(size) {}
   ~Impl() {
     std::lock_guard<std::mutex> lock(planner_mutex());
     for (fftw_plan p : {r2c, c2c_backward, c2r, r2c_in_place, c2r_in_place})
       if (p) fftw_destroy_plan(p);
+    for (const auto* other : {&r2c_other, &c2r_other})
+      for (const auto& [alignment, p] : *other) fftw_destroy_plan(p);
     std::free(real_in);
     std::free(half_out);
     std::free(full_in);
@@ -128,8 +138,23 @@ struct Fft::Impl {
     auto* r = reinterpret_cast<double*>(data);
     fftw_plan& plan = forward ? r2c_in_place : c2r_in_place;
     int& alignment = forward ? r2c_alignment : c2r_alignment;
-    if (!plan || fftw_alignment_of(r) != alignment) {
+    const int wanted = fftw_alignment_of(r);
+    if (!plan || wanted != alignment) {
       std::lock_guard<std::mutex> lock(planner_mutex());
+      // The plan for this alignment if one was made (a long record's are never kept).
+      auto& other = forward ? r2c_other : c2r_other;
+      if (plan && n <= kLargestKeptPlan) {
+        other.emplace_back(alignment, plan);
+        plan = nullptr;
+      }
+      for (auto it = other.begin(); it != other.end(); ++it) {
+        if (it->first == wanted) {
+          plan = it->second;
+          alignment = wanted;
+          other.erase(it);
+          return plan;
+        }
+      }
       if (plan) fftw_destroy_plan(plan);
       plan = nullptr;
       probe_planning_memory();
@@ -215,10 +240,6 @@ Eigen::VectorXd Fft::inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half
 
 namespace {
 
-// In-place plans of more points than this are made for one transform and destroyed after it:
-// FFTW's tables for a plan take about 8 bytes a point (a 4e7-point plan 350 MB), as much as
-// the record they transform, and a kept pair would double a long record's peak memory.
-constexpr Eigen::Index kLargestKeptPlan = Eigen::Index{1} << 22;
 
 // Moves a[i] to a[to(i)] for every i in [0, size), `to` a permutation: each cycle once, a bit
 // a value marking what has moved.
