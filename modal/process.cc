@@ -63,14 +63,11 @@ std::complex<double> baseband_value(const BandOfChannel& channel, double t) {
   if (n < 4) return 0.0;
   const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(x)) - 1, 0, n - 4);
   const double u = x - static_cast<double>(j);
+  // The Lagrange weights of nodes 0 to 3, their denominators -6, 2, -2, 6 taken together.
+  const double a = u, b = u - 1, c = u - 2, d = u - 3;
+  const double w[4] = {-(b * c * d) / 6, a * c * d / 2, -(a * b * d) / 2, a * b * c / 6};
   std::complex<double> v = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    double w = 1;
-    for (int l = 0; l < 4; ++l) {
-      if (l != k) w *= (u - l) / (k - l);
-    }
-    v += w * z.baseband(j + k);
-  }
+  for (int k = 0; k < 4; ++k) v += w[k] * z.baseband(j + k);
   return v;
 }
 

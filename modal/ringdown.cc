@@ -699,8 +699,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   for (Eigen::Index j = 0; j < grid; ++j) {
     std::complex<double> lr =
         abs_r(j) > 1e-12 ? std::complex<double>(log_abs(j), arg(j)) : std::log(1e-12);
-    if (j > 0) {  // unwrap the phase
-      lr.imag(lr.imag() + kTwoPi * std::round((g.log_r(j - 1).imag() - lr.imag()) / kTwoPi));
+    if (j > 0) {  // unwrap the phase (round() only off its usual 0: a libm call a sample)
+      const double turns = (g.log_r(j - 1).imag() - lr.imag()) / kTwoPi;
+      if (std::abs(turns) >= 0.5) lr.imag(lr.imag() + kTwoPi * std::round(turns));
     }
     g.log_r(j) = lr;
     const double x = static_cast<double>(j) * s.dt;

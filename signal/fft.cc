@@ -240,7 +240,6 @@ Eigen::VectorXd Fft::inverse_real(const Eigen::Ref<const Eigen::VectorXcd>& half
 
 namespace {
 
-
 // Moves a[i] to a[to(i)] for every i in [0, size), `to` a permutation: each cycle once, a bit
 // a value marking what has moved.
 template <typename To>
