@@ -410,7 +410,15 @@ struct GainCorrection {
     const double w = x - static_cast<double>(j);
     return (1 - w) * log_r(j) + w * log_r(j + 1);
   }
-  double abs_at(double at) const { return std::exp(log_at(at).real()); }
+  double abs_at(double at) const { return std::exp(log_abs_at(at)); }
+  // log_at(at).real() without the imaginary part's interpolation.
+  double log_abs_at(double at) const {
+    if (!active) return 0.0;
+    const double x = std::clamp(at / dt, 0.0, static_cast<double>(log_r.size() - 1));
+    const auto j = std::min<Eigen::Index>(static_cast<Eigen::Index>(x), log_r.size() - 2);
+    const double w = x - static_cast<double>(j);
+    return (1 - w) * log_r(j).real() + w * log_r(j + 1).real();
+  }
 };
 
 // Band signal, noise floor, span and windows of one band (the set-up of the steps).
@@ -635,13 +643,12 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
     const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
     return (1 - w) * v[k - 1] + w * v[k];
   };
-  // Zero-padded to twice the grid; a long record's channel (padded by pad_s itself) by three
-  // settling times, where the band's kernel is down to exp(-100): the model's start, its
-  // largest part, then adds nothing to r where the model has decayed by decades.
+  // Zero-padded by three settling times, where the band's kernel is down to exp(-100): the
+  // model's start, its largest part, then adds nothing to r where the model has decayed by
+  // decades (twice the grid where that is less; twice it always cost a twentieth of the time).
   const Eigen::Index n =
-      s.channel.padded_by_pad_s()
-          ? signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt)))
-          : signal::fast_size(2 * grid);
+      std::min(signal::fast_size(2 * grid),
+               signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt))));
   Eigen::VectorXd log_m(grid);  // m past the grid is zero padding
   Eigen::VectorXd phase(grid);
   double la = 0, ph = 0;
@@ -1384,7 +1391,7 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
     bool passed = true;
     for (double t = e.centre - e.window / 2;
          passed && previous.active && t <= e.centre + e.window / 2; t += s.dt) {
-      passed = previous.log_at(t).real() >= log_min_passed;
+      passed = previous.log_abs_at(t) >= log_min_passed;
     }
     weak += usable(e, noise_i, options.snr_min) && !passed;
     valid[i] = usable(e, noise_i, options.snr_min) && passed && e.sigma_std <= limit;
