@@ -784,6 +784,8 @@ TEST_P(RingdownAcceptance, MeetsTheIssueOnThreeRecords) {
     ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
     const Errors e = score(r, rec.first);
     print("acceptance", method, f1, acc, seed, e);
+    // Independent modes, one of them jointed: no point is taken for an energy exchange.
+    EXPECT_EQ(r.summary.exchange_points, 0) << "seed " << seed << ": " << r.summary.message;
     EXPECT_GE(e.decades, method == Method::kHilbert ? 1.5 : 1.4) << "seed " << seed;
     EXPECT_LE(e.max_f, 5e-4) << "seed " << seed;
     EXPECT_LE(e.max_z, 0.03) << "seed " << seed;
@@ -814,6 +816,7 @@ TEST_P(RingdownStress, RecoversPrescribedBackbone) {
   ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
   const Errors e = score(r, rec.first);
   print("stress", method, f1, acc, 11, e);
+  EXPECT_EQ(r.summary.exchange_points, 0) << r.summary.message;
   const bool hilbert = method == Method::kHilbert;
   EXPECT_GE(e.decades, hilbert ? (acc ? 1.2 : 1.5) : (acc ? 0.8 : 1.4));
   EXPECT_LE(e.max_f, 5e-4);
