@@ -1396,13 +1396,17 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
   }
   if (exchange.found()) {
     const double r = exchange.partner;
+    const std::string turns =
+        fmt::format("the envelope's decay rate turns {} times", exchange.turns);
+    const std::string how = exchange.turns >= 2 && exchange.grows
+                                ? turns + " and the envelope grows"
+                            : exchange.turns >= 2 ? turns
+                                                  : std::string("the envelope grows");
     notes.push_back(fmt::format(
-        "up to {:.4f} s the mode exchanges energy with another mode (the envelope's decay rate "
-        "turns {} times{}, against that of the envelope in {} the band): {} points there marked "
-        "(column exchange), their damping apparent (damping plus transfer), left out of the "
-        "linear values",
-        channel.t0 + exchange.end_t, exchange.turns,
-        exchange.grows ? " and the envelope grows" : "",
+        "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "
+        "of the envelope in {} the band): {} points there marked (column exchange), their "
+        "damping apparent (damping plus transfer), left out of the linear values",
+        channel.t0 + exchange.end_t, how,
         r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
         sum.exchange_points));
   }
