@@ -1,6 +1,7 @@
 #include "jointlab/correlate/measured_data.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -283,6 +284,9 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
                           "damping_std"};
   int column[5] = {-1, -1, -1, -1, -1};
   std::vector<double> values[5];
+  // Optional marks of points that are not the mode's own (harmonic: a multiple of a stronger
+  // mode's frequency; exchange: damping plus transfer to another mode): such rows are skipped.
+  std::vector<size_t> marks;
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
     for (int k = 0; k < 5; ++k) {
       for (size_t c = 0; c < cells.size(); ++c) {
@@ -291,8 +295,15 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
       if (column[k] < 0)
         throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
     }
+    for (size_t c = 0; c < cells.size(); ++c) {
+      if (cells[c] == "harmonic" || cells[c] == "exchange") marks.push_back(c);
+    }
   };
   const auto on_row = [&](const std::vector<std::string>& cells, long n) {
+    for (const size_t c : marks) {
+      if (c < cells.size() && !cells[c].empty() && std::strtod(cells[c].c_str(), nullptr) != 0)
+        return;
+    }
     for (int k = 0; k < 5; ++k) {
       const std::string& cell = cells[static_cast<size_t>(column[k])];
       double x = 0;

@@ -89,8 +89,9 @@ MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& s
 /// A backbone of `kind` measured at sensor index `sensor` with `points` points, all zero.
 MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points);
 
-/// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`;
-/// InputError naming the file and line.
+/// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`, leaving
+/// out rows marked in a `harmonic` or `exchange` column (not the mode's own frequency or
+/// damping); InputError naming the file and line.
 MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor);
 
 /// A backbone table (data/backbone_table.h, read at the edge) as a measured ring-down backbone:

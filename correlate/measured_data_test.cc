@@ -133,6 +133,22 @@ TEST(MeasuredData, DefectsNameFileAndField) {
             std::string::npos);
 }
 
+// Rows of a process backbone marked as not the mode's own (harmonic n > 1, exchange 1, whose
+// apparent damping may be negative) are no target of the update: skipped, not refused.
+TEST(MeasuredData, SkipsBackboneRowsMarkedHarmonicOrExchange) {
+  const fs::path d = fresh("marked");
+  write(d / "b.csv",
+        "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,harmonic,"
+        "exchange,coverage_factor\n"
+        "0.1,0.03,57.1,-0.001,0.01,0.0001,0,1,3\n"
+        "0.2,0.02,114.9,0.006,0.01,0.0001,2,0,3\n"
+        "0.3,0.01,57.8,0.003,0.01,0.0001,0,0,3\n");
+  const MeasuredBackbone b = read_backbone_csv(d / "b.csv", 0);
+  ASSERT_EQ(b.amplitude.size(), 1);
+  EXPECT_EQ(b.amplitude(0), 0.01);
+  EXPECT_EQ(b.damping_ratio(0), 0.003);
+}
+
 TEST(MeasuredData, ReadsAPlainModesTable) {
   const fs::path d = fresh("table");
   const std::vector<Sensor> sensors{{"b2", 7, 1.0}, {"a5", 5, -1.0}, {"a1", 1, 1.0}};

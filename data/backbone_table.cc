@@ -30,9 +30,14 @@ BackboneTable read_backbone_table(const fs::path& path) {
       "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz", "damping_std"};
   std::array<int, 5> col;
   col.fill(-1);
+  // A `process` backbone's marks of points that are not the mode's own (harmonic: a multiple
+  // of a stronger mode's frequency; exchange: damping plus transfer to another mode, which
+  // may be negative): such rows are skipped.
+  std::vector<size_t> marks;
   const std::vector<std::string> fields = splitter.split(header);
   for (size_t i = 0; i < fields.size(); ++i) {
     const std::string name = split_name_unit(fields[i], file, header_line).first;
+    if (name == "harmonic" || name == "exchange") marks.push_back(i);
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (name != kNames[k]) continue;
       if (col[k] >= 0) {
@@ -68,6 +73,12 @@ BackboneTable read_backbone_table(const fs::path& path) {
       throw InputError(where(
           file, n, fmt::format("{} cells, the header needs at least {}", cells.size(), needed)));
     }
+    const bool marked = std::any_of(marks.begin(), marks.end(), [&](size_t c) {
+      if (c >= cells.size()) return false;
+      const auto v = parse_double(cells[c]);
+      return v && *v != 0;
+    });
+    if (marked) continue;
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (col[k] < 0) continue;
       const std::string& cell = cells[static_cast<size_t>(col[k])];

@@ -3,7 +3,9 @@
 //
 // CSV (comma, semicolon or tab; optional "# key: value" lines and blank lines before the header):
 //     amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]
-// further columns ignored, columns in any order, a header field may carry a unit in brackets
+// further columns ignored but for a `process` file's marks: a row whose `harmonic` or
+// `exchange` cell is not 0 (not the mode's own frequency or damping) is skipped. Columns in
+// any order, a header field may carry a unit in brackets
 // ("amplitude [m/s]": the unit is not converted, the amplitude is SI of the quantity the caller
 // names). Rows in any order; the table returned has them by increasing amplitude. Every
 // amplitude, frequency [Hz] and damping ratio (a fraction) must be finite and > 0; the

@@ -50,6 +50,23 @@ TEST(BackboneTable, ReadsTheUncertainties) {
   EXPECT_EQ(t.damping_std(1), 1e-4);
 }
 
+// A `process` backbone's rows marked as not the mode's own are skipped before they are
+// checked: an exchange point's apparent damping may be negative, a harmonic point follows a
+// stronger mode's frequency. Unmarked rows (0, or no such column) are read.
+TEST(BackboneTable, SkipsRowsMarkedHarmonicOrExchange) {
+  const BackboneTable t = read_backbone_table(
+      table("marked.csv",
+            "time_s,amplitude,frequency_hz,damping_ratio,harmonic,exchange,coverage_factor\n"
+            "0.1,5,122.1,-0.002,0,1,3\n"
+            "0.2,4,244.0,0.006,2,0,3\n"
+            "0.3,3,122.0,0.003,0,0,3\n"
+            "0.4,2,122.0,0.003,0,0.0,3\n"));
+  ASSERT_EQ(t.size(), 2);
+  EXPECT_EQ(t.amplitude(0), 2);
+  EXPECT_EQ(t.amplitude(1), 3);
+  EXPECT_EQ(t.damping_ratio.minCoeff(), 0.003);
+}
+
 // Every defect: one line naming the file and the line (the row as an editor numbers it).
 TEST(BackboneTable, RefusesUnphysicalValuesWithFileAndLine) {
   const std::string header = "amplitude,frequency_hz,damping_ratio\n";

@@ -30,6 +30,7 @@ data::Table backbone_table(const Backbone& b, const RingdownOptions& options) {
   t.add("snr", b.snr);
   t.add("window_s", b.window_s);
   t.add("harmonic", b.harmonic.cast<double>());
+  t.add("exchange", b.exchange.cast<double>());
   // The k of the *_std columns, named in the header row itself: a comment line above it
   // would become the header of readers that take the first line (numpy, pandas).
   t.add("coverage_factor", Eigen::VectorXd::Constant(b.size(), options.coverage_factor));
@@ -120,6 +121,9 @@ void write_record(data::JsonWriter& j, const RecordResult& rec) {
       j.key("amplitude_decades").value(s.amplitude_decades);
       write_linear(j, s);
       j.key("superharmonic_points").value(s.superharmonic_points);
+      // Only where a mode exchanges energy (a rare record): the summaries of others stay as
+      // they were.
+      if (s.exchange_points > 0) j.key("exchange_points").value(s.exchange_points);
       if (!s.message.empty()) j.key("note").value(s.message);
     } else {
       j.key("file").null();

@@ -2,7 +2,8 @@
 //
 // Per channel and band: DIR/<file stem>.<channel>.band<k>.csv with columns
 //   time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz, damping_std,
-//   damped_frequency_hz, decay_rate_1_per_s, displacement_m, snr, window_s, harmonic
+//   damped_frequency_hz, decay_rate_1_per_s, displacement_m, snr, window_s, harmonic,
+//   exchange, coverage_factor
 // (the first six fixed by the contract). DIR/summary.json describes every
 // output: file, channel, band, span kept, noise floor, linear frequency and
 // damping, and each band's complex amplitudes (operating shape) per channel.

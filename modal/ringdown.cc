@@ -863,9 +863,11 @@ Run longest_run(const std::vector<Estimate>& est, const std::vector<char>& valid
 }
 
 // The backbone of the valid estimates in `run`, uncertainties expanded.
-Backbone backbone_of(const std::vector<Estimate>& est, const std::vector<char>& valid, Run run,
-                     double t0, double noise, const RingdownOptions& options) {
+Backbone backbone_of(const std::vector<Estimate>& est, const std::vector<char>& valid,
+                     const std::vector<char>& exchange, Run run, double t0, double noise,
+                     const RingdownOptions& options) {
   Backbone bb;
+  bb.exchange.resize(static_cast<Eigen::Index>(run.count));
   const auto n = static_cast<Eigen::Index>(run.count);
   for (Eigen::VectorXd* v : {&bb.time_s, &bb.amplitude, &bb.frequency_hz, &bb.damping,
                              &bb.frequency_std_hz, &bb.damping_std, &bb.damped_frequency_hz,
@@ -891,6 +893,7 @@ Backbone backbone_of(const std::vector<Estimate>& est, const std::vector<char>& 
     bb.decay_rate(i) = e.sigma;
     bb.snr(i) = a / noise;
     bb.window_s(i) = e.window;
+    bb.exchange(i) = exchange[k] ? 1 : 0;
     ++i;
   }
   assert(i == n);
@@ -929,8 +932,8 @@ Eigen::VectorXcd corrected(const Eigen::VectorXcd& z, double dt, const GainCorre
 }
 
 // Low-amplitude limit of y(A): a weighted straight line y = y0 + c A through the
-// lower half of the kept span (in log amplitude, at least 4 points, superharmonic
-// points left out); y0 and its one-sigma from the points' one-sigma, inflated by the
+// lower half of the kept span (in log amplitude, at least 4 points, superharmonic and
+// exchange points left out); y0 and its one-sigma from the points' one-sigma, inflated by the
 // square root of the points per window (neighbouring points share their data).
 struct Limit {
   double value = 0, std = 0;
@@ -943,7 +946,7 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
   const Eigen::Index n = bb.size();
   std::vector<Eigen::Index> order;
   for (Eigen::Index i = 0; i < n; ++i) {
-    if (bb.harmonic(i) == 0) order.push_back(i);
+    if (bb.harmonic(i) == 0 && bb.exchange(i) == 0) order.push_back(i);
   }
   if (order.empty()) return out;
   std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
@@ -1207,10 +1210,17 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
   const Limit lf = low_amplitude_limit(bb, bb.frequency_hz, bb.frequency_std_hz / k, inflate);
   const Limit lz = low_amplitude_limit(bb, bb.damping, bb.damping_std / k, inflate);
   if (lf.lo < 0 || lz.lo < 0) {
-    sum.linear_reason = fmt::format(
-        "no linear values: every one of the {} points follows a multiple of a stronger mode's "
-        "frequency (superharmonic)",
-        bb.size());
+    sum.linear_reason =
+        sum.exchange_points == 0
+            ? fmt::format(
+                  "no linear values: every one of the {} points follows a multiple of a stronger "
+                  "mode's frequency (superharmonic)",
+                  bb.size())
+            : fmt::format(
+                  "no linear values: every one of the {} points follows a multiple of a stronger "
+                  "mode's frequency (superharmonic, {}) or exchanges energy with another mode "
+                  "(exchange, {})",
+                  bb.size(), sum.superharmonic_points, sum.exchange_points);
     return;
   }
   if (!std::isfinite(lf.value) || !std::isfinite(lz.value) || !std::isfinite(lf.std) ||
@@ -1226,10 +1236,161 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
   sum.linear_fit_max = bb.amplitude(lf.hi);
 }
 
-// Notes for the summary: what was left out at the start and why, and superharmonic points.
+// An energy exchange between the band's mode and another (ringdown.h, step 5), read from the
+// envelope's decay rate along the estimates.
+struct Exchange {
+  double end_t = -std::numeric_limits<double>::infinity();  ///< last turn or growth [s]
+  int turns = 0;                                            ///< turns of the decay rate
+  bool grows = false;                                       ///< the envelope grows somewhere
+  double partner = 0;  ///< n or 1/n: the band, times the band's, of the mode taking energy
+  bool found() const { return partner > 0 && (turns >= 2 || grows); }
+};
+
+// A turn of the decay rate or a growth of the envelope counts beyond kExchangeSigmas of its
+// uncertainty and kExchangeRel of the mode's typical decay rate (the median over the span):
+// a mode's own decay rate changes with its amplitude, monotonically or turning once where its
+// damping peaks, but does not oscillate.
+constexpr double kExchangeSigmas = 3.0;
+constexpr double kExchangeRel = 0.05;
+
+// Whether the envelope in [r lo, r hi] (r = n or 1/n, n = 2, 3: a mode that can be in
+// internal resonance with the band's) takes what the band's mode gives and gives it back:
+// over the estimates `at` (those up to the exchange's end, at least 5), the decay rates of
+// the two envelopes, each fitted over the estimate's window, move against each other (rank
+// correlation at most kAntiCorrelated; ranks, as the rates swing by factors while energy
+// flows). In the 1:2 internal resonance of ringdown_test.cc it is -0.50 to -0.90; two modes
+// that merely decay side by side do not: a beam's 297 Hz mode, whose decay rate wanders by
+// 5 % and turns 14 times, has a peak 2.5 % off twice its frequency, and the rates of the two
+// (and of a third at 3 times) move together, +0.5 to +0.8.
+constexpr double kAntiCorrelated = -0.3;
+
+// Ranks 0 .. n-1 of v (ties in the order given).
+std::vector<double> ranks(const std::vector<double>& v) {
+  std::vector<size_t> order(v.size());
+  for (size_t i = 0; i < v.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return v[a] < v[b]; });
+  std::vector<double> r(v.size());
+  for (size_t k = 0; k < order.size(); ++k) r[order[k]] = static_cast<double>(k);
+  return r;
+}
+
+bool takes_energy(const std::vector<const Estimate*>& at, double r, const BandSetting& s,
+                  Quantity measured, signal::FftCache& cache) {
+  const ChannelSpectrum& channel = s.channel;
+  const RingdownOptions& options = s.options;
+  const signal::Band sub{s.band.lo * r, s.band.hi * r};
+  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
+  if (sub.hi >= channel.fs / 2 || band_settling_s(sub, options.taper) > duration ||
+      !has_interior_peak(channel, sub))
+    return false;
+  const signal::BandSignal zs = band_signal(channel, measured, sub, options, cache);
+  const EnvelopePhase ep = envelope_phase(zs.baseband, zs.carrier_hz, zs.dt);
+  const double correlation = std::max(1.0, 1.0 / (zs.dt * zs.noise_bandwidth_hz));
+  const double span = static_cast<double>(zs.baseband.size() - 1) * zs.dt;
+  std::vector<double> own, other;
+  for (const Estimate* e : at) {
+    const double w = std::min(e->window, span);
+    const double c = std::clamp(e->centre, w / 2, span - w / 2);
+    if (static_cast<Eigen::Index>(w / zs.dt) < options.degree + 4) continue;
+    const auto [fa, fp] =
+        signal::fit_local_pair(ep.log_amp, ep.theta, 0.0, zs.dt, c, w / 2, options.degree,
+                               correlation, 1, std::clamp((e->t - c) / (w / 2), -1.0, 1.0));
+    if (!std::isfinite(fa.slope)) continue;
+    own.push_back(e->sigma);
+    other.push_back(-fa.slope);
+  }
+  if (own.size() < 5) return false;
+  const std::vector<double> r1 = ranks(own), r2 = ranks(other);
+  const double mean = 0.5 * static_cast<double>(own.size() - 1);
+  double s11 = 0, s22 = 0, s12 = 0;
+  for (size_t i = 0; i < own.size(); ++i) {
+    s11 += (r1[i] - mean) * (r1[i] - mean);
+    s22 += (r2[i] - mean) * (r2[i] - mean);
+    s12 += (r1[i] - mean) * (r2[i] - mean);
+  }
+  return s12 <= kAntiCorrelated * std::sqrt(s11 * s22);
+}
+
+// The turns of the decay rate along the estimates above the noise threshold (a zig-zag: a
+// turn is confirmed once a later estimate lies clearly the other way of the running
+// extreme), and where the envelope grows.
+Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandSetting& s,
+                     Quantity measured, signal::FftCache& cache) {
+  Exchange x;
+  std::vector<const Estimate*> seen;
+  std::vector<double> rates;
+  for (const Estimate& e : est) {
+    if (!std::isfinite(e.sigma) || !std::isfinite(e.sigma_std) || !std::isfinite(e.omega_d) ||
+        !(e.omega_d > 0) || !(std::exp(e.log_amp) >= s.options.snr_min * noise))
+      continue;
+    seen.push_back(&e);
+    rates.push_back(std::abs(e.sigma));
+  }
+  if (seen.size() < 4) return x;
+  const double typical = quantile(rates, 0.5);
+  const auto apart = [&](const Estimate& a, const Estimate& b) {
+    return std::abs(a.sigma - b.sigma) >
+           std::max(kExchangeSigmas * std::hypot(a.sigma_std, b.sigma_std), kExchangeRel * typical);
+  };
+  const Estimate *lo = seen[0], *hi = seen[0], *extreme = nullptr;
+  int dir = 0;  // +1 rising, -1 falling, 0 not yet known
+  for (const Estimate* e : seen) {
+    if (e->sigma + kExchangeSigmas * e->sigma_std < -kExchangeRel * typical) {
+      x.grows = true;
+      x.end_t = std::max(x.end_t, e->t);
+    }
+    if (dir == 0) {
+      if (e->sigma > lo->sigma && apart(*e, *lo)) {
+        dir = 1, extreme = e;
+      } else if (e->sigma < hi->sigma && apart(*e, *hi)) {
+        dir = -1, extreme = e;
+      } else {
+        if (e->sigma < lo->sigma) lo = e;
+        if (e->sigma > hi->sigma) hi = e;
+      }
+      continue;
+    }
+    if ((e->sigma - extreme->sigma) * dir >= 0) {
+      extreme = e;
+    } else if (apart(*e, *extreme)) {
+      ++x.turns;
+      x.end_t = std::max(x.end_t, extreme->t);
+      dir = -dir;
+      extreme = e;
+    }
+  }
+  if (x.turns >= 2 || x.grows) {
+    std::vector<const Estimate*> during;
+    for (const Estimate* e : seen) {
+      if (e->t <= x.end_t) during.push_back(e);
+    }
+    for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
+      if (takes_energy(during, r, s, measured, cache)) {
+        x.partner = r;
+        break;
+      }
+    }
+  }
+  if (!x.found()) x.end_t = -std::numeric_limits<double>::infinity();
+  return x;
+}
+
+// The estimates after an exchange (the mode's own decay, what the band-gain correction
+// models the mode from).
+std::vector<Estimate> after(const std::vector<Estimate>& est, const Exchange& x) {
+  if (!x.found()) return est;
+  std::vector<Estimate> out;
+  for (const Estimate& e : est) {
+    if (e.t > x.end_t) out.push_back(e);
+  }
+  return out;
+}
+
+// Notes for the summary: what was left out at the start and why, superharmonic and
+// exchange points.
 std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Estimate>& est,
                                     const Run& run, const GainCorrection& applied, double noise,
-                                    const RingdownSummary& sum) {
+                                    const RingdownSummary& sum, const Exchange& exchange) {
   const ChannelSpectrum& channel = s.channel;
   const signal::Band& band = s.band;
   const RingdownOptions& options = s.options;
@@ -1266,6 +1427,22 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
         "column harmonic); left out of the linear values",
         sum.superharmonic_points));
   }
+  if (exchange.found()) {
+    const double r = exchange.partner;
+    const std::string turns =
+        fmt::format("the envelope's decay rate turns {} times", exchange.turns);
+    const std::string how = exchange.turns >= 2 && exchange.grows
+                                ? turns + " and the envelope grows"
+                            : exchange.turns >= 2 ? turns
+                                                  : std::string("the envelope grows");
+    notes.push_back(fmt::format(
+        "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "
+        "of the envelope in {} the band): {} points there marked (column exchange), their "
+        "damping apparent (damping plus transfer), left out of the linear values",
+        channel.t0 + exchange.end_t, how,
+        r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
+        sum.exchange_points));
+  }
   return notes;
 }
 
@@ -1295,6 +1472,7 @@ struct CorrectedEstimates {
   std::vector<Estimate> est;      ///< the last pass's estimates
   GainCorrection previous;        ///< the correction `est` was made with
   std::vector<double> gain_term;  ///< each estimate's model error from the correction
+  Exchange exchange;              ///< an energy exchange with another mode, from the first pass
 };
 
 // Local estimates along the span: a first pass on the band signal, then, where the
@@ -1314,8 +1492,14 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
                                  band, fo, cache);
   }
   const signal::BandSignal& z = options.method == Method::kPeaks ? full : bs;
+  Exchange exchange;
+  // The mode's model for the correction leaves out an exchange's estimates (exchange, set
+  // after the first pass): their decay is not the mode's own, and a correction modelled on
+  // it never settles (its uncertainty made the first 0.5 s of a 1:2 internal resonance
+  // infinite, and the long windows of its tail reaching back there).
   const auto correct = [&](const std::vector<Estimate>& from) {
-    return gain_correction(from, s, noise, bs.baseband.size(), bs.carrier_hz, cache);
+    return gain_correction(after(from, exchange), s, noise, bs.baseband.size(), bs.carrier_hz,
+                           cache);
   };
   const auto redo = [&](const GainCorrection& g) {
     return estimates_of(corrected(z.baseband, z.dt, g), z.carrier_hz, s, noise, g);
@@ -1325,6 +1509,7 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   std::vector<Estimate> est = options.method == Method::kHilbert
                                   ? hilbert_estimates(ep, s, noise, {})
                                   : estimates_of(z.baseband, z.carrier_hz, s, noise, {});
+  exchange = exchange_of(est, noise, s, measured, cache);
   GainCorrection previous;
   GainCorrection gain = correct(est);
   // Iterated until ln r changes by less than kConverged anywhere in the span (each
@@ -1352,29 +1537,40 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
     if (now < kGainConverged) break;
   }
   const GainCorrection continued =
-      gain.active ? gain_correction(est, s, noise, bs.baseband.size(), bs.carrier_hz, cache, true)
+      gain.active ? gain_correction(after(est, exchange), s, noise, bs.baseband.size(),
+                                    bs.carrier_hz, cache, true)
                   : GainCorrection{};
   const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, earlier,
                                                          bs.dt, bs.baseband.size(), options.degree);
-  return {std::move(est), previous, gain_term};
+  return {std::move(est), previous, gain_term, exchange};
 }
 
 // Which estimates may form the backbone, with notes on those left out for the band's gain.
 struct Screening {
-  std::vector<char> valid;  ///< per estimate
-  std::vector<char> above;  ///< per estimate: the envelope above the noise threshold
-  std::string weak_note;    ///< points where the band passes less than half of the mode
-  std::string gain_note;    ///< points whose gain correction is not known well enough
+  std::vector<char> valid;     ///< per estimate
+  std::vector<char> above;     ///< per estimate: the envelope above the noise threshold
+  std::vector<char> exchange;  ///< per estimate: valid and exchanging energy (Backbone::exchange)
+  std::string weak_note;       ///< points where the band passes less than half of the mode
+  std::string gain_note;       ///< points whose gain correction is not known well enough
 };
 
+// An exchange's point is kept where its amplitude is known to this (one sigma of ln A) ...
+constexpr double kExchangeLogAmpStd = 0.05;
+// ... and its frequency to the mode's half-power half-width (its own decay rate, the median
+// over the valid points after the exchange; a point whose frequency swings by more is not
+// the mode's).
+
 // Valid points: envelope well above the noise floor, finite, positive decay rate,
-// damping known to max_damping_rel_std.
+// damping known to max_damping_rel_std; or, up to the end of an exchange with another mode,
+// amplitude and frequency well determined (marked, whatever their decay).
 Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, double noise,
                            const RingdownOptions& options) {
   const std::vector<Estimate>& est = c.est;
   const GainCorrection& previous = c.previous;
   const std::vector<double>& gain_term = c.gain_term;
-  std::vector<char> valid(est.size()), gain_limited(est.size(), 0), above(est.size(), 0);
+  std::vector<char> valid(est.size()), gain_limited(est.size(), 0), above(est.size(), 0),
+      exchange(est.size(), 0);
+  std::vector<double> own;  // decay rates of the valid points after an exchange
   size_t weak = 0;
   for (size_t i = 0; i < est.size(); ++i) {
     const Estimate& e = est[i];
@@ -1395,9 +1591,23 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
     }
     weak += usable(e, noise_i, options.snr_min) && !passed;
     valid[i] = usable(e, noise_i, options.snr_min) && passed && e.sigma_std <= limit;
+    if (c.exchange.found() && e.t <= c.exchange.end_t) {
+      // Decided below, once the mode's own decay rate is known.
+      exchange[i] = above[i] && passed && std::isfinite(e.sigma) && std::isfinite(e.sigma_std) &&
+                    std::isfinite(e.omega_d) && e.omega_d > 0 && std::isfinite(e.omega_d_std) &&
+                    e.log_amp_std <= kExchangeLogAmpStd;
+      valid[i] = 0;
+      continue;
+    }
+    if (valid[i] && c.exchange.found()) own.push_back(e.sigma);
     gain_limited[i] =
         usable(e, noise_i, options.snr_min) && !valid[i] &&
         std::sqrt(std::max(0.0, e.sigma_std * e.sigma_std - gain_term[i] * gain_term[i])) <= limit;
+  }
+  const double half_width = quantile(own, 0.5);
+  for (size_t i = 0; i < est.size(); ++i) {
+    exchange[i] = exchange[i] && !own.empty() && est[i].omega_d_std <= half_width;
+    if (exchange[i]) valid[i] = 1;
   }
   const size_t limited =
       static_cast<size_t>(std::count(gain_limited.begin(), gain_limited.end(), 1));
@@ -1413,7 +1623,7 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
                          "{} points left out where the correction for the band's gain was not "
                          "known to the damping limit (the mode on the band's steep edge)",
                          limited);
-  return {std::move(valid), std::move(above), weak_note, gain_note};
+  return {std::move(valid), std::move(above), std::move(exchange), weak_note, gain_note};
 }
 
 // The mode's track through a band: the lowest and highest frequency it runs through above
@@ -1724,7 +1934,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     }
     return out;
   }
-  out.backbone = backbone_of(est, valid, run, channel.t0, noise, options);
+  out.backbone = backbone_of(est, valid, screened.exchange, run, channel.t0, noise, options);
   Backbone& bb = out.backbone;
   mark_superharmonics(bb, channel, measured, read, options, cache);
   const Eigen::Index n = bb.size();
@@ -1733,8 +1943,9 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   sum.span_end_s = bb.time_s(n - 1);
   sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
   sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
+  sum.exchange_points = static_cast<int>((bb.exchange.array() > 0).count());
   set_linear_values(sum, bb, options);
-  std::vector<std::string> notes = span_notes(sr, est, run, previous, noise, sum);
+  std::vector<std::string> notes = span_notes(sr, est, run, previous, noise, sum, corr.exchange);
   // Points inside the run that are not valid: those above the noise for their decay, the few
   // of a short gap for the noise (each said apart).
   size_t left_above = 0, left_below = 0;

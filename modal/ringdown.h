@@ -30,6 +30,17 @@
 //    (two backbone shapes, 40/80/150 Hz, from displacement and acceleration) k = 2 covered
 //    95-99 % of all points but fewer than 90 % of one record's points in 29 records; k = 3
 //    left one record below 90 %.
+// 5. Energy exchange (an internal resonance: a mode near n or 1/n times this one's frequency,
+//    n = 2, 3, taking energy and giving it back): the envelope's decay rate then oscillates
+//    or the envelope grows. Where, in the first pass's estimates, the decay rate turns at
+//    least twice by more than three of its uncertainties and 5 % of its median, or the
+//    envelope grows by as much, and the envelope in n (or 1/n) times the band has a decay
+//    rate moving against this one's there (rank correlation at most -0.3), the points up to
+//    the last such turn or growth are kept where their amplitude (to 5 %) and frequency (to
+//    the mode's half-power half-width) are well determined, and marked (Backbone::exchange):
+//    their damping is damping plus transfer, an apparent damping that may be negative. They
+//    are left out of the linear values and of the band-gain correction's model of the mode.
+//    Records without such an exchange are unchanged.
 // The band a user gives says which mode. Where the mode's track comes within three
 // half-power half-widths of the band's sloping edge, the mode is read through a band moved
 // (and, if the typed band's filter would lose the start of the decay, widened) to hold it
@@ -88,6 +99,9 @@ struct Backbone {
   Eigen::VectorXd snr;                  ///< envelope / noise floor
   Eigen::VectorXd window_s;             ///< fit window used [s]
   Eigen::VectorXi harmonic;  ///< n > 1 where the point follows n times a stronger mode, else 0
+  /// 1 where the mode exchanges energy with another mode (its envelope's decay there is
+  /// damping plus transfer, an apparent damping that may be negative), else 0.
+  Eigen::VectorXi exchange;
   /// Number of points.
   Eigen::Index size() const { return time_s.size(); }
 };
@@ -116,6 +130,7 @@ struct RingdownSummary {
   /// True when the linear values were measured.
   bool has_linear() const { return status == RingdownStatus::kOk && linear_reason.empty(); }
   int superharmonic_points = 0;  ///< points following a multiple of a stronger mode
+  int exchange_points = 0;       ///< points where the mode exchanges energy (Backbone::exchange)
   double carrier_hz = 0.0;       ///< dominant frequency in the band [Hz]
   /// One paragraph for a person.
   std::string report() const;

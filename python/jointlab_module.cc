@@ -507,7 +507,9 @@ callable is given.
                        "CSV's columns: .time_s [s], .amplitude [SI of the amplitude quantity], "
                        ".frequency_hz [Hz], .damping_ratio, .frequency_std_hz [Hz], .damping_std "
                        "(expanded, k = .coverage_factor), .damped_frequency_hz, "
-                       ".decay_rate_1_per_s, .displacement_m, .snr, .window_s, .harmonic.")
+                       ".decay_rate_1_per_s, .displacement_m, .snr, .window_s, .harmonic, "
+                       ".exchange (1 where the mode exchanges energy with another: damping "
+                       "apparent).")
       .def_readonly("file", &Backbone::file)
       .def_readonly("channel", &Backbone::channel)
       .def_readonly("band", &Backbone::band)

@@ -52,12 +52,6 @@ NumericTable read_numeric_table(const fs::path& path, bool allow_empty) {
   return t;
 }
 
-namespace {
-Eigen::VectorXd vec(const std::vector<double>& v) {
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
-}
-}  // namespace
-
 BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
                                 const std::string& group) {
   const NumericTable bt = read_numeric_table(path);
@@ -65,16 +59,33 @@ BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
   correlate::Curve& cv = file.curve;
   cv.id = id;
   cv.group = group;
-  cv.time_s = vec(bt.column("time_s", path));
-  cv.amplitude = vec(bt.column("amplitude", path));
-  cv.frequency_hz = vec(bt.column("frequency_hz", path));
-  cv.damping = vec(bt.column("damping_ratio", path));
   const auto has = [&](const char* name) {
     return std::find(bt.names.begin(), bt.names.end(), name) != bt.names.end();
   };
+  // The mode's own points: not a point marked as following a multiple of a stronger mode
+  // (harmonic) or as exchanging energy with another mode (exchange, its damping apparent).
+  std::vector<size_t> own;
+  const size_t rows = bt.column("time_s", path).size();
+  for (size_t i = 0; i < rows; ++i) {
+    bool marked = false;
+    for (const char* mark : {"harmonic", "exchange"}) {
+      if (has(mark) && bt.column(mark, path)[i] != 0) marked = true;
+    }
+    if (!marked) own.push_back(i);
+  }
+  const auto pick = [&](const char* name) {
+    const std::vector<double>& all = bt.column(name, path);
+    Eigen::VectorXd out(static_cast<Eigen::Index>(own.size()));
+    for (size_t k = 0; k < own.size(); ++k) out(static_cast<Eigen::Index>(k)) = all[own[k]];
+    return out;
+  };
+  cv.time_s = pick("time_s");
+  cv.amplitude = pick("amplitude");
+  cv.frequency_hz = pick("frequency_hz");
+  cv.damping = pick("damping_ratio");
   if (has("frequency_std_hz") && has("damping_std")) {
-    file.frequency_std_hz = vec(bt.column("frequency_std_hz", path));
-    file.damping_std = vec(bt.column("damping_std", path));
+    file.frequency_std_hz = pick("frequency_std_hz");
+    file.damping_std = pick("damping_std");
   }
   return file;
 }

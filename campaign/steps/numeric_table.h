@@ -35,7 +35,8 @@ struct BackboneFile {
 };
 
 /// Reads a backbone CSV of `process` (time_s, amplitude, frequency_hz, damping_ratio and, when
-/// present, frequency_std_hz and damping_std) as a curve of hit `id` in `group`.
+/// present, frequency_std_hz and damping_std) as a curve of hit `id` in `group`. Points marked
+/// in a `harmonic` or `exchange` column (not the mode's own frequency or damping) are left out.
 BackboneFile read_backbone_file(const std::filesystem::path& path, const std::string& id,
                                 const std::string& group);
 

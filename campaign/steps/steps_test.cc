@@ -512,5 +512,29 @@ TEST_F(Steps, ReportSections) {
   EXPECT_EQ(model->tables[0].rows[0][3], fmt::format("{:.4f}", r.start.frequency_hz[0]));
 }
 
+// A hit's backbone file as the campaign reads it back: points marked as not the mode's own
+// (harmonic n > 1; exchange 1, damping plus transfer, here negative) are no point of its curve,
+// so neither the scatter nor the Iwan targets see them; a file without the marks reads whole.
+TEST(BackboneFileOfAHit, LeavesOutPointsMarkedHarmonicOrExchange) {
+  const fs::path p = testing::scratch_file(
+      "jointlab_steps_backbone_file", "hit.acc1.band1.csv",
+      "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,harmonic,"
+      "exchange,coverage_factor\n"
+      "0.1,0.03,57.1,-0.001,0.01,0.0001,0,1,3\n"
+      "0.2,0.02,114.9,0.006,0.01,0.0001,2,0,3\n"
+      "0.3,0.01,57.8,0.003,0.01,0.0002,0,0,3\n");
+  const BackboneFile f = read_backbone_file(p, "hit", "level1");
+  ASSERT_EQ(f.curve.amplitude.size(), 1);
+  EXPECT_EQ(f.curve.time_s(0), 0.3);
+  EXPECT_EQ(f.curve.damping(0), 0.003);
+  ASSERT_EQ(f.damping_std.size(), 1);
+  EXPECT_EQ(f.damping_std(0), 0.0002);
+  const fs::path plain =
+      testing::scratch_file("jointlab_steps_backbone_file", "plain.csv",
+                            "time_s,amplitude,frequency_hz,damping_ratio\n0.1,0.02,57.5,0.004\n"
+                            "0.2,0.01,57.8,0.003\n");
+  EXPECT_EQ(read_backbone_file(plain, "hit", "level1").curve.amplitude.size(), 2);
+}
+
 }  // namespace
 }  // namespace jointlab::campaign

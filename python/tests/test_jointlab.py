@@ -63,8 +63,9 @@ def test_process_equals_the_command_line(tmp_path):
         assert b.band == 1
         csv_columns = read_csv(out / f"hammer_impact.{b.channel}.band1.csv")
         for name in ("time_s", "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
-                     "damping_std"):
+                     "damping_std", "harmonic", "exchange"):
             assert_close(getattr(b, name), csv_columns[name])
+        assert not b.exchange.any()  # an ordinary record: no point exchanges energy
         assert 78 < b.linear_frequency_hz < 83  # the Brake-Reuss beam's first mode, ~80.5 Hz
         assert 0 < b.linear_damping_ratio < 0.05
     # Channels on one worker or several: the same numbers, bit for bit.
