@@ -314,11 +314,14 @@ struct EnvelopePhase {
   Eigen::VectorXd amp, log_amp, theta;
 };
 
-// The unwrapping's step at sample j > 0, from the samples' imaginary parts and arguments:
-// -2 pi, 0 or +2 pi added to the phase from j on. Two samples whose imaginary parts share a
-// sign lie in one closed half plane, where the difference of their arguments is within pi.
-double unwrap_step(double im_before, double im, double arg_before, double arg) {
-  if (std::signbit(im) == std::signbit(im_before)) return 0.0;
+// Whether the unwrapping may step between two samples: two whose imaginary parts share a sign
+// lie in one closed half plane, where the difference of their arguments is within pi (their
+// arguments are then not needed).
+bool may_wrap(double im_before, double im) { return std::signbit(im) != std::signbit(im_before); }
+
+// The unwrapping's step between two samples that may wrap, from their arguments: -2 pi, 0 or
+// +2 pi added to the phase from the second on.
+double unwrap_step(double arg_before, double arg) {
   const double d = arg - arg_before;
   if (d > std::numbers::pi) return -kTwoPi;
   if (d < -std::numbers::pi) return kTwoPi;
@@ -347,7 +350,7 @@ EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz
   double offset = 0, arg_before = 0;
   for (Eigen::Index j = 0; j < n; ++j) {
     const double arg = ep.theta(j);
-    if (j > 0) offset += unwrap_step(im(j - 1), im(j), arg_before, arg);
+    if (j > 0 && may_wrap(im(j - 1), im(j))) offset += unwrap_step(arg_before, arg);
     ep.theta(j) = arg + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
     arg_before = arg;
   }
@@ -364,9 +367,8 @@ std::pair<double, double> phases_at(const Eigen::VectorXcd& baseband, double car
     return std::arg(baseband(j)) + offset + kTwoPi * carrier_hz * static_cast<double>(j) * dt;
   };
   for (Eigen::Index j = 0; j <= b; ++j) {
-    if (j > 0 && std::signbit(baseband(j).imag()) != std::signbit(baseband(j - 1).imag())) {
-      offset += unwrap_step(baseband(j - 1).imag(), baseband(j).imag(), std::arg(baseband(j - 1)),
-                            std::arg(baseband(j)));
+    if (j > 0 && may_wrap(baseband(j - 1).imag(), baseband(j).imag())) {
+      offset += unwrap_step(std::arg(baseband(j - 1)), std::arg(baseband(j)));
     }
     if (j == a) at_a = phase_at(j);
   }
@@ -405,19 +407,21 @@ struct GainCorrection {
   bool active = false;     // r changes along the span
   std::complex<double> log_at(double at) const {
     if (!active) return 0.0;
-    const double x = std::clamp(at / dt, 0.0, static_cast<double>(log_r.size() - 1));
-    const auto j = std::min<Eigen::Index>(static_cast<Eigen::Index>(x), log_r.size() - 2);
-    const double w = x - static_cast<double>(j);
+    const auto [j, w] = node(at);
     return (1 - w) * log_r(j) + w * log_r(j + 1);
   }
   double abs_at(double at) const { return std::exp(log_abs_at(at)); }
   // log_at(at).real() without the imaginary part's interpolation.
   double log_abs_at(double at) const {
     if (!active) return 0.0;
+    const auto [j, w] = node(at);
+    return (1 - w) * log_r(j).real() + w * log_r(j + 1).real();
+  }
+  // The grid interval [j, j + 1] holding `at` (clamped to the grid) and the weight of j + 1.
+  std::pair<Eigen::Index, double> node(double at) const {
     const double x = std::clamp(at / dt, 0.0, static_cast<double>(log_r.size() - 1));
     const auto j = std::min<Eigen::Index>(static_cast<Eigen::Index>(x), log_r.size() - 2);
-    const double w = x - static_cast<double>(j);
-    return (1 - w) * log_r(j).real() + w * log_r(j + 1).real();
+    return {j, x - static_cast<double>(j)};
   }
 };
 
@@ -604,14 +608,16 @@ bool usable(const Estimate& e, double noise, double snr_min) {
 // Beyond the estimates the model's frequency and decay rate are held, or, with
 // `continued`, continued along the straight line through the end estimate and the one a
 // settling time inside, up to the impact and the record's end (see add_model_errors).
+// The model is made of the estimates after `model_from` [s] alone (those of an energy
+// exchange before it do not decay as the mode does; -infinity: all).
 GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetting& s, double noise,
-                               Eigen::Index grid, double carrier_hz, signal::FftCache& cache,
-                               bool continued = false) {
+                               Eigen::Index grid, double carrier_hz, double model_from,
+                               signal::FftCache& cache, bool continued = false) {
   GainCorrection g;
   g.dt = s.dt;
   std::vector<double> t, f, d;
   for (const Estimate& e : est) {
-    if (!usable(e, noise, s.options.snr_min)) continue;
+    if (!usable(e, noise, s.options.snr_min) || !(e.t > model_from)) continue;
     t.push_back(e.t);
     f.push_back(e.omega_d / kTwoPi);
     d.push_back(e.sigma / kTwoPi);
@@ -1375,17 +1381,6 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   return x;
 }
 
-// The estimates after an exchange (the mode's own decay, what the band-gain correction
-// models the mode from).
-std::vector<Estimate> after(const std::vector<Estimate>& est, const Exchange& x) {
-  if (!x.found()) return est;
-  std::vector<Estimate> out;
-  for (const Estimate& e : est) {
-    if (e.t > x.end_t) out.push_back(e);
-  }
-  return out;
-}
-
 // Notes for the summary: what was left out at the start and why, superharmonic and
 // exchange points.
 std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Estimate>& est,
@@ -1498,7 +1493,7 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   // it never settles (its uncertainty made the first 0.5 s of a 1:2 internal resonance
   // infinite, and the long windows of its tail reaching back there).
   const auto correct = [&](const std::vector<Estimate>& from) {
-    return gain_correction(after(from, exchange), s, noise, bs.baseband.size(), bs.carrier_hz,
+    return gain_correction(from, s, noise, bs.baseband.size(), bs.carrier_hz, exchange.end_t,
                            cache);
   };
   const auto redo = [&](const GainCorrection& g) {
@@ -1536,10 +1531,10 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
     }
     if (now < kGainConverged) break;
   }
-  const GainCorrection continued =
-      gain.active ? gain_correction(after(est, exchange), s, noise, bs.baseband.size(),
-                                    bs.carrier_hz, cache, true)
-                  : GainCorrection{};
+  const GainCorrection continued = gain.active
+                                       ? gain_correction(est, s, noise, bs.baseband.size(),
+                                                         bs.carrier_hz, exchange.end_t, cache, true)
+                                       : GainCorrection{};
   const std::vector<double> gain_term = add_model_errors(est, gain, previous, continued, earlier,
                                                          bs.dt, bs.baseband.size(), options.degree);
   return {std::move(est), previous, gain_term, exchange};

@@ -161,7 +161,7 @@ struct Fft::Impl {
       plan = forward ? fftw_plan_dft_r2c_1d(static_cast<int>(n), r, c, FFTW_ESTIMATE)
                      : fftw_plan_dft_c2r_1d(static_cast<int>(n), c, r, FFTW_ESTIMATE);
       if (!plan) throw std::bad_alloc();
-      alignment = fftw_alignment_of(r);
+      alignment = wanted;
     }
     return plan;
   }

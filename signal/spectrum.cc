@@ -74,15 +74,16 @@ class LowpassGain {
     const double df = fs / static_cast<double>(nfft);
     const double mid = 0.5 * (f_pass + f_stop), sd = 0.25 * (f_stop - f_pass);
     const Eigen::Index bins = nfft / 2 + 1;
-    // The first bin with f >= mid - 9 sd and the first with f > mid + 9 sd.
-    const auto first = [&](auto above) {
-      Eigen::Index k = std::clamp<Eigen::Index>(
-          static_cast<Eigen::Index>(std::floor((mid - 9 * sd) / df)) - 1, 0, bins);
+    // The first bin with f >= mid - 9 sd (from a bin below it) and the first after it with
+    // f > mid + 9 sd.
+    const auto first = [&](Eigen::Index k, auto above) {
       while (k < bins && !above(static_cast<double>(k) * df)) ++k;
       return k;
     };
-    begin_ = first([&](double f) { return !(f < mid - 9 * sd); });
-    end_ = std::max(begin_, first([&](double f) { return f > mid + 9 * sd; }));
+    begin_ = first(std::clamp<Eigen::Index>(
+                       static_cast<Eigen::Index>(std::floor((mid - 9 * sd) / df)) - 1, 0, bins),
+                   [&](double f) { return !(f < mid - 9 * sd); });
+    end_ = first(begin_, [&](double f) { return f > mid + 9 * sd; });
     Eigen::ArrayXd x(end_ - begin_);
     for (Eigen::Index k = begin_; k < end_; ++k) {
       x(k - begin_) = (static_cast<double>(k) * df - mid) / (std::sqrt(2.0) * sd);
