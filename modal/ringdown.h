@@ -11,7 +11,9 @@
 //    Each point's window (from a few periods up to max_window_s, pushed inside
 //    the span near its ends with the point off-centre) is the one with the
 //    smallest damping uncertainty, or the shortest that meets
-//    target_damping_rel_std.
+//    target_damping_rel_std. A point whose centred windows miss max_damping_rel_std
+//    also tries each length shifted either way (the point half a half-width off centre),
+//    so a window can grow away from a bend of the backbone on one side of the point.
 // 3. Noise floor: the RMS of the analytic signal about its local smooth fit over
 //    windows of 16 / noise bandwidth (lower quartile over the record, corrected
 //    for the degrees of freedom the fit absorbs). Kept span: from the impact
