@@ -532,6 +532,9 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
     // along the record (the point at kMaxOffset of the half-width from the centre): on the
     // side where the backbone bends less (a tail after a strongly nonlinear start, a start
     // before an exchange) the window can grow longer before its model error dominates.
+    // (The next point's search starts from the centred choice: a shifted window is this
+    // point's alone.)
+    const double centred_window = best.window;
     if (!buried && best.sigma_std > options.max_damping_rel_std * std::abs(best.sigma)) {
       const double longest = std::min(options.max_window_s, stop - start);
       for (const double side : {1.0, -1.0}) {
@@ -548,7 +551,7 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
     }
     best.log_amp = best_amp.log_amp;
     best.log_amp_std = best_amp.log_amp_std;
-    if (!buried) previous_window = best.window;
+    if (!buried) previous_window = centred_window;
     est.push_back(best);
   }
   return est;
