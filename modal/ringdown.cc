@@ -528,24 +528,27 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
         break;  // clearly past the minimum: model error now dominates
       }
     }
-    // A point whose centred windows miss the target may do better with its window shifted
-    // along the record (the point at kMaxOffset of the half-width from the centre): on the
-    // side where the backbone bends less (a tail after a strongly nonlinear start, a start
-    // before an exchange) the window can grow longer before its model error dominates.
-    // (The next point's search starts from the centred choice: a shifted window is this
-    // point's alone.)
+    // A point whose centred windows leave its damping over the limit (it would be dropped)
+    // may do better with its window shifted along the record (the point at kMaxOffset of
+    // the half-width from the centre): on the side where the backbone bends less (a tail
+    // after a strongly nonlinear start or an exchange) the window can grow longer before
+    // its model error dominates. As above, the search stops at the first window that meets
+    // the target. (The next point's search starts from the centred choice: a shifted
+    // window is this point's alone.)
     const double centred_window = best.window;
+    const auto met = [&] {
+      return best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma);
+    };
     if (!buried && best.sigma_std > options.max_damping_rel_std * std::abs(best.sigma)) {
       const double longest = std::min(options.max_window_s, stop - start);
       for (const double side : {1.0, -1.0}) {
-        for (double w = w_first; w <= longest; w *= std::sqrt(2.0)) {
+        for (double w = w_first; w <= longest && !met(); w *= std::sqrt(2.0)) {
           const double centre =
               std::clamp(c + side * kMaxOffset * w / 2, start + w / 2, stop - w / 2);
           if (std::abs(centre - c) > kMaxOffset * w / 2 + 1e-12) continue;
           const Estimate next = estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, centre, w,
                                                  s.correlation, noise_c, options.degree);
           if (next.sigma_std < best.sigma_std) best = next;
-          if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
         }
       }
     }
