@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
 #include "jointlab/data/json_reader.h"
 #include "jointlab/data/output_stage.h"
@@ -284,9 +285,7 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
                           "damping_std"};
   int column[5] = {-1, -1, -1, -1, -1};
   std::vector<double> values[5];
-  // Optional marks of points that are not the mode's own (harmonic: a multiple of a stronger
-  // mode's frequency; exchange: damping plus transfer to another mode): such rows are skipped.
-  std::vector<size_t> marks;
+  std::vector<size_t> marks;  // columns of data::is_point_mark: their marked rows are skipped
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
     for (int k = 0; k < 5; ++k) {
       for (size_t c = 0; c < cells.size(); ++c) {
@@ -296,7 +295,7 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
         throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
     }
     for (size_t c = 0; c < cells.size(); ++c) {
-      if (cells[c] == "harmonic" || cells[c] == "exchange") marks.push_back(c);
+      if (data::is_point_mark(cells[c])) marks.push_back(c);
     }
   };
   const auto on_row = [&](const std::vector<std::string>& cells, long n) {

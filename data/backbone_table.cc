@@ -16,6 +16,8 @@ namespace jointlab::data {
 
 namespace fs = std::filesystem;
 
+bool is_point_mark(std::string_view column) { return column == "harmonic" || column == "exchange"; }
+
 BackboneTable read_backbone_table(const fs::path& path) {
   const std::string file = path.string();
   const auto text = read_text_file(path);
@@ -30,14 +32,11 @@ BackboneTable read_backbone_table(const fs::path& path) {
       "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz", "damping_std"};
   std::array<int, 5> col;
   col.fill(-1);
-  // A `process` backbone's marks of points that are not the mode's own (harmonic: a multiple
-  // of a stronger mode's frequency; exchange: damping plus transfer to another mode, which
-  // may be negative): such rows are skipped.
-  std::vector<size_t> marks;
+  std::vector<size_t> marks;  // columns of is_point_mark: their marked rows are skipped
   const std::vector<std::string> fields = splitter.split(header);
   for (size_t i = 0; i < fields.size(); ++i) {
     const std::string name = split_name_unit(fields[i], file, header_line).first;
-    if (name == "harmonic" || name == "exchange") marks.push_back(i);
+    if (is_point_mark(name)) marks.push_back(i);
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (name != kNames[k]) continue;
       if (col[k] >= 0) {

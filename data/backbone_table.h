@@ -15,6 +15,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include <Eigen/Core>
 
@@ -31,6 +32,11 @@ struct BackboneTable {
   /// Number of points.
   Eigen::Index size() const { return amplitude.size(); }
 };
+
+/// Whether a backbone column marks points that are not the mode's own: a `process` backbone's
+/// `harmonic` (a multiple of a stronger mode's frequency) and `exchange` (damping plus transfer
+/// to another mode, which may be negative). Every backbone reader skips a row whose mark is not 0.
+bool is_point_mark(std::string_view column);
 
 /// Reads a backbone table; InputError "file:line: what" on any defect (above), and when the
 /// file holds fewer than two points.

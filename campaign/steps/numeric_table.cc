@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
 
 namespace jointlab::campaign {
@@ -62,16 +63,17 @@ BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
   const auto has = [&](const char* name) {
     return std::find(bt.names.begin(), bt.names.end(), name) != bt.names.end();
   };
-  // The mode's own points: not a point marked as following a multiple of a stronger mode
-  // (harmonic) or as exchanging energy with another mode (exchange, its damping apparent).
+  // The mode's own points: none marked in a column of data::is_point_mark.
+  std::vector<const std::vector<double>*> marks;
+  for (const std::string& name : bt.names) {
+    if (data::is_point_mark(name)) marks.push_back(&bt.column(name, path));
+  }
   std::vector<size_t> own;
   const size_t rows = bt.column("time_s", path).size();
   for (size_t i = 0; i < rows; ++i) {
-    bool marked = false;
-    for (const char* mark : {"harmonic", "exchange"}) {
-      if (has(mark) && bt.column(mark, path)[i] != 0) marked = true;
-    }
-    if (!marked) own.push_back(i);
+    if (std::none_of(marks.begin(), marks.end(),
+                     [&](const std::vector<double>* m) { return (*m)[i] != 0; }))
+      own.push_back(i);
   }
   const auto pick = [&](const char* name) {
     const std::vector<double>& all = bt.column(name, path);
