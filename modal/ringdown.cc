@@ -502,16 +502,21 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
     const double allowed = std::min(
         {options.max_window_s, stop - start, 2 * std::min(c - start, stop - c) / (1 - kMaxOffset)});
     const double noise_c = noise / gain.abs_at(c);
-    const auto fit = [&](double w) {
-      return estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, window_centre(c, w), w, s.correlation,
-                              noise_c, options.degree);
+    // The window of length w centred at `centre` (c in its middle half), or centred on c.
+    const auto fit_at = [&](double w, double centre) {
+      return estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, centre, w, s.correlation, noise_c,
+                              options.degree);
     };
+    const auto fit = [&](double w) { return fit_at(w, window_centre(c, w)); };
     // The slope and the envelope each take the window that determines them
     // best: longer windows average noise (std ~ W^-1.5 for the slope) but bend
     // less with the backbone (model error ~ W^2); the search stops once the
     // damping meets its target or the uncertainty clearly grows again.
     Estimate best = fit(w_min);
     Estimate best_amp = best;
+    const auto met = [&] {
+      return best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma);
+    };
     // Below the noise threshold a point is dropped whatever its window.
     const bool buried = std::exp(best.log_amp) < options.snr_min * noise_c;
     // The best window changes slowly along the record: start the search two
@@ -519,7 +524,7 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
     double w_first = w_min * std::sqrt(2.0);
     while (w_first * 2.0 < previous_window) w_first *= std::sqrt(2.0);
     for (double w = w_first; !buried && w <= allowed; w *= std::sqrt(2.0)) {
-      if (best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma)) break;
+      if (met()) break;
       const Estimate next = fit(w);
       if (next.log_amp_std < best_amp.log_amp_std) best_amp = next;
       if (next.sigma_std < best.sigma_std) {
@@ -536,9 +541,6 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
     // the target. (The next point's search starts from the centred choice: a shifted
     // window is this point's alone.)
     const double centred_window = best.window;
-    const auto met = [&] {
-      return best.sigma_std <= options.target_damping_rel_std * std::abs(best.sigma);
-    };
     if (!buried && best.sigma_std > options.max_damping_rel_std * std::abs(best.sigma)) {
       const double longest = std::min(options.max_window_s, stop - start);
       for (const double side : {1.0, -1.0}) {
@@ -546,8 +548,7 @@ std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetti
           const double centre =
               std::clamp(c + side * kMaxOffset * w / 2, start + w / 2, stop - w / 2);
           if (std::abs(centre - c) > kMaxOffset * w / 2 + 1e-12) continue;
-          const Estimate next = estimate_hilbert(ep.log_amp, ep.theta, s.dt, c, centre, w,
-                                                 s.correlation, noise_c, options.degree);
+          const Estimate next = fit_at(w, centre);
           if (next.sigma_std < best.sigma_std) best = next;
         }
       }
