@@ -1270,11 +1270,11 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
 // An energy exchange between the band's mode and another (ringdown.h, step 5), read from the
 // envelope's decay rate along the estimates.
 struct Exchange {
-  double end_t = -std::numeric_limits<double>::infinity();  ///< last turn or growth [s]
+  double end_t = -std::numeric_limits<double>::infinity();  ///< last turn or growth, relaxed [s]
   int turns = 0;                                            ///< turns of the decay rate
   bool grows = false;                                       ///< the envelope grows somewhere
   double partner = 0;  ///< n or 1/n: the band, times the band's, of the mode taking energy
-  bool found() const { return partner > 0 && (turns >= 2 || grows); }
+  bool found() const { return partner > 0 && (turns >= 1 || grows); }
 };
 
 // A turn of the decay rate or a growth of the envelope counts beyond kExchangeSigmas of its
@@ -1286,14 +1286,20 @@ constexpr double kExchangeRel = 0.05;
 
 // Whether the envelope in [r lo, r hi] (r = n or 1/n, n = 2, 3: a mode that can be in
 // internal resonance with the band's) takes what the band's mode gives and gives it back:
-// over the estimates `at` (those up to the exchange's end, at least 5), the decay rates of
-// the two envelopes, each fitted over the estimate's window, move against each other (rank
-// correlation at most kAntiCorrelated; ranks, as the rates swing by factors while energy
-// flows). In the 1:2 internal resonance of ringdown_test.cc it is -0.50 to -0.90; two modes
-// that merely decay side by side do not: a beam's 297 Hz mode, whose decay rate wanders by
-// 5 % and turns 14 times, has a peak 2.5 % off twice its frequency, and the rates of the two
-// (and of a third at 3 times) move together, +0.5 to +0.8.
+// over the estimates `at` (those up to the exchange's end and the one after it that shows
+// its last turn, at least 5), the decay rates of the two envelopes, each fitted over the
+// estimate's window, move against each other (rank correlation at most `limit`; ranks, as the
+// rates swing by factors while energy flows). In the 1:2 internal resonance of
+// ringdown_test.cc it is -0.50 to -0.90; two modes that merely decay side by side do not: a
+// beam's 297 Hz mode, whose decay rate wanders by 5 % and turns 14 times, has a peak 2.5 % off
+// twice its frequency, and the rates of the two (and of a third at 3 times) move together,
+// +0.5 to +0.8.
 constexpr double kAntiCorrelated = -0.3;
+// A decay rate that turns once (and an envelope that never grows) may be the mode's own
+// damping peaking with amplitude: then the two rates must move against each other nearly
+// throughout (-0.7 to -0.9 where a hammer excites both modes of the resonance; for five
+// unrelated rates a correlation of -0.6 or less has a chance of about 1 in 10).
+constexpr double kAntiCorrelatedOneTurn = -0.6;
 
 // Ranks 0 .. n-1 of v (ties in the order given).
 std::vector<double> ranks(const std::vector<double>& v) {
@@ -1305,8 +1311,8 @@ std::vector<double> ranks(const std::vector<double>& v) {
   return r;
 }
 
-bool takes_energy(const std::vector<const Estimate*>& at, double r, const BandSetting& s,
-                  Quantity measured, signal::FftCache& cache) {
+bool takes_energy(const std::vector<const Estimate*>& at, double r, double limit,
+                  const BandSetting& s, Quantity measured, signal::FftCache& cache) {
   const ChannelSpectrum& channel = s.channel;
   const RingdownOptions& options = s.options;
   const signal::Band sub{s.band.lo * r, s.band.hi * r};
@@ -1339,7 +1345,7 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, const BandSe
     s22 += (r2[i] - mean) * (r2[i] - mean);
     s12 += (r1[i] - mean) * (r2[i] - mean);
   }
-  return s12 <= kAntiCorrelated * std::sqrt(s11 * s22);
+  return s12 <= limit * std::sqrt(s11 * s22);
 }
 
 // The turns of the decay rate along the estimates above the noise threshold (a zig-zag: a
@@ -1363,12 +1369,20 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
     return std::abs(a.sigma - b.sigma) >
            std::max(kExchangeSigmas * std::hypot(a.sigma_std, b.sigma_std), kExchangeRel * typical);
   };
-  const Estimate *lo = seen[0], *hi = seen[0], *extreme = nullptr;
+  // The zig-zag runs over the rates known to better than the typical rate itself: a first
+  // estimate of 1.6 +- 7.6 1/s (typical 2.3) once stood as the running minimum that no later
+  // rate could lie clearly above.
+  const Estimate *lo = nullptr, *hi = nullptr, *extreme = nullptr;
   int dir = 0;  // +1 rising, -1 falling, 0 not yet known
   for (const Estimate* e : seen) {
     if (e->sigma + kExchangeSigmas * e->sigma_std < -kExchangeRel * typical) {
       x.grows = true;
       x.end_t = std::max(x.end_t, e->t);
+    }
+    if (!(e->sigma_std <= typical)) continue;
+    if (lo == nullptr) {
+      lo = hi = e;
+      continue;
     }
     if (dir == 0) {
       if (e->sigma > lo->sigma && apart(*e, *lo)) {
@@ -1390,16 +1404,37 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
       extreme = e;
     }
   }
-  if (x.turns >= 2 || x.grows) {
-    std::vector<const Estimate*> during;
-    for (const Estimate* e : seen) {
-      if (e->t <= x.end_t) during.push_back(e);
+  // After its last turn the decay rate relaxes to the mode's own while the partner still
+  // holds energy: the exchange lasts until the first rate within the turns' tolerance of the
+  // median of those after it. (A rate that only falls from the start is what a joint's
+  // damping does as the amplitude falls: on the bench record's nonlinear 58 Hz mode, taking
+  // such a fall for an exchange marked 31 points.)
+  if (!(x.turns >= 1 || x.grows)) return x;
+  std::vector<const Estimate*> later;
+  std::vector<double> later_rates;
+  for (const Estimate* e : seen) {
+    if (e->t > x.end_t && e->sigma_std <= typical) {
+      later.push_back(e);
+      later_rates.push_back(e->sigma);
     }
-    for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
-      if (takes_energy(during, r, s, measured, cache)) {
-        x.partner = r;
-        break;
-      }
+  }
+  const double settled = later_rates.empty() ? 0.0 : quantile(later_rates, 0.5);
+  for (const Estimate* e : later) {
+    if (std::abs(e->sigma - settled) <=
+        std::max(kExchangeSigmas * e->sigma_std, kExchangeRel * typical))
+      break;
+    x.end_t = e->t;
+  }
+  // The rates up to the exchange's end and the one after it, which shows where it ends.
+  std::vector<const Estimate*> during;
+  for (const Estimate* e : seen) {
+    if (e->t <= x.end_t || (!during.empty() && during.back()->t <= x.end_t)) during.push_back(e);
+  }
+  const double limit = x.turns >= 2 || x.grows ? kAntiCorrelated : kAntiCorrelatedOneTurn;
+  for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
+    if (takes_energy(during, r, limit, s, measured, cache)) {
+      x.partner = r;
+      break;
     }
   }
   if (!x.found()) x.end_t = -std::numeric_limits<double>::infinity();
@@ -1450,10 +1485,12 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
   if (exchange.found()) {
     const double r = exchange.partner;
     const std::string turns =
-        fmt::format("the envelope's decay rate turns {} times", exchange.turns);
-    const std::string how = exchange.turns >= 2 && exchange.grows
+        exchange.turns == 1
+            ? std::string("the envelope's decay rate turns once")
+            : fmt::format("the envelope's decay rate turns {} times", exchange.turns);
+    const std::string how = exchange.turns >= 1 && exchange.grows
                                 ? turns + " and the envelope grows"
-                            : exchange.turns >= 2 ? turns
+                            : exchange.turns >= 1 ? turns
                                                   : std::string("the envelope grows");
     notes.push_back(fmt::format(
         "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "

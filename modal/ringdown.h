@@ -34,15 +34,15 @@
 //    left one record below 90 %.
 // 5. Energy exchange (an internal resonance: a mode near n or 1/n times this one's frequency,
 //    n = 2, 3, taking energy and giving it back): the envelope's decay rate then oscillates
-//    or the envelope grows. Where, in the first pass's estimates, the decay rate turns at
-//    least twice by more than three of its uncertainties and 5 % of its median, or the
-//    envelope grows by as much, and the envelope in n (or 1/n) times the band has a decay
-//    rate moving against this one's there (rank correlation at most -0.3), the points up to
-//    the last such turn or growth are kept where their amplitude (to 5 %) and frequency (to
-//    the mode's half-power half-width) are well determined, and marked (Backbone::exchange):
-//    their damping is damping plus transfer, an apparent damping that may be negative. They
-//    are left out of the linear values and of the band-gain correction's model of the mode.
-//    Records without such an exchange are unchanged.
+//    or the envelope grows. Where, in the first pass's estimates, the decay rate turns by
+//    more than three of its uncertainties and 5 % of its median, or the envelope grows by as
+//    much, and the envelope in n (or 1/n) times the band has a decay rate moving against this
+//    one's there (rank correlation at most -0.3, or -0.6 for a single turn), the points up to
+//    the last such turn or growth and the relaxation after it are kept where their amplitude (to 5
+//    %) and frequency (to the mode's half-power half-width) are well determined, and marked
+//    (Backbone::exchange): their damping is damping plus transfer, an apparent damping that may be
+//    negative. They are left out of the linear values and of the band-gain correction's model of
+//    the mode. Records without such an exchange are unchanged.
 // The band a user gives says which mode. Where the mode's track comes within three
 // half-power half-widths of the band's sloping edge, the mode is read through a band moved
 // (and, if the typed band's filter would lose the start of the decay, widened) to hold it

@@ -834,5 +834,60 @@ INSTANTIATE_TEST_SUITE_P(Harsh, RingdownStress,
                          ::testing::Combine(::testing::Values(40.0, 80.0, 150.0), ::testing::Bool(),
                                             ::testing::Values(Method::kHilbert, Method::kPeaks)));
 
+// The same resonance struck as a hammer strikes it: both modes at once (mode 2 at 0.1, 0.3
+// and 1 times mode 1's amplitude, in three phases), alpha 1e9-3e9, zeta2 0.6 %. Mode 2 then
+// takes energy from the start and mode 1's decay rate is up to three times its own, turning
+// once or not at all before it relaxes. Measured on these 27 cases: kept 0.68-1.00 of what the
+// envelope shows (median 0.87; before a single turn with strongly anti-correlated rates counted
+// as an exchange, 0.50-1.00, median 0.82), the unmarked points' median frequency error at most
+// 3.7e-5 and median damping error at most 1.0 %. Where the exchange is marked, no unmarked
+// point's damping is more than 5.7 % off (before, in 19 of the 27 cases some unmarked point
+// was more than 10 % off, up to 170 %, with a stated uncertainty of 1 %: the relaxation after
+// the last turn was not marked). Where it is not (5 of the 27: no turn, or the partner's band
+// shows no peak of its own), unmarked points at the start still read 19-86 % more damping:
+// the envelope's decay there looks as a joint's damping does, falling as the amplitude falls.
+TEST(RingdownInternalResonance, BothModesStruck) {
+  std::vector<double> kept;
+  for (const double alpha : {1e9, 2e9, 3e9}) {
+    for (const double ratio : {0.1, 0.3, 1.0}) {
+      for (const double phase : {0.0, std::numbers::pi / 2, std::numbers::pi}) {
+        const testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+            alpha, 6.5e-5, 0.006, 1e-5, 1, 4.0, ratio * 6.5e-5, phase);
+        const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+        ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+        const double threshold = RingdownOptions{}.snr_min * r.summary.noise_floor_m;
+        const double share =
+            r.summary.amplitude_decades / std::log10(rec.amplitude1.maxCoeff() / threshold);
+        kept.push_back(share);
+        std::vector<double> ef, ez;
+        for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+          if (r.backbone.exchange(i) != 0) continue;
+          ef.push_back(std::abs(r.backbone.frequency_hz(i) / rec.f1_hz - 1));
+          ez.push_back(std::abs(r.backbone.damping(i) / rec.zeta1 - 1));
+        }
+        ASSERT_FALSE(ef.empty());
+        std::sort(ef.begin(), ef.end());
+        std::sort(ez.begin(), ez.end());
+        std::printf(
+            "both struck: alpha %.0e ratio %.1f phase %.2f: %.3f of the envelope kept, %d "
+            "points marked exchange; unmarked: median f err %.1e, median z err %.3f, worst "
+            "%.3f\n",
+            alpha, ratio, phase, share, r.summary.exchange_points, ef[ef.size() / 2],
+            ez[ez.size() / 2], ez.back());
+        char where[64];
+        std::snprintf(where, sizeof where, "alpha %g ratio %g phase %g", alpha, ratio, phase);
+        EXPECT_GE(share, 0.65) << where;
+        EXPECT_LE(ef[ef.size() / 2], 5e-4) << where;
+        EXPECT_LE(ez[ez.size() / 2], 0.10) << where;
+        if (r.summary.exchange_points > 0) {
+          EXPECT_LE(ez.back(), 0.10) << where;
+        }
+      }
+    }
+  }
+  std::sort(kept.begin(), kept.end());
+  EXPECT_GE(kept[kept.size() / 2], 0.8);
+}
+
 }  // namespace
 }  // namespace jointlab::modal

@@ -70,6 +70,7 @@ struct InternalResonanceRecord {
 /// Builds the internal-resonance record (`duration_s` long, noise realisation `seed`).
 InternalResonanceRecord internal_resonance_record(double alpha, double x10, double zeta2,
                                                   double noise, unsigned seed,
-                                                  double duration_s = 4.0);
+                                                  double duration_s = 4.0, double x20 = 0.0,
+                                                  double phase2 = 0.0);
 
 }  // namespace jointlab::testing
