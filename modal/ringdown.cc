@@ -1288,18 +1288,22 @@ constexpr double kExchangeRel = 0.05;
 // internal resonance with the band's) takes what the band's mode gives and gives it back:
 // over the estimates `at` (those up to the exchange's end and the one after it that shows
 // its last turn, at least 5), the decay rates of the two envelopes, each fitted over the
-// estimate's window, move against each other (rank correlation at most `limit`; ranks, as the
-// rates swing by factors while energy flows). In the 1:2 internal resonance of
-// ringdown_test.cc it is -0.50 to -0.90; two modes that merely decay side by side do not: a
-// beam's 297 Hz mode, whose decay rate wanders by 5 % and turns 14 times, has a peak 2.5 % off
-// twice its frequency, and the rates of the two (and of a third at 3 times) move together,
-// +0.5 to +0.8.
+// estimate's window, move against each other (rank correlation at most kAntiCorrelated; ranks, as
+// the rates swing by factors while energy flows). In the 1:2 internal resonance of ringdown_test.cc
+// it is -0.50 to -0.90; two modes that merely decay side by side do not: a beam's 297 Hz mode,
+// whose decay rate wanders by 5 % and turns 14 times, has a peak 2.5 % off twice its frequency, and
+// the rates of the two (and of a third at 3 times) move together, +0.5 to +0.8.
 constexpr double kAntiCorrelated = -0.3;
 // A decay rate that turns once (and an envelope that never grows) may be the mode's own
-// damping peaking with amplitude: then the two rates must move against each other nearly
-// throughout (-0.7 to -0.9 where a hammer excites both modes of the resonance; for five
-// unrelated rates a correlation of -0.6 or less has a chance of about 1 in 10).
+// damping peaking with amplitude, beside a neighbour whose damping changes too: then the two
+// rates must move against each other nearly throughout (-0.7 to -0.9 where a hammer strikes
+// both modes of the twin), and the partner's rate must turn the other way within kTurnApart
+// estimates of this one's turn. Without that second condition 9 of 54 joint-like twins (a
+// damping peak, an uncoupled neighbour at twice the frequency, its damping constant, falling
+// or peaking; ringdown_test.cc) were taken for an exchange, and 12 of 54 with the neighbour
+// at half; with it none of 162 are.
 constexpr double kAntiCorrelatedOneTurn = -0.6;
+constexpr std::ptrdiff_t kTurnApart = 2;
 
 // Ranks 0 .. n-1 of v (ties in the order given).
 std::vector<double> ranks(const std::vector<double>& v) {
@@ -1311,7 +1315,7 @@ std::vector<double> ranks(const std::vector<double>& v) {
   return r;
 }
 
-bool takes_energy(const std::vector<const Estimate*>& at, double r, double limit,
+bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_turn,
                   const BandSetting& s, Quantity measured, signal::FftCache& cache) {
   const ChannelSpectrum& channel = s.channel;
   const RingdownOptions& options = s.options;
@@ -1324,7 +1328,7 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, double limit
   const EnvelopePhase ep = envelope_phase(zs.baseband, zs.carrier_hz, zs.dt);
   const double correlation = std::max(1.0, 1.0 / (zs.dt * zs.noise_bandwidth_hz));
   const double span = static_cast<double>(zs.baseband.size() - 1) * zs.dt;
-  std::vector<double> own, other;
+  std::vector<double> own, other, other_std;
   for (const Estimate* e : at) {
     const double w = std::min(e->window, span);
     const double c = std::clamp(e->centre, w / 2, span - w / 2);
@@ -1335,6 +1339,7 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, double limit
     if (!std::isfinite(fa.slope)) continue;
     own.push_back(e->sigma);
     other.push_back(-fa.slope);
+    other_std.push_back(std::hypot(fa.slope_std, fa.slope_change));
   }
   if (own.size() < 5) return false;
   const std::vector<double> r1 = ranks(own), r2 = ranks(other);
@@ -1345,7 +1350,29 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, double limit
     s22 += (r2[i] - mean) * (r2[i] - mean);
     s12 += (r1[i] - mean) * (r2[i] - mean);
   }
-  return s12 <= limit * std::sqrt(s11 * s22);
+  const double limit = one_turn ? kAntiCorrelatedOneTurn : kAntiCorrelated;
+  if (!(s12 <= limit * std::sqrt(s11 * s22))) return false;
+  if (!one_turn) return true;
+  // The partner's rate turns the other way within kTurnApart estimates of this one's turn
+  // (its extreme inside `at`; the partner's may be the first, the exchange having begun
+  // before the first estimate, but not the last, and it lies clearly apart from the last, as
+  // turns do: `at` runs past the exchange's end).
+  const auto n = static_cast<std::ptrdiff_t>(own.size());
+  const auto at_max = std::max_element(own.begin(), own.end()) - own.begin();
+  const auto at_min = std::min_element(own.begin(), own.end()) - own.begin();
+  const bool max_inside = at_max > 0 && at_max < n - 1;
+  const std::ptrdiff_t turn = max_inside ? at_max : at_min;
+  const std::ptrdiff_t opposite =
+      max_inside ? std::min_element(other.begin(), other.end()) - other.begin()
+                 : std::max_element(other.begin(), other.end()) - other.begin();
+  std::vector<double> magnitudes(other.size());
+  std::transform(other.begin(), other.end(), magnitudes.begin(),
+                 [](double v) { return std::abs(v); });
+  const double apart = std::max(
+      kExchangeSigmas * std::hypot(other_std[static_cast<size_t>(opposite)], other_std.back()),
+      kExchangeRel * quantile(magnitudes, 0.5));
+  return opposite < n - 1 && std::abs(opposite - turn) <= kTurnApart &&
+         std::abs(other[static_cast<size_t>(opposite)] - other.back()) > apart;
 }
 
 // The turns of the decay rate along the estimates above the noise threshold (a zig-zag: a
@@ -1430,9 +1457,9 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   for (const Estimate* e : seen) {
     if (e->t <= x.end_t || (!during.empty() && during.back()->t <= x.end_t)) during.push_back(e);
   }
-  const double limit = x.turns >= 2 || x.grows ? kAntiCorrelated : kAntiCorrelatedOneTurn;
+  const bool one_turn = x.turns == 1 && !x.grows;
   for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
-    if (takes_energy(during, r, limit, s, measured, cache)) {
+    if (takes_energy(during, r, one_turn, s, measured, cache)) {
       x.partner = r;
       break;
     }

@@ -889,5 +889,59 @@ TEST(RingdownInternalResonance, BothModesStruck) {
   EXPECT_GE(kept[kept.size() / 2], 0.8);
 }
 
+// What a single turn of the decay rate must not be taken for: a joint-like mode (100 Hz, its
+// damping peaking at 0.8 % where the amplitude is 0.3, 0.1 or 0.03 of the start, so that its
+// decay rate turns once) beside an uncoupled neighbour at about 2, 1/2 or 3 times its
+// frequency (0.25, 0.75 or 2.25 times its amplitude; linear, its damping falling with its
+// amplitude, or peaking too), two noise seeds: 162 records, none may mark an exchange. With
+// the rank correlation alone (at most -0.6), 9 of the 54 records with the neighbour at twice
+// the frequency, 12 of 54 at half and 1 of 54 at three times marked one; the partner's rate
+// must also turn the other way near this one's turn, clearly apart from where it ends.
+TEST(RingdownInternalResonance, OneTurnBesideAnUncoupledNeighbourIsNoExchange) {
+  const double fs = 5120, two_pi = 2 * std::numbers::pi, a0 = 1e-4;
+  const Eigen::Index n = static_cast<Eigen::Index>(4.0 * fs);
+  for (const double neighbour_hz : {201.3, 50.4, 301.7}) {
+    int flagged = 0;
+    for (const double peak_at : {0.3, 0.1, 0.03}) {
+      for (const double ratio : {0.25, 0.75, 2.25}) {
+        for (const int kind : {0, 1, 2}) {
+          testing::SlowFlowMode m1;
+          const auto bump = [](double a, double at) {
+            const double l = std::log(a / at) / 0.7;
+            return std::exp(-0.5 * l * l);
+          };
+          m1.omega_n = [=](double a) { return two_pi * 100 * (1 - 0.004 * bump(a, peak_at * a0)); };
+          m1.zeta = [=](double a) { return 0.002 + 0.006 * bump(a, peak_at * a0); };
+          m1.a0 = a0;
+          testing::SlowFlowMode m2;
+          m2.omega_n = [=](double) { return two_pi * neighbour_hz; };
+          m2.zeta = [=](double a) {
+            if (kind == 0) return 0.003;
+            if (kind == 1) return 0.002 + 0.004 * std::min(1.0, a / (ratio * a0));
+            return 0.002 + 0.005 * bump(a, 0.4 * ratio * a0);
+          };
+          m2.a0 = ratio * a0;
+          m2.theta0 = 1.0;
+          const Eigen::VectorXd clean =
+              testing::slow_flow(m1, fs, n).velocity + testing::slow_flow(m2, fs, n).velocity;
+          for (const unsigned seed : {1u, 2u}) {
+            std::mt19937 rng(seed);
+            std::normal_distribution<double> g(0.0, 1e-5 * clean.cwiseAbs().maxCoeff());
+            Eigen::VectorXd x = clean;
+            for (Eigen::Index k = 0; k < n; ++k) x(k) += g(rng);
+            const Ringdown r = extract_band(x, fs, Quantity::kVelocity, {85, 115});
+            ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+            flagged += r.summary.exchange_points > 0;
+            EXPECT_EQ(r.summary.exchange_points, 0)
+                << "neighbour " << neighbour_hz << " Hz, peak at " << peak_at << ", ratio " << ratio
+                << ", kind " << kind << ", seed " << seed << ": " << r.summary.message;
+          }
+        }
+      }
+    }
+    std::printf("neighbour at %.1f Hz: %d of 54 records mark an exchange\n", neighbour_hz, flagged);
+  }
+}
+
 }  // namespace
 }  // namespace jointlab::modal
