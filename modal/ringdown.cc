@@ -1284,6 +1284,13 @@ struct Exchange {
 constexpr double kExchangeSigmas = 3.0;
 constexpr double kExchangeRel = 0.05;
 
+// Whether two decay rates lie clearly apart in that sense, `typical` the rate kExchangeRel is
+// taken of (a rate known exactly has one-sigma 0).
+bool rates_apart(double a, double a_std, double b, double b_std, double typical) {
+  return std::abs(a - b) >
+         std::max(kExchangeSigmas * std::hypot(a_std, b_std), kExchangeRel * typical);
+}
+
 // Whether the envelope in [r lo, r hi] (r = n or 1/n, n = 2, 3: a mode that can be in
 // internal resonance with the band's) takes what the band's mode gives and gives it back:
 // over the estimates `at` (those up to the exchange's end and the one after it that shows
@@ -1368,11 +1375,10 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_tur
   std::vector<double> magnitudes(other.size());
   std::transform(other.begin(), other.end(), magnitudes.begin(),
                  [](double v) { return std::abs(v); });
-  const double apart = std::max(
-      kExchangeSigmas * std::hypot(other_std[static_cast<size_t>(opposite)], other_std.back()),
-      kExchangeRel * quantile(magnitudes, 0.5));
+  const auto o = static_cast<size_t>(opposite);
   return opposite < n - 1 && std::abs(opposite - turn) <= kTurnApart &&
-         std::abs(other[static_cast<size_t>(opposite)] - other.back()) > apart;
+         rates_apart(other[o], other_std[o], other.back(), other_std.back(),
+                     quantile(magnitudes, 0.5));
 }
 
 // The turns of the decay rate along the estimates above the noise threshold (a zig-zag: a
@@ -1393,9 +1399,10 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   if (seen.size() < 4) return x;
   const double typical = quantile(rates, 0.5);
   const auto apart = [&](const Estimate& a, const Estimate& b) {
-    return std::abs(a.sigma - b.sigma) >
-           std::max(kExchangeSigmas * std::hypot(a.sigma_std, b.sigma_std), kExchangeRel * typical);
+    return rates_apart(a.sigma, a.sigma_std, b.sigma, b.sigma_std, typical);
   };
+  // A rate known to better than the typical rate itself.
+  const auto known = [&](const Estimate& e) { return e.sigma_std <= typical; };
   // The zig-zag runs over the rates known to better than the typical rate itself: a first
   // estimate of 1.6 +- 7.6 1/s (typical 2.3) once stood as the running minimum that no later
   // rate could lie clearly above.
@@ -1406,7 +1413,7 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
       x.grows = true;
       x.end_t = std::max(x.end_t, e->t);
     }
-    if (!(e->sigma_std <= typical)) continue;
+    if (!known(*e)) continue;
     if (lo == nullptr) {
       lo = hi = e;
       continue;
@@ -1440,16 +1447,14 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   std::vector<const Estimate*> later;
   std::vector<double> later_rates;
   for (const Estimate* e : seen) {
-    if (e->t > x.end_t && e->sigma_std <= typical) {
+    if (e->t > x.end_t && known(*e)) {
       later.push_back(e);
       later_rates.push_back(e->sigma);
     }
   }
   const double settled = later_rates.empty() ? 0.0 : quantile(later_rates, 0.5);
   for (const Estimate* e : later) {
-    if (std::abs(e->sigma - settled) <=
-        std::max(kExchangeSigmas * e->sigma_std, kExchangeRel * typical))
-      break;
+    if (!rates_apart(e->sigma, e->sigma_std, settled, 0.0, typical)) break;
     x.end_t = e->t;
   }
   // The rates up to the exchange's end and the one after it, which shows where it ends.
