@@ -207,17 +207,40 @@ Padding padding(Eigen::Index n_record, Eigen::Index m, Eigen::Index guard, doubl
   return {even(n_record + pad), even(m + std::min(2 * guard, m))};
 }
 
-// The bins of channel c's spectrum that are kept. A long low-passed record keeps those up to
+// The bins of channel c's spectrum that are kept. A low-passed record keeps those up to
 // where the low-pass's gain is zero (lowpass_hz to twice it, Gaussian edge of standard
 // deviation lowpass_hz / 4: zero from 3.75 lowpass_hz, 5.6 times the highest band edge with
 // prepare_for's low-pass): above them the record holds nothing but the rounding of its
-// continuations' joins, and the spectrum then costs a few per cent of the record instead
-// of a double a sample for the rest of its extraction. Readers take missing bins as zero.
-Eigen::Index stored_bins(const ChannelSpectrum& c, bool cut, double lowpass_hz) {
-  const Eigen::Index all = c.n_fft / 2 + 1;
+// continuations' joins and the images of their poles, and a long record's spectrum then
+// costs a few per cent of the record instead of a double a sample for the rest of its
+// extraction. Readers take missing bins as zero.
+// With `step`, the bins of every step-th bin's spectrum (ChannelSpectrum::measured).
+Eigen::Index stored_bins(const ChannelSpectrum& c, bool cut, double lowpass_hz,
+                         Eigen::Index step = 1) {
+  const Eigen::Index all = c.n_fft / 2 / step + 1;
   if (!cut) return all;
-  const double df = c.fs / static_cast<double>(c.n_fft);
+  const double df = c.fs * static_cast<double>(step) / static_cast<double>(c.n_fft);
   return std::min(all, static_cast<Eigen::Index>(std::ceil(3.75 * lowpass_hz / df)) + 2);
+}
+
+// The step of the measured samples' spectrum over the continued record's (n_fft points, of
+// which `kept` measured, continued by `ext` at either end): the largest divisor of n_fft up to
+// 8 that keeps its bins no farther apart than the measured samples' own resolution fs / kept,
+// or than 0.2 / extend_s, if that is wider. Continued over 1.1 settling times of its slowest
+// band (prepare_for), a band is at least 3.3 / (taper extend_s) wide, 13 / extend_s with
+// the default taper, so the narrowest band the checks read, a third of it, then spans 22
+// bins or more. The smallest divisor when none is fine enough (a transform of half the size
+// or less, in a buffer of its own, beside the record's: that of a 4e6-sample record
+// otherwise came within 2 MB of process_test.cc's memory limit). 1 when n_fft has none.
+Eigen::Index measured_step(Eigen::Index n_fft, Eigen::Index kept, Eigen::Index ext) {
+  const Eigen::Index spacing = ext > 0 ? std::min(kept, 5 * ext) : kept;
+  Eigen::Index step = 1;
+  for (Eigen::Index d = 8; d >= 2; --d) {
+    if (n_fft % d != 0) continue;
+    if (d * spacing <= n_fft) return d;
+    step = d;
+  }
+  return step;
 }
 
 }  // namespace
@@ -288,12 +311,37 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
       e.after_valid = f.after_valid;
     }
   }
+  // The measured samples' spectrum is the continued record's less the continuations', at
+  // every step-th bin: the continuations folded modulo n_fft / step transform there exactly
+  // (a transform of a step-th of the size, in a buffer of its own, while the record waits
+  // in the main one). Both are kept only up to where the low-pass leaves nothing
+  // (stored_bins). (The measured samples transformed on their own in the main buffer, then
+  // the continuations, cost 14 % more time on the bench record; a copy of the whole
+  // measured spectrum doubled the memory of a 4e6-sample record.)
+  c.measured_step = measured_step(c.n_fft, kept, ext);
+  const Eigen::Index m_fold = c.n_fft / c.measured_step;
+  Eigen::VectorXcd continuations = Eigen::VectorXcd::Zero(m_fold / 2 + 1);
+  {
+    double* f = reinterpret_cast<double*>(continuations.data());
+    for (Eigen::Index j = 0; j < wanted; ++j) {
+      f[j % m_fold] += e.before(j);
+      f[(wanted + kept + j) % m_fold] += e.after(j);
+    }
+    cache.get(m_fold).forward_in_place(continuations.data());
+  }
+  const Eigen::Index measured_bins =
+      std::min(m_fold / 2 + 1, stored_bins(c, lowpass, options.lowpass_hz, c.measured_step));
+  continuations.conservativeResize(measured_bins);
   // The analysed record, before + kept + after, zero-padded to n_fft, then its spectrum.
   std::memmove(r + wanted, r + guard, sizeof(double) * static_cast<size_t>(kept));
   std::copy(e.before.data(), e.before.data() + wanted, r);
   std::copy(e.after.data(), e.after.data() + wanted, r + wanted + kept);
   std::fill(r + c.n_record, r + 2 * buffer.size(), 0.0);
   cache.get(c.n_fft).forward_in_place(buffer.data());
+  c.measured.resize(measured_bins);
+  for (Eigen::Index q = 0; q < measured_bins; ++q) {
+    c.measured(q) = buffer(q * c.measured_step) - continuations(q);
+  }
   // Cut only where every reader takes the long record's way (ChannelSpectrum::padded_by_pad_s):
   // a record whose settling times reach past its own length is padded as a short one, whole.
   buffer.conservativeResize(stored_bins(c, c.padded_by_pad_s() && lowpass, options.lowpass_hz));
@@ -1106,28 +1154,29 @@ class SpectrumMagnitudes {
   Eigen::VectorXd squared_;
 };
 
-// What the channel's spectrum shows around a band with no span: the strongest peak
+// What the measured samples' spectrum shows around a band with no span: the strongest peak
 // near it, or that the band is narrower than kWidths half-power widths of its mode.
 std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& band, double taper,
                             signal::FftCache& cache) {
   // Measured on 80 Hz modes of 0.3-3 % damping: narrower bands mostly gave no span or under
   // one decade, bands of 12 half-power widths two (ringdown_test.cc, RingdownAdvice).
   constexpr double kWidths = 12.0;
-  const double df = channel.fs / static_cast<double>(channel.n_fft);
+  const double df =
+      channel.fs * static_cast<double>(channel.measured_step) / static_cast<double>(channel.n_fft);
   const double width = band.hi - band.lo;
   const auto bin = [&](double f) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1,
-                                    channel.spectrum.size() - 1);
+                                    channel.measured.size() - 1);
   };
   const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
   if (k1 <= k0 + 2) return {};
   // The highest local maximum (a rising or falling edge of the range is not a peak).
   const Eigen::Index first = std::max<Eigen::Index>(k0, 1) - 1;
-  const Eigen::Index last = std::min<Eigen::Index>(k1 + 1, channel.spectrum.size() - 1);
-  const SpectrumMagnitudes mag(channel.spectrum, first, last);
+  const Eigen::Index last = std::min<Eigen::Index>(k1 + 1, channel.measured.size() - 1);
+  const SpectrumMagnitudes mag(channel.measured, first, last);
   Eigen::Index kp = -1;
   for (Eigen::Index k = first + 1; k <= k1; ++k) {
-    if (k + 1 >= channel.spectrum.size() || !mag.greater(k, k - 1) ||
+    if (k + 1 >= channel.measured.size() || !mag.greater(k, k - 1) ||
         !mag.greater(k, k + 1, true)) {
       continue;
     }
@@ -1155,21 +1204,25 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   return fmt::format("the strongest spectral peak in the band is at {:.2f} Hz", fp);
 }
 
-// True when the channel's spectrum has its largest magnitude over `sub` strictly inside it
-// (two bins or more from either edge): a mode of its own there. A heavily damped mode above
+// True when the spectrum of the channel's measured samples (ChannelSpectrum::measured, not the
+// continuations: run backwards, the one before the record once peaked at the edge of a 1:2
+// resonance twin's 220:270 Hz band, 20 times above the record's own 242 Hz mode) has its
+// largest magnitude over `sub` strictly inside it (two bins or more from either edge): a mode
+// of its own there. A heavily damped mode above
 // the range only leaks its tail into it, rising towards the upper edge, and its displacement
 // (integrated twice from acceleration) can then outweigh the mode's own band: a 100 Hz mode
 // of 5 % damping in 80:120 Hz once had every point flagged as following twice a "mode" at
 // 40:60 Hz that is not there.
 bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub) {
-  const double df = channel.fs / static_cast<double>(channel.n_fft);
-  const Eigen::Index last = channel.spectrum.size() - 1;
+  const double df =
+      channel.fs * static_cast<double>(channel.measured_step) / static_cast<double>(channel.n_fft);
+  const Eigen::Index last = channel.measured.size() - 1;
   const auto bin = [&](double f) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 0, last);
   };
   const Eigen::Index k0 = bin(sub.lo), k1 = bin(sub.hi);
   if (k1 <= k0 + 4) return true;  // too few bins to tell: leave the decision to the fits
-  const SpectrumMagnitudes mag(channel.spectrum, k0, k1);
+  const SpectrumMagnitudes mag(channel.measured, k0, k1);
   Eigen::Index kp = k0;
   for (Eigen::Index k = k0 + 1; k <= k1; ++k) {
     if (mag.greater(k, kp)) kp = k;
@@ -1755,7 +1808,10 @@ ModeTrack track_mode(const EnvelopePhase& ep, double noise, const BandSetting& s
 // floor is no peak). A mode's own skirt falls away from it, but a decaying, drifting mode's
 // spectrum ripples by up to 2.5 times in power (LMS twin, ringdown_test.cc); a linear mode
 // 4 Hz below a drifting one of three times its size rose 4-5 times above the valley
-// between them. Returns its frequency, or 0 when there is none.
+// between them. This reads the continued record's spectrum, not the measured samples':
+// run backwards, the neighbour's heavier damping raises it above the drifting mode's skirt,
+// and in the measured samples' spectrum alone that neighbour (146 Hz) was not found.
+// Returns its frequency, or 0 when there is none.
 double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, double sigma,
                       int dir, double to) {
   constexpr double kRise = 3.5, kAbove = 10.0;

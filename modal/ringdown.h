@@ -169,7 +169,13 @@ struct ChannelSpectrum {
   /// One-sided spectrum of the zero-padded analysed record; bins past its size are zero (a
   /// long record keeps those its low-pass leaves anything in).
   Eigen::VectorXcd spectrum;
-  Eigen::Index n_record = 0;  ///< samples analysed (continuations included)
+  /// Every measured_step-th bin of the measured samples' spectrum alone, the continuations
+  /// zeroed, up to where the low-pass leaves nothing: what the record itself holds, for the
+  /// checks that ask whether a mode is there. (A continuation run backwards can grow
+  /// hundreds of times past the record's peak and dominate `spectrum`.)
+  Eigen::VectorXcd measured;
+  Eigen::Index measured_step = 1;  ///< bin k of `measured` is bin k times this of `spectrum`
+  Eigen::Index n_record = 0;       ///< samples analysed (continuations included)
   Eigen::Index n_fft = 0;     ///< padded length (twice n_record, or n_record and pad_s if long)
   double fs = 0.0;            ///< sample rate [Hz]
   double t0 = 0.0;            ///< time of the analysed record's first sample [s]
