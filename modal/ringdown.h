@@ -37,8 +37,9 @@
 //    or the envelope grows. Where, in the first pass's estimates, the decay rate turns by
 //    more than three of its uncertainties and 5 % of its median, or the envelope grows by as
 //    much, and the envelope in n (or 1/n) times the band has a decay rate moving against this
-//    one's there (rank correlation at most -0.3; for a single turn -0.6, the partner's rate
-//    turning the other way there), the points up to
+//    one's there (rank correlation at most -0.3, or -0.6 in their changes, the partner's rate
+//    mirroring half the turns where the envelope never grows; for a single turn -0.6, the
+//    partner's rate turning the other way there), the points up to
 //    the last such turn or growth and the relaxation after it are kept where their amplitude (to 5
 //    %) and frequency (to the mode's half-power half-width) are well determined, and marked
 //    (Backbone::exchange): their damping is damping plus transfer, an apparent damping that may be
