@@ -323,10 +323,16 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   Eigen::VectorXcd continuations = Eigen::VectorXcd::Zero(m_fold / 2 + 1);
   {
     double* f = reinterpret_cast<double*>(continuations.data());
-    for (Eigen::Index j = 0; j < wanted; ++j) {
-      f[j % m_fold] += e.before(j);
-      f[(wanted + kept + j) % m_fold] += e.after(j);
-    }
+    // Adds x, placed from `at` on, folded modulo m_fold: a run of whole stretches.
+    const auto fold = [&](const Eigen::VectorXd& x, Eigen::Index at) {
+      for (Eigen::Index j = 0; j < x.size();) {
+        const Eigen::Index place = (at + j) % m_fold, run = std::min(x.size() - j, m_fold - place);
+        Eigen::Map<Eigen::VectorXd>(f + place, run) += x.segment(j, run);
+        j += run;
+      }
+    };
+    fold(e.before, 0);
+    fold(e.after, wanted + kept);
     cache.get(m_fold).forward_in_place(continuations.data());
   }
   const Eigen::Index measured_bins =
