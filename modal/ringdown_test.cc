@@ -468,6 +468,43 @@ TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeKeepsItsSpan) {
   }
 }
 
+// The same twin with slow content beside it, as a sensor's high-pass or a rigid-body motion
+// leaves after an impact: a heavily damped 10 Hz component (damping 0.1 or 0.3) of 5, 20 or
+// 80 m/s^2. The record's backward continuation then holds as long as the 10 Hz band filter
+// settles, so that the band was moved but not widened: its 0.4 s windows could not follow the
+// mode's nonlinear start, and 7 of the 12 records kept 0.75-1.16 decades. Followed, a band is
+// widened until its shortest window is at most half the mode's decay time (up to three times
+// the typed width). Required as above: 1.2 decades, medians 5e-4 and 5 %.
+TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeBesideSlowContentKeepsItsSpan) {
+  const double two_pi = 2 * std::numbers::pi;
+  for (const double level : {5.0, 20.0, 80.0}) {
+    for (const double zeta : {0.1, 0.3}) {
+      for (const unsigned seed : {1u, 2u}) {
+        LmsTwin t = lms_twin(seed);
+        const Eigen::Index pre = static_cast<Eigen::Index>(0.1 * t.fs);
+        testing::SlowFlowMode slow;
+        slow.omega_n = [=](double) { return two_pi * 10; };
+        slow.zeta = [=](double) { return zeta; };
+        slow.a0 = level / std::pow(two_pi * 10, 2);
+        slow.theta0 = 0.5;
+        t.x.tail(t.x.size() - pre) += testing::slow_flow(slow, t.fs, t.x.size() - pre).acceleration;
+        const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+        ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+        const Medians e = medians(r.backbone, t.m1);
+        std::printf(
+            "LMS twin, slow content %g m/s^2 damping %g, seed %u: %.2f decades, median f "
+            "err %.1e, median z err %.3f\n",
+            level, zeta, seed, r.summary.amplitude_decades, e.f, e.z);
+        char where[80];
+        std::snprintf(where, sizeof where, "level %g damping %g seed %u", level, zeta, seed);
+        EXPECT_GE(r.summary.amplitude_decades, 1.2) << where << ": " << r.summary.message;
+        EXPECT_LE(e.f, 5e-4) << where;
+        EXPECT_LE(e.z, 0.05) << where;
+      }
+    }
+  }
+}
+
 // The same twin with a linear mode below the typed band, at 146, 144 or 140 Hz (100 m/s^2 at
 // the impact, damping 0.3 %: 2.9 to 8.9 Hz below the band's lower edge). The band may not
 // follow mode 1 onto it: it stops where its gain at the neighbour's spectral peak is 1e-4
