@@ -229,9 +229,11 @@ Eigen::Index stored_bins(const ChannelSpectrum& c, bool cut, double lowpass_hz,
 // or than 0.2 / extend_s, if that is wider. Continued over 1.1 settling times of its slowest
 // band (prepare_for), a band is at least 3.3 / (taper extend_s) wide, 13 / extend_s with
 // the default taper, so the narrowest band the checks read, a third of it, then spans 22
-// bins or more. The smallest divisor when none is fine enough (a transform of half the size
-// or less, in a buffer of its own, beside the record's: that of a 4e6-sample record
-// otherwise came within 2 MB of process_test.cc's memory limit). 1 when n_fft has none.
+// bins or more. An even n_fft always has one (2: n_fft is at least twice `kept`, or a long
+// record's, far longer than 10 ext); an odd one may not, and then takes its smallest divisor,
+// up to 7, its bins up to 3.5 times farther apart, rather than a transform of the full size
+// in a buffer of its own beside the record's (at a half-size one, a 4e6-sample record came
+// within 2 MB of process_test.cc's memory limit). 1 when n_fft has no divisor up to 8.
 Eigen::Index measured_step(Eigen::Index n_fft, Eigen::Index kept, Eigen::Index ext) {
   const Eigen::Index spacing = ext > 0 ? std::min(kept, 5 * ext) : kept;
   Eigen::Index step = 1;
@@ -825,7 +827,8 @@ constexpr double kGainConverged = 1e-4;
 //   uncertainty infinite and a 1:2 internal resonance lost its whole backbone); the tail
 //   is unbounded where the changes do not shrink, and 10 where they no longer
 //   shrink but are already below kGainConverged. Where the correction alternates between
-//   two states (its last two changes cancel to less than half of one), the truth lies
+//   two states (its last two changes about equal, q <= 1.1, and cancelling to less than
+//   half of one: an alternation that grows is no such pair), the truth lies
 //   between them and the tail is 1: a moved band of the LMS twin beside slow content
 //   alternated by 6e-4 in ln r (two changes summing to 6e-14), and every point's uncertainty
 //   had been infinite.
@@ -889,10 +892,10 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
                      : now > 0       ? std::numeric_limits<double>::infinity()
                                      : 0.0;
     const double two = two_steps_abs.segment(j0, j1 - j0 + 1).maxCoeff();
-    const double tail = q < 0.9                ? 1.0 / (1.0 - q)
-                        : now < kGainConverged ? 10.0
-                        : two < 0.5 * now      ? 1.0
-                                               : std::numeric_limits<double>::infinity();
+    const double tail = q < 0.9                       ? 1.0 / (1.0 - q)
+                        : now < kGainConverged        ? 10.0
+                        : q <= 1.1 && two < 0.5 * now ? 1.0
+                                                      : std::numeric_limits<double>::infinity();
     const auto scaled = [tail](double x) { return x == 0 ? 0.0 : tail * std::abs(x); };
     // The four series share one design (its weights and factors made once).
     const auto [step_s, step_w, ends_s, ends_w] =
@@ -1177,6 +1180,7 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   // Measured on 80 Hz modes of 0.3-3 % damping: narrower bands mostly gave no span or under
   // one decade, bands of 12 half-power widths two (ringdown_test.cc, RingdownAdvice).
   constexpr double kWidths = 12.0;
+  if (channel.measured.size() < 3) return {};
   const double df =
       channel.fs * static_cast<double>(channel.measured_step) / static_cast<double>(channel.n_fft);
   const double width = band.hi - band.lo;
@@ -1344,6 +1348,7 @@ struct Exchange {
   bool grows = false;                                       ///< the envelope grows somewhere
   double partner = 0;  ///< n or 1/n: the band, times the band's, of the mode taking energy
   std::vector<const Estimate*> turned_at;  ///< the estimates where the decay rate turned
+  std::vector<char> turned_up;             ///< 1 where that turn is a peak of the rate
   bool found() const { return partner > 0 && (turns >= 1 || grows); }
 };
 
@@ -1435,21 +1440,21 @@ double changes_correlation(const std::vector<double>& a, const std::vector<doubl
   return rank_correlation(da, db);
 }
 
-// How many of the band's turns (`turned_at`, among the estimates `used`, whose decay rates are
-// `own`) the partner's rates `other` mirror: within kTurnApart estimates of the turn they have
-// a local extreme of the other kind (a minimum where the band's rate peaks), clearly apart
-// (rates_apart) from a neighbouring estimate's; the last estimate's does not count, as it may
-// only be the start of a change. A joint-like mode whose damping peaks twice (its rate turns
-// three times) beside an uncoupled neighbour had the two rates' ranks move against each other
+// How many of the band's turns (`turned_at`, among the estimates `used`; `turned_up` 1 where
+// the rate peaks there) the partner's rates `other` (one per estimate used) mirror: within
+// kTurnApart estimates of the turn they have a local extreme of the other kind (a minimum where the
+// band's rate peaks), clearly apart (rates_apart) from a neighbouring estimate's; the last
+// estimate's does not count, as it may only be the start of a change. A joint-like mode whose
+// damping peaks twice (its rate turns three times) beside an uncoupled neighbour had the two rates'
+// ranks move against each other
 // (-0.58 to -0.85 over 38-50 estimates) in 155 of 162 records (ringdown_test.cc), none of its
 // turns mirrored in 155 and one of three in 7; in the 1:2 twins 29 of the 31 partner bands
 // tried mirrored at least half.
 std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
-                              const std::vector<double>& own,
                               const std::vector<const Estimate*>& turned_at,
-                              const std::vector<double>& other,
+                              const std::vector<char>& turned_up, const std::vector<double>& other,
                               const std::vector<double>& other_std) {
-  const auto n = static_cast<std::ptrdiff_t>(own.size());
+  const auto n = static_cast<std::ptrdiff_t>(used.size());
   const double typical = median_magnitude(other);
   // Whether other[j] is a local maximum (dir +1) or minimum (-1), clearly apart from a
   // neighbour's.
@@ -1463,11 +1468,11 @@ std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
     return clear;
   };
   std::ptrdiff_t mirrored = 0;
-  for (const Estimate* t : turned_at) {
-    const auto it = std::find(used.begin(), used.end(), t);
+  for (size_t turn = 0; turn < turned_at.size(); ++turn) {
+    const auto it = std::find(used.begin(), used.end(), turned_at[turn]);
     if (it == used.end()) continue;
     const std::ptrdiff_t i = it - used.begin();
-    const bool peak = (i > 0 && own[i] > own[i - 1]) || (i + 1 < n && own[i] > own[i + 1]);
+    const bool peak = turned_up[turn] != 0;
     for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, i - kTurnApart);
          j <= std::min(n - 2, i + kTurnApart); ++j) {
       if (extreme(j, peak ? -1 : 1)) {
@@ -1480,8 +1485,8 @@ std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
 }
 
 bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_turn, bool grows,
-                  const std::vector<const Estimate*>& turned_at, const BandSetting& s,
-                  Quantity measured, signal::FftCache& cache) {
+                  const std::vector<const Estimate*>& turned_at, const std::vector<char>& turned_up,
+                  const BandSetting& s, Quantity measured, signal::FftCache& cache) {
   const ChannelSpectrum& channel = s.channel;
   const RingdownOptions& options = s.options;
   const signal::Band sub{s.band.lo * r, s.band.hi * r};
@@ -1518,7 +1523,7 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_tur
       return false;
     // Where the envelope never grows, the partner mirrors at least half of the turns.
     const auto turns = static_cast<std::ptrdiff_t>(turned_at.size());
-    return grows || 2 * mirrored_turns(used, own, turned_at, other, other_std) >= turns;
+    return grows || 2 * mirrored_turns(used, turned_at, turned_up, other, other_std) >= turns;
   }
   if (!(moves <= limit)) return false;
   // The partner's rate turns the other way within kTurnApart estimates of this one's turn
@@ -1592,6 +1597,7 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
     } else if (apart(*e, *extreme)) {
       ++x.turns;
       x.turned_at.push_back(extreme);
+      x.turned_up.push_back(dir > 0 ? 1 : 0);
       x.end_t = std::max(x.end_t, extreme->t);
       dir = -dir;
       extreme = e;
@@ -1623,7 +1629,7 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   }
   const bool one_turn = x.turns == 1 && !x.grows;
   for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
-    if (takes_energy(during, r, one_turn, x.grows, x.turned_at, s, measured, cache)) {
+    if (takes_energy(during, r, one_turn, x.grows, x.turned_at, x.turned_up, s, measured, cache)) {
       x.partner = r;
       break;
     }
@@ -1905,21 +1911,6 @@ ModeTrack track_mode(const EnvelopePhase& ep, double noise, const BandSetting& s
   return tr;
 }
 
-// The nearest peak of another mode in the channel's spectrum, walking away from the mode in
-// direction `dir` (-1 down, +1 up) as far as `to` [Hz]. The power spectrum is smoothed over
-// the mode's half-power half-width sigma / 2 pi (at least five bins); the walk starts at its
-// largest value inside the typed band (the mode the band names) and a neighbour is a local
-// maximum standing kRise times above the lowest level between it and the mode and kAbove
-// times above the spectrum's lower decile around the band (so that the ripple of the noise
-// floor is no peak). A mode's own skirt falls away from it, but a decaying, drifting mode's
-// spectrum ripples by up to 2.5 times in power (LMS twin, ringdown_test.cc); a linear mode
-// 4 Hz below a drifting one of three times its size rose 4-5 times above the valley
-// between them, and the measured samples' spectrum bends down there too (measured_peak_near;
-// else the walk goes on past it). This reads the continued record's spectrum, not the
-// measured samples':
-// run backwards, the neighbour's heavier damping raises it above the drifting mode's skirt,
-// and in the measured samples' spectrum alone that neighbour (146 Hz) was not found.
-// Returns its frequency, or 0 when there is none.
 // Whether the measured samples' power (ChannelSpectrum::measured), summed over `half_hz` either
 // side of each bin, bends down somewhere within that reach (and a bin) of f: its logarithm
 // concave over the reach, as at a mode's peak or at the shoulder a mode hidden on a stronger
@@ -1949,6 +1940,20 @@ bool measured_peak_near(const ChannelSpectrum& channel, double f, double half_hz
   return false;
 }
 
+// The nearest peak of another mode in the channel's spectrum, walking away from the mode in
+// direction `dir` (-1 down, +1 up) as far as `to` [Hz]. The power spectrum is smoothed over
+// the mode's half-power half-width sigma / 2 pi (at least five bins); the walk starts at its
+// largest value inside the typed band (the mode the band names) and a neighbour is a local
+// maximum standing kRise times above the lowest level between it and the mode and kAbove
+// times above the spectrum's lower decile around the band (so that the ripple of the noise
+// floor is no peak), where the measured samples' spectrum bends down too (measured_peak_near;
+// else the walk goes on past it). A mode's own skirt falls away from it, but a decaying,
+// drifting mode's spectrum ripples by up to 2.5 times in power (LMS twin, ringdown_test.cc); a
+// linear mode 4 Hz below a drifting one of three times its size rose 4-5 times above the
+// valley between them. The walk reads the continued record's spectrum, not the measured
+// samples': run backwards, the neighbour's heavier damping raises it above the drifting mode's
+// skirt, and in the measured samples' spectrum alone that neighbour (146 Hz) was not found.
+// Returns its frequency, or 0 when there is none.
 double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, double sigma,
                       int dir, double to) {
   constexpr double kRise = 3.5, kAbove = 10.0;
@@ -2017,8 +2022,9 @@ double neighbour_peak(const ChannelSpectrum& channel, const signal::Band& band, 
 // backward continuation holds (the start of the decay, its largest amplitudes, would be
 // lost): then it is widened, at most kMaxWiden times, until it settles within it. (With a
 // margin of 2 and no widening the LMS twin in ringdown_test.cc kept 0.96-1.57 decades, with
-// 3 and 3 times 1.38-1.61.) It is also widened (at most kMaxWiden times) until its shortest
-// window, 4 / noise bandwidth (band_setting's w_min), is at most half the mode's decay time
+// 3 and 3 times 1.38-1.61.) It is also widened (at most kMaxWiden times) until the shortest
+// window its noise bandwidth B allows, 4 / B (band_setting's w_min, unless 8 of the mode's
+// periods or 6 samples are longer), is at most half the mode's decay time
 // 1 / sigma: a longer window cannot follow a start whose damping changes with amplitude.
 // Beside slow content (a heavily damped 10 Hz component, as a sensor's high-pass leaves) the
 // twin's continuation held, the band was only moved, and 7 of 12 records kept 0.75-1.16

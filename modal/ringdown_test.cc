@@ -195,6 +195,7 @@ TEST(RingdownLongRecord, PaddingBySettlingTimesGivesTheTwicePaddedBandSignals) {
     ChannelSpectrum c = analysed;
     c.n_fft = n_fft;
     c.spectrum = cache.get(c.n_fft).forward(y);
+    c.measured.resize(0);  // not read here
     return c;
   };
   const auto padded_by = [&](double pad_s) {
@@ -964,14 +965,39 @@ TEST(RingdownInternalResonance, BothModesStruck) {
   EXPECT_GE(kept[kept.size() / 2], 0.8);
 }
 
-// What a single turn of the decay rate must not be taken for: a joint-like mode (100 Hz, its
-// damping peaking at 0.8 % where the amplitude is 0.3, 0.1 or 0.03 of the start, so that its
-// decay rate turns once) beside an uncoupled neighbour at about 2, 1/2 or 3 times its
-// frequency (0.25, 0.75 or 2.25 times its amplitude; linear, its damping falling with its
-// amplitude, or peaking too), two noise seeds: 162 records, none may mark an exchange. With
-// the rank correlation alone (at most -0.6), 9 of the 54 records with the neighbour at twice
-// the frequency, 12 of 54 at half and 1 of 54 at three times marked one; the partner's rate
-// must also turn the other way near this one's turn, clearly apart from where it ends.
+// The first twin with slow content beside it, as a sensor's high-pass or a rigid-body motion
+// leaves after an impact: a 10 Hz component of damping 0.2 whose velocity starts at 1 or 3
+// times mode 1's. Its rates then swing harder at the start (up to 28 1/s), the band is moved
+// and widened to follow them, and the exchange is read through shorter windows: kept 0.81-0.93
+// of what mode 1's envelope shows (0.80-0.94 without it). Required: 0.8 in every record.
+TEST(RingdownInternalResonance, SlowContentBesideKeepsWhatTheEnvelopeShows) {
+  const double two_pi = 2 * std::numbers::pi;
+  for (const double level : {1.0, 3.0}) {
+    for (const double alpha : {1e9, 3e9}) {
+      for (const unsigned seed : {1u, 2u}) {
+        testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+            alpha, 6.5e-5, alpha > 2e9 ? 0.002 : 0.006, 1e-5, seed);
+        testing::SlowFlowMode slow;
+        slow.omega_n = [=](double) { return two_pi * 10; };
+        slow.zeta = [](double) { return 0.2; };
+        slow.a0 = level * 6.5e-5 * 122 / 10;  // velocity level times mode 1's, at 10 Hz
+        slow.theta0 = 0.5;
+        rec.velocity += testing::slow_flow(slow, rec.fs, rec.velocity.size()).velocity;
+        const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+        ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+        const double threshold = RingdownOptions{}.snr_min * r.summary.noise_floor_m;
+        const double share =
+            r.summary.amplitude_decades / std::log10(rec.amplitude1.maxCoeff() / threshold);
+        std::printf(
+            "slow content %g times mode 1, alpha %g seed %u: %.3f of the envelope kept, "
+            "%d points marked exchange\n",
+            level, alpha, seed, share, r.summary.exchange_points);
+        EXPECT_GE(share, 0.8) << "level " << level << " alpha " << alpha << " seed " << seed;
+      }
+    }
+  }
+}
+
 // The joint-like mode of the tests below beside an uncoupled neighbour at `neighbour_hz`, over
 // 54 records (3 amplitudes of the damping peak, 3 of the neighbour, 3 kinds of its damping, 2
 // noise seeds); with `two_peaks` the mode's damping peaks a second time, a decade of amplitude
@@ -1025,6 +1051,14 @@ int exchanges_beside_an_uncoupled_neighbour(double neighbour_hz, bool two_peaks)
   return flagged;
 }
 
+// What a single turn of the decay rate must not be taken for: a joint-like mode (100 Hz, its
+// damping peaking at 0.8 % where the amplitude is 0.3, 0.1 or 0.03 of the start, so that its
+// decay rate turns once) beside an uncoupled neighbour at about 2, 1/2 or 3 times its
+// frequency (0.25, 0.75 or 2.25 times its amplitude; linear, its damping falling with its
+// amplitude, or peaking too), two noise seeds: 162 records, none may mark an exchange. With
+// the rank correlation alone (at most -0.6), 9 of the 54 records with the neighbour at twice
+// the frequency, 12 of 54 at half and 1 of 54 at three times marked one; the partner's rate
+// must also turn the other way near this one's turn, clearly apart from where it ends.
 TEST(RingdownInternalResonance, OneTurnBesideAnUncoupledNeighbourIsNoExchange) {
   for (const double neighbour_hz : {201.3, 50.4, 301.7}) {
     const int flagged = exchanges_beside_an_uncoupled_neighbour(neighbour_hz, false);
@@ -1033,8 +1067,9 @@ TEST(RingdownInternalResonance, OneTurnBesideAnUncoupledNeighbourIsNoExchange) {
 }
 
 // As above, with the mode's damping peaking twice (its decay rate turns three times, so the
-// partner's rate need only move against it, in its ranks or its changes): 162 records, none
-// may mark an exchange.
+// partner's rate must move against it, in its ranks or its changes, and mirror at least half
+// of its turns): 162 records, none may mark an exchange. With the rank correlation alone
+// (at most -0.3), 41 of them marked most of their points.
 TEST(RingdownInternalResonance, ThreeTurnsBesideAnUncoupledNeighbourAreNoExchange) {
   for (const double neighbour_hz : {201.3, 50.4, 301.7}) {
     const int flagged = exchanges_beside_an_uncoupled_neighbour(neighbour_hz, true);
