@@ -921,7 +921,9 @@ INSTANTIATE_TEST_SUITE_P(Harsh, RingdownStress,
 // point was more than 10 % off, up to 170 %, with a stated uncertainty of 1 %: the relaxation
 // after the last turn was not marked). Where it is not (3 of the 27: the rate only falls from
 // the start), unmarked points at the start still read 19-65 % more damping: the envelope's
-// decay there looks as a joint's damping does, falling as the amplitude falls.
+// decay there looks as a joint's damping does, falling as the amplitude falls. Required: 0.7
+// kept in every case and 0.85 in the median, the medians above within 5e-4 and 10 %, and no
+// unmarked point more than 10 % off where an exchange is marked.
 TEST(RingdownInternalResonance, BothModesStruck) {
   std::vector<double> kept;
   for (const double alpha : {1e9, 2e9, 3e9}) {
@@ -952,7 +954,7 @@ TEST(RingdownInternalResonance, BothModesStruck) {
             ez[ez.size() / 2], ez.back());
         char where[64];
         std::snprintf(where, sizeof where, "alpha %g ratio %g phase %g", alpha, ratio, phase);
-        EXPECT_GE(share, 0.65) << where;
+        EXPECT_GE(share, 0.7) << where;
         EXPECT_LE(ef[ef.size() / 2], 5e-4) << where;
         EXPECT_LE(ez[ez.size() / 2], 0.10) << where;
         if (r.summary.exchange_points > 0) {
@@ -962,7 +964,7 @@ TEST(RingdownInternalResonance, BothModesStruck) {
     }
   }
   std::sort(kept.begin(), kept.end());
-  EXPECT_GE(kept[kept.size() / 2], 0.8);
+  EXPECT_GE(kept[kept.size() / 2], 0.85);
 }
 
 // The first twin with slow content beside it, as a sensor's high-pass or a rigid-body motion
