@@ -1181,8 +1181,7 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   // one decade, bands of 12 half-power widths two (ringdown_test.cc, RingdownAdvice).
   constexpr double kWidths = 12.0;
   if (channel.measured.size() < 3) return {};
-  const double df =
-      channel.fs * static_cast<double>(channel.measured_step) / static_cast<double>(channel.n_fft);
+  const double df = channel.measured_df();
   const double width = band.hi - band.lo;
   const auto bin = [&](double f) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1,
@@ -1234,8 +1233,7 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
 // of 5 % damping in 80:120 Hz once had every point flagged as following twice a "mode" at
 // 40:60 Hz that is not there.
 bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub) {
-  const double df =
-      channel.fs * static_cast<double>(channel.measured_step) / static_cast<double>(channel.n_fft);
+  const double df = channel.measured_df();
   const Eigen::Index last = channel.measured.size() - 1;
   const auto bin = [&](double f) {
     return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 0, last);
@@ -1340,16 +1338,20 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
   sum.linear_fit_max = bb.amplitude(lf.hi);
 }
 
+// A turn of the envelope's decay rate: the estimate where it peaks (or bottoms out).
+struct Turn {
+  const Estimate* at = nullptr;
+  bool peak = false;
+};
+
 // An energy exchange between the band's mode and another (ringdown.h, step 5), read from the
 // envelope's decay rate along the estimates.
 struct Exchange {
   double end_t = -std::numeric_limits<double>::infinity();  ///< last turn or growth, relaxed [s]
-  int turns = 0;                                            ///< turns of the decay rate
   bool grows = false;                                       ///< the envelope grows somewhere
-  double partner = 0;  ///< n or 1/n: the band, times the band's, of the mode taking energy
-  std::vector<const Estimate*> turned_at;  ///< the estimates where the decay rate turned
-  std::vector<char> turned_up;             ///< 1 where that turn is a peak of the rate
-  bool found() const { return partner > 0 && (turns >= 1 || grows); }
+  double partner = 0;       ///< n or 1/n: the band, times the band's, of the mode taking energy
+  std::vector<Turn> turns;  ///< the turns of the decay rate, in time order
+  bool found() const { return partner > 0 && (!turns.empty() || grows); }
 };
 
 // A turn of the decay rate or a growth of the envelope counts beyond kExchangeSigmas of its
@@ -1440,8 +1442,8 @@ double changes_correlation(const std::vector<double>& a, const std::vector<doubl
   return rank_correlation(da, db);
 }
 
-// How many of the band's turns (`turned_at`, among the estimates `used`; `turned_up` 1 where
-// the rate peaks there) the partner's rates `other` (one per estimate used) mirror: within
+// How many of the band's turns (among the estimates `used`) the partner's rates `other` (one
+// per estimate used) mirror: within
 // kTurnApart estimates of the turn they have a local extreme of the other kind (a minimum where the
 // band's rate peaks), clearly apart (rates_apart) from a neighbouring estimate's; the last
 // estimate's does not count, as it may only be the start of a change. A joint-like mode whose
@@ -1451,8 +1453,7 @@ double changes_correlation(const std::vector<double>& a, const std::vector<doubl
 // turns mirrored in 155 and one of three in 7; in the 1:2 twins 29 of the 31 partner bands
 // tried mirrored at least half.
 std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
-                              const std::vector<const Estimate*>& turned_at,
-                              const std::vector<char>& turned_up, const std::vector<double>& other,
+                              const std::vector<Turn>& turns, const std::vector<double>& other,
                               const std::vector<double>& other_std) {
   const auto n = static_cast<std::ptrdiff_t>(used.size());
   const double typical = median_magnitude(other);
@@ -1468,11 +1469,11 @@ std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
     return clear;
   };
   std::ptrdiff_t mirrored = 0;
-  for (size_t turn = 0; turn < turned_at.size(); ++turn) {
-    const auto it = std::find(used.begin(), used.end(), turned_at[turn]);
+  for (const Turn& turn : turns) {
+    const auto it = std::find(used.begin(), used.end(), turn.at);
     if (it == used.end()) continue;
     const std::ptrdiff_t i = it - used.begin();
-    const bool peak = turned_up[turn] != 0;
+    const bool peak = turn.peak;
     for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, i - kTurnApart);
          j <= std::min(n - 2, i + kTurnApart); ++j) {
       if (extreme(j, peak ? -1 : 1)) {
@@ -1485,8 +1486,8 @@ std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
 }
 
 bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_turn, bool grows,
-                  const std::vector<const Estimate*>& turned_at, const std::vector<char>& turned_up,
-                  const BandSetting& s, Quantity measured, signal::FftCache& cache) {
+                  const std::vector<Turn>& turns, const BandSetting& s, Quantity measured,
+                  signal::FftCache& cache) {
   const ChannelSpectrum& channel = s.channel;
   const RingdownOptions& options = s.options;
   const signal::Band sub{s.band.lo * r, s.band.hi * r};
@@ -1522,8 +1523,8 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_tur
           changes_correlation(own, own_std, other, other_std) <= kAntiCorrelatedChanges))
       return false;
     // Where the envelope never grows, the partner mirrors at least half of the turns.
-    const auto turns = static_cast<std::ptrdiff_t>(turned_at.size());
-    return grows || 2 * mirrored_turns(used, turned_at, turned_up, other, other_std) >= turns;
+    return grows || 2 * mirrored_turns(used, turns, other, other_std) >=
+                        static_cast<std::ptrdiff_t>(turns.size());
   }
   if (!(moves <= limit)) return false;
   // The partner's rate turns the other way within kTurnApart estimates of this one's turn
@@ -1595,9 +1596,7 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
     if ((e->sigma - extreme->sigma) * dir >= 0) {
       extreme = e;
     } else if (apart(*e, *extreme)) {
-      ++x.turns;
-      x.turned_at.push_back(extreme);
-      x.turned_up.push_back(dir > 0 ? 1 : 0);
+      x.turns.push_back({extreme, dir > 0});
       x.end_t = std::max(x.end_t, extreme->t);
       dir = -dir;
       extreme = e;
@@ -1608,7 +1607,7 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   // median of those after it. (A rate that only falls from the start is what a joint's
   // damping does as the amplitude falls: on the bench record's nonlinear 58 Hz mode, taking
   // such a fall for an exchange marked 31 points.)
-  if (!(x.turns >= 1 || x.grows)) return x;
+  if (x.turns.empty() && !x.grows) return x;
   std::vector<const Estimate*> later;
   std::vector<double> later_rates;
   for (const Estimate* e : seen) {
@@ -1627,9 +1626,9 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   for (const Estimate* e : seen) {
     if (e->t <= x.end_t || (!during.empty() && during.back()->t <= x.end_t)) during.push_back(e);
   }
-  const bool one_turn = x.turns == 1 && !x.grows;
+  const bool one_turn = x.turns.size() == 1 && !x.grows;
   for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
-    if (takes_energy(during, r, one_turn, x.grows, x.turned_at, x.turned_up, s, measured, cache)) {
+    if (takes_energy(during, r, one_turn, x.grows, x.turns, s, measured, cache)) {
       x.partner = r;
       break;
     }
@@ -1682,13 +1681,13 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
   if (exchange.found()) {
     const double r = exchange.partner;
     const std::string turns =
-        exchange.turns == 1
+        exchange.turns.size() == 1
             ? std::string("the envelope's decay rate turns once")
-            : fmt::format("the envelope's decay rate turns {} times", exchange.turns);
-    const std::string how = exchange.turns >= 1 && exchange.grows
+            : fmt::format("the envelope's decay rate turns {} times", exchange.turns.size());
+    const std::string how = !exchange.turns.empty() && exchange.grows
                                 ? turns + " and the envelope grows"
-                            : exchange.turns >= 1 ? turns
-                                                  : std::string("the envelope grows");
+                            : !exchange.turns.empty() ? turns
+                                                      : std::string("the envelope grows");
     notes.push_back(fmt::format(
         "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "
         "of the envelope in {} the band): {} points there marked (column exchange), their "
@@ -1922,8 +1921,7 @@ ModeTrack track_mode(const EnvelopePhase& ep, double noise, const BandSetting& s
 // (ringdown_test.cc) all pass; asked for a local maximum instead, 2 of 6 failed, hidden under
 // the drifting mode's skirt.
 bool measured_peak_near(const ChannelSpectrum& channel, double f, double half_hz) {
-  const double dm =
-      channel.fs * static_cast<double>(channel.measured_step) / static_cast<double>(channel.n_fft);
+  const double dm = channel.measured_df();
   const Eigen::Index h = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(half_hz / dm));
   const Eigen::Index centre = static_cast<Eigen::Index>(std::round(f / dm));
   const Eigen::Index first = centre - 3 * h - 3, last = centre + 3 * h + 3;

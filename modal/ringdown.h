@@ -176,7 +176,12 @@ struct ChannelSpectrum {
   /// hundreds of times past the record's peak and dominate `spectrum`.)
   Eigen::VectorXcd measured;
   Eigen::Index measured_step = 1;  ///< bin k of `measured` is bin k times this of `spectrum`
-  Eigen::Index n_record = 0;       ///< samples analysed (continuations included)
+
+  /// Spacing of `measured`'s bins [Hz].
+  double measured_df() const {
+    return fs * static_cast<double>(measured_step) / static_cast<double>(n_fft);
+  }
+  Eigen::Index n_record = 0;  ///< samples analysed (continuations included)
   Eigen::Index n_fft = 0;     ///< padded length (twice n_record, or n_record and pad_s if long)
   double fs = 0.0;            ///< sample rate [Hz]
   double t0 = 0.0;            ///< time of the analysed record's first sample [s]
