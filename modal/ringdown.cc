@@ -869,7 +869,11 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
   std::vector<double> add_s(ne, 0.0), add_w(ne, 0.0);
   for (size_t i = 0; i < ne; ++i) {
     const Estimate& e = est[i];
-    const auto reach = static_cast<size_t>(std::ceil(e.window / 2 / std::max(1e-12, spacing)));
+    // A peak-fitting estimate whose extrema do not advance in its window (a fitted half period
+    // of zero or less: omega_d <= 0, never usable) has no window to take errors across.
+    if (!(e.window > 0) || !std::isfinite(e.window)) continue;
+    const auto reach = static_cast<size_t>(
+        std::min(std::ceil(e.window / 2 / std::max(1e-12, spacing)), static_cast<double>(ne)));
     const size_t lo = i >= reach ? i - reach : 0, hi = std::min(ne - 1, i + reach);
     const double dl = est[hi].log_amp - est[lo].log_amp;
     if (hi != lo && std::abs(dl) > 0) {
@@ -2210,6 +2214,16 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
       moved ? envelope_phase(zb.baseband, zb.carrier_hz, zb.dt) : EnvelopePhase{};
   const EnvelopePhase& ep = moved ? moved_ep : typed_ep;
   const double noise = moved ? noise_floor(ep, sr) : typed_noise;
+  // A channel analysed at a scale (samples beyond [1e-100, 1e100]) may have a displacement
+  // beyond the range of a double in the record's units: at a sample rate of 1e-277 Hz, a
+  // velocity of 1e297 m/s is a displacement of 1e574 m. Nothing about it can be written.
+  const double peak_m = ep.amp.maxCoeff() / channel.scale;
+  if (!std::isfinite(peak_m) || !std::isfinite(noise / channel.scale)) {
+    sum.message =
+        "the band's displacement envelope exceeds the largest double (1.8e308 m): check the "
+        "channel's unit and the sample rate";
+    return out;
+  }
   sum.noise_floor_m = noise / channel.scale;
 
   const CorrectedEstimates corr =

@@ -376,6 +376,23 @@ TEST(HugeSamples, AreProcessedLikeTheSameRecordAtUnitScale) {
       << r.err;
   EXPECT_NE(r.err.find("acc2 band 1: no backbone: "), std::string::npos) << r.err;
   EXPECT_NO_THROW(data::read_json(dir + "/over/summary.json"));
+
+  // A velocity of 1e300 m/s sampled at 1e-250 Hz, its mode at 8e-252 Hz: the displacement,
+  // 1e300 / (2 pi 8e-252) = 2e550 m, is past the largest double already in the envelope (the
+  // noise floor summary.json reports), not only in the backbone (the fuzzer's finding: the
+  // summary was refused for an infinite noise floor). No backbone, the reason, no Inf.
+  std::string slow = "# fs: 1e-250\nv1 [m/s]\n";
+  for (int k = 0; k < 4000; ++k) {
+    const double t = k * 1e-3;
+    slow += fmt::format("{}\n", 1e300 * std::exp(-t) * std::sin(2 * M_PI * 80 * t));
+  }
+  write_text(dir + "/slow.csv", slow);
+  const CommandResult s =
+      run_jointlab("process " + dir + "/slow.csv --band 7e-252:9e-252 --out " + dir + "/slow");
+  expect_error(s, "v1: the band's displacement envelope exceeds the largest double");
+  const std::string json = testing::read_file(dir + "/slow/summary.json");
+  EXPECT_NO_THROW(data::parse_json(json, "summary.json"));
+  EXPECT_EQ(json.find("inf"), std::string::npos);
 }
 
 TEST(Readers, NonUtf8HeaderGivesValidJson) {
