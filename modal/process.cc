@@ -134,7 +134,7 @@ void check_processable(const data::Record& record, const std::vector<signal::Ban
     throw InputError(where(
         record.source, 0,
         fmt::format("sample rate {:.3g} Hz: continuing this record's {} samples at its ends would "
-                    "take {:.0f} samples (at most {:.0f}); check the file's time column or fs",
+                    "take {:.4g} samples (at most {:.4g}); check the file's time column or fs",
                     record.fs, record.size(), samples_for(options.prepare.extend_s),
                     kMaxContinued)));
   }
@@ -146,7 +146,7 @@ void check_processable(const data::Record& record, const std::vector<signal::Ban
       throw InputError(where(
           record.source, 0,
           fmt::format("band {}:{} Hz: continuing this record's {} samples at its ends for the "
-                      "band's filter would take {:.0f} samples (at most {:.0f}); give a wider "
+                      "band's filter would take {:.4g} samples (at most {:.4g}); give a wider "
                       "band or a shorter record",
                       b.lo, b.hi, record.size(), samples, kMaxContinued)));
     }
