@@ -2252,6 +2252,19 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   }
   out.backbone = backbone_of(est, valid, screened.exchange, run, channel.t0, noise, options);
   Backbone& bb = out.backbone;
+  // The band says which mode: one that lies outside it at every point is another band's,
+  // seen through the filter's skirt and followed there (an LMS-like mode drifting from 148.4
+  // to 150.3 Hz, read with 140:148, was reported at 150.3 Hz).
+  if (const auto [f_min, f_max] =
+          std::pair{bb.damped_frequency_hz.minCoeff(), bb.damped_frequency_hz.maxCoeff()};
+      f_max < band.lo || f_min > band.hi) {
+    out.backbone = Backbone{};
+    sum.message = fmt::format(
+        "no mode in the band: the mode its filter passes lies at {:.2f} to {:.2f} Hz, outside "
+        "the typed band {:g}:{:g} Hz; type a band around it",
+        f_min, f_max, band.lo, band.hi);
+    return out;
+  }
   mark_superharmonics(bb, channel, measured, read, options, cache);
   const Eigen::Index n = bb.size();
   sum.status = RingdownStatus::kOk;

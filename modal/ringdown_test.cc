@@ -386,7 +386,7 @@ struct LmsTwin {
   testing::SlowFlowMode m1;  // the planted backbone (displacement amplitude)
 };
 
-LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0) {
+LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0, double noise = 4.0) {
   LmsTwin t;
   const Eigen::Index n = static_cast<Eigen::Index>(2.55 * t.fs);
   const Eigen::Index pre = static_cast<Eigen::Index>(0.1 * t.fs);
@@ -414,7 +414,7 @@ LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0) {
   ring += linear(412.0, 0.004, 150.0, 1.1);
   if (neighbour_hz > 0) ring += linear(neighbour_hz, 0.003, 100.0, 2.3);
   std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, 4.0);
+  std::normal_distribution<double> g(0.0, noise);
   t.x.resize(n);
   for (Eigen::Index k = 0; k < n; ++k) t.x(k) = (k < pre ? 0.0 : ring(k - pre)) + g(rng);
   return t;
@@ -503,6 +503,34 @@ TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeBesideSlowContentKeepsItsSpan
         EXPECT_LE(e.z, 0.05) << where;
       }
     }
+  }
+}
+
+// A band typed beside the mode rather than around it: the LMS twin's mode (149.6 to 151.7 Hz),
+// its noise 0.02 m/s^2 (80 dB below the start), read with 140:149.3, which it never enters.
+// Followed through the filter's skirt, its points read 149.8-151.8 Hz with their damping known
+// to 1 %: before, they were this band's backbone (a Python twin drifting from 148.4 to 150.3 Hz
+// read with 140:148 was given one at 148.5-150.6 Hz). Now no backbone, and the reason names
+// where the mode is. Above it, 152:162 is refused by the noise test. The band around it,
+// 148.9:158.9, keeps its backbone.
+TEST(RingdownBandGain, AModeBesideTheTypedBandIsNotItsMode) {
+  for (const unsigned seed : {1u, 2u}) {
+    const LmsTwin t = lms_twin(seed, 0, 0.02);
+    for (const signal::Band band : {signal::Band{140, 149.3}, signal::Band{152, 162}}) {
+      const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, band);
+      std::printf("LMS twin seed %u, band %g:%g: %s\n", seed, band.lo, band.hi,
+                  r.summary.report().c_str());
+      EXPECT_NE(r.summary.status, RingdownStatus::kOk) << band.lo << ":" << band.hi;
+      EXPECT_NE(r.summary.message.find("no mode in the band"), std::string::npos)
+          << r.summary.message;
+      if (band.hi < 150) {
+        EXPECT_NE(r.summary.message.find("outside the typed band 140:149.3 Hz"), std::string::npos)
+            << r.summary.message;
+      }
+    }
+    const Ringdown around = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+    EXPECT_EQ(around.summary.status, RingdownStatus::kOk) << around.summary.message;
+    EXPECT_GE(around.summary.amplitude_decades, 1.2);
   }
 }
 
