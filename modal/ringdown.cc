@@ -2141,8 +2141,8 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
   }
   if (out.band.lo != typed.lo || out.band.hi != typed.hi) {
     out.note = fmt::format(
-        "read through {:.2f}:{:.2f} Hz, the band moved to follow the mode (it runs from {:.2f} to "
-        "{:.2f} Hz, near the typed band's edge; the filter's gain is divided out)",
+        "read through {:.2f}:{:.2f} Hz, the band moved to follow the mode (inside the typed band "
+        "it runs from {:.2f} to {:.2f} Hz, near its edge; the filter's gain is divided out)",
         out.band.lo, out.band.hi, f_lo, f_hi);
     if (held_by > 0) {
       out.note += fmt::format(
