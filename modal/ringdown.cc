@@ -1447,15 +1447,14 @@ double changes_correlation(const std::vector<double>& a, const std::vector<doubl
 }
 
 // How many of the band's turns (among the estimates `used`) the partner's rates `other` (one
-// per estimate used) mirror: within
-// kTurnApart estimates of the turn they have a local extreme of the other kind (a minimum where the
-// band's rate peaks), clearly apart (rates_apart) from a neighbouring estimate's; the last
-// estimate's does not count, as it may only be the start of a change. A joint-like mode whose
-// damping peaks twice (its rate turns three times) beside an uncoupled neighbour had the two rates'
-// ranks move against each other
-// (-0.58 to -0.85 over 38-50 estimates) in 155 of 162 records (ringdown_test.cc), none of its
-// turns mirrored in 155 and one of three in 7; in the 1:2 twins 29 of the 31 partner bands
-// tried mirrored at least half.
+// per estimate used) mirror: within kTurnApart estimates of the turn they have a local extreme
+// of the other kind (a minimum where the band's rate peaks), clearly apart (rates_apart) from a
+// neighbouring estimate's; the last estimate's does not count, as it may only be the start of a
+// change. A joint-like mode whose damping peaks twice (its rate turns three times) beside an
+// uncoupled neighbour had the two rates' ranks move against each other (-0.58 to -0.85 over
+// 38-50 estimates) in 155 of 162 records (ringdown_test.cc), none of its turns mirrored in 155
+// and one of three in 7; in the 1:2 twins 29 of the 31 partner bands tried mirrored at least
+// half.
 std::ptrdiff_t mirrored_turns(const std::vector<const Estimate*>& used,
                               const std::vector<Turn>& turns, const std::vector<double>& other,
                               const std::vector<double>& other_std) {
