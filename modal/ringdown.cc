@@ -356,6 +356,8 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
+  c.clipping = find_clipping(x);
+  c.clipped_until_s = t0 + static_cast<double>(c.clipping.last) / fs;
   c.continued_begin_s = static_cast<double>(e.before_valid) / fs;
   c.continued_end_s = static_cast<double>(e.after_valid) / fs;
   c.spectrum = std::move(buffer);
@@ -496,6 +498,9 @@ BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& ban
   const double end = channel.data_end_s - channel.t0;
   s.begin = begin;
   s.start = begin + std::max(0.0, settle - channel.continued_begin_s);
+  // A clipped channel's band is read from its last clipped sample on: what the band sees of
+  // the clipped stretch is the recorder's range, not the structure's response.
+  if (channel.clipping.found()) s.start = std::max(s.start, channel.clipped_until_s - channel.t0);
   s.stop = std::min(duration, end - std::max(0.0, settle - channel.continued_end_s));
   s.noise_bandwidth_hz = bs.noise_bandwidth_hz;
   s.correlation = std::max(1.0, 1.0 / (s.dt * bs.noise_bandwidth_hz));
@@ -508,6 +513,28 @@ BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& ban
   s.period = 1.0 / std::max(s.f_guess, band.lo);
   s.w_min = std::max({options.min_periods * s.period, 4.0 / bs.noise_bandwidth_hz, 6.0 * s.dt});
   return s;
+}
+
+// Whether the band's usable span starts at the channel's last clipped sample (band_setting).
+bool clipped_from_start(const BandSetting& s) {
+  const ChannelSpectrum& c = s.channel;
+  return c.clipping.found() && c.clipped_until_s - c.t0 >= s.start - 1e-12;
+}
+
+// The note on a clipped channel (ChannelSpectrum::clipping), or nothing.
+std::string clipping_note(const BandSetting& s, Quantity measured) {
+  const Clipping& c = s.channel.clipping;
+  if (!c.found()) return {};
+  const std::string unit = si_unit(measured);
+  std::string values;
+  if (c.high_pinned) values = fmt::format("{:.6g} {}", c.high, unit);
+  if (c.low_pinned)
+    values += fmt::format("{}{:.6g} {}", values.empty() ? "" : " and ", c.low, unit);
+  return fmt::format(
+      "the channel is clipped (the sensor or the recorder past its range): {} samples pinned at "
+      "{}, the last at {:.4f} s{}",
+      c.samples, values, s.channel.clipped_until_s,
+      clipped_from_start(s) ? "; the band is read from there on" : "");
 }
 
 // Noise floor: residual RMS about fits spanning kNoiseSamples independent noise
@@ -1644,13 +1671,16 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
 // exchange points.
 std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Estimate>& est,
                                     const Run& run, const GainCorrection& applied, double noise,
-                                    const RingdownSummary& sum, const Exchange& exchange) {
+                                    const RingdownSummary& sum, const Exchange& exchange,
+                                    Quantity measured) {
   const ChannelSpectrum& channel = s.channel;
   const signal::Band& band = s.band;
   const RingdownOptions& options = s.options;
   const GainCorrection& previous = applied;  // the correction the estimates carry
   std::vector<std::string> notes;
-  if (s.start > s.begin + 1e-9) {
+  const std::string clipped = clipping_note(s, measured);
+  if (!clipped.empty()) notes.push_back(clipped);
+  if (s.start > s.begin + 1e-9 && !clipped_from_start(s)) {
     notes.push_back(fmt::format(
         "the first {:.3f} s after the impact are not used: the band's filter settles in "
         "{:.3f} s and the record's backward continuation holds for {:.3f} s",
@@ -2189,6 +2219,12 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   // channels are refused quickly).
   const BandSetting s = band_setting(channel, band, options, bs);
   if (s.stop - s.start < 2 * s.w_min) {
+    if (clipped_from_start(s)) {
+      sum.message =
+          fmt::format("{}; {:.3f} s of the record usable after it, {:.3f} s needed",
+                      clipping_note(s, measured), std::max(0.0, s.stop - s.start), 2 * s.w_min);
+      return out;
+    }
     // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
     const std::string advice = spectral_advice(channel, band, options.taper, cache);
     sum.message = fmt::format(
@@ -2244,7 +2280,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
         noise / channel.scale);
     // Each note that applies, "; " between them (an advice followed by the weak-gain note once
     // ran together as "... 96.75 Hz20 points left out").
-    for (const std::string* note : {&advice, &gain_note, &weak_note, &followed.note}) {
+    const std::string clipped = clipping_note(sr, measured);
+    for (const std::string* note : {&clipped, &advice, &gain_note, &weak_note, &followed.note}) {
       if (!note->empty()) sum.message += "; " + *note;
     }
     return out;
@@ -2273,7 +2310,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
   sum.exchange_points = static_cast<int>((bb.exchange.array() > 0).count());
   set_linear_values(sum, bb, options);
-  std::vector<std::string> notes = span_notes(sr, est, run, previous, noise, sum, corr.exchange);
+  std::vector<std::string> notes =
+      span_notes(sr, est, run, previous, noise, sum, corr.exchange, measured);
   // Points inside the run that are not valid: those above the noise for their decay, the few
   // of a short gap for the noise (each said apart).
   size_t left_above = 0, left_below = 0;

@@ -65,6 +65,7 @@
 #include <Eigen/Core>
 
 #include "jointlab/core/units.h"
+#include "jointlab/modal/clipping.h"
 #include "jointlab/signal/band_analytic.h"
 
 namespace jointlab::modal {
@@ -189,6 +190,10 @@ struct ChannelSpectrum {
   double data_end_s = 0.0;    ///< last measured sample [s]
   double continued_begin_s = 0.0;  ///< faithful continuation before the data [s]
   double continued_end_s = 0.0;    ///< faithful continuation after the data [s]
+  /// The channel's samples pinned at its range (find_clipping), over the whole record.
+  Clipping clipping;
+  /// Time of the last clipped sample [s] (meaningful where clipping.found()).
+  double clipped_until_s = 0.0;
   /// The analysed samples are the record's times this power of two: 1 unless the channel's
   /// magnitude lies outside [1e-100, 1e100], where squares would overflow or underflow.
   double scale = 1.0;

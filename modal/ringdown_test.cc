@@ -534,6 +534,61 @@ TEST(RingdownBandGain, AModeBesideTheTypedBandIsNotItsMode) {
   }
 }
 
+// The same twin hit harder than its recorder's range: clipped at 420, 300, 200 or 100 m/s^2 (its
+// peak about 480) for the first 0.03 to 0.38 s after the impact (4 to 57 of the mode's cycles).
+// Every pinned sample is the range, not the structure's response, so the band is read from the last
+// of them on, and the summary says so with the range and the time. Measured on these eight records:
+// 1.25-1.75 decades down to 200 m/s^2, 0.73-0.79 at 100; median frequency errors at most 2.5e-5,
+// median damping errors at most 0.8 %. With the pinned stretch left to the screens alone (a point
+// whose window read it dropped only where its damping uncertainty grew past the limit): 1.33-1.76
+// decades down to 200, 0.89-1.14 at 100, the same medians; but at 420 a first point whose window
+// held pinned samples (a Python twin of this record clipped at 420 read its damping 3.8 % off, 1.8
+// times its stated uncertainty; read after the range, 0.7 %), and on a Python twin with a 1230 Hz
+// mode of 300 m/s^2 besides, clipped at 100, the pinned stretch itself kept as 15 points of an
+// 'energy exchange' with damping 92-141 % off. (At 100 the span now also ends 0.3-0.5 s before the
+// unclipped twin's: its tail's damping uncertainty passes the limit sooner; not yet understood.)
+// Required: issue 26's accuracy (medians 5e-4 and 5 %), 1.2 decades down to 200 m/s^2, no exchange,
+// the note, and the span after the last pinned sample (found here from the unclipped record: the
+// last sample beyond the range).
+TEST(RingdownBandGain, AClippedRecordIsReadAfterItsRange) {
+  for (const double range : {420.0, 300.0, 200.0, 100.0}) {
+    for (const unsigned seed : {1u, 2u}) {
+      const LmsTwin t = lms_twin(seed);
+      const Eigen::VectorXd x = t.x.cwiseMin(range).cwiseMax(-range);
+      Eigen::Index last = -1;
+      for (Eigen::Index k = 0; k < t.x.size(); ++k)
+        if (std::abs(t.x(k)) >= range) last = k;
+      ASSERT_GT(last, 0);
+      const double clipped_until = static_cast<double>(last) / t.fs;
+      const Ringdown r = extract_band(x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+      ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+      const Medians e = medians(r.backbone, t.m1);
+      std::printf(
+          "LMS twin clipped at %g m/s^2, seed %u: last pinned sample at %.4f s; %.2f decades "
+          "from %.4f to %.4f s, median f err %.1e, median z err %.3f\n  %s\n",
+          range, seed, clipped_until, r.summary.amplitude_decades, r.summary.span_start_s,
+          r.summary.span_end_s, e.f, e.z, r.summary.message.c_str());
+      char where[64];
+      std::snprintf(where, sizeof where, "range %g seed %u", range, seed);
+      char note[200];
+      std::snprintf(note, sizeof note,
+                    "the channel is clipped (the sensor or the recorder past its range): %ld "
+                    "samples pinned at %g m/s^2 and %g m/s^2, the last at %.4f s; the band is "
+                    "read from there on",
+                    long((x.array().abs() == range).count()), range, -range, clipped_until);
+      EXPECT_NE(r.summary.message.find(note), std::string::npos)
+          << where << ": " << r.summary.message;
+      EXPECT_GT(r.summary.span_start_s, clipped_until) << where;
+      EXPECT_EQ(r.summary.exchange_points, 0) << where;
+      if (range >= 200) {
+        EXPECT_GE(r.summary.amplitude_decades, 1.2) << where;
+      }
+      EXPECT_LE(e.f, 5e-4) << where;
+      EXPECT_LE(e.z, 0.05) << where;
+    }
+  }
+}
+
 // The same twin with a linear mode below the typed band, at 146, 144 or 140 Hz (100 m/s^2 at
 // the impact, damping 0.3 %: 2.9 to 8.9 Hz below the band's lower edge). The band may not
 // follow mode 1 onto it: it stops where its gain at the neighbour's spectral peak is 1e-4
