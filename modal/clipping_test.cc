@@ -51,9 +51,7 @@ TEST(Clipping, OneSideAlone) {
 }
 
 // The same ring-down unclipped: its extremes are reached once each.
-TEST(Clipping, AnUnclippedRingDownIsNot) {
-  EXPECT_FALSE(find_clipping(ring(20000)).found());
-}
+TEST(Clipping, AnUnclippedRingDownIsNot) { EXPECT_FALSE(find_clipping(ring(20000)).found()); }
 
 // Recorded by a coarse recorder: a 16-bit range of which the ring-down uses 1 % (its peak
 // 327 steps), so that the samples around its first peak share the top code (a run of
