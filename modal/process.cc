@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <numbers>
@@ -38,6 +39,11 @@ struct BandOfChannel {
   double t0 = 0;           // time of the analysed record's first sample [s]
   double scale = 1;        // ChannelSpectrum::scale
   Eigen::Index first = 0;  // coarse-grid index of z.baseband(0)
+  // Time until which the band signal carries the channel's clipped stretch [s] (its last
+  // pinned sample, ChannelSpectrum::clipping, and the band filter's settling time); -inf:
+  // the channel is not clipped.
+  double clipped_until = -std::numeric_limits<double>::infinity();
+  double record_end = 0;  // time of the record's last sample [s]
 };
 
 // Keeps only the samples of c's band signal over the record's time span [begin, end] (and
@@ -89,6 +95,15 @@ struct Projection {
 
 Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t1, double t2) {
   Projection p;
+  // A clipped stretch is the recorder's range, not the mode's shape: the ratio is taken after
+  // the band signals have settled from it (BandOfChannel::clipped_until), over a span as long
+  // as [t1, t2] as far as the record goes; the amplitude is still scaled to a's envelope at t1.
+  const double span = t2 - t1;
+  const double from = std::max({t1, ca.clipped_until, cb.clipped_until});
+  const double to = from == t1 ? t2 : std::min(from + span, std::min(ca.record_end, cb.record_end));
+  const double anchor = t1;
+  t1 = from;
+  t2 = to;
   std::complex<double> ab = 0.0;
   double aa = 0, bb = 0;
   // a = a_base e^{i phi_a}, b = b_base e^{i phi_b}: |a| and |b| need no carrier, and
@@ -109,7 +124,7 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   p.ratio = ab / aa;
   const double c = std::abs(ab) / std::sqrt(aa) / std::sqrt(bb);  // aa * bb may overflow
   p.coherence = c * c;
-  p.amplitude = p.ratio * std::abs(baseband_value(ca, t1)) / cb.scale;
+  p.amplitude = p.ratio * std::abs(baseband_value(ca, anchor)) / cb.scale;
   p.ratio *= ca.scale / cb.scale;
   if (!std::isfinite(std::abs(p.amplitude)) || !std::isfinite(std::abs(p.ratio))) return {};
   return p;
@@ -312,9 +327,13 @@ struct ChannelSet {
   ChannelSpectrum spectrum(size_t c, const PrepareOptions& prepare, signal::FftCache& cache) const {
     return channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
   }
-  BandOfChannel band_of(const ChannelSpectrum& spectrum, signal::BandSignal z) const {
+  BandOfChannel band_of(const ChannelSpectrum& spectrum, signal::BandSignal z,
+                        const signal::Band& band) const {
     const double record_end = record.t0 + static_cast<double>(record.size() - 1) / record.fs;
     BandOfChannel k{std::move(z), spectrum.t0, spectrum.scale, 0};
+    if (spectrum.clipping.found())
+      k.clipped_until = spectrum.clipped_until_s + band_settling_s(band, options.ringdown.taper);
+    k.record_end = record_end;
     keep_record_span(k, record.t0, record_end);
     return k;
   }
@@ -389,7 +408,7 @@ void extract_bands(const ChannelSet& set, const std::vector<signal::Band>& bands
       r.band_index = static_cast<int>(out.first + b) + 1;
       r.ringdown = extract_backbone(spectrum, r.measured, bands[b], set.options.ringdown, cache);
       if (r.ringdown.summary.status == RingdownStatus::kOk && !kept)
-        kept = set.band_of(spectrum, std::move(r.ringdown.band));
+        kept = set.band_of(spectrum, std::move(r.ringdown.band), bands[b]);
       r.ringdown.band = signal::BandSignal{};
     }
   });
@@ -437,8 +456,10 @@ std::vector<std::vector<double>> shapes_and_shares(const ChannelSet& set,
     std::optional<BandOfChannel> again;
     if (!kept[d]) {
       const ChannelSpectrum spectrum = set.spectrum(d, prepare[b], cache);
-      again = set.band_of(spectrum, band_signal(spectrum, set.measured_by(d), bands[b],
-                                                set.options.ringdown, cache));
+      again = set.band_of(
+          spectrum,
+          band_signal(spectrum, set.measured_by(d), bands[b], set.options.ringdown, cache),
+          bands[b]);
     }
     const BandOfChannel& zd = kept[d] ? *kept[d] : *again;
     for (const size_t i : set.requests[d]) {
