@@ -7,23 +7,31 @@ namespace jointlab::modal {
 Clipping find_clipping(const Eigen::Ref<const Eigen::VectorXd>& x) {
   Clipping c;
   if (x.size() == 0) return c;
-  const auto side = [&](double value, bool& pinned) {
-    Eigen::Index count = 0, runs = 0, last = -1;
+  c.high = x.maxCoeff();
+  c.low = x.minCoeff();
+  // Most channels reach their extremes once: one branch-free counting pass settles them, and
+  // only a side reached at kMinClippedSamples or more has its runs counted.
+  Eigen::Index at_high = 0, at_low = 0;
+  const double* v = x.data();
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    at_high += v[k] == c.high;
+    at_low += v[k] == c.low;
+  }
+  const auto side = [&](double value, Eigen::Index count, bool& pinned) {
+    if (count < kMinClippedSamples) return;
+    Eigen::Index runs = 0, last = -1;
     for (Eigen::Index k = 0; k < x.size(); ++k) {
-      if (x(k) != value) continue;
-      ++count;
+      if (v[k] != value) continue;
       if (last != k - 1) ++runs;
       last = k;
     }
-    if (count < kMinClippedSamples || runs < kMinClippedRuns) return;
+    if (runs < kMinClippedRuns) return;
     pinned = true;
     c.samples += count;
     c.last = std::max(c.last, last);
   };
-  c.high = x.maxCoeff();
-  c.low = x.minCoeff();
-  side(c.high, c.high_pinned);
-  if (c.low != c.high) side(c.low, c.low_pinned);
+  side(c.high, at_high, c.high_pinned);
+  if (c.low != c.high) side(c.low, at_low, c.low_pinned);
   return c;
 }
 

@@ -300,6 +300,7 @@ struct ChannelSet {
   const ProcessOptions& options;
   std::vector<const data::Channel*> all;
   std::vector<Eigen::Index> impact;           ///< impact sample of each of `all`
+  std::vector<Clipping> clipping;             ///< clipped samples of each of `all`
   std::vector<size_t> index_of;               ///< position in `all` of each request
   std::vector<std::vector<size_t>> requests;  ///< requests each of `all` answers
 
@@ -311,7 +312,11 @@ struct ChannelSet {
       if (c.quantity != Quantity::kForce && (c.quantity || options.quantity)) all.push_back(&c);
     }
     impact.resize(all.size());
-    for (size_t c = 0; c < all.size(); ++c) impact[c] = impact_index(all[c]->samples);
+    clipping.resize(all.size());
+    for (size_t c = 0; c < all.size(); ++c) {
+      impact[c] = impact_index(all[c]->samples);
+      clipping[c] = find_clipping(all[c]->samples);
+    }
     std::unordered_map<const data::Channel*, size_t> position;
     for (size_t c = 0; c < all.size(); ++c) position.emplace(all[c], c);
     index_of.resize(chans.size());
@@ -325,7 +330,8 @@ struct ChannelSet {
     return all[c]->quantity ? *all[c]->quantity : *options.quantity;
   }
   ChannelSpectrum spectrum(size_t c, const PrepareOptions& prepare, signal::FftCache& cache) const {
-    return channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c]);
+    return channel_spectrum(all[c]->samples, record.fs, record.t0, prepare, cache, impact[c],
+                            &clipping[c]);
   }
   BandOfChannel band_of(const ChannelSpectrum& spectrum, signal::BandSignal z,
                         const signal::Band& band) const {

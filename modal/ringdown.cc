@@ -249,7 +249,7 @@ Eigen::Index measured_step(Eigen::Index n_fft, Eigen::Index kept, Eigen::Index e
 
 ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
                                  const PrepareOptions& options, signal::FftCache& cache,
-                                 Eigen::Index impact) {
+                                 Eigen::Index impact, const Clipping* clipping) {
   const Eigen::Index n = x.size();
   const Eigen::Index i_peak = impact >= 0 ? std::min(impact, n - 1) : impact_index(x);
   const Eigen::Index i_begin = std::min<Eigen::Index>(
@@ -356,7 +356,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
   c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
   c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
-  c.clipping = find_clipping(x);
+  c.clipping = clipping ? *clipping : find_clipping(x);
   c.clipped_until_s = t0 + static_cast<double>(c.clipping.last) / fs;
   c.continued_begin_s = static_cast<double>(e.before_valid) / fs;
   c.continued_end_s = static_cast<double>(e.after_valid) / fs;

@@ -227,10 +227,11 @@ PrepareOptions prepare_for(const std::vector<signal::Band>& bands, double taper,
 Eigen::Index impact_index(const Eigen::Ref<const Eigen::VectorXd>& x);
 
 /// Mean-removed, onset-trimmed, continued and zero-padded spectrum of a channel;
-/// `impact` is the impact's sample index (negative: found by impact_index).
+/// `impact` is the impact's sample index (negative: found by impact_index), `clipping` the
+/// channel's find_clipping (null: found here).
 ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
                                  const PrepareOptions& options, signal::FftCache& cache,
-                                 Eigen::Index impact = -1);
+                                 Eigen::Index impact = -1, const Clipping* clipping = nullptr);
 
 /// The displacement analytic signal of `band` from a channel measuring `measured`, times
 /// channel.scale.
