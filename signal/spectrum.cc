@@ -136,9 +136,22 @@ void lowpass_in_place(std::complex<double>* data, Eigen::Index n, Eigen::Index n
   std::fill(real + n, real + 2 * bins, 0.0);
   Fft& fft = cache.get(nfft);
   fft.forward_in_place(data);
-  // The gain bin by bin (a stored gain would cost a copy of the record), its edge alone stored.
-  const LowpassGain g(nfft, fs, f_pass, f_stop);
-  for (Eigen::Index k = g.begin(); k < bins; ++k) data[k] *= g(k);
+  // The gain bin by bin (a stored gain would cost a copy of the record), its edge alone
+  // stored, and kept with the cache as [begin, end, edge...]: every channel of a record shares
+  // it (its erfc at every edge bin of every channel and band was a seventieth of process's
+  // time).
+  const Eigen::VectorXd& kept =
+      cache.gain({3.0, static_cast<double>(nfft), fs, f_pass, f_stop}, [&] {
+        const LowpassGain g(nfft, fs, f_pass, f_stop);
+        Eigen::VectorXd v(2 + g.end() - g.begin());
+        v(0) = static_cast<double>(g.begin());
+        v(1) = static_cast<double>(g.end());
+        for (Eigen::Index k = g.begin(); k < g.end(); ++k) v(2 + k - g.begin()) = g(k);
+        return v;
+      });
+  const auto begin = static_cast<Eigen::Index>(kept(0)), end = static_cast<Eigen::Index>(kept(1));
+  for (Eigen::Index k = begin; k < std::min(end, bins); ++k) data[k] *= kept(2 + k - begin);
+  for (Eigen::Index k = std::max(end, begin); k < bins; ++k) data[k] *= 0.0;  // as g(k) did
   fft.inverse_real_in_place(data);
 }
 
