@@ -101,9 +101,6 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   const double span = t2 - t1;
   const double from = std::max({t1, ca.clipped_until, cb.clipped_until});
   const double to = from == t1 ? t2 : std::min(from + span, std::min(ca.record_end, cb.record_end));
-  const double anchor = t1;
-  t1 = from;
-  t2 = to;
   std::complex<double> ab = 0.0;
   double aa = 0, bb = 0;
   // a = a_base e^{i phi_a}, b = b_base e^{i phi_b}: |a| and |b| need no carrier, and
@@ -111,8 +108,8 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   // equal (two sines per point were a twentieth of process's time).
   const bool same_carrier = ca.z.carrier_hz == cb.z.carrier_hz;
   const std::complex<double> constant_turn =
-      std::polar(1.0, carrier_phase(cb, t1) - carrier_phase(ca, t1));
-  for (double t = t1; t <= t2 + 1e-12; t += ca.z.dt) {
+      std::polar(1.0, carrier_phase(cb, from) - carrier_phase(ca, from));
+  for (double t = from; t <= to + 1e-12; t += ca.z.dt) {
     const std::complex<double> a = baseband_value(ca, t), b = baseband_value(cb, t);
     const std::complex<double> turn =
         same_carrier ? constant_turn : std::polar(1.0, carrier_phase(cb, t) - carrier_phase(ca, t));
@@ -124,7 +121,7 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   p.ratio = ab / aa;
   const double c = std::abs(ab) / std::sqrt(aa) / std::sqrt(bb);  // aa * bb may overflow
   p.coherence = c * c;
-  p.amplitude = p.ratio * std::abs(baseband_value(ca, anchor)) / cb.scale;
+  p.amplitude = p.ratio * std::abs(baseband_value(ca, t1)) / cb.scale;
   p.ratio *= ca.scale / cb.scale;
   if (!std::isfinite(std::abs(p.amplitude)) || !std::isfinite(std::abs(p.ratio))) return {};
   return p;
