@@ -60,22 +60,49 @@ void keep_record_span(BandOfChannel& c, double begin, double end) {
   c.first = j0;
 }
 
+// Where the cubic (Lagrange) interpolation of a channel's band signal at absolute time t
+// reads it: from sample j on, with weights w (of j to j + 3).
+struct Node {
+  Eigen::Index j = -1;  // -1: the band signal has fewer than 4 samples
+  double w[4] = {};
+  bool inside = false;  // j not moved by the band signal's ends (t has a node on either side)
+};
+
+// The node of `channel`'s band signal at absolute time t.
+Node node_at(const BandOfChannel& channel, double t) {
+  const signal::BandSignal& z = channel.z;
+  const double x = (t - channel.t0) / z.dt - static_cast<double>(channel.first);
+  const Eigen::Index n = z.baseband.size();
+  if (n < 4) return {};
+  Node node;
+  const auto j = static_cast<Eigen::Index>(std::floor(x)) - 1;
+  node.j = std::clamp<Eigen::Index>(j, 0, n - 4);
+  node.inside = j == node.j;
+  const double u = x - static_cast<double>(node.j);
+  // The Lagrange weights of nodes 0 to 3, their denominators -6, 2, -2, 6 taken together.
+  const double a = u, b = u - 1, c = u - 2, d = u - 3;
+  node.w[0] = -(b * c * d) / 6;
+  node.w[1] = a * c * d / 2;
+  node.w[2] = -(a * b * d) / 2;
+  node.w[3] = a * b * c / 6;
+  return node;
+}
+
+// The interpolation at `node` moved on by `steps` samples of the band signal.
+std::complex<double> value_at(const BandOfChannel& channel, const Node& node,
+                              Eigen::Index steps = 0) {
+  if (node.j < 0) return 0.0;
+  const std::complex<double>* z = channel.z.baseband.data() + node.j + steps;
+  std::complex<double> v = 0.0;
+  for (int k = 0; k < 4; ++k) v += node.w[k] * z[k];
+  return v;
+}
+
 // The baseband of a channel's band signal at absolute time t, by cubic (Lagrange)
 // interpolation: the coarse grid samples the baseband at 8 times its width, where the
 // cubic's error is below 1e-3.
 std::complex<double> baseband_value(const BandOfChannel& channel, double t) {
-  const signal::BandSignal& z = channel.z;
-  const double x = (t - channel.t0) / z.dt - static_cast<double>(channel.first);
-  const Eigen::Index n = z.baseband.size();
-  if (n < 4) return 0.0;
-  const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(x)) - 1, 0, n - 4);
-  const double u = x - static_cast<double>(j);
-  // The Lagrange weights of nodes 0 to 3, their denominators -6, 2, -2, 6 taken together.
-  const double a = u, b = u - 1, c = u - 2, d = u - 3;
-  const double w[4] = {-(b * c * d) / 6, a * c * d / 2, -(a * b * d) / 2, a * b * c / 6};
-  std::complex<double> v = 0.0;
-  for (int k = 0; k < 4; ++k) v += w[k] * z.baseband(j + k);
-  return v;
+  return value_at(channel, node_at(channel, t));
 }
 
 // The carrier's phase of a channel's band signal at absolute time t.
@@ -109,8 +136,18 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   const bool same_carrier = ca.z.carrier_hz == cb.z.carrier_hz;
   const std::complex<double> constant_turn =
       std::polar(1.0, carrier_phase(cb, from) - carrier_phase(ca, from));
-  for (double t = from; t <= to + 1e-12; t += ca.z.dt) {
-    const std::complex<double> a = baseband_value(ca, t), b = baseband_value(cb, t);
+  // On one grid spacing, every point of the span keeps the first one's interpolation
+  // weights, the nodes one sample on per point (the weights at every point were a twentieth
+  // of process's time); interpolated anew where a step would leave the band signal.
+  const Node na = node_at(ca, from), nb = node_at(cb, from);
+  const Eigen::Index last_a = ca.z.baseband.size() - 4, last_b = cb.z.baseband.size() - 4;
+  const bool one_grid = ca.z.dt == cb.z.dt;
+  Eigen::Index i = 0;
+  for (double t = from; t <= to + 1e-12; t += ca.z.dt, ++i) {
+    const bool inside =
+        one_grid && na.inside && nb.inside && na.j + i <= last_a && nb.j + i <= last_b;
+    const std::complex<double> a = inside ? value_at(ca, na, i) : baseband_value(ca, t);
+    const std::complex<double> b = inside ? value_at(cb, nb, i) : baseband_value(cb, t);
     const std::complex<double> turn =
         same_carrier ? constant_turn : std::polar(1.0, carrier_phase(cb, t) - carrier_phase(ca, t));
     ab += std::conj(a) * b * turn;

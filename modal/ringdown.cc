@@ -1858,22 +1858,39 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
       exchange(est.size(), 0);
   std::vector<double> own;  // decay rates of the valid points after an exchange
   size_t weak = 0;
+  // Where the band passes less than kMinPassed of the mode, dividing by r lifts the
+  // noise and whatever else the band holds above the mode's own share ...
+  constexpr double kMinPassed = 0.5;
+  // ... anywhere in the point's fit window (its data come from all of it).
+  // (|r| >= kMinPassed compared as ln |r|: an exp per sample of every window was a
+  // twentieth of process's time.)
+  const double log_min_passed = std::log(kMinPassed);
+  // The grid nodes of ln |r| below that (or within 1e-9 of it, beyond the rounding of an
+  // interpolation between two nodes above it; or not a number), counted before each node: a window
+  // whose nodes hold none passes without its samples read (reading them was a thirtieth of
+  // process's time).
+  std::vector<Eigen::Index> low_before;
+  if (previous.active) {
+    low_before.assign(static_cast<size_t>(previous.log_r.size()) + 1, 0);
+    for (Eigen::Index j = 0; j < previous.log_r.size(); ++j) {
+      const auto u = static_cast<size_t>(j);
+      low_before[u + 1] = low_before[u] + !(previous.log_r(j).real() >= log_min_passed + 1e-9);
+    }
+  }
   for (size_t i = 0; i < est.size(); ++i) {
     const Estimate& e = est[i];
     const double noise_i = noise / previous.abs_at(e.t);  // the correction est carries
     const double limit = options.max_damping_rel_std * e.sigma;
     above[i] = std::exp(e.log_amp) >= options.snr_min * noise_i;
-    // Where the band passes less than kMinPassed of the mode, dividing by r lifts the
-    // noise and whatever else the band holds above the mode's own share ...
-    constexpr double kMinPassed = 0.5;
-    // ... anywhere in the point's fit window (its data come from all of it).
-    // (|r| >= kMinPassed compared as ln |r|: an exp per sample of every window was a
-    // twentieth of process's time.)
-    const double log_min_passed = std::log(kMinPassed);
     bool passed = true;
-    for (double t = e.centre - e.window / 2;
-         passed && previous.active && t <= e.centre + e.window / 2; t += s.dt) {
-      passed = previous.log_abs_at(t) >= log_min_passed;
+    if (previous.active) {
+      const double from = e.centre - e.window / 2, to = e.centre + e.window / 2;
+      const auto first = static_cast<size_t>(previous.node(from).first),
+                 last = static_cast<size_t>(previous.node(to).first) + 1;
+      for (double t = from; passed && low_before[last + 1] > low_before[first] && t <= to;
+           t += s.dt) {
+        passed = previous.log_abs_at(t) >= log_min_passed;
+      }
     }
     weak += usable(e, noise_i, options.snr_min) && !passed;
     valid[i] = usable(e, noise_i, options.snr_min) && passed && e.sigma_std <= limit;
