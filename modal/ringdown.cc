@@ -335,7 +335,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
     };
     fold(e.before, 0);
     fold(e.after, wanted + kept);
-    cache.get(m_fold).forward_in_place(continuations.data());
+    cache.get(m_fold).forward_through_buffer(continuations.data());
   }
   const Eigen::Index measured_bins =
       std::min(m_fold / 2 + 1, stored_bins(c, lowpass, options.lowpass_hz, c.measured_step));
@@ -345,7 +345,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   std::copy(e.before.data(), e.before.data() + wanted, r);
   std::copy(e.after.data(), e.after.data() + wanted, r + wanted + kept);
   std::fill(r + c.n_record, r + 2 * buffer.size(), 0.0);
-  cache.get(c.n_fft).forward_in_place(buffer.data());
+  cache.get(c.n_fft).forward_through_buffer(buffer.data());
   c.measured.resize(measured_bins);
   for (Eigen::Index q = 0; q < measured_bins; ++q) {
     c.measured(q) = buffer(q * c.measured_step) - continuations(q);
@@ -1136,7 +1136,7 @@ Eigen::VectorXcd measured_spectrum(const ChannelSpectrum& channel, Eigen::Index 
   std::memmove(r, r + i0, sizeof(double) * static_cast<size_t>(count));
   n = 2 * signal::fast_size((count + 1) / 2);  // even, at most n_fft
   std::fill(r + count, r + 2 * buffer.size(), 0.0);
-  cache.get(n).forward_in_place(buffer.data());
+  cache.get(n).forward_through_buffer(buffer.data());
   buffer.conservativeResize(n / 2 + 1);
   return buffer;
 }
