@@ -735,27 +735,39 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
   // beyond them for one settling time (all the filter reaches), then a steady tone.
   const double reach = band_settling_s(s.band, s.options.taper);
   const double data_end = s.channel.data_end_s - s.channel.t0;
-  const auto line_from = [&](const std::vector<double>& v, size_t end, double x) {
-    // The estimate a settling time inside the span from `end` (or the other end).
+  // The estimate a settling time inside the span from `end` (or the other end).
+  const auto inside_from = [&](size_t end) {
     const double inside = end == 0 ? t.front() + reach : t.back() - reach;
     size_t k = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), inside) - t.begin());
     k = std::min(k, t.size() - 1);
     if (k == end) k = end == 0 ? t.size() - 1 : 0;
-    // Continued back to the impact and on to the record's end only: beyond them the band
-    // sees the record's continuation, which holds the mode as the end of the data has it.
-    const double xe = std::clamp(x, std::max(t.front() - reach, std::min(t.front(), s.begin)),
-                                 std::min(t.back() + reach, std::max(t.back(), data_end)));
+    return k;
+  };
+  const size_t inside_first = inside_from(0), inside_last = inside_from(t.size() - 1);
+  // Continued back to the impact and on to the record's end only: beyond them the band
+  // sees the record's continuation, which holds the mode as the end of the data has it.
+  const double continued_from = std::max(t.front() - reach, std::min(t.front(), s.begin)),
+               continued_to = std::min(t.back() + reach, std::max(t.back(), data_end));
+  const auto line_from = [&](const std::vector<double>& v, size_t end, double x) {
+    const size_t k = end == 0 ? inside_first : inside_last;
+    const double xe = std::clamp(x, continued_from, continued_to);
     return v[end] + (v[k] - v[end]) / (t[k] - t[end]) * (xe - t[end]);
   };
-  // Between the estimates, t[k - 1] <= x < t[k]: k walks along with the grid (x only grows),
-  // not searched anew at each point.
+  // The model's frequency and decay rate at x. Between the estimates, t[k - 1] <= x < t[k]:
+  // k walks along with the grid (x only grows), not searched anew at each point.
   size_t k = 1;
-  const auto at = [&](const std::vector<double>& v, double x) {
-    if (x <= t.front()) return continued ? line_from(v, 0, x) : v.front();
-    if (x >= t.back()) return continued ? line_from(v, t.size() - 1, x) : v.back();
+  const auto model_at = [&](double x) -> std::pair<double, double> {
+    if (x <= t.front()) {
+      if (!continued) return {f.front(), d.front()};
+      return {line_from(f, 0, x), line_from(d, 0, x)};
+    }
+    if (x >= t.back()) {
+      if (!continued) return {f.back(), d.back()};
+      return {line_from(f, t.size() - 1, x), line_from(d, t.size() - 1, x)};
+    }
     while (t[k] <= x) ++k;
     const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
-    return (1 - w) * v[k - 1] + w * v[k];
+    return {(1 - w) * f[k - 1] + w * f[k], (1 - w) * d[k - 1] + w * d[k]};
   };
   // Zero-padded by three settling times, where the band's kernel is down to exp(-100): the
   // model's start, its largest part, then adds nothing to r where the model has decayed by
@@ -771,8 +783,9 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
     const bool near = x > t.front() - reach && x < t.back() + reach;
     log_m(j) = la;
     phase(j) = ph;
-    la -= (near ? kTwoPi * std::max(0.0, at(d, x)) : 0.0) * s.dt;
-    ph += kTwoPi * (at(f, x) - carrier_hz) * s.dt;
+    const auto [f_x, d_x] = model_at(x);
+    la -= (near ? kTwoPi * std::max(0.0, d_x) : 0.0) * s.dt;
+    ph += kTwoPi * (f_x - carrier_hz) * s.dt;
   }
   const double top = log_m.maxCoeff();
   // m = |m| u, u = e^{i phase}: r = band(m) / m = band(m) conj(u) / |m| needs no complex
