@@ -901,7 +901,7 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
   if (gain.active) {
     // The corrections at the grid's nodes, which are their own (log_at interpolated between
     // two of them at every node, 2 % of process's time).
-    const auto at = [grid](const GainCorrection& g, Eigen::Index j) {
+    const auto at = [&](const GainCorrection& g, Eigen::Index j) {
       assert(!g.active || g.log_r.size() == grid);
       return g.active ? g.log_r(j) : std::complex<double>(0.0);
     };
