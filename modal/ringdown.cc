@@ -1146,8 +1146,9 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
 // The one-sided spectrum of the analysed record's samples [i0, i0 + count), zero-padded to
 // n points (set here). A short record's is padded to 4 times their length for resolution.
 // A long record's bins, a record's duration apart, need no finer grid: its samples are
-// taken out of the spectrum and transformed again in one buffer, in place (padded to 4x
-// it was 130 bytes a sample, five times the rest of the record's analysis).
+// taken out of the spectrum and transformed again in one buffer (through the transform's own
+// buffer up to 2^17 points, in place above: padded to 4x it was 130 bytes a sample, five times
+// the rest of the record's analysis).
 Eigen::VectorXcd measured_spectrum(const ChannelSpectrum& channel, Eigen::Index i0,
                                    Eigen::Index count, signal::FftCache& cache, Eigen::Index& n) {
   if (!channel.padded_by_pad_s()) {
@@ -1909,8 +1910,8 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
     const double limit = options.max_damping_rel_std * e.sigma;
     above[i] = std::exp(e.log_amp) >= options.snr_min * noise_i;
     bool passed = true;
-    if (previous.active) {
-      const double from = e.centre - e.window / 2, to = e.centre + e.window / 2;
+    const double from = e.centre - e.window / 2, to = e.centre + e.window / 2;
+    if (previous.active && from <= to) {  // (a window not a number reads no nodes)
       const auto first = static_cast<size_t>(previous.node(from).first),
                  last = static_cast<size_t>(previous.node(to).first) + 1;
       for (double t = from; passed && low_before[last + 1] > low_before[first] && t <= to;

@@ -37,7 +37,8 @@ constexpr Eigen::Index kLargestBufferedForward = Eigen::Index{1} << 17;
 struct Fft::Impl {
   Eigen::Index n = 0;
   // Work buffers, each allocated on the first transform that needs it: a size used only in
-  // place (a record's spectrum) never holds a buffer of its own.
+  // place (a long record's spectrum, above kLargestBufferedForward) never holds a buffer of
+  // its own.
   double* real_in = nullptr;
   fftw_complex* half_out = nullptr;
   fftw_complex* full_in = nullptr;
