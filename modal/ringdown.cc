@@ -38,12 +38,12 @@ struct Estimate {
   double centre = 0;       // window centre [s from record start]
 };
 
-// sqrt(a^2 + b^2): as the square root of the sum where neither square can overflow or
-// underflow, else std::hypot, which guards every pair at several times the cost (four pairs
-// of every local fit's estimate were a seventieth of process's time).
-double root_sum_square(double a, double b) {
-  const double m = std::max(std::abs(a), std::abs(b));
-  return m < 1e150 && m > 1e-150 ? std::sqrt(a * a + b * b) : std::hypot(a, b);
+// |z| as sqrt(re^2 + im^2) where that cannot overflow or underflow, else std::abs (a
+// hypot, which guards every sample at four times the cost; the estimates' uncertainties,
+// summed in quadrature as |(a, b)|, took a seventieth of process's time through it).
+double magnitude(std::complex<double> z) {
+  const double n = std::norm(z);
+  return n > 1e-290 && n < 1e290 ? std::sqrt(n) : std::abs(z);
 }
 
 // Hilbert estimate at `at` from ln A and theta on the grid t_j = j dt, fitted
@@ -70,12 +70,12 @@ Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd&
   const double floor_rel = noise / (std::sqrt(2.0) * std::exp(fa.value));
   const double scale_a = fa.residual_rms > 0 ? std::max(1.0, floor_rel / fa.residual_rms) : 1.0;
   const double scale_p = fp.residual_rms > 0 ? std::max(1.0, floor_rel / fp.residual_rms) : 1.0;
-  e.log_amp_std = root_sum_square(fa.value_std * scale_a, fa.value_change);
+  e.log_amp_std = magnitude({fa.value_std * scale_a, fa.value_change});
   e.sigma = -fa.slope;
-  e.sigma_std = root_sum_square(fa.slope_std * scale_a, fa.slope_change);
+  e.sigma_std = magnitude({fa.slope_std * scale_a, fa.slope_change});
   e.omega_d = fp.slope;
-  e.omega_d_std = root_sum_square(fp.slope_std * scale_p, fp.slope_change);
-  e.misfit = std::exp(fa.value) * root_sum_square(fa.residual_rms, fp.residual_rms);
+  e.omega_d_std = magnitude({fp.slope_std * scale_p, fp.slope_change});
+  e.misfit = std::exp(fa.value) * magnitude({fa.residual_rms, fp.residual_rms});
   e.window = window;
   e.centre = centre;
   return e;
@@ -392,13 +392,6 @@ double unwrap_step(double arg_before, double arg) {
   if (d > std::numbers::pi) return -kTwoPi;
   if (d < -std::numbers::pi) return kTwoPi;
   return 0.0;
-}
-
-// |z| as sqrt(re^2 + im^2) where that cannot overflow or underflow, else std::abs (a
-// hypot, which guards every sample at four times the cost).
-double magnitude(std::complex<double> z) {
-  const double n = std::norm(z);
-  return n > 1e-290 && n < 1e290 ? std::sqrt(n) : std::abs(z);
 }
 
 // The logarithms and arguments of a signal's samples take one vector call each
