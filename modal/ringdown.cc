@@ -469,6 +469,8 @@ struct GainCorrection {
     const auto [j, w] = node(at);
     return (1 - w) * log_r(j) + w * log_r(j + 1);
   }
+  // log_at at the grid's node j, read rather than interpolated.
+  std::complex<double> log_at_node(Eigen::Index j) const { return active ? log_r(j) : 0.0; }
   double abs_at(double at) const { return std::exp(log_abs_at(at)); }
   // log_at(at).real() without the imaginary part's interpolation.
   double log_abs_at(double at) const {
@@ -894,20 +896,16 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
   if (gain.active) {
     // The corrections at the grid's nodes, which are their own (log_at interpolated between
     // two of them at every node, 2 % of process's time).
-    const auto at = [&](const GainCorrection& g, Eigen::Index j) {
-      assert(!g.active || g.log_r.size() == grid);
-      return g.active ? g.log_r(j) : std::complex<double>(0.0);
-    };
     for (Eigen::Index j = 0; j < grid; ++j) {
-      const std::complex<double> step = at(gain, j) - at(previous, j);
+      const std::complex<double> step = gain.log_at_node(j) - previous.log_at_node(j);
       step_re(j) = step.real();
       step_im(j) = step.imag();
       step_abs(j) = magnitude(step);
       if (earlier.active) {
-        before_abs(j) = magnitude(at(previous, j) - at(earlier, j));
-        two_steps_abs(j) = magnitude(at(gain, j) - at(earlier, j));
+        before_abs(j) = magnitude(previous.log_at_node(j) - earlier.log_at_node(j));
+        two_steps_abs(j) = magnitude(gain.log_at_node(j) - earlier.log_at_node(j));
       }
-      const std::complex<double> ends = at(continued, j) - at(gain, j);
+      const std::complex<double> ends = continued.log_at_node(j) - gain.log_at_node(j);
       ends_re(j) = ends.real();
       ends_im(j) = ends.imag();
     }
