@@ -88,6 +88,42 @@ Model stacked_beams() {
   return model;
 }
 
+// Past the onset of full macroslip the stacked beams' last loaded slips stop at their
+// elements' kink, phi_max (1 - 2.5e-11), over a third of the load range. Whether full macroslip
+// began there once hung on the model's last digits: a rounding-level change of the model (on
+// another machine) moved the curve's pinned onset from the start of that stretch to its far
+// end, and a point read 94.9 Hz where its twin read 130.5. Slips within 1e-8 of phi_max count
+// as reached (qsma.cc), so the same model with its stiffness moved by a few roundings gives
+// the same curve: its onset pinned at the same load (1e-9) and every column within 1e-9.
+TEST(IwanSetModel, StackedBeamsCurvePastMacroslipDoesNotHangOnRounding) {
+  const Model model = testing::with_set(stacked_beams(), "iwan.x", {120.0, 2.0e8, -0.4, 0.8});
+  const JointCondensation reference(model);
+  QsmaOptions options;
+  options.points = 15;
+  QsmaSummary summary;
+  const std::vector<QsmaPoint> range = qsma(reference, 1, options, &summary);
+  ASSERT_GE(range.size(), 3u) << summary.report();
+  EXPECT_EQ(summary.termination, QsmaTermination::kFullMacroslip) << summary.report();
+  options.q_max = 1.2 * range.back().modal_amplitude;  // past full macroslip
+  const std::vector<QsmaPoint> curve = qsma(reference, 1, options, &summary);
+  ASSERT_EQ(curve.size(), 15u) << summary.report();
+  for (const double eps : {1e-15, 3e-15, 1e-14, 3e-14, 1e-13, 3e-13, 1e-12}) {
+    Model moved = model;
+    moved.stiffness *= 1 + eps;
+    moved.mass *= 1 + eps;  // the same frequencies, other roundings
+    const std::vector<QsmaPoint> other = qsma(JointCondensation(moved), 1, options, &summary);
+    ASSERT_EQ(other.size(), curve.size()) << eps;
+    for (size_t i = 0; i < curve.size(); ++i) {
+      EXPECT_TRUE(Close(other[i].force_amplitude, curve[i].force_amplitude, 1e-9))
+          << eps << " " << i;
+      EXPECT_TRUE(Close(other[i].modal_amplitude, curve[i].modal_amplitude, 1e-9))
+          << eps << " " << i;
+      EXPECT_TRUE(Close(other[i].frequency_hz, curve[i].frequency_hz, 1e-9)) << eps << " " << i;
+      EXPECT_TRUE(Close(other[i].damping_ratio, curve[i].damping_ratio, 1e-9)) << eps << " " << i;
+    }
+  }
+}
+
 // The update against the condensation from scratch (every mode densely, a new sparse Cholesky)
 // on a 126-DOF model with three rigid-body modes, for K_T from 0.3 to 10 times the model's.
 TEST(IwanSetModel, StackedBeamsMatchTheCondensationFromScratch) {
