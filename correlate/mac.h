@@ -5,7 +5,8 @@
 //
 //     MAC(x, y) = |x^H y|^2 / ((x^H x) (y^H y)),     0 <= MAC <= 1,
 //
-// invariant to the scaling (and phase) of either shape. MAC = 1 for collinear shapes.
+// invariant to the scaling (and phase) of either shape. MAC = 1 for collinear shapes. A sensor
+// without a measured entry for a mode (its entry exactly zero) is left out of that mode's MACs.
 // A MAC matrix holds MAC(measured_i, model_j) at (i, j).
 //
 // Pairing: greedy one-to-one assignment on the MAC matrix (largest entry first, then its
@@ -25,7 +26,8 @@
 
 namespace jointlab::correlate {
 
-/// MAC of a complex measured shape and a real model shape of the same length; 0 if either is zero.
+/// MAC of a complex measured shape and a real model shape of the same length, over the sensors
+/// with a measured entry (exactly zero: none); 0 if either is zero there.
 double mac(const Eigen::Ref<const Eigen::VectorXcd>& measured,
            const Eigen::Ref<const Eigen::VectorXd>& model);
 
@@ -83,8 +85,10 @@ struct RulePairing {
 /// with the strongest candidate is paired first. Candidates within tie_mac of the best are
 /// told apart by frequency (the nearest, when it is at most half as far in ln f as the next);
 /// when frequency cannot tell them either, `ambiguity` says so. A measured mode without a
-/// shape (`has_shape` false) pairs with the nearest visible-or-not model frequency in the
-/// window. `model_norm2` is each model mode's squared norm at the sensors.
+/// shape (`has_shape` false: none, or an entry at one sensor only, where every MAC is 1) pairs
+/// with the nearest visible-or-not model frequency in the window by the same rule (at most
+/// half as far in ln f as the next, else `ambiguity`). `model_norm2` is each model mode's
+/// squared norm at the sensors.
 RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
                           const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
                           const std::vector<bool>& has_shape,
