@@ -88,6 +88,13 @@ double LinearEvaluation::max_error() const {
   return m;
 }
 
+std::optional<double> LinearEvaluation::pair_mac(Eigen::Index i) const {
+  const int j = pairing.model_for(static_cast<int>(i));
+  const auto k = static_cast<size_t>(i);
+  if (j < 0 || mac.size() == 0 || k >= mac_reads_shape.size() || !mac_reads_shape[k]) return {};
+  return mac(i, j);
+}
+
 namespace {
 
 // Each model mode's squared norm at the sensors.
@@ -122,6 +129,7 @@ LinearEvaluation evaluate_pairs(const StiffnessSets& sets, const std::vector<Sen
   e.mac = mac_matrix(measured.shapes, e.model_at_sensors);
   e.all_model_frequency_hz = modes.frequency_hz;
   e.measured_frequency_hz = measured.frequency_hz;
+  e.mac_reads_shape = shapes_given(measured);
   e.model_frequency_hz = Eigen::VectorXd::Zero(m);
   e.residuals = Eigen::VectorXd::Zero(m);
   e.jacobian = Eigen::MatrixXd::Zero(m, sets.size());
@@ -1010,9 +1018,10 @@ std::string LinearUpdateSummary::report() const {
       out += fmt::format("  {:>8}  {:>10.5g}  unpaired\n", i + 1, fe);
       continue;
     }
-    out += fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {:.3f}\n", i + 1, fe,
-                       j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
-                       final.mac.size() > 0 ? final.mac(i, j) : 0.0);
+    const std::optional<double> mac = final.pair_mac(i);
+    out += fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {}\n", i + 1, fe, j + 1,
+                       final.model_frequency_hz(i), 100 * final.residuals(i),
+                       mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
   }
   if (degrees_of_freedom > 0)
     out += fmt::format("  reduced chi-square {:.3g} over {} degrees of freedom\n", reduced_chi2,

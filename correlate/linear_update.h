@@ -100,14 +100,20 @@ struct LinearEvaluation {
   Eigen::MatrixXd jacobian;            ///< d r_i / d ln theta_k
   Eigen::VectorXd all_model_frequency_hz;  ///< every elastic model frequency
   Eigen::VectorXd measured_frequency_hz;   ///< the measured frequencies
-  Eigen::MatrixXd mac;                     ///< MAC, measured x elastic model modes
-  Eigen::MatrixXd model_at_sensors;        ///< elastic model shapes at the sensors
-  std::vector<int> hidden;                 ///< model modes invisible at the sensors
-  std::string ambiguity;                   ///< pairing by rules: what it cannot decide, or ""
-  int ambiguous_measured = -1;             ///< the measured mode of `ambiguity` (-1: none)
-  std::vector<int> ambiguous_candidates;   ///< the model modes it cannot tell apart
+  /// Per measured mode, whether its MAC reads a shape (entries at two sensors or more);
+  /// where not, its MAC is no evidence and is reported empty.
+  std::vector<bool> mac_reads_shape;
+  Eigen::MatrixXd mac;                    ///< MAC, measured x elastic model modes
+  Eigen::MatrixXd model_at_sensors;       ///< elastic model shapes at the sensors
+  std::vector<int> hidden;                ///< model modes invisible at the sensors
+  std::string ambiguity;                  ///< pairing by rules: what it cannot decide, or ""
+  int ambiguous_measured = -1;            ///< the measured mode of `ambiguity` (-1: none)
+  std::vector<int> ambiguous_candidates;  ///< the model modes it cannot tell apart
   /// 1/2 sum r_i^2.
   double cost() const { return 0.5 * residuals.squaredNorm(); }
+  /// The MAC of measured mode i's pair where it reads a shape; nothing when i is unpaired or
+  /// its shape has fewer than two sensors.
+  std::optional<double> pair_mac(Eigen::Index i) const;
   /// Largest |r_i| over paired modes.
   double max_error() const;
 };

@@ -68,8 +68,11 @@ void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSum
     if (j < 0) {
       t += fmt::format("{},{},,,,\n", i + 1, num(e.measured_frequency_hz(i)));
     } else {
+      // A MAC over fewer than two sensors is no evidence: its cell stays empty.
+      const std::optional<double> mac = e.pair_mac(i);
       t += fmt::format("{},{},{},{},{},{}\n", i + 1, num(e.measured_frequency_hz(i)), j + 1,
-                       num(e.model_frequency_hz(i)), num(e.residuals(i)), num(e.mac(i, j)));
+                       num(e.model_frequency_hz(i)), num(e.residuals(i)),
+                       mac ? num(*mac) : std::string());
     }
   }
   data::write_file_atomically(path, t);

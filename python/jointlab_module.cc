@@ -301,7 +301,8 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
     d["model_frequency_hz"] =
         j < 0 ? py::object(py::none()) : py::object(py::float_(e.model_frequency_hz(i)));
     d["error"] = j < 0 ? py::object(py::none()) : py::object(py::float_(e.residuals(i)));
-    d["mac"] = j < 0 ? py::object(py::none()) : py::object(py::float_(e.mac(i, j)));
+    const std::optional<double> mac = e.pair_mac(i);
+    d["mac"] = mac ? py::object(py::float_(*mac)) : py::object(py::none());
     modes.append(d);
   }
   py::dict result;
