@@ -891,6 +891,48 @@ std::vector<std::pair<int, std::string>> unconfirmed_changes(
   return out;
 }
 
+// A fitted set that only pairs the sensors cannot confirm see (their partners changed along
+// the fit) is not identified: the fit may have moved it until another mode sat at a measured
+// frequency. With one sensor, spring.rz went from 100 to 2129 N m/rad that way (a twisting
+// mode tuned onto a measured frequency), "converged" with a 7 % uncertainty, and the truth,
+// 100, fitted as well. Returns why the update stops, or ""; where every fitted set is also
+// seen by confirmed pairs the result stands and *warning says which pairs changed.
+std::string unconfirmed_sets(const LinearProblem& p, const Eigen::SparseMatrix<double>& mass,
+                             const TrackedPoint& start, const TrackedPoint& end,
+                             const MeasuredModes& measured, const LinearUpdateOptions& options,
+                             const std::vector<char>& held, const std::vector<std::string>& names,
+                             std::string* warning) {
+  const LinearEvaluation at = p.evaluate(end);
+  const auto changes = unconfirmed_changes(mass, start, end, at, measured, options.mac_threshold);
+  if (changes.empty()) return "";
+  std::vector<std::string> lines, blind;
+  std::vector<char> changed(static_cast<size_t>(at.residuals.size()), 0);
+  for (const auto& [i, line] : changes) {
+    lines.push_back(line);
+    changed[static_cast<size_t>(i)] = 1;
+  }
+  for (int k = 0; k < p.size(); ++k) {
+    if (held[static_cast<size_t>(k)]) continue;
+    double seen = 0;
+    for (const ModePair& pr : at.pairing.pairs)
+      if (!changed[static_cast<size_t>(pr.measured)])
+        seen = std::max(seen, std::abs(at.jacobian(pr.measured, k)));
+    if (seen < options.flat_sensitivity) blind.push_back(names[static_cast<size_t>(k)]);
+  }
+  const std::string what = fmt::format(
+      "the partners of {} changed their shape along the fit (another mode took their place, "
+      "through a veering or a new pairing) and the sensors cannot confirm the new ones",
+      fmt::join(lines, "; "));
+  if (blind.empty()) {
+    *warning = what + "; every fitted set is also seen by confirmed pairs, so the result stands";
+    return "";
+  }
+  return fmt::format(
+      "{}; {} only these pairs see, so the fit may have moved it until another mode sat at a "
+      "measured frequency: add sensors that see the modes apart, or hold it (--hold NAME)",
+      what, fmt::join(blind, " and "));
+}
+
 }  // namespace
 
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
@@ -961,45 +1003,11 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   s.warnings = o.record.warnings;
   s.rounds = o.rounds;
   point = o.point;
-  // A fitted set that only pairs the sensors cannot confirm see (their partners changed along
-  // the fit) is not identified: the fit may have moved it until another mode sat at a measured
-  // frequency. With one sensor, spring.rz went from 100 to 2129 N m/rad that way (a twisting
-  // mode tuned onto a measured frequency), "converged" with a 7 % uncertainty, and the truth,
-  // 100, fitted as well. Sets the other pairs see stand, with a warning.
   if (o.ambiguity.empty()) {
-    const LinearEvaluation at = p.evaluate(point);
-    const auto changes =
-        unconfirmed_changes(model.mass, starts[win], point, at, measured, options.mac_threshold);
-    if (!changes.empty()) {
-      std::vector<std::string> lines, blind;
-      std::vector<char> changed(static_cast<size_t>(at.residuals.size()), 0);
-      for (const auto& [i, line] : changes) {
-        lines.push_back(line);
-        changed[static_cast<size_t>(i)] = 1;
-      }
-      for (int k = 0; k < n; ++k) {
-        if (held[static_cast<size_t>(k)]) continue;
-        double seen = 0;
-        for (const ModePair& pr : at.pairing.pairs)
-          if (!changed[static_cast<size_t>(pr.measured)])
-            seen = std::max(seen, std::abs(at.jacobian(pr.measured, k)));
-        if (seen < options.flat_sensitivity) blind.push_back(names[static_cast<size_t>(k)]);
-      }
-      const std::string what = fmt::format(
-          "the partners of {} changed their shape along the fit (another mode took their place, "
-          "through a veering or a new pairing) and the sensors cannot confirm the new ones",
-          fmt::join(lines, "; "));
-      if (!blind.empty()) {
-        o.ambiguity = fmt::format(
-            "{}; {} only these pairs see, so the fit may have moved it until another mode sat "
-            "at a measured frequency: add sensors that see the modes apart, or hold it "
-            "(--hold NAME)",
-            what, fmt::join(blind, " and "));
-      } else {
-        s.warnings.push_back(
-            what + "; every fitted set is also seen by confirmed pairs, so the result stands");
-      }
-    }
+    std::string warning;
+    o.ambiguity = unconfirmed_sets(p, model.mass, starts[win], point, measured, options, held,
+                                   names, &warning);
+    if (!warning.empty()) s.warnings.push_back(warning);
   }
   if (!decided && o.ambiguity.empty())
     o.ambiguity = fmt::format(

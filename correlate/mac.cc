@@ -116,6 +116,13 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
            (rules.frequency_window <= 0 ||
             std::abs(model_frequency_hz(j) / test_frequency_hz(i) - 1) <= rules.frequency_window);
   };
+  // Sorts candidates nearest in frequency first; true when the nearest is at most half as far
+  // (in ln f) as the next, the rule that tells apart candidates the MAC cannot.
+  auto nearest_first = [&](int i, std::vector<int>& cand) {
+    std::sort(cand.begin(), cand.end(),
+              [&](int a, int b) { return distance(i, a) < distance(i, b); });
+    return cand.size() < 2 || distance(i, cand[0]) <= 0.5 * distance(i, cand[1]);
+  };
   std::vector<char> row_used(rows, 0), col_used(cols, 0);
   // The choice of measured mode i among the free model modes: column, its score, and the
   // ambiguity if frequency cannot decide between candidates of (nearly) equal MAC.
@@ -134,11 +141,10 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
       for (int j = 0; j < cols; ++j)
         if (!col_used[j] && in_window(i, j)) near.push_back(j);
       if (near.empty()) return c;
-      std::sort(near.begin(), near.end(),
-                [&](int a, int b) { return distance(i, a) < distance(i, b); });
+      const bool decided = nearest_first(i, near);
       c.col = near.front();
       c.score = 1.0;
-      if (near.size() > 1 && !(distance(i, near[0]) <= 0.5 * distance(i, near[1]))) {
+      if (!decided) {
         c.ambiguity = fmt::format(
             "test mode {} ({:.5g} Hz, without a shape the MAC can read: give two sensors or "
             "more): model modes {} ({:.5g} Hz) and {} ({:.5g} Hz) are about as close in "
@@ -160,11 +166,10 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
     std::vector<int> tied;
     for (int j : cand)
       if (mac(i, j) >= best - rules.tie_mac) tied.push_back(j);
-    std::sort(tied.begin(), tied.end(),
-              [&](int a, int b) { return distance(i, a) < distance(i, b); });
+    const bool decided = nearest_first(i, tied);
     c.col = tied.front();
     c.score = mac(i, c.col);
-    if (tied.size() > 1 && !(distance(i, tied[0]) <= 0.5 * distance(i, tied[1]))) {
+    if (!decided) {
       c.ambiguity = fmt::format(
           "test mode {} ({:.5g} Hz): model modes {} ({:.5g} Hz, MAC {:.3f}) and {} ({:.5g} Hz, "
           "MAC {:.3f}) look alike at the sensors and are about as close in frequency",

@@ -159,12 +159,9 @@ class Problem {
     const auto exact = [&](const State& s) { return macroslip_margin(s, false); };
     if (exact(reached) >= 0) return reached;
     const double alpha = reached.alpha * (1 + 1e-6);
-    if (alpha >= b.alpha) {
-      if (exact(b) >= 0) return find_root(exact, reached, b);
-      return std::nullopt;
-    }
-    State probe;
-    if (solve(alpha, reached, probe) && exact(probe) >= 0) return find_root(exact, reached, probe);
+    State probe = b;
+    if (alpha < b.alpha && !solve(alpha, reached, probe)) return std::nullopt;
+    if (exact(probe) >= 0) return find_root(exact, reached, probe);
     return std::nullopt;
   }
 
@@ -455,11 +452,12 @@ Grid output_grid(Problem& problem, const QsmaOptions& options, const March& m, c
   // it: a doubling step across it can fail to converge (past the kink the structure's
   // tangent is nearly singular) where the bisection's levels that follow converge.
   State before = m.before_macroslip, after = m.after_macroslip;
-  const bool crossed =
-      m.crossed ||
-      bracket(
-          m, [&](const State& s) { return problem.macroslip_margin(s); }, &before, &after);
-  const std::optional<State> kink = crossed && options.q_max > 0 && g.alphas.size() > 2
+  const auto crossed = [&] {
+    return m.crossed ||
+           bracket(
+               m, [&](const State& s) { return problem.macroslip_margin(s); }, &before, &after);
+  };
+  const std::optional<State> kink = options.q_max > 0 && g.alphas.size() > 2 && crossed()
                                         ? problem.find_macroslip(before, after)
                                         : std::nullopt;
   if (kink) {
