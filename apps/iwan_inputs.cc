@@ -8,6 +8,7 @@
 #include "jointlab/apps/print.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/units.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/data/backbone_table.h"
 #include "jointlab/model/linear_modes.h"
@@ -62,9 +63,12 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
     s.channel = model::dof_name(m, s.dof);
     sensors.push_back(s);
   }
+  // The amplitude column's unit, when given, must measure this quantity (none: modal).
+  const std::optional<Quantity> measured =
+      quantity == "modal" ? std::nullopt : parse_quantity(quantity);
   for (const std::string& file : a.backbones) {
-    t.curves.push_back(
-        correlate::measured_backbone(data::read_backbone_table(file), sensors.empty() ? -1 : 0));
+    t.curves.push_back(correlate::measured_backbone(data::read_backbone_table(file, measured),
+                                                    sensors.empty() ? -1 : 0));
   }
   IwanInputs in;
   for (const std::string& file : a.backbones)

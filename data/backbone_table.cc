@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
+#include "jointlab/core/units.h"
 #include "jointlab/data/csv_lines.h"
 
 namespace jointlab::data {
@@ -18,7 +20,57 @@ namespace fs = std::filesystem;
 
 bool is_point_mark(std::string_view column) { return column == "harmonic" || column == "exchange"; }
 
-BackboneTable read_backbone_table(const fs::path& path) {
+namespace {
+
+// The columns read: the three required, then the two optional uncertainties.
+constexpr std::array<const char*, 5> kNames = {"amplitude", "frequency_hz", "damping_ratio",
+                                               "frequency_std_hz", "damping_std"};
+
+// The factor a value of column k (amplitude, frequency_hz, damping_ratio, frequency_std_hz,
+// damping_std) in `unit` takes to the table's units; InputError naming the file, the column and
+// the unit when the column does not take it: a unit is converted or refused, never ignored.
+double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> quantity,
+                  const std::string& file, long line) {
+  const auto refuse = [&](const std::string& why) {
+    return InputError(
+        where(file, line, fmt::format("column '{} [{}]': {}", kNames[k], shorten(unit), why)));
+  };
+  if (k == 1 || k == 3) {  // frequencies
+    if (lower(unit) == "hz") return 1.0;
+    throw refuse(
+        fmt::format("unit '{}' refused: {} is in Hz ([Hz] or no unit)", shorten(unit), kNames[k]));
+  }
+  if (k == 2 || k == 4) {  // damping ratios
+    if (unit == "1" || unit == "-") return 1.0;
+    if (unit == "%") return 0.01;
+    throw refuse(fmt::format(
+        "unit '{}' refused: {} is a fraction (no unit, [1] or [-]) or in per cent ([%])",
+        shorten(unit), kNames[k]));
+  }
+  if (!quantity) {
+    throw refuse(fmt::format(
+        "unit '{}' refused: a modal amplitude (--amplitude modal) takes no unit; a measured one "
+        "needs --amplitude displacement, velocity or acceleration with --dof",
+        shorten(unit)));
+  }
+  const std::string name = quantity_name(*quantity);
+  const std::optional<Unit> u = parse_unit(unit);
+  if (!u) {
+    throw refuse(fmt::format("unknown unit '{}' (the amplitude is a {}, SI unit {})", shorten(unit),
+                             name, si_unit(*quantity)));
+  }
+  if (u->quantity != *quantity) {
+    throw refuse(
+        fmt::format("unit '{}' measures {}, the amplitude is a {} (--amplitude {}, SI "
+                    "unit {})",
+                    shorten(unit), quantity_name(u->quantity), name, name, si_unit(*quantity)));
+  }
+  return u->to_si;
+}
+
+}  // namespace
+
+BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> quantity) {
   const std::string file = path.string();
   const auto text = read_text_file(path);
   if (!text) throw InputError(where(file, 0, "cannot open the backbone table"));
@@ -27,15 +79,14 @@ BackboneTable read_backbone_table(const fs::path& path) {
   const long header_line = lines.line_no();
   const char delim = detect_delimiter(header);
   CsvLineSplitter splitter(delim);
-  // Columns: the three required, then the two optional uncertainties.
-  static constexpr std::array<const char*, 5> kNames = {
-      "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz", "damping_std"};
   std::array<int, 5> col;
   col.fill(-1);
+  std::array<double, 5> scale;  // value in the file's unit -> the table's (SI, Hz, a fraction)
+  scale.fill(1.0);
   std::vector<size_t> marks;  // columns of is_point_mark: their marked rows are skipped
   const std::vector<std::string> fields = splitter.split(header);
   for (size_t i = 0; i < fields.size(); ++i) {
-    const std::string name = split_name_unit(fields[i], file, header_line).first;
+    const auto [name, unit] = split_name_unit(fields[i], file, header_line);
     if (is_point_mark(name)) marks.push_back(i);
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (name != kNames[k]) continue;
@@ -43,6 +94,7 @@ BackboneTable read_backbone_table(const fs::path& path) {
         throw InputError(where(file, header_line, fmt::format("column '{}' appears twice", name)));
       }
       col[k] = static_cast<int>(i);
+      if (!unit.empty()) scale[k] = unit_scale(k, unit, quantity, file, header_line);
     }
   }
   for (size_t k = 0; k < 3; ++k) {
@@ -88,7 +140,7 @@ BackboneTable read_backbone_table(const fs::path& path) {
                                fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,
                                            uncertainty ? ">= 0" : "> 0")));
       }
-      values[k].push_back(*v);
+      values[k].push_back(*v * scale[k]);
     }
   }
   const size_t points = values[0].size();

@@ -5,19 +5,26 @@
 //     amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]
 // further columns ignored but for a `process` file's marks: a row whose `harmonic` or
 // `exchange` cell is not 0 (not the mode's own frequency or damping) is skipped. Columns in
-// any order, a header field may carry a unit in brackets
-// ("amplitude [m/s]": the unit is not converted, the amplitude is SI of the quantity the caller
-// names). Rows in any order; the table returned has them by increasing amplitude. Every
-// amplitude, frequency [Hz] and damping ratio (a fraction) must be finite and > 0; the
+// any order. A column read may carry a unit in brackets, converted, never ignored:
+//   amplitude [m], [mm/s], [g], ... (core/units.h): must measure the quantity the caller names
+//     (none for a modal amplitude, which takes no unit), converted to SI;
+//   frequency_hz, frequency_std_hz: [Hz] only;
+//   damping_ratio, damping_std: [1] or [-] (a fraction), [%] (per cent: divided by 100).
+// Any other unit is an InputError "file:line: column 'damping_ratio [x]': unit 'x' ..." naming
+// what the column takes. Rows in any order; the table returned has them by increasing amplitude.
+// Every amplitude, frequency [Hz] and damping ratio (a fraction) must be finite and > 0; the
 // uncertainties, when present, finite and >= 0 (0: the caller's floor). Any defect is an
 // InputError "file:line: what" naming the column.
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
 #include <Eigen/Core>
+
+#include "jointlab/core/units.h"
 
 namespace jointlab::data {
 
@@ -38,8 +45,10 @@ struct BackboneTable {
 /// to another mode, which may be negative). Every backbone reader skips a row whose mark is not 0.
 bool is_point_mark(std::string_view column);
 
-/// Reads a backbone table; InputError "file:line: what" on any defect (above), and when the
-/// file holds fewer than two points.
-BackboneTable read_backbone_table(const std::filesystem::path& path);
+/// Reads a backbone table whose amplitude is of `quantity` (nullopt: a modal amplitude, which
+/// takes no unit); InputError "file:line: what" on any defect (above), and when the file holds
+/// fewer than two points.
+BackboneTable read_backbone_table(const std::filesystem::path& path,
+                                  std::optional<Quantity> quantity);
 
 }  // namespace jointlab::data

@@ -1,6 +1,8 @@
 #include "jointlab/data/backbone_table.h"
 
+#include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -24,7 +26,7 @@ TEST(BackboneTable, ReadsAnyRowOrderAndIgnoresFurtherColumns) {
                        "6.5e-4;1e-5;y;93.75\n"
                        "\n"
                        "8.0e-4;9e-5;z;93.60\n");
-  const BackboneTable t = read_backbone_table(p);
+  const BackboneTable t = read_backbone_table(p, Quantity::kDisplacement);
   EXPECT_EQ(t.source, p.string());
   ASSERT_EQ(t.size(), 3);
   // Sorted by amplitude, every column with its row.
@@ -43,7 +45,8 @@ TEST(BackboneTable, ReadsTheUncertainties) {
   const BackboneTable t =
       read_backbone_table(table("std.csv",
                                 "amplitude,frequency_hz,damping_ratio,frequency_std_hz,"
-                                "damping_std\n2,10,0.01,0.001,1e-4\n1,11,0.02,0.002,0\n"));
+                                "damping_std\n2,10,0.01,0.001,1e-4\n1,11,0.02,0.002,0\n"),
+                          std::nullopt);
   ASSERT_EQ(t.size(), 2);
   EXPECT_EQ(t.frequency_std_hz(0), 0.002);
   EXPECT_EQ(t.damping_std(0), 0.0);
@@ -60,7 +63,8 @@ TEST(BackboneTable, SkipsRowsMarkedHarmonicOrExchange) {
             "0.1,5,122.1,-0.002,0,1,3\n"
             "0.2,4,244.0,0.006,2,0,3\n"
             "0.3,3,122.0,0.003,0,0,3\n"
-            "0.4,2,122.0,0.003,0,0.0,3\n"));
+            "0.4,2,122.0,0.003,0,0.0,3\n"),
+      std::nullopt);
   ASSERT_EQ(t.size(), 2);
   EXPECT_EQ(t.amplitude(0), 2);
   EXPECT_EQ(t.amplitude(1), 3);
@@ -90,11 +94,66 @@ TEST(BackboneTable, RefusesUnphysicalValuesWithFileAndLine) {
   for (const auto& [text, expected] : cases) {
     const std::string name = "bad" + std::to_string(++i) + ".csv";
     const auto p = table(name, text);
-    const std::string m = input_error_of([&] { read_backbone_table(p); });
+    const std::string m = input_error_of([&] { read_backbone_table(p, std::nullopt); });
     EXPECT_NE(m.find(expected), std::string::npos) << name << ": " << m;
   }
-  const std::string m = input_error_of([] { read_backbone_table("/nonexistent/b.csv"); });
+  const std::string m =
+      input_error_of([] { read_backbone_table("/nonexistent/b.csv", std::nullopt); });
   EXPECT_NE(m.find("/nonexistent/b.csv"), std::string::npos) << m;
+}
+
+// A unit in brackets is converted or refused, never ignored (before, `damping_ratio [%]` was read
+// as a fraction and the fit targeted 100 times the damping). Per cent: divided by 100; the
+// amplitude's unit converted to SI when it measures the caller's quantity. The converted values
+// are one rounding of a product away from the decimal ones: EXPECT_DOUBLE_EQ (4 ulps).
+TEST(BackboneTable, ConvertsPerCentAndAmplitudeUnitsAndRefusesTheRest) {
+  const BackboneTable t = read_backbone_table(
+      table("units.csv",
+            "amplitude [mm/s],frequency_hz [Hz],damping_ratio [%],frequency_std_hz [Hz],"
+            "damping_std [%]\n2,93.7,0.07,0.01,0.002\n1,93.8,0.06,0.01,0\n"),
+      Quantity::kVelocity);
+  ASSERT_EQ(t.size(), 2);
+  EXPECT_DOUBLE_EQ(t.amplitude(0), 1e-3);
+  EXPECT_DOUBLE_EQ(t.amplitude(1), 2e-3);
+  EXPECT_DOUBLE_EQ(t.damping_ratio(0), 6e-4);
+  EXPECT_DOUBLE_EQ(t.damping_ratio(1), 7e-4);
+  EXPECT_DOUBLE_EQ(t.damping_std(1), 2e-5);
+  EXPECT_EQ(t.frequency_hz(1), 93.7);
+  const BackboneTable f = read_backbone_table(
+      table("fraction.csv", "amplitude,frequency_hz,damping_ratio [1]\n1,10,0.01\n2,10,0.02\n"),
+      std::nullopt);
+  EXPECT_EQ(f.damping_ratio(1), 0.02);
+
+  // Each refusal: one line naming the file and header line, the column and the unit.
+  const std::string rows = "\n1,10,0.01\n2,10,0.01\n";
+  const std::vector<std::tuple<std::string, std::optional<Quantity>, std::string>> cases = {
+      {"amplitude,frequency_hz [rad/s],damping_ratio", Quantity::kVelocity,
+       "u1.csv:1: column 'frequency_hz [rad/s]': unit 'rad/s' refused: frequency_hz is in Hz"},
+      {"amplitude,frequency_hz,damping_ratio [dB]", Quantity::kVelocity,
+       "u2.csv:1: column 'damping_ratio [dB]': unit 'dB' refused: damping_ratio is a fraction"},
+      {"amplitude [mm],frequency_hz,damping_ratio", Quantity::kVelocity,
+       "u3.csv:1: column 'amplitude [mm]': unit 'mm' measures displacement, the amplitude is a "
+       "velocity"},
+      {"amplitude [m],frequency_hz,damping_ratio", std::nullopt,
+       "u4.csv:1: column 'amplitude [m]': unit 'm' refused: a modal amplitude"},
+      {"amplitude [furlong],frequency_hz,damping_ratio", Quantity::kDisplacement,
+       "u5.csv:1: column 'amplitude [furlong]': unknown unit 'furlong'"},
+      {"amplitude,frequency_hz,damping_ratio,frequency_std_hz [%],damping_std", std::nullopt,
+       "u6.csv:1: column 'frequency_std_hz [%]': unit '%' refused"},
+      {"amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std [ppm]", std::nullopt,
+       "u7.csv:1: column 'damping_std [ppm]': unit 'ppm' refused"},
+  };
+  int i = 0;
+  for (const auto& [header, quantity, expected] : cases) {
+    const std::string name = "u" + std::to_string(++i) + ".csv";
+    const std::string body = header.find("std") != std::string::npos
+                                 ? header + "\n1,10,0.01,0.1,0.001\n2,10,0.01,0.1,0.001\n"
+                                 : header + rows;
+    const auto p = table(name, body);
+    const std::string m = input_error_of([&] { read_backbone_table(p, quantity); });
+    EXPECT_NE(m.find(expected), std::string::npos) << name << ": " << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+  }
 }
 
 }  // namespace

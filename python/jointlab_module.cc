@@ -417,9 +417,12 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
     }
     correlate::IwanTarget target;
     target.mode = mode;
+    // The amplitude column's unit, when given, must measure this quantity (none: modal).
+    const std::optional<Quantity> measured =
+        amplitude == "modal" ? std::nullopt : parse_quantity(amplitude);
     for (const std::string& f : backbones)
-      target.curves.push_back(
-          correlate::measured_backbone(data::read_backbone_table(f), sensors.empty() ? -1 : 0));
+      target.curves.push_back(correlate::measured_backbone(data::read_backbone_table(f, measured),
+                                                           sensors.empty() ? -1 : 0));
     o.fit_linear_damping = linear_damping == "fit";
     o.max_evaluations = evaluations;
     o.seed = seed;

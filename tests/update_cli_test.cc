@@ -695,6 +695,80 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// A backbone table with its damping in per cent (`damping_ratio [%]`, `damping_std [%]`) is
+// the same backbone as in fractions: the two fits give the same parameters. Before, the unit was
+// ignored and the fit targeted 100 times the damping. The per cent values are the fractions
+// times 100 printed to 17 digits and divided by 100 on reading: a rounding apart, which the fit
+// (300 evaluations, the same samples) can carry to about 1e-9 of a parameter; 1e-6 allows for it
+// and is far below what a factor 100 in damping moves them. A unit not understood is refused
+// with the file, the column and the unit, never ignored.
+TEST(UpdateCli, IwanReadsBackboneTablesInPerCentAndRefusesUnitsItDoesNotUnderstand) {
+  const fs::path dir = testing::scratch_dir("update_iwan_units");
+  const double k_total = std::pow(2 * M_PI * 177.0, 2);
+  const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
+  const double phi = model::Iwan(truth).phi_max();
+  const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, 5e-4);
+  write_backbone_table(dir / "fraction.csv", m, 30, 2 * phi, 41);
+  // The same table in per cent.
+  const auto cells = read_csv_cells(dir / "fraction.csv");
+  std::string percent =
+      "amplitude,frequency_hz [Hz],damping_ratio [%],frequency_std_hz,damping_std [%],note\n";
+  for (size_t i = 1; i < cells.size(); ++i) {
+    percent += fmt::format("{},{},{:.17g},{},{:.17g},x\n", cells[i][0], cells[i][1],
+                           100 * std::stod(cells[i][2]), cells[i][3], 100 * std::stod(cells[i][4]));
+  }
+  testing::write_text((dir / "percent.csv").string(), percent);
+  const std::string model = write_model(
+      dir, correlate::one_mode_structure(0.96 * k_total, {1.5, 0.8 * truth.Kt, -0.3, 2.0}, 5e-4),
+      "s.toml");
+  const auto fit = [&](const std::string& table, const std::string& out) {
+    const testing::CommandResult r = testing::run_jointlab(fmt::format(
+        "update-iwan {} --set j --mode 1 --backbone {} --fs-range 0.005:50 --evaluations 300 "
+        "--out {}",
+        model, (dir / table).string(), (dir / out).string()));
+    EXPECT_EQ(r.status, 0) << r.err;
+    return read_parameters(dir / out / "parameters.csv");
+  };
+  const auto pf = fit("fraction.csv", "fraction");
+  const auto pp = fit("percent.csv", "percent");
+  for (const char* name : {"Fs", "Kt", "chi", "beta"}) {
+    const double a = std::stod(pf.at(name).at(2)), b = std::stod(pp.at(name).at(2));
+    RecordProperty(std::string(name) + "_fraction_vs_percent", fmt::format("{} {}", a, b));
+    EXPECT_TRUE(testing::Close(b, a, 1e-6)) << name << ": " << a << " vs " << b;
+  }
+
+  // Units the columns do not take: one line naming the file, the column and the unit, exit 2.
+  const std::string rows = "\n1e-6,177,7e-4\n2e-6,176,8e-4\n";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"amplitude [m/s],frequency_hz,damping_ratio",
+       ":1: column 'amplitude [m/s]': unit 'm/s' refused: a modal amplitude"},
+      {"amplitude,frequency_hz [rad/s],damping_ratio",
+       ":1: column 'frequency_hz [rad/s]': unit 'rad/s' refused: frequency_hz is in Hz"},
+      {"amplitude,frequency_hz,damping_ratio [permille]",
+       ":1: column 'damping_ratio [permille]': unit 'permille' refused"},
+  };
+  int i = 0;
+  for (const auto& [header, says] : refused) {
+    const fs::path bad = dir / fmt::format("unit{}.csv", ++i);
+    testing::write_text(bad.string(), header + rows);
+    expect_one_line_error(fmt::format("update-iwan {} --set j --mode 1 --backbone {} --out {}",
+                                      model, bad.string(), (dir / "bad").string()),
+                          bad.string() + says);
+  }
+  // A measured amplitude's unit must measure the quantity --amplitude names; one that does is
+  // converted (mm/s to m/s: the fit runs).
+  const fs::path mm = dir / "mm.csv";
+  testing::write_text(mm.string(), "amplitude [mm],frequency_hz,damping_ratio" + rows);
+  expect_one_line_error(
+      fmt::format("update-iwan {} --set j --mode 1 --backbone {} --amplitude velocity --dof 0 "
+                  "--out {}",
+                  model, mm.string(), (dir / "bad").string()),
+      mm.string() +
+          ":1: column 'amplitude [mm]': unit 'mm' measures displacement, the amplitude "
+          "is a velocity");
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
 // Three modes at once (issue 28: `--mode 1:1 --mode 2:2 --mode 3:3` failed with "no measured
 // backbone to update against"): chain A's first three modes, each measured in a hit of its own
 // (so no other mode slips the joints in it and the screen leaves every point), fitted together.

@@ -119,7 +119,7 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     tables.fitted = c.iwan_update.fits(c.modes[k].name);
     tables.linear_frequency_hz = modes[k].linear_frequency_hz;
     for (const std::filesystem::path& f : c.modes[k].backbones) {
-      const data::BackboneTable t = data::read_backbone_table(f);
+      const data::BackboneTable t = data::read_backbone_table(f, c.amplitude);
       Curve cv;
       cv.id = "table " + f.filename().string();  // never a hit's id: no slip screen across
       cv.amplitude = t.amplitude;
