@@ -101,6 +101,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
   const int elastic = linear.size() - linear.rigid_count;
   std::vector<campaign::ModeBackbones> modes;
+  std::vector<BandOfMode> band_of_mode;
   for (const std::string& spec : a.modes) {
     correlate::IwanTarget t;
     int band = 0;
@@ -155,6 +156,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
     mb.model_mode = t.mode;
     if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
     modes.push_back(std::move(mb));
+    if (col >= 0) band_of_mode.push_back({spec, t.mode, band, col});
   }
   if (!a.stepped_sine.empty()) {
     int sensor = 0;
@@ -211,6 +213,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   in.amplitude = run.amplitude;
   in.measured = measured;
   in.data_name = a.measured;
+  in.bands = std::move(band_of_mode);
   return in;
 }
 

@@ -26,6 +26,15 @@ struct IwanInputArgs {
   int stepped_sine_mode = 0;
 };
 
+/// A `--mode R[:BAND]` of a process folder: the band whose measured shape must look like model
+/// mode R (checked against the updated model).
+struct BandOfMode {
+  std::string spec;  ///< as given ("1:2")
+  int mode = 0;      ///< elastic model mode R
+  int band = 0;      ///< the measured band
+  int column = -1;   ///< its column in IwanInputs::measured
+};
+
 /// The measured backbones as targets.
 struct IwanInputs {
   std::vector<correlate::Sensor> sensors;      ///< the sensors (one DOF for --dof, none: modal)
@@ -34,6 +43,7 @@ struct IwanInputs {
   bool modal = false;                                ///< amplitudes are modal (q)
   std::optional<correlate::MeasuredModes> measured;  ///< the measured linear modes (process)
   std::string data_name;                             ///< for messages
+  std::vector<BandOfMode> bands;                     ///< each process --mode's band
 };
 
 /// Reads the measured side named by `a` against model `m`; InputError prefixed by `command`.

@@ -39,6 +39,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The smallest MAC at the sensors of a --mode's band with that mode of the updated model
+// without a warning: the MAC pairing's threshold (correlate::measured_mode_of's 0.6).
+constexpr double kBandMacThreshold = 0.6;
+
 struct LinearArgs {
   std::string model, measured, modes_table, sensors, out, rule = "least-squares";
   std::vector<std::string> sets, bounds, holds;
@@ -263,6 +267,26 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& i
     campaign::plot_backbone_comparison(c, fs::path(a.out) / (name + ".png"), {});
   }
   say(stdout, "{}", summary.report());
+  // Each band named for a mode must look like that mode of the updated model (not the start's:
+  // a start far off may order the modes differently). A low MAC means the band, or the sensors
+  // file, belongs to another mode: the parameters then fit that mode's data. Said, not refused:
+  // a poorly measured shape of the right mode may look like nothing.
+  if (in.measured) {
+    const model::Model updated = objective.apply(best, summary.modal_ratio);
+    for (const BandOfMode& b : in.bands) {
+      const correlate::ModeShapeMatch match =
+          correlate::mode_shape_match(updated, in.sensors, *in.measured, b.column, b.mode);
+      if (match.mac >= kBandMacThreshold) continue;
+      say(stdout,
+          "  WARNING: --mode {}: band {}'s measured shape and mode {} of the updated model have "
+          "MAC {:.2g} at the sensors (below {:g}){}: the band, or the sensors file, may belong "
+          "to another mode, and the parameters then fit that mode's data\n",
+          b.spec, b.band, b.mode, match.mac, kBandMacThreshold,
+          match.best_mode != b.mode ? fmt::format("; it looks most like mode {} (MAC {:.2g})",
+                                                  match.best_mode, match.best_mac)
+                                    : std::string());
+    }
+  }
   for (const correlate::ParetoPoint& p : front) {
     say(stdout,
         "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "

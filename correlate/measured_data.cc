@@ -462,6 +462,23 @@ int measured_mode_of(const model::Model& model, const std::vector<Sensor>& senso
   return -1;
 }
 
+ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sensor>& sensors,
+                                const MeasuredModes& measured, int column, int mode) {
+  const model::LinearModes modes = model::linear_modes(model.mass, model.linear_stiffness());
+  const int elastic = modes.size() - modes.rigid_count;
+  if (mode < 1 || mode > elastic || column < 0 || column >= measured.shapes.cols()) {
+    throw InputError(fmt::format("mode {}: the model has {} elastic modes", mode, elastic));
+  }
+  const Eigen::MatrixXd model_shapes = shapes_at_sensors(sensors, modes.shapes.rightCols(elastic));
+  const Eigen::MatrixXd row = mac_matrix(measured.shapes.col(column), model_shapes);
+  ModeShapeMatch out;
+  out.mac = row(0, mode - 1);
+  Eigen::Index best = 0;
+  out.best_mac = row.row(0).maxCoeff(&best);
+  out.best_mode = static_cast<int>(best) + 1;
+  return out;
+}
+
 MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor) {
   MeasuredBackbone b;
   b.kind = BackboneKind::kRingdown;

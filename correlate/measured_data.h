@@ -118,4 +118,16 @@ MeasuredModes read_modes_table(const std::filesystem::path& path,
 int measured_mode_of(const model::Model& model, const std::vector<Sensor>& sensors,
                      const MeasuredModes& measured, int mode, double mac_threshold);
 
+/// How a measured mode's shape matches a model mode at the sensors.
+struct ModeShapeMatch {
+  double mac = 0;       ///< MAC of the measured shape with the asked model mode
+  int best_mode = 0;    ///< the elastic model mode (1-based) of highest MAC
+  double best_mac = 0;  ///< its MAC
+};
+
+/// The MAC at the sensors of measured column `column` against elastic mode `mode` (1-based) of
+/// the model at its linear stiffness, and the elastic mode it matches best.
+ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sensor>& sensors,
+                                const MeasuredModes& measured, int column, int mode);
+
 }  // namespace jointlab::correlate

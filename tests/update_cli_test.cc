@@ -441,6 +441,9 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   const model::Model updated = model::read_model(dir / "out" / "model.toml");
   ASSERT_TRUE(updated.joints.size() == m.joints.size());
   EXPECT_TRUE(testing::Close(joint_stiffness(updated, "iwan.rivet"), truth.ka, 0.02));
+  // The start's K_T of 3 x the truth puts chain A's mode above chain B's; the band's shape is
+  // checked against the updated model, where mode 1 is chain A's again: no warning.
+  EXPECT_EQ(r.out.find("WARNING: --mode"), std::string::npos) << r.out;
   std::ifstream history(dir / "out" / "history.csv");
   std::string header;
   std::getline(history, header);
@@ -502,6 +505,50 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   expect_one_line_error(iwan + "--mode 1:1 --beta-range 0:5",
                         "--beta-range 0:5: need 0 < LO < HI (beta is searched on a log scale");
   EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+// --mode R:BAND takes the band as mode R's; the band's measured shape is then checked against
+// mode R of the updated model. A sensors file with the rows of a1 and a5 exchanged (a wiring
+// list mixed up) makes a5's backbone read at A1 and the band's shape unlike mode 1 (MAC about
+// 0.1): the fit moves Fs far from the truth and, before, said nothing. The start orders the modes
+// as the truth does (K_T x 1.1), so a check at the start would pass wrongly just as often as at
+// the result; the correct file gives no warning. MACs are of exact model shapes at the sensors,
+// so the two cases lie far either side of the 0.6 threshold.
+TEST(UpdateCli, IwanWarnsWhenTheBandDoesNotLookLikeTheModeOfTheUpdatedModel) {
+  const fs::path dir = testing::scratch_dir("update_iwan_band_shape");
+  correlate::TwoChainParameters truth;
+  truth.iwan = true;
+  const model::Model m = correlate::two_chain_structure(truth);
+  write_two_hits(dir / "measured", m, a5_backbone(m, 20, kTop, 5e-4, 0.03, 7),
+                 a5_backbone(m, 20, kTop, 5e-4, 0.03, 11));
+  testing::write_text((dir / "sensors.csv").string(), sensors_text());
+  std::string swapped = sensors_text();
+  swapped.replace(swapped.find("a1,1,1"), 6, "a5,1,1");
+  swapped.replace(swapped.find("a5,5,-1"), 7, "a1,5,-1");
+  testing::write_text((dir / "swapped.csv").string(), swapped);
+  correlate::TwoChainParameters start = truth;
+  start.Fs *= 1.5;
+  start.ka *= 1.1;
+  start.chi = -0.3;
+  start.beta = 0.6;
+  const std::string model = write_model(dir, correlate::two_chain_structure(start), "start.toml");
+  const auto fit = [&](const std::string& sensors, const std::string& out) {
+    const testing::CommandResult r = testing::run_jointlab(fmt::format(
+        "update-iwan {} --measured {} --sensors {} --set iwan.rivet --mode 1:1 --evaluations 400 "
+        "--out {}",
+        model, (dir / "measured").string(), (dir / sensors).string(), (dir / out).string()));
+    EXPECT_EQ(r.status, 0) << r.err;
+    RecordProperty(out + "_Fs", read_parameters(dir / out / "parameters.csv").at("Fs").at(2));
+    return r.out;
+  };
+  const std::string right = fit("sensors.csv", "right");
+  EXPECT_EQ(right.find("WARNING: --mode"), std::string::npos) << right;
+  const std::string wrong = fit("swapped.csv", "swapped");
+  EXPECT_NE(wrong.find("WARNING: --mode 1:1: band 1's measured shape and mode 1 of the updated "
+                       "model have MAC"),
+            std::string::npos)
+      << wrong;
+  RecordProperty("swapped_report", wrong);
 }
 
 // A `stepped-sine` output folder as the command writes it (summary.json naming the program
