@@ -228,6 +228,11 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& i
   if (const std::string e = o.error(); !e.empty()) {
     throw InputError(fmt::format("update-iwan: {}", e));
   }
+  // Frequencies no parameter set can reach: said with the numbers before any fit (before, the
+  // fit's every cost was clipped to a penalty and the message blamed the amplitudes).
+  if (const std::string e = correlate::unreachable_frequencies(objective, o); !e.empty()) {
+    throw InputError(fmt::format("update-iwan: {}: {}", data_name, e));
+  }
   std::vector<correlate::ParetoPoint> front;
   if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
   // The fit `run` makes (beta held first, freed when the data reach macroslip).

@@ -19,7 +19,7 @@
 namespace jointlab::correlate {
 namespace {
 
-constexpr double kPenalty = 1e6;  // cost of a parameter set the model cannot evaluate
+constexpr double kPenalty = 1e6;  // cost() of a parameter set the model cannot evaluate
 constexpr int kBatch = 50;        // samples evaluated between two progress reports
 
 }  // namespace
@@ -389,12 +389,74 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
   return true;
 }
 
-double IwanObjective::cost(const model::IwanParameters& p) const {
+std::optional<double> IwanObjective::try_cost(const model::IwanParameters& p) const {
   std::vector<double> r(residual_count_);
-  if (!residuals(p, r.data())) return kPenalty;
+  if (!residuals(p, r.data())) return std::nullopt;
   double s = 0;
   for (double v : r) s += v * v;
-  return std::min(s, kPenalty);
+  return s;
+}
+
+double IwanObjective::cost(const model::IwanParameters& p) const {
+  return try_cost(p).value_or(kPenalty);
+}
+
+Eigen::Vector2d IwanObjective::frequency_reach(int mode, double gamma) const {
+  model::Model m = *model_;
+  Eigen::Vector2d out(NAN, NAN);
+  try {
+    const model::LinearModes as_given = model::linear_modes(m.mass, m.linear_stiffness());
+    const int col = as_given.rigid_count + mode - 1;  // the same ordered eigenvalue in both
+    for (int side = 0; side < 2; ++side) {
+      for (model::Joint& j : m.joints)
+        if (j.element == set_) j.stiffness = side == 0 ? 0.0 : gamma * Ks_;
+      const model::LinearModes lm = model::linear_modes(m.mass, m.linear_stiffness());
+      if (col < lm.size()) out(side) = std::max(lm.frequency_hz(col), 0.0);
+    }
+  } catch (const InputError&) {
+    return Eigen::Vector2d(NAN, NAN);
+  }
+  return out;
+}
+
+std::string unreachable_frequencies(const IwanObjective& objective,
+                                    const IwanUpdateOptions& options) {
+  const double gamma = options.fixed_gamma > 0 ? options.fixed_gamma : options.bounds.gamma_max;
+  const double kt = gamma * objective.reference_stiffness();
+  std::string out;
+  for (const IwanTarget& t : objective.targets()) {
+    double lo = INFINITY, hi = 0;
+    for (const MeasuredBackbone& c : t.curves) {
+      lo = std::min(lo, c.frequency_hz.minCoeff());
+      hi = std::max(hi, c.frequency_hz.maxCoeff());
+    }
+    const Eigen::Vector2d reach = objective.frequency_reach(t.mode, gamma);
+    if (!reach.allFinite()) continue;
+    const std::string stuck =
+        fmt::format("stuck at K_T = {:.4g} x K_s = {:.6g} N/m ({})", gamma, kt,
+                    options.fixed_gamma > 0 ? "--gamma" : "the top of the gamma range");
+    std::string e;
+    if (lo > reach(1)) {
+      e = fmt::format(
+          "mode {}: every measured frequency ({:.6g} to {:.6g} Hz) lies above {:.6g} Hz, the "
+          "highest model mode {} reaches (every element of the set {}; slipped, it falls to "
+          "{:.6g} Hz)",
+          t.mode, lo, hi, reach(1), t.mode, stuck, reach(0));
+    } else if (hi < reach(0)) {
+      e = fmt::format(
+          "mode {}: every measured frequency ({:.6g} to {:.6g} Hz) lies below {:.6g} Hz, the "
+          "lowest model mode {} reaches (every element of the set slipped, no stiffness; {}, it "
+          "rises to {:.6g} Hz)",
+          t.mode, lo, hi, reach(0), t.mode, stuck, reach(1));
+    }
+    if (!e.empty()) out += (out.empty() ? "" : "; ") + e;
+  }
+  if (!out.empty()) {
+    out +=
+        ": no Iwan parameters in the bounds can fit these backbones; check the model's linear "
+        "part (update-linear), the mode and the frequency column";
+  }
+  return out;
 }
 
 double IwanObjective::linear_error(const model::IwanParameters& p) const {
@@ -526,7 +588,9 @@ struct Tracker {
     parallel_for(
         vs.size(), static_cast<unsigned>(options.threads), [] { return 0; },
         [&](size_t i, int) {
-          c[i] = objective.cost(to_params(vs[i], objective.reference_stiffness()));
+          // A set the model cannot evaluate costs +inf: never a best, never a number written.
+          c[i] = objective.try_cost(to_params(vs[i], objective.reference_stiffness()))
+                     .value_or(INFINITY);
         });
     for (size_t i = 0; i < vs.size(); ++i) record(vs[i], c[i], base + static_cast<int>(i) + 1);
     return c;
@@ -608,7 +672,7 @@ class IwanCost : public ceres::CostFunction {
     const double Ks = tr_.objective.reference_stiffness();
     const Vec4 v = with_held(to_v(x[0]));
     if (!tr_.objective.residuals(to_params(v, Ks), r)) {
-      tr_.record(v, kPenalty);
+      tr_.record(v, INFINITY);
       return false;
     }
     double c = 0;
@@ -686,7 +750,7 @@ void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>*
   std::sort(samples.begin(), samples.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   int starts = o.local_starts;
-  if (extra && extra->first < kPenalty) {
+  if (extra && std::isfinite(extra->first)) {
     samples.insert(samples.begin() + std::min<size_t>(samples.size(), o.local_starts), *extra);
     ++starts;
   }
@@ -696,7 +760,7 @@ void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>*
     if (held[k]) constant.push_back(k);
   bool converged = true;
   for (int s = 0; s < starts && s < static_cast<int>(samples.size()); ++s) {
-    if (samples[s].first >= kPenalty) continue;
+    if (!std::isfinite(samples[s].first)) continue;
     const int remaining = o.max_evaluations - tr.used();
     if (remaining <= 9) break;
     const int limit = tr.used() + remaining / (starts - s);
@@ -976,7 +1040,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   s.linear_known = std::any_of(objective.targets().begin(), objective.targets().end(),
                                [](const IwanTarget& t) { return t.linear_frequency_hz > 0; });
   Tracker tr{objective, options, s, objective.evaluations()};
-  s.initial_cost = objective.cost(s.start);
+  s.initial_cost = objective.try_cost(s.start).value_or(INFINITY);
   std::mt19937 rng(options.seed);
   std::optional<std::pair<double, Vec4>> constant;
   if (objective.fits_linear_damping()) {
@@ -999,11 +1063,11 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   model::IwanParameters start = s.start;
   if (options.fixed_gamma > 0) start.Kt = options.fixed_gamma * objective.reference_stiffness();
   if (options.fixed_beta) start.beta = *options.fixed_beta;
-  if (!(tr.best < kPenalty)) {
+  if (!std::isfinite(tr.best)) {
     s.status = IwanUpdateStatus::kNoValidPoint;
     s.improved = false;
     s.best = start;
-    s.final_cost = objective.cost(start);
+    s.final_cost = objective.try_cost(start).value_or(INFINITY);
     s.modal_ratio = objective.linear_damping(start).value_or(s.modal_ratio_start);
     return start;
   }
@@ -1021,7 +1085,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   const double start_cost = !start_inside ? INFINITY
                             : start.Kt == s.start.Kt && start.beta == s.start.beta
                                 ? s.initial_cost
-                                : objective.cost(start);
+                                : objective.try_cost(start).value_or(INFINITY);
   Vec4 best_v;
   if (start_cost <= tr.best) {
     s.improved = false;
@@ -1079,12 +1143,16 @@ std::string IwanUpdateSummary::report() const {
                               : status == IwanUpdateStatus::kBudget ? "evaluation budget spent"
                               : monte_carlo ? "converged (a Monte Carlo round brought no gain)"
                                             : "converged (every local solve met its tolerance)";
-  std::string out = fmt::format(
-      "Iwan update: {}, {} QSMA evaluations, {} {}, cost {:.4g} -> {:.4g}, {}\n", outcome,
-      evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements", initial_cost,
-      final_cost,
-      linear_known ? fmt::format("linear frequency error {:.3g} %", 100 * linear_error)
-                   : std::string("no measured linear frequency to compare"));
+  // A cost the model could not evaluate is said so, never printed as a number.
+  const auto cost_text = [](double c) {
+    return std::isfinite(c) ? fmt::format("{:.4g}", c) : std::string("(not evaluable)");
+  };
+  std::string out =
+      fmt::format("Iwan update: {}, {} QSMA evaluations, {} {}, cost {} -> {}, {}\n", outcome,
+                  evaluations, rounds, monte_carlo ? "Monte Carlo rounds" : "local refinements",
+                  cost_text(initial_cost), cost_text(final_cost),
+                  linear_known ? fmt::format("linear frequency error {:.3g} %", 100 * linear_error)
+                               : std::string("no measured linear frequency to compare"));
   // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
   auto sigma = [&](int k) -> std::string {
     if (held[k]) return " (held)";

@@ -179,7 +179,11 @@ class IwanObjective {
   /// Residuals at p with the structure's own damping ratio at z (not fitted, not the model's):
   /// the Jacobian column of Z and the covariance need it held. Thread-safe.
   bool residuals_at(const model::IwanParameters& p, double z, double* r) const;
-  /// Sum of squared residuals at p (a large finite penalty if it cannot be evaluated).
+  /// Sum of squared residuals at p, however large; nullopt if the model cannot be evaluated
+  /// there.
+  std::optional<double> try_cost(const model::IwanParameters& p) const;
+  /// try_cost(), or a finite penalty of 1e6 if the model cannot be evaluated at p (for reports
+  /// that compare costs; the update itself never takes the penalty for a cost).
   double cost(const model::IwanParameters& p) const;
   /// The structure's own damping ratio Z the residuals at p use: the model's when held, the
   /// best one in [0, linear_damping_max] at p when fitted; nullopt if p cannot be evaluated.
@@ -195,6 +199,12 @@ class IwanObjective {
   Eigen::Vector2d slip_range(const model::IwanParameters& p) const;
   /// Index of the curve (over every target, in order) each residual belongs to.
   const std::vector<int>& residual_curve() const { return residual_curve_; }
+  /// The frequency [Hz] of elastic mode `mode` (1-based) with every element of the set slipped
+  /// (no stiffness: QSMA's high-amplitude limit, the elements' force a constant F_S) and stuck
+  /// at K_T = gamma K_s (its low-amplitude limit): (slipped, stuck). Every ordered eigenvalue
+  /// falls as a stiffness falls, so the mode's frequency lies between the two at any amplitude
+  /// and any K_T up to gamma K_s. (NaN, NaN) where the linear modes cannot be found.
+  Eigen::Vector2d frequency_reach(int mode, double gamma) const;
   /// Relative linear-frequency error of every target at p (0 for targets without one).
   double linear_error(const model::IwanParameters& p) const;
   /// Gives the measured linear modes (shapes at the sensors) for linear_errors().
@@ -255,6 +265,13 @@ class IwanObjective {
                 double* values = nullptr) const;
 };
 
+/// "" when each target's measured frequencies overlap what its mode can reach (frequency_reach()
+/// at the largest K_T of the options: fixed_gamma, else bounds.gamma_max); else one sentence per
+/// target whose every frequency lies above the stuck or below the slipped frequency, with the
+/// numbers: no Iwan parameters can fit it, whatever the amplitudes.
+std::string unreachable_frequencies(const IwanObjective& objective,
+                                    const IwanUpdateOptions& options);
+
 /// Why update_iwan() stopped.
 enum class IwanUpdateStatus {
   kConverged,     ///< no further improvement (Monte Carlo) or Ceres converged
@@ -265,7 +282,7 @@ enum class IwanUpdateStatus {
 /// One objective value on the way.
 struct IwanHistoryEntry {
   int evaluation = 0;  ///< evaluations so far
-  double cost = 0;     ///< the cost of this evaluation
+  double cost = 0;     ///< the cost of this evaluation (+inf: the model could not be evaluated)
   double best = 0;     ///< the best cost so far
 };
 
@@ -274,8 +291,8 @@ struct IwanUpdateSummary {
   IwanUpdateStatus status = IwanUpdateStatus::kNoValidPoint;  ///< termination
   model::IwanParameters start;                                ///< the model's parameters
   model::IwanParameters best;                                 ///< the updated parameters
-  double initial_cost = 0;                                    ///< cost at start
-  double final_cost = 0;                                      ///< cost at best
+  double initial_cost = 0;    ///< cost at start (+inf: the model cannot be evaluated there)
+  double final_cost = 0;      ///< cost at best (+inf: kNoValidPoint and the start not evaluable)
   double linear_error = 0;    ///< relative linear-frequency error at best
   bool linear_known = false;  ///< some target has a measured linear frequency (else no error)
   int evaluations = 0;        ///< QSMA evaluations

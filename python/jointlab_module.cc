@@ -2,6 +2,7 @@
 // numpy arrays in and out, the same options and defaults as the command line, and the command
 // line's one-line messages as jointlab.InputError (a ValueError). Argument conversion only: every
 // number comes from the library the program uses (style.md 13).
+#include <cmath>
 #include <complex>
 #include <optional>
 #include <string>
@@ -440,6 +441,8 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
     o.bounds = b;
     if (const std::string e = o.error(); !e.empty())
       throw InputError(fmt::format("update-iwan: {}", e));
+    if (const std::string e = correlate::unreachable_frequencies(objective, o); !e.empty())
+      throw InputError(fmt::format("update-iwan: {}", e));
     summary = campaign::fit_iwan(objective, o, nullptr);
     if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint)
       throw InputError(
@@ -474,8 +477,13 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   parameters["modal_ratio"] = z;
   py::dict result;
   result["parameters"] = parameters;
-  result["cost"] = summary.final_cost;
-  result["initial_cost"] = summary.initial_cost;
+  // A cost the model could not evaluate (+inf) is None, never a number.
+  const auto cost = [](double c) -> py::object {
+    if (std::isfinite(c)) return py::cast(c);
+    return py::none();
+  };
+  result["cost"] = cost(summary.final_cost);
+  result["initial_cost"] = cost(summary.initial_cost);
   result["evaluations"] = summary.evaluations;
   result["warnings"] = summary.at_bounds;
   result["report"] = summary.report();

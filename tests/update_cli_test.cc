@@ -816,6 +816,52 @@ TEST(UpdateCli, IwanReadsBackboneTablesInPerCentAndRefusesUnitsItDoesNotUndersta
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// Frequencies the model's mode cannot reach: the one-mode model (k0 = 0.96 k, one Iwan element
+// of K_s = 0.032 k to ground) spans sqrt(k0) / 2 pi (the element slipped) to
+// sqrt(k0 + gamma_max K_s) / 2 pi (stuck at the top of the gamma range, 2) whatever F_S, chi and
+// beta. Tables at twice and half the measured frequencies are refused with those two numbers,
+// closed form against the dense eigen-solve, compared as printed (6 digits; the solve agrees to
+// about 1e-12). Before, every cost was clipped to the 1e6 penalty and the message said no
+// parameter set gave a curve "over the measured amplitudes".
+TEST(UpdateCli, IwanRefusesFrequenciesTheModeCannotReachNamingTheReach) {
+  const fs::path dir = testing::scratch_dir("update_iwan_reach");
+  const double k_total = std::pow(2 * M_PI * 177.0, 2);
+  const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
+  const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, 0);
+  write_backbone_table(dir / "hit.csv", m, 20, 2 * model::Iwan(truth).phi_max(), 51);
+  const double ks = 0.8 * truth.Kt;
+  const std::string model = write_model(
+      dir, correlate::one_mode_structure(0.96 * k_total, {1.5, ks, -0.3, 2.0}, 0), "s.toml");
+  const double slipped = std::sqrt(0.96 * k_total) / (2 * M_PI);
+  const double stuck = std::sqrt(0.96 * k_total + 2 * ks) / (2 * M_PI);
+  const auto cells = read_csv_cells(dir / "hit.csv");
+  for (const double factor : {2.0, 0.5}) {
+    std::string t = "amplitude,frequency_hz,damping_ratio\n";
+    for (size_t i = 1; i < cells.size(); ++i)
+      t +=
+          fmt::format("{},{:.17g},{}\n", cells[i][0], factor * std::stod(cells[i][1]), cells[i][2]);
+    const fs::path table = dir / fmt::format("x{}.csv", factor);
+    testing::write_text(table.string(), t);
+    const std::string says =
+        factor > 1 ? fmt::format(
+                         "lies above {:.6g} Hz, the highest model mode 1 reaches (every "
+                         "element of the set stuck at K_T = 2 x K_s",
+                         stuck)
+                   : fmt::format("lies below {:.6g} Hz, the lowest model mode 1 reaches", slipped);
+    expect_one_line_error(fmt::format("update-iwan {} --set j --mode 1 --backbone {} --out {}",
+                                      model, table.string(), (dir / "bad").string()),
+                          says);
+    const testing::CommandResult r =
+        testing::run_jointlab(fmt::format("update-iwan {} --set j --mode 1 --backbone {} --out {}",
+                                          model, table.string(), (dir / "bad").string()));
+    const std::string other = factor > 1 ? fmt::format("slipped, it falls to {:.6g} Hz", slipped)
+                                         : fmt::format("it rises to {:.6g} Hz", stuck);
+    EXPECT_NE(r.err.find(other), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("measured amplitudes"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
 // Three modes at once (issue 28: `--mode 1:1 --mode 2:2 --mode 3:3` failed with "no measured
 // backbone to update against"): chain A's first three modes, each measured in a hit of its own
 // (so no other mode slips the joints in it and the screen leaves every point), fitted together.
