@@ -939,9 +939,9 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
   return cov;
 }
 
-// The free parameters of v (and a fitted Z) that end within 1e-3 of their range (in the search
-// coordinates x) of a bound, e.g. "Fs at its upper bound 2000 N"; `side` receives -1 / +1 per
-// parameter (F_S, K_T, chi, beta, Z) at its lower / upper bound.
+// The free parameters of v that end within 1e-3 of their range (in the search coordinates x) of
+// a bound, and a fitted Z that ends at one, e.g. "Fs at its upper bound 2000 N"; `side` receives -1
+// / +1 per parameter (F_S, K_T, chi, beta, Z) at its lower / upper bound.
 std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const Vec4& v,
                                         std::optional<double> z, std::array<int, 5>& side) {
   const Box box = initial_box(options);
@@ -961,12 +961,15 @@ std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const 
       out.push_back(fmt::format("{} at its upper bound {:.6g}{}", names[k], box.hi(k), units[k]));
     }
   }
+  // Z is the weighted mean of the damping residuals clamped to [0, zmax] (IwanObjective): at a
+  // bound it is the bound itself, so only the bound itself is called one (a tolerance of 1e-3
+  // zmax called a fitted 2e-5 "at its lower bound 0" beside its value).
   if (z) {
     const double zmax = options.linear_damping_max;
-    if (*z <= 1e-3 * zmax) {
+    if (*z <= 0) {
       side[4] = -1;
       out.push_back("modal_ratio at its lower bound 0 (the joints explain all the damping)");
-    } else if (*z >= (1 - 1e-3) * zmax) {
+    } else if (*z >= zmax) {
       side[4] = 1;
       out.push_back(fmt::format("modal_ratio at its upper bound {:.6g}", zmax));
     }
@@ -1166,7 +1169,7 @@ std::string IwanUpdateSummary::report() const {
       start.beta, best.beta, sigma(3));
   if (modal_ratio_fitted) {
     out += fmt::format(
-        "  modal_ratio (the structure's own damping) {:.4g} -> {:.4g}{}; the best constant "
+        "  modal_ratio (the structure's own damping) {:.6g} -> {:.6g}{}; the best constant "
         "backbone (joint barely slipping) costs {:.4g}\n",
         modal_ratio_start, modal_ratio,
         modal_ratio_std > 0 ? fmt::format(" +/- {:.2g}", modal_ratio_std) : " (sigma unknown)",

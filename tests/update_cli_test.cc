@@ -862,6 +862,46 @@ TEST(UpdateCli, IwanRefusesFrequenciesTheModeCannotReachNamingTheReach) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// The report and parameters.csv call modal_ratio at a bound exactly when it is there: Z is the
+// clamped weighted mean of the damping residuals, so at a bound it is the bound itself. Before,
+// anything below 1e-3 of --linear-damping-max (5e-5 by default) was called "at its lower bound
+// 0" while its value was reported beside it. Planted Z = 2e-5 (its sigma from 2 % damping noise
+// is about 3e-6, so the fit lands well inside (0, 5e-5)); with --linear-damping-max 2e-4 below
+// a planted 5e-4 the fit ends exactly at the upper bound and says so.
+TEST(UpdateCli, IwanCallsModalRatioAtABoundOnlyWhenItIsThere) {
+  const fs::path dir = testing::scratch_dir("update_iwan_modal_ratio_bound");
+  const double k_total = std::pow(2 * M_PI * 177.0, 2);
+  const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
+  const double phi = model::Iwan(truth).phi_max();
+  const std::string model = write_model(
+      dir, correlate::one_mode_structure(0.96 * k_total, {1.5, 0.8 * truth.Kt, -0.3, 2.0}, 0),
+      "s.toml");
+  const auto fit = [&](double z, const std::string& out, const std::string& extra) {
+    const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, z);
+    write_backbone_table(dir / (out + "1.csv"), m, 40, 1.5 * phi, 61);
+    write_backbone_table(dir / (out + "2.csv"), m, 40, 2.5 * phi, 62);
+    const testing::CommandResult r = testing::run_jointlab(fmt::format(
+        "update-iwan {} --set j --mode 1 --backbone {} --backbone {} --fs-range 0.005:50 "
+        "--linear-damping fit {} --out {}",
+        model, (dir / (out + "1.csv")).string(), (dir / (out + "2.csv")).string(), extra,
+        (dir / out).string()));
+    EXPECT_EQ(r.status, 0) << r.err;
+    RecordProperty(out, r.out);
+    return std::pair{r.out, read_parameters(dir / out / "parameters.csv").at("modal_ratio")};
+  };
+  const auto [small_report, small] = fit(2e-5, "small", "");
+  const double z_small = std::stod(small.at(2));
+  EXPECT_GT(z_small, 5e-6) << small_report;
+  EXPECT_LT(z_small, 5e-5) << small_report;
+  EXPECT_EQ(small.at(6), "") << small_report;
+  EXPECT_EQ(small_report.find("modal_ratio at its"), std::string::npos) << small_report;
+  const auto [capped_report, capped] = fit(5e-4, "capped", "--linear-damping-max 2e-4");
+  EXPECT_EQ(std::stod(capped.at(2)), 2e-4) << capped_report;
+  EXPECT_EQ(capped.at(6), "upper") << capped_report;
+  EXPECT_NE(capped_report.find("modal_ratio at its upper bound 0.0002"), std::string::npos)
+      << capped_report;
+}
+
 // Three modes at once (issue 28: `--mode 1:1 --mode 2:2 --mode 3:3` failed with "no measured
 // backbone to update against"): chain A's first three modes, each measured in a hit of its own
 // (so no other mode slips the joints in it and the screen leaves every point), fitted together.
