@@ -577,7 +577,7 @@ struct Tracker {
       best = c;
       best_v = v;
     }
-    summary.history.push_back({evaluation, c, best});
+    summary.history.push_back({evaluation, c, best, options.fixed_beta.has_value()});
     if (options.progress) options.progress(evaluation, best);
   }
   // Costs of vs (evaluated on options.threads threads, each independent of the others), then

@@ -281,9 +281,10 @@ enum class IwanUpdateStatus {
 
 /// One objective value on the way.
 struct IwanHistoryEntry {
-  int evaluation = 0;  ///< evaluations so far
-  double cost = 0;     ///< the cost of this evaluation (+inf: the model could not be evaluated)
-  double best = 0;     ///< the best cost so far
+  int evaluation = 0;      ///< evaluations so far
+  double cost = 0;         ///< the cost of this evaluation (+inf: the model could not be evaluated)
+  double best = 0;         ///< the best cost so far
+  bool beta_held = false;  ///< evaluated with beta held (IwanUpdateOptions::fixed_beta)
 };
 
 /// Outcome of update_iwan().

@@ -170,12 +170,13 @@ void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSu
 }
 
 void write_iwan_history(const std::filesystem::path& path, const IwanUpdateSummary& s) {
-  std::string t = "evaluation,objective,best\n";
+  std::string t = "evaluation,objective,best,stage\n";
   for (const IwanHistoryEntry& h : s.history) {
     // A parameter set the model could not evaluate has no objective value: left out (its
     // evaluation number is skipped), never written as a number.
     if (!std::isfinite(h.cost)) continue;
-    t += fmt::format("{},{},{}\n", h.evaluation, num(h.cost), num(h.best));
+    t += fmt::format("{},{},{},{}\n", h.evaluation, num(h.cost), num(h.best),
+                     h.beta_held ? "beta held" : "beta free");
   }
   data::write_file_atomically(path, t);
 }

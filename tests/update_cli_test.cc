@@ -444,10 +444,43 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   // The start's K_T of 3 x the truth puts chain A's mode above chain B's; the band's shape is
   // checked against the updated model, where mode 1 is chain A's again: no warning.
   EXPECT_EQ(r.out.find("WARNING: --mode"), std::string::npos) << r.out;
-  std::ifstream history(dir / "out" / "history.csv");
-  std::string header;
-  std::getline(history, header);
-  EXPECT_EQ(header, "evaluation,objective,best");
+  // history.csv covers the whole fit: the fit with beta held, then (the data reach macroslip)
+  // the one with beta free, numbered on; every objective is a cost the model gave (a set it
+  // could not evaluate is left out: before, it was written as 1e6, and the history held the free
+  // fit alone); best is the running minimum of the objectives (exactly: the same doubles, 10
+  // digits each in the file).
+  const auto history = read_csv_cells(dir / "out" / "history.csv");
+  ASSERT_GT(history.size(), 2u);
+  EXPECT_EQ(history[0], (std::vector<std::string>{"evaluation", "objective", "best", "stage"}));
+  int held = 0, free = 0, previous = 0;
+  double running = INFINITY;
+  for (size_t i = 1; i < history.size(); ++i) {
+    const int evaluation = std::stoi(history[i][0]);
+    const double objective = std::stod(history[i][1]), best = std::stod(history[i][2]);
+    EXPECT_GT(evaluation, previous) << "row " << i;
+    previous = evaluation;
+    EXPECT_TRUE(std::isfinite(objective) && objective != 1e6) << "row " << i;
+    running = std::min(running, objective);
+    EXPECT_EQ(best, running) << "row " << i;
+    if (history[i][3] == "beta held") {
+      ++held;
+      EXPECT_EQ(free, 0) << "a beta held row after the beta free ones, row " << i;
+    } else {
+      EXPECT_EQ(history[i][3], "beta free") << "row " << i;
+      ++free;
+    }
+  }
+  EXPECT_GT(held, 100);
+  EXPECT_GT(free, 100);
+  // The last row is near the reported total (the evaluations after the search, for the
+  // covariance and slips, are not the objective's history).
+  const size_t at = r.out.find(" QSMA evaluations");
+  ASSERT_NE(at, std::string::npos);
+  const int total = std::stoi(r.out.substr(r.out.rfind(", ", at) + 2));
+  RecordProperty("history_rows",
+                 fmt::format("{} held, {} free, last {}, total {}", held, free, previous, total));
+  EXPECT_LE(previous, total);
+  EXPECT_GT(previous, 0.9 * total);
 
   // --gamma holds K_T at gamma K_s (K_s = the start's 1.5e6); the Pareto table carries both
   // measured linear modes' errors.

@@ -1,6 +1,8 @@
 #include "jointlab/campaign/steps/iwan_step.h"
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -191,8 +193,20 @@ IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptio
     }
     IwanUpdateSummary full;
     correlate::update_iwan(objective, io, &full);
-    full.evaluations += best.evaluations;
+    // One history over both fits, whichever is kept: the free fit's evaluations numbered on
+    // from the held fit's, the best the best of both so far; the evaluations of both counted.
+    std::vector<correlate::IwanHistoryEntry> history = best.history;
+    double so_far = history.empty() ? INFINITY : history.back().best;
+    for (correlate::IwanHistoryEntry h : full.history) {
+      h.evaluation += best.evaluations;
+      so_far = std::min(so_far, h.cost);
+      h.best = so_far;
+      history.push_back(h);
+    }
+    const int evaluations = best.evaluations + full.evaluations;
     if (full.final_cost < best.final_cost) best = full;
+    best.history = std::move(history);
+    best.evaluations = evaluations;
   }
   return best;
 }

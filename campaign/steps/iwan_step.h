@@ -38,7 +38,8 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& campaign,
 /// The Iwan fit `run` and `update-iwan` both make: beta held first (at options.fixed_beta, else
 /// at the objective's start), then, when that fit puts the top of the data past phi_max and
 /// beta is not held by the options, freed for a second fit; the better of the two, with the
-/// evaluations of both. `say` (may be empty) hears the first fit's report before the second.
+/// evaluations and the history of both (the second's evaluations numbered on from the first's).
+/// `say` (may be empty) hears the first fit's report before the second.
 correlate::IwanUpdateSummary fit_iwan(const correlate::IwanObjective& objective,
                                       const correlate::IwanUpdateOptions& options,
                                       const std::function<void(const std::string&)>& say);
