@@ -617,8 +617,9 @@ fs_range, gamma_range, chi_range, beta_range, evaluations, seed: as the command'
 out             write the updated model file here, or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
-None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost',
-'evaluations', 'warnings' (parameters at a bound), 'report'.
+None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
+(None where the model cannot be evaluated), 'evaluations', 'warnings' (parameters at a bound),
+'report'.
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]
