@@ -119,10 +119,25 @@ std::string output_file(const Fields& f, const JsonValue& obj, const std::string
   return name;
 }
 
-// The amplitude quantity the document's backbones are in.
+// The amplitude quantity the document's backbones are in. Their unit, when the document names
+// one ("amplitude_unit", written by process and stepped-sine), must be that quantity's SI unit:
+// the amplitudes are read as SI, so any other is refused, never ignored.
 AmplitudeQuantity amplitude_of(const Fields& f, const JsonValue& doc) {
-  return quantity_of(
+  const AmplitudeQuantity q = quantity_of(
       f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
+  if (const JsonValue* unit = doc.find("amplitude_unit"); unit && !unit->is_null()) {
+    const std::string si = q == AmplitudeQuantity::kDisplacement ? "m"
+                           : q == AmplitudeQuantity::kVelocity   ? "m/s"
+                                                                 : "m/s^2";
+    if (!unit->is_string() || unit->string() != si) {
+      f.fail("amplitude_unit",
+             fmt::format("{}: the backbones' amplitudes are read as SI ({} for {}); no other "
+                         "unit is converted",
+                         unit->is_string() ? "\"" + unit->string() + "\"" : "not a string", si,
+                         doc.find("amplitude_quantity")->string()));
+    }
+  }
+  return q;
 }
 
 // Calls on_file(file, path) for each entry of the document's "files" array, checked to be an

@@ -133,6 +133,23 @@ TEST(MeasuredData, DefectsNameFileAndField) {
             std::string::npos);
 }
 
+// The amplitudes of a process folder are read as SI: a summary.json naming another amplitude
+// unit (hand-edited, or from another tool) is refused naming the field, not read as SI.
+TEST(MeasuredData, AnAmplitudeUnitOtherThanSiIsRefused) {
+  const fs::path d = fresh("unit");
+  std::string summary = kSummary;
+  summary.replace(summary.find("\"m/s\""), 5, "\"mm/s\"");
+  write(d / "summary.json", summary);
+  const std::string m = testing::input_error_of([&] { read_process_run(d); });
+  EXPECT_NE(m.find("summary.json: amplitude_unit: \"mm/s\": the backbones' amplitudes are read "
+                   "as SI (m/s for velocity)"),
+            std::string::npos)
+      << m;
+  summary = kSummary;  // the SI unit, or none: read
+  write(d / "summary.json", summary);
+  EXPECT_EQ(read_process_run(d).amplitude, AmplitudeQuantity::kVelocity);
+}
+
 // Rows of a process backbone marked as not the mode's own (harmonic n > 1, exchange 1, whose
 // apparent damping may be negative) are no target of the update: skipped, not refused.
 TEST(MeasuredData, SkipsBackboneRowsMarkedHarmonicOrExchange) {
