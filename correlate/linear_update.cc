@@ -176,8 +176,7 @@ LinearEvaluation evaluate_by_rules(const StiffnessSets& sets, const std::vector<
   LinearEvaluation e = evaluate_pairs(sets, sensors, measured, theta, modes, columns);
   e.hidden = rp.hidden;
   e.ambiguity = rp.ambiguity;
-  e.ambiguous_measured = rp.ambiguous_measured;
-  e.ambiguous_candidates = rp.ambiguous_candidates;
+  e.ties = rp.ties;
   return e;
 }
 
@@ -740,19 +739,36 @@ std::string pair_text(const LinearEvaluation& e, int i) {
                      e.mac(i, j));
 }
 
-// The pairings to try where the rules pair `at` (made afresh at `point`) ambiguously: one per
-// candidate of the ambiguous measured mode (a swap keeps the pairs one to one); else `point`.
-std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point,
-                                             const LinearEvaluation& at) {
-  if (at.ambiguity.empty()) return {point};
-  std::vector<TrackedPoint> out;
-  const size_t i = static_cast<size_t>(at.ambiguous_measured);
-  for (int c : at.ambiguous_candidates) {
-    TrackedPoint t = point;
-    for (int& col : t.columns)
-      if (col == c) col = point.columns[i];
-    t.columns[i] = c;
-    out.push_back(std::move(t));
+// The pairings to try where the rules pair `at` (made afresh at `point`) by a guess: every
+// combination of one candidate for each tie (each a swap, so the pairs stay one to one), or
+// for the first `ties` ties alone; else `point`. At the start every tie is tried: a later tie
+// is met only once an earlier guess is made, and trying the first tie's candidates alone
+// left a fit "converged" on a wrong guess of the second. At a fit's result the first alone
+// (each candidate there is a fit of its own, within each start's fit).
+
+// At most this many candidate pairings are fitted from the start: each is a whole fit
+// (seconds on a thousand-DOF model), and more guesses than this say the sensors do not see
+// the modes apart.
+constexpr size_t kMaxPairings = 16;
+
+std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const LinearEvaluation& at,
+                                             size_t ties) {
+  std::vector<TrackedPoint> out{point};
+  for (size_t k = 0; k < at.ties.size() && k < ties; ++k) {
+    const PairingTie& tie = at.ties[k];
+    std::vector<TrackedPoint> next;
+    const size_t i = static_cast<size_t>(tie.measured);
+    for (const TrackedPoint& base : out)
+      for (int c : tie.candidates) {
+        TrackedPoint t = base;
+        for (int& col : t.columns)
+          if (col == c) col = base.columns[i];
+        t.columns[i] = c;
+        if (std::none_of(next.begin(), next.end(),
+                         [&](const TrackedPoint& o) { return o.columns == t.columns; }))
+          next.push_back(std::move(t));
+      }
+    out = std::move(next);
   }
   return out;
 }
@@ -789,7 +805,7 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
       return std::count_if(t.columns.begin(), t.columns.end(), [](int c) { return c >= 0; });
     };
     std::vector<TrackedPoint> candidates;
-    for (TrackedPoint& c : candidate_pairings(again, fresh_end)) {
+    for (TrackedPoint& c : candidate_pairings(again, fresh_end, 1)) {
       if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) continue;
       tried.push_back(c.columns);
       if (pairs_of(c) < pairs_of(point)) {
@@ -981,8 +997,28 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   // and the data decide between the results as they do at a result.
   const double sf2 = options.frequency_std * options.frequency_std;
   std::vector<Settled> outcomes;
-  const std::vector<TrackedPoint> starts = candidate_pairings(point, s.start);
-  for (const TrackedPoint& c : starts) outcomes.push_back(settle(p, c, held));
+  const std::vector<TrackedPoint> starts = candidate_pairings(point, s.start, s.start.ties.size());
+  if (starts.size() > kMaxPairings) {
+    s.status = LinearUpdateStatus::kAmbiguous;
+    s.ambiguity = fmt::format(
+        "at the start, {}; that leaves {} pairings to fit, more than {}: add sensors that see "
+        "the modes apart",
+        s.start.ambiguity, starts.size(), kMaxPairings);
+    return begin;
+  }
+  // Two results with different pairs that each fit within the noise (2 cost / sigma_f^2 < 9)
+  // cannot be told apart whatever the other starts give (no cost is below 0): those are not
+  // fitted (a frequency-only table of the example beam has 16 pairings, 8 s each).
+  const auto within_noise = [&](const Settled& o) { return 2 * o.cost / sf2 < 9; };
+  for (const TrackedPoint& c : starts) {
+    outcomes.push_back(settle(p, c, held));
+    const Settled& last = outcomes.back();
+    if (within_noise(last) &&
+        std::any_of(outcomes.begin(), outcomes.end() - 1, [&](const Settled& o) {
+          return within_noise(o) && o.point.columns != last.point.columns;
+        }))
+      break;
+  }
   size_t win = 0;
   for (size_t k = 1; k < outcomes.size(); ++k)
     if (outcomes[k].cost < outcomes[win].cost) win = k;
@@ -1011,9 +1047,9 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   }
   if (!decided && o.ambiguity.empty())
     o.ambiguity = fmt::format(
-        "at the start, {}; fitting each candidate pairing leaves costs {} that the data cannot "
-        "tell apart",
-        s.start.ambiguity, fmt::join(start_costs, ", "));
+        "at the start, {}; fitting {} of the {} candidate pairings leaves costs {} that the "
+        "data cannot tell apart",
+        s.start.ambiguity, outcomes.size(), starts.size(), fmt::join(start_costs, ", "));
   if (!o.ambiguity.empty()) {
     s.status = LinearUpdateStatus::kAmbiguous;
     s.ambiguity = o.ambiguity;

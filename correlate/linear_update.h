@@ -103,12 +103,11 @@ struct LinearEvaluation {
   /// Per measured mode, whether its MAC reads a shape (entries at two sensors or more);
   /// where not, its MAC is no evidence and is reported empty.
   std::vector<bool> mac_reads_shape;
-  Eigen::MatrixXd mac;                    ///< MAC, measured x elastic model modes
-  Eigen::MatrixXd model_at_sensors;       ///< elastic model shapes at the sensors
-  std::vector<int> hidden;                ///< model modes invisible at the sensors
-  std::string ambiguity;                  ///< pairing by rules: what it cannot decide, or ""
-  int ambiguous_measured = -1;            ///< the measured mode of `ambiguity` (-1: none)
-  std::vector<int> ambiguous_candidates;  ///< the model modes it cannot tell apart
+  Eigen::MatrixXd mac;               ///< MAC, measured x elastic model modes
+  Eigen::MatrixXd model_at_sensors;  ///< elastic model shapes at the sensors
+  std::vector<int> hidden;           ///< model modes invisible at the sensors
+  std::string ambiguity;             ///< pairing by rules: what it cannot decide, or ""
+  std::vector<PairingTie> ties;      ///< pairing by rules: the modes paired by a guess
   /// 1/2 sum r_i^2.
   double cost() const { return 0.5 * residuals.squaredNorm(); }
   /// The MAC of measured mode i's pair where it reads a shape; nothing when i is unpaired or

@@ -188,10 +188,9 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
       if (c.col >= 0 && c.score > bc.score) bi = i, bc = std::move(c);
     }
     if (bi < 0) break;
-    if (!bc.ambiguity.empty() && out.ambiguity.empty()) {
-      out.ambiguity = bc.ambiguity;
-      out.ambiguous_measured = bi;
-      out.ambiguous_candidates = bc.tied;
+    if (!bc.ambiguity.empty()) {
+      out.ambiguity += (out.ambiguity.empty() ? "" : "; ") + bc.ambiguity;
+      out.ties.push_back({bi, bc.tied});
     }
     row_used[bi] = col_used[bc.col] = 1;
     out.pairing.pairs.push_back({bi, bc.col, mac(bi, bc.col)});

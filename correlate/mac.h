@@ -71,22 +71,30 @@ struct PairingRules {
   double tie_mac = 0.05;          ///< candidates within this MAC of the best: frequency decides
 };
 
+/// A measured mode pair_by_rules() pairs only by a guess: the model columns it cannot tell
+/// apart (the first is the one it paired).
+struct PairingTie {
+  int measured = -1;            ///< the measured mode
+  std::vector<int> candidates;  ///< the model columns it cannot tell apart
+};
+
 /// The outcome of pair_by_rules(): the pairs, or why a pair cannot be decided.
 struct RulePairing {
-  Pairing pairing;              ///< the pairs made (MAC of each as in the sensor MAC matrix)
-  std::string ambiguity;        ///< non-empty: which modes cannot be told apart, and why
-  int ambiguous_measured = -1;  ///< the measured mode of `ambiguity` (-1: none)
-  std::vector<int> ambiguous_candidates;  ///< the model columns it cannot tell apart
-  std::vector<int> hidden;                ///< model columns invisible at the sensors
+  Pairing pairing;  ///< the pairs made (MAC of each as in the sensor MAC matrix)
+  /// Non-empty: which modes cannot be told apart, and why (one clause per tie, joined by "; ").
+  std::string ambiguity;
+  std::vector<PairingTie> ties;  ///< every measured mode paired by a guess, in pairing order
+  std::vector<int> hidden;       ///< model columns invisible at the sensors
 };
 
 /// Pairs measured modes (rows of `mac`) with model modes (columns) one to one: a candidate is
 /// a visible model mode within the frequency window with MAC >= threshold; the measured mode
 /// with the strongest candidate is paired first. Candidates within tie_mac of the best are
 /// told apart by frequency (the nearest, when it is at most half as far in ln f as the next);
-/// when frequency cannot tell them either, `ambiguity` says so. A measured mode without a
-/// shape (`has_shape` false: none, or an entry at one sensor only, where every MAC is 1) pairs
-/// with the nearest visible-or-not model frequency in the window by the same rule (at most
+/// when frequency cannot tell them either, `ambiguity` and `ties` say so (every such mode, not
+/// the first alone: a later tie is met only once the earlier guess is made). A measured mode
+/// without a shape (`has_shape` false: none, or an entry at one sensor only, where every MAC is 1)
+/// pairs with the nearest visible-or-not model frequency in the window by the same rule (at most
 /// half as far in ln f as the next, else `ambiguity`). `model_norm2` is each model mode's
 /// squared norm at the sensors.
 RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,

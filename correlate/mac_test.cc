@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::correlate {
@@ -72,6 +74,30 @@ TEST(PairByRules, AModeInvisibleAtTheSensorsIsNeverPairedByMac) {
   EXPECT_TRUE(p.ambiguity.empty());
 }
 
+TEST(PairByRules, EveryGuessedPairIsRecordedNotTheFirstAlone) {
+  // Two test modes without a shape (100 and 200 Hz), each between two model modes as close in
+  // frequency (99/101 and 198/202 Hz): both pairs are guesses, and both are recorded with their
+  // candidates, so that a caller can try each combination (before, only the first was).
+  RulesCase c{Eigen::MatrixXd::Ones(2, 4),
+              (Eigen::VectorXd(2) << 100.0, 200.0).finished(),
+              (Eigen::VectorXd(4) << 99.0, 101.0, 198.0, 202.0).finished(),
+              Eigen::VectorXd::Ones(4),
+              {false, false}};
+  const RulePairing p = c.run();
+  ASSERT_EQ(p.ties.size(), 2u) << p.ambiguity;
+  std::vector<int> measured{p.ties[0].measured, p.ties[1].measured};
+  std::sort(measured.begin(), measured.end());
+  EXPECT_EQ(measured, (std::vector<int>{0, 1}));
+  for (const PairingTie& t : p.ties) {
+    std::vector<int> cand = t.candidates;
+    std::sort(cand.begin(), cand.end());
+    EXPECT_EQ(cand, t.measured == 0 ? (std::vector<int>{0, 1}) : (std::vector<int>{2, 3}));
+    EXPECT_EQ(p.pairing.model_for(t.measured), t.candidates.front());
+  }
+  EXPECT_NE(p.ambiguity.find("test mode 1"), std::string::npos) << p.ambiguity;
+  EXPECT_NE(p.ambiguity.find("test mode 2"), std::string::npos) << p.ambiguity;
+}
+
 TEST(PairByRules, ModesAlikeAtTheSensorsAreToldApartByFrequency) {
   // Two model modes with MAC 0.99 and 0.97 (within tie_mac): the one at 101 Hz, not the one at
   // 160 Hz, pairs with the 100 Hz test mode, although its MAC is the lower.
@@ -88,8 +114,9 @@ TEST(PairByRules, ModesAlikeAtTheSensorsAreToldApartByFrequency) {
   c.f_model << 99.0, 101.0;
   p = c.run();
   EXPECT_NE(p.ambiguity.find("test mode 1"), std::string::npos) << p.ambiguity;
-  EXPECT_EQ(p.ambiguous_measured, 0);
-  EXPECT_EQ(p.ambiguous_candidates.size(), 2u);
+  ASSERT_EQ(p.ties.size(), 1u);
+  EXPECT_EQ(p.ties[0].measured, 0);
+  EXPECT_EQ(p.ties[0].candidates.size(), 2u);
   // The frequency window removes a far mode before MAC is looked at: 300 Hz is outside +-50 %.
   c.f_model << 300.0, 101.0;
   c.mac << 1.0, 0.7;
