@@ -503,6 +503,44 @@ TEST(RunCli, UnitlessChannelsNeedTheCampaignsQuantity) {
   EXPECT_TRUE(fs::exists(dir / "out" / "report.md"));
 }
 
+// One hit without the reference channel, and a second mode whose band reaches past the hits'
+// Nyquist frequency (500 Hz): each is left out where it applies, with its reason, and the rest
+// is processed. Before, either left out every hit for every mode: the first mode had no
+// backbone in any hit and the report led with "Hits left out".
+TEST(RunCli, ABadModeOrChannelLeavesOutThatModeOrChannelNotTheHit) {
+  const fs::path dir = testing::scratch_dir("run_cli_partial");
+  const testing::SmallCampaign s = testing::make_small_campaign(
+      dir, "[[mode]]\nname = \"past Nyquist\"\nband = [480.0, 520.0]\n");
+  std::string hit = testing::read_file(s.hits[1]);
+  ASSERT_NE(hit.find(",acc_5"), std::string::npos);
+  hit.replace(hit.find(",acc_5"), 6, ",acc_9");
+  testing::write_text(s.hits[1].string(), hit);
+  std::string text = testing::read_file(s.campaign);
+  const std::string model = "[model]\nfile = \"model.toml\"\n";
+  text.erase(text.find(model), model.size());
+  const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
+  text.erase(text.find(mm), mm.size());
+  testing::write_text(s.campaign.string(), text);
+  const fs::path out = dir / "out";
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
+  // Exit 2: the second mode has no backbone in any hit; no hit is left out.
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("no backbone in any hit for past Nyquist"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("could not be processed"), std::string::npos) << r.err;
+  const std::string report = testing::read_file(out / "report.md");
+  EXPECT_EQ(report.find("Hits left out"), std::string::npos) << report.substr(0, 600);
+  EXPECT_NE(report.find("reaches past the Nyquist frequency"), std::string::npos);
+  EXPECT_NE(report.find("no channel 'acc_5' (channels: acc_1, acc_9)"), std::string::npos);
+  // The first mode: a backbone from every hit at acc_1, and at its reference acc_5 from the
+  // two hits that have it (the scatter summary counts the reference's curves).
+  for (int i = 1; i <= 3; ++i)
+    EXPECT_TRUE(fs::exists(out / "hits" / "all" / fmt::format("hit{}.acc_1.band1.csv", i))) << i;
+  EXPECT_TRUE(fs::exists(out / "hits" / "all" / "hit1.acc_5.band1.csv"));
+  EXPECT_FALSE(fs::exists(out / "hits" / "all" / "hit2.acc_5.band1.csv"));
+  EXPECT_TRUE(fs::exists(out / "scatter" / "mode1.json"));
+}
+
 // `run` and `update-iwan` build their Iwan targets with one function: from the same hits
 // (processed by `run` into its cache, and by `process` into a folder `update-iwan` reads) and
 // the same settings, the targets agree point for point, weights and screening included, and

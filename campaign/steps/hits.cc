@@ -40,21 +40,86 @@ modal::ProcessOptions process_options(const Campaign& c) {
   return opt;
 }
 
-// Reads and processes one test file; InputError for whatever is wrong with it.
+// A band and channel of a hit without a backbone, for `why` (their cache row says so).
+modal::ChannelBand without_backbone(int band, const std::string& channel, const std::string& why) {
+  modal::ChannelBand cb;
+  cb.channel = channel;
+  cb.band_index = band;
+  cb.ringdown.summary.message = why;
+  cb.complex_amplitude = {std::numeric_limits<double>::quiet_NaN(), 0.0};
+  return cb;
+}
+
+// Reads and processes one test file; InputError for whatever is wrong with it as a whole.
+// A channel the file lacks (or that has no unit where the campaign gives no quantity), or a
+// band past its Nyquist frequency, is left out of this hit alone with its reason: one bad
+// mode or channel once dropped every hit for every mode. The rest is processed as it would
+// be with the campaign's settings alone (bands one at a time only when together they fail).
 modal::RecordResult analyse_hit(const Campaign& c, const modal::ProcessOptions& opt,
                                 const fs::path& file, signal::FftCache& cache) {
   const data::Record rec = data::read_record(file);
-  // The rule of `process`: a channel without a unit measures what the campaign says, or
-  // nothing can be assumed.
-  for (const CampaignChannel& ch : c.channels)
-    for (const data::Channel& rc : rec.channels)
-      if (rc.name == ch.name && !rc.quantity && !c.quantity)
-        throw InputError(fmt::format(
-            "{}: channel '{}' has no unit and the campaign gives no quantity: give its unit in "
-            "the header (e.g. '{} [m/s^2]', '{} [m/s]') or quantity = "
-            "\"acceleration\"|\"velocity\"|\"displacement\" in [campaign] of {}",
-            file.string(), ch.name, ch.name, ch.name, c.file.string()));
-  return modal::process_record(rec, opt, cache);
+  std::vector<std::pair<std::string, std::string>> lacking;  // channel, why
+  modal::ProcessOptions kept = opt;
+  kept.channels.clear();
+  for (const CampaignChannel& ch : c.channels) {
+    const auto rc = std::find_if(rec.channels.begin(), rec.channels.end(),
+                                 [&](const data::Channel& x) { return x.name == ch.name; });
+    if (rc == rec.channels.end()) {
+      std::string have;
+      for (const data::Channel& k : rec.channels) have += (have.empty() ? "" : ", ") + k.name;
+      lacking.emplace_back(ch.name, fmt::format("no channel '{}' (channels: {})", ch.name, have));
+    } else if (rc->quantity == Quantity::kForce) {
+      lacking.emplace_back(ch.name,
+                           fmt::format("channel '{}' is a force, not a response", ch.name));
+    } else if (!rc->quantity && !c.quantity) {
+      // The rule of `process`: a channel without a unit measures what the campaign says, or
+      // nothing can be assumed.
+      lacking.emplace_back(
+          ch.name,
+          fmt::format("channel '{}' has no unit and the campaign gives no quantity: give its "
+                      "unit in the header (e.g. '{} [m/s^2]', '{} [m/s]') or quantity = "
+                      "\"acceleration\"|\"velocity\"|\"displacement\" in [campaign] of {}",
+                      ch.name, ch.name, ch.name, c.file.string()));
+    } else {
+      kept.channels.push_back(ch.name);
+    }
+  }
+  if (kept.channels.empty())
+    throw InputError(fmt::format("{}: {}", file.string(), lacking.front().second));
+  modal::RecordResult r;
+  try {
+    r = modal::process_record(rec, kept, cache);
+  } catch (const InputError&) {
+    if (kept.bands.size() < 2) throw;
+    r = {};
+    std::string first;
+    for (size_t b = 0; b < kept.bands.size(); ++b) {
+      modal::ProcessOptions one = kept;
+      one.bands = {kept.bands[b]};
+      const int index = static_cast<int>(b) + 1;
+      try {
+        modal::RecordResult part = modal::process_record(rec, one, cache);
+        r.source = part.source;
+        for (modal::ChannelBand& cb : part.results) {
+          cb.band_index = index;
+          r.results.push_back(std::move(cb));
+        }
+      } catch (const InputError& e) {
+        if (first.empty()) first = e.what();
+        // The hit's rows name the file: its reason without it.
+        std::string why = e.what();
+        if (const std::string name = file.string() + ": "; why.rfind(name, 0) == 0)
+          why.erase(0, name.size());
+        for (const std::string& ch : kept.channels)
+          r.results.push_back(without_backbone(index, ch, why));
+      }
+    }
+    if (r.source.empty()) throw InputError(first);  // no band could be processed
+  }
+  for (const auto& [channel, why] : lacking)
+    for (size_t b = 0; b < kept.bands.size(); ++b)
+      r.results.push_back(without_backbone(static_cast<int>(b) + 1, channel, why));
+  return r;
 }
 
 // `text` on one line.
