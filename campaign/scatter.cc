@@ -89,9 +89,13 @@ std::string ScatterSummary::report() const {
   for (const HitDeviation& h : hits)
     if (h.outlier) s += fmt::format(" [{}: {}]", h.id, h.reason);
   if (linear_count > 0) {
-    s += fmt::format("; linear frequency {:.6g} Hz (std {:.3g} Hz), damping {:.4g} (std {:.2g})",
-                     linear_frequency_hz.mean, linear_frequency_hz.std, linear_damping.mean,
-                     linear_damping.std);
+    if (linear_frequency_hz.has_spread())
+      s += fmt::format("; linear frequency {:.6g} Hz (std {:.3g} Hz), damping {:.4g} (std {:.2g})",
+                       linear_frequency_hz.mean, linear_frequency_hz.std, linear_damping.mean,
+                       linear_damping.std);
+    else
+      s += fmt::format("; linear frequency {:.6g} Hz, damping {:.4g} (one hit: no spread)",
+                       linear_frequency_hz.mean, linear_damping.mean);
   }
   return s;
 }
@@ -108,6 +112,7 @@ double student_t_quantile(double p, int dof) {
 Statistic describe(const std::vector<double>& values, double confidence) {
   Statistic st;
   const size_t n = values.size();
+  st.count = static_cast<int>(n);
   if (n == 0) return st;
   double sum = 0;
   for (double v : values) sum += v;
@@ -314,7 +319,9 @@ void write_scatter_hits_csv(const std::filesystem::path& path, const ScatterSumm
 namespace {
 void put(data::JsonWriter& j, const char* key, const Statistic& s) {
   j.key(key).begin_object();
-  j.numbers({{"mean", s.mean}, {"std", s.std}, {"ci_low", s.ci_low}, {"ci_high", s.ci_high}});
+  // One value has no spread: std and interval are absent, never 0.
+  j.numbers({{"mean", s.mean}});
+  if (s.has_spread()) j.numbers({{"std", s.std}, {"ci_low", s.ci_low}, {"ci_high", s.ci_high}});
   j.end_object();
 }
 }  // namespace

@@ -48,10 +48,13 @@ struct ScatterOptions {
 
 /// Mean, standard deviation and confidence interval of one quantity over curves.
 struct Statistic {
+  int count = 0;       ///< values described
   double mean = 0;     ///< arithmetic mean
-  double std = 0;      ///< sample standard deviation (n - 1); 0 when n < 2
-  double ci_low = 0;   ///< lower end of the confidence interval of the mean
-  double ci_high = 0;  ///< upper end of the confidence interval of the mean
+  double std = 0;      ///< sample standard deviation (n - 1); meaningless when n < 2
+  double ci_low = 0;   ///< lower end of the confidence interval of the mean (n >= 2)
+  double ci_high = 0;  ///< upper end of the confidence interval of the mean (n >= 2)
+  /// Whether std and the interval exist: one value has no spread (not a spread of 0).
+  bool has_spread() const { return count >= 2; }
 };
 
 /// One amplitude bin.

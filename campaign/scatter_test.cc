@@ -188,6 +188,32 @@ TEST(Scatter, WritesFilesWithoutNaN) {
   std::filesystem::remove_all(dir);
 }
 
+// One hit has no spread between tests: its linear statistics say so (no std, no interval),
+// where they once gave a standard deviation of 0 and an interval of zero width.
+TEST(Scatter, OneHitHasNoSpreadRatherThanASpreadOfZero) {
+  const ScatterSummary s = summarize_scatter({flat_curve("a", 1e-3, 1e-2, 10, 0.01)}, {});
+  EXPECT_EQ(s.linear_count, 1);
+  EXPECT_FALSE(s.linear_frequency_hz.has_spread());
+  EXPECT_FALSE(s.linear_damping.has_spread());
+  EXPECT_EQ(s.linear_frequency_hz.mean, 10.01);  // the hit's own value, exactly
+  EXPECT_NE(s.report().find("one hit: no spread"), std::string::npos) << s.report();
+  EXPECT_EQ(s.report().find("std"), std::string::npos) << s.report();
+  const auto dir = jointlab::testing::scratch_folder("jointlab_scatter_one");
+  std::filesystem::create_directories(dir);
+  write_scatter_json(dir / "scatter.json", "mode 1", s);
+  const std::string json = testing::read_file(dir / "scatter.json");
+  const std::string linear = json.substr(json.find("\"linear\""));
+  EXPECT_NE(linear.find("\"mean\""), std::string::npos) << linear;
+  EXPECT_EQ(linear.find("\"std\""), std::string::npos) << linear;
+  EXPECT_EQ(linear.find("\"ci_low\""), std::string::npos) << linear;
+  std::filesystem::remove_all(dir);
+  // Two hits do have one.
+  const ScatterSummary two = summarize_scatter(
+      {flat_curve("a", 1e-3, 1e-2, 10, 0.01), flat_curve("b", 1e-3, 1e-2, 10.1, 0.011)}, {});
+  EXPECT_TRUE(two.linear_frequency_hz.has_spread());
+  EXPECT_GT(two.linear_frequency_hz.std, 0);
+}
+
 TEST(Scatter, RejectsBadInput) {
   ScatterOptions bad;
   bad.confidence = 1.0;

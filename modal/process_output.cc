@@ -89,12 +89,13 @@ void write_record(data::JsonWriter& j, const RecordResult& rec) {
       const RingdownSummary& s = r.ringdown.summary;
       if (s.status == RingdownStatus::kOk) write_linear(j, s);
     }
-    // A band with a backbone at no channel says why (its reference channel's reason).
-    if (const std::string why = band_without_backbone(rec, static_cast<int>(b) + 1); !why.empty())
-      j.key("reason").value(why);
+    // A band with a backbone at no channel says why (its reference channel's reason), and has
+    // no shape: its entries are absent, never 0 standing in for "none".
+    const std::string why = band_without_backbone(rec, static_cast<int>(b) + 1);
+    if (!why.empty()) j.key("reason").value(why);
     j.key("operating_shape").begin_array();
     for (const ChannelBand& r : rec.results) {
-      if (r.band_index != static_cast<int>(b) + 1) continue;
+      if (r.band_index != static_cast<int>(b) + 1 || !why.empty()) continue;
       j.begin_object();
       j.key("channel").value(r.channel);
       j.key("real_m").value(r.complex_amplitude.real());

@@ -224,6 +224,36 @@ TEST(ProcessCoverageFactor, StatedInHelpFileHeaderAndSummary) {
   }
 }
 
+// A band with a backbone at no channel has no reference, so no operating shape: summary.json
+// gives its reason and no shape entries, where it once gave entries of 0 (read as a measured
+// shape of zero by a later update).
+TEST(ProcessSummary, ABandWithoutABackboneHasNoShape) {
+  const ThreeModeRecord rec = three_mode_record(60.0, 6.0, 1e-3, 5);
+  const std::string dir = scratch_dir("no_shape");
+  std::string text = fmt::format("# fs: {}\nresponse [m]\n", rec.fs);
+  for (Eigen::Index k = 0; k < rec.displacement.size(); ++k)
+    text += fmt::format("{:.12g}\n", rec.displacement(k));
+  write_text(dir + "/ring.csv", text);
+  const CommandResult r = run_jointlab(
+      fmt::format("process {}/ring.csv --band 48:72 --band 1000:1100 --out {}/out", dir, dir));
+  // Exit 2 for the band without a backbone; everything else is written.
+  ASSERT_EQ(r.status, 2) << r.err;
+  std::ifstream js(dir + "/out/summary.json");
+  std::stringstream ss;
+  ss << js.rdbuf();
+  const std::string json = ss.str();
+  const size_t second = json.find("\"band\": 2");
+  ASSERT_NE(second, std::string::npos) << json;
+  const size_t first_shape = json.find("\"operating_shape\"");
+  ASSERT_LT(first_shape, second) << json;
+  EXPECT_NE(json.find("\"real_m\"", first_shape), std::string::npos);  // band 1 has its entry
+  EXPECT_NE(json.find("\"reason\"", second), std::string::npos) << json.substr(second, 400);
+  const size_t shape = json.find("\"operating_shape\"", second);
+  ASSERT_NE(shape, std::string::npos);
+  const size_t open = json.find('[', shape);
+  EXPECT_EQ(json[json.find_first_not_of(" \n", open + 1)], ']') << json.substr(shape, 200);
+}
+
 INSTANTIATE_TEST_SUITE_P(Quantities, ProcessSynthetic,
                          ::testing::Values("displacement", "acceleration"));
 

@@ -267,12 +267,18 @@ ReportSection scatter_section(const Campaign& c, const MeasuredSide& m, size_t k
   }
   s.tables.push_back(ht);
   if (!c.modes[k].stepped_sine.empty()) s.tables.push_back(sine_against_hammer(c, m, k));
-  s.paragraphs.push_back(fmt::format(
-      "Linear (low-amplitude) values over {} hit(s): frequency {:.4f} Hz, standard deviation "
-      "{} Hz, interval {:.4f} - {:.4f} Hz; damping ratio {}, standard deviation {}.",
-      sc.linear_count, sc.linear_frequency_hz.mean, spread(sc.linear_frequency_hz.std),
-      sc.linear_frequency_hz.ci_low, sc.linear_frequency_hz.ci_high, zeta(sc.linear_damping.mean),
-      zeta(sc.linear_damping.std)));
+  if (sc.linear_frequency_hz.has_spread())
+    s.paragraphs.push_back(fmt::format(
+        "Linear (low-amplitude) values over {} hit(s): frequency {:.4f} Hz, standard deviation "
+        "{} Hz, interval {:.4f} - {:.4f} Hz; damping ratio {}, standard deviation {}.",
+        sc.linear_count, sc.linear_frequency_hz.mean, spread(sc.linear_frequency_hz.std),
+        sc.linear_frequency_hz.ci_low, sc.linear_frequency_hz.ci_high, zeta(sc.linear_damping.mean),
+        zeta(sc.linear_damping.std)));
+  else if (sc.linear_count == 1)
+    s.paragraphs.push_back(fmt::format(
+        "Linear (low-amplitude) values of one hit: frequency {:.4f} Hz, damping ratio {} (one "
+        "hit has no spread between tests).",
+        sc.linear_frequency_hz.mean, zeta(sc.linear_damping.mean)));
   s.figures.push_back(figures.backbone[k]);
   return s;
 }
@@ -286,7 +292,9 @@ ReportTable frequency_table(const Campaign& c, const MeasuredSide& m, const Mode
     if (r.start.frequency_hz[k] <= 0 || m.scatter[k].linear_count == 0) continue;
     const double fe = m.scatter[k].linear_frequency_hz.mean;
     ft.rows.push_back({c.modes[k].name, fmt::format("{:.4f}", fe),
-                       spread(m.scatter[k].linear_frequency_hz.std),
+                       m.scatter[k].linear_frequency_hz.has_spread()
+                           ? spread(m.scatter[k].linear_frequency_hz.std)
+                           : "-",
                        fmt::format("{:.4f}", r.start.frequency_hz[k]),
                        pct(100 * (r.start.frequency_hz[k] - fe) / fe),
                        r.have_updated ? fmt::format("{:.4f}", r.after.frequency_hz[k]) : "-",

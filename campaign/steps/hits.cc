@@ -92,14 +92,19 @@ modal::RecordResult analyse_hit(const Campaign& c, const modal::ProcessOptions& 
   } catch (const InputError&) {
     if (kept.bands.size() < 2) throw;
     r = {};
+    r.source = rec.source;
+    r.bands = kept.bands;
+    r.reference.assign(kept.bands.size(), "");
     std::string first;
+    bool any = false;
     for (size_t b = 0; b < kept.bands.size(); ++b) {
       modal::ProcessOptions one = kept;
       one.bands = {kept.bands[b]};
       const int index = static_cast<int>(b) + 1;
       try {
         modal::RecordResult part = modal::process_record(rec, one, cache);
-        r.source = part.source;
+        any = true;
+        r.reference[b] = part.reference.front();
         for (modal::ChannelBand& cb : part.results) {
           cb.band_index = index;
           r.results.push_back(std::move(cb));
@@ -114,7 +119,7 @@ modal::RecordResult analyse_hit(const Campaign& c, const modal::ProcessOptions& 
           r.results.push_back(without_backbone(index, ch, why));
       }
     }
-    if (r.source.empty()) throw InputError(first);  // no band could be processed
+    if (!any) throw InputError(first);  // no band could be processed
   }
   for (const auto& [channel, why] : lacking)
     for (size_t b = 0; b < kept.bands.size(); ++b)
@@ -180,8 +185,10 @@ void write_hit(const Campaign& c, const fs::path& file, const fs::path& dir,
     l.ok(i) = good;
     l.f(i) = rs.has_linear() ? rs.linear_frequency_hz : kAbsent;
     l.z(i) = rs.has_linear() ? rs.linear_damping : kAbsent;
-    const bool shape =
-        std::isfinite(cb.complex_amplitude.real()) && std::isfinite(cb.complex_amplitude.imag());
+    // A band with a backbone at no channel has no reference, so no shape: absent, not 0.
+    const bool shape = std::isfinite(cb.complex_amplitude.real()) &&
+                       std::isfinite(cb.complex_amplitude.imag()) &&
+                       modal::band_without_backbone(r, cb.band_index).empty();
     l.re(i) = shape ? cb.complex_amplitude.real() : kAbsent;
     l.im(i) = shape ? cb.complex_amplitude.imag() : kAbsent;
     l.t0(i) = good ? rs.span_start_s : kAbsent;
