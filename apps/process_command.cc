@@ -118,6 +118,12 @@ void run_process(const ProcessArgs& args) {
         // A line per channel and band, written in blocks (a record may hold 1e5 channels).
         std::lock_guard<std::mutex> lock(print);
         std::string lines;
+        for (const modal::LeftOutPeak& p : results[i].left_out) {
+          fmt::format_to(std::back_inserter(lines),
+                         "{}: --modes: the spectral peak at {:.2f} Hz is left out (band {:g}:{:g} "
+                         "Hz gives no modal data): {}\n",
+                         args.files[i], p.frequency_hz, p.band.lo, p.band.hi, p.reason);
+        }
         for (const modal::ChannelBand& r : results[i].results) {
           fmt::format_to(std::back_inserter(lines), "{} {} band {}: {}\n", args.files[i], r.channel,
                          r.band_index, r.ringdown.summary.report());
@@ -137,6 +143,10 @@ void run_process(const ProcessArgs& args) {
   // Like `run`: everything is written, and a band with a backbone at no channel of any file
   // (not merely at some: nodal sensors) fails the command, naming the band and why.
   std::vector<std::string> empty;
+  // --modes N where fewer than N peaks give modal data: what was found is written.
+  for (const auto& r : results) {
+    if (!r.shortfall.empty()) empty.push_back(r.source + ": " + r.shortfall);
+  }
   size_t bands = 0;
   for (const auto& r : results) bands = std::max(bands, r.bands.size());
   for (size_t b = 0; b < bands; ++b) {

@@ -5,12 +5,16 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <numbers>
 #include <numeric>
 #include <optional>
+#include <string>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -164,6 +168,30 @@ Projection projection(const BandOfChannel& ca, const BandOfChannel& cb, double t
   return p;
 }
 
+// Why band b cannot be processed in this record, or "": its continuation would not fit in
+// memory, or its filter cannot settle within the record.
+std::string band_unprocessable(const data::Record& record, const signal::Band& b,
+                               const ProcessOptions& options) {
+  const double duration = static_cast<double>(record.size() - 1) / record.fs;
+  const auto samples_for = [&](double extend_s) { return (duration + 2 * extend_s) * record.fs; };
+  const double settle = band_settling_s(b, options.ringdown.taper);
+  const double samples =
+      samples_for(prepare_for({b}, options.ringdown.taper, options.prepare).extend_s);
+  if (settle <= duration && !(samples <= kMaxContinued)) {
+    return fmt::format(
+        "band {:g}:{:g} Hz: continuing this record's {} samples at its ends for the band's filter "
+        "would take {:.4g} samples (at most {:.4g}); give a wider band or a shorter record",
+        b.lo, b.hi, record.size(), samples, kMaxContinued);
+  }
+  if (!(settle <= duration)) {
+    return fmt::format(
+        "band {:g}:{:g} Hz is too narrow for this {:.3g} s record: its filter takes {:.3g} s to "
+        "settle; give a band at least {:.3g} Hz wide",
+        b.lo, b.hi, duration, settle, 3.0 / (options.ringdown.taper * duration));
+  }
+  return {};
+}
+
 // Refuses, before anything is allocated, what cannot be processed: a continued record
 // too large for memory, a band whose filter cannot settle within the record, and a
 // requested channel whose quantity is unknown.
@@ -188,24 +216,8 @@ void check_processable(const data::Record& record, const std::vector<signal::Ban
                     kMaxContinued)));
   }
   for (const signal::Band& b : bands) {
-    const double settle = band_settling_s(b, options.ringdown.taper);
-    const double samples =
-        samples_for(prepare_for({b}, options.ringdown.taper, options.prepare).extend_s);
-    if (settle <= duration && !(samples <= kMaxContinued)) {
-      throw InputError(where(
-          record.source, 0,
-          fmt::format("band {}:{} Hz: continuing this record's {} samples at its ends for the "
-                      "band's filter would take {:.4g} samples (at most {:.4g}); give a wider "
-                      "band or a shorter record",
-                      b.lo, b.hi, record.size(), samples, kMaxContinued)));
-    }
-    if (!(settle <= duration)) {
-      throw InputError(where(
-          record.source, 0,
-          fmt::format("band {}:{} Hz is too narrow for this {:.3g} s record: its filter takes "
-                      "{:.3g} s to settle; give a band at least {:.3g} Hz wide",
-                      b.lo, b.hi, duration, settle, 3.0 / (options.ringdown.taper * duration))));
-    }
+    if (std::string why = band_unprocessable(record, b, options); !why.empty())
+      throw InputError(where(record.source, 0, why));
   }
   // A channel without a unit measures what the user says, or nothing can be assumed.
   for (const data::Channel* c : chans) {
@@ -235,9 +247,9 @@ std::string ProcessOptions::check() const {
   return {};
 }
 
-std::vector<signal::Band> bands_from_peaks(const data::Record& record,
-                                           const std::vector<const data::Channel*>& channels,
-                                           int count, signal::FftCache& cache) {
+std::vector<double> peak_frequencies(const data::Record& record,
+                                     const std::vector<const data::Channel*>& channels, int count,
+                                     signal::FftCache& cache) {
   Eigen::VectorXd total;
   Eigen::VectorXd freq;
   for (const data::Channel* c : channels) {
@@ -259,17 +271,33 @@ std::vector<signal::Band> bands_from_peaks(const data::Record& record,
   const Eigen::Index k_hi = static_cast<Eigen::Index>(0.95 * static_cast<double>(total.size()));
   Eigen::VectorXd searched = Eigen::VectorXd::Zero(total.size());
   searched.segment(k_lo, k_hi - k_lo) = total.segment(k_lo, k_hi - k_lo);
-  const std::vector<Eigen::Index> peaks = signal::strongest_peaks(searched, count, min_distance);
+  std::vector<double> peaks;
+  for (const Eigen::Index k : signal::prominent_peaks(searched, count, min_distance))
+    peaks.push_back(freq(k));
+  return peaks;
+}
+
+std::vector<signal::Band> bands_around(const std::vector<double>& peaks_hz, double fs,
+                                       const std::vector<double>& reach) {
   std::vector<signal::Band> bands;
-  for (size_t i = 0; i < peaks.size(); ++i) {
-    const double f = freq(peaks[i]);
-    double lo = 0.85 * f, hi = 1.15 * f;
-    if (i > 0) lo = std::max(lo, 0.5 * (f + freq(peaks[i - 1])));
-    if (i + 1 < peaks.size()) hi = std::min(hi, 0.5 * (f + freq(peaks[i + 1])));
-    hi = std::min(hi, 0.5 * record.fs * 0.99);
+  for (size_t i = 0; i < peaks_hz.size(); ++i) {
+    const double f = peaks_hz[i];
+    const double r = i < reach.size() ? reach[i] : 0.15;
+    double lo = (1 - r) * f, hi = (1 + r) * f;
+    if (i > 0) lo = std::max(lo, 0.5 * (f + peaks_hz[i - 1]));
+    if (i + 1 < peaks_hz.size()) hi = std::min(hi, 0.5 * (f + peaks_hz[i + 1]));
+    hi = std::min(hi, 0.5 * fs * 0.99);
     bands.push_back({lo, hi});
   }
   return bands;
+}
+
+std::vector<signal::Band> bands_from_peaks(const data::Record& record,
+                                           const std::vector<const data::Channel*>& channels,
+                                           int count, signal::FftCache& cache) {
+  std::vector<double> peaks = peak_frequencies(record, channels, count, cache);
+  std::sort(peaks.begin(), peaks.end());
+  return bands_around(peaks, record.fs);
 }
 
 namespace {
@@ -306,17 +334,8 @@ std::vector<const data::Channel*> requested_channels(const data::Record& record,
   return chans;
 }
 
-// The bands to process: given, or the strongest spectral peaks; each below Nyquist.
-std::vector<signal::Band> record_bands(const data::Record& record,
-                                       const std::vector<const data::Channel*>& chans,
-                                       const ProcessOptions& options, signal::FftCache& cache) {
-  std::vector<signal::Band> bands =
-      options.modes > 0 ? bands_from_peaks(record, chans, options.modes, cache) : options.bands;
-  if (options.modes > 0 && static_cast<int>(bands.size()) < options.modes) {
-    throw InputError(where(
-        record.source, 0,
-        fmt::format("--modes {}: only {} spectral peaks found", options.modes, bands.size())));
-  }
+// The typed bands, each below Nyquist.
+void check_typed_bands(const data::Record& record, const std::vector<signal::Band>& bands) {
   for (const signal::Band& b : bands) {
     if (b.hi > record.fs / 2) {
       throw InputError(where(record.source, 0,
@@ -324,7 +343,6 @@ std::vector<signal::Band> record_bands(const data::Record& record,
                                          b.lo, b.hi, record.fs / 2)));
     }
   }
-  return bands;
 }
 
 // Every response channel the nodal test compares with (requested or not), its impact, and
@@ -550,12 +568,28 @@ std::string band_without_backbone(const RecordResult& record, int band) {
   return reference->channel + ": " + reference->ringdown.summary.message;
 }
 
-RecordResult process_record(const data::Record& record, const ProcessOptions& options,
-                            signal::FftCache& cache) {
+std::string band_refusal(const RecordResult& record, int band) {
+  if (std::string why = band_without_backbone(record, band); !why.empty()) return why;
+  for (const ChannelBand& r : record.results) {
+    if (r.band_index != band || r.channel != record.reference[static_cast<size_t>(band - 1)])
+      continue;
+    const RingdownSummary& s = r.ringdown.summary;
+    if (s.status == RingdownStatus::kOk && !s.has_linear())
+      return r.channel + ": " + s.linear_reason;
+  }
+  return {};
+}
+
+namespace {
+
+// Every requested channel of `record` in every band of `bands`.
+RecordResult process_bands(const data::Record& record,
+                           const std::vector<const data::Channel*>& chans,
+                           const std::vector<signal::Band>& bands, const ProcessOptions& options,
+                           signal::FftCache& cache) {
   RecordResult out;
   out.source = record.source;
-  const std::vector<const data::Channel*> chans = requested_channels(record, options);
-  out.bands = record_bands(record, chans, options, cache);
+  out.bands = bands;
   check_processable(record, out.bands, chans, options);
   // Every band, channel and file is processed on its own: each channel from its own
   // impact, each band with the continuation and low-pass it alone needs (bands that
@@ -603,6 +637,130 @@ RecordResult process_record(const data::Record& record, const ProcessOptions& op
     }
   }
   return out;
+}
+
+// `--modes N`: the N most prominent spectral peaks that the program processes. Peaks are
+// taken in order of prominence, each with a band reaching half-way to its chosen neighbours
+// and at most 15 % of its frequency either side. A peak whose band cannot be processed, or
+// gives a backbone at no channel, or no linear values at its reference channel (a harmonic
+// of a stronger mode, whose every point is superharmonic; noise; a strong neighbour's
+// leakage) is tried once more with a band reaching at most 7.5 % either side (a weak mode
+// beside a stronger mode's harmonic), and then left out with its reason and the next peak
+// taken, until N bands pass or the examined peaks run out. A band depends on that band
+// alone, so a band whose edges did not move is not processed again.
+RecordResult process_modes(const data::Record& record,
+                           const std::vector<const data::Channel*>& chans,
+                           const ProcessOptions& options, signal::FftCache& cache) {
+  check_processable(record, {}, chans, options);
+  const int wanted = options.modes;
+  const std::vector<double> peaks = peak_frequencies(record, chans, 2 * wanted + 4, cache);
+  std::map<std::pair<double, double>, RecordResult> done;  // one band each, by its edges
+  const auto key = [](const signal::Band& b) { return std::pair{b.lo, b.hi}; };
+  struct Chosen {
+    double frequency_hz;
+    double reach;  // the band's largest reach either side, a fraction of the frequency
+  };
+  std::vector<Chosen> chosen;  // ascending frequency
+  std::vector<signal::Band> bands;
+  std::vector<LeftOutPeak> left_out;
+  size_t next = 0;
+  for (;;) {
+    while (static_cast<int>(chosen.size()) < wanted && next < peaks.size()) {
+      const double f = peaks[next++];
+      chosen.insert(std::upper_bound(chosen.begin(), chosen.end(), f,
+                                     [](double g, const Chosen& c) { return g < c.frequency_hz; }),
+                    Chosen{f, 0.15});
+    }
+    std::vector<double> freq, reach;
+    for (const Chosen& c : chosen) {
+      freq.push_back(c.frequency_hz);
+      reach.push_back(c.reach);
+    }
+    bands = bands_around(freq, record.fs, reach);
+    std::vector<std::string> why(chosen.size());
+    for (size_t k = 0; k < chosen.size(); ++k)
+      why[k] = band_unprocessable(record, bands[k], options);
+    if (std::all_of(why.begin(), why.end(), [](const std::string& w) { return w.empty(); })) {
+      std::vector<signal::Band> todo;
+      for (const signal::Band& b : bands)
+        if (!done.contains(key(b))) todo.push_back(b);
+      if (!todo.empty()) {
+        RecordResult r = process_bands(record, chans, todo, options, cache);
+        const size_t per_band = chans.size();
+        for (size_t k = 0; k < todo.size(); ++k) {
+          RecordResult one;
+          one.source = record.source;
+          one.bands = {todo[k]};
+          one.reference = {r.reference[k]};
+          for (size_t i = 0; i < per_band; ++i) {
+            one.results.push_back(std::move(r.results[k * per_band + i]));
+            one.results.back().band_index = 1;
+          }
+          done.emplace(key(todo[k]), std::move(one));
+        }
+      }
+      for (size_t k = 0; k < chosen.size(); ++k) why[k] = band_refusal(done.at(key(bands[k])), 1);
+    }
+    bool refused = false;
+    for (size_t k = chosen.size(); k-- > 0;) {
+      if (why[k].empty()) continue;
+      refused = true;
+      if (chosen[k].reach > 0.075) {
+        chosen[k].reach = 0.075;  // once more, narrower
+        continue;
+      }
+      left_out.push_back({chosen[k].frequency_hz, bands[k], why[k]});
+      chosen.erase(chosen.begin() + static_cast<std::ptrdiff_t>(k));
+    }
+    if (!refused) break;
+  }
+  std::sort(left_out.begin(), left_out.end(), [](const LeftOutPeak& a, const LeftOutPeak& b) {
+    return a.frequency_hz < b.frequency_hz;
+  });
+  std::string left;
+  for (const LeftOutPeak& p : left_out)
+    left += fmt::format("{}{:.2f} Hz: {}", left.empty() ? "" : "; ", p.frequency_hz, p.reason);
+  if (chosen.empty()) {
+    throw InputError(
+        where(record.source, 0,
+              peaks.empty()
+                  ? fmt::format("--modes {}: no spectral peak found", wanted)
+                  : fmt::format("--modes {}: none of the {} most prominent spectral peaks gives "
+                                "a backbone: {}; type the bands (--band LO:HI)",
+                                wanted, peaks.size(), left)));
+  }
+  RecordResult out;
+  out.source = record.source;
+  out.bands = bands;
+  out.left_out = std::move(left_out);
+  for (size_t k = 0; k < bands.size(); ++k) {
+    const RecordResult& one = done.at(key(bands[k]));
+    out.reference.push_back(one.reference[0]);
+    for (ChannelBand r : one.results) {
+      r.band_index = static_cast<int>(k) + 1;
+      out.results.push_back(std::move(r));
+    }
+  }
+  if (static_cast<int>(chosen.size()) < wanted) {
+    std::string kept;
+    for (const Chosen& c : chosen)
+      kept += fmt::format("{}{:.2f} Hz", kept.empty() ? "" : ", ", c.frequency_hz);
+    out.shortfall = fmt::format(
+        "--modes {}: only {} of the {} most prominent spectral peaks give a backbone ({}); "
+        "left out: {}",
+        wanted, chosen.size(), peaks.size(), kept, left);
+  }
+  return out;
+}
+
+}  // namespace
+
+RecordResult process_record(const data::Record& record, const ProcessOptions& options,
+                            signal::FftCache& cache) {
+  const std::vector<const data::Channel*> chans = requested_channels(record, options);
+  if (options.modes > 0) return process_modes(record, chans, options, cache);
+  check_typed_bands(record, options.bands);
+  return process_bands(record, chans, options.bands, options, cache);
 }
 
 }  // namespace jointlab::modal

@@ -1,9 +1,11 @@
 // Processing of one test record: every selected channel in every band.
 //
 // Bands come from the user or, with `modes = N`, from the N most prominent
-// peaks of the channels' summed (peak-normalised) amplitude spectra: each band
-// reaches half-way to the neighbouring peaks and at most 15 % of its peak
-// frequency on either side. Per band the linear (low-amplitude) modal data are
+// peaks of the channels' summed (peak-normalised) amplitude spectra that give
+// modal data: each band reaches half-way to the neighbouring chosen peaks and at
+// most 15 % of its peak frequency on either side; a peak whose band gives no
+// backbone or no linear values (a harmonic, noise) is left out with its reason
+// and the next one taken. Per band the linear (low-amplitude) modal data are
 // the reference channel's low-amplitude frequency and damping and, for every
 // channel, a complex amplitude: the least-squares projection of the channel's
 // displacement analytic signal onto the reference channel's over the
@@ -54,25 +56,57 @@ struct ChannelBand {
   std::complex<double> complex_amplitude;  ///< operating-shape entry [m]
 };
 
+/// A spectral peak that `modes = N` examined and left out, and why.
+struct LeftOutPeak {
+  double frequency_hz = 0;  ///< the peak [Hz]
+  signal::Band band;        ///< the band it was given
+  std::string reason;       ///< why that band gave no modal data
+};
+
 /// Everything found in one record.
 struct RecordResult {
   std::string source;                  ///< file processed
   std::vector<signal::Band> bands;     ///< bands used (1-based in outputs)
   std::vector<std::string> reference;  ///< per band: reference channel for the shape
   std::vector<ChannelBand> results;    ///< band-major, then channel
+  std::vector<LeftOutPeak> left_out;   ///< with `modes`: peaks left out, ascending frequency
+  /// With `modes = N`: why fewer than N bands were found ("" when N were).
+  std::string shortfall;
 };
 
 /// Why band `band` (1-based) of `record` gave a backbone at no channel: its reference
 /// channel's name and reason ("acc1: no span of ..."); "" when some channel gave one.
 std::string band_without_backbone(const RecordResult& record, int band);
 
-/// Chooses `count` bands around the most prominent spectral peaks of the channels.
+/// Why band `band` (1-based) of `record` gives no modal data: band_without_backbone(), or
+/// its reference channel's backbone has no linear values ("acc1: no linear values: ...");
+/// "" when the reference channel gives a backbone with linear values.
+std::string band_refusal(const RecordResult& record, int band);
+
+/// Frequencies [Hz] of the `count` most prominent peaks of the channels' summed
+/// (peak-normalised) amplitude spectra, most prominent first: between 2 Hz and 95 % of the
+/// Nyquist frequency, peaks closer than 1 Hz (or 3 bins) counted as one.
+std::vector<double> peak_frequencies(const data::Record& record,
+                                     const std::vector<const data::Channel*>& channels, int count,
+                                     signal::FftCache& cache);
+
+/// Bands around peaks given in ascending frequency: each reaches half-way to its
+/// neighbours and at most `reach` (per peak; default 15 %) of its frequency either side, and
+/// stays below 99 % of fs / 2.
+std::vector<signal::Band> bands_around(const std::vector<double>& peaks_hz, double fs,
+                                       const std::vector<double>& reach = {});
+
+/// Chooses `count` bands around the most prominent spectral peaks of the channels
+/// (bands_around() the peak_frequencies()), whatever each band holds.
 std::vector<signal::Band> bands_from_peaks(const data::Record& record,
                                            const std::vector<const data::Channel*>& channels,
                                            int count, signal::FftCache& cache);
 
 /// Processes a record; throws InputError for unknown channels, bands outside (0, fs/2), or a
-/// requested channel without a unit when options.quantity is not given.
+/// requested channel without a unit when options.quantity is not given. With `modes = N`
+/// the bands are those of the N most prominent spectral peaks that give a backbone with
+/// linear values (the others are listed in `left_out`; fewer than N found: `shortfall`;
+/// none: InputError).
 RecordResult process_record(const data::Record& record, const ProcessOptions& options,
                             signal::FftCache& cache);
 

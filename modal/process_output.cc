@@ -106,6 +106,19 @@ void write_record(data::JsonWriter& j, const RecordResult& rec) {
     j.end_object();
   }
   j.end_array();
+  // --modes: the spectral peaks left out, and why (only where some were).
+  if (!rec.left_out.empty()) {
+    j.key("left_out_peaks").begin_array();
+    for (const LeftOutPeak& p : rec.left_out) {
+      j.begin_object();
+      j.key("frequency_hz").value(p.frequency_hz);
+      j.key("low_hz").value(p.band.lo);
+      j.key("high_hz").value(p.band.hi);
+      j.key("reason").value(p.reason);
+      j.end_object();
+    }
+    j.end_array();
+  }
   j.key("outputs").begin_array();
   for (const ChannelBand& r : rec.results) {
     const RingdownSummary& s = r.ringdown.summary;

@@ -27,7 +27,7 @@ AmplitudeSpectrum amplitude_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x,
   return s;
 }
 
-std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd>& a, int count,
+std::vector<Eigen::Index> prominent_peaks(const Eigen::Ref<const Eigen::VectorXd>& a, int count,
                                           Eigen::Index min_distance, double min_prominence) {
   const Eigen::Index n = a.size();
   struct Peak {
@@ -59,6 +59,12 @@ std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd
     });
     if (clear) chosen.push_back(p.index);
   }
+  return chosen;
+}
+
+std::vector<Eigen::Index> strongest_peaks(const Eigen::Ref<const Eigen::VectorXd>& a, int count,
+                                          Eigen::Index min_distance, double min_prominence) {
+  std::vector<Eigen::Index> chosen = prominent_peaks(a, count, min_distance, min_prominence);
   std::sort(chosen.begin(), chosen.end());
   return chosen;
 }

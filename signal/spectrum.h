@@ -24,6 +24,13 @@ struct AmplitudeSpectrum {
 AmplitudeSpectrum amplitude_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs,
                                      FftCache& cache);
 
+/// Indices of the `count` most prominent local maxima, at least `min_distance` bins apart,
+/// ignoring maxima whose prominence is below `min_prominence` times the highest peak;
+/// returned most prominent first (fewer when fewer peaks exist).
+std::vector<Eigen::Index> prominent_peaks(const Eigen::Ref<const Eigen::VectorXd>& amplitude,
+                                          int count, Eigen::Index min_distance,
+                                          double min_prominence = 1e-3);
+
 /// Indices of the `count` highest local maxima, at least `min_distance` bins apart,
 /// ignoring maxima whose prominence is below `min_prominence` times the highest peak;
 /// returned in ascending index order (fewer when fewer peaks exist).

@@ -257,5 +257,39 @@ TEST(BrakeReuss, ABandBesideTheModeSaysEachReasonApart) {
   EXPECT_GE(advised, 2);
 }
 
+// --modes 3 on the measured record: its three most prominent peaks (80.5, 297.7 and 1527 Hz)
+// are modes, so no peak is left out and the bands are those of the three peaks, as before
+// peaks were checked; --modes 7 reaches the harmonic (161 Hz), a leakage peak beside
+// 297.7 Hz (221.7 Hz) and others, which are left out with their reasons: every band the
+// program keeps has linear values at its reference channel.
+TEST(BrakeReuss, ModesChooseOnlyBandsTheyProcess) {
+  const data::Record rec = data::read_record(testing::source_dir() +
+                                             "/data/examples/brake-reuss-beam/hammer_impact.csv");
+  signal::FftCache cache;
+  std::vector<const data::Channel*> chans;
+  for (const data::Channel& c : rec.channels) chans.push_back(&c);
+  for (const int n : {3, 7}) {
+    SCOPED_TRACE(n);
+    modal::ProcessOptions opt;
+    opt.modes = n;
+    const modal::RecordResult res = modal::process_record(rec, opt, cache);
+    for (size_t b = 0; b < res.bands.size(); ++b)
+      EXPECT_EQ(modal::band_refusal(res, static_cast<int>(b) + 1), "") << b + 1;
+    if (n == 3) {
+      EXPECT_TRUE(res.left_out.empty());
+      EXPECT_TRUE(res.shortfall.empty());
+      const std::vector<signal::Band> peaks = modal::bands_from_peaks(rec, chans, 3, cache);
+      ASSERT_EQ(res.bands.size(), peaks.size());
+      for (size_t b = 0; b < peaks.size(); ++b) {
+        EXPECT_EQ(res.bands[b].lo, peaks[b].lo);
+        EXPECT_EQ(res.bands[b].hi, peaks[b].hi);
+      }
+    } else {
+      EXPECT_FALSE(res.left_out.empty());
+      for (const modal::LeftOutPeak& p : res.left_out) EXPECT_FALSE(p.reason.empty());
+    }
+  }
+}
+
 }  // namespace
 }  // namespace jointlab
