@@ -45,14 +45,8 @@ function(jointlab_add_library name)
   install(FILES ${headers} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/jointlab/${ARG_FOLDER})
 endfunction()
 
-# jointlab_add_test(<name> <source> [libraries...]): one GoogleTest program,
-# registered with ctest test by test.
-function(jointlab_add_test name source)
-  if(NOT JOINTLAB_BUILD_TESTS)
-    return()
-  endif()
-  add_executable(${name} ${source})
-  target_link_libraries(${name} PRIVATE ${ARGN} jointlab::testing GTest::gtest_main)
+# The compile options of a test program: our warnings, and its own code at -O1.
+function(jointlab_test_options name)
   jointlab_warnings(${name})
   # A test program's own code drives the library (compiled as configured) on small inputs:
   # at -O1 it compiles in two thirds of -O3's time (modal/ringdown_test.cc 8.7 s against
@@ -62,6 +56,18 @@ function(jointlab_add_test name source)
   if(CMAKE_BUILD_TYPE MATCHES "^(Release|RelWithDebInfo)$")
     target_compile_options(${name} PRIVATE -O1 -Wno-maybe-uninitialized)
   endif()
+endfunction()
+
+# jointlab_add_test(<name> <source> [libraries...]): one GoogleTest program,
+# registered with ctest test by test.
+function(jointlab_add_test name source)
+  if(NOT JOINTLAB_BUILD_TESTS)
+    return()
+  endif()
+  add_executable(${name} ${source})
+  target_link_libraries(${name} PRIVATE ${ARGN} jointlab::testing GTest::gtest_main)
+  jointlab_test_options(${name})
+  target_precompile_headers(${name} REUSE_FROM jointlab_test_pch)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   set(env "JOINTLAB_SOURCE_DIR=${PROJECT_SOURCE_DIR};JOINTLAB_BINARY_DIR=${PROJECT_BINARY_DIR}")
   if(JOINTLAB_SANITIZE)  # leaks inside third-party libraries (fontconfig under PLplot) only
