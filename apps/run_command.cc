@@ -57,6 +57,8 @@ void run_run(const RunArgs& args) {
   }
   if (!s.no_backbone.empty())
     wrong.push_back(fmt::format("no backbone in any hit for {}", fmt::join(s.no_backbone, ", ")));
+  if (!s.refused.empty())
+    wrong.push_back(fmt::format("{} refused its data", fmt::join(s.refused, " and ")));
   if (!wrong.empty()) {
     throw InputError(fmt::format("{}: {}; everything else is written, the report says why: {}",
                                  args.campaign, fmt::join(wrong, ", and "),

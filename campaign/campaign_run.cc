@@ -50,9 +50,11 @@ ModelResults model_side(const Campaign& c, CampaignModelData data, const Measure
   r.start = evaluate_model(c, r.data.model, r.data.dofs, "model, start", out / "qsma", "start");
   r.linear = linear_update_step(c, r.data, measured.modes, o.progress);
   if (!r.linear.note.empty()) summary.notes.push_back(r.linear.note);
+  if (r.linear.refused) summary.refused.push_back("update.linear");
   const model::Model& base = r.linear.ran ? r.linear.updated : r.data.model;
   r.iwan = iwan_update_step(c, base, r.data.sensors, measured, o.progress);
   if (!r.iwan.note.empty()) summary.notes.push_back(r.iwan.note);
+  if (r.iwan.refused) summary.refused.push_back("update.iwan");
   r.have_updated = r.linear.ran || r.iwan.ran;
   if (r.have_updated) {
     r.updated = r.iwan.ran ? r.iwan.updated : r.linear.updated;

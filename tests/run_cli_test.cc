@@ -541,6 +541,35 @@ TEST(RunCli, ABadModeOrChannelLeavesOutThatModeOrChannelNotTheHit) {
   EXPECT_TRUE(fs::exists(out / "scatter" / "mode1.json"));
 }
 
+// An update that refuses its data refuses it in `run` as in its own command: exit 2 naming it,
+// the reason in the report, and no model reaching the next steps as if identified. Linear:
+// a frequency window of 1e-4 that no pair meets (before: "ran", exit 0, and its unchanged
+// stiffness passed on as the update's). Iwan: K_T held at 1 % of the start's (gamma = 0.01),
+// where the mode's frequency lies below every measured one (before: a fit to a best that fits
+// nothing, exit 0).
+TEST(RunCli, AnUpdateThatRefusesItsDataIsNamedAndPassesNothingOn) {
+  for (const bool linear : {true, false}) {
+    SCOPED_TRACE(linear ? "update.linear" : "update.iwan");
+    const fs::path dir = testing::scratch_dir(linear ? "run_cli_refused_l" : "run_cli_refused_i");
+    const testing::SmallCampaign s = testing::make_small_campaign(
+        dir,
+        linear ? "[update.linear]\nsets = [\"iwan.rivet\"]\nfrequency_window = 1e-4\n"
+               : "[update.iwan]\nenabled = true\ngamma = 0.01\nmax_evaluations = 200\n",
+        {10, 40});
+    const fs::path out = dir / "out";
+    const testing::CommandResult r = testing::run_jointlab(
+        fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
+    EXPECT_EQ(r.status, 2) << r.err;
+    const std::string what = linear ? "update.linear" : "update.iwan";
+    EXPECT_NE(r.err.find(what + " refused its data"), std::string::npos) << r.err;
+    const std::string report = testing::read_file(out / "report.md");
+    EXPECT_NE(report.find(linear ? "no measured mode pairs with a model mode" : "lies above"),
+              std::string::npos)
+        << report.substr(0, 2000);
+    EXPECT_FALSE(fs::exists(out / "qsma" / "mode1.updated.csv"));
+  }
+}
+
 // `run` and `update-iwan` build their Iwan targets with one function: from the same hits
 // (processed by `run` into its cache, and by `process` into a folder `update-iwan` reads) and
 // the same settings, the targets agree point for point, weights and screening included, and

@@ -236,6 +236,13 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
                   100 * to.max_slip_share));
   io.bounds = correlate::default_iwan_bounds(objective.initial());
+  // Frequencies no parameter set can reach are said with the numbers, as update-iwan says
+  // them, rather than fitted to a best that fits nothing.
+  if (const std::string e = correlate::unreachable_frequencies(objective, io); !e.empty()) {
+    step.refused = true;
+    step.note = "update.iwan: " + e + "; Iwan updating skipped";
+    return step;
+  }
   // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
   if (progress) {
     io.progress = [&](int evaluations, double best) {

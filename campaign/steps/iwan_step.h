@@ -61,6 +61,7 @@ struct ModeCost {
 struct IwanStep {
   bool ran = false;                      ///< the update ran
   std::string note;                      ///< why it was skipped ("" when it ran or was off)
+  bool refused = false;                  ///< the data cannot be fitted (note says why)
   std::string set;                       ///< the updated set
   correlate::IwanUpdateSummary summary;  ///< its outcome (the better fit)
   bool beta_held = false;                ///< beta held: microslip data, or by the campaign

@@ -22,6 +22,7 @@ correlate::LinearUpdateOptions linear_update_options(const Campaign& campaign);
 struct LinearStep {
   bool ran = false;                        ///< the update ran
   std::string note;                        ///< why it was skipped ("" when it ran or was off)
+  bool refused = false;                    ///< it ran and refused a result (note says why)
   correlate::LinearUpdateSummary summary;  ///< its outcome
   model::Model updated;                    ///< the updated model (when it ran)
 };
