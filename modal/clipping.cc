@@ -19,10 +19,13 @@ Clipping find_clipping(const Eigen::Ref<const Eigen::VectorXd>& x) {
   }
   const auto side = [&](double value, Eigen::Index count, bool& pinned) {
     if (count < kMinClippedSamples) return;
-    Eigen::Index runs = 0, last = -1;
+    // Only flat runs count: a sine's peak samples, however often they repeat its largest
+    // value, stand alone (or in twos, a peak midway between two samples).
+    Eigen::Index runs = 0, last = -1, length = 0;
     for (Eigen::Index k = 0; k < x.size(); ++k) {
       if (v[k] != value) continue;
-      if (last != k - 1) ++runs;
+      length = last == k - 1 ? length + 1 : 1;
+      if (length == kMinClippedRunSamples) ++runs;
       last = k;
     }
     if (runs < kMinClippedRuns) return;

@@ -8,9 +8,12 @@
 // clipped reaches its extreme once: at its first peak, where successive samples differ unless
 // the recorder's step is coarse, and the next peak is lower by the decay of a cycle.
 // Required of each side (largest, smallest) apart: at least kMinClippedSamples samples at
-// that exact value in at least kMinClippedRuns runs. (A single run, however long, is a peak
-// sampled finely by a coarse recorder, or one clipped peak that did not ring on: no ring-down
-// point depends on it alone.)
+// that exact value in at least kMinClippedRuns runs, each flat over kMinClippedRunSamples or
+// more consecutive samples. (A single run, however long, is a peak sampled finely by a coarse
+// recorder, or one clipped peak that did not ring on: no ring-down point depends on it alone.
+// A sine of constant amplitude, or one barely damped, written with a few digits, reaches its
+// largest value at many peaks, but at one sample each, or two where the peak falls midway
+// between them: a cut peak is flat where a sine's is curved.)
 #pragma once
 
 #include <Eigen/Core>
@@ -21,6 +24,8 @@ namespace jointlab::modal {
 inline constexpr Eigen::Index kMinClippedSamples = 3;
 /// Separate runs of such samples required (one per clipped peak).
 inline constexpr Eigen::Index kMinClippedRuns = 2;
+/// Consecutive samples at the value that make a run flat (a cut peak, not a sine's).
+inline constexpr Eigen::Index kMinClippedRunSamples = 3;
 
 /// Where a channel is clipped: its samples at a pinned extreme value and the last of them.
 struct Clipping {

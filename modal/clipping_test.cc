@@ -1,6 +1,8 @@
 #include "jointlab/modal/clipping.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -78,6 +80,55 @@ TEST(Clipping, OnePinnedRunIsNot) {
   EXPECT_TRUE(c.found());
   EXPECT_EQ(c.samples, 8);
   EXPECT_EQ(c.last, 402);
+}
+
+// A sine of `amplitude` at f (Hz) sampled at fs, phase phi, damping zeta, for n samples, each
+// written as a CSV writes it with `digits` significant digits and read back.
+Eigen::VectorXd written_sine(double f, double fs, double phi, double zeta, Eigen::Index n,
+                             int digits, double amplitude = 1.0) {
+  Eigen::VectorXd x(n);
+  const double w = 2 * std::numbers::pi * f;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    char text[64];
+    std::snprintf(text, sizeof text, "%.*g", digits,
+                  amplitude * std::exp(-zeta * w * t) * std::sin(w * t + phi));
+    x(k) = std::strtod(text, nullptr);
+  }
+  return x;
+}
+
+// A clean sine of constant amplitude reaches its largest and smallest values at every peak:
+// 50 Hz at 1 kHz, 7 digits (its peaks fall on samples, 250 of them at exactly 1 and -1); 125
+// Hz at 1 kHz with its peaks midway between two samples, 6 digits (two equal samples a peak);
+// and one barely damped (zeta 1e-6 at 80 Hz, 5120 Hz, 4 digits: the first 40 peaks read
+// 1.000). Before, each was called clipped and read from its last peak on; no peak is flat.
+TEST(Clipping, AConstantOrBarelyDampedSineIsNot) {
+  const Eigen::VectorXd on_samples = written_sine(50, 1000, 0, 0, 5000, 7);
+  Eigen::Index at_top = 0;
+  for (Eigen::Index k = 0; k < on_samples.size(); ++k) at_top += on_samples(k) == 1.0;
+  ASSERT_GE(at_top, 100);  // the repeats the old rule took for clipping
+  EXPECT_FALSE(find_clipping(on_samples).found());
+  const Eigen::VectorXd midway = written_sine(125, 1000, std::numbers::pi / 8, 0, 5000, 6);
+  EXPECT_FALSE(find_clipping(midway).found());
+  const Eigen::VectorXd barely = written_sine(80, 5120, 0.3, 1e-6, 51200, 4);
+  EXPECT_FALSE(find_clipping(barely).found());
+}
+
+// The same sines cut at 0.8 of their peak (a recorder's range) are clipped: every peak is
+// flat over several samples (a fifth of a cycle: 4 samples at 50 Hz, 1 kHz; 2 at 125 Hz,
+// 1 kHz, which is no flat run, and 13 at 80 Hz, 5120 Hz).
+TEST(Clipping, TheSameSinesCutAtTheirRangeAre) {
+  const Eigen::VectorXd cut = written_sine(50, 1000, 0, 0, 5000, 7).cwiseMin(0.8).cwiseMax(-0.8);
+  const Clipping c = find_clipping(cut);
+  ASSERT_TRUE(c.found());
+  EXPECT_TRUE(c.high_pinned);
+  EXPECT_TRUE(c.low_pinned);
+  Eigen::Index last = cut.size() - 1;  // the last sample at the range, found here apart
+  while (std::abs(cut(last)) != 0.8) --last;
+  EXPECT_EQ(c.last, last);
+  const Eigen::VectorXd barely = written_sine(80, 5120, 0.3, 1e-6, 51200, 4);
+  EXPECT_TRUE(find_clipping(barely.cwiseMin(0.8).cwiseMax(-0.8)).found());
 }
 
 TEST(Clipping, EmptyAndConstantChannels) {
