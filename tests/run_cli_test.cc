@@ -96,6 +96,17 @@ CampaignSide campaign_side(const testing::SmallCampaign& s, const fs::path& dir)
 
 // 600 evaluations: in the default search box (gamma 0.05-2, F_S within a factor 30) 150 left
 // the small campaign at its start.
+// The small campaign's text without its model (a model-less campaign: no QSMA, no updates).
+std::string without_model(const testing::SmallCampaign& s) {
+  std::string text = testing::read_file(s.campaign);
+  for (const std::string& line : {std::string("[model]\nfile = \"model.toml\"\n"),
+                                  fmt::format("model_mode = {}\n", s.model_mode)}) {
+    EXPECT_NE(text.find(line), std::string::npos) << line;
+    if (text.find(line) != std::string::npos) text.erase(text.find(line), line.size());
+  }
+  return text;
+}
+
 constexpr const char* kUpdates =
     "[update.linear]\nsets = [\"iwan.rivet\"]\n\n"
     "[update.iwan]\nenabled = true\nmax_evaluations = 600\n";
@@ -429,13 +440,7 @@ TEST(RunCli, AModeWithoutABackboneIsReportedAndFails) {
   const fs::path dir = testing::scratch_dir("run_cli_nothing");
   const testing::SmallCampaign s = testing::make_small_campaign(
       dir, "[[mode]]\nname = \"nothing\"\nband = [20.0, 30.0]\nreference = \"acc_5\"\n");
-  std::string text = testing::read_file(s.campaign);
-  const std::string model = "[model]\nfile = \"model.toml\"\n";
-  ASSERT_NE(text.find(model), std::string::npos);
-  text.erase(text.find(model), model.size());
-  const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
-  text.erase(text.find(mm), mm.size());
-  testing::write_text(s.campaign.string(), text);
+  testing::write_text(s.campaign.string(), without_model(s));
   const fs::path out = dir / "out";
   const testing::CommandResult r = testing::run_jointlab(
       fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
@@ -474,11 +479,7 @@ TEST(RunCli, UnitlessChannelsNeedTheCampaignsQuantity) {
     for (size_t at; (at = text.find(unit)) != std::string::npos;) text.erase(at, unit.size());
     testing::write_text(hit.string(), text);
   }
-  std::string text = testing::read_file(s.campaign);
-  const std::string model = "[model]\nfile = \"model.toml\"\n";
-  text.erase(text.find(model), model.size());
-  const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
-  text.erase(text.find(mm), mm.size());
+  std::string text = without_model(s);
   const std::string quantity = "quantity = \"acceleration\"\n";
   ASSERT_NE(text.find(quantity), std::string::npos);
   const std::string with = text;
@@ -515,12 +516,7 @@ TEST(RunCli, ABadModeOrChannelLeavesOutThatModeOrChannelNotTheHit) {
   ASSERT_NE(hit.find(",acc_5"), std::string::npos);
   hit.replace(hit.find(",acc_5"), 6, ",acc_9");
   testing::write_text(s.hits[1].string(), hit);
-  std::string text = testing::read_file(s.campaign);
-  const std::string model = "[model]\nfile = \"model.toml\"\n";
-  text.erase(text.find(model), model.size());
-  const std::string mm = fmt::format("model_mode = {}\n", s.model_mode);
-  text.erase(text.find(mm), mm.size());
-  testing::write_text(s.campaign.string(), text);
+  testing::write_text(s.campaign.string(), without_model(s));
   const fs::path out = dir / "out";
   const testing::CommandResult r = testing::run_jointlab(
       fmt::format("run {} --out {} --quiet", s.campaign.string(), out.string()));
