@@ -10,6 +10,7 @@
 #include <regex>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -21,6 +22,7 @@
 #include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
+#include "jointlab/core/text.h"
 #include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/modal/process.h"
@@ -92,6 +94,17 @@ void run_process(const ProcessArgs& args) {
 
   namespace fs = std::filesystem;
   check_distinct_stems(args.files);
+  // A channel named twice is one channel: processed once (its outputs would share a name).
+  std::unordered_map<std::string, size_t> times;
+  for (const std::string& c : args.channels) ++times[c];
+  for (const std::string& c : args.channels) {
+    size_t& n = times[c];
+    if (n > 1) {
+      say(stderr, "jointlab process: --channel {} is given {} times; it is processed once\n",
+          shorten(c), n);
+    }
+    n = 0;  // said once
+  }
 
   // Backbones and summary.json appear together, replacing the previous run's as a set.
   // Backbone-like names count as old outputs only in a folder holding an old summary.json.

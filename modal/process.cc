@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -311,6 +312,7 @@ std::vector<const data::Channel*> requested_channels(const data::Record& record,
       if (c.quantity != Quantity::kForce) chans.push_back(&c);
     }
   } else {
+    std::unordered_set<const data::Channel*> given;  // a channel named twice is processed once
     for (const std::string& name : options.channels) {
       const data::Channel* c = record.find(name);
       if (!c) {
@@ -323,7 +325,7 @@ std::vector<const data::Channel*> requested_channels(const data::Record& record,
         throw InputError(
             where(record.source, 0, fmt::format("channel '{}' is a force, not a response", name)));
       }
-      chans.push_back(c);
+      if (given.insert(c).second) chans.push_back(c);
     }
   }
   if (chans.empty()) throw InputError(where(record.source, 0, "no response channel to process"));

@@ -32,12 +32,13 @@ namespace jointlab::modal {
 
 /// What to process in a record.
 struct ProcessOptions {
-  std::vector<signal::Band> bands;    ///< explicit bands (used when modes == 0)
-  int modes = 0;                      ///< number of spectral peaks to use as bands
-  std::vector<std::string> channels;  ///< channels to process (empty: all non-force)
-  std::optional<Quantity> quantity;   ///< quantity of channels without a unit
-  RingdownOptions ringdown;           ///< backbone extraction settings
-  PrepareOptions prepare;             ///< onset trimming and continuation
+  std::vector<signal::Band> bands;  ///< explicit bands (used when modes == 0)
+  int modes = 0;                    ///< number of spectral peaks to use as bands
+  /// Channels to process (empty: all non-force); a channel named twice is processed once.
+  std::vector<std::string> channels;
+  std::optional<Quantity> quantity;  ///< quantity of channels without a unit
+  RingdownOptions ringdown;          ///< backbone extraction settings
+  PrepareOptions prepare;            ///< onset trimming and continuation
   double min_share = 0.1;  ///< weakest channel share of a mode that still gives a backbone
   /// Workers for the record's channels (0: every core); at most 2e7 / the samples of the
   /// record continued for its narrowest band, as each holds one channel's continued record

@@ -320,3 +320,37 @@ TEST(ProcessModes, AHarmonicOrNoisePeakIsLeftOutWithItsReasonNeverRefused) {
 
 }  // namespace
 }  // namespace jointlab::testing
+
+namespace jointlab::testing {
+namespace {
+
+size_t count_of(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// A channel given twice is one channel: processed once, with a note, not two rows and one
+// file written twice under the same name (before: "3 backbone file(s)" for two channels,
+// and summary.json listed a.band1 twice).
+TEST(ProcessChannels, AChannelGivenTwiceIsProcessedOnceWithANote) {
+  const ThreeModeRecord rec = three_mode_record(60.0, 6.0, 1e-3, 5);
+  std::string text = fmt::format("# fs: {}\na [m],b [m]\n", rec.fs);
+  for (Eigen::Index k = 0; k < rec.displacement.size(); ++k)
+    text += fmt::format("{:.12g},{:.12g}\n", rec.displacement(k), 0.5 * rec.displacement(k));
+  const std::string dir = scratch_dir("channel_twice");
+  write_text(dir + "/ring.csv", text);
+  const CommandResult r = run_jointlab(fmt::format(
+      "process {0}/ring.csv --band 48:72 --channel a --channel b --channel a --out {0}/out", dir));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("--channel a is given 2 times; it is processed once"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(count_of(r.err, " a band 1:"), 1u) << r.err;
+  EXPECT_NE(r.out.find("2 backbone file(s)"), std::string::npos) << r.out;
+  const std::string summary = read_file(dir + "/out/summary.json");
+  EXPECT_EQ(count_of(summary, "\"ring.a.band1.csv\""), 1u) << summary;
+  EXPECT_EQ(count_of(summary, "\"ring.b.band1.csv\""), 1u) << summary;
+}
+
+}  // namespace
+}  // namespace jointlab::testing
