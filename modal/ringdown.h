@@ -45,10 +45,17 @@
 //    (Backbone::exchange): their damping is damping plus transfer, an apparent damping that may be
 //    negative. They are left out of the linear values and of the band-gain correction's model of
 //    the mode. Records without such an exchange are unchanged.
+// 6. Two modes in one band: a second resolved peak of the measured spectrum inside the band
+//    read, whose beat with the mode (ln A + i theta oscillating at the difference frequency)
+//    shows in the first estimates, has what it moves each point's decay rate and frequency by
+//    added to the point's uncertainty (where it exceeds it somewhere), so the points it moves
+//    past max_damping_rel_std drop out, and the summary names the second mode. Not applied
+//    beside an energy exchange (5), which is marked on its own.
 // The band a user gives says which mode. Where the mode's track comes within three
 // half-power half-widths of the band's sloping edge, the mode is read through a band moved
 // (and, if the typed band's filter would lose the start of the decay, widened) to hold it
-// in its flat part, never toward a neighbouring mode's spectral peak beyond the typed band;
+// in its flat part, never toward a neighbouring mode's spectral peak beyond the typed band
+// (of the smoothed spectrum, or where it shows none a resolved peak of the measured samples');
 // Ringdown::band stays the typed band's signal (shapes compare channels through it).
 // The amplitude column is A * omega_n^k for displacement (k = 0), velocity (1)
 // or acceleration (2) amplitude.

@@ -1166,6 +1166,108 @@ TEST(RingdownInternalResonance, ThreeTurnsBesideAnUncoupledNeighbourAreNoExchang
   }
 }
 
+// Two modes in one band (a newcomer's trial): m(f, z, A) = A exp(-z 2 pi f t) cos(2 pi f
+// sqrt(1 - z^2) t), displacement at 2048 Hz for 8 s, white noise 1e-7 m. The band's mode is
+// m(50 Hz, ...); the band's signal beats with the second mode at the difference frequency, and
+// the envelope's decay rate and the frequency oscillate with it. Before, 40:60 Hz read
+// 50 Hz + 52 Hz (a fifth of its size) as 51.11 +- 0.012 Hz and damping 0.0089 +- 0.00026
+// (true 0.005), no point's damping within its uncertainty and no word of the second mode;
+// 51 Hz at 5 % swung the damping between 0.00205 and 0.00398 (true 0.003), 31 % of the
+// points within their uncertainty. Now the summary names the second mode (its spectral peak,
+// refined between bins 1/8 Hz apart: within 0.2 Hz) and the beat joins each point's
+// uncertainty: what is kept has at least 90 % of its points' damping and frequency within their
+// stated k sigma (what k = 3 gives a record of a single mode, docs/process.md step 4), or
+// nothing is kept. Measured: 52 Hz at 20 % and 51 Hz at 50 % keep nothing; 51 Hz at 5 %
+// keeps 0.8 decades of the tail, where the windows span several beats, every point within.
+struct TwoModeCase {
+  double f2, z1, z2, a2;
+};
+
+Eigen::VectorXd two_close_modes(const TwoModeCase& c, unsigned seed) {
+  constexpr double fs = 2048.0;
+  const Eigen::Index n = static_cast<Eigen::Index>(8 * fs);
+  const auto m = [](double f, double z, double a, double t) {
+    const double w = 2 * std::numbers::pi * f;
+    return a * std::exp(-z * w * t) * std::cos(w * std::sqrt(1 - z * z) * t);
+  };
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1e-7);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) = m(50.0, c.z1, 1e-3, t) + (c.a2 > 0 ? m(c.f2, c.z2, c.a2, t) : 0.0) + noise(rng);
+  }
+  return x;
+}
+
+// Share of the backbone's points whose damping and frequency are both within their stated
+// expanded uncertainty of the single 50 Hz mode's.
+double within(const Backbone& b, double z_true) {
+  int in = 0;
+  for (Eigen::Index i = 0; i < b.size(); ++i) {
+    in += std::abs(b.damping(i) - z_true) <= b.damping_std(i) &&
+          std::abs(b.frequency_hz(i) - 50.0) <= b.frequency_std_hz(i);
+  }
+  return b.size() > 0 ? double(in) / double(b.size()) : 1.0;
+}
+
+TEST(RingdownTwoModes, ABeatWithASecondModeInTheBandIsNamedAndNotReadAsDamping) {
+  for (const TwoModeCase c :
+       {TwoModeCase{52.0, 0.005, 0.003, 2e-4}, TwoModeCase{51.0, 0.003, 0.003, 5e-5},
+        TwoModeCase{51.0, 0.003, 0.003, 5e-4}}) {
+    for (const unsigned seed : {1u, 2u}) {
+      const Ringdown r =
+          extract_band(two_close_modes(c, seed), 2048.0, Quantity::kDisplacement, {40, 60});
+      const std::string& msg = r.summary.message;
+      std::printf(
+          "50 Hz + %.0f Hz at %.0f %%, seed %u: %ld points, %.2f decades, within %.2f: %s\n", c.f2,
+          100 * c.a2 / 1e-3, seed, long(r.backbone.size()), r.summary.amplitude_decades,
+          within(r.backbone, c.z1), msg.c_str());
+      const auto at = msg.find("holds a second mode at ");
+      ASSERT_NE(at, std::string::npos) << msg;
+      EXPECT_NEAR(std::stod(msg.substr(at + 23)), c.f2, 0.2) << msg;
+      EXPECT_GE(within(r.backbone, c.z1), 0.9) << msg;
+      if (r.summary.has_linear()) {
+        EXPECT_LE(std::abs(r.summary.linear_damping - c.z1), r.summary.linear_damping_std) << msg;
+      }
+      EXPECT_EQ(r.summary.exchange_points, 0) << msg;  // a beat is no energy exchange
+    }
+  }
+}
+
+// The same 50 Hz mode with the 52 Hz one (a fifth of its size) typed as 42:51 Hz, the user
+// leaving 52 Hz out on purpose: the band may follow the mode up (it sits past the band's
+// half-gain point, 49.9 Hz) but not onto 52 Hz, a resolved peak of the measured spectrum
+// (before, the band was moved to 33:60 Hz and read damping 0.0217 +- 0.00064, true 0.005).
+// Whatever is kept is the 50 Hz mode's, to the same 90 % as above (measured: nothing, the
+// mode on the held band's edge). A single 50 Hz mode in 40:60 Hz is read as before, with no
+// word of a second mode (48 points, 3.15 decades, every one within).
+TEST(RingdownTwoModes, TheBandFollowingTheModeStopsShortOfASecondModeBesideTheTypedBand) {
+  for (const unsigned seed : {1u, 2u}) {
+    const Ringdown r = extract_band(two_close_modes({52.0, 0.005, 0.003, 2e-4}, seed), 2048.0,
+                                    Quantity::kDisplacement, {42, 51});
+    const std::string& msg = r.summary.message;
+    std::printf("50 Hz + 52 Hz in 42:51 Hz, seed %u: %ld points, within %.2f: %s\n", seed,
+                long(r.backbone.size()), within(r.backbone, 0.005), msg.c_str());
+    const auto read = msg.find("read through ");
+    if (read != std::string::npos) {
+      const double hi = std::stod(msg.substr(msg.find(':', read) + 1));
+      EXPECT_LT(hi, 52.0) << msg;
+      EXPECT_NE(msg.find("neighbouring mode's spectral peak at 52"), std::string::npos) << msg;
+    }
+    EXPECT_GE(within(r.backbone, 0.005), 0.9) << msg;
+    const Ringdown single = extract_band(two_close_modes({0, 0.005, 0, 0}, seed), 2048.0,
+                                         Quantity::kDisplacement, {40, 60});
+    std::printf("50 Hz alone in 40:60 Hz, seed %u: %ld points, %.2f decades, within %.2f: %s\n",
+                seed, long(single.backbone.size()), single.summary.amplitude_decades,
+                within(single.backbone, 0.005), single.summary.message.c_str());
+    ASSERT_EQ(single.summary.status, RingdownStatus::kOk) << single.summary.message;
+    EXPECT_EQ(single.summary.message.find("second mode"), std::string::npos);
+    EXPECT_GE(single.summary.amplitude_decades, 3.0);
+    EXPECT_GE(within(single.backbone, 0.005), 0.9);
+  }
+}
+
 }  // namespace
 
 }  // namespace jointlab::modal
