@@ -2194,6 +2194,39 @@ struct TwoModes {
   bool found() const { return moved > 0; }
 };
 
+// A "second mode" f2 whose distance from the band's mode f1 is the frequency of a spectral
+// peak below the band that is stronger than f2's is a sideband: the band's mode
+// amplitude-modulated by that mode (the Brake-Reuss beam's 1527 Hz mode shows peaks at 1447
+// and 1607 Hz, the 80.5 Hz mode's frequency either side), not a mode of its own. The
+// modulating peak is looked for within 3 bins (or 1 % of the spacing) of |f2 - f1|.
+bool is_sideband(const ChannelSpectrum& channel, const signal::Band& read, double f1, double f2) {
+  const double fm = std::abs(f2 - f1);
+  const double df = channel.measured_df();
+  const Eigen::Index n = channel.measured.size();
+  if (n < 8 || !(df > 0)) return false;
+  const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
+  const auto bin = [&](double f) {
+    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1, n - 2);
+  };
+  const Eigen::Index k2 = bin(f2);
+  // A stronger local maximum within 3 bins (or 1 % of f) of f.
+  const auto stronger_peak_at = [&](double f) {
+    const auto reach = std::max<Eigen::Index>(3, static_cast<Eigen::Index>(0.01 * f / df));
+    const Eigen::Index km = bin(f);
+    for (Eigen::Index k = std::max<Eigen::Index>(1, km - reach);
+         k <= std::min<Eigen::Index>(n - 2, km + reach); ++k) {
+      if (mag(k) > mag(k - 1) && mag(k) >= mag(k + 1) && mag(k) > mag(k2)) return true;
+    }
+    return false;
+  };
+  if (fm < read.lo && stronger_peak_at(fm)) return true;
+  // A harmonic (2 to 6 times) of a stronger peak below the band is no mode either.
+  for (int h = 2; h <= 6; ++h) {
+    if (f2 / h < read.lo && f2 / h > 3 * df && stronger_peak_at(f2 / h)) return true;
+  }
+  return false;
+}
+
 TwoModes two_modes(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
                    const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
                    double noise) {
@@ -2202,7 +2235,7 @@ TwoModes two_modes(const std::vector<Estimate>& est, const ChannelSpectrum& chan
   const BandPeaks peaks = band_peaks(channel, read, s.options.taper, 3);
   for (const auto& [f2, ratio] : peaks.others) {
     const double dw = kTwoPi * (f2 - peaks.main_hz);
-    if (!(std::abs(dw) > 0)) continue;
+    if (!(std::abs(dw) > 0) || is_sideband(channel, read, peaks.main_hz, f2)) continue;
     const Beat beat = beat_of(ep, s, noise, dw);
     if (!beat.found()) continue;
     std::vector<std::pair<double, double>> errors = beat_errors(est, beat, s.dt, s.options.degree);
