@@ -39,6 +39,25 @@ struct Estimate {
   double centre = 0;       // window centre [s from record start]
 };
 
+// An estimate's local window on a grid of step dt and `grid` samples: its half width, the
+// estimate's place in it (-1 at its start to 1 at its end), the stride that samples it about
+// 48 times, and the samples [j0, j1] it covers.
+struct WindowOnGrid {
+  double half = 0, offset = 0;
+  Eigen::Index stride = 1, j0 = 0, j1 = 0;
+};
+
+WindowOnGrid window_on_grid(const Estimate& e, double dt, Eigen::Index grid) {
+  WindowOnGrid w;
+  w.half = e.window / 2;
+  w.offset = std::clamp((e.t - e.centre) / w.half, -1.0, 1.0);
+  w.stride = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(e.window / dt) / 48);
+  w.j0 = std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre - w.half) / dt), 0, grid - 1);
+  w.j1 =
+      std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + w.half) / dt), w.j0, grid - 1);
+  return w;
+}
+
 // |z| as sqrt(re^2 + im^2) where that cannot overflow or underflow, else std::abs (a
 // hypot, which guards every sample at four times the cost; the estimates' uncertainties,
 // summed in quadrature as |(a, b)|, took a seventieth of process's time through it).
@@ -926,14 +945,7 @@ std::vector<double> add_model_errors(std::vector<Estimate>& est, const GainCorre
       add_w[i] = (est[hi].omega_d - est[lo].omega_d) / dl * e.log_amp_std;
     }
     if (!gain.active) continue;
-    const double half = e.window / 2;
-    const double offset = std::clamp((e.t - e.centre) / half, -1.0, 1.0);
-    const Eigen::Index stride =
-        std::max<Eigen::Index>(1, static_cast<Eigen::Index>(e.window / dt) / 48);
-    const auto j0 =
-        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre - half) / dt), 0, grid - 1);
-    const auto j1 =
-        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + half) / dt), j0, grid - 1);
+    const auto [half, offset, stride, j0, j1] = window_on_grid(e, dt, grid);
     const double now = step_abs.segment(j0, j1 - j0 + 1).maxCoeff();
     const double before = before_abs.segment(j0, j1 - j0 + 1).maxCoeff();
     const double q = !earlier.active ? 0.0
@@ -2155,15 +2167,8 @@ std::vector<std::pair<double, double>> beat_errors(const std::vector<Estimate>& 
   for (size_t i = 0; i < est.size(); ++i) {
     const Estimate& e = est[i];
     if (!(e.window > 0) || !std::isfinite(e.window)) continue;
-    const double half = e.window / 2;
     if (static_cast<Eigen::Index>(e.window / dt) < degree + 4 || grid < degree + 4) continue;
-    const double offset = std::clamp((e.t - e.centre) / half, -1.0, 1.0);
-    const Eigen::Index stride =
-        std::max<Eigen::Index>(1, static_cast<Eigen::Index>(e.window / dt) / 48);
-    const auto j0 =
-        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre - half) / dt), 0, grid - 1);
-    const auto j1 =
-        std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + half) / dt), j0, grid - 1);
+    const auto [half, offset, stride, j0, j1] = window_on_grid(e, dt, grid);
     if (beat.other.segment(j0, j1 - j0 + 1).maxCoeff() > 0) {
       constexpr double kInf = std::numeric_limits<double>::infinity();
       out[i] = {kInf, kInf};
