@@ -301,6 +301,18 @@ std::vector<signal::Band> bands_from_peaks(const data::Record& record,
   return bands_around(peaks, record.fs);
 }
 
+std::string not_a_response(const data::Record& record, const std::string& name) {
+  const data::Channel* c = record.find(name);
+  if (!c) {
+    std::string have;
+    for (const data::Channel& k : record.channels) have += (have.empty() ? "" : ", ") + k.name;
+    return fmt::format("no channel '{}' (channels: {})", name, have);
+  }
+  if (c->quantity == Quantity::kForce)
+    return fmt::format("channel '{}' is a force, not a response", name);
+  return "";
+}
+
 namespace {
 
 // The requested response channels (default: every channel that is not a force).
@@ -314,17 +326,9 @@ std::vector<const data::Channel*> requested_channels(const data::Record& record,
   } else {
     std::unordered_set<const data::Channel*> given;  // a channel named twice is processed once
     for (const std::string& name : options.channels) {
+      if (const std::string why = not_a_response(record, name); !why.empty())
+        throw InputError(where(record.source, 0, why));
       const data::Channel* c = record.find(name);
-      if (!c) {
-        std::string have;
-        for (const data::Channel& k : record.channels) have += (have.empty() ? "" : ", ") + k.name;
-        throw InputError(
-            where(record.source, 0, fmt::format("no channel '{}' (channels: {})", name, have)));
-      }
-      if (c->quantity == Quantity::kForce) {
-        throw InputError(
-            where(record.source, 0, fmt::format("channel '{}' is a force, not a response", name)));
-      }
       if (given.insert(c).second) chans.push_back(c);
     }
   }

@@ -103,6 +103,10 @@ std::vector<signal::Band> bands_from_peaks(const data::Record& record,
                                            const std::vector<const data::Channel*>& channels,
                                            int count, signal::FftCache& cache);
 
+/// Why channel `name` of `record` cannot be processed as a response (it is missing, or a
+/// force), or "" when it can.
+std::string not_a_response(const data::Record& record, const std::string& name);
+
 /// Processes a record; throws InputError for unknown channels, bands outside (0, fs/2), or a
 /// requested channel without a unit when options.quantity is not given. With `modes = N`
 /// the bands are those of the N most prominent spectral peaks that give a backbone with

@@ -62,16 +62,9 @@ modal::RecordResult analyse_hit(const Campaign& c, const modal::ProcessOptions& 
   modal::ProcessOptions kept = opt;
   kept.channels.clear();
   for (const CampaignChannel& ch : c.channels) {
-    const auto rc = std::find_if(rec.channels.begin(), rec.channels.end(),
-                                 [&](const data::Channel& x) { return x.name == ch.name; });
-    if (rc == rec.channels.end()) {
-      std::string have;
-      for (const data::Channel& k : rec.channels) have += (have.empty() ? "" : ", ") + k.name;
-      lacking.emplace_back(ch.name, fmt::format("no channel '{}' (channels: {})", ch.name, have));
-    } else if (rc->quantity == Quantity::kForce) {
-      lacking.emplace_back(ch.name,
-                           fmt::format("channel '{}' is a force, not a response", ch.name));
-    } else if (!rc->quantity && !c.quantity) {
+    if (std::string why = modal::not_a_response(rec, ch.name); !why.empty()) {
+      lacking.emplace_back(ch.name, std::move(why));
+    } else if (!rec.find(ch.name)->quantity && !c.quantity) {
       // The rule of `process`: a channel without a unit measures what the campaign says, or
       // nothing can be assumed.
       lacking.emplace_back(
