@@ -130,17 +130,13 @@ void run_update_linear(const LinearArgs& a) {
   correlate::LinearUpdateSummary summary;
   const Eigen::VectorXd theta =
       correlate::update_linear(m, a.sets, sensors, measured, options, &summary);
-  if (summary.status == correlate::LinearUpdateStatus::kTooFewPairs) {
-    throw InputError(fmt::format(
-        "update-linear: no measured mode of {} pairs with a model mode (MAC >= {}, frequency "
-        "within {:g} %)",
-        a.measured.empty() ? a.modes_table : a.measured, options.mac_threshold,
-        100 * options.frequency_window));
-  }
-  if (summary.status == correlate::LinearUpdateStatus::kAmbiguous) {
-    say(stdout, "{}", summary.report());  // where it stopped, for the user to judge
-    throw InputError(
-        fmt::format("update-linear: the pairs cannot be decided: {}", summary.ambiguity));
+  if (const std::string why = correlate::linear_refusal(
+          summary, options, a.measured.empty() ? a.modes_table : a.measured);
+      !why.empty()) {
+    // Where undecided pairs stopped it, for the user to judge.
+    if (summary.status == correlate::LinearUpdateStatus::kAmbiguous)
+      say(stdout, "{}", summary.report());
+    throw InputError("update-linear: " + why);
   }
   const model::Model updated = correlate::StiffnessSets(m, a.sets).apply(theta);
   make_out_dir(a.out);

@@ -739,18 +739,17 @@ std::string pair_text(const LinearEvaluation& e, int i) {
                      e.mac(i, j));
 }
 
+// At most this many candidate pairings are fitted from the start: each is a whole fit
+// (seconds on a thousand-DOF model), and more guesses than this say the sensors do not see
+// the modes apart.
+constexpr size_t kMaxPairings = 16;
+
 // The pairings to try where the rules pair `at` (made afresh at `point`) by a guess: every
 // combination of one candidate for each tie (each a swap, so the pairs stay one to one), or
 // for the first `ties` ties alone; else `point`. At the start every tie is tried: a later tie
 // is met only once an earlier guess is made, and trying the first tie's candidates alone
 // left a fit "converged" on a wrong guess of the second. At a fit's result the first alone
 // (each candidate there is a fit of its own, within each start's fit).
-
-// At most this many candidate pairings are fitted from the start: each is a whole fit
-// (seconds on a thousand-DOF model), and more guesses than this say the sensors do not see
-// the modes apart.
-constexpr size_t kMaxPairings = 16;
-
 std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const LinearEvaluation& at,
                                              size_t ties) {
   std::vector<TrackedPoint> out{point};
@@ -1154,6 +1153,16 @@ std::string LinearUpdateSummary::report() const {
   }
   for (const std::string& w : warnings) out += fmt::format("  WARNING: {}\n", w);
   return out;
+}
+
+std::string linear_refusal(const LinearUpdateSummary& summary, const LinearUpdateOptions& options,
+                           const std::string& source) {
+  if (summary.status == LinearUpdateStatus::kAmbiguous)
+    return "the pairs cannot be decided: " + summary.ambiguity;
+  if (summary.status != LinearUpdateStatus::kTooFewPairs) return "";
+  return fmt::format(
+      "no measured mode{} pairs with a model mode (MAC >= {}, frequency within {:g} %)",
+      source.empty() ? "" : " of " + source, options.mac_threshold, 100 * options.frequency_window);
 }
 
 }  // namespace jointlab::correlate

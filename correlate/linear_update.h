@@ -244,6 +244,12 @@ struct AliasedModes {
 std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>& at_sensors,
                                         double threshold);
 
+/// Why update_linear() gave no result (no measured mode paired, or pairs that cannot be
+/// decided: the command refuses both), or "" when it gave one; `source` names the measured
+/// data in the message ("" for none).
+std::string linear_refusal(const LinearUpdateSummary& summary, const LinearUpdateOptions& options,
+                           const std::string& source);
+
 /// Updates the named sets of `model` to the measured frequencies; returns theta.
 /// InputError for bad options, unknown sets or inconsistent sensors/measured shapes (a
 /// measured mode whose shape is zero at every sensor while others have shapes among them).

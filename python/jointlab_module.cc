@@ -271,11 +271,10 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
         measured ? correlate::measured_modes(correlate::read_process_run(*measured), sensors)
                  : correlate::read_modes_table(*modes_table, sensors, nullptr);
     theta = correlate::update_linear(m, sets, sensors, meas, o, &s);
-    if (s.status == correlate::LinearUpdateStatus::kTooFewPairs)
-      throw InputError(fmt::format("update-linear: no measured mode of {} pairs with a model mode",
-                                   measured ? *measured : *modes_table));
-    if (s.status == correlate::LinearUpdateStatus::kAmbiguous)
-      throw InputError(fmt::format("update-linear: the pairs cannot be decided: {}", s.ambiguity));
+    if (const std::string why =
+            correlate::linear_refusal(s, o, measured ? *measured : *modes_table);
+        !why.empty())
+      throw InputError("update-linear: " + why);
     updated = correlate::StiffnessSets(m, sets).apply(theta);
     if (out) model::write_model_file(std::filesystem::path(*out), updated);
   }

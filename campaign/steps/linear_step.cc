@@ -112,17 +112,9 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
       correlate::update_linear(m.model, c.linear_update.sets, m.sensors, fitted, lo, &step.summary);
   // A refused update (as update-linear refuses it) leaves the model as given: its stiffness
   // must not reach the Iwan update and the model-side results as if identified.
-  using correlate::LinearUpdateStatus;
-  if (step.summary.status == LinearUpdateStatus::kTooFewPairs ||
-      step.summary.status == LinearUpdateStatus::kAmbiguous) {
+  if (const std::string why = correlate::linear_refusal(step.summary, lo, ""); !why.empty()) {
     step.refused = true;
-    step.note = fmt::format(
-        "update.linear: {}; the model's linear part is left as given",
-        step.summary.status == LinearUpdateStatus::kAmbiguous
-            ? "the pairs cannot be decided: " + step.summary.ambiguity
-            : fmt::format("no measured mode pairs with a model mode (MAC >= {}, frequency within "
-                          "{:g} %)",
-                          lo.mac_threshold, 100 * lo.frequency_window));
+    step.note = "update.linear: " + why + "; the model's linear part is left as given";
     return step;
   }
   step.updated = correlate::StiffnessSets(m.model, c.linear_update.sets).apply(theta);
