@@ -186,11 +186,15 @@ CsvColumns read_columns(std::vector<std::string> header, long line, const std::s
       if (slot >= 0) throw InputError(where(file, line, fmt::format("two '{}' columns", col)));
       slot = static_cast<int>(i);
     };
-    if (col == "frequency_hz" || (col == "frequency" && lower(unit) == "hz")) {
+    if ((col == "frequency_hz" || col == "frequency") &&
+        (lower(unit) == "hz" || (col == "frequency_hz" && unit.empty()))) {
       take(cols.f);
-    } else if (col == "frequency") {
-      throw InputError(
-          where(file, line, fmt::format("column 'frequency': unit '{}' is not Hz", unit)));
+    } else if (col == "frequency" || col == "frequency_hz") {
+      // (`frequency_hz [rad/s]` was read as Hz: a frequency 2 pi too high, and no word.)
+      throw InputError(where(file, line,
+                             fmt::format("column '{}': unit '{}' is not Hz (write 'frequency_hz' "
+                                         "or 'frequency [Hz]')",
+                                         col, printable(unit))));
     } else if (col == "force") {
       take(cols.force);
       cols.force_si = force_unit(unit, file, line);

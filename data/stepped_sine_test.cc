@@ -96,6 +96,19 @@ TEST(SteppedSineCsv, BadInputNamesFileAndLine) {
   EXPECT_NE(err("# control: force\nfrequency_hz,force [N],response,phase [deg]\n")
                 .find("column 'response' has no unit"),
             std::string::npos);
+  // A frequency column in any unit but Hz (it was read as Hz, 2 pi too high for rad/s).
+  EXPECT_NE(err("# control: force\nfrequency_hz [rad/s],force [N],response [m/s^2],phase [deg]\n")
+                .find("s.csv:2: column 'frequency_hz': unit 'rad/s' is not Hz"),
+            std::string::npos);
+  EXPECT_NE(err("# control: force\nfrequency [kHz],force [N],response [m/s^2],phase [deg]\n")
+                .find("s.csv:2: column 'frequency': unit 'kHz' is not Hz"),
+            std::string::npos);
+  EXPECT_EQ(parse_stepped_sine_csv("# control: force\nfrequency_hz [Hz],force [N],response "
+                                   "[m/s^2],phase [deg]\n" +
+                                       rows + "5,1,1,0\n",
+                                   "s.csv")[0]
+                .frequency_hz(4),
+            5.0);
   EXPECT_NE(
       err("# control: force\nfrequency_hz,force [N],phase [deg]\n").find("no 'response' column"),
       std::string::npos);
