@@ -940,8 +940,10 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
 }
 
 // The free parameters of v that end within 1e-3 of their range (in the search coordinates x) of
-// a bound, and a fitted Z that ends at one, e.g. "Fs at its upper bound 2000 N"; `side` receives -1
-// / +1 per parameter (F_S, K_T, chi, beta, Z) at its lower / upper bound.
+// a bound, and a fitted Z that ends at one, e.g. "Fs at its upper bound 2000 N" (the bound itself,
+// to rounding) or "Fs 1985 N, near its upper bound 2000 N" (within the tolerance: the search was
+// pressing on it); `side` receives -1 / +1 per parameter (F_S, K_T, chi, beta, Z) at or near its
+// lower / upper bound.
 std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const Vec4& v,
                                         std::optional<double> z, std::array<int, 5>& side) {
   const Box box = initial_box(options);
@@ -952,13 +954,20 @@ std::vector<std::string> bounds_reached(const IwanUpdateOptions& options, const 
   side.fill(0);
   for (int k = 0; k < 4; ++k) {
     if (!(hi(k) > lo(k))) continue;  // held
-    const double tol = 1e-3 * (hi(k) - lo(k));
+    const double tol = 1e-3 * (hi(k) - lo(k)), exact = 1e-9 * (hi(k) - lo(k));
+    const double value = v(k);
+    const auto say = [&](const char* which, double bound, double distance) {
+      return distance <= exact
+                 ? fmt::format("{} at its {} bound {:.6g}{}", names[k], which, bound, units[k])
+                 : fmt::format("{} {:.6g}{}, near its {} bound {:.6g}{}", names[k], value, units[k],
+                               which, bound, units[k]);
+    };
     if (x(k) <= lo(k) + tol) {
       side[k] = -1;
-      out.push_back(fmt::format("{} at its lower bound {:.6g}{}", names[k], box.lo(k), units[k]));
+      out.push_back(say("lower", box.lo(k), x(k) - lo(k)));
     } else if (x(k) >= hi(k) - tol) {
       side[k] = 1;
-      out.push_back(fmt::format("{} at its upper bound {:.6g}{}", names[k], box.hi(k), units[k]));
+      out.push_back(say("upper", box.hi(k), hi(k) - x(k)));
     }
   }
   // Z is the weighted mean of the damping residuals clamped to [0, zmax] (IwanObjective): at a

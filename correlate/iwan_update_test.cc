@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
@@ -556,6 +557,16 @@ TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
     EXPECT_EQ(sum.best.Fs, p.Fs);
     EXPECT_TRUE(sum.improved);
     EXPECT_EQ(sum.report().find("no candidate improved"), std::string::npos) << sum.report();
+    // A bound is called one only at the bound itself (to rounding); short of it, within 1e-3 of
+    // the range, the value is named beside it ("Fs 60.3 N, near its lower bound 60 N").
+    for (const std::string& b : sum.at_bounds) {
+      if (!b.starts_with("Fs")) continue;
+      if (b.find("near") == std::string::npos) {
+        EXPECT_NEAR(p.Fs, b.find("lower") != std::string::npos ? 60.0 : 80.0, 1e-9 * 80) << b;
+      } else {
+        EXPECT_NE(b.find(fmt::format("Fs {:.6g} N, near its", p.Fs)), std::string::npos) << b;
+      }
+    }
     if (method == IwanOptimizer::kPaper) continue;  // its samples rarely land on a bound
     ASSERT_FALSE(sum.at_bounds.empty()) << sum.report();
     EXPECT_EQ(sum.at_bounds.front(), "Fs at its lower bound 60 N") << sum.report();
