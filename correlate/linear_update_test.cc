@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include <fmt/format.h>
@@ -409,6 +410,51 @@ TEST(LinearUpdate, SweepsFollowEachPairByItsShape) {
       }
     }
   }
+}
+
+// Five test modes, each midway between two model modes 0.1 % apart, read at one sensor (a shape
+// at one sensor is no evidence for MAC): every pair is a guess, 2^5 = 32 combinations, more than
+// the 16 the start fits (kMaxPairings). The update is refused before any fit, naming the count
+// and what would help, and the model is left at its start.
+TEST(LinearUpdate, MoreGuessedPairingsThanTheStartFitsAreRefused) {
+  constexpr int kPairs = 5;
+  model::Model m;
+  std::vector<Eigen::Triplet<double>> k, mass;
+  MeasuredModes meas;
+  meas.frequency_hz.resize(kPairs);
+  for (int j = 0; j < kPairs; ++j) {
+    const double f = 100.0 * (j + 1), w2 = std::pow(2 * std::numbers::pi * f, 2);
+    for (int side : {0, 1}) {
+      const int dof = 2 * j + side;
+      mass.emplace_back(dof, dof, 1.0);
+      k.emplace_back(dof, dof, w2 * (side == 0 ? 1 - 1e-3 : 1 + 1e-3));
+    }
+    meas.frequency_hz(j) = f;
+  }
+  m.mass.resize(2 * kPairs, 2 * kPairs);
+  m.mass.setFromTriplets(mass.begin(), mass.end());
+  m.stiffness.resize(2 * kPairs, 2 * kPairs);
+  m.stiffness.setFromTriplets(k.begin(), k.end());
+  model::Joint j;
+  j.a = 0;
+  j.b = model::kGround;
+  j.element = "spring.kj";
+  j.stiffness = 1.0;  // a joint that barely moves mode 1 (a 1e-6 share of its stiffness)
+  m.joints.push_back(j);
+  model::validate_model(m, "five close pairs");
+  meas.shapes = Eigen::MatrixXcd::Ones(1, kPairs);
+  const std::vector<Sensor> one{{"s0", 0, 1.0}};
+  LinearUpdateSummary s;
+  const Eigen::VectorXd theta = update_linear(m, {"spring.kj"}, one, meas, {}, &s);
+  ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << s.report();
+  EXPECT_EQ(s.start.ties.size(), static_cast<size_t>(kPairs)) << s.start.ambiguity;
+  EXPECT_NE(s.ambiguity.find("that leaves 32 pairings to fit, more than 16: add sensors"),
+            std::string::npos)
+      << s.ambiguity;
+  EXPECT_EQ(s.rounds, 0) << "no fit is made";
+  EXPECT_EQ(theta(0), 1.0);
+  EXPECT_NE(linear_refusal(s, {}, "table.csv").find("32 pairings"), std::string::npos)
+      << linear_refusal(s, {}, "table.csv");
 }
 
 }  // namespace
