@@ -752,8 +752,11 @@ RecordResult process_modes(const data::Record& record,
     for (const Chosen& c : chosen)
       kept += fmt::format("{}{:.2f} Hz", kept.empty() ? "" : ", ", c.frequency_hz);
     out.shortfall = fmt::format(
-        "--modes {}: only {} of the {} most prominent spectral peaks give a backbone ({}); "
-        "left out: {}",
+        fmt::runtime(left.empty()
+                         ? "--modes {0}: only {1} spectral peak(s) stand out ({3}), each giving a "
+                           "backbone"
+                         : "--modes {0}: only {1} of the {2} most prominent spectral peaks give a "
+                           "backbone ({3}); left out: {4}"),
         wanted, chosen.size(), peaks.size(), kept, left);
   }
   return out;

@@ -134,6 +134,27 @@ py::list process(const std::vector<std::string>& files,
         why = modal::band_without_backbone(r, static_cast<int>(k) + 1);
     throw InputError(fmt::format("process: no backbone at any channel, band or file; {}", why));
   }
+  // What the command writes and then fails with (exit 2) is returned here with a warning: fewer
+  // modes than modes=N asked for, or a band without a backbone in some file. Each peak modes=N
+  // left out goes to `progress`, as the command writes it to stderr.
+  for (const modal::RecordResult& r : results) {
+    for (const modal::LeftOutPeak& p : r.left_out) {
+      report(progress, fmt::format("process: {}: the spectral peak at {:.2f} Hz is left out (band "
+                                   "{:g}:{:g} Hz gives no modal data): {}",
+                                   r.source, p.frequency_hz, p.band.lo, p.band.hi, p.reason));
+    }
+    std::vector<std::string> why;
+    if (!r.shortfall.empty()) why.push_back(r.shortfall);
+    for (size_t k = 0; k < r.bands.size(); ++k) {
+      if (std::string w = modal::band_without_backbone(r, static_cast<int>(k) + 1); !w.empty())
+        why.push_back(fmt::format("band {} ({:g}:{:g} Hz): no backbone at any channel; {}", k + 1,
+                                  r.bands[k].lo, r.bands[k].hi, w));
+    }
+    for (const std::string& w : why) {
+      const std::string message = fmt::format("process: {}: {}", r.source, w);
+      if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+    }
+  }
   return out;
 }
 
@@ -548,7 +569,9 @@ progress   callable taking one line of text, or None (silent)
 threads    workers for each file's bands and channels (0: every core); the results do not depend on it
 
 Returns a list of jointlab.Backbone, one per file x channel x band with a kept span, in the
-order of the files, then bands, then channels. Each carries numpy arrays named as the CSV's
+order of the files, then bands, then channels. Where the command would fail after writing what
+it found (modes=N finding fewer than N modes, or a band with a backbone at no channel of a file),
+the list is returned with a UserWarning saying why; each peak modes=N left out is a progress line. Each carries numpy arrays named as the CSV's
 columns (time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz, damping_std, ...)
 and its linear values (linear_frequency_hz, linear_damping_ratio).
 

@@ -134,6 +134,31 @@ def test_progress_is_silent_unless_asked(capfd):
     assert out == "" and err == ""
 
 
+def test_fewer_modes_than_asked_are_returned_with_a_warning(tmp_path):
+    # One mode (50 Hz, 0.5 % damping) read through a sensor with a 5 % square term, in noise:
+    # modes=2 finds the mode, and the second peak (its harmonic at 100 Hz) gives no modal data.
+    # The command writes the one mode and exits 2; here it is returned with a warning, and the
+    # peak left out is a progress line, as the command's stderr has it.
+    fs, n = 2048.0, 8192
+    t = np.arange(n) / fs
+    w = 2 * np.pi * 50.0
+    x = np.exp(-0.005 * w * t) * np.sin(w * t)
+    acc = x + 0.05 * x**2 + 1e-4 * np.random.default_rng(1).standard_normal(n)
+    record = tmp_path / "one_mode.csv"
+    np.savetxt(record, np.column_stack([t, acc]), delimiter=",", header="time,acc1 [m/s^2]",
+               comments="")
+    r = run("process", record, "--modes", "2", "--out", tmp_path / "cli")
+    assert r.returncode == 2, r.stderr
+    lines = []
+    with pytest.warns(UserWarning, match="--modes 2: only 1 of the"):
+        backbones = jointlab.process([str(record)], modes=2, progress=lines.append)
+    assert len(backbones) == 1
+    assert abs(backbones[0].linear_frequency_hz / 50.0 - 1) < 1e-3
+    left_out = [line for line in lines if "is left out" in line]
+    assert len(left_out) == 1 and "100.00 Hz" in left_out[0] and "superharmonic" in left_out[0]
+    assert r.stderr.count("is left out") == 1
+
+
 def two_mass_spring_model(directory, kj):
     """Two 1 kg masses, each on a 1e5 N/m ground spring, joined by the joint spring.kj."""
     d = pathlib.Path(directory)
