@@ -36,6 +36,7 @@ function(jointlab_add_library name)
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(jointlab_${name} PUBLIC ${ARG_DEPENDS} PRIVATE ${ARG_PRIVATE_DEPENDS})
   jointlab_warnings(jointlab_${name})
+  target_precompile_headers(jointlab_${name} REUSE_FROM jointlab_lib_pch)
   install(TARGETS jointlab_${name} EXPORT jointlabTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
   file(GLOB headers RELATIVE ${CMAKE_CURRENT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/*.h)

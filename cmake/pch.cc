@@ -1,0 +1,1 @@
+// Hosts the precompiled headers every jointlab library reuses (CMakeLists.txt); no code.
