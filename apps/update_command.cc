@@ -340,6 +340,7 @@ void add_update_commands(CLI::App& app) {
       "  history.csv/.png         objective and every stiffness per iteration (Figure 2)\n"
       "  sweeps.csv/.png          one-at-a-time sweeps, modes followed by shape (Figure 3)\n"
       "  mac_start.png, mac.png   MAC at the start and at the result, pairs framed (Figure 4)\n"
+      "  mac.csv                  the MAC matrix at the result (measured x model modes)\n"
       "Progress on stderr, the report (with every warning once) on stdout.\n"
       "Example: jointlab update-linear beam/model.toml --measured processed --sensors\n"
       "  sensors.csv --set iwan.rivet --set spring.rz --out linear");
@@ -386,8 +387,9 @@ void add_update_commands(CLI::App& app) {
       "Updates the four parameters of one Iwan set (Fs, Kt = gamma Ks, chi, beta) so QSMA\n"
       "backbones match the measured ones (and, with --linear-damping fit, the model's own\n"
       "modal damping ratio). Reads DIR/summary.json and the band CSVs of 'jointlab process',\n"
-      "or --backbone tables; writes OUTDIR/model.toml, parameters.csv, history.csv (and\n"
-      "pareto.csv with --pareto), and prints a report (progress on stderr).");
+      "or --backbone tables; writes OUTDIR/model.toml, parameters.csv, history.csv,\n"
+      "backbones.png (backbones_<k>.png for each further mode; pareto.csv with --pareto),\n"
+      "and prints a report (progress on stderr).");
   iw->add_option("MODEL", ia->model, "model file (TOML), linear stiffness already updated")
       ->required();
   iw->add_option("--measured", ia->measured,

@@ -83,7 +83,7 @@ TEST(BrakeReuss, ChannelsAgreeOnTheFirstModeBackbone) {
 }
 
 // Forced to report (--min-share 0), acc2's damping near the impact reads 1-4 % above
-// acc1's and acc3's (which agree within 1.2 %), several times its stated uncertainty:
+// acc1's and acc3's (which agree within 1.1 %), several times its stated uncertainty:
 // the confident wrong values the default refusal prevents.
 TEST(BrakeReuss, WeakChannelForcedToReportDisagreesNearTheImpact) {
   const data::Record rec = data::read_record(testing::source_dir() +
