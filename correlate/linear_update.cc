@@ -553,6 +553,15 @@ void report_uncertainty(const LinearProblem& p, const LinearEvaluation& at,
         "(model-form error); the standard deviations are widened by sqrt({:.3g})",
         100 * sf, s.reduced_chi2, s.degrees_of_freedom, s.reduced_chi2));
   }
+  // (A sign-flipped sensor paired a 505 Hz test mode with a model mode then at 748 Hz, the one
+  // pair for the one set, and the fit moved K_T 528-fold to match it exactly, "converged".)
+  if (s.degrees_of_freedom == 0 && !fitted.empty()) {
+    s.warnings.push_back(fmt::format(
+        "{} pair(s) for {} fitted set(s): no degree of freedom is left, so the fit matches the "
+        "frequencies exactly whatever the pairs and nothing checks them or the model (the "
+        "standard deviations only assume the stated {:.3g} %); add measured modes or sensors",
+        pairs, fitted.size(), 100 * sf));
+  }
 }
 
 // Within the tolerance: every pair of `at` kept, every paired error at most the tolerance.

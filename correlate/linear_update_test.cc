@@ -457,5 +457,31 @@ TEST(LinearUpdate, MoreGuessedPairingsThanTheStartFitsAreRefused) {
       << linear_refusal(s, {}, "table.csv");
 }
 
+// One mode for one set: the fit matches the frequency exactly whatever the pair, and nothing is
+// left to check it; the summary says so (a sign-flipped sensor once paired a mode 48 % away and
+// moved K_T 528-fold, "converged" without a word).
+TEST(LinearUpdate, NoDegreeOfFreedomLeftIsSaid) {
+  model::Model m;
+  m.mass.resize(1, 1);
+  m.mass.insert(0, 0) = 1.0;
+  m.stiffness.resize(1, 1);
+  m.stiffness.insert(0, 0) = 1e4;
+  model::Joint j;
+  j.a = 0;
+  j.b = model::kGround;
+  j.element = "spring.kj";
+  j.stiffness = 1e4;
+  m.joints.push_back(j);
+  model::validate_model(m, "one mass");
+  MeasuredModes meas;
+  meas.frequency_hz = Eigen::VectorXd::Constant(1, std::sqrt(4e4) / (2 * std::numbers::pi));
+  meas.shapes = Eigen::MatrixXcd::Ones(1, 1);
+  LinearUpdateSummary s;
+  const Eigen::VectorXd theta = update_linear(m, {"spring.kj"}, {{"s0", 0, 1.0}}, meas, {}, &s);
+  EXPECT_NEAR(theta(0), 3e4, 3e4 * 1e-6) << s.report();  // k0 + kj = (2 pi f)^2 = 4e4
+  EXPECT_EQ(s.degrees_of_freedom, 0);
+  EXPECT_NE(s.report().find("no degree of freedom is left"), std::string::npos) << s.report();
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
