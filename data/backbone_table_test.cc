@@ -89,6 +89,10 @@ TEST(BackboneTable, RefusesUnphysicalValuesWithFileAndLine) {
       {"amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n1,10,0.01,1,-1\n",
        "bad11.csv:2: damping_std '-1' must be a finite number >= 0"},
       {header + "1,10,abc\n2,10,0.01\n", "bad12.csv:2: damping_ratio 'abc'"},
+      // Per cent without its unit: 4.85 (%) read as a fraction is no ring-down.
+      {header + "1,10,0.5\n2,10,4.85\n",
+       "bad13.csv:3: damping_ratio '4.85' is not a fraction below 1; per cent? write the header "
+       "as 'damping_ratio [%]'"},
   };
   int i = 0;
   for (const auto& [text, expected] : cases) {
