@@ -59,10 +59,14 @@ double bin_std(const ScatterSummary& s, double a, bool frequency) {
   return -1.0;
 }
 
-// Point i's own uncertainty on curve c, or 0 where not known.
-double own_std(const std::vector<Eigen::VectorXd>& stds, size_t c, Eigen::Index i) {
+// Point i's own uncertainty on curve c, one sigma (k sigma as written over the curve's k), or 0
+// where not known. (Read as one sigma, process's k = 3 weighed these points a third as much as
+// the bins' one-sigma scatter beside them.)
+double own_std(const ModeBackbones& mode, const std::vector<Eigen::VectorXd>& stds, size_t c,
+               Eigen::Index i) {
   if (c >= stds.size() || i >= stds[c].size()) return 0.0;
-  return stds[c](i);
+  const double k = c < mode.coverage.size() ? mode.coverage[c] : 1.0;
+  return stds[c](i) / k;
 }
 
 bool flagged(const ScatterSummary& s, const std::string& id) {
@@ -155,8 +159,8 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
         mb.damping_ratio(j) = cv.damping(i);
         const double bf = bin_std(mode.scatter, cv.amplitude(i), true);
         const double bz = bin_std(mode.scatter, cv.amplitude(i), false);
-        mb.frequency_std_hz(j) = bf >= 0 ? bf : own_std(mode.frequency_std_hz, c, i);
-        mb.damping_std(j) = bz >= 0 ? bz : own_std(mode.damping_std, c, i);
+        mb.frequency_std_hz(j) = bf >= 0 ? bf : own_std(mode, mode.frequency_std_hz, c, i);
+        mb.damping_std(j) = bz >= 0 ? bz : own_std(mode, mode.damping_std, c, i);
       }
       t.curves.push_back(std::move(mb));
     }
@@ -193,6 +197,7 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
     mb.curves.push_back(std::move(bf.curve));
     mb.frequency_std_hz.push_back(std::move(bf.frequency_std_hz));
     mb.damping_std.push_back(std::move(bf.damping_std));
+    mb.coverage.push_back(bf.coverage_factor);
     mb.sensors.push_back(s);
   }
   if (mb.curves.empty()) {
@@ -222,6 +227,7 @@ ModeBackbones stepped_sine_run_backbones(const correlate::SteppedSineRun& run, i
     mb.curves.push_back(std::move(cv));
     mb.frequency_std_hz.push_back(b.frequency_std_hz);
     mb.damping_std.push_back(b.damping_std);
+    mb.coverage.push_back(b.coverage_factor);
     mb.sensors.push_back(sensor);
     mb.kinds.push_back(correlate::BackboneKind::kSteppedSine);
   }

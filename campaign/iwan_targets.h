@@ -42,10 +42,13 @@ struct ModeBackbones {
   std::vector<Curve> curves;       ///< backbones; Curve::id names the hit
   std::vector<int> sensors;        ///< per curve: its sensor index
   std::vector<correlate::BackboneKind> kinds;     ///< per curve (empty or no entry: ring-down)
-  std::vector<Eigen::VectorXd> frequency_std_hz;  ///< per curve: each point's own sigma_f [Hz]
+  std::vector<Eigen::VectorXd> frequency_std_hz;  ///< per curve: each point's own k sigma_f [Hz]
                                                   ///< (process's; empty vector or entry: none)
-  std::vector<Eigen::VectorXd> damping_std;       ///< per curve: each point's own sigma_z
-  ScatterSummary scatter;                         ///< the scatter summary of `curves`
+  std::vector<Eigen::VectorXd> damping_std;       ///< per curve: each point's own k sigma_z
+  /// Per curve: k of its own std, as written (process and stepped-sine: 3 by default; a table
+  /// without a coverage_factor column: 1); no entry: 1. The fit weighs by std / k.
+  std::vector<double> coverage;
+  ScatterSummary scatter;  ///< the scatter summary of `curves`
 };
 
 /// Settings of iwan_targets().

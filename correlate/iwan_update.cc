@@ -120,6 +120,10 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
         throw InputError(
             fmt::format("mode {}, {}: backbone columns empty or of unequal length", t.mode, name));
       }
+      if (!(c.coverage_factor >= 1 && std::isfinite(c.coverage_factor))) {
+        throw InputError(fmt::format("mode {}, {}: coverage factor {} is not a finite number >= 1",
+                                     t.mode, name, c.coverage_factor));
+      }
       if ((c.amplitude.array() <= 0).any() || (c.frequency_hz.array() <= 0).any() ||
           !c.amplitude.allFinite() || !c.frequency_hz.allFinite() || !c.damping_ratio.allFinite()) {
         throw InputError(fmt::format(
@@ -350,8 +354,12 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
           const double z = !matched                               ? q.damping_ratio
                            : c.kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
                                                                   : q.ringdown_damping_ratio;
-          const double sf = std::max(c.frequency_std_hz(j), f_floor_ * c.frequency_hz(j));
-          const double sz = std::max(c.damping_std(j), z_floor_ * std::abs(c.damping_ratio(j)));
+          // One sigma: the file's expanded uncertainty over its coverage factor (process's k = 3
+          // was read as sigma, and the reduced chi-square came out 9 times too small).
+          const double k_cov = c.coverage_factor;
+          const double sf = std::max(c.frequency_std_hz(j) / k_cov, f_floor_ * c.frequency_hz(j));
+          const double sz =
+              std::max(c.damping_std(j) / k_cov, z_floor_ * std::abs(c.damping_ratio(j)));
           if (values) {
             values[k] = f;
             values[k + 1] = z;

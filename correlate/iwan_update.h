@@ -78,8 +78,11 @@ struct MeasuredBackbone {
   Eigen::VectorXd amplitude;         ///< amplitude a_j (SI units of the quantity), > 0
   Eigen::VectorXd frequency_hz;      ///< f_j [Hz]
   Eigen::VectorXd damping_ratio;     ///< zeta_j
-  Eigen::VectorXd frequency_std_hz;  ///< sigma_f,j [Hz] (0: the floor)
-  Eigen::VectorXd damping_std;       ///< sigma_z,j (0: the floor)
+  Eigen::VectorXd frequency_std_hz;  ///< k sigma_f,j [Hz] as read (0: the floor)
+  Eigen::VectorXd damping_std;       ///< k sigma_z,j as read (0: the floor)
+  /// k of the two std columns: `process` and `stepped-sine` write expanded uncertainties
+  /// (k = 3 by default, their `coverage_factor`); the objective weighs each point by std / k.
+  double coverage_factor = 1.0;
 };
 
 /// The measured data of one model mode.

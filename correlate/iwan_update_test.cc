@@ -102,6 +102,38 @@ TEST(IwanUpdate, ObjectiveIsSmallAtTheTruthAndLargeAway) {
   EXPECT_GT(obj.cost({20, 5.5e5, -0.5, 1.0}), 100.0);
 }
 
+// process and stepped-sine write expanded uncertainties, k sigma (k = 3): a curve whose std
+// columns are 3 sigma with coverage_factor 3 costs what the same curve at one sigma does, at the
+// truth (noise-only residuals, cost ~2) and away from it. Read as one sigma (k left at 1), the
+// same numbers cost a ninth (the floors, 1e-5 in frequency and 1e-3 in damping of the values, lie
+// far below these 5e-4 and 3 % std), and the cost ~2 of noise alone looked like 0.2.
+TEST(IwanUpdate, ExpandedUncertaintiesAreWeighedAsOneSigma) {
+  Synthetic s;
+  const model::Model m = two_chain_structure(s.truth);
+  IwanTarget expanded = s.target, misread = s.target;
+  for (IwanTarget* t : {&expanded, &misread}) {
+    for (MeasuredBackbone& c : t->curves) {
+      c.frequency_std_hz *= 3;
+      c.damping_std *= 3;
+    }
+  }
+  for (MeasuredBackbone& c : expanded.curves) c.coverage_factor = 3;
+  const IwanObjective one(m, "rivet", s.sensors, {s.target}, {}),
+      three(m, "rivet", s.sensors, {expanded}, {}), wrong(m, "rivet", s.sensors, {misread}, {});
+  for (const model::IwanParameters& p :
+       {model::IwanParameters{20, 5e5, -0.5, 1.0}, model::IwanParameters{40, 5e5, -0.5, 1.0}}) {
+    const double c1 = one.cost(p);
+    EXPECT_NEAR(three.cost(p), c1, 1e-12 * c1) << p.Fs;
+    EXPECT_NEAR(wrong.cost(p), c1 / 9, 1e-9 * c1) << p.Fs;
+  }
+  IwanTarget bad = s.target;
+  bad.curves[0].coverage_factor = 0.5;
+  EXPECT_NE(testing::input_error_of([&] {
+              IwanObjective(m, "rivet", s.sensors, {bad}, {});
+            }).find("coverage factor 0.5 is not a finite number >= 1"),
+            std::string::npos);
+}
+
 // The fast evaluation (shared set-up, model/iwan_set_model.h; Newton, qsma_at.h) against
 // the slow one (condensation from scratch, bracketing) at the same parameters, across the
 // search box: the same residuals. They differ by the rounding of two dense eigen-solves and

@@ -220,6 +220,11 @@ SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
   SteppedSineRun run;
   run.dir = dir;
   run.amplitude = amplitude_of(f, doc);
+  if (const JsonValue* k = doc.find("coverage_factor"); k && !k->is_null()) {
+    if (!k->is_number() || !(k->number() >= 1) || !std::isfinite(k->number()))
+      f.fail("coverage_factor", "not a finite number >= 1");
+    run.coverage_factor = k->number();
+  }
   for_each_file(f, doc, [&](const JsonValue& file, const std::string& fp) {
     SteppedSineOutput o;
     o.source = f.get(file, fp, "file", JsonValue::Type::kString).string();
@@ -245,6 +250,7 @@ std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, 
     if (o.file.empty()) continue;
     out.push_back(read_backbone_csv(run.dir / o.file, sensor));
     out.back().kind = BackboneKind::kSteppedSine;
+    out.back().coverage_factor = run.coverage_factor;
   }
   if (out.empty()) {
     throw InputError(fmt::format("{}: no file gave a stepped-sine backbone",
@@ -301,7 +307,11 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
   int column[5] = {-1, -1, -1, -1, -1};
   std::vector<double> values[5];
   std::vector<size_t> marks;  // columns of data::is_point_mark: their marked rows are skipped
+  int coverage_col = -1;      // process's coverage_factor: k of the std columns
+  double coverage = 0;        // its value (0: none read)
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
+    for (size_t c = 0; c < cells.size(); ++c)
+      if (cells[c] == "coverage_factor") coverage_col = static_cast<int>(c);
     for (int k = 0; k < 5; ++k) {
       for (size_t c = 0; c < cells.size(); ++c) {
         if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
@@ -317,6 +327,17 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
     for (const size_t c : marks) {
       if (c < cells.size() && !cells[c].empty() && std::strtod(cells[c].c_str(), nullptr) != 0)
         return;
+    }
+    if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
+      const std::string& cell = cells[static_cast<size_t>(coverage_col)];
+      const double k = std::strtod(cell.c_str(), nullptr);
+      if (!(k >= 1) || !std::isfinite(k) || (coverage > 0 && k != coverage)) {
+        throw InputError(where(
+            name, n,
+            fmt::format("coverage_factor '{}' must be a finite number >= 1, the same on every row",
+                        cell)));
+      }
+      coverage = k;
     }
     for (int k = 0; k < 5; ++k) {
       const std::string& cell = cells[static_cast<size_t>(column[k])];
@@ -351,6 +372,7 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
   b.damping_ratio = vec(values[2]);
   b.frequency_std_hz = vec(values[3]);
   b.damping_std = vec(values[4]);
+  if (coverage > 0) b.coverage_factor = coverage;
   return b;
 }
 
@@ -395,7 +417,15 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
   std::vector<std::vector<double>> shape;
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
     if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
-      throw InputError(where(name, n, "the header must begin with mode,frequency_hz"));
+      // What was found, as written: 'Mode,Frequency_Hz' or 'frequency_hz [Hz]' differ only in
+      // case or a unit, and a newcomer cannot see which from the rule alone.
+      std::string found;
+      for (size_t c = 0; c < std::min<size_t>(cells.size(), 2); ++c)
+        found += (c ? "," : "") + cells[c];
+      throw InputError(where(name, n,
+                             fmt::format("the header must begin with mode,frequency_hz (lower "
+                                         "case, no unit: frequencies in Hz); it begins '{}'",
+                                         found)));
     }
     for (size_t c = 2; c < cells.size(); ++c) {
       int row = -1;
@@ -505,6 +535,7 @@ MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor)
   b.damping_ratio = table.damping_ratio;
   b.frequency_std_hz = table.frequency_std_hz;
   b.damping_std = table.damping_std;
+  b.coverage_factor = table.coverage_factor;
   return b;
 }
 

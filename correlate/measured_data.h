@@ -70,6 +70,7 @@ struct SteppedSineRun {
   std::filesystem::path dir;                                   ///< the directory
   AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< backbone amplitude quantity
   std::vector<SteppedSineOutput> outputs;                      ///< every file's backbone
+  double coverage_factor = 1.0;  ///< k of the backbones' std columns (summary.json; absent: 1)
 };
 
 /// Reads DIR/summary.json of `jointlab stepped-sine`; InputError naming the file and the field,
@@ -91,7 +92,8 @@ MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index poin
 
 /// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`, leaving
 /// out rows marked in a `harmonic` or `exchange` column (not the mode's own frequency or
-/// damping); InputError naming the file and line.
+/// damping), its std columns' k from its `coverage_factor` column (none: 1); InputError naming
+/// the file and line.
 MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor);
 
 /// A backbone table (data/backbone_table.h, read at the edge) as a measured ring-down backbone:

@@ -131,6 +131,22 @@ TEST(MeasuredData, DefectsNameFileAndField) {
   write(d / "b.csv", std::string(kBackbone) + "0.3,0.01,nan,0.003,0.01,0.0001,20\n");
   EXPECT_NE(testing::input_error_of([&] { read_backbone_csv(d / "b.csv", 0); }).find("b.csv:4:"),
             std::string::npos);
+  // process's std columns are k sigma, k in its coverage_factor column: read with the curve
+  // (none: 1), one number >= 1.
+  write(d / "b.csv", kBackbone);
+  EXPECT_EQ(read_backbone_csv(d / "b.csv", 0).coverage_factor, 1.0);
+  const std::string head =
+      "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,coverage_factor\n";
+  write(d / "k.csv",
+        head + "0.1,0.02,57.5,0.004,0.03,0.0003,3\n0.2,0.01,57.8,0.003,0.03,0.0003,3\n");
+  const MeasuredBackbone k = read_backbone_csv(d / "k.csv", 0);
+  EXPECT_EQ(k.coverage_factor, 3.0);
+  EXPECT_EQ(k.frequency_std_hz(0), 0.03);  // as written
+  write(d / "k.csv", head + "0.1,0.02,57.5,0.004,0.03,0.0003,0.5\n");
+  EXPECT_NE(testing::input_error_of([&] {
+              read_backbone_csv(d / "k.csv", 0);
+            }).find("k.csv:2: coverage_factor '0.5' must be a finite number >= 1"),
+            std::string::npos);
 }
 
 // The amplitudes of a process folder are read as SI: a summary.json naming another amplitude
@@ -185,6 +201,12 @@ TEST(MeasuredData, ReadsAPlainModesTable) {
   EXPECT_NE(testing::input_error_of([&] {
               read_modes_table(d / "bad1.csv", sensors, nullptr);
             }).find("bad1.csv:1"),
+            std::string::npos);
+  // A header that differs in case names what it found.
+  write(d / "caps.csv", "Mode,Frequency_Hz\n1,2\n");
+  EXPECT_NE(testing::input_error_of([&] { read_modes_table(d / "caps.csv", sensors, nullptr); })
+                .find("caps.csv:1: the header must begin with mode,frequency_hz (lower case, no "
+                      "unit: frequencies in Hz); it begins 'Mode,Frequency_Hz'"),
             std::string::npos);
   write(d / "bad2.csv", "mode,frequency_hz,zz\n1,2,3\n");
   EXPECT_NE(testing::input_error_of([&] {

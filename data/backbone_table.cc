@@ -84,10 +84,13 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   std::array<double, 5> scale;  // value in the file's unit -> the table's (SI, Hz, a fraction)
   scale.fill(1.0);
   std::vector<size_t> marks;  // columns of is_point_mark: their marked rows are skipped
+  int coverage_col = -1;      // a `process` backbone's coverage_factor: k of the std columns
+  double coverage = 0;        // its value (0: none read yet)
   const std::vector<std::string> fields = splitter.split(header);
   for (size_t i = 0; i < fields.size(); ++i) {
     const auto [name, unit] = split_name_unit(fields[i], file, header_line);
     if (is_point_mark(name)) marks.push_back(i);
+    if (name == "coverage_factor") coverage_col = static_cast<int>(i);
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (name != kNames[k]) continue;
       if (col[k] >= 0) {
@@ -130,6 +133,17 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
       return v && *v != 0;
     });
     if (marked) continue;
+    if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
+      const std::string& cell = cells[static_cast<size_t>(coverage_col)];
+      const auto v = parse_double(cell);
+      if (!v || !(*v >= 1) || !std::isfinite(*v) || (coverage > 0 && *v != coverage)) {
+        throw InputError(where(file, n,
+                               fmt::format("coverage_factor '{}' must be a finite number >= 1, "
+                                           "the same on every row",
+                                           cell)));
+      }
+      coverage = *v;
+    }
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (col[k] < 0) continue;
       const std::string& cell = cells[static_cast<size_t>(col[k])];
@@ -163,6 +177,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
                    [&](size_t a, size_t b) { return values[0][a] < values[0][b]; });
   BackboneTable t;
   t.source = file;
+  if (coverage > 0) t.coverage_factor = coverage;
   Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
                             &t.damping_std};
   for (size_t k = 0; k < kNames.size(); ++k) {

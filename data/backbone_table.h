@@ -34,8 +34,10 @@ struct BackboneTable {
   Eigen::VectorXd amplitude;         ///< a_j, > 0 (SI of the quantity named by the caller)
   Eigen::VectorXd frequency_hz;      ///< f_j [Hz], > 0
   Eigen::VectorXd damping_ratio;     ///< zeta_j, > 0
-  Eigen::VectorXd frequency_std_hz;  ///< sigma_f,j [Hz] >= 0 (all 0 without the column)
-  Eigen::VectorXd damping_std;       ///< sigma_z,j >= 0 (all 0 without the column)
+  Eigen::VectorXd frequency_std_hz;  ///< k sigma_f,j [Hz] >= 0 (all 0 without the column)
+  Eigen::VectorXd damping_std;       ///< k sigma_z,j >= 0 (all 0 without the column)
+  /// k of the std columns: a `coverage_factor` column's value (a `process` backbone's), else 1.
+  double coverage_factor = 1.0;
   /// Number of points.
   Eigen::Index size() const { return amplitude.size(); }
 };

@@ -51,6 +51,25 @@ TEST(BackboneTable, ReadsTheUncertainties) {
   EXPECT_EQ(t.frequency_std_hz(0), 0.002);
   EXPECT_EQ(t.damping_std(0), 0.0);
   EXPECT_EQ(t.damping_std(1), 1e-4);
+  EXPECT_EQ(t.coverage_factor, 1.0);  // no coverage_factor column: one sigma
+  // A `process` backbone: its std columns are k sigma, k in its coverage_factor column, which is
+  // read (the values themselves are kept as written) and must be one number >= 1.
+  const std::string process_header =
+      "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,coverage_factor\n";
+  const BackboneTable p = read_backbone_table(
+      table("process.csv",
+            process_header + "0.1,2,10,0.01,0.003,3e-4,3\n0.2,1,11,0.02,0.006,0,3\n"),
+      std::nullopt);
+  EXPECT_EQ(p.coverage_factor, 3.0);
+  EXPECT_EQ(p.frequency_std_hz(0), 0.006);
+  EXPECT_NE(input_error_of([&] {
+              read_backbone_table(table("mixed.csv", process_header + "0.1,2,10,0.01,0.003,3e-4,3\n"
+                                                                      "0.2,1,11,0.02,0.006,0,2\n"),
+                                  std::nullopt);
+            })
+                .find("mixed.csv:3: coverage_factor '2' must be a finite number >= 1, the same on "
+                      "every row"),
+            std::string::npos);
 }
 
 // A `process` backbone's rows marked as not the mode's own are skipped before they are

@@ -316,7 +316,8 @@ HitData load_hit(const Campaign& c, const CampaignGroup& g, const fs::path& file
       if (le.ok && fs::exists(p)) {
         BackboneFile bf = read_backbone_file(p, h.stem, g.name);
         cv = std::move(bf.curve);
-        h.point_std[b][ch] = {std::move(bf.frequency_std_hz), std::move(bf.damping_std)};
+        h.point_std[b][ch] = {std::move(bf.frequency_std_hz), std::move(bf.damping_std),
+                              bf.coverage_factor};
       }
       cv.id = h.stem;
       cv.group = g.name;

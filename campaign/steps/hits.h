@@ -39,8 +39,9 @@ struct LinearEntry {
 
 /// Each point's own uncertainty as `process` reports it (empty: unknown).
 struct PointStd {
-  Eigen::VectorXd frequency_hz;  ///< [Hz]
-  Eigen::VectorXd damping;       ///< damping ratio
+  Eigen::VectorXd frequency_hz;  ///< k sigma [Hz], as process writes it
+  Eigen::VectorXd damping;       ///< k sigma of the damping ratio
+  double coverage = 1.0;         ///< k (the backbone file's coverage_factor)
 };
 
 /// Everything a run knows about one hit.

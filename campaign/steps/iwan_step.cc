@@ -99,6 +99,7 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     for (const PointStd& p : m.point_std[k]) {
       mb.frequency_std_hz.push_back(p.frequency_hz);
       mb.damping_std.push_back(p.damping);
+      mb.coverage.push_back(p.coverage);
     }
     mb.scatter = m.scatter[k];
   }
@@ -131,6 +132,7 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
       tables.curves.push_back(std::move(cv));
       tables.frequency_std_hz.push_back(t.frequency_std_hz);
       tables.damping_std.push_back(t.damping_std);
+      tables.coverage.push_back(t.coverage_factor);
       tables.sensors.push_back(m.reference[k]);
     }
     tables.scatter = summarize_scatter(tables.curves, ScatterOptions{});
@@ -168,6 +170,7 @@ ModeBackbones stepped_sine_backbones(const Campaign& c, size_t k, int sensor) {
     mb.curves.push_back(std::move(cv));
     mb.frequency_std_hz.push_back(sf);
     mb.damping_std.push_back(sz);
+    mb.coverage.push_back(opt.coverage_factor);
     mb.sensors.push_back(sensor);
     mb.kinds.push_back(correlate::BackboneKind::kSteppedSine);
   }

@@ -89,6 +89,15 @@ BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
     file.frequency_std_hz = pick("frequency_std_hz");
     file.damping_std = pick("damping_std");
   }
+  if (has("coverage_factor") && !own.empty()) {
+    const std::vector<double>& k = bt.column("coverage_factor", path);
+    file.coverage_factor = k[own.front()];
+    if (!(file.coverage_factor >= 1) ||
+        std::any_of(own.begin(), own.end(), [&](size_t i) { return k[i] != k[own.front()]; })) {
+      throw InputError(fmt::format(
+          "{}: coverage_factor must be a number >= 1, the same on every row", path.string()));
+    }
+  }
   return file;
 }
 

@@ -30,8 +30,9 @@ NumericTable read_numeric_table(const std::filesystem::path& path, bool allow_em
 /// A backbone file of `process`: the curve and each point's own uncertainty.
 struct BackboneFile {
   correlate::Curve curve;            ///< time, amplitude, frequency and damping (no linear values)
-  Eigen::VectorXd frequency_std_hz;  ///< per point [Hz]; empty when the file has none
-  Eigen::VectorXd damping_std;       ///< per point; empty when the file has none
+  Eigen::VectorXd frequency_std_hz;  ///< per point, k sigma [Hz]; empty when the file has none
+  Eigen::VectorXd damping_std;       ///< per point, k sigma; empty when the file has none
+  double coverage_factor = 1.0;      ///< k: the file's coverage_factor column (none: 1)
 };
 
 /// Reads a backbone CSV of `process` (time_s, amplitude, frequency_hz, damping_ratio and, when
