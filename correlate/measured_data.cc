@@ -330,14 +330,8 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
     }
     if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
       const std::string& cell = cells[static_cast<size_t>(coverage_col)];
-      const double k = std::strtod(cell.c_str(), nullptr);
-      if (!(k >= 1) || !std::isfinite(k) || (coverage > 0 && k != coverage)) {
-        throw InputError(where(
-            name, n,
-            fmt::format("coverage_factor '{}' must be a finite number >= 1, the same on every row",
-                        cell)));
-      }
-      coverage = k;
+      coverage =
+          data::coverage_factor_of_row(std::strtod(cell.c_str(), nullptr), coverage, cell, name, n);
     }
     for (int k = 0; k < 5; ++k) {
       const std::string& cell = cells[static_cast<size_t>(column[k])];

@@ -70,6 +70,17 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
 
 }  // namespace
 
+double coverage_factor_of_row(double value, double before, std::string_view cell,
+                              const std::string& file, long line) {
+  if (!(value >= 1) || !std::isfinite(value) || (before > 0 && value != before)) {
+    throw InputError(where(file, line,
+                           fmt::format("coverage_factor '{}' must be a finite number >= 1, the "
+                                       "same on every row",
+                                       cell)));
+  }
+  return value;
+}
+
 BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> quantity) {
   const std::string file = path.string();
   const auto text = read_text_file(path);
@@ -135,14 +146,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
     if (marked) continue;
     if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
       const std::string& cell = cells[static_cast<size_t>(coverage_col)];
-      const auto v = parse_double(cell);
-      if (!v || !(*v >= 1) || !std::isfinite(*v) || (coverage > 0 && *v != coverage)) {
-        throw InputError(where(file, n,
-                               fmt::format("coverage_factor '{}' must be a finite number >= 1, "
-                                           "the same on every row",
-                                           cell)));
-      }
-      coverage = *v;
+      coverage = coverage_factor_of_row(parse_double(cell).value_or(NAN), coverage, cell, file, n);
     }
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (col[k] < 0) continue;

@@ -47,6 +47,13 @@ struct BackboneTable {
 /// to another mode, which may be negative). Every backbone reader skips a row whose mark is not 0.
 bool is_point_mark(std::string_view column);
 
+/// One row's `coverage_factor` (k of a backbone file's expanded uncertainties, as `process`
+/// writes it): `value` (NaN where the cell is no number) must be a finite number >= 1 and equal
+/// `before`, the rows' value so far (0: none yet); returns it, else InputError "file:line:
+/// coverage_factor 'cell' must be ..." (line 0: the file alone).
+double coverage_factor_of_row(double value, double before, std::string_view cell,
+                              const std::string& file, long line);
+
 /// Reads a backbone table whose amplitude is of `quantity` (nullopt: a modal amplitude, which
 /// takes no unit); InputError "file:line: what" on any defect (above), and when the file holds
 /// fewer than two points.

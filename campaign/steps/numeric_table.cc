@@ -91,12 +91,11 @@ BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
   }
   if (has("coverage_factor") && !own.empty()) {
     const std::vector<double>& k = bt.column("coverage_factor", path);
-    file.coverage_factor = k[own.front()];
-    if (!(file.coverage_factor >= 1) ||
-        std::any_of(own.begin(), own.end(), [&](size_t i) { return k[i] != k[own.front()]; })) {
-      throw InputError(fmt::format(
-          "{}: coverage_factor must be a number >= 1, the same on every row", path.string()));
-    }
+    double before = 0;
+    for (const size_t i : own)
+      before =
+          data::coverage_factor_of_row(k[i], before, fmt::format("{:g}", k[i]), path.string(), 0);
+    file.coverage_factor = before;
   }
   return file;
 }
