@@ -132,10 +132,8 @@ void run_process(const ProcessArgs& args) {
         std::lock_guard<std::mutex> lock(print);
         std::string lines;
         for (const modal::LeftOutPeak& p : results[i].left_out) {
-          fmt::format_to(std::back_inserter(lines),
-                         "{}: --modes: the spectral peak at {:.2f} Hz is left out (band {:g}:{:g} "
-                         "Hz gives no modal data): {}\n",
-                         args.files[i], p.frequency_hz, p.band.lo, p.band.hi, p.reason);
+          fmt::format_to(std::back_inserter(lines), "{}: --modes: {}\n", args.files[i],
+                         modal::left_out_line(p));
         }
         for (const modal::ChannelBand& r : results[i].results) {
           fmt::format_to(std::back_inserter(lines), "{} {} band {}: {}\n", args.files[i], r.channel,

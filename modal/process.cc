@@ -563,6 +563,13 @@ void drop_near_nodes(const std::vector<double>& share, double min_share, Channel
 
 }  // namespace
 
+std::string left_out_line(const LeftOutPeak& peak) {
+  return fmt::format(
+      "the spectral peak at {:.2f} Hz is left out (band {:g}:{:g} Hz gives no "
+      "modal data): {}",
+      peak.frequency_hz, peak.band.lo, peak.band.hi, peak.reason);
+}
+
 std::string band_without_backbone(const RecordResult& record, int band) {
   const ChannelBand* reference = nullptr;
   for (const ChannelBand& r : record.results) {

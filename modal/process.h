@@ -64,6 +64,10 @@ struct LeftOutPeak {
   std::string reason;       ///< why that band gave no modal data
 };
 
+/// Why `peak` was left out, as the command and the Python module say it: "the spectral peak at
+/// 100.00 Hz is left out (band 92.5:107.5 Hz gives no modal data): <reason>".
+std::string left_out_line(const LeftOutPeak& peak);
+
 /// Everything found in one record.
 struct RecordResult {
   std::string source;                  ///< file processed

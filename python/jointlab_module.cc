@@ -139,9 +139,7 @@ py::list process(const std::vector<std::string>& files,
   // left out goes to `progress`, as the command writes it to stderr.
   for (const modal::RecordResult& r : results) {
     for (const modal::LeftOutPeak& p : r.left_out) {
-      report(progress, fmt::format("process: {}: the spectral peak at {:.2f} Hz is left out (band "
-                                   "{:g}:{:g} Hz gives no modal data): {}",
-                                   r.source, p.frequency_hz, p.band.lo, p.band.hi, p.reason));
+      report(progress, fmt::format("process: {}: {}", r.source, modal::left_out_line(p)));
     }
     std::vector<std::string> why;
     if (!r.shortfall.empty()) why.push_back(r.shortfall);
@@ -571,9 +569,10 @@ threads    workers for each file's bands and channels (0: every core); the resul
 Returns a list of jointlab.Backbone, one per file x channel x band with a kept span, in the
 order of the files, then bands, then channels. Where the command would fail after writing what
 it found (modes=N finding fewer than N modes, or a band with a backbone at no channel of a file),
-the list is returned with a UserWarning saying why; each peak modes=N left out is a progress line. Each carries numpy arrays named as the CSV's
-columns (time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz, damping_std, ...)
-and its linear values (linear_frequency_hz, linear_damping_ratio).
+the list is returned with a UserWarning saying why; each peak modes=N left out is a progress
+line. Each carries numpy arrays named as the CSV's columns (time_s, amplitude, frequency_hz,
+damping_ratio, frequency_std_hz, damping_std, ...) and its linear values (linear_frequency_hz,
+linear_damping_ratio).
 
     bb = jointlab.process(["hit1.csv"], bands=[(70, 90)], quantity="acceleration")
     import matplotlib.pyplot as plt
