@@ -1,5 +1,10 @@
 include(GNUInstallDirs)
 
+# The headers most sources parse (Eigen, fmt and the standard library's containers): precompiled
+# once for the libraries (CMakeLists.txt) and once for the fuzzing build (fuzz/CMakeLists.txt).
+set(JOINTLAB_PRECOMPILED_HEADERS <Eigen/Dense> <fmt/format.h> <algorithm> <cmath> <filesystem>
+    <fstream> <functional> <map> <optional> <string> <vector>)
+
 # Warnings as errors on our own code only (dependencies are SYSTEM includes).
 function(jointlab_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Werror)
