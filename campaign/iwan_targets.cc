@@ -62,8 +62,8 @@ double bin_std(const ScatterSummary& s, double a, bool frequency) {
 // Point i's own uncertainty on curve c, one sigma (k sigma as written over the curve's k), or 0
 // where not known. (Read as one sigma, process's k = 3 weighed these points a third as much as
 // the bins' one-sigma scatter beside them.)
-double own_std(const ModeBackbones& mode, const std::vector<Eigen::VectorXd>& stds, size_t c,
-               Eigen::Index i) {
+double own_std(const ModeBackbones& mode, bool frequency, size_t c, Eigen::Index i) {
+  const std::vector<Eigen::VectorXd>& stds = frequency ? mode.frequency_std_hz : mode.damping_std;
   if (c >= stds.size() || i >= stds[c].size()) return 0.0;
   const double k = c < mode.coverage.size() ? mode.coverage[c] : 1.0;
   return stds[c](i) / k;
@@ -159,8 +159,8 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
         mb.damping_ratio(j) = cv.damping(i);
         const double bf = bin_std(mode.scatter, cv.amplitude(i), true);
         const double bz = bin_std(mode.scatter, cv.amplitude(i), false);
-        mb.frequency_std_hz(j) = bf >= 0 ? bf : own_std(mode, mode.frequency_std_hz, c, i);
-        mb.damping_std(j) = bz >= 0 ? bz : own_std(mode, mode.damping_std, c, i);
+        mb.frequency_std_hz(j) = bf >= 0 ? bf : own_std(mode, true, c, i);
+        mb.damping_std(j) = bz >= 0 ? bz : own_std(mode, false, c, i);
       }
       t.curves.push_back(std::move(mb));
     }
