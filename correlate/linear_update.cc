@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/shape_checks.h"
 #include "jointlab/model/linear_modes.h"
 
 namespace jointlab::correlate {
@@ -82,6 +83,17 @@ model::Model StiffnessSets::apply(const Eigen::Ref<const Eigen::VectorXd>& theta
   return out;
 }
 
+std::string MeasuredModes::id(Eigen::Index i) const {
+  const auto k = static_cast<size_t>(i);
+  return k < ids.size() && !ids[k].empty() ? ids[k] : std::to_string(i + 1);
+}
+
+std::string LinearEvaluation::measured_id(Eigen::Index i) const {
+  const auto k = static_cast<size_t>(i);
+  return k < measured_ids.size() && !measured_ids[k].empty() ? measured_ids[k]
+                                                             : std::to_string(i + 1);
+}
+
 double LinearEvaluation::max_error() const {
   double m = 0;
   for (const ModePair& p : pairing.pairs) m = std::max(m, std::abs(residuals(p.measured)));
@@ -129,6 +141,7 @@ LinearEvaluation evaluate_pairs(const StiffnessSets& sets, const std::vector<Sen
   e.mac = mac_matrix(measured.shapes, e.model_at_sensors);
   e.all_model_frequency_hz = modes.frequency_hz;
   e.measured_frequency_hz = measured.frequency_hz;
+  e.measured_ids = measured.ids;
   e.mac_reads_shape = shapes_given(measured);
   e.model_frequency_hz = Eigen::VectorXd::Zero(m);
   e.residuals = Eigen::VectorXd::Zero(m);
@@ -266,10 +279,11 @@ void check_measured(const std::vector<Sensor>& sensors, const MeasuredModes& mea
   }
   // "measured mode 2", with its label when that says more ("measured mode 2 (band2)").
   auto name = [&](Eigen::Index i) {
-    const std::string plain = fmt::format("measured mode {}", i + 1);
+    const std::string plain = fmt::format("measured mode {}", measured.id(i));
     if (static_cast<size_t>(i) >= measured.labels.size()) return plain;
     const std::string& l = measured.labels[static_cast<size_t>(i)];
-    if (l.empty() || l == fmt::format("mode {}", i + 1) || l == std::to_string(i + 1)) return plain;
+    if (l.empty() || l == fmt::format("mode {}", measured.id(i)) || l == measured.id(i))
+      return plain;
     return fmt::format("{} ({})", plain, l);
   };
   bool any_shape = false;
@@ -823,7 +837,8 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
           out.record.warnings.push_back(fmt::format(
               "test mode {} ({:.5g} Hz) is followed by its shape to {}, below the MAC threshold "
               "at the result: check its measured shape",
-              i + 1, measured.frequency_hz(static_cast<Eigen::Index>(i)),
+              measured.id(static_cast<Eigen::Index>(i)),
+              measured.frequency_hz(static_cast<Eigen::Index>(i)),
               pair_text(followed, static_cast<int>(i))));
         }
         continue;
@@ -864,7 +879,8 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
         why = fmt::format(
             "test mode {} ({:.5g} Hz) is followed by its shape to {}, but at the result the "
             "sensors pair it with {}",
-            i + 1, measured.frequency_hz(i), pair_text(followed, i), pair_text(fresh_end, i));
+            measured.id(i), measured.frequency_hz(i), pair_text(followed, i),
+            pair_text(fresh_end, i));
       }
       out.ambiguity =
           fmt::format("{}; fitting each pairing leaves costs {} that the data cannot tell apart",
@@ -909,7 +925,8 @@ std::vector<std::pair<int, std::string>> unconfirmed_changes(
         fmt::format(
             "test mode {} ({:.5g} Hz) from model mode {} to {} (mass-weighted MAC {:.2f} "
             "between them; {})",
-            i + 1, measured.frequency_hz(static_cast<Eigen::Index>(i)), a + 1, b + 1, c * c,
+            measured.id(static_cast<Eigen::Index>(i)),
+            measured.frequency_hz(static_cast<Eigen::Index>(i)), a + 1, b + 1, c * c,
             mac ? fmt::format("MAC {:.2f} at the sensors", *mac) : "no shape at two sensors"));
   }
   return out;
@@ -957,6 +974,31 @@ std::string unconfirmed_sets(const LinearProblem& p, const Eigen::SparseMatrix<d
       what, fmt::join(blind, " and "));
 }
 
+// What is wrong with the measured shapes against the model at the start (shape_checks.h), or "".
+std::string shape_problem(const LinearEvaluation& start, const std::vector<Sensor>& sensors,
+                          const MeasuredModes& measured, const LinearUpdateOptions& options) {
+  std::vector<std::string> ids;
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) ids.push_back(measured.id(i));
+  if (std::string why = phaseless_shapes(measured.shapes, measured.frequency_hz,
+                                         start.model_at_sensors, start.all_model_frequency_hz, ids);
+      !why.empty())
+    return why;
+  if (options.trust_signs) return "";
+  const SignCheck c =
+      check_channel_signs(measured.shapes, measured.frequency_hz, start.model_at_sensors,
+                          start.all_model_frequency_hz, start.hidden, options.frequency_window);
+  if (c.channel < 0) return "";
+  const Sensor& r = sensors[static_cast<size_t>(c.channel)];
+  return fmt::format(
+      "channel {} reads the model reversed: as given, {} of {} measured modes (with entries at "
+      "three sensors or more) have a model mode within the frequency window at MAC >= 0.9 (mean "
+      "best MAC {:.3f}); with {} reversed, {} of {} have (mean {:.3f}), so its sign is likely "
+      "wrong (a sensor mounted the other way round): give it sign {:+g} in the sensors file, or, "
+      "if the sign is right, fit the shapes as given with --trust-signs",
+      r.channel, c.matched, c.counted, c.mean_mac, r.channel, c.matched_reversed, c.counted,
+      c.mean_mac_reversed, -r.sign);
+}
+
 }  // namespace
 
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
@@ -995,6 +1037,11 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   s.final = s.start;
   s.final_cost = s.initial_cost;
   s.final_mac = s.start.mac;
+  if (std::string why = shape_problem(s.start, sensors, measured, options); !why.empty()) {
+    s.status = LinearUpdateStatus::kShapesRefused;
+    s.shape_problem = std::move(why);
+    return begin;
+  }
   if (s.start.pairing.pairs.empty()) {
     s.status = LinearUpdateStatus::kTooFewPairs;
     return begin;
@@ -1082,6 +1129,8 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     if (std::optional<TrackedPoint> q = p.move(point, x, 8)) {
       point = std::move(*q);
       refit = true;
+      s.parameters[k].drifted_to = at;
+      s.parameters[k].drifted_sensitivity = s.parameters[k].sensitivity;
       s.warnings.push_back(fmt::format(
           "{} is flat (sensitivity {:.3g} < {:.3g}): the frequencies do not identify it; held "
           "at {:.6g} (it had drifted to {:.6g}); hold it elsewhere with --hold {}=VALUE",
@@ -1121,8 +1170,8 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
 }
 
 std::string LinearUpdateSummary::report() const {
-  static const char* names[] = {"converged", "iteration limit", "no mode paired", "failed",
-                                "pairs cannot be decided"};
+  static const char* names[] = {"converged", "iteration limit",         "no mode paired",
+                                "failed",    "pairs cannot be decided", "measured shapes refused"};
   std::string out = fmt::format(
       "linear update ({}): {}, {} iterations in {} round{}, cost {:.4g} -> {:.4g}, {} of {} "
       "measured modes paired, largest frequency error {:.3g} %\n",
@@ -1130,18 +1179,20 @@ std::string LinearUpdateSummary::report() const {
       initial_cost, final_cost, final.pairing.pairs.size(), final.residuals.size(),
       100 * final.max_error());
   if (!ambiguity.empty()) out += fmt::format("  {}\n", ambiguity);
+  if (!shape_problem.empty()) out += fmt::format("  {}\n", shape_problem);
   out += "  measured  f_exp [Hz]  model mode  f_model [Hz]  error [%]    MAC\n";
   for (Eigen::Index i = 0; i < final.residuals.size(); ++i) {
     const int j = final.pairing.model_for(static_cast<int>(i));
     const double fe = final.measured_frequency_hz(i);
     if (j < 0) {
-      out += fmt::format("  {:>8}  {:>10.5g}  unpaired\n", i + 1, fe);
+      out += fmt::format("  {:>8}  {:>10.5g}  unpaired\n", final.measured_id(i), fe);
       continue;
     }
     const std::optional<double> mac = final.pair_mac(i);
-    out += fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {}\n", i + 1, fe, j + 1,
-                       final.model_frequency_hz(i), 100 * final.residuals(i),
-                       mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
+    out +=
+        fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {}\n", final.measured_id(i),
+                    fe, j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
+                    mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
   }
   if (degrees_of_freedom > 0)
     out += fmt::format("  reduced chi-square {:.3g} over {} degrees of freedom\n", reduced_chi2,
@@ -1155,8 +1206,13 @@ std::string LinearUpdateSummary::report() const {
       what = "  held";
     else if (p.relative_std)
       what = fmt::format("  +/- {:.3g} %", 100 * *p.relative_std);
-    out += fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}", p.name, p.start, p.value,
-                       p.sensitivity, what);
+    // A set held back from where the fit took it is flat there, not here: both are said.
+    const std::string drifted = p.drifted_to > 0
+                                    ? fmt::format(" here, {:.3g} at {:.6g} where the fit took it",
+                                                  p.drifted_sensitivity, p.drifted_to)
+                                    : "";
+    out += fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}{}", p.name, p.start, p.value,
+                       p.sensitivity, drifted, what);
     if (p.smallest_within_tolerance > 0) out += "  (smallest within tolerance)";
     out += "\n";
   }
@@ -1168,6 +1224,8 @@ std::string linear_refusal(const LinearUpdateSummary& summary, const LinearUpdat
                            const std::string& source) {
   if (summary.status == LinearUpdateStatus::kAmbiguous)
     return "the pairs cannot be decided: " + summary.ambiguity;
+  if (summary.status == LinearUpdateStatus::kShapesRefused)
+    return fmt::format("{}{}", source.empty() ? "" : source + ": ", summary.shape_problem);
   if (summary.status != LinearUpdateStatus::kTooFewPairs) return "";
   return fmt::format(
       "no measured mode{} pairs with a model mode (MAC >= {}, frequency within {:g} %)",

@@ -90,6 +90,11 @@ struct MeasuredModes {
   Eigen::VectorXd frequency_hz;     ///< one per measured mode [Hz]
   Eigen::MatrixXcd shapes;          ///< rows: sensors (in sensor order), columns: modes
   std::vector<std::string> labels;  ///< a name per mode for reports ("band1"), may be empty
+  /// Each mode's own name in reports and files: the table's `mode` number, the band's number, the
+  /// campaign's mode name; empty (or an empty entry): its position, 1, 2, ...
+  std::vector<std::string> ids;
+  /// ids[i], or i + 1 where it has none.
+  std::string id(Eigen::Index i) const;
 };
 
 /// One evaluation of the linear objective.
@@ -103,11 +108,14 @@ struct LinearEvaluation {
   /// Per measured mode, whether its MAC reads a shape (entries at two sensors or more);
   /// where not, its MAC is no evidence and is reported empty.
   std::vector<bool> mac_reads_shape;
-  Eigen::MatrixXd mac;               ///< MAC, measured x elastic model modes
-  Eigen::MatrixXd model_at_sensors;  ///< elastic model shapes at the sensors
-  std::vector<int> hidden;           ///< model modes invisible at the sensors
-  std::string ambiguity;             ///< pairing by rules: what it cannot decide, or ""
-  std::vector<PairingTie> ties;      ///< pairing by rules: the modes paired by a guess
+  Eigen::MatrixXd mac;                    ///< MAC, measured x elastic model modes
+  Eigen::MatrixXd model_at_sensors;       ///< elastic model shapes at the sensors
+  std::vector<int> hidden;                ///< model modes invisible at the sensors
+  std::string ambiguity;                  ///< pairing by rules: what it cannot decide, or ""
+  std::vector<PairingTie> ties;           ///< pairing by rules: the modes paired by a guess
+  std::vector<std::string> measured_ids;  ///< MeasuredModes::ids
+  /// Measured mode i's own name (MeasuredModes::id).
+  std::string measured_id(Eigen::Index i) const;
   /// 1/2 sum r_i^2.
   double cost() const { return 0.5 * residuals.squaredNorm(); }
   /// The MAC of measured mode i's pair where it reads a shape; nothing when i is unpaired or
@@ -175,6 +183,8 @@ struct LinearUpdateOptions {
   double frequency_std = 1e-3;     ///< relative frequency uncertainty for confidence
   double sweep_decades = 2;        ///< one-at-a-time sweep over theta * 10^[-d, d]
   int sweep_points = 9;            ///< points of the sweep (>= 2)
+  /// Fit the shapes whatever their signs: no reversed-channel check (shape_checks.h).
+  bool trust_signs = false;
   /// Called after each optimiser iteration with (iteration, cost, largest |r_i|).
   std::function<void(int, double, double)> progress;
   /// What is wrong with these options, or "".
@@ -183,11 +193,13 @@ struct LinearUpdateOptions {
 
 /// What update_linear() found about one parameter.
 struct ParameterReport {
-  std::string name;                      ///< element name
-  double start = 0;                      ///< starting stiffness
-  double value = 0;                      ///< updated stiffness
-  double sensitivity = 0;                ///< s_k at the solution
-  bool flat = false;                     ///< s_k < flat_sensitivity
+  std::string name;        ///< element name
+  double start = 0;        ///< starting stiffness
+  double value = 0;        ///< updated stiffness
+  double sensitivity = 0;  ///< s_k at the solution
+  bool flat = false;       ///< s_k < flat_sensitivity
+  /// A flat set held back at its start: where the fit had taken it, and s_k there (0: not so)
+  double drifted_to = 0, drifted_sensitivity = 0;
   bool held = false;                     ///< not fitted: held by the user, or flat
   bool held_by_user = false;             ///< held by LinearUpdateOptions::holds
   std::optional<double> relative_std;    ///< one-sigma relative uncertainty (none: not fitted)
@@ -209,6 +221,7 @@ enum class LinearUpdateStatus {
   kTooFewPairs,     ///< fewer paired modes than needed to say anything (none)
   kFailed,          ///< the optimiser failed (numerical)
   kAmbiguous,       ///< the pairs cannot be decided (see LinearUpdateSummary::ambiguity)
+  kShapesRefused,   ///< a channel reads reversed, or shapes lack their phase (shape_problem)
 };
 
 /// Outcome of update_linear().
@@ -222,6 +235,7 @@ struct LinearUpdateSummary {
   std::string rule;                   ///< the rule that produced the result, for the headline
   bool tolerance_met = true;          ///< kSmallest: false when no stiffness meets the tolerance
   std::string ambiguity;              ///< kAmbiguous: which modes, and why
+  std::string shape_problem;          ///< kShapesRefused: what is wrong with the shapes
   int rounds = 0;                     ///< fits run (a new round when the pairs change)
   double reduced_chi2 = 0;            ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
   int degrees_of_freedom = 0;         ///< pairs - fitted sets
@@ -244,8 +258,8 @@ struct AliasedModes {
 std::vector<AliasedModes> aliased_modes(const Eigen::Ref<const Eigen::MatrixXd>& at_sensors,
                                         double threshold);
 
-/// Why update_linear() gave no result (no measured mode paired, or pairs that cannot be
-/// decided: the command refuses both), or "" when it gave one; `source` names the measured
+/// Why update_linear() gave no result (no measured mode paired, pairs that cannot be decided, or
+/// shapes refused: the command refuses each), or "" when it gave one; `source` names the measured
 /// data in the message ("" for none).
 std::string linear_refusal(const LinearUpdateSummary& summary, const LinearUpdateOptions& options,
                            const std::string& source);

@@ -333,6 +333,13 @@ TEST(LinearUpdate, AFlatSetIsHeldAndTheResultDoesNotDependOnItsBounds) {
     EXPECT_FALSE(s.parameters[2].relative_std.has_value());
     EXPECT_TRUE(testing::Close(theta(2), 1e10, 1e-12));  // exp(ln(start)): rounding only
     EXPECT_NE(s.report().find("spring.kflat is flat"), std::string::npos);
+    // Its line says where it was flat, not only its sensitivity where it is held.
+    EXPECT_LT(s.parameters[2].drifted_sensitivity, o.flat_sensitivity);
+    EXPECT_GT(s.parameters[2].drifted_to, 0);
+    EXPECT_NE(s.report().find(fmt::format("{:.3g} at {:.6g} where the fit took it",
+                                          s.parameters[2].drifted_sensitivity,
+                                          s.parameters[2].drifted_to)),
+              std::string::npos);
     if (first.size() == 0) {
       first = theta;
     } else {
@@ -481,6 +488,61 @@ TEST(LinearUpdate, NoDegreeOfFreedomLeftIsSaid) {
   EXPECT_NEAR(theta(0), 3e4, 3e4 * 1e-6) << s.report();  // k0 + kj = (2 pi f)^2 = 4e4
   EXPECT_EQ(s.degrees_of_freedom, 0);
   EXPECT_NE(s.report().find("no degree of freedom is left"), std::string::npos) << s.report();
+}
+
+// A channel whose sign the sensors file gets wrong (chain_sensors' s1 is mounted reversed; the
+// file says +1): the shapes then pair crosswise or not at all, so the update is refused naming
+// the channel and the sign to give, before any fit. With --trust-signs it runs on the shapes as
+// given. The measured modes are the structure's own, so with the right sign nothing is refused.
+TEST(LinearUpdate, AChannelReadReversedIsRefusedNamingIt) {
+  const NoiselessMeasurement d(6, 2);
+  std::vector<Sensor> wrong = d.sensors;
+  wrong[1].sign = 1.0;
+  LinearUpdateSummary s;
+  update_linear(d.m, kSets, wrong, d.meas, {}, &s);
+  ASSERT_EQ(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
+  const std::string why = linear_refusal(s, {}, "table.csv");
+  EXPECT_NE(why.find("table.csv: channel s2 reads the model reversed"), std::string::npos) << why;
+  EXPECT_NE(why.find("give it sign -1"), std::string::npos) << why;
+  EXPECT_EQ(s.iterations, 0);
+  LinearUpdateOptions trust;
+  trust.trust_signs = true;
+  trust.max_iterations = 2;
+  update_linear(d.m, kSets, wrong, d.meas, trust, &s);
+  EXPECT_NE(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
+  LinearUpdateOptions few;
+  few.max_iterations = 2;
+  update_linear(d.m, kSets, d.sensors, d.meas, few, &s);
+  EXPECT_NE(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
+}
+
+// Magnitudes without their phase (a table of |shape|): refused, naming the modes, the report
+// and the refusal saying why.
+TEST(LinearUpdate, ShapesWithoutPhaseAreRefused) {
+  NoiselessMeasurement d(6, 3);
+  d.meas.shapes = d.meas.shapes.cwiseAbs().cast<std::complex<double>>();
+  d.meas.ids = {"2", "3", "4", "5", "6", "7"};
+  LinearUpdateSummary s;
+  update_linear(d.m, kSets, d.sensors, d.meas, {}, &s);
+  ASSERT_EQ(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
+  const std::string why = linear_refusal(s, {}, "");
+  EXPECT_EQ(why.find("the shapes of measured modes 2, 3, 4, 5, 6, 7 have one phase"), 0u) << why;
+  EXPECT_NE(s.report().find("measured shapes refused"), std::string::npos) << s.report();
+}
+
+// The report and modes.csv name each measured mode by its own number (a table's `mode` column),
+// not by its row.
+TEST(LinearUpdate, MeasuredModesKeepTheirOwnNumbers) {
+  NoiselessMeasurement d(3, 4);
+  d.meas.ids = {"4", "7", "9"};
+  LinearUpdateOptions o;
+  o.max_iterations = 3;
+  LinearUpdateSummary s;
+  update_linear(d.m, kSets, d.sensors, d.meas, o, &s);
+  ASSERT_EQ(s.final.pairing.pairs.size(), 3u) << s.report();
+  const std::string r = s.report();
+  EXPECT_NE(r.find("\n         7  "), std::string::npos) << r;
+  EXPECT_EQ(s.final.measured_id(2), "9");
 }
 
 }  // namespace

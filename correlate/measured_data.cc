@@ -290,6 +290,7 @@ MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& s
       if (s >= 0) m.shapes(s, col) = value, any_sensor = true;
     }
     m.labels.push_back(fmt::format("band{}", k));
+    m.ids.push_back(std::to_string(k));
     if (bands) bands->push_back(k);
     ++col;
   }
@@ -481,6 +482,7 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
     for (size_t s = 0; s < sensors.size(); ++s)
       out.shapes(static_cast<Eigen::Index>(s), i) = shape[static_cast<size_t>(i)][s];
     out.labels.push_back(fmt::format("mode {}", numbers[static_cast<size_t>(i)]));
+    out.ids.push_back(std::to_string(numbers[static_cast<size_t>(i)]));
   }
   if (modes) *modes = numbers;
   return out;

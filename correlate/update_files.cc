@@ -66,12 +66,12 @@ void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSum
   for (Eigen::Index i = 0; i < e.measured_frequency_hz.size(); ++i) {
     const int j = e.pairing.model_for(static_cast<int>(i));
     if (j < 0) {
-      t += fmt::format("{},{},,,,\n", i + 1, num(e.measured_frequency_hz(i)));
+      t += fmt::format("{},{},,,,\n", e.measured_id(i), num(e.measured_frequency_hz(i)));
     } else {
       // A MAC over fewer than two sensors is no evidence: its cell stays empty.
       const std::optional<double> mac = e.pair_mac(i);
-      t += fmt::format("{},{},{},{},{},{}\n", i + 1, num(e.measured_frequency_hz(i)), j + 1,
-                       num(e.model_frequency_hz(i)), num(e.residuals(i)),
+      t += fmt::format("{},{},{},{},{},{}\n", e.measured_id(i), num(e.measured_frequency_hz(i)),
+                       j + 1, num(e.model_frequency_hz(i)), num(e.residuals(i)),
                        mac ? num(*mac) : std::string());
     }
   }
@@ -96,7 +96,7 @@ void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSumma
   for (int j = 0; j < cols; ++j) t += fmt::format(",model{}", j + 1);
   t += "\n";
   for (Eigen::Index i = 0; i < mac.rows(); ++i) {
-    t += fmt::format("{}", i + 1);
+    t += s.final.measured_id(i);
     for (int j = 0; j < cols; ++j) t += fmt::format(",{}", num(mac(i, j)));
     t += "\n";
   }
@@ -106,7 +106,7 @@ void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSumma
 void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSummary& s) {
   const Eigen::Index m = s.final.measured_frequency_hz.size();
   std::string t = "set,factor,stiffness,rms_error";
-  for (Eigen::Index i = 0; i < m; ++i) t += fmt::format(",error{}", i + 1);
+  for (Eigen::Index i = 0; i < m; ++i) t += ",error" + s.final.measured_id(i);
   t += "\n";
   for (const ParameterReport& p : s.parameters) {
     for (size_t k = 0; k < p.sweep_factor.size(); ++k) {

@@ -2,6 +2,7 @@
 // numpy arrays in and out, the same options and defaults as the command line, and the command
 // line's one-line messages as jointlab.InputError (a ValueError). Argument conversion only: every
 // number comes from the library the program uses (style.md 13).
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <optional>
@@ -244,8 +245,9 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
                        const std::optional<std::string>& minimize, double tolerance,
                        double frequency_window, double mac_threshold, double frequency_std,
                        const std::vector<std::string>& hold, const std::optional<std::string>& out,
-                       const py::object& progress) {
+                       const py::object& progress, bool trust_signs) {
   correlate::LinearUpdateOptions o;
+  o.trust_signs = trust_signs;
   o.frequency_window = frequency_window;
   o.mac_threshold = mac_threshold;
   o.frequency_std = frequency_std;
@@ -314,7 +316,12 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
   for (Eigen::Index i = 0; i < e.measured_frequency_hz.size(); ++i) {
     const int j = e.pairing.model_for(static_cast<int>(i));
     py::dict d;
-    d["measured"] = i + 1;
+    // Its own number (the table's mode column, the band), as modes.csv writes it.
+    const std::string id = e.measured_id(i);
+    const bool number =
+        !id.empty() && id.size() < 10 &&
+        std::all_of(id.begin(), id.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+    d["measured"] = number ? py::object(py::int_(std::stoi(id))) : py::object(py::str(id));
     d["frequency_hz"] = e.measured_frequency_hz(i);
     d["model_mode"] = j < 0 ? py::object(py::none()) : py::object(py::int_(j + 1));
     d["model_frequency_hz"] =
@@ -596,7 +603,7 @@ written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy arra
       py::arg("rule") = "least-squares", py::arg("minimize") = py::none(),
       py::arg("tolerance") = 0.0, py::arg("frequency_window") = 0.5, py::arg("mac_threshold") = 0.6,
       py::arg("frequency_std") = 1e-3, py::arg("hold") = std::vector<std::string>{},
-      py::arg("out") = py::none(), py::arg("progress") = py::none(),
+      py::arg("out") = py::none(), py::arg("progress") = py::none(), py::arg("trust_signs") = false,
       R"(Updates named joint stiffness sets to measured linear frequencies (`jointlab update-linear`).
 
 model          model file (TOML)
@@ -605,13 +612,15 @@ sensors        sensors file (channel,dof[,sign])
 measured       a `jointlab process` output folder, or modes_table: mode,frequency_hz[,<channel>...]
 rule           'least-squares' (default) or 'smallest' (with minimize=NAME, tolerance default 0.01)
 frequency_window, mac_threshold, frequency_std, hold=["NAME[=VALUE]"]: as the command's options
+trust_signs    fit with the sensors file's signs even when one channel reads the model reversed
 out            write the updated model file here (its matrices beside it), or None
 
 Pairs are made by sensor MAC within the frequency window and followed by full shape (see
 docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final, relative_std or
 None, sensitivity, flat, held, at_bound), 'modes' (measured, frequency_hz, model_mode,
 model_frequency_hz, error, mac; None where unpaired), 'rule', 'converged', 'reduced_chi2',
-'warnings', 'report'. Undecidable pairs raise InputError naming the modes.
+'warnings', 'report'. Undecidable pairs, a channel reading the model reversed and shapes without
+phase raise InputError saying which.
 
     r = jointlab.update_linear("model.toml", ["iwan.rivet"], "sensors.csv", measured="processed")
     r["parameters"]["iwan.rivet"]["final"]

@@ -107,7 +107,10 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
   }
   fitted.frequency_hz = measured.frequency_hz(keep);
   fitted.shapes = measured.shapes(Eigen::all, keep);
-  for (Eigen::Index k : keep) fitted.labels.push_back(measured.labels[k]);
+  for (Eigen::Index k : keep) {  // each keeps its place in the campaign's [[mode]] list
+    fitted.labels.push_back(measured.labels[k]);
+    fitted.ids.push_back(measured.id(k));
+  }
   const Eigen::VectorXd theta =
       correlate::update_linear(m.model, c.linear_update.sets, m.sensors, fitted, lo, &step.summary);
   // A refused update (as update-linear refuses it) leaves the model as given: its stiffness

@@ -198,6 +198,12 @@ def test_update_linear_equals_the_command_line(tmp_path):
     assert result["converged"]
     assert [m["model_mode"] for m in result["modes"]] == [1, 2]
     assert lines and lines[0].startswith("update-linear: iteration")
+    # Each mode keeps the table's own number, as modes.csv writes it.
+    numbered = tmp_path / "numbered.csv"
+    numbered.write_text(table.read_text().replace("\n1,", "\n3,").replace("\n2,", "\n5,"))
+    result = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                                    modes_table=str(numbered))
+    assert [m["measured"] for m in result["modes"]] == [3, 5]
     # A shape that is zero at every sensor is refused as by the command.
     table.write_text("mode,frequency_hz,s0,s1\n1,50.0,0,0\n2,80.0,1,1\n")
     with pytest.raises(jointlab.InputError, match="zero at every sensor"):

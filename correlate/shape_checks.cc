@@ -1,0 +1,136 @@
+#include "jointlab/correlate/shape_checks.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <complex>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "jointlab/correlate/mac.h"
+
+namespace jointlab::correlate {
+namespace {
+
+// Measured modes with an entry at three sensors or more.
+std::vector<Eigen::Index> counted_modes(const Eigen::Ref<const Eigen::MatrixXcd>& shapes) {
+  std::vector<Eigen::Index> out;
+  for (Eigen::Index i = 0; i < shapes.cols(); ++i)
+    if ((shapes.col(i).array().abs() > 0.0).count() >= 3) out.push_back(i);
+  return out;
+}
+
+// Best MAC of measured shape x (mode at test frequency f) over the visible model modes in the
+// window.
+double best_mac(const Eigen::Ref<const Eigen::VectorXcd>& x, double f,
+                const Eigen::Ref<const Eigen::MatrixXd>& model,
+                const Eigen::Ref<const Eigen::VectorXd>& model_f, const std::vector<char>& visible,
+                double window) {
+  double best = 0;
+  for (Eigen::Index j = 0; j < model.cols(); ++j) {
+    if (!visible[static_cast<size_t>(j)]) continue;
+    if (window > 0 && std::abs(model_f(j) / f - 1) > window) continue;
+    best = std::max(best, mac(x, model.col(j)));
+  }
+  return best;
+}
+
+struct Score {
+  int matched = 0;
+  double mean = 0;
+};
+
+Score score(const Eigen::MatrixXcd& shapes, const std::vector<Eigen::Index>& counted,
+            const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::MatrixXd>& model,
+            const Eigen::Ref<const Eigen::VectorXd>& model_f, const std::vector<char>& visible,
+            double window, double strong) {
+  Score s;
+  for (const Eigen::Index i : counted) {
+    const double b = best_mac(shapes.col(i), f(i), model, model_f, visible, window);
+    s.matched += b >= strong;
+    s.mean += b / static_cast<double>(counted.size());
+  }
+  return s;
+}
+
+}  // namespace
+
+SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured_shapes,
+                              const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
+                              const Eigen::Ref<const Eigen::MatrixXd>& model_at_sensors,
+                              const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
+                              const std::vector<int>& hidden, double frequency_window,
+                              double strong_mac) {
+  assert(measured_shapes.rows() == model_at_sensors.rows());
+  SignCheck out;
+  const std::vector<Eigen::Index> counted = counted_modes(measured_shapes);
+  out.counted = static_cast<int>(counted.size());
+  if (counted.size() < 2) return out;
+  std::vector<char> visible(static_cast<size_t>(model_at_sensors.cols()), 1);
+  for (const int j : hidden)
+    if (j >= 0 && j < model_at_sensors.cols()) visible[static_cast<size_t>(j)] = 0;
+  Eigen::MatrixXcd shapes = measured_shapes;
+  const Score given = score(shapes, counted, test_frequency_hz, model_at_sensors,
+                            model_frequency_hz, visible, frequency_window, strong_mac);
+  out.matched = given.matched;
+  out.mean_mac = given.mean;
+  Score best;
+  int best_channel = -1;
+  for (Eigen::Index c = 0; c < shapes.rows(); ++c) {
+    if (!(shapes.row(c).array().abs() > 0.0).any()) continue;
+    shapes.row(c) *= -1.0;
+    const Score r = score(shapes, counted, test_frequency_hz, model_at_sensors,
+                          model_frequency_hz, visible, frequency_window, strong_mac);
+    shapes.row(c) *= -1.0;
+    if (best_channel < 0 || r.matched > best.matched ||
+        (r.matched == best.matched && r.mean > best.mean)) {
+      best = r;
+      best_channel = static_cast<int>(c);
+    }
+  }
+  if (best_channel < 0 || best.matched < given.matched + 2 || 4 * best.matched < 3 * out.counted)
+    return out;
+  out.channel = best_channel;
+  out.matched_reversed = best.matched;
+  out.mean_mac_reversed = best.mean;
+  return out;
+}
+
+std::string phaseless_shapes(const Eigen::Ref<const Eigen::MatrixXcd>& measured_shapes,
+                             const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
+                             const Eigen::Ref<const Eigen::MatrixXd>& model_at_sensors,
+                             const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
+                             const std::vector<std::string>& ids) {
+  const std::vector<Eigen::Index> counted = counted_modes(measured_shapes);
+  if (counted.size() < 2 || model_frequency_hz.size() == 0) return "";
+  std::vector<std::string> modes, signed_model;
+  for (const Eigen::Index i : counted) {
+    const Eigen::VectorXcd x = measured_shapes.col(i);
+    Eigen::Index top = 0;
+    x.cwiseAbs().maxCoeff(&top);
+    const std::complex<double> unit = std::conj(x(top)) / std::abs(x(top));
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      // An entry in phase with the largest to rounding: a magnitude, or a dropped sign.
+      if (x(k) != 0.0 && std::abs(std::arg(x(k) * unit)) > 1e-9) return "";
+    }
+    modes.push_back(ids[static_cast<size_t>(i)]);
+    Eigen::Index near = 0;
+    (model_frequency_hz.array() / test_frequency_hz(i)).log().abs().minCoeff(&near);
+    const Eigen::VectorXd v = model_at_sensors.col(near);
+    const double floor = 0.1 * v.cwiseAbs().maxCoeff();
+    if ((v.array() > floor).any() && (v.array() < -floor).any())
+      signed_model.push_back(fmt::format("{} ({:.5g} Hz)", near + 1, model_frequency_hz(near)));
+  }
+  if (2 * signed_model.size() < counted.size()) return "";
+  return fmt::format(
+      "the shape{} of measured mode{} {} {} one phase at every sensor (magnitudes without their "
+      "phase or sign?), while model mode{} {} nearest in frequency change{} sign between the "
+      "sensors; MAC cannot pair shapes without their signs: give each entry with its sign (the "
+      "real part of the complex shape, or magnitude times the sign of cos(phase))",
+      modes.size() == 1 ? "" : "s", modes.size() == 1 ? "" : "s", fmt::join(modes, ", "),
+      modes.size() == 1 ? "has" : "have", signed_model.size() == 1 ? "" : "s",
+      fmt::join(signed_model, ", "), signed_model.size() == 1 ? "s" : "");
+}
+
+}  // namespace jointlab::correlate

@@ -1,0 +1,52 @@
+// Checks of measured shapes against the model before they pair: a channel whose sign reads the
+// model reversed, and shapes without phase.
+//
+// A measured mode i "matches" when some visible model mode within the pairing's frequency window
+// has sensor MAC >= strong_mac (0.9) with it. Only modes with an entry at three sensors or more
+// count (at two, flipping one sign only swaps which of two shapes they look like).
+// Reversed channel: for each sensor c, row c of the measured shapes is negated and the matches
+// counted again. Channel c is named when, reversed, at least two more modes match than as given,
+// and at least three in four of the counted modes. One channel mounted the other way round
+// (sensors file `sign` wrong or missing) otherwise pairs modes crosswise: with five sensors on the
+// example beam two of five paired, one at +25 % and one at -38 %, and K_T came out 3.1 times low,
+// "converged".
+// Shapes without phase: every entry of every counted mode has the same phase (magnitudes, or a
+// sign dropped), at least two such modes, while at least half of them have a model mode nearest
+// in frequency that changes sign between the sensors (entries above a tenth of its largest with
+// both signs). MAC cannot pair magnitudes: on the example beam one of five paired, crosswise.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace jointlab::correlate {
+
+/// What check_channel_signs() found.
+struct SignCheck {
+  int channel = -1;          ///< the sensor row whose sign looks reversed; -1: none
+  int counted = 0;           ///< measured modes with entries at three sensors or more
+  int matched = 0;           ///< of them, modes with a strong match as given
+  int matched_reversed = 0;  ///< of them, modes with a strong match with `channel` reversed
+  double mean_mac = 0;           ///< mean best MAC over the counted modes as given
+  double mean_mac_reversed = 0;  ///< the same with `channel` reversed
+};
+
+/// Tries each single channel reversed (above); `hidden` lists model columns never paired.
+SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured_shapes,
+                              const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
+                              const Eigen::Ref<const Eigen::MatrixXd>& model_at_sensors,
+                              const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
+                              const std::vector<int>& hidden, double frequency_window,
+                              double strong_mac = 0.9);
+
+/// Why the measured shapes look like magnitudes without phase (above), or ""; `ids` names the
+/// measured modes in the message.
+std::string phaseless_shapes(const Eigen::Ref<const Eigen::MatrixXcd>& measured_shapes,
+                             const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
+                             const Eigen::Ref<const Eigen::MatrixXd>& model_at_sensors,
+                             const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
+                             const std::vector<std::string>& ids);
+
+}  // namespace jointlab::correlate
