@@ -43,7 +43,8 @@ struct IwanInputs {
   bool modal = false;                                ///< amplitudes are modal (q)
   std::optional<correlate::MeasuredModes> measured;  ///< the measured linear modes (process)
   std::string data_name;                             ///< for messages
-  std::vector<BandOfMode> bands;                     ///< each process --mode's band
+  std::string amplitude_note;     ///< --backbone: what the amplitudes were read as, for the report
+  std::vector<BandOfMode> bands;  ///< each process --mode's band
 };
 
 /// Reads the measured side named by `a` against model `m`; InputError prefixed by `command`.

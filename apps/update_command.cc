@@ -268,6 +268,7 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& i
     campaign::plot_backbone_comparison(c, fs::path(a.out) / (name + ".png"), {});
   }
   say(stdout, "{}", summary.report());
+  if (!in.amplitude_note.empty()) say(stdout, "  {}\n", in.amplitude_note);
   // Each band named for a mode must look like that mode of the updated model (not the start's:
   // a start far off may order the modes differently). A low MAC means the band, or the sensors
   // file, belongs to another mode: the parameters then fit that mode's data. Said, not refused:

@@ -42,7 +42,8 @@ struct Score {
 };
 
 Score score(const Eigen::MatrixXcd& shapes, const std::vector<Eigen::Index>& counted,
-            const Eigen::Ref<const Eigen::VectorXd>& f, const Eigen::Ref<const Eigen::MatrixXd>& model,
+            const Eigen::Ref<const Eigen::VectorXd>& f,
+            const Eigen::Ref<const Eigen::MatrixXd>& model,
             const Eigen::Ref<const Eigen::VectorXd>& model_f, const std::vector<char>& visible,
             double window, double strong) {
   Score s;
@@ -80,8 +81,8 @@ SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured
   for (Eigen::Index c = 0; c < shapes.rows(); ++c) {
     if (!(shapes.row(c).array().abs() > 0.0).any()) continue;
     shapes.row(c) *= -1.0;
-    const Score r = score(shapes, counted, test_frequency_hz, model_at_sensors,
-                          model_frequency_hz, visible, frequency_window, strong_mac);
+    const Score r = score(shapes, counted, test_frequency_hz, model_at_sensors, model_frequency_hz,
+                          visible, frequency_window, strong_mac);
     shapes.row(c) *= -1.0;
     if (best_channel < 0 || r.matched > best.matched ||
         (r.matched == best.matched && r.mean > best.mean)) {

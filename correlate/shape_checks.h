@@ -25,10 +25,10 @@ namespace jointlab::correlate {
 
 /// What check_channel_signs() found.
 struct SignCheck {
-  int channel = -1;          ///< the sensor row whose sign looks reversed; -1: none
-  int counted = 0;           ///< measured modes with entries at three sensors or more
-  int matched = 0;           ///< of them, modes with a strong match as given
-  int matched_reversed = 0;  ///< of them, modes with a strong match with `channel` reversed
+  int channel = -1;              ///< the sensor row whose sign looks reversed; -1: none
+  int counted = 0;               ///< measured modes with entries at three sensors or more
+  int matched = 0;               ///< of them, modes with a strong match as given
+  int matched_reversed = 0;      ///< of them, modes with a strong match with `channel` reversed
   double mean_mac = 0;           ///< mean best MAC over the counted modes as given
   double mean_mac_reversed = 0;  ///< the same with `channel` reversed
 };

@@ -67,9 +67,11 @@ TEST(PhaselessShapes, MagnitudesAreNamed) {
   const StringModes m;
   const std::vector<std::string> ids = {"3", "4", "5", "6", "7"};
   // Magnitudes, with a common phase (a complex scale keeps every entry in phase).
-  const Eigen::MatrixXcd magnitudes = std::polar(1.0, 0.3) * m.at.cwiseAbs().cast<std::complex<double>>();
+  const Eigen::MatrixXcd magnitudes =
+      std::polar(1.0, 0.3) * m.at.cwiseAbs().cast<std::complex<double>>();
   const std::string why = phaseless_shapes(magnitudes, m.f, m.at, m.f, ids);
-  EXPECT_NE(why.find("the shapes of measured modes 3, 4, 5, 6, 7 have one phase"), std::string::npos)
+  EXPECT_NE(why.find("the shapes of measured modes 3, 4, 5, 6, 7 have one phase"),
+            std::string::npos)
       << why;
   // Mode 1 of the string keeps one sign at every sensor; modes 2-5 change it.
   EXPECT_NE(why.find("model modes 2 (40 Hz), 3 (160 Hz), 4 (640 Hz), 5 (2560 Hz)"),

@@ -807,6 +807,12 @@ TEST(UpdateCli, IwanReadsBackboneTablesInPerCentAndRefusesUnitsItDoesNotUndersta
         "--out {}",
         model, (dir / table).string(), (dir / out).string()));
     EXPECT_EQ(r.status, 0) << r.err;
+    // The default read of the amplitudes is said: a sensor's displacement read as modal
+    // scales F_S and fits as well, so only the report can tell the user.
+    EXPECT_NE(r.out.find("amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal, "
+                         "the default)"),
+              std::string::npos)
+        << r.out;
     return read_parameters(dir / out / "parameters.csv");
   };
   const auto pf = fit("fraction.csv", "fraction");
