@@ -987,16 +987,25 @@ std::string shape_problem(const LinearEvaluation& start, const std::vector<Senso
   const SignCheck c =
       check_channel_signs(measured.shapes, measured.frequency_hz, start.model_at_sensors,
                           start.all_model_frequency_hz, start.hidden, options.frequency_window);
-  if (c.channel < 0) return "";
-  const Sensor& r = sensors[static_cast<size_t>(c.channel)];
+  if (c.channels.empty()) return "";
+  std::vector<std::string> names, signs;
+  for (const int k : c.channels) {
+    const Sensor& r = sensors[static_cast<size_t>(k)];
+    names.push_back(r.channel);
+    signs.push_back(fmt::format("{} sign {:+g}", r.channel, -r.sign));
+  }
+  const std::string which = fmt::format("{}", fmt::join(names, " and "));
+  const bool one = names.size() == 1;
   return fmt::format(
-      "channel {} reads the model reversed: as given, {} of {} measured modes (with entries at "
+      "channel{} {} read{} the model reversed: as given, {} of {} measured modes (with entries at "
       "three sensors or more) have a model mode within the frequency window at MAC >= 0.9 (mean "
-      "best MAC {:.3f}); with {} reversed, {} of {} have (mean {:.3f}), so its sign is likely "
-      "wrong (a sensor mounted the other way round): give it sign {:+g} in the sensors file, or, "
-      "if the sign is right, fit the shapes as given with --trust-signs",
-      r.channel, c.matched, c.counted, c.mean_mac, r.channel, c.matched_reversed, c.counted,
-      c.mean_mac_reversed, -r.sign);
+      "best MAC {:.3f}); with {} reversed, {} of {} have (mean {:.3f}), so {} likely wrong "
+      "(mounted "
+      "the other way round): give {} in the sensors file, or, if the sign{} right, "
+      "fit the shapes as given with --trust-signs",
+      one ? "" : "s", which, one ? "s" : "", c.matched, c.counted, c.mean_mac, which,
+      c.matched_reversed, c.counted, c.mean_mac_reversed, one ? "its sign is" : "their signs are",
+      fmt::join(signs, " and "), one ? " is" : "s are");
 }
 
 }  // namespace

@@ -503,7 +503,7 @@ TEST(LinearUpdate, AChannelReadReversedIsRefusedNamingIt) {
   ASSERT_EQ(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
   const std::string why = linear_refusal(s, {}, "table.csv");
   EXPECT_NE(why.find("table.csv: channel s2 reads the model reversed"), std::string::npos) << why;
-  EXPECT_NE(why.find("give it sign -1"), std::string::npos) << why;
+  EXPECT_NE(why.find("give s2 sign -1"), std::string::npos) << why;
   EXPECT_EQ(s.iterations, 0);
   LinearUpdateOptions trust;
   trust.trust_signs = true;

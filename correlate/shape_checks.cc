@@ -76,23 +76,29 @@ SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured
                             model_frequency_hz, visible, frequency_window, strong_mac);
   out.matched = given.matched;
   out.mean_mac = given.mean;
+  // Every channel, then every pair of channels, reversed; the first best kept (one before two).
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index c = 0; c < shapes.rows(); ++c)
+    if ((shapes.row(c).array().abs() > 0.0).any()) rows.push_back(c);
   Score best;
-  int best_channel = -1;
-  for (Eigen::Index c = 0; c < shapes.rows(); ++c) {
-    if (!(shapes.row(c).array().abs() > 0.0).any()) continue;
-    shapes.row(c) *= -1.0;
+  std::vector<int> chosen;
+  const auto consider = [&](const std::vector<Eigen::Index>& flip) {
+    for (const Eigen::Index c : flip) shapes.row(c) *= -1.0;
     const Score r = score(shapes, counted, test_frequency_hz, model_at_sensors, model_frequency_hz,
                           visible, frequency_window, strong_mac);
-    shapes.row(c) *= -1.0;
-    if (best_channel < 0 || r.matched > best.matched ||
-        (r.matched == best.matched && r.mean > best.mean)) {
+    for (const Eigen::Index c : flip) shapes.row(c) *= -1.0;
+    if (chosen.empty() || r.matched > best.matched ||
+        (r.matched == best.matched && r.mean > best.mean + 1e-9)) {
       best = r;
-      best_channel = static_cast<int>(c);
+      chosen.assign(flip.begin(), flip.end());
     }
-  }
-  if (best_channel < 0 || best.matched < given.matched + 2 || 4 * best.matched < 3 * out.counted)
+  };
+  for (const Eigen::Index c : rows) consider({c});
+  for (size_t a = 0; a < rows.size(); ++a)
+    for (size_t b = a + 1; b < rows.size(); ++b) consider({rows[a], rows[b]});
+  if (chosen.empty() || best.matched < given.matched + 2 || 4 * best.matched < 3 * out.counted)
     return out;
-  out.channel = best_channel;
+  out.channels = std::move(chosen);
   out.matched_reversed = best.matched;
   out.mean_mac_reversed = best.mean;
   return out;

@@ -4,12 +4,14 @@
 // A measured mode i "matches" when some visible model mode within the pairing's frequency window
 // has sensor MAC >= strong_mac (0.9) with it. Only modes with an entry at three sensors or more
 // count (at two, flipping one sign only swaps which of two shapes they look like).
-// Reversed channel: for each sensor c, row c of the measured shapes is negated and the matches
-// counted again. Channel c is named when, reversed, at least two more modes match than as given,
-// and at least three in four of the counted modes. One channel mounted the other way round
-// (sensors file `sign` wrong or missing) otherwise pairs modes crosswise: with five sensors on the
-// example beam two of five paired, one at +25 % and one at -38 %, and K_T came out 3.1 times low,
-// "converged".
+// Reversed channels: for each sensor c, and each pair of sensors, those rows of the measured
+// shapes are negated and the matches counted again (the most matches win, then the highest mean
+// best MAC, then one channel over two). They are named when, reversed, at least two more modes
+// match than as given, and at least three in four of the counted modes. A channel mounted the
+// other way round (sensors file `sign` wrong or missing) otherwise pairs modes crosswise: with
+// five sensors on the example beam and one reversed, two of five paired, one at +25 % and one at
+// -38 %, and K_T came out 3.1 times low, "converged"; with two reversed, one of five paired and
+// K_T came out twice the truth, "converged".
 // Shapes without phase: every entry of every counted mode has the same phase (magnitudes, or a
 // sign dropped), at least two such modes, while at least half of them have a model mode nearest
 // in frequency that changes sign between the sensors (entries above a tenth of its largest with
@@ -25,15 +27,16 @@ namespace jointlab::correlate {
 
 /// What check_channel_signs() found.
 struct SignCheck {
-  int channel = -1;              ///< the sensor row whose sign looks reversed; -1: none
+  std::vector<int> channels;     ///< the sensor rows whose signs look reversed (one or two); none
   int counted = 0;               ///< measured modes with entries at three sensors or more
   int matched = 0;               ///< of them, modes with a strong match as given
-  int matched_reversed = 0;      ///< of them, modes with a strong match with `channel` reversed
+  int matched_reversed = 0;      ///< of them, modes with a strong match with `channels` reversed
   double mean_mac = 0;           ///< mean best MAC over the counted modes as given
-  double mean_mac_reversed = 0;  ///< the same with `channel` reversed
+  double mean_mac_reversed = 0;  ///< the same with `channels` reversed
 };
 
-/// Tries each single channel reversed (above); `hidden` lists model columns never paired.
+/// Tries each channel and each pair of channels reversed (above); `hidden` lists model columns
+/// never paired.
 SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured_shapes,
                               const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
                               const Eigen::Ref<const Eigen::MatrixXd>& model_at_sensors,

@@ -28,7 +28,7 @@ TEST(ChannelSigns, NamesTheOneChannelMountedTheOtherWayRound) {
   Eigen::MatrixXcd measured = std::polar(2.0, 0.3) * m.at.cast<std::complex<double>>();
   measured.row(0) *= -1.0;
   const SignCheck c = check_channel_signs(measured, m.f, m.at, m.f, {}, 0.5);
-  EXPECT_EQ(c.channel, 0);
+  EXPECT_EQ(c.channels, std::vector<int>{0});
   EXPECT_EQ(c.counted, 5);
   EXPECT_EQ(c.matched_reversed, 5);
   EXPECT_NEAR(c.mean_mac_reversed, 1.0, 1e-12);
@@ -44,11 +44,22 @@ TEST(ChannelSigns, NamesTheOneChannelMountedTheOtherWayRound) {
   EXPECT_NEAR(c.mean_mac, mean, 1e-12);
 }
 
+TEST(ChannelSigns, NamesTwoChannelsMountedTheOtherWayRound) {
+  const StringModes m;
+  Eigen::MatrixXcd measured = m.at.cast<std::complex<double>>();
+  measured.row(1) *= -1.0;
+  measured.row(3) *= -1.0;
+  const SignCheck c = check_channel_signs(measured, m.f, m.at, m.f, {}, 0.5);
+  EXPECT_EQ(c.channels, (std::vector<int>{1, 3}));
+  EXPECT_EQ(c.matched_reversed, 5);
+  EXPECT_LE(c.matched, 3);
+}
+
 TEST(ChannelSigns, RightSignsNameNoChannel) {
   const StringModes m;
   const Eigen::MatrixXcd measured = m.at.cast<std::complex<double>>();
   const SignCheck c = check_channel_signs(measured, m.f, m.at, m.f, {}, 0.5);
-  EXPECT_EQ(c.channel, -1);
+  EXPECT_TRUE(c.channels.empty());
   EXPECT_EQ(c.matched, 5);
 }
 
@@ -60,7 +71,7 @@ TEST(ChannelSigns, TwoSensorsAreNotEnoughToJudge) {
   measured.row(0) *= -1.0;
   const SignCheck c = check_channel_signs(measured, m.f, m.at.topRows(2), m.f, {}, 0.5);
   EXPECT_EQ(c.counted, 0);
-  EXPECT_EQ(c.channel, -1);
+  EXPECT_TRUE(c.channels.empty());
 }
 
 TEST(PhaselessShapes, MagnitudesAreNamed) {
