@@ -90,7 +90,7 @@ const toml::array& array(const Context& ctx, const toml::node& n, const std::str
   return *a;
 }
 
-// A setting of an update table: a number, a text, or a table of per-set bounds
+// A setting of an update table: a number, a text, a flag, or a table of per-set bounds
 // { "<set>" = [lower, upper], ... }; the settings' meaning is checked where they are used.
 CampaignSetting setting(const Context& ctx, const toml::node& n, const std::string& field) {
   const long line = static_cast<long>(n.source().begin.line);
@@ -107,8 +107,10 @@ CampaignSetting setting(const Context& ctx, const toml::node& n, const std::stri
     }
     return {std::move(bounds), line};
   }
+  if (n.is_boolean()) return CampaignSetting::flag(*n.value<bool>(), line);
   if (!(n.is_integer() || n.is_floating_point()))
-    ctx.fail(n, fmt::format("{} must be a number, a string or a table of bounds", field));
+    ctx.fail(n, fmt::format("{} must be a number, a string, true or false, or a table of bounds",
+                            field));
   return {number(ctx, n, field), line};
 }
 

@@ -66,7 +66,7 @@ struct SetBounds {
 
 /// One setting of an update table as written: a number, a text, or bounds of named sets.
 struct CampaignSetting {
-  std::variant<double, std::string, std::vector<SetBounds>> value;  ///< the value
+  std::variant<double, std::string, std::vector<SetBounds>, bool> value;  ///< the value
   long line = 0;  ///< its line in the campaign file (0: not read from a file)
   CampaignSetting() = default;
   /// A number (implicit, so a setting can be assigned a number).
@@ -75,6 +75,13 @@ struct CampaignSetting {
   CampaignSetting(std::string v, long at) : value(std::move(v)), line(at) {}
   /// Bounds of named sets.
   CampaignSetting(std::vector<SetBounds> v, long at) : value(std::move(v)), line(at) {}
+  /// A flag (true or false).
+  static CampaignSetting flag(bool v, long at) {
+    CampaignSetting s;
+    s.value = v;
+    s.line = at;
+    return s;
+  }
 };
 
 /// One update step and its settings (passed on to the updating library).

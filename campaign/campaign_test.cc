@@ -93,9 +93,11 @@ TEST(Campaign, LinearUpdateSettingsAreTyped) {
                                         "rule = \"smallest\"\nsmallest_set = \"iwan.rivet\"\n"
                                         "tolerance = 0.005\nfrequency_window = 0.3\n"
                                         "alias_mac = 0.95\nmax_iterations = 50\n"
-                                        "bounds = { \"spring.kz\" = [1e5, 1e9] }\n",
+                                        "bounds = { \"spring.kz\" = [1e5, 1e9] }\n"
+                                        "trust_signs = true\n",
                                     file);
   const correlate::LinearUpdateOptions lo = linear_update_options(c);
+  EXPECT_TRUE(lo.trust_signs);
   EXPECT_EQ(lo.rule, correlate::LinearRule::kSmallest);
   EXPECT_EQ(lo.smallest_set, "iwan.rivet");
   EXPECT_EQ(lo.tolerance, 0.005);
@@ -120,6 +122,8 @@ TEST(Campaign, LinearUpdateSettingsAreTyped) {
   EXPECT_EQ(message("rule = \"fastest\""),
             at + "update.linear.rule must be \"least-squares\" or \"smallest\", not \"fastest\"");
   EXPECT_EQ(message("rule = 1"), at + "update.linear.rule must be a string");
+  EXPECT_EQ(message("trust_signs = 1"), at + "update.linear.trust_signs must be true or false");
+  EXPECT_EQ(message("rule = true"), at + "update.linear.rule must be a string");
   EXPECT_EQ(message("tolerance = \"small\""), at + "update.linear.tolerance must be a number");
   EXPECT_EQ(message("max_iterations = 2.5"),
             at + "update.linear.max_iterations must be a whole number from 1 to 100000");

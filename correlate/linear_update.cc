@@ -1000,9 +1000,9 @@ std::string shape_problem(const LinearEvaluation& start, const std::vector<Senso
       "channel{} {} read{} the model reversed: as given, {} of {} measured modes (with entries at "
       "three sensors or more) have a model mode within the frequency window at MAC >= 0.9 (mean "
       "best MAC {:.3f}); with {} reversed, {} of {} have (mean {:.3f}), so {} likely wrong "
-      "(mounted "
-      "the other way round): give {} in the sensors file, or, if the sign{} right, "
-      "fit the shapes as given with --trust-signs",
+      "(mounted the other way round): give {} in the sensors file (a campaign's [[channel]] "
+      "sign), or, if the sign{} right, fit the shapes as given with --trust-signs (a campaign's "
+      "update.linear trust_signs = true)",
       one ? "" : "s", which, one ? "s" : "", c.matched, c.counted, c.mean_mac, which,
       c.matched_reversed, c.counted, c.mean_mac_reversed, one ? "its sign is" : "their signs are",
       fmt::join(signs, " and "), one ? " is" : "s are");

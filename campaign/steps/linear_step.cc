@@ -32,6 +32,8 @@ correlate::LinearUpdateOptions linear_update_options(const Campaign& c) {
     } else if (key == "frequency_window") {
       lo.frequency_window = in.number(key, s);
       if (!(lo.frequency_window >= 0)) in.fail(key, s, "must be >= 0 (0: no window)");
+    } else if (key == "trust_signs") {
+      lo.trust_signs = in.flag(key, s);
     } else if (key == "alias_mac") {
       lo.alias_mac = in.number(key, s);
       if (!(lo.alias_mac > 0 && lo.alias_mac <= 1)) in.fail(key, s, "must be in (0, 1]");
@@ -63,7 +65,7 @@ correlate::LinearUpdateOptions linear_update_options(const Campaign& c) {
       in.unknown(key, s,
                  "rule, smallest_set, tolerance, bounds, lower_factor, upper_factor, "
                  "frequency_window, mac_threshold, alias_mac, max_iterations, "
-                 "flat_sensitivity, frequency_std");
+                 "flat_sensitivity, frequency_std, trust_signs");
     }
   }
   if (lo.rule == correlate::LinearRule::kSmallest && lo.smallest_set.empty() &&

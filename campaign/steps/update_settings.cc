@@ -32,6 +32,12 @@ int UpdateSettings::whole(const std::string& key, const CampaignSetting& s, int 
   return static_cast<int>(v);
 }
 
+bool UpdateSettings::flag(const std::string& key, const CampaignSetting& s) const {
+  const bool* v = std::get_if<bool>(&s.value);
+  if (!v) fail(key, s, "must be true or false");
+  return *v;
+}
+
 const std::string& UpdateSettings::text(const std::string& key, const CampaignSetting& s) const {
   const std::string* v = std::get_if<std::string>(&s.value);
   if (!v) fail(key, s, "must be a string");

@@ -18,6 +18,8 @@ class UpdateSettings {
   double number(const std::string& key, const CampaignSetting& s) const;
   /// A whole number in [lo, hi].
   int whole(const std::string& key, const CampaignSetting& s, int lo, int hi) const;
+  /// A flag (true or false).
+  bool flag(const std::string& key, const CampaignSetting& s) const;
   /// A text.
   const std::string& text(const std::string& key, const CampaignSetting& s) const;
   /// Bounds of named sets.
