@@ -453,7 +453,8 @@ void add_update_commands(CLI::App& app) {
   iw->add_option("--pareto", ia->pareto, "gamma values of a Pareto front, comma separated")
       ->delimiter(',');
   iw->add_option("--evaluations", ia->options.max_evaluations,
-                 "budget of QSMA evaluations (default 1500)");
+                 "budget of QSMA evaluations of each fit (default 1500); when beta is freed for a "
+                 "second fit, that fit has its own, so the total can reach twice it");
   iw->add_option("--seed", ia->options.seed, "random seed (default 1)");
   iw->add_option("--threads", ia->options.threads,
                  "threads evaluating samples (default 0: every core); the result does not "

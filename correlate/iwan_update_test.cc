@@ -468,6 +468,47 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
   // F_S on its own is not identified: with beta held at 1 it must move away from the truth to
   // keep R (here by more than the planted scatter), which is why the report does not judge it.
   EXPECT_FALSE(testing::Close(p.Fs, truth.Fs, 2 * s_fs));
+  // With beta held F_S has the sigma it has at that beta.
+  EXPECT_GT(sum.relative_std(0), 0.0);
+
+  // With beta free, ending in microslip, F_S stands for R and its own sigma is unknown: it is
+  // not stated (before: a sigma of under 1 % for an F_S that moves freely with beta).
+  IwanUpdateOptions free_beta = o;
+  free_beta.fixed_beta.reset();
+  IwanUpdateSummary sf;
+  update_iwan(obj, free_beta, &sf);
+  SCOPED_TRACE(sf.report());
+  if (sf.microslip_only()) {
+    EXPECT_EQ(sf.relative_std(0), 0.0);
+    EXPECT_EQ(sf.relative_std(3), 0.0);
+    EXPECT_NE(sf.report().find("(not identified apart from Fs: microslip only)"),
+              std::string::npos);
+    EXPECT_NE(sf.report().find("Fs " + fmt::format("{:.6g} -> {:.6g} N", sf.start.Fs, sf.best.Fs) +
+                               " (not identified apart from beta: microslip only)"),
+              std::string::npos);
+  } else {
+    ADD_FAILURE() << "the fit with beta free left microslip";
+  }
+}
+
+// A search that stopped short with a misfit says it may have missed the best fit (the report of
+// a summary as update_iwan leaves it after a spent budget), and says nothing of it when the model
+// describes the data or when every local solve converged.
+TEST(IwanUpdate, AShortSearchWithAMisfitSuggestsMoreEvaluations) {
+  IwanUpdateSummary s;
+  s.improved = true;
+  s.status = IwanUpdateStatus::kBudget;
+  s.evaluations = 2807;
+  s.residuals = 180;
+  s.reduced_chi2 = 9.69;
+  const std::string warning = "it may have missed the best fit rather than the model being wrong";
+  EXPECT_NE(s.report().find(warning), std::string::npos) << s.report();
+  EXPECT_NE(s.report().find("--evaluations (e.g. 11228)"), std::string::npos) << s.report();
+  s.reduced_chi2 = 1.1;  // within 1 + 3 sqrt(2 / 180) = 1.32
+  EXPECT_EQ(s.report().find(warning), std::string::npos) << s.report();
+  s.reduced_chi2 = 9.69;
+  s.status = IwanUpdateStatus::kConverged;
+  EXPECT_EQ(s.report().find(warning), std::string::npos) << s.report();
 }
 
 // beta = 0 (no macroslip delta, method.md) is in the domain and can be held: every optimiser

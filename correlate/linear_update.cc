@@ -1,6 +1,7 @@
 #include "jointlab/correlate/linear_update.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -8,6 +9,7 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <boost/math/distributions/chi_squared.hpp>
 
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/shape_checks.h"
@@ -531,6 +533,16 @@ void report_sensitivity(const LinearProblem& p, const LinearEvaluation& at,
   }
 }
 
+}  // namespace
+
+double reduced_chi2_limit(int degrees_of_freedom) {
+  assert(degrees_of_freedom > 0);
+  const boost::math::chi_squared chi2(degrees_of_freedom);
+  return boost::math::quantile(chi2, 0.99865) / degrees_of_freedom;
+}
+
+namespace {
+
 // Standard deviations of the fitted sets at the result (its Jacobian), widened by the reduced
 // chi-square of the least-squares fit `ls` when the frequencies scatter beyond their stated
 // uncertainty (at the least-squares point: a rule that then moves to its tolerance adds errors
@@ -560,12 +572,17 @@ void report_uncertainty(const LinearProblem& p, const LinearEvaluation& at,
     const double v = cov(c, c);
     if (v >= 0 && std::isfinite(v)) s.parameters[fitted[c]].relative_std = std::sqrt(v);
   }
-  if (s.reduced_chi2 > 1) {
+  // A model-form error only where noise of the stated size would rarely scatter so far (above
+  // the one-sided 3-sigma point of the chi-square distribution: 4.45 over 4 degrees of freedom;
+  // "above 1" was said for 7 of 20 fits of exact data with the stated noise).
+  if (s.degrees_of_freedom > 0 && s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom)) {
     s.warnings.push_back(fmt::format(
         "the frequencies scatter beyond their stated uncertainty ({:.3g} %): reduced chi-square "
-        "{:.3g} over {} degrees of freedom, so the model does not describe them to within it "
-        "(model-form error); the standard deviations are widened by sqrt({:.3g})",
-        100 * sf, s.reduced_chi2, s.degrees_of_freedom, s.reduced_chi2));
+        "{:.3g} over {} degrees of freedom (noise of that size stays below {:.3g} but once in 740 "
+        "fits), so the model does not describe them to within it (model-form error); the "
+        "standard deviations are widened by sqrt({:.3g})",
+        100 * sf, s.reduced_chi2, s.degrees_of_freedom, reduced_chi2_limit(s.degrees_of_freedom),
+        s.reduced_chi2));
   }
   // (A sign-flipped sensor paired a 505 Hz test mode with a model mode then at 748 Hz, the one
   // pair for the one set, and the fit moved K_T 528-fold to match it exactly, "converged".)
@@ -1203,9 +1220,18 @@ std::string LinearUpdateSummary::report() const {
                     fe, j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
                     mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
   }
-  if (degrees_of_freedom > 0)
-    out += fmt::format("  reduced chi-square {:.3g} over {} degrees of freedom\n", reduced_chi2,
-                       degrees_of_freedom);
+  if (degrees_of_freedom > 0) {
+    const double limit = reduced_chi2_limit(degrees_of_freedom);
+    out += fmt::format(
+        "  reduced chi-square {:.3g} over {} degrees of freedom{}\n", reduced_chi2,
+        degrees_of_freedom,
+        reduced_chi2 > limit ? ""
+        : reduced_chi2 > 1
+            ? fmt::format(" (within the stated noise: below {:.3g}, its 3-sigma level; the "
+                          "standard deviations widened by sqrt({:.3g}) all the same)",
+                          limit, reduced_chi2)
+            : " (within the stated noise)");
+  }
   for (const ParameterReport& p : parameters) {
     std::string what;
     if (p.flat)

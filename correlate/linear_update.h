@@ -248,6 +248,10 @@ struct LinearUpdateSummary {
   std::string report() const;
 };
 
+/// The reduced chi-square that noise of the stated size exceeds once in 740 fits (the one-sided
+/// 3-sigma point of the chi-square distribution over degrees_of_freedom > 0, divided by it).
+double reduced_chi2_limit(int degrees_of_freedom);
+
 /// Pairs of model modes (columns of shapes at the sensors) whose auto-MAC is at least
 /// threshold: the sensors cannot tell them apart. Each entry (j, k, MAC), j < k.
 struct AliasedModes {

@@ -545,5 +545,14 @@ TEST(LinearUpdate, MeasuredModesKeepTheirOwnNumbers) {
   EXPECT_EQ(s.final.measured_id(2), "9");
 }
 
+// The model-form threshold against the closed form of the chi-square distribution over 4
+// degrees of freedom, P(X > x) = exp(-x/2) (1 + x/2): 0.00135 at the limit (1e-10: the
+// quantile's own accuracy is near double rounding).
+TEST(LinearUpdate, TheModelFormThresholdIsTheChiSquaresThreeSigmaPoint) {
+  const double x = 4 * reduced_chi2_limit(4);
+  EXPECT_NEAR(std::exp(-x / 2) * (1 + x / 2), 1 - 0.99865, 1e-10);
+  EXPECT_NEAR(reduced_chi2_limit(4), 4.45, 0.01);
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
