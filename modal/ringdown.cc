@@ -2708,7 +2708,7 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
 // joins the run as its end. The limit itself is not moved. Not beside a second mode's beat
 // (two_modes), whose errors are fitted at the grid's points alone: the span ends there. (A 1:2
 // internal resonance, alpha 3e9 seed 1, kept 0.798 of what its envelope shows, the next grid
-// point's damping known to 1.19 %.)
+// point's damping known to 1.17 %.)
 void place_end(CorrectedEstimates& corr, Screening& screened, Run& run, const signal::BandSignal& z,
                const EnvelopePhase& ep, const BandSetting& s, double noise, bool beat) {
   constexpr int kEndHalvings = 3;
