@@ -19,7 +19,10 @@
 //    for the degrees of freedom the fit absorbs). Kept span: from the impact
 //    (continued backwards, see ChannelSpectrum) plus the filter's settling time
 //    to where the envelope falls below snr_min times the noise floor or the
-//    damping's relative uncertainty exceeds max_damping_rel_std.
+//    damping's relative uncertainty exceeds max_damping_rel_std. Points lie every
+//    shortest window / points_per_window; where the next one fails the damping limit alone, the
+//    span's end is placed between the two by three halvings (the last point that meets
+//    the limit, made and screened as the others are).
 // 4. Uncertainty per point: the larger of the fit's residual-based and the noise
 //    floor's standard deviation of each slope (both corrected for correlated
 //    samples), combined with the change of the slope when the polynomial degree

@@ -646,15 +646,17 @@ TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
 // end (the last time the simulated envelope's decay rate, smoothed over 0.1 s, is more than
 // 5 % off mode 1's own). The unmarked points must be mode 1's linear values: median
 // frequency within 0.05 % and median damping within 10 %.
-// Kept against the whole envelope: 0.934, 0.944, 0.837, 0.875, 0.798, 0.838 (over seeds 1-6,
-// 17 of 18 cases at 0.8 or more, the least 0.798: alpha 3e9 seed 1, whose next point, 0.08
-// decades further, has its damping known to 1.19 % against the 1 % limit; before the exchange was
-// marked 0.57-0.81, and before a point's window could shift away from the bend of the backbone
+// Kept against the whole envelope: 0.934, 0.944, 0.850, 0.875, 0.806, 0.838 (over seeds 1-6,
+// 0.806-0.946, all 18 cases at 0.8 or more). Alpha 3e9 seed 1 had kept 0.798 (and alpha 2e9
+// seed 1 0.837) while the span ended at a grid point: its next point, 0.0785 s and 0.08
+// decades further, has its damping known to 1.17 % against the 1 % limit; the span's end now
+// placed between the two by halving (place_end: 1.08 % at half the step, 0.99 % at a quarter,
+// 1.04 % at three eighths) keeps the point a quarter step, 0.0196 s, further. Before the exchange
+// was marked 0.57-0.81, and before a point's window could shift away from the bend of the backbone
 // 0.72-0.94: alpha 2e9 and 3e9 seed 1 lost their tails to the 1 % damping limit, their centred
-// windows reaching back into the exchange's relaxation). Alpha 3e9's first three points swing in
-// frequency by more than the mode's half-power half-width and are not kept. Required here: 0.79 of
-// the whole envelope in every case (the acceptance's 0.8 less the one case above), and 0.8 of it
-// after the exchange.
+// windows reaching back into the exchange's relaxation. Alpha 3e9's first three points swing in
+// frequency by more than the mode's half-power half-width and are not kept. Required here: 0.8 of
+// the whole envelope in every case, and 0.8 of it after the exchange.
 TEST(RingdownInternalResonance, ModeOneKeepsWhatItsEnvelopeShows) {
   struct Case {
     double alpha, zeta2;
@@ -713,7 +715,7 @@ TEST(RingdownInternalResonance, ModeOneKeepsWhatItsEnvelopeShows) {
           r.summary.span_end_s, whole, r.summary.amplitude_decades / whole, free,
           static_cast<double>(free_from) / rec.fs, r.summary.amplitude_decades / free, marked,
           ef[ef.size() / 2], ez[ez.size() / 2], r.summary.message.c_str());
-      EXPECT_GE(r.summary.amplitude_decades, 0.79 * whole) << c.alpha << " seed " << seed;
+      EXPECT_GE(r.summary.amplitude_decades, 0.8 * whole) << c.alpha << " seed " << seed;
       EXPECT_GE(r.summary.amplitude_decades, 0.8 * free) << c.alpha << " seed " << seed;
       EXPECT_LE(ef[ef.size() / 2], 5e-4) << c.alpha << " seed " << seed;
       EXPECT_LE(ez[ez.size() / 2], 0.10) << c.alpha << " seed " << seed;

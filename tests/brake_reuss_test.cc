@@ -176,9 +176,10 @@ TEST(BrakeReuss, EachBandAndChannelStandsAlone) {
 // Hz (on the upper edge), the measured mode is read through a band that follows it and
 // must agree with the centred band 70:90 Hz at the same instants: median frequency within
 // 2e-5 and median damping within 1 %, over at least 1.4 decades for 79:99 (the centred band
-// keeps 1.69 and 1.76) and 1.0 for 72:82. Before the band followed the mode, 79:99 gave no
+// keeps 1.70 and 1.76) and 1.0 for 72:82. Before the band followed the mode, 79:99 gave no
 // backbone on either channel and 72:82 kept acc3 from 1.0 s (median errors then 2.5e-6 and
-// 0.1 %). Measured now: 1.69/1.76 decades, median differences at most 1.3e-6 and 0.1 %.
+// 0.1 %). Measured now: 1.71/1.77 decades (72:82: 1.63/1.70), median differences at most
+// 1.4e-6 and 0.1 %.
 // The record's own spectrum has no peak from 65 to 90 Hz but the mode's (80.47 Hz): no band
 // may be held back by a neighbouring mode there. acc3's 72:82 Hz band once was, by a peak at
 // 75.34 Hz of its backward continuation alone, and kept 1.53 decades instead of 1.68.
