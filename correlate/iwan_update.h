@@ -239,6 +239,10 @@ class IwanObjective {
   Eigen::Vector2d constant_rms_errors() const;
   /// The targets (the measured backbones).
   const std::vector<IwanTarget>& targets() const { return targets_; }
+  /// How many measured points state an uncertainty (std > 0) below the floors: (points,
+  /// frequencies below frequency_floor f, dampings below damping_floor zeta); those are raised
+  /// to the floor.
+  Eigen::Vector3i floored_points() const;
 
  private:
   const model::Model* model_;
@@ -336,6 +340,9 @@ struct IwanUpdateSummary {
   double reduced_chi2 = 0;
   double reference_stiffness = 0;  ///< K_s: gamma = K_T / K_s [N/m]
   size_t residuals = 0;            ///< number of residuals (2 per measured point)
+  /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)
+  Eigen::Vector3i floored = Eigen::Vector3i::Zero();
+  double frequency_floor = 0, damping_floor = 0;  ///< the floors of the options
   /// True when reduced_chi2 is significantly above 1 (by more than 3 of its standard deviations
   /// sqrt(2 / dof)): the model does not describe the data within their noise and the sigma is a
   /// lower bound.

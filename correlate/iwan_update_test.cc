@@ -511,6 +511,35 @@ TEST(IwanUpdate, AShortSearchWithAMisfitSuggestsMoreEvaluations) {
   EXPECT_EQ(s.report().find(warning), std::string::npos) << s.report();
 }
 
+// Stated uncertainties below the floors are raised to them, and the report says how many.
+TEST(IwanUpdate, UncertaintiesBelowTheFloorsAreSaid) {
+  IwanTarget target;
+  target.mode = 1;
+  MeasuredBackbone c;
+  c.modal = true;
+  c.amplitude = Eigen::Vector3d(1e-6, 2e-6, 3e-6);
+  c.frequency_hz = Eigen::Vector3d(100, 100, 100);
+  c.damping_ratio = Eigen::Vector3d(1e-3, 1e-3, 1e-3);
+  // sigma 1e-3 Hz (1e-5 f, below 1e-4 f), 3e-2 Hz (above), none; damping 1e-6 (0.1 %, below
+  // 2 %) at every point.
+  c.frequency_std_hz = Eigen::Vector3d(1e-3, 3e-2, 0);
+  c.damping_std = Eigen::Vector3d(1e-6, 1e-6, 1e-6);
+  target.curves = {c};
+  TwoChainParameters p;
+  p.iwan = true;
+  const model::Model m = two_chain_structure(p);
+  const IwanObjective obj(m, "rivet", {}, {target}, {});
+  EXPECT_EQ(obj.floored_points(), Eigen::Vector3i(3, 1, 3));
+  IwanUpdateSummary s;
+  s.floored = obj.floored_points();
+  s.frequency_floor = 1e-4;
+  s.damping_floor = 0.02;
+  EXPECT_NE(s.report().find("note: the stated uncertainties of 1 of 3 frequencies and 3 of 3 "
+                            "dampings lie below the floors (0.0001 f, 0.02 zeta)"),
+            std::string::npos)
+      << s.report();
+}
+
 // beta = 0 (no macroslip delta, method.md) is in the domain and can be held: every optimiser
 // keeps it at exactly 0 (its search coordinate ln beta is no finite number, so the held value
 // must not go through it), and with noiseless backbones of a beta = 0 truth reaching 1.2 to 2
