@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
@@ -200,6 +201,19 @@ correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjectiv
   return b;
 }
 
+// "; with channel s1 reversed ..." where a sign explains a band's low MAC (mode_shape_match).
+std::string reversed_hint(const correlate::ModeShapeMatch& match,
+                          const std::vector<correlate::Sensor>& sensors, int mode) {
+  if (match.reversed.empty()) return "";
+  std::vector<std::string> names;
+  for (const int k : match.reversed) names.push_back(sensors[static_cast<size_t>(k)].channel);
+  return fmt::format(
+      "; or a sign: with {} {} reversed its MAC with mode {} is {:.2g}, so check {} sign in the "
+      "sensors file",
+      names.size() == 1 ? "channel" : "channels", fmt::join(names, " and "), mode,
+      match.reversed_mac, names.size() == 1 ? "its" : "their");
+}
+
 // The fit and its files, whatever the measured data came from (the measured linear modes, when
 // known, give the Pareto front's per-mode errors).
 void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& in) {
@@ -282,11 +296,12 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& i
       say(stdout,
           "  WARNING: --mode {}: band {}'s measured shape and mode {} of the updated model have "
           "MAC {:.2g} at the sensors (below {:g}){}: the band, or the sensors file, may belong "
-          "to another mode, and the parameters then fit that mode's data\n",
+          "to another mode, and the parameters then fit that mode's data{}\n",
           b.spec, b.band, b.mode, match.mac, kBandMacThreshold,
           match.best_mode != b.mode ? fmt::format("; it looks most like mode {} (MAC {:.2g})",
                                                   match.best_mode, match.best_mac)
-                                    : std::string());
+                                    : std::string(),
+          reversed_hint(match, in.sensors, b.mode));
     }
   }
   for (const correlate::ParetoPoint& p : front) {

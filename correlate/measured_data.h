@@ -125,6 +125,11 @@ struct ModeShapeMatch {
   double mac = 0;       ///< MAC of the measured shape with the asked model mode
   int best_mode = 0;    ///< the elastic model mode (1-based) of highest MAC
   double best_mac = 0;  ///< its MAC
+  /// Where the MAC with `mode` is below 0.6 and the shape has entries at three sensors or more:
+  /// the one or two sensors whose reversal raises it the most, when that reaches 0.9 (a sign
+  /// the sensors file may have wrong); empty otherwise.
+  std::vector<int> reversed;
+  double reversed_mac = 0;  ///< the MAC with `mode` with `reversed` reversed
 };
 
 /// The MAC at the sensors of measured column `column` against elastic mode `mode` (1-based) of

@@ -5,10 +5,12 @@
 #include <fstream>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/two_chain.h"
+#include "jointlab/model/linear_modes.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::correlate {
@@ -232,6 +234,32 @@ TEST(MeasuredData, ASizedBackboneHasEveryColumnAtThatLengthAndZero) {
   for (const Eigen::VectorXd* v :
        {&b.amplitude, &b.frequency_hz, &b.damping_ratio, &b.frequency_std_hz, &b.damping_std})
     EXPECT_EQ(*v, Eigen::VectorXd::Zero(4));
+}
+
+// A band whose shape is mode 1's with one sensor's sign wrong: its MAC with mode 1 is low, and
+// the match names that sensor, whose reversal gives MAC 1 (to rounding); the right shape
+// names none.
+TEST(MeasuredData, ModeShapeMatchNamesASensorWhoseReversalExplainsALowMac) {
+  TwoChainParameters p;
+  const model::Model m = two_chain_structure(p);
+  std::vector<Sensor> sensors;
+  for (const int dof : {0, 2, 3, 5}) sensors.push_back({fmt::format("s{}", dof), dof, 1.0});
+  const model::LinearModes modes = model::linear_modes(m.mass, m.linear_stiffness());
+  const int elastic = modes.size() - modes.rigid_count;
+  const Eigen::VectorXd at = shapes_at_sensors(sensors, modes.shapes.rightCols(elastic)).col(0);
+  MeasuredModes measured;
+  measured.frequency_hz = Eigen::VectorXd::Constant(1, modes.frequency_hz(modes.rigid_count));
+  measured.shapes = at.cast<std::complex<double>>();
+  ModeShapeMatch right = mode_shape_match(m, sensors, measured, 0, 1);
+  EXPECT_NEAR(right.mac, 1.0, 1e-12);
+  EXPECT_TRUE(right.reversed.empty());
+  Eigen::Index top = 0;
+  at.cwiseAbs().maxCoeff(&top);
+  measured.shapes(top, 0) *= -1.0;
+  const ModeShapeMatch wrong = mode_shape_match(m, sensors, measured, 0, 1);
+  ASSERT_LT(wrong.mac, 0.6);
+  EXPECT_EQ(wrong.reversed, std::vector<int>{static_cast<int>(top)});
+  EXPECT_NEAR(wrong.reversed_mac, 1.0, 1e-12);
 }
 
 }  // namespace
