@@ -77,16 +77,9 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   in.targets = {std::move(t)};
   in.amplitude = amplitude;
   in.modal = quantity == "modal";
-  // A sensor's displacement read as modal scales F_S by the shape's value there and fits as
-  // well (a 2.65x F_S on the example beam, reduced chi-square 0.027): only the report can say.
-  in.amplitude_note =
-      in.modal ? fmt::format(
-                     "amplitudes read as mode {}'s QSMA modal amplitude q (--amplitude modal{}); a "
-                     "sensor's displacement, velocity or acceleration needs --amplitude and --dof, "
-                     "else F_S comes out scaled by the mode's shape value at that sensor",
-                     in.targets.front().mode, a.amplitude.empty() ? ", the default" : "")
-               : fmt::format("amplitudes read as the {} at model DOF {} (--amplitude {} --dof {})",
-                             quantity, in.sensors.front().channel, quantity, a.dof);
+  in.amplitude_note = correlate::amplitude_reading(
+      in.targets.front().mode, quantity, a.amplitude.empty(),
+      in.sensors.empty() ? std::string() : in.sensors.front().channel, a.dof);
   return in;
 }
 

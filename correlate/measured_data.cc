@@ -556,4 +556,17 @@ MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor)
   return b;
 }
 
+std::string amplitude_reading(int mode, const std::string& quantity, bool defaulted,
+                              const std::string& dof_name, const std::string& dof) {
+  if (quantity == "modal") {
+    return fmt::format(
+        "amplitudes read as mode {}'s QSMA modal amplitude q (--amplitude modal{}); a sensor's "
+        "displacement, velocity or acceleration needs --amplitude and --dof, else F_S comes out "
+        "scaled by the mode's shape value at that sensor",
+        mode, defaulted ? ", the default" : "");
+  }
+  return fmt::format("amplitudes read as the {} at model DOF {} (--amplitude {} --dof {})",
+                     quantity, dof_name, quantity, dof);
+}
+
 }  // namespace jointlab::correlate

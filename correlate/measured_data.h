@@ -137,4 +137,12 @@ struct ModeShapeMatch {
 ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sensor>& sensors,
                                 const MeasuredModes& measured, int column, int mode);
 
+/// The report's line on what a backbone table's amplitudes were read as: mode `mode`'s QSMA modal
+/// amplitude q (quantity "modal"; `defaulted`: no amplitude quantity given), else `quantity` at
+/// the model DOF `dof_name` (given as `dof`). A sensor's displacement read as modal scales F_S by
+/// the shape's value there and fits as well (a 2.65 times F_S, reduced chi-square 0.027), so only
+/// the report can say it.
+std::string amplitude_reading(int mode, const std::string& quantity, bool defaulted,
+                              const std::string& dof_name, const std::string& dof);
+
 }  // namespace jointlab::correlate

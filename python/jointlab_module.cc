@@ -406,6 +406,7 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
         fmt::format("--beta-range {}:{}: need 0 < LO < HI (beta is searched on a log scale)",
                     beta_range.first, beta_range.second));
   correlate::IwanUpdateSummary summary;
+  std::vector<correlate::Sensor> sensors_used;  // the DOF named by `dof`, for the report
   model::Model updated;
   {
     py::gil_scoped_release release;
@@ -457,6 +458,7 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
         report(progress,
                fmt::format("update-iwan: {} QSMA evaluations, best cost {:.6g}", n, best));
     };
+    sensors_used = sensors;
     correlate::IwanObjective objective(m, set, sensors, {target}, o);
     correlate::IwanBounds b = correlate::default_iwan_bounds(objective.initial());
     if (fs_range) b.Fs_min = fs_range->first, b.Fs_max = fs_range->second;
@@ -511,7 +513,12 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["initial_cost"] = cost(summary.initial_cost);
   result["evaluations"] = summary.evaluations;
   result["warnings"] = summary.at_bounds;
-  result["report"] = summary.report();
+  result["report"] =
+      summary.report() + "  " +
+      correlate::amplitude_reading(
+          mode, amplitude, false,
+          sensors_used.empty() ? std::string() : sensors_used.front().channel, dof.value_or("")) +
+      "\n";
   return result;
 }
 

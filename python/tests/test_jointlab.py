@@ -273,6 +273,9 @@ def test_update_iwan_equals_the_command_line(tmp_path):
                                   evaluations=400)
     for name in ("Fs", "Kt", "chi", "beta"):
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    # The report says what the amplitudes were read as, as the command's does.
+    assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal)" in \
+        result["report"]
     with pytest.raises(jointlab.InputError, match="--mode 2: model mode 2 does not exist"):
         jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 2, [str(d / "bb.csv")])
     (d / "neg.csv").write_text("amplitude,frequency_hz,damping_ratio\n1e-4,93.0,-1e-5\n")
