@@ -996,8 +996,9 @@ std::string shape_problem(const LinearEvaluation& start, const std::vector<Senso
                           const MeasuredModes& measured, const LinearUpdateOptions& options) {
   std::vector<std::string> ids;
   for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) ids.push_back(measured.id(i));
-  if (std::string why = phaseless_shapes(measured.shapes, measured.frequency_hz,
-                                         start.model_at_sensors, start.all_model_frequency_hz, ids);
+  if (std::string why =
+          phaseless_shapes(measured.shapes, measured.frequency_hz, start.model_at_sensors,
+                           start.all_model_frequency_hz, ids, options.frequency_window);
       !why.empty())
     return why;
   if (options.trust_signs) return "";

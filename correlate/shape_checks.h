@@ -7,15 +7,20 @@
 // Reversed channels: for each sensor c, and each pair of sensors, those rows of the measured
 // shapes are negated and the matches counted again (the most matches win, then the highest mean
 // best MAC, then one channel over two). They are named when, reversed, at least two more modes
-// match than as given, and at least three in four of the counted modes. A channel mounted the
+// match than as given, and at least three in four of the counted modes; or every counted mode
+// matches where one did not as given, with the mean best MAC up by 0.1 (few modes: with three,
+// a reversal often turns one). A channel mounted the
 // other way round (sensors file `sign` wrong or missing) otherwise pairs modes crosswise: with
 // five sensors on the example beam and one reversed, two of five paired, one at +25 % and one at
 // -38 %, and K_T came out 3.1 times low, "converged"; with two reversed, one of five paired and
 // K_T came out twice the truth, "converged".
-// Shapes without phase: every entry of every counted mode has the same phase (magnitudes, or a
-// sign dropped), at least two such modes, while at least half of them have a model mode nearest
-// in frequency that changes sign between the sensors (entries above a tenth of its largest with
-// both signs). MAC cannot pair magnitudes: on the example beam one of five paired, crosswise.
+// Shapes without phase: counted modes whose every entry has the same phase (magnitudes, or a
+// sign dropped) while every model mode within the frequency window (none: the nearest in
+// frequency) changes sign between the sensors (entries above a tenth of its largest with both
+// signs); at least two such modes. MAC cannot pair magnitudes: on the example beam all five
+// as magnitudes paired one, crosswise; modes 2-5 alone as magnitudes gave K_T 2.77e6 against
+// 1.2e7, "converged", and modes 1, 3 and 5 were read as a channel reversed. Checked before the
+// channels' signs.
 #pragma once
 
 #include <string>
@@ -50,6 +55,6 @@ std::string phaseless_shapes(const Eigen::Ref<const Eigen::MatrixXcd>& measured_
                              const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
                              const Eigen::Ref<const Eigen::MatrixXd>& model_at_sensors,
                              const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
-                             const std::vector<std::string>& ids);
+                             const std::vector<std::string>& ids, double frequency_window);
 
 }  // namespace jointlab::correlate

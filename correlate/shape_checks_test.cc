@@ -80,16 +80,15 @@ TEST(PhaselessShapes, MagnitudesAreNamed) {
   // Magnitudes, with a common phase (a complex scale keeps every entry in phase).
   const Eigen::MatrixXcd magnitudes =
       std::polar(1.0, 0.3) * m.at.cwiseAbs().cast<std::complex<double>>();
-  const std::string why = phaseless_shapes(magnitudes, m.f, m.at, m.f, ids);
-  EXPECT_NE(why.find("the shapes of measured modes 3, 4, 5, 6, 7 have one phase"),
-            std::string::npos)
+  const std::string why = phaseless_shapes(magnitudes, m.f, m.at, m.f, ids, 0.5);
+  EXPECT_NE(why.find("the shapes of measured modes 4, 5, 6, 7 have one phase"), std::string::npos)
       << why;
   // Mode 1 of the string keeps one sign at every sensor; modes 2-5 change it.
   EXPECT_NE(why.find("model modes 2 (40 Hz), 3 (160 Hz), 4 (640 Hz), 5 (2560 Hz)"),
             std::string::npos)
       << why;
   const Eigen::MatrixXcd signed_shapes = std::polar(1.0, 0.3) * m.at.cast<std::complex<double>>();
-  EXPECT_EQ(phaseless_shapes(signed_shapes, m.f, m.at, m.f, ids), "");
+  EXPECT_EQ(phaseless_shapes(signed_shapes, m.f, m.at, m.f, ids, 0.5), "");
 }
 
 TEST(PhaselessShapes, ModesThatKeepOneSignAreNotMagnitudes) {
@@ -98,7 +97,7 @@ TEST(PhaselessShapes, ModesThatKeepOneSignAreNotMagnitudes) {
   Eigen::MatrixXd at(3, 2);
   at << 1.0, 0.2, 0.8, 0.5, 0.6, 1.0;
   const Eigen::Vector2d f(10, 40);
-  EXPECT_EQ(phaseless_shapes(at.cast<std::complex<double>>(), f, at, f, {"1", "2"}), "");
+  EXPECT_EQ(phaseless_shapes(at.cast<std::complex<double>>(), f, at, f, {"1", "2"}, 0.5), "");
 }
 
 }  // namespace
