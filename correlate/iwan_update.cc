@@ -22,6 +22,13 @@ namespace {
 constexpr double kPenalty = 1e6;  // cost() of a parameter set the model cannot evaluate
 constexpr int kBatch = 50;        // samples evaluated between two progress reports
 
+// Point j's stated one-sigma uncertainties (frequency [Hz], damping ratio; 0: none stated): the
+// file's expanded uncertainty over its coverage factor (process's k = 3 was read as sigma, and
+// the reduced chi-square came out 9 times too small).
+Eigen::Vector2d stated_sigma(const MeasuredBackbone& c, Eigen::Index j) {
+  return Eigen::Vector2d(c.frequency_std_hz(j), c.damping_std(j)) / c.coverage_factor;
+}
+
 }  // namespace
 
 int amplitude_power(AmplitudeQuantity q) {
@@ -354,12 +361,9 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
           const double z = !matched                               ? q.damping_ratio
                            : c.kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
                                                                   : q.ringdown_damping_ratio;
-          // One sigma: the file's expanded uncertainty over its coverage factor (process's k = 3
-          // was read as sigma, and the reduced chi-square came out 9 times too small).
-          const double k_cov = c.coverage_factor;
-          const double sf = std::max(c.frequency_std_hz(j) / k_cov, f_floor_ * c.frequency_hz(j));
-          const double sz =
-              std::max(c.damping_std(j) / k_cov, z_floor_ * std::abs(c.damping_ratio(j)));
+          const Eigen::Vector2d stated = stated_sigma(c, j);
+          const double sf = std::max(stated(0), f_floor_ * c.frequency_hz(j));
+          const double sz = std::max(stated(1), z_floor_ * std::abs(c.damping_ratio(j)));
           if (values) {
             values[k] = f;
             values[k + 1] = z;
@@ -847,28 +851,43 @@ double lag_one_correlation(const std::vector<std::vector<int>>& curves, const Ei
   return c0 > 0 ? c1 / c0 : 0.0;
 }
 
+// Each curve's points ordered by amplitude (points_by_amplitude) and its bandwidth (hac_lags at
+// the residuals' pooled lag-1 autocorrelation): made once for the residuals at the result, for
+// every Jacobian that covariance() weighs with them.
+struct SerialOrder {
+  std::vector<std::vector<int>> curves;
+  std::vector<int> lags;  // per curve
+};
+
+SerialOrder serial_order(const IwanObjective& objective, const Eigen::VectorXd& r) {
+  SerialOrder out{points_by_amplitude(objective), {}};
+  const double rho = lag_one_correlation(out.curves, r);
+  for (const std::vector<int>& points : out.curves)
+    out.lags.push_back(hac_lags(static_cast<int>(points.size()), rho));
+  return out;
+}
+
 // Newey-West (HAC) estimate of S = Var(sum of scores) for residuals r with Jacobian J: each
 // curve's points ordered by amplitude, the score of a point g_t = J_t^T r_t over its frequency
 // and damping residuals, S = sum over curves of sum_t g_t g_t^T + sum_{l=1..L} w_l (g_t g_{t-l}^T
-// + g_{t-l} g_t^T), Bartlett weights w_l = 1 - l / (L + 1). L is a tenth of the curve's points
-// (at least 1): a fixed share of the amplitude range, so the same curve sampled ten times more
-// densely covers the same correlation length and gives the same S, where the points of a curve
-// come from overlapping local fits and model-form error runs in long waves (method.md section 2
-// point 5).
-Eigen::MatrixXd hac_scores(const IwanObjective& objective, const Eigen::MatrixXd& J,
+// + g_{t-l} g_t^T), Bartlett weights w_l = 1 - l / (L + 1), L the curve's hac_lags(): at least
+// a tenth of its points, a fixed share of the amplitude range, so the same curve sampled ten
+// times more densely covers the same correlation length and gives the same S, where the points of
+// a curve come from overlapping local fits and model-form error runs in long waves (method.md
+// section 2 point 5).
+Eigen::MatrixXd hac_scores(const SerialOrder& order, const Eigen::MatrixXd& J,
                            const Eigen::VectorXd& r) {
   const Eigen::Index nf = J.cols();
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(nf, nf);
-  const std::vector<std::vector<int>> curves = points_by_amplitude(objective);
-  const double rho = lag_one_correlation(curves, r);
-  for (const std::vector<int>& points : curves) {
+  for (size_t c = 0; c < order.curves.size(); ++c) {
+    const std::vector<int>& points = order.curves[c];
     const int n = static_cast<int>(points.size());
     Eigen::MatrixXd g(nf, n);
     for (int t = 0; t < n; ++t) {
       const int i = points[t];
       g.col(t) = J.row(i).transpose() * r(i) + J.row(i + 1).transpose() * r(i + 1);
     }
-    const int lags = hac_lags(n, rho);
+    const int lags = order.lags[c];
     S += g * g.transpose();
     for (int l = 1; l <= lags && l < n; ++l) {
       const double w = 1.0 - l / (lags + 1.0);
@@ -884,13 +903,12 @@ Eigen::MatrixXd hac_scores(const IwanObjective& objective, const Eigen::MatrixXd
 // of the frequency and of the damping residuals of each curve ordered by amplitude, pooled: N /
 // tau is the effective number of independent points. The same curve sampled ten times more
 // densely has tau about ten times larger, so Gauss-Newton times tau does not depend on density.
-double residual_correlation_time(const IwanObjective& objective, const Eigen::VectorXd& r) {
+double residual_correlation_time(const SerialOrder& order, const Eigen::VectorXd& r) {
   double c0 = 0, sum = 0;
-  const std::vector<std::vector<int>> curves = points_by_amplitude(objective);
-  const double rho = lag_one_correlation(curves, r);
-  for (const std::vector<int>& points : curves) {
+  for (size_t c = 0; c < order.curves.size(); ++c) {
+    const std::vector<int>& points = order.curves[c];
     const int n = static_cast<int>(points.size());
-    const int lags = hac_lags(n, rho);
+    const int lags = order.lags[c];
     for (int part = 0; part < 2; ++part) {  // frequency, damping
       for (int t = 0; t < n; ++t) c0 += r(points[t] + part) * r(points[t] + part);
       for (int l = 1; l <= lags && l < n; ++l) {
@@ -905,15 +923,15 @@ double residual_correlation_time(const IwanObjective& objective, const Eigen::Ve
 
 // The covariance of covariance() (below) from one Jacobian J of the residuals r; none when J^T J
 // is singular.
-std::optional<Eigen::MatrixXd> sandwich(const IwanObjective& objective, const Eigen::MatrixXd& J,
-                                        const Eigen::VectorXd& r, double n_points,
-                                        double reduced_chi2, double tau) {
+std::optional<Eigen::MatrixXd> sandwich(const IwanObjective& objective, const SerialOrder& order,
+                                        const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                                        double n_points, double reduced_chi2, double tau) {
   const Eigen::MatrixXd H = J.transpose() * J;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(H);
   if (!lu.isInvertible()) return std::nullopt;
   const Eigen::MatrixXd Hi = lu.inverse();
   const Eigen::MatrixXd gauss_newton = Hi / n_points * std::max(1.0, reduced_chi2 * tau);
-  Eigen::MatrixXd robust = Hi * hac_scores(objective, J, r) * Hi;
+  Eigen::MatrixXd robust = Hi * hac_scores(order, J, r) * Hi;
   const std::vector<int>& curve = objective.residual_curve();
   const int nf = static_cast<int>(J.cols()), m = static_cast<int>(J.rows());
   const int n_curves = curve.empty() ? 0 : curve.back() + 1;
@@ -986,9 +1004,10 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
       Jb(i, j) = (r(i) - rm[i]) / h;
     }
   }
-  const double tau = residual_correlation_time(objective, r);
+  const SerialOrder order = serial_order(objective, r);
+  const double tau = residual_correlation_time(order, r);
   const std::optional<Eigen::MatrixXd> central =
-      sandwich(objective, J, r, n_points, *reduced_chi2, tau);
+      sandwich(objective, order, J, r, n_points, *reduced_chi2, tau);
   if (!central) return {};
   // At a kink of the model (a measured amplitude at phi_max, where the cost's minimum likes to
   // sit) the one-sided slopes differ and the central one overstates what the data say: each
@@ -998,7 +1017,7 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
   Eigen::MatrixXd cov = *central;
   for (const Eigen::MatrixXd* one_sided : {&Jf, &Jb}) {
     const std::optional<Eigen::MatrixXd> c =
-        sandwich(objective, *one_sided, r, n_points, *reduced_chi2, tau);
+        sandwich(objective, order, *one_sided, r, n_points, *reduced_chi2, tau);
     if (!c) continue;
     // Only where a sigma differs by more than 10 %: elsewhere the O(h) differences of the
     // one-sided slopes are no kink and leave the result as it was.
@@ -1110,10 +1129,9 @@ Eigen::Vector3i IwanObjective::floored_points() const {
     for (const MeasuredBackbone& c : t.curves) {
       for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
         ++out(0);
-        const double sf = c.frequency_std_hz(j) / c.coverage_factor;
-        const double sz = c.damping_std(j) / c.coverage_factor;
-        out(1) += sf > 0 && sf < f_floor_ * c.frequency_hz(j);
-        out(2) += sz > 0 && sz < z_floor_ * std::abs(c.damping_ratio(j));
+        const Eigen::Vector2d stated = stated_sigma(c, j);
+        out(1) += stated(0) > 0 && stated(0) < f_floor_ * c.frequency_hz(j);
+        out(2) += stated(1) > 0 && stated(1) < z_floor_ * std::abs(c.damping_ratio(j));
       }
     }
   }
