@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/shape_checks.h"
 #include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
 #include "jointlab/data/json_reader.h"
@@ -517,27 +518,11 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
   Eigen::Index best = 0;
   out.best_mac = row.row(0).maxCoeff(&best);
   out.best_mode = static_cast<int>(best) + 1;
-  // A low MAC from a sign: each sensor, and each pair, reversed (shape_checks.h does so for
-  // every measured mode at the start of update-linear).
-  Eigen::VectorXcd x = measured.shapes.col(column);
-  const Eigen::VectorXd y = model_shapes.col(mode - 1);
-  std::vector<Eigen::Index> rows;
-  for (Eigen::Index c = 0; c < x.size(); ++c)
-    if (std::abs(x(c)) > 0) rows.push_back(c);
-  if (out.mac >= 0.6 || rows.size() < 3) return out;
-  const auto consider = [&](std::vector<Eigen::Index> flip) {
-    for (const Eigen::Index c : flip) x(c) = -x(c);
-    const double m = mac(x, y);
-    for (const Eigen::Index c : flip) x(c) = -x(c);
-    if (m > out.reversed_mac + 1e-9) {
-      out.reversed_mac = m;
-      out.reversed.assign(flip.begin(), flip.end());
-    }
-  };
-  for (const Eigen::Index c : rows) consider({c});
-  for (size_t a = 0; a < rows.size(); ++a)
-    for (size_t b = a + 1; b < rows.size(); ++b) consider({rows[a], rows[b]});
-  if (out.reversed_mac < 0.9) out.reversed.clear(), out.reversed_mac = 0;
+  // A low MAC from a sign: each sensor, and each pair, reversed (shape_checks.h; update-linear
+  // tries the same for every measured mode at its start).
+  if (out.mac >= 0.6) return out;
+  const Reversal r = best_reversal(measured.shapes.col(column), model_shapes.col(mode - 1));
+  if (r.mac >= 0.9) out.reversed = r.channels, out.reversed_mac = r.mac;
   return out;
 }
 

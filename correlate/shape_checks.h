@@ -49,6 +49,17 @@ SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured
                               const std::vector<int>& hidden, double frequency_window,
                               double strong_mac = 0.9);
 
+/// The one or two entries of one measured shape whose reversal gives it the highest MAC with a
+/// model shape (each entry alone, then each pair; the first best kept).
+struct Reversal {
+  std::vector<int> channels;  ///< the reversed rows; none with fewer than three entries
+  double mac = 0;             ///< the MAC with them reversed
+};
+/// The reversal of one or two of `measured`'s entries that gives the highest MAC with `model`
+/// (mode_shape_match(): a band whose shape does not look like its mode).
+Reversal best_reversal(const Eigen::Ref<const Eigen::VectorXcd>& measured,
+                       const Eigen::Ref<const Eigen::VectorXd>& model);
+
 /// Why the measured shapes look like magnitudes without phase (above), or ""; `ids` names the
 /// measured modes in the message.
 std::string phaseless_shapes(const Eigen::Ref<const Eigen::MatrixXcd>& measured_shapes,
