@@ -345,9 +345,9 @@ void add_update_commands(CLI::App& app) {
       "alike at the sensors are told apart by frequency, else the command stops and says\n"
       "which); then every pair is followed by its full shape as the stiffness moves, and\n"
       "checked again at the result. A set the frequencies do not see (FLAT) is held.\n"
-      "Before any fit the shapes are checked: a channel whose sign reads the model reversed\n"
-      "(reversed, most modes match a model mode at MAC >= 0.9; as given, two or more fewer)\n"
-      "or shapes without phase (magnitudes) are refused, saying which.\n"
+      "Before any fit the shapes are checked: shapes without phase (magnitudes) and one or\n"
+      "two channels whose signs read the model reversed (reversed, more modes match a model\n"
+      "mode at MAC >= 0.9) are refused, saying which (docs/update-linear.md).\n"
       "Reads DIR/summary.json of 'jointlab process' (or --modes-table). Writes into OUTDIR:\n"
       "  model.toml (+ matrices)  the updated model\n"
       "  parameters.csv           name,initial,final,relative_std,... (1 sigma, widened by the\n"
@@ -396,8 +396,8 @@ void add_update_commands(CLI::App& app) {
                   "relative uncertainty of the measured frequencies, for the standard "
                   "deviations and the reduced chi-square (default 0.001)");
   lin->add_flag("--trust-signs", la->options.trust_signs,
-                "fit the shapes with the sensors file's signs even when one channel reads the "
-                "model reversed");
+                "fit the shapes with the sensors file's signs even when one or two channels "
+                "read the model reversed");
   lin->add_option("--alias-mac", la->options.alias_mac,
                   "warn when two model modes have an auto-MAC at the sensors above this "
                   "(default 0.9)");

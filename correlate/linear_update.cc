@@ -85,15 +85,20 @@ model::Model StiffnessSets::apply(const Eigen::Ref<const Eigen::VectorXd>& theta
   return out;
 }
 
-std::string MeasuredModes::id(Eigen::Index i) const {
+namespace {
+
+// Mode i's own name among `ids`, or its position i + 1 where it has none.
+std::string id_or_position(const std::vector<std::string>& ids, Eigen::Index i) {
   const auto k = static_cast<size_t>(i);
   return k < ids.size() && !ids[k].empty() ? ids[k] : std::to_string(i + 1);
 }
 
+}  // namespace
+
+std::string MeasuredModes::id(Eigen::Index i) const { return id_or_position(ids, i); }
+
 std::string LinearEvaluation::measured_id(Eigen::Index i) const {
-  const auto k = static_cast<size_t>(i);
-  return k < measured_ids.size() && !measured_ids[k].empty() ? measured_ids[k]
-                                                             : std::to_string(i + 1);
+  return id_or_position(measured_ids, i);
 }
 
 double LinearEvaluation::max_error() const {
