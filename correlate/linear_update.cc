@@ -188,9 +188,11 @@ LinearEvaluation evaluate_by_rules(const StiffnessSets& sets, const std::vector<
                                    const ElasticModes& modes, const PairingRules& rules,
                                    std::vector<int>& columns) {
   const Eigen::MatrixXd at = shapes_at_sensors(sensors, modes.shapes);
+  std::vector<std::string> names;
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) names.push_back(measured.id(i));
   const RulePairing rp =
       pair_by_rules(mac_matrix(measured.shapes, at), measured.frequency_hz, shapes_given(measured),
-                    modes.frequency_hz, norms_at_sensors(at), rules);
+                    modes.frequency_hz, norms_at_sensors(at), rules, names);
   columns.assign(static_cast<size_t>(measured.frequency_hz.size()), -1);
   for (const ModePair& p : rp.pairing.pairs) columns[static_cast<size_t>(p.measured)] = p.model;
   LinearEvaluation e = evaluate_pairs(sets, sensors, measured, theta, modes, columns);
@@ -996,6 +998,23 @@ std::string unconfirmed_sets(const LinearProblem& p, const Eigen::SparseMatrix<d
       what, fmt::join(blind, " and "));
 }
 
+// Where the channels with measured entries other than `reversed` are at most one more than
+// them, the clause saying that reversing those instead is the same (MAC ignores a shape's
+// overall sign: with three of five channels mounted reversed the checks name the other two,
+// and either fix fits alike); else "".
+std::string same_as_the_others(const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                               const std::vector<int>& reversed) {
+  std::vector<std::string> others;
+  for (Eigen::Index k = 0; k < measured.shapes.rows(); ++k)
+    if ((measured.shapes.row(k).array().abs() > 0.0).any() &&
+        std::find(reversed.begin(), reversed.end(), static_cast<int>(k)) == reversed.end())
+      others.push_back(sensors[static_cast<size_t>(k)].channel);
+  if (others.empty() || others.size() > reversed.size() + 1) return "";
+  return fmt::format(
+      " (or, as a shape's sign as a whole is arbitrary, the same: {} reversed instead)",
+      fmt::join(others, ", "));
+}
+
 // What is wrong with the measured shapes against the model at the start (shape_checks.h), or "".
 std::string shape_problem(const LinearEvaluation& start, const std::vector<Sensor>& sensors,
                           const MeasuredModes& measured, const LinearUpdateOptions& options) {
@@ -1023,28 +1042,26 @@ std::string shape_problem(const LinearEvaluation& start, const std::vector<Senso
       "channel{} {} read{} the model reversed: as given, {} of {} measured modes (with entries at "
       "three sensors or more) have a model mode within the frequency window at MAC >= 0.9 (mean "
       "best MAC {:.3f}); with {} reversed, {} of {} have (mean {:.3f}), so {} likely wrong "
-      "(mounted the other way round): give {} in the sensors file (a campaign's [[channel]] "
+      "(mounted the other way round): give {}{} in the sensors file (a campaign's [[channel]] "
       "sign), or, if the sign{} right, fit the shapes as given with --trust-signs (a campaign's "
       "update.linear trust_signs = true)",
       one ? "" : "s", which, one ? "s" : "", c.matched, c.counted, c.mean_mac, which,
       c.matched_reversed, c.counted, c.mean_mac_reversed, one ? "its sign is" : "their signs are",
-      fmt::join(signs, " and "), one ? " is" : "s are");
+      fmt::join(signs, " and "), same_as_the_others(sensors, measured, c.channels),
+      one ? " is" : "s are");
 }
 
-}  // namespace
-
-Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
-                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
-  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
-  check_measured(sensors, measured);
+// update_linear() with the sensors' signs as given (after the start's shape checks); the
+// one-at-a-time sweeps only where `with_sweeps`.
+Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::string>& names,
+                             const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                             const LinearUpdateOptions& options, bool with_sweeps,
+                             LinearUpdateSummary& s) {
   const StiffnessSets sets(model, names);
   const LinearProblem p = make_problem(sets, model, names, sensors, measured, options);
   const int minimised = options.rule == LinearRule::kSmallest
                             ? set_index(names, options.smallest_set, "the smallest rule")
                             : -1;
-  LinearUpdateSummary local;
-  LinearUpdateSummary& s = summary ? *summary : local;
   s = LinearUpdateSummary{};
   s.rule = options.rule == LinearRule::kSmallest
                ? fmt::format("smallest {} with every error within {:.3g} %", options.smallest_set,
@@ -1194,10 +1211,98 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   report_uncertainty(p, at, least_squares, held, s);
   warn_bounds(p, theta, s);
   warn_aliased(p, at, s);
-  sweeps(p, point, s);
+  if (with_sweeps) sweeps(p, point, s);
   s.final_cost = at.cost();
   s.final_mac = at.mac;
   s.final = std::move(at);
+  return theta;
+}
+
+bool fitted(const LinearUpdateSummary& s) {
+  return s.status == LinearUpdateStatus::kConverged ||
+         s.status == LinearUpdateStatus::kIterationLimit;
+}
+
+// Why a fit's misfit is one or two channels read reversed, or "". The start's check
+// (shape_problem) cannot tell when every measured mode matches some model mode either way:
+// on the example beam with s2 and s4 reversed and modes 1, 4 and 5 alone, all three matched as
+// given, the fit paired mode 5 with a model mode 38 % away and gave K_T 5.1e6 against 1.2e7,
+// "converged", with reduced chi-square 7.6e4. So where a fit leaves scatter beyond the noise
+// (reduced_chi2_limit) and the reversal that matches the shapes best at the start matches as
+// many modes with a higher mean MAC (SignCheck::best_looks_better), that reversal is fitted
+// too; when it pairs as many modes and its reduced chi-square is within the noise, or a
+// hundredth of the given signs' (a model-form error both share), the signs are refused.
+std::string misfit_of_signs(const model::Model& model, const std::vector<std::string>& names,
+                            const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                            const LinearUpdateOptions& options, const LinearUpdateSummary& s) {
+  // The scatter per degree of freedom and where noise keeps it; with none left (as many pairs
+  // as fitted sets) the whole chi-square, which a fit that reached every frequency leaves near
+  // 0, against 3 sigma at each pair (a bound stopped it, or pairs no stiffness can meet).
+  const double sf2 = options.frequency_std * options.frequency_std;
+  const auto misfit = [&](const LinearUpdateSummary& x) {
+    if (x.degrees_of_freedom >= 1)
+      return std::pair{x.reduced_chi2, reduced_chi2_limit(x.degrees_of_freedom)};
+    return std::pair{x.final.residuals.squaredNorm() / sf2,
+                     9.0 * static_cast<double>(x.final.pairing.pairs.size())};
+  };
+  const auto [given, given_limit] = misfit(s);
+  if (options.trust_signs || !fitted(s) || !(given > given_limit)) return "";
+  const SignCheck c =
+      check_channel_signs(measured.shapes, measured.frequency_hz, s.start.model_at_sensors,
+                          s.start.all_model_frequency_hz, s.start.hidden, options.frequency_window);
+  if (!c.best_looks_better()) return "";
+  std::vector<Sensor> reversed = sensors;
+  std::vector<std::string> which, signs;
+  for (const int k : c.best) {
+    Sensor& r = reversed[static_cast<size_t>(k)];
+    r.sign = -r.sign;
+    which.push_back(r.channel);
+    signs.push_back(fmt::format("{} sign {:+g}", r.channel, r.sign));
+  }
+  LinearUpdateOptions o = options;
+  o.trust_signs = true;
+  o.progress = nullptr;
+  LinearUpdateSummary r;
+  fit_as_given(model, names, reversed, measured, o, false, r);
+  if (!fitted(r) || (s.degrees_of_freedom >= 1 && r.degrees_of_freedom < 1) ||
+      r.final.pairing.pairs.size() < s.final.pairing.pairs.size())
+    return "";
+  const auto [again, again_limit] = misfit(r);
+  if (!(again <= std::max(again_limit, given / 100))) return "";
+  const std::string scatter =
+      s.degrees_of_freedom >= 1
+          ? fmt::format("a reduced chi-square of {:.3g} over {} degrees of freedom", given,
+                        s.degrees_of_freedom)
+          : fmt::format("a chi-square of {:.3g} with no degree of freedom left", given);
+  const bool one = which.size() == 1;
+  return fmt::format(
+      "channel{} {} likely read{} the model reversed: as given, the fit leaves {} (largest "
+      "frequency error {:.3g} %), beyond the noise the frequencies state; with {} reversed it "
+      "leaves {:.3g} (largest error {:.3g} %), pairing {} of {} measured modes, so the fit tells "
+      "what the shapes alone did not: give {}{} in the sensors file (a campaign's [[channel]] "
+      "sign), or, if the sign{} right, fit the shapes as given with --trust-signs (a campaign's "
+      "update.linear trust_signs = true)",
+      one ? "" : "s", fmt::join(which, " and "), one ? "s" : "", scatter, 100 * s.final.max_error(),
+      fmt::join(which, " and "), again, 100 * r.final.max_error(), r.final.pairing.pairs.size(),
+      measured.frequency_hz.size(), fmt::join(signs, " and "),
+      same_as_the_others(sensors, measured, c.best), one ? " is" : "s are");
+}
+
+}  // namespace
+
+Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
+                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
+  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
+  check_measured(sensors, measured);
+  LinearUpdateSummary local;
+  LinearUpdateSummary& s = summary ? *summary : local;
+  Eigen::VectorXd theta = fit_as_given(model, names, sensors, measured, options, true, s);
+  if (std::string why = misfit_of_signs(model, names, sensors, measured, options, s);
+      !why.empty()) {
+    s.status = LinearUpdateStatus::kShapesRefused;
+    s.shape_problem = std::move(why);
+  }
   return theta;
 }
 

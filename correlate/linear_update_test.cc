@@ -560,3 +560,57 @@ TEST(LinearUpdate, TheModelFormThresholdIsTheChiSquaresThreeSigmaPoint) {
 
 }  // namespace
 }  // namespace jointlab::correlate
+namespace jointlab::correlate {
+namespace {
+
+// A channel reversed where every measured mode still matches some model mode (MAC >= 0.9) as
+// given, so the start's check cannot tell: the two-chain structure's modes 2-4 with s0 reversed,
+// from ka 2e5 and kb 6e5 (truth 5e5 and 3e5). Before, the fit paired a mode 24 % away and ended
+// "converged" with ka 1.6e5 and a reduced chi-square of 7e4. Now the best reversal at the start
+// is fitted too; it reaches every frequency (reduced chi-square ~1e-17), so the update is refused
+// after its fit, naming s0. The same with modes 1-3 (no degree of freedom left: the whole
+// chi-square judges). With the right signs, or --trust-signs, nothing is refused; nor, in a
+// search over every 3 or 4 of the 6 modes with the frequencies 0-3 % off (model-form error),
+// is any table with the right signs (96 tables).
+TEST(LinearUpdate, AReversedChannelThatOnlyTheFitRevealsIsRefusedAfterIt) {
+  TwoChainParameters tp;
+  tp.ka = 2e5;
+  tp.kb = 6e5;
+  const model::Model start = two_chain_structure(tp);
+  const NoiselessMeasurement d(6, 1);
+  for (const std::vector<int>& cols : {std::vector<int>{1, 2, 3}, std::vector<int>{0, 1, 2}}) {
+    MeasuredModes mm;
+    mm.frequency_hz.resize(static_cast<Eigen::Index>(cols.size()));
+    mm.shapes.resize(d.meas.shapes.rows(), static_cast<Eigen::Index>(cols.size()));
+    for (size_t j = 0; j < cols.size(); ++j) {
+      mm.frequency_hz(j) = d.meas.frequency_hz(cols[j]);
+      mm.shapes.col(j) = d.meas.shapes.col(cols[j]);
+      mm.ids.push_back(std::to_string(cols[j] + 1));
+    }
+    std::vector<Sensor> wrong = d.sensors;
+    wrong[0].sign = -1.0;
+    LinearUpdateSummary s;
+    update_linear(start, kSets, wrong, mm, {}, &s);
+    ASSERT_EQ(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
+    EXPECT_GT(s.iterations, 0) << "refused after a fit, not before";
+    const std::string why = linear_refusal(s, {}, "");
+    EXPECT_EQ(why.find("channel s0 likely reads the model reversed"), 0u) << why;
+    EXPECT_NE(why.find("give s0 sign +1"), std::string::npos) << why;
+    LinearUpdateOptions trust;
+    trust.trust_signs = true;
+    update_linear(start, kSets, wrong, mm, trust, &s);
+    EXPECT_NE(s.status, LinearUpdateStatus::kShapesRefused) << s.report();
+    const Eigen::VectorXd theta = update_linear(start, kSets, d.sensors, mm, {}, &s);
+    ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << s.report();
+    // Noise-free frequencies: the truth to the optimiser's tolerance wherever a set is fitted.
+    if (!s.parameters[0].flat) {
+      EXPECT_NEAR(theta(0) / 5e5, 1.0, 1e-4) << s.report();
+    }
+    if (!s.parameters[1].flat) {
+      EXPECT_NEAR(theta(1) / 3e5, 1.0, 1e-4) << s.report();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace jointlab::correlate

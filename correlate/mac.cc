@@ -95,7 +95,7 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
                           const std::vector<bool>& has_shape,
                           const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
                           const Eigen::Ref<const Eigen::VectorXd>& model_norm2,
-                          const PairingRules& rules) {
+                          const PairingRules& rules, const std::vector<std::string>& test_names) {
   const int rows = static_cast<int>(mac.rows()), cols = static_cast<int>(mac.cols());
   RulePairing out;
   // Visibility against the most visible mode up to twice the highest test frequency.
@@ -108,6 +108,10 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
     visible[j] = top > 0 && model_norm2(j) >= rules.visibility * top;
     if (!visible[j]) out.hidden.push_back(j);
   }
+  auto name = [&](int i) {
+    return i < static_cast<int>(test_names.size()) ? test_names[static_cast<size_t>(i)]
+                                                   : std::to_string(i + 1);
+  };
   auto distance = [&](int i, int j) {
     return std::abs(std::log(model_frequency_hz(j) / test_frequency_hz(i)));
   };
@@ -149,7 +153,7 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
             "test mode {} ({:.5g} Hz, without a shape the MAC can read: give two sensors or "
             "more): model modes {} ({:.5g} Hz) and {} ({:.5g} Hz) are about as close in "
             "frequency",
-            i + 1, test_frequency_hz(i), near[0] + 1, model_frequency_hz(near[0]), near[1] + 1,
+            name(i), test_frequency_hz(i), near[0] + 1, model_frequency_hz(near[0]), near[1] + 1,
             model_frequency_hz(near[1]));
         c.tied = {near[0], near[1]};
       }
@@ -173,7 +177,7 @@ RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
       c.ambiguity = fmt::format(
           "test mode {} ({:.5g} Hz): model modes {} ({:.5g} Hz, MAC {:.3f}) and {} ({:.5g} Hz, "
           "MAC {:.3f}) look alike at the sensors and are about as close in frequency",
-          i + 1, test_frequency_hz(i), tied[0] + 1, model_frequency_hz(tied[0]), mac(i, tied[0]),
+          name(i), test_frequency_hz(i), tied[0] + 1, model_frequency_hz(tied[0]), mac(i, tied[0]),
           tied[1] + 1, model_frequency_hz(tied[1]), mac(i, tied[1]));
       c.tied = tied;
     }

@@ -96,12 +96,14 @@ struct RulePairing {
 /// without a shape (`has_shape` false: none, or an entry at one sensor only, where every MAC is 1)
 /// pairs with the nearest visible-or-not model frequency in the window by the same rule (at most
 /// half as far in ln f as the next, else `ambiguity`). `model_norm2` is each model mode's
-/// squared norm at the sensors.
+/// squared norm at the sensors. `test_names` names the measured modes in `ambiguity` (the
+/// table's own numbers); where it is shorter, mode i is named i + 1.
 RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
                           const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
                           const std::vector<bool>& has_shape,
                           const Eigen::Ref<const Eigen::VectorXd>& model_frequency_hz,
                           const Eigen::Ref<const Eigen::VectorXd>& model_norm2,
-                          const PairingRules& rules);
+                          const PairingRules& rules,
+                          const std::vector<std::string>& test_names = {});
 
 }  // namespace jointlab::correlate

@@ -96,6 +96,13 @@ TEST(PairByRules, EveryGuessedPairIsRecordedNotTheFirstAlone) {
   }
   EXPECT_NE(p.ambiguity.find("test mode 1"), std::string::npos) << p.ambiguity;
   EXPECT_NE(p.ambiguity.find("test mode 2"), std::string::npos) << p.ambiguity;
+  // Named by the table's own numbers where it has them (modes 3 and 5 of a campaign whose
+  // modes 1, 2 and 4 were not measured), not by their rows.
+  const RulePairing named =
+      pair_by_rules(c.mac, c.f_test, c.shape, c.f_model, c.norm2, PairingRules{}, {"3", "5"});
+  EXPECT_NE(named.ambiguity.find("test mode 3 (100 Hz"), std::string::npos) << named.ambiguity;
+  EXPECT_NE(named.ambiguity.find("test mode 5 (200 Hz"), std::string::npos) << named.ambiguity;
+  EXPECT_EQ(named.ambiguity.find("test mode 1"), std::string::npos) << named.ambiguity;
 }
 
 TEST(PairByRules, ModesAlikeAtTheSensorsAreToldApartByFrequency) {

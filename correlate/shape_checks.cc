@@ -133,10 +133,10 @@ SignCheck check_channel_signs(const Eigen::Ref<const Eigen::MatrixXcd>& measured
   const bool more = best.matched >= given.matched + 2 && 4 * best.matched >= 3 * out.counted;
   const bool all = best.matched == out.counted && best.matched == given.matched + 1 &&
                    best.mean >= given.mean + 0.1;
-  if (chosen.empty() || !(more || all)) return out;
-  out.channels = std::move(chosen);
+  out.best = chosen;
   out.matched_reversed = best.matched;
   out.mean_mac_reversed = best.mean;
+  if (!chosen.empty() && (more || all)) out.channels = std::move(chosen);
   return out;
 }
 

@@ -35,9 +35,18 @@ struct SignCheck {
   std::vector<int> channels;     ///< the sensor rows whose signs look reversed (one or two); none
   int counted = 0;               ///< measured modes with entries at three sensors or more
   int matched = 0;               ///< of them, modes with a strong match as given
-  int matched_reversed = 0;      ///< of them, modes with a strong match with `channels` reversed
+  int matched_reversed = 0;      ///< of them, modes with a strong match with `best` reversed
   double mean_mac = 0;           ///< mean best MAC over the counted modes as given
-  double mean_mac_reversed = 0;  ///< the same with `channels` reversed
+  double mean_mac_reversed = 0;  ///< the same with `best` reversed
+  /// The reversal with the most matches, then the highest mean best MAC, whether or not it
+  /// meets the rule above (`channels`, when it does); none with fewer than two counted modes.
+  std::vector<int> best;
+  /// True when `best` matches at least as many modes as given with a mean best MAC at least
+  /// 0.02 higher: not enough to refuse before a fit, but worth a fit where the given signs
+  /// leave a misfit (linear_update.h).
+  bool best_looks_better() const {
+    return !best.empty() && matched_reversed >= matched && mean_mac_reversed >= mean_mac + 0.02;
+  }
 };
 
 /// Tries each channel and each pair of channels reversed (above); `hidden` lists model columns
