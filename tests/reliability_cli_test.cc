@@ -854,7 +854,7 @@ TEST(KilledCommit, ReadersRefuseAFolderMidCommit) {
   EXPECT_FALSE(fs::exists(dir + "/p/.process.commit"));
   const CommandResult again = run_jointlab("update-iwan " + model + " --set iwan.rivet --mode 1" +
                                            measured + " --out " + dir + "/u");
-  EXPECT_EQ(again.err.find("killed"), std::string::npos) << again.err;
+  EXPECT_EQ(again.err.find("was killed while"), std::string::npos) << again.err;
 }
 
 // Out of memory (an address-space limit, ulimit -v), whatever runs out first (mapping the
