@@ -2619,6 +2619,22 @@ double resolved_neighbour(const ChannelSpectrum& channel, const signal::Band& ty
   return 0.0;
 }
 
+// The strongest local maximum of the measured samples' spectrum strictly inside `band` [Hz],
+// or 0 where it has none.
+double peak_inside(const ChannelSpectrum& channel, const signal::Band& band) {
+  const Eigen::Index n = channel.measured.size();
+  if (n < 3) return 0.0;
+  const double df = channel.measured_df();
+  const Eigen::Index k0 =
+      std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::ceil(band.lo / df)));
+  const Eigen::Index k1 = std::min<Eigen::Index>(n - 2, static_cast<Eigen::Index>(band.hi / df));
+  const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
+  Eigen::Index best = -1;
+  for (Eigen::Index k = k0; k <= k1; ++k)
+    if (mag(k) > mag(k - 1) && mag(k) >= mag(k + 1) && (best < 0 || mag(k) > mag(best))) best = k;
+  return best < 0 ? 0.0 : static_cast<double>(best) * df;
+}
+
 // The band the mode is read through. The band a user types says which mode, not where the
 // filter's edges must be: when the mode's track (ModeTrack) leaves less than kMargin of its
 // half-power half-widths (sigma / 2 pi) between it and the points where the band's gain
@@ -2667,13 +2683,24 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
   for (int round = 0; round < kRounds; ++round) {
     const signal::BandSignal& bs = round == 0 ? typed_signal : out.signal;
     const BandSetting s = band_setting(channel, out.band, options, bs);
-    if (s.stop - s.start < 2 * s.w_min) break;
     ModeTrack tr;
-    if (round == 0) {
-      tr = track_mode(typed_ep, typed_noise, s);
-    } else {
-      const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
-      tr = track_mode(ep, noise_floor(ep, s), s);
+    if (s.stop - s.start >= 2 * s.w_min) {
+      if (round == 0) {
+        tr = track_mode(typed_ep, typed_noise, s);
+      } else {
+        const EnvelopePhase ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
+        tr = track_mode(ep, noise_floor(ep, s), s);
+      }
+    }
+    if (tr.points == 0 && round == 0 && channel.continued_begin_s < band_settling_s(typed, t)) {
+      // The typed band reads no point, or the record is too short for it, and its filter
+      // settles longer than the record's continuation holds: the strongest peak of the
+      // measured samples' spectrum inside it stands for the track, its half-power width for
+      // the decay rate (sigma = pi x width). Else a mode of 0.6 % damping in the LMS twin's band,
+      // or the twin cut to 2 s, kept nothing ("widen it to at least 26 Hz").
+      const double fp = peak_inside(channel, typed);
+      const double hp = fp > 0 ? half_power_width(channel, fp, cache) : 0.0;
+      if (hp > 0) tr = ModeTrack{fp, fp, std::numbers::pi * hp, 1};
     }
     if (tr.points == 0) break;
     // Inside the typed band only (the moved one may reach beyond it).
@@ -2895,33 +2922,45 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   // The envelope and phase only for a record long enough for the band (many short
   // channels are refused quickly).
   const BandSetting s = band_setting(channel, band, options, bs);
-  if (s.stop - s.start < 2 * s.w_min) {
+  const auto short_for = [](const BandSetting& x) { return x.stop - x.start < 2 * x.w_min; };
+  // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
+  const auto too_short = [&](const BandSetting& x) {
+    const std::string advice = spectral_advice(channel, band, options.taper, cache);
+    sum.message = fmt::format(
+        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
+        "time, {:.3f} s needed",
+        advice, advice.empty() ? "" : "; ", std::max(0.0, x.stop - x.start), 2 * x.w_min);
+  };
+  if (short_for(s)) {
     if (clipped_from_start(s)) {
       sum.message =
           fmt::format("{}; {:.3f} s of the record usable after it, {:.3f} s needed",
                       clipping_note(s, measured), std::max(0.0, s.stop - s.start), 2 * s.w_min);
       return out;
     }
-    // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
-    const std::string advice = spectral_advice(channel, band, options.taper, cache);
-    sum.message = fmt::format(
-        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
-        "time, {:.3f} s needed",
-        advice, advice.empty() ? "" : "; ", std::max(0.0, s.stop - s.start), 2 * s.w_min);
-    return out;
+    // A band whose filter settles longer than the record's continuation holds may be widened
+    // about its mode (follow_mode), which settles sooner; else refused here, quickly.
+    if (!(channel.continued_begin_s < band_settling_s(band, options.taper))) {
+      too_short(s);
+      return out;
+    }
   }
   // The mode is read through a band that follows it (follow_mode); out.band stays the typed
   // band's signal, which the shapes and the nodal test compare across channels.
   // The typed band's envelope, phase and noise floor serve the mode's track and, where the
   // band is not moved, the estimates (each made once).
   const EnvelopePhase typed_ep = envelope_phase(bs.baseband, bs.carrier_hz, bs.dt);
-  const double typed_noise = noise_floor(typed_ep, s);
+  const double typed_noise = short_for(s) ? 0.0 : noise_floor(typed_ep, s);
   const FollowedBand followed =
       follow_mode(channel, measured, band, options, bs, typed_ep, typed_noise, cache);
   const signal::Band& read = followed.band;
   const bool moved = followed.signal.baseband.size() > 0;
   const signal::BandSignal& zb = moved ? followed.signal : bs;
   const BandSetting sr = band_setting(channel, read, options, zb);
+  if (short_for(sr)) {
+    too_short(sr);
+    return out;
+  }
   const EnvelopePhase moved_ep =
       moved ? envelope_phase(zb.baseband, zb.carrier_hz, zb.dt) : EnvelopePhase{};
   const EnvelopePhase& ep = moved ? moved_ep : typed_ep;
