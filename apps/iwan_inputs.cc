@@ -66,9 +66,11 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   // The amplitude column's unit, when given, must measure this quantity (none: modal).
   const std::optional<Quantity> measured =
       quantity == "modal" ? std::nullopt : parse_quantity(quantity);
+  std::string unitless;
   for (const std::string& file : a.backbones) {
-    t.curves.push_back(correlate::measured_backbone(data::read_backbone_table(file, measured),
-                                                    sensors.empty() ? -1 : 0));
+    const data::BackboneTable table = data::read_backbone_table(file, measured);
+    if (table.amplitude_unit.empty()) unitless += (unitless.empty() ? "" : ", ") + file;
+    t.curves.push_back(correlate::measured_backbone(table, sensors.empty() ? -1 : 0));
   }
   IwanInputs in;
   for (const std::string& file : a.backbones)
@@ -77,9 +79,10 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   in.targets = {std::move(t)};
   in.amplitude = amplitude;
   in.modal = quantity == "modal";
-  in.amplitude_note = correlate::amplitude_reading(
-      in.targets.front().mode, quantity, a.amplitude.empty(),
-      in.sensors.empty() ? std::string() : in.sensors.front().channel, a.dof);
+  in.amplitude_note =
+      correlate::amplitude_reading(in.targets.front().mode, quantity, a.amplitude.empty(),
+                                   in.sensors.empty() ? std::string() : in.sensors.front().channel,
+                                   a.dof, in.modal ? std::string() : unitless);
   return in;
 }
 

@@ -542,7 +542,8 @@ MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor)
 }
 
 std::string amplitude_reading(int mode, const std::string& quantity, bool defaulted,
-                              const std::string& dof_name, const std::string& dof) {
+                              const std::string& dof_name, const std::string& dof,
+                              const std::string& unitless) {
   if (quantity == "modal") {
     return fmt::format(
         "amplitudes read as mode {}'s QSMA modal amplitude q (--amplitude modal{}); a sensor's "
@@ -550,8 +551,17 @@ std::string amplitude_reading(int mode, const std::string& quantity, bool defaul
         "scaled by the mode's shape value at that sensor",
         mode, defaulted ? ", the default" : "");
   }
-  return fmt::format("amplitudes read as the {} at model DOF {} (--amplitude {} --dof {})",
-                     quantity, dof_name, quantity, dof);
+  return fmt::format(
+      "amplitudes read as the {} at model DOF {} (--amplitude {} --dof {}), zero to peak{}",
+      quantity, dof_name, quantity, dof,
+      unitless.empty()
+          ? ""
+          : fmt::format(
+                "; {} give{} no unit in the amplitude header, so {} is assumed (a table in "
+                "g or mm read so scales F_S by its factor: give the unit, e.g. "
+                "'amplitude [g]')",
+                unitless, unitless.find(", ") == std::string::npos ? "s" : "",
+                parse_quantity(quantity) ? si_unit(*parse_quantity(quantity)) : std::string("SI")));
 }
 
 }  // namespace jointlab::correlate

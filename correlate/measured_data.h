@@ -141,8 +141,11 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
 /// amplitude q (quantity "modal"; `defaulted`: no amplitude quantity given), else `quantity` at
 /// the model DOF `dof_name` (given as `dof`). A sensor's displacement read as modal scales F_S by
 /// the shape's value there and fits as well (a 2.65 times F_S, reduced chi-square 0.027), so only
-/// the report can say it.
+/// the report can say it. Measured amplitudes are zero to peak; `unitless` names the tables
+/// whose amplitude header gives no unit (SI assumed: g or mm read so scale F_S and pass every
+/// check), "" for none.
 std::string amplitude_reading(int mode, const std::string& quantity, bool defaulted,
-                              const std::string& dof_name, const std::string& dof);
+                              const std::string& dof_name, const std::string& dof,
+                              const std::string& unitless = "");
 
 }  // namespace jointlab::correlate

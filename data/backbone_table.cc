@@ -98,6 +98,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   int coverage_col = -1;      // a `process` backbone's coverage_factor: k of the std columns
   double coverage = 0;        // its value (0: none read yet)
   const std::vector<std::string> fields = splitter.split(header);
+  std::string amplitude_unit;
   for (size_t i = 0; i < fields.size(); ++i) {
     const auto [name, unit] = split_name_unit(fields[i], file, header_line);
     if (is_point_mark(name)) marks.push_back(i);
@@ -109,6 +110,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
       }
       col[k] = static_cast<int>(i);
       if (!unit.empty()) scale[k] = unit_scale(k, unit, quantity, file, header_line);
+      if (k == 0) amplitude_unit = unit;
     }
   }
   for (size_t k = 0; k < 3; ++k) {
@@ -181,6 +183,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
                    [&](size_t a, size_t b) { return values[0][a] < values[0][b]; });
   BackboneTable t;
   t.source = file;
+  t.amplitude_unit = amplitude_unit;
   if (coverage > 0) t.coverage_factor = coverage;
   Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
                             &t.damping_std};

@@ -38,6 +38,8 @@ struct BackboneTable {
   Eigen::VectorXd damping_std;       ///< k sigma_z,j >= 0 (all 0 without the column)
   /// k of the std columns: a `coverage_factor` column's value (a `process` backbone's), else 1.
   double coverage_factor = 1.0;
+  /// The amplitude column's unit as its header gives it ("" where it gives none: SI).
+  std::string amplitude_unit;
   /// Number of points.
   Eigen::Index size() const { return amplitude.size(); }
 };

@@ -142,10 +142,12 @@ TEST(BackboneTable, ConvertsPerCentAndAmplitudeUnitsAndRefusesTheRest) {
   EXPECT_DOUBLE_EQ(t.damping_ratio(1), 7e-4);
   EXPECT_DOUBLE_EQ(t.damping_std(1), 2e-5);
   EXPECT_EQ(t.frequency_hz(1), 93.7);
+  EXPECT_EQ(t.amplitude_unit, "mm/s");  // as given, for the report
   const BackboneTable f = read_backbone_table(
       table("fraction.csv", "amplitude,frequency_hz,damping_ratio [1]\n1,10,0.01\n2,10,0.02\n"),
       std::nullopt);
   EXPECT_EQ(f.damping_ratio(1), 0.02);
+  EXPECT_EQ(f.amplitude_unit, "");  // none given: SI assumed, which the report then says
 
   // Each refusal: one line naming the file and header line, the column and the unit.
   const std::string rows = "\n1,10,0.01\n2,10,0.01\n";

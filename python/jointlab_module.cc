@@ -407,6 +407,7 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
                     beta_range.first, beta_range.second));
   correlate::IwanUpdateSummary summary;
   std::vector<correlate::Sensor> sensors_used;  // the DOF named by `dof`, for the report
+  std::string unitless;  // the tables whose amplitude header gives no unit, for the report
   model::Model updated;
   {
     py::gil_scoped_release release;
@@ -447,9 +448,11 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
     // The amplitude column's unit, when given, must measure this quantity (none: modal).
     const std::optional<Quantity> measured =
         amplitude == "modal" ? std::nullopt : parse_quantity(amplitude);
-    for (const std::string& f : backbones)
-      target.curves.push_back(correlate::measured_backbone(data::read_backbone_table(f, measured),
-                                                           sensors.empty() ? -1 : 0));
+    for (const std::string& f : backbones) {
+      const data::BackboneTable table = data::read_backbone_table(f, measured);
+      if (table.amplitude_unit.empty()) unitless += (unitless.empty() ? "" : ", ") + f;
+      target.curves.push_back(correlate::measured_backbone(table, sensors.empty() ? -1 : 0));
+    }
     o.fit_linear_damping = linear_damping == "fit";
     o.max_evaluations = evaluations;
     o.seed = seed;
@@ -513,12 +516,12 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["initial_cost"] = cost(summary.initial_cost);
   result["evaluations"] = summary.evaluations;
   result["warnings"] = summary.at_bounds;
-  result["report"] =
-      summary.report() + "  " +
-      correlate::amplitude_reading(
-          mode, amplitude, false,
-          sensors_used.empty() ? std::string() : sensors_used.front().channel, dof.value_or("")) +
-      "\n";
+  result["report"] = summary.report() + "  " +
+                     correlate::amplitude_reading(
+                         mode, amplitude, false,
+                         sensors_used.empty() ? std::string() : sensors_used.front().channel,
+                         dof.value_or(""), amplitude == "modal" ? std::string() : unitless) +
+                     "\n";
   return result;
 }
 
