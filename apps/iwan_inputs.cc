@@ -69,7 +69,8 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   std::string unitless;
   for (const std::string& file : a.backbones) {
     const data::BackboneTable table = data::read_backbone_table(file, measured);
-    if (table.amplitude_unit.empty()) unitless += (unitless.empty() ? "" : ", ") + file;
+    if (table.amplitude_unit.empty() && !table.written_by_jointlab)
+      unitless += (unitless.empty() ? "" : ", ") + file;
     t.curves.push_back(correlate::measured_backbone(table, sensors.empty() ? -1 : 0));
   }
   IwanInputs in;

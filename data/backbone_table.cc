@@ -99,10 +99,12 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   double coverage = 0;        // its value (0: none read yet)
   const std::vector<std::string> fields = splitter.split(header);
   std::string amplitude_unit;
+  bool ours = false;
   for (size_t i = 0; i < fields.size(); ++i) {
     const auto [name, unit] = split_name_unit(fields[i], file, header_line);
     if (is_point_mark(name)) marks.push_back(i);
     if (name == "coverage_factor") coverage_col = static_cast<int>(i);
+    if (name == "coverage_factor" || name == "response_controlled") ours = true;
     for (size_t k = 0; k < kNames.size(); ++k) {
       if (name != kNames[k]) continue;
       if (col[k] >= 0) {
@@ -184,6 +186,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   BackboneTable t;
   t.source = file;
   t.amplitude_unit = amplitude_unit;
+  t.written_by_jointlab = ours;
   if (coverage > 0) t.coverage_factor = coverage;
   Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
                             &t.damping_std};

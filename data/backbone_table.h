@@ -40,6 +40,9 @@ struct BackboneTable {
   double coverage_factor = 1.0;
   /// The amplitude column's unit as its header gives it ("" where it gives none: SI).
   std::string amplitude_unit;
+  /// A `process` backbone (its `coverage_factor` column) or a `stepped-sine` one
+  /// (`response_controlled`): amplitudes in SI whatever the header says.
+  bool written_by_jointlab = false;
   /// Number of points.
   Eigen::Index size() const { return amplitude.size(); }
 };

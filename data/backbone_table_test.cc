@@ -148,6 +148,12 @@ TEST(BackboneTable, ConvertsPerCentAndAmplitudeUnitsAndRefusesTheRest) {
       std::nullopt);
   EXPECT_EQ(f.damping_ratio(1), 0.02);
   EXPECT_EQ(f.amplitude_unit, "");  // none given: SI assumed, which the report then says
+  EXPECT_FALSE(f.written_by_jointlab);
+  EXPECT_TRUE(read_backbone_table(table("ours.csv",
+                                        "amplitude,frequency_hz,damping_ratio,coverage_factor\n"
+                                        "1,10,0.01,3\n2,10,0.02,3\n"),
+                                  std::nullopt)
+                  .written_by_jointlab);
 
   // Each refusal: one line naming the file and header line, the column and the unit.
   const std::string rows = "\n1,10,0.01\n2,10,0.01\n";

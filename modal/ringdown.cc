@@ -1479,7 +1479,7 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
     own += bb.harmonic(i) == 0 && bb.exchange(i) == 0;
     harmonic_below += bb.harmonic(i) != 0 && bb.displacement(i) < bb.displacement(lf.lo);
   }
-  if (own < 3 && (harmonic_below > 0 || sum.superharmonic_points > 0)) {
+  if (own < 3 && harmonic_below > 0) {
     sum.linear_reason = fmt::format(
         "no linear values: {} point(s) read the band's own mode, above {} that follow a "
         "multiple of a stronger mode's frequency (superharmonic) to lower amplitudes, where the "
@@ -1751,10 +1751,10 @@ Exchange one_way_exchange(const std::vector<const Estimate*>& seen, double typic
   for (const Estimate* e : seen) {
     if (e->t <= end_t || (!during.empty() && during.back()->t <= end_t)) during.push_back(e);
   }
-  if (during.size() < 3) return x;
+  if (during.size() < 5) return x;
   for (const double r : {2.0, 0.5, 3.0, 1 / 3.0}) {
     const PartnerRates pr = partner_rates(during, r, s, measured, cache);
-    if (pr.used.size() < 3) continue;
+    if (pr.used.size() < 5) continue;  // as takes_energy: ranks of fewer say little
     const double partner_typical = median_magnitude(pr.other);
     const bool fed = pr.other.front() < pr.other.back() &&
                      rates_apart(pr.other.front(), pr.other_std.front(), pr.other.back(),
@@ -1830,7 +1830,7 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   // holds energy: the exchange lasts until the first rate within the turns' tolerance of the
   // median of those after it. (A rate that only falls from the start is what a joint's
   // damping does as the amplitude falls: on the bench record's nonlinear 58 Hz mode, taking
-  // such a fall for an exchange marked 31 points.)
+  // such a fall for an exchange by itself marked 31 points; one_way_exchange asks the partner.)
   if (x.turns.empty() && !x.grows) return one_way_exchange(seen, typical, s, measured, cache);
   std::vector<const Estimate*> later;
   std::vector<double> later_rates;
@@ -2693,7 +2693,8 @@ double peak_inside(const ChannelSpectrum& channel, const signal::Band& band) {
 // still leaves the mode's need flat, and the summary names that mode; the band never goes
 // below half the typed lower edge or past the Nyquist frequency. Once moved, the track is
 // read again through the new band (a mode seen on the edge may run further), in at most
-// kRounds rounds. Returns the typed band when the mode sits in its flat part.
+// kRounds rounds. Returns the typed band when the mode sits in its flat part and the typed
+// band's filter settles within the continuation.
 struct FollowedBand {
   signal::Band band;
   std::string note;           // what was moved and why; "" when the typed band is read
@@ -2714,8 +2715,10 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
   FollowedBand out{typed, {}, {}};
   const double t = options.taper;
   double f_lo = std::numeric_limits<double>::infinity(), f_hi = -f_lo, sigma = 0;
-  double held_by = 0;         // a neighbouring mode's peak that stopped the band [Hz]
-  bool widened_only = false;  // the mode sat in the typed band's flat part
+  double held_by = 0;         // a neighbouring mode's peak that held the band read back [Hz]
+  bool widened_only = false;  // the band read was widened about a mode in its flat part
+  double kept_by = 0;         // a neighbour's peak that kept the typed band as it is [Hz]
+  bool kept_about = false;    // ... from a widening about the mode (else from a move)
   for (int round = 0; round < kRounds; ++round) {
     const signal::BandSignal& bs = round == 0 ? typed_signal : out.signal;
     const BandSetting s = band_setting(channel, out.band, options, bs);
@@ -2782,7 +2785,6 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
       next.hi = std::max(b.hi, need_hi + w);
       next.lo = std::min(next.hi - width, need_lo - w);
     } else {
-      widened_only = true;
       const double c = 0.5 * (need_lo + need_hi);
       next.lo = c - 0.5 * width;
       next.hi = c + 0.5 * width;
@@ -2802,17 +2804,16 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
     const auto held_width = [&](double room) {
       return std::max(typed_width, std::min(width, room / ((1 + kNeighbourReach) * t)));
     };
-    bool held = false;
+    const bool about = !low_short && !high_short;
+    double round_held_by = 0;
     if (nb_lo > 0 && next.lo < nb_lo + kNeighbourReach * w) {
-      held = true;
-      held_by = nb_lo;
+      round_held_by = nb_lo;
       const double wl = held_width(need_lo - nb_lo);
       next.lo = std::min(typed.lo, nb_lo + kNeighbourReach * t * wl);
       next.hi = std::max(next.lo + wl, std::min(next.hi, need_hi + t * wl));
     }
     if (nb_hi > 0 && next.hi > nb_hi - kNeighbourReach * w) {
-      held = true;
-      held_by = nb_hi;
+      round_held_by = nb_hi;
       const double wh = held_width(nb_hi - need_hi);
       next.hi = std::max(typed.hi, nb_hi - kNeighbourReach * t * wh);
       next.lo = nb_lo > 0 ? next.lo : std::min(next.hi - wh, std::max(next.lo, need_lo - t * wh));
@@ -2820,13 +2821,23 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
     // A band widened about a mode it already holds is not widened beside a neighbour: held at
     // the typed edge, its softer skirt lets in more of the neighbour than the typed band did
     // (a 160 Hz mode beside the LMS twin's band: 1.10 decades kept, 1.44 as typed).
-    if (held && !low_short && !high_short) break;
+    const bool typed_kept = out.band.lo == typed.lo && out.band.hi == typed.hi;
+    const auto keep = [&] {
+      if (typed_kept && round_held_by > 0) kept_by = round_held_by, kept_about = about;
+    };
+    if (round_held_by > 0 && about) {
+      keep();
+      break;
+    }
     next.lo = std::max(next.lo, 0.5 * typed.lo);
     next.hi = std::min(next.hi, 0.5 * channel.fs);
     if (!(next.hi > next.lo) ||
         (std::abs(next.lo - b.lo) < 1e-3 * width && std::abs(next.hi - b.hi) < 1e-3 * width)) {
+      keep();
       break;
     }
+    widened_only = about;
+    held_by = round_held_by;
     out.band = next;
     out.signal = band_signal(channel, measured, out.band, options, cache);
   }
@@ -2849,10 +2860,10 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
           "1e-4)",
           held_by);
     }
-  } else if (held_by > 0) {
+  } else if (kept_by > 0) {
     out.note = fmt::format("the band was not {}: a neighbouring mode's spectral peak at {:.2f} Hz",
-                           widened_only ? "widened about the mode" : "moved toward the mode's side",
-                           held_by);
+                           kept_about ? "widened about the mode" : "moved toward the mode's side",
+                           kept_by);
   }
   return out;
 }

@@ -450,7 +450,8 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
         amplitude == "modal" ? std::nullopt : parse_quantity(amplitude);
     for (const std::string& f : backbones) {
       const data::BackboneTable table = data::read_backbone_table(f, measured);
-      if (table.amplitude_unit.empty()) unitless += (unitless.empty() ? "" : ", ") + f;
+      if (table.amplitude_unit.empty() && !table.written_by_jointlab)
+        unitless += (unitless.empty() ? "" : ", ") + f;
       target.curves.push_back(correlate::measured_backbone(table, sensors.empty() ? -1 : 0));
     }
     o.fit_linear_damping = linear_damping == "fit";
