@@ -10,7 +10,6 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
 #include "jointlab/correlate/measured_data.h"
-#include "jointlab/data/backbone_table.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/sim/simulated_record.h"
 
@@ -66,13 +65,9 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   // The amplitude column's unit, when given, must measure this quantity (none: modal).
   const std::optional<Quantity> measured =
       quantity == "modal" ? std::nullopt : parse_quantity(quantity);
-  std::string unitless;
-  for (const std::string& file : a.backbones) {
-    const data::BackboneTable table = data::read_backbone_table(file, measured);
-    if (table.amplitude_unit.empty() && !table.written_by_jointlab)
-      unitless += (unitless.empty() ? "" : ", ") + file;
-    t.curves.push_back(correlate::measured_backbone(table, sensors.empty() ? -1 : 0));
-  }
+  correlate::BackboneCurves read =
+      correlate::read_backbone_curves(a.backbones, measured, sensors.empty() ? -1 : 0);
+  t.curves = std::move(read.curves);
   IwanInputs in;
   for (const std::string& file : a.backbones)
     in.data_name += (in.data_name.empty() ? "" : ", ") + file;
@@ -80,10 +75,9 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   in.targets = {std::move(t)};
   in.amplitude = amplitude;
   in.modal = quantity == "modal";
-  in.amplitude_note =
-      correlate::amplitude_reading(in.targets.front().mode, quantity, a.amplitude.empty(),
-                                   in.sensors.empty() ? std::string() : in.sensors.front().channel,
-                                   a.dof, in.modal ? std::string() : unitless);
+  in.amplitude_note = correlate::amplitude_reading(
+      in.targets.front().mode, quantity, a.amplitude.empty(),
+      in.sensors.empty() ? std::string() : in.sensors.front().channel, a.dof, read.unitless);
   return in;
 }
 

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/shape_checks.h"
@@ -526,6 +527,17 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
   return out;
 }
 
+BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
+                                    std::optional<Quantity> quantity, int sensor) {
+  BackboneCurves out;
+  for (const std::string& file : files) {
+    const data::BackboneTable table = data::read_backbone_table(file, quantity);
+    if (table.amplitude_unit.empty() && !table.written_by_jointlab) out.unitless.push_back(file);
+    out.curves.push_back(measured_backbone(table, sensor));
+  }
+  return out;
+}
+
 MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor) {
   MeasuredBackbone b;
   b.kind = BackboneKind::kRingdown;
@@ -543,7 +555,7 @@ MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor)
 
 std::string amplitude_reading(int mode, const std::string& quantity, bool defaulted,
                               const std::string& dof_name, const std::string& dof,
-                              const std::string& unitless) {
+                              const std::vector<std::string>& unitless) {
   if (quantity == "modal") {
     return fmt::format(
         "amplitudes read as mode {}'s QSMA modal amplitude q (--amplitude modal{}); a sensor's "
@@ -560,7 +572,7 @@ std::string amplitude_reading(int mode, const std::string& quantity, bool defaul
                 "; {} give{} no unit in the amplitude header, so {} is assumed (a table in "
                 "g or mm read so scales F_S by its factor: give the unit, e.g. "
                 "'amplitude [g]')",
-                unitless, unitless.find(", ") == std::string::npos ? "s" : "",
+                fmt::join(unitless, ", "), unitless.size() == 1 ? "s" : "",
                 parse_quantity(quantity) ? si_unit(*parse_quantity(quantity)) : std::string("SI")));
 }
 

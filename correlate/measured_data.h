@@ -17,6 +17,7 @@
 
 #include <complex>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -100,6 +101,16 @@ MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor
 /// at sensor index `sensor`, or of the modal amplitude q when `sensor` is negative.
 MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor);
 
+/// Backbone tables as curves (measured_backbone at `sensor`), and the files among them whose
+/// amplitude header gives no unit (SI assumed; jointlab's own backbones, SI, are not named).
+struct BackboneCurves {
+  std::vector<MeasuredBackbone> curves;  ///< one per file, in order
+  std::vector<std::string> unitless;     ///< files read without an amplitude unit
+};
+/// Reads each file with data::read_backbone_table (amplitudes of `quantity`; nullopt: modal).
+BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
+                                    std::optional<Quantity> quantity, int sensor);
+
 /// Every backbone of band `band` on the selected channels (empty: each file's reference
 /// channel), each at its sensor; InputError when a selected channel is not a sensor or no
 /// backbone is found.
@@ -143,9 +154,9 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
 /// the shape's value there and fits as well (a 2.65 times F_S, reduced chi-square 0.027), so only
 /// the report can say it. Measured amplitudes are zero to peak; `unitless` names the tables
 /// whose amplitude header gives no unit (SI assumed: g or mm read so scale F_S and pass every
-/// check), "" for none.
+/// check; BackboneCurves::unitless), none for none.
 std::string amplitude_reading(int mode, const std::string& quantity, bool defaulted,
                               const std::string& dof_name, const std::string& dof,
-                              const std::string& unitless = "");
+                              const std::vector<std::string>& unitless = {});
 
 }  // namespace jointlab::correlate

@@ -266,17 +266,17 @@ TEST(MeasuredData, ModeShapeMatchNamesASensorWhoseReversalExplainsALowMac) {
 // gives no unit is named with the SI unit assumed (an acceleration table in g read so gave F_S
 // 4.08 N against 40, exit 0, every check passed: the scale cannot be seen in the fit).
 TEST(MeasuredData, TheAmplitudeLineSaysZeroToPeakAndTheUnitAssumed) {
-  const std::string given = amplitude_reading(1, "acceleration", false, "9003:3", "9003:3", "");
+  const std::string given = amplitude_reading(1, "acceleration", false, "9003:3", "9003:3", {});
   EXPECT_NE(given.find("zero to peak"), std::string::npos) << given;
   EXPECT_EQ(given.find("assumed"), std::string::npos) << given;
   const std::string none =
-      amplitude_reading(1, "acceleration", false, "9003:3", "9003:3", "hit1.csv, hit2.csv");
+      amplitude_reading(1, "acceleration", false, "9003:3", "9003:3", {"hit1.csv", "hit2.csv"});
   EXPECT_NE(none.find("hit1.csv, hit2.csv give no unit in the amplitude header, so m/s^2 is "
                       "assumed"),
             std::string::npos)
       << none;
   const std::string displacement =
-      amplitude_reading(1, "displacement", false, "9003:3", "9003:3", "hit.csv");
+      amplitude_reading(1, "displacement", false, "9003:3", "9003:3", {"hit.csv"});
   EXPECT_NE(displacement.find("hit.csv gives no unit in the amplitude header, so m is assumed"),
             std::string::npos)
       << displacement;

@@ -24,7 +24,6 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
-#include "jointlab/data/backbone_table.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/data/table_writer.h"
 #include "jointlab/modal/process.h"
@@ -407,7 +406,7 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
                     beta_range.first, beta_range.second));
   correlate::IwanUpdateSummary summary;
   std::vector<correlate::Sensor> sensors_used;  // the DOF named by `dof`, for the report
-  std::string unitless;  // the tables whose amplitude header gives no unit, for the report
+  std::vector<std::string> unitless;  // the tables whose amplitude has no unit, for the report
   model::Model updated;
   {
     py::gil_scoped_release release;
@@ -448,12 +447,10 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
     // The amplitude column's unit, when given, must measure this quantity (none: modal).
     const std::optional<Quantity> measured =
         amplitude == "modal" ? std::nullopt : parse_quantity(amplitude);
-    for (const std::string& f : backbones) {
-      const data::BackboneTable table = data::read_backbone_table(f, measured);
-      if (table.amplitude_unit.empty() && !table.written_by_jointlab)
-        unitless += (unitless.empty() ? "" : ", ") + f;
-      target.curves.push_back(correlate::measured_backbone(table, sensors.empty() ? -1 : 0));
-    }
+    correlate::BackboneCurves read =
+        correlate::read_backbone_curves(backbones, measured, sensors.empty() ? -1 : 0);
+    target.curves = std::move(read.curves);
+    unitless = std::move(read.unitless);
     o.fit_linear_damping = linear_damping == "fit";
     o.max_evaluations = evaluations;
     o.seed = seed;
@@ -521,7 +518,7 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
                      correlate::amplitude_reading(
                          mode, amplitude, false,
                          sensors_used.empty() ? std::string() : sensors_used.front().channel,
-                         dof.value_or(""), amplitude == "modal" ? std::string() : unitless) +
+                         dof.value_or(""), unitless) +
                      "\n";
   return result;
 }
