@@ -1296,6 +1296,24 @@ class SpectrumMagnitudes {
 // bands of 12 half-power widths two (ringdown_test.cc, RingdownAdvice).
 constexpr double kBandWidths = 12.0;
 
+// The highest local maximum of the measured samples' spectrum over bins [k0, k1] (k0 >= 0; a
+// rising or falling edge of the range is not a peak), or -1 where it has none.
+Eigen::Index strongest_peak(const ChannelSpectrum& channel, Eigen::Index k0, Eigen::Index k1) {
+  const Eigen::Index first = std::max<Eigen::Index>(k0, 1) - 1;
+  const Eigen::Index last = std::min<Eigen::Index>(k1 + 1, channel.measured.size() - 1);
+  if (last <= first) return -1;
+  const SpectrumMagnitudes mag(channel.measured, first, last);
+  Eigen::Index kp = -1;
+  for (Eigen::Index k = first + 1; k <= k1; ++k) {
+    if (k + 1 >= channel.measured.size() || !mag.greater(k, k - 1) ||
+        !mag.greater(k, k + 1, true)) {
+      continue;
+    }
+    if (kp < 0 || mag.greater(k, kp)) kp = k;
+  }
+  return kp;
+}
+
 // What the measured samples' spectrum shows around a band with no span: the strongest peak
 // near it, or that the band is narrower than kWidths half-power widths of its mode.
 std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& band, double taper,
@@ -1310,18 +1328,7 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   };
   const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
   if (k1 <= k0 + 2) return {};
-  // The highest local maximum (a rising or falling edge of the range is not a peak).
-  const Eigen::Index first = std::max<Eigen::Index>(k0, 1) - 1;
-  const Eigen::Index last = std::min<Eigen::Index>(k1 + 1, channel.measured.size() - 1);
-  const SpectrumMagnitudes mag(channel.measured, first, last);
-  Eigen::Index kp = -1;
-  for (Eigen::Index k = first + 1; k <= k1; ++k) {
-    if (k + 1 >= channel.measured.size() || !mag.greater(k, k - 1) ||
-        !mag.greater(k, k + 1, true)) {
-      continue;
-    }
-    if (kp < 0 || mag.greater(k, kp)) kp = k;
-  }
+  const Eigen::Index kp = strongest_peak(channel, k0, k1);
   if (kp < 0) {
     return fmt::format("no mode in the band and no spectral peak from {:.2f} to {:.2f} Hz",
                        static_cast<double>(k0) * df, static_cast<double>(k1) * df);
@@ -1424,23 +1431,16 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
       if (stronger && off <= tol) bb.harmonic(i) = n;
       near[static_cast<size_t>(i)] = stronger && off <= kMaxPull * bb.damped_frequency_hz(i);
     }
-    // Points between two marked ones (in time) that lie within kMaxPull of n times the
-    // stronger mode's frequency follow it too: the locked harmonic with more of the band's own
-    // mode left beside it, which pulls the read frequency further than kPull allows. In the 1:2
-    // twin of a double beam struck near mode 2, eight such points (0.68-0.83 s, 0.09-0.11 Hz
-    // off 2 f1) between marked ones gave mode 2's linear values 243.92 Hz and damping 0.0031,
-    // against 243.0 Hz and 0.006, unmarked.
-    // So do such points after the last marked one, where the harmonic runs on to the record's
-    // lowest amplitudes (two points 0.12 Hz off 2 f1 there gave mode 2's linear values
-    // 244.13 Hz and damping 0.0035).
-    Eigen::Index last = -1;
-    for (Eigen::Index i = 0; i < bb.size(); ++i) {
-      if (bb.harmonic(i) != n) continue;
-      for (Eigen::Index j = last + 1; last >= 0 && j < i; ++j)
-        if (bb.harmonic(j) == 0 && near[static_cast<size_t>(j)]) bb.harmonic(j) = n;
-      last = i;
-    }
-    for (Eigen::Index j = last + 1; last >= 0 && j < bb.size(); ++j)
+    // Points after the first marked one (between two marked ones, or after the last) that lie
+    // within kMaxPull of n times the stronger mode's frequency follow it too: the locked
+    // harmonic with more of the band's own mode left beside it, which pulls the read frequency
+    // further than kPull allows. In the 1:2 twin of a double beam struck near mode 2, eight such
+    // points (0.68-0.83 s, 0.09-0.11 Hz off 2 f1) between marked ones gave mode 2's linear
+    // values 243.92 Hz and damping 0.0031, against 243.0 Hz and 0.006, unmarked; two after the
+    // last, where the harmonic runs on to the record's lowest amplitudes, 244.13 Hz and 0.0035.
+    Eigen::Index first = 0;
+    while (first < bb.size() && bb.harmonic(first) != n) ++first;
+    for (Eigen::Index j = first + 1; j < bb.size(); ++j)
       if (bb.harmonic(j) == 0 && near[static_cast<size_t>(j)]) bb.harmonic(j) = n;
   }
 }
@@ -2655,20 +2655,15 @@ double resolved_neighbour(const ChannelSpectrum& channel, const signal::Band& ty
   return 0.0;
 }
 
-// The strongest local maximum of the measured samples' spectrum strictly inside `band` [Hz],
-// or 0 where it has none.
+// The strongest local maximum of the measured samples' spectrum inside `band` [Hz] (bins from
+// ceil(lo / df) to floor(hi / df)), or 0 where it has none.
 double peak_inside(const ChannelSpectrum& channel, const signal::Band& band) {
-  const Eigen::Index n = channel.measured.size();
-  if (n < 3) return 0.0;
+  if (channel.measured.size() < 3) return 0.0;
   const double df = channel.measured_df();
-  const Eigen::Index k0 =
-      std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::ceil(band.lo / df)));
-  const Eigen::Index k1 = std::min<Eigen::Index>(n - 2, static_cast<Eigen::Index>(band.hi / df));
-  const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
-  Eigen::Index best = -1;
-  for (Eigen::Index k = k0; k <= k1; ++k)
-    if (mag(k) > mag(k - 1) && mag(k) >= mag(k + 1) && (best < 0 || mag(k) > mag(best))) best = k;
-  return best < 0 ? 0.0 : static_cast<double>(best) * df;
+  const Eigen::Index kp =
+      strongest_peak(channel, static_cast<Eigen::Index>(std::ceil(band.lo / df)),
+                     static_cast<Eigen::Index>(band.hi / df));
+  return kp < 0 ? 0.0 : static_cast<double>(kp) * df;
 }
 
 // The band the mode is read through. The band a user types says which mode, not where the
