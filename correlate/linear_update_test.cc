@@ -558,11 +558,6 @@ TEST(LinearUpdate, TheModelFormThresholdIsTheChiSquaresThreeSigmaPoint) {
   EXPECT_NEAR(reduced_chi2_limit(4), 4.45, 0.01);
 }
 
-}  // namespace
-}  // namespace jointlab::correlate
-namespace jointlab::correlate {
-namespace {
-
 // A channel reversed where every measured mode still matches some model mode (MAC >= 0.9) as
 // given, so the start's check cannot tell: the two-chain structure's modes 2-4 with s0 reversed,
 // from ka 2e5 and kb 6e5 (truth 5e5 and 3e5). Before, the fit paired a mode 24 % away and ended
