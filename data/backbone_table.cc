@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <numeric>
 #include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
@@ -25,6 +27,27 @@ namespace {
 // The columns read: the three required, then the two optional uncertainties.
 constexpr std::array<const char*, 5> kNames = {"amplitude", "frequency_hz", "damping_ratio",
                                                "frequency_std_hz", "damping_std"};
+constexpr const char* kHeader =
+    "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]";
+
+// The amplitude units core/units.h reads, by quantity, for the messages that list them.
+constexpr std::array<const char*, 13> kAmplitudeUnits = {
+    "m", "mm", "um", "in", "m/s", "mm/s", "um/s", "in/s", "m/s^2", "mm/s^2", "in/s^2", "g", "mg"};
+
+std::string with_article(const std::string& noun) {
+  return (std::string("aeiou").find(noun.front()) != std::string::npos ? "an " : "a ") + noun;
+}
+
+// "m/s^2, mm/s^2, in/s^2, g or mg": the units an amplitude of `q` takes.
+std::string units_of(Quantity q) {
+  std::vector<std::string> u;
+  for (const char* c : kAmplitudeUnits) {
+    if (parse_unit(c)->quantity == q) u.emplace_back(c);
+  }
+  const std::string last = u.back();
+  u.pop_back();
+  return fmt::format("{} or {}", fmt::join(u, ", "), last);
+}
 
 // The factor a value of column k (amplitude, frequency_hz, damping_ratio, frequency_std_hz,
 // damping_std) in `unit` takes to the table's units; InputError naming the file, the column and
@@ -56,16 +79,255 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
   const std::string name = quantity_name(*quantity);
   const std::optional<Unit> u = parse_unit(unit);
   if (!u) {
-    throw refuse(fmt::format("unknown unit '{}' (the amplitude is a {}, SI unit {})", shorten(unit),
-                             name, si_unit(*quantity)));
+    // Units are case-sensitive (mm is not Mm, g is not G): a unit of the quantity that differs
+    // only in case is named as the fix, not read in its place.
+    for (const char* c : kAmplitudeUnits) {
+      if (lower(c) == lower(unit) && parse_unit(c)->quantity == *quantity) {
+        throw refuse(
+            fmt::format("unknown unit '{}': write 'amplitude [{}]' (units are "
+                        "case-sensitive; {} amplitude takes {})",
+                        shorten(unit), c, with_article(name), units_of(*quantity)));
+      }
+    }
+    throw refuse(fmt::format("unknown unit '{}': {} amplitude takes {} (SI {})", shorten(unit),
+                             with_article(name), units_of(*quantity), si_unit(*quantity)));
   }
   if (u->quantity != *quantity) {
-    throw refuse(
-        fmt::format("unit '{}' measures {}, the amplitude is a {} (--amplitude {}, SI "
-                    "unit {})",
-                    shorten(unit), quantity_name(u->quantity), name, name, si_unit(*quantity)));
+    throw refuse(fmt::format(
+        "unit '{}' measures {}, the amplitude is {} (--amplitude {}, SI "
+        "unit {})",
+        shorten(unit), quantity_name(u->quantity), with_article(name), name, si_unit(*quantity)));
   }
   return u->to_si;
+}
+
+// --- What a header the reader cannot use most likely meant, for a refusal that names the fix.
+
+// The words of a header name, lower-cased: runs of letters and digits (bytes of UTF-8 letters
+// such as 'ζ' and 'σ' kept in them).
+std::vector<std::string> words_of(std::string_view name) {
+  std::vector<std::string> out(1);
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    if (std::isalnum(u) || u >= 0x80) {
+      out.back().push_back(static_cast<char>(std::tolower(u)));
+    } else if (!out.back().empty()) {
+      out.emplace_back();
+    }
+  }
+  if (out.back().empty()) out.pop_back();
+  return out;
+}
+
+bool starts_with(std::string_view s, std::string_view prefix) {
+  return s.substr(0, prefix.size()) == prefix;
+}
+
+// A header field that is not one of kNames, as the column it most likely means.
+struct Guess {
+  int column = -1;             // index into kNames; -1: none of them
+  bool uncertainty = false;    // a std, sigma, error ... (of `column` when that is 3 or 4)
+  bool loss_factor = false;    // eta = 2 zeta, not a damping ratio
+  bool relative = false;       // "rel", "relative": a std divided by its value
+  std::string unit;            // the unit it gives, in [] or (); "" if none
+  bool parenthesised = false;  // the unit in round brackets
+  bool unit_taken = false;     // `unit` is one the guessed column takes
+};
+
+Guess guess_column(const std::string& name, const std::string& bracket_unit) {
+  Guess g;
+  std::string base = name;
+  g.unit = bracket_unit;
+  if (const auto open = name.rfind('(');
+      bracket_unit.empty() && open != std::string::npos && !name.empty() && name.back() == ')') {
+    base = std::string(trim(std::string_view(name).substr(0, open)));
+    g.unit = std::string(trim(std::string_view(name).substr(open + 1, name.size() - open - 2)));
+    g.parenthesised = true;
+  }
+  const std::vector<std::string> words = words_of(base);
+  const auto any = [&](auto&& pred) { return std::any_of(words.begin(), words.end(), pred); };
+  const auto has = [](const std::string& w, const char* part) {
+    return w.find(part) != std::string::npos;
+  };
+  g.uncertainty = any([&](const std::string& w) {
+                    return has(w, "std") || has(w, "sigma") || has(w, "σ") || has(w, "uncert") ||
+                           has(w, "err") || has(w, "deviation") || has(w, "±") || w == "sd" ||
+                           w == "unc" || w == "dev";
+                  }) ||
+                  base.find("+/-") != std::string::npos;
+  g.relative = any([](const std::string& w) { return w == "rel" || w == "relative"; });
+  g.loss_factor = any([](const std::string& w) {
+    return w == "loss" || starts_with(w, "lossfactor") || w == "eta" || w == "η";
+  });
+  const bool damping = any([](const std::string& w) {
+    // Not "damped": a damped frequency is a frequency.
+    return (starts_with(w, "damp") && w != "damped") || starts_with(w, "zeta") || w == "ζ" ||
+           w == "xi";
+  });
+  const bool frequency = any([](const std::string& w) {
+    return starts_with(w, "freq") || w == "f" || w == "fn" || w == "f0" || w == "hz";
+  });
+  const bool amplitude = any([](const std::string& w) {
+    return starts_with(w, "amp") || starts_with(w, "acc") || starts_with(w, "vel") ||
+           starts_with(w, "disp") || w == "a" || w == "q";
+  });
+  if (g.loss_factor) return g;
+  if (damping) {
+    g.column = g.uncertainty ? 4 : 2;
+  } else if (frequency) {
+    g.column = g.uncertainty ? 3 : 1;
+  } else if (amplitude && g.uncertainty) {
+    g.uncertainty = false;  // an amplitude's uncertainty: not used by the update, not asked for
+  } else if (amplitude) {
+    g.column = 0;
+  }
+  if (g.column == 1 || g.column == 3) g.unit_taken = lower(g.unit) == "hz";
+  if (g.column == 2 || g.column == 4)
+    g.unit_taken = g.unit == "%" || g.unit == "1" || g.unit == "-";
+  if (g.column == 0) g.unit_taken = parse_unit(g.unit).has_value();
+  return g;
+}
+
+// The header a guessed column should have: its name, and its unit in square brackets when it
+// gave one the column takes.
+std::string suggested_header(const Guess& g) {
+  const std::string name = kNames[static_cast<size_t>(g.column)];
+  return g.unit_taken ? fmt::format("{} [{}]", name, g.unit) : name;
+}
+
+// "column 3 'damping_ratio (%)': write the unit in square brackets, 'damping_ratio [%]'" or
+// "column 2 'Freq (Hz)': rename it 'frequency_hz [Hz]' (the unit in square brackets)".
+std::string rename_hint(size_t i, const std::string& field, const Guess& g) {
+  const std::string name = kNames[static_cast<size_t>(g.column)];
+  const std::string to = suggested_header(g);
+  const std::string base(trim(std::string_view(field).substr(0, field.find_first_of("(["))));
+  std::string fix;
+  std::vector<std::string> notes;
+  if (g.parenthesised && g.unit_taken && lower(base) == name) {
+    fix = fmt::format("write the unit in square brackets, '{}'", to);
+  } else {
+    fix = fmt::format("rename it '{}'", to);
+    if (!g.unit.empty() && !g.unit_taken) {
+      notes.push_back(fmt::format("'{}' is no unit of {}", shorten(g.unit), name));
+    } else if (g.parenthesised) {
+      notes.emplace_back("the unit in square brackets");
+    }
+  }
+  if (g.column == 3) notes.emplace_back("one standard deviation in Hz");
+  if (g.column == 4) {
+    notes.emplace_back(g.relative ? "one standard deviation of the damping ratio, absolute: a "
+                                    "relative one times damping_ratio"
+                                  : "one standard deviation of the damping ratio");
+  }
+  if (!notes.empty()) fix += fmt::format(" ({})", fmt::join(notes, "; "));
+  return fmt::format("column {} '{}': {}", i + 1, shorten(field), fix);
+}
+
+// Whether a line holds the names of at least two of the three columns a backbone needs: a
+// header row below the line the reader took as its header.
+bool looks_like_header(std::string_view line) {
+  CsvLineSplitter splitter(detect_delimiter(line));
+  int found = 0;
+  for (const std::string& field : splitter.split(line)) {
+    const std::string name = lower(trim(std::string_view(field).substr(0, field.find('['))));
+    for (size_t k = 0; k < 3; ++k) found += name == kNames[k];
+  }
+  return found >= 2;
+}
+
+// InputError for a header without the required columns (col[k] < 0), naming for each the
+// column that most likely meant it and the fix: a name to use, a unit to write in square
+// brackets, '#' before lines above the header, or the header row that a table of numbers lacks.
+[[noreturn]] void refuse_header(std::string_view header, const std::vector<std::string>& fields,
+                                const std::vector<Guess>& guesses, const std::array<int, 5>& col,
+                                TextLines lines, const std::string& file, long header_line) {
+  std::vector<std::string> fixes;
+  std::vector<bool> used(fields.size(), false);
+  for (size_t k = 0; k < 3; ++k) {
+    if (col[k] >= 0) continue;
+    size_t i = 0;
+    while (i < fields.size() && (used[i] || guesses[i].column != static_cast<int>(k))) ++i;
+    if (i < fields.size()) {
+      used[i] = true;
+      fixes.push_back(rename_hint(i, fields[i], guesses[i]));
+      continue;
+    }
+    const auto loss =
+        std::find_if(guesses.begin(), guesses.end(), [](const Guess& g) { return g.loss_factor; });
+    if (k == 2 && loss != guesses.end()) {
+      const size_t j = static_cast<size_t>(loss - guesses.begin());
+      fixes.push_back(fmt::format(
+          "column {} '{}': a loss factor is twice the damping ratio: halve its values and name "
+          "the column 'damping_ratio'",
+          j + 1, shorten(fields[j])));
+      continue;
+    }
+    fixes.push_back(fmt::format("no column '{}'", kNames[k]));
+  }
+  // Lines above the header without '#' (an export's title, a sensor name): not skipped, as such
+  // a line may say what the numbers are ("amplitudes in mm"); the fix names the header's line.
+  std::string_view line;
+  for (int seen = 0; seen < 200 && lines.next(line); ++seen) {
+    if (!looks_like_header(line)) continue;
+    throw InputError(
+        where(file, header_line,
+              fmt::format("'{}' is read as the header, but the header row is line {}: start each "
+                          "line above it with '#', or delete them",
+                          shorten(trim(header)), lines.line_no())));
+  }
+  if (std::all_of(fields.begin(), fields.end(),
+                  [](const std::string& f) { return parse_double(f).has_value(); })) {
+    throw InputError(where(file, header_line,
+                           "the first row is numbers, not a header: add the header row above "
+                           "it, e.g. amplitude,frequency_hz,damping_ratio (names in the columns' "
+                           "order)"));
+  }
+  // The header to write is named only where a column was not recognised at all; a renamed one
+  // has its fix above.
+  const bool unknown = std::any_of(
+      fixes.begin(), fixes.end(), [](const std::string& f) { return starts_with(f, "no column"); });
+  throw InputError(where(file, header_line,
+                         fmt::format("{}{}", fmt::join(fixes, "; "),
+                                     unknown ? fmt::format(" (a backbone table's header: {}, "
+                                                           "units in square brackets)",
+                                                           kHeader)
+                                             : "")));
+}
+
+// Refuses columns that look like the uncertainties but are not read, naming the names read.
+// Refused, not warned about: the update weighs every point by frequency_std_hz and damping_std
+// and states the parameters' uncertainties from them; a column it does not read leaves its
+// floors in their place, so the fit and its stated std change with no sign in the result, and
+// a user who wrote the column believes it is used. A warning among a fit's progress lines is
+// easily missed; the fix is a rename, and a column that is no uncertainty can be renamed out of
+// the way. Checked while the pair is incomplete only: with both read, a further column (a
+// relative copy, an amplitude's std) is one of the further columns, ignored.
+void refuse_unread_uncertainties(const std::vector<std::string>& fields,
+                                 const std::vector<Guess>& guesses, const std::array<int, 5>& col,
+                                 const std::string& file, long header_line) {
+  if (col[3] >= 0 && col[4] >= 0) return;
+  std::vector<std::string> fixes;
+  std::array<bool, 5> hinted{};
+  for (size_t i = 0; i < fields.size(); ++i) {
+    const Guess& g = guesses[i];
+    if (!g.uncertainty) continue;
+    if ((g.column == 3 || g.column == 4) && col[static_cast<size_t>(g.column)] < 0 &&
+        !hinted[static_cast<size_t>(g.column)]) {
+      hinted[static_cast<size_t>(g.column)] = true;
+      fixes.push_back(rename_hint(i, fields[i], g));
+    } else if (g.column < 0) {
+      fixes.push_back(fmt::format(
+          "column {} '{}' looks like an uncertainty but is not read: the uncertainties read "
+          "are 'frequency_std_hz' and 'damping_std' (one standard deviation each, both or "
+          "neither); rename it to the one it is, or out of the way if it is neither",
+          i + 1, shorten(fields[i])));
+    }
+  }
+  if (fixes.empty()) return;
+  throw InputError(where(file, header_line,
+                         fmt::format("{}; an uncertainty under another name is not read, and the "
+                                     "fit would weigh the points by its floors instead",
+                                     fmt::join(fixes, "; "))));
 }
 
 }  // namespace
@@ -98,6 +360,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   int coverage_col = -1;      // a `process` backbone's coverage_factor: k of the std columns
   double coverage = 0;        // its value (0: none read yet)
   const std::vector<std::string> fields = splitter.split(header);
+  std::vector<Guess> guesses(fields.size());  // what each field not read most likely means
   std::string amplitude_unit;
   bool ours = false;
   for (size_t i = 0; i < fields.size(); ++i) {
@@ -105,30 +368,35 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
     if (is_point_mark(name)) marks.push_back(i);
     if (name == "coverage_factor") coverage_col = static_cast<int>(i);
     if (name == "coverage_factor" || name == "response_controlled") ours = true;
-    for (size_t k = 0; k < kNames.size(); ++k) {
-      if (name != kNames[k]) continue;
-      if (col[k] >= 0) {
-        throw InputError(where(file, header_line, fmt::format("column '{}' appears twice", name)));
-      }
-      col[k] = static_cast<int>(i);
-      if (!unit.empty()) scale[k] = unit_scale(k, unit, quantity, file, header_line);
-      if (k == 0) amplitude_unit = unit;
+    // Names are read case-blind ("Amplitude", "Frequency_Hz"), as a test file's "time" is.
+    const auto k =
+        static_cast<size_t>(std::find(kNames.begin(), kNames.end(), lower(name)) - kNames.begin());
+    if (k == kNames.size()) {
+      guesses[i] = guess_column(name, unit);
+      continue;
     }
-  }
-  for (size_t k = 0; k < 3; ++k) {
-    if (col[k] < 0) {
-      throw InputError(
-          where(file, header_line,
-                fmt::format("no column '{}': a backbone table has the header "
-                            "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]",
-                            kNames[k])));
+    if (col[k] >= 0) {
+      throw InputError(where(file, header_line,
+                             fmt::format("columns {} '{}' and {} '{}' are both {}: keep one",
+                                         col[k] + 1, shorten(fields[static_cast<size_t>(col[k])]),
+                                         i + 1, shorten(fields[i]), kNames[k])));
     }
+    col[k] = static_cast<int>(i);
+    if (!unit.empty()) scale[k] = unit_scale(k, unit, quantity, file, header_line);
+    if (k == 0) amplitude_unit = unit;
   }
+  if (col[0] < 0 || col[1] < 0 || col[2] < 0) {
+    refuse_header(header, fields, guesses, col, lines, file, header_line);
+  }
+  refuse_unread_uncertainties(fields, guesses, col, file, header_line);
   if ((col[3] < 0) != (col[4] < 0)) {
-    throw InputError(
-        where(file, header_line, "give both frequency_std_hz and damping_std, or neither"));
+    throw InputError(where(file, header_line,
+                           fmt::format("give both frequency_std_hz and damping_std, or neither "
+                                       "(the table has {} alone)",
+                                       kNames[col[3] >= 0 ? 3 : 4])));
   }
   const size_t needed = static_cast<size_t>(*std::max_element(col.begin(), col.end())) + 1;
+  const std::string separator = delim == '\t' ? "tab" : fmt::format("'{}'", delim);
   std::array<std::vector<double>, 5> values;
   std::vector<std::string> cells;
   std::string_view line;
@@ -137,10 +405,29 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
         line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
     if (trimmed.empty() || trimmed.front() == '#') continue;
     if (!splitter.split(line, cells)) continue;
+    // A row of empty cells (a spreadsheet's ",,") holds nothing: skipped as a blank line is.
+    if (std::all_of(cells.begin(), cells.end(),
+                    [](const std::string& c) { return trim(c).empty(); })) {
+      continue;
+    }
     const long n = lines.line_no();
     if (cells.size() < needed) {
       throw InputError(where(
           file, n, fmt::format("{} cells, the header needs at least {}", cells.size(), needed)));
+    }
+    // More cells than the header names: with ',' between the columns, decimal commas split each
+    // number in two ("1,5" read as 1 and 5), and the row would be read shifted.
+    if (cells.size() > fields.size() &&
+        std::any_of(cells.begin() + static_cast<std::ptrdiff_t>(fields.size()), cells.end(),
+                    [](const std::string& c) { return !trim(c).empty(); })) {
+      throw InputError(where(
+          file, n,
+          fmt::format("{} cells, the header names {}: {}", cells.size(), fields.size(),
+                      delim == ','
+                          ? "decimal commas with ',' separators split each number in two "
+                            "(write numbers with a decimal point, '0.0123'), or a column has no "
+                            "name in the header row"
+                          : "a column without a name in the header row")));
     }
     const bool marked = std::any_of(marks.begin(), marks.end(), [&](size_t c) {
       if (c >= cells.size()) return false;
@@ -157,6 +444,23 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
       const std::string& cell = cells[static_cast<size_t>(col[k])];
       const auto v = parse_double(cell);
       const bool uncertainty = k >= 3;
+      if (!v && trim(cell).empty()) {
+        throw InputError(where(file, n,
+                               fmt::format("column {} '{}' is empty: fill it or delete the row",
+                                           col[k] + 1, kNames[k])));
+      }
+      // A decimal comma is never read as a decimal point: "1,234" may be a thousand.
+      if (std::string point = cell; !v && cell.find(',') != std::string::npos) {
+        std::replace(point.begin(), point.end(), ',', '.');
+        if (parse_double(point)) {
+          throw InputError(
+              where(file, n,
+                    fmt::format("decimal comma in '{}' (column {} '{}') with {} separators: write "
+                                "numbers with a decimal point, '{}', and no thousands separators "
+                                "(e.g. export with '.' as the decimal symbol)",
+                                shorten(cell), col[k] + 1, kNames[k], separator, shorten(point))));
+        }
+      }
       if (!v || !std::isfinite(*v) || (uncertainty ? !(*v >= 0) : !(*v > 0))) {
         throw InputError(where(file, n,
                                fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,

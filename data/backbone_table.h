@@ -15,6 +15,11 @@
 // Every amplitude, frequency [Hz] and damping ratio (a fraction) must be finite and > 0; the
 // uncertainties, when present, finite and >= 0 (0: the caller's floor). Any defect is an
 // InputError "file:line: what" naming the column.
+// Tables written otherwise (docs/backbone-table.md): names are read case-blind and rows of empty
+// cells (",,") skipped; everything else is refused with the fix named: a unit in round
+// brackets, a lab's own column names, lines above the header without '#', decimal commas (never
+// read as points nor as separators), and, while the two uncertainties are not both read, a column
+// that looks like one (std, sigma, err, ...): ignored, the fit would use its floors unseen.
 #pragma once
 
 #include <filesystem>

@@ -187,5 +187,146 @@ TEST(BackboneTable, ConvertsPerCentAndAmplitudeUnitsAndRefusesTheRest) {
   }
 }
 
+// A message a newcomer can act on: one line naming the file, the line or column, what is wrong
+// and the fix (a lab's export, as the trial h22 wrote them, before: "no column 'amplitude'").
+void expect_refusal(const std::string& name, const std::string& text,
+                    std::optional<Quantity> quantity, const std::vector<std::string>& expected) {
+  const auto p = table(name, text);
+  const std::string m = input_error_of([&] { read_backbone_table(p, quantity); });
+  for (const std::string& e : expected)
+    EXPECT_NE(m.find(e), std::string::npos) << name << ": " << m;
+  EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+}
+
+TEST(BackboneTable, HeaderRefusalsNameTheColumnAndTheFix) {
+  const std::string rows = "\n1,10,0.01\n2,10,0.02\n";
+  // A unit in round brackets: the contract's units are in square ones.
+  expect_refusal("h1.csv", "amplitude,frequency_hz,damping_ratio (%)" + rows, std::nullopt,
+                 {"h1.csv:1: column 3 'damping_ratio (%)': write the unit in square brackets, "
+                  "'damping_ratio [%]'"});
+  expect_refusal("h2.csv", "Amplitude (g),frequency_hz,damping_ratio" + rows,
+                 Quantity::kAcceleration,
+                 {"h2.csv:1: column 1 'Amplitude (g)': write the unit in square brackets, "
+                  "'amplitude [g]'"});
+  // A lab's own names: each column that most likely meant one read is named with its new name.
+  expect_refusal("h3.csv", "Amplitude,Freq (Hz),zeta" + rows, std::nullopt,
+                 {"h3.csv:1: column 2 'Freq (Hz)': rename it 'frequency_hz [Hz]' (the unit in "
+                  "square brackets); column 3 'zeta': rename it 'damping_ratio'"});
+  // Parentheses that hold no unit of the column are not carried into the new name.
+  expect_refusal("h4.csv", "amplitude,frequency (peak),damping_ratio" + rows, std::nullopt,
+                 {"h4.csv:1: column 2 'frequency (peak)': rename it 'frequency_hz' ('peak' is "
+                  "no unit of frequency_hz)"});
+  // A loss factor is no damping ratio: the fix says how to turn one into the other.
+  expect_refusal("h5.csv", "amplitude,frequency_hz,loss_factor" + rows, std::nullopt,
+                 {"h5.csv:1: column 3 'loss_factor': a loss factor is twice the damping ratio: "
+                  "halve its values and name the column 'damping_ratio'"});
+  // Nothing to point at: the header to write.
+  expect_refusal("h6.csv", "amplitude,frequency_hz,note" + rows, std::nullopt,
+                 {"h6.csv:1: no column 'damping_ratio' (a backbone table's header: "
+                  "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]"});
+  // Lines above the header without '#': not skipped (one may say what the numbers are).
+  expect_refusal("h7.csv",
+                 "Backbone export 2024-05-01\nSensor: 9003:3\n\n"
+                 "amplitude,frequency_hz,damping_ratio" +
+                     rows,
+                 std::nullopt,
+                 {"h7.csv:1: 'Backbone export 2024-05-01' is read as the header, but the header "
+                  "row is line 4: start each line above it with '#', or delete them"});
+  expect_refusal("h7b.csv", "Accelerometer 9003:3\namplitude,frequency_hz,damping_ratio" + rows,
+                 std::nullopt,
+                 {"h7b.csv:1: 'Accelerometer 9003:3' is read as the header, but the header row "
+                  "is line 2"});
+  expect_refusal("h8.csv", "1,10,0.01\n2,10,0.02\n", std::nullopt,
+                 {"h8.csv:1: the first row is numbers, not a header: add the header row"});
+  // Case-blind names: two columns that both read as one are refused, naming both.
+  expect_refusal("h9.csv", "amplitude,Amplitude,frequency_hz,damping_ratio\n1,1,10,0.01\n",
+                 std::nullopt,
+                 {"h9.csv:1: columns 1 'amplitude' and 2 'Amplitude' are both amplitude: keep "
+                  "one"});
+  // Units are case-sensitive: a unit that differs only in case is named, not read.
+  expect_refusal("h10.csv", "amplitude [G],frequency_hz,damping_ratio" + rows,
+                 Quantity::kAcceleration,
+                 {"h10.csv:1: column 'amplitude [G]': unknown unit 'G': write 'amplitude [g]' "
+                  "(units are case-sensitive; an acceleration amplitude takes m/s^2, mm/s^2, "
+                  "in/s^2, g or mg)"});
+  expect_refusal("h11.csv", "amplitude [parsec],frequency_hz,damping_ratio" + rows,
+                 Quantity::kDisplacement,
+                 {"h11.csv:1: column 'amplitude [parsec]': unknown unit 'parsec': a "
+                  "displacement amplitude takes m, mm, um or in (SI m)"});
+}
+
+// What cannot be read wrong is read: names case-blind (as a test file's "time"), and a
+// spreadsheet's rows of empty cells (",,") skipped like blank lines, wherever they are.
+TEST(BackboneTable, ReadsNamesCaseBlindAndSkipsRowsOfEmptyCells) {
+  const BackboneTable t = read_backbone_table(
+      table("caps.csv",
+            "Amplitude,Frequency_Hz,DAMPING_RATIO [%],\n1,10,1,\n,,,\n2,11,2,\n , ,,\n,,,\n"),
+      std::nullopt);
+  ASSERT_EQ(t.size(), 2);
+  EXPECT_EQ(t.frequency_hz(1), 11.0);
+  EXPECT_DOUBLE_EQ(t.damping_ratio(1), 0.02);
+  // A row with some cells empty is no blank row: refused, naming the empty column.
+  expect_refusal("partly.csv", "amplitude,frequency_hz,damping_ratio\n1,10,0.01\n2,,0.01\n",
+                 std::nullopt,
+                 {"partly.csv:3: column 2 'frequency_hz' is empty: fill it or delete the row"});
+}
+
+// A decimal comma is never read as a decimal point ("1,234" may be a thousand) nor as a
+// separator (the row would be read shifted): refused, naming the cell, the line and the fix.
+TEST(BackboneTable, RefusesDecimalCommasNamingTheFix) {
+  expect_refusal("c1.csv", "amplitude;frequency_hz;damping_ratio\n1e-06;121,85;0,0002\n",
+                 std::nullopt,
+                 {"c1.csv:2: decimal comma in '121,85' (column 2 'frequency_hz') with ';' "
+                  "separators: write numbers with a decimal point, '121.85'"});
+  expect_refusal("c2.csv", "amplitude\tfrequency_hz\tdamping_ratio\n1\t121\t0.001\n1,5\t1\t0.1\n",
+                 std::nullopt,
+                 {"c2.csv:3: decimal comma in '1,5' (column 1 'amplitude') with tab separators"});
+  expect_refusal("c3.csv", "amplitude,frequency_hz,damping_ratio\n1,\"121,85\",0.001\n",
+                 std::nullopt, {"c3.csv:2: decimal comma in '121,85'", "with ',' separators"});
+  expect_refusal("c4.csv", "amplitude,frequency_hz,damping_ratio\n1e-06,121,85,0,0002\n",
+                 std::nullopt,
+                 {"c4.csv:2: 5 cells, the header names 3: decimal commas with ',' separators "
+                  "split each number in two (write numbers with a decimal point"});
+  expect_refusal("c5.csv", "amplitude;frequency_hz;damping_ratio\n1;10;0.01;7\n", std::nullopt,
+                 {"c5.csv:2: 4 cells, the header names 3: a column without a name"});
+}
+
+// An uncertainty the reader does not know is refused, not ignored: the fit would weigh the
+// points by its floors while the user believes the stated uncertainties are used.
+TEST(BackboneTable, RefusesUncertaintiesUnderOtherNames) {
+  const std::string rows = "\n1,10,0.01,0.1,0.001\n2,10,0.02,0.1,0.001\n";
+  expect_refusal("s1.csv",
+                 "amplitude,frequency_hz,damping_ratio,freq_std_hz,damping_std_rel" + rows,
+                 std::nullopt,
+                 {"s1.csv:1: column 4 'freq_std_hz': rename it 'frequency_std_hz' (one standard "
+                  "deviation in Hz); column 5 'damping_std_rel': rename it 'damping_std' (one "
+                  "standard deviation of the damping ratio, absolute: a relative one times "
+                  "damping_ratio)",
+                  "an uncertainty under another name is not read"});
+  expect_refusal("s2.csv", "amplitude,frequency_hz,damping_ratio,sigma" + rows, std::nullopt,
+                 {"s2.csv:1: column 4 'sigma' looks like an uncertainty but is not read: the "
+                  "uncertainties read are 'frequency_std_hz' and 'damping_std'"});
+  expect_refusal("s3.csv",
+                 "amplitude,frequency_hz,damping_ratio,frequency_std_hz,zeta err [%]" + rows,
+                 std::nullopt, {"s3.csv:1: column 5 'zeta err [%]': rename it 'damping_std [%]'"});
+  expect_refusal("s4.csv", "amplitude,frequency_hz,damping_ratio,frequency_std_hz,note" + rows,
+                 std::nullopt,
+                 {"s4.csv:1: give both frequency_std_hz and damping_std, or neither (the table "
+                  "has frequency_std_hz alone)"});
+  // With both read, a further one is a further column; an amplitude's is not used by the update.
+  const auto both = read_backbone_table(
+      table("s5.csv",
+            "amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,damping_std_rel\n"
+            "1,10,0.01,0.1,0.001,0.1\n2,10,0.02,0.1,0.002,0.1\n"),
+      std::nullopt);
+  EXPECT_EQ(both.damping_std(1), 0.002);
+  EXPECT_EQ(read_backbone_table(table("s6.csv",
+                                      "amplitude,frequency_hz,damping_ratio,amplitude_std\n"
+                                      "1,10,0.01,0.1\n2,10,0.02,0.1\n"),
+                                std::nullopt)
+                .size(),
+            2);
+}
+
 }  // namespace
 }  // namespace jointlab::data
