@@ -38,6 +38,15 @@ TEST(SimulatedRecord, ResolvesIndicesAndLabels) {
   EXPECT_THROW(resolve_dof(m, "-1", "--impact"), InputError);
   EXPECT_THROW(resolve_dof(m, "", "--impact"), InputError);
   EXPECT_THROW(resolve_dof(pair(false), "9001:3", "--sensors"), InputError);
+  // A label the model lacks: the message names the labels its node has (the fix), or says the
+  // node is absent. Before: only "is not a label of the model's dof_labels".
+  EXPECT_EQ(testing::input_error_of([&] { resolve_dof(m, "9001:1", "--dof"); }),
+            "--dof = \"9001:1\" is not a label of the model's dof_labels: node 9001 has only "
+            "9001:3");
+  EXPECT_NE(testing::input_error_of([&] {
+              resolve_dof(m, "9005:1", "--dof");
+            }).find("is not a label of the model's dof_labels: it has no node 9005"),
+            std::string::npos);
   try {
     resolve_dof(m, "abc", "--sensors");
   } catch (const InputError& e) {
