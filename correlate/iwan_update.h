@@ -319,7 +319,9 @@ struct IwanUpdateSummary {
   /// each curve's points ordered by amplitude, with a bandwidth of a tenth of the curve so that
   /// it does not depend on how densely the curve is sampled, and the Gauss-Newton covariance
   /// scaled by the reduced chi-square when that exceeds 1; with three or more curves the
-  /// cluster-robust covariance (one cluster per curve) as a further lower limit.
+  /// cluster-robust covariance (one cluster per curve) as a further lower limit, and the
+  /// covariance of AR(1) noise at its coefficient corrected for what the fit absorbs; widened
+  /// for few effective_points (Student's t), and 0 (unknown) where they are 3 or fewer.
   Eigen::Vector4d relative_std = Eigen::Vector4d::Zero();
   /// Covariance of x = (ln F_S, ln K_T, chi, ln beta) behind relative_std (0 rows and columns
   /// for held parameters; all 0 when unknown).
@@ -338,6 +340,12 @@ struct IwanUpdateSummary {
   /// Reduced chi-square at best: sum of squared normalised residuals over (2N - free
   /// parameters); about 1 when the model describes the data within their stated noise.
   double reduced_chi2 = 0;
+  /// The residuals' noise read as AR(1) along each curve: its lag-1 coefficient, corrected for
+  /// the slow part the fit absorbs (0 when unknown), and the effective number of independent
+  /// points (about residuals x (1 - rho) / (1 + rho), at least 1 per curve's frequencies or
+  /// dampings); 3 or fewer state no sigma.
+  double noise_correlation = 0;
+  double effective_points = 0;     ///< 0 when unknown
   double reference_stiffness = 0;  ///< K_s: gamma = K_T / K_s [N/m]
   size_t residuals = 0;            ///< number of residuals (2 per measured point)
   /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)
