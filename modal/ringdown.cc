@@ -1741,14 +1741,23 @@ Exchange one_way_exchange(const std::vector<const Estimate*>& seen, double typic
   const auto apart = [&](const Estimate* e) {
     return e->sigma > own && rates_apart(e->sigma, e->sigma_std, own, 0.0, typical);
   };
-  if (!apart(known.front())) return x;
-  double end_t = known.front()->t;
-  for (const Estimate* e : known) {
-    if (!apart(e)) break;
-    end_t = e->t;
+  // The fall starts at the first rate clearly above the mode's own. The rates before it, read
+  // where the exchange swings fastest (within a window of the impact), may be too uncertain to
+  // say where they lie, but none may lie clearly apart from that first one: a rate that rises to
+  // it has turned, which exchange_of's turns judge.
+  const auto first =
+      std::find_if(known.begin(), known.end(), [&](const Estimate* e) { return apart(e); });
+  if (first == known.end()) return x;
+  for (auto e = known.begin(); e != first; ++e) {
+    if (rates_apart((*e)->sigma, (*e)->sigma_std, (*first)->sigma, (*first)->sigma_std, typical))
+      return x;
   }
+  const double start_t = (*first)->t;
+  double end_t = start_t;
+  for (auto e = first; e != known.end() && apart(*e); ++e) end_t = (*e)->t;
   std::vector<const Estimate*> during;
   for (const Estimate* e : seen) {
+    if (e->t < start_t) continue;
     if (e->t <= end_t || (!during.empty() && during.back()->t <= end_t)) during.push_back(e);
   }
   if (during.size() < 5) return x;
@@ -1861,6 +1870,9 @@ Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandS
   return x;
 }
 
+// "1 point" or "n points", for the notes.
+std::string points(size_t n) { return fmt::format("{} point{}", n, n == 1 ? "" : "s"); }
+
 // Notes for the summary: what was left out at the start and why, superharmonic and
 // exchange points.
 std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Estimate>& est,
@@ -1892,18 +1904,29 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
         ++other;
       }
     }
-    notes.push_back(fmt::format(
-        "{} points from {:.4f} s to {:.4f} s dropped before the span: {} with a damping "
-        "uncertainty over the {:.1f} % limit (up to {:.1f} %) or read through less than half "
-        "the band's gain, {} not decaying or below the noise threshold",
-        run.begin, channel.t0 + est.front().t, channel.t0 + est[run.begin - 1].t, over,
-        100 * options.max_damping_rel_std, 100 * worst, other));
+    // Only the reasons that apply: "0 with a damping uncertainty ... (up to 0.0 %)" read as
+    // if an uncertainty had been measured.
+    std::vector<std::string> why;
+    if (over > 0) {
+      why.push_back(fmt::format(
+          "{} with a damping uncertainty over the {:.1f} % limit (up to {:.1f} %) or read "
+          "through less than half the band's gain",
+          over, 100 * options.max_damping_rel_std, 100 * worst));
+    }
+    if (other > 0)
+      why.push_back(fmt::format("{} not decaying or below the noise threshold", other));
+    const std::string which =
+        run.begin == 1 ? fmt::format("1 point at {:.4f} s", channel.t0 + est.front().t)
+                       : fmt::format("{} from {:.4f} s to {:.4f} s", points(run.begin),
+                                     channel.t0 + est.front().t, channel.t0 + est[run.begin - 1].t);
+    notes.push_back(fmt::format("{} dropped before the span: {}", which, fmt::join(why, ", ")));
   }
   if (sum.superharmonic_points > 0) {
-    notes.push_back(fmt::format(
-        "{} points follow an integer multiple of a stronger mode's frequency (superharmonic, "
-        "column harmonic); left out of the linear values",
-        sum.superharmonic_points));
+    notes.push_back(
+        fmt::format("{} an integer multiple of a stronger mode's frequency (superharmonic, "
+                    "column harmonic); left out of the linear values",
+                    sum.superharmonic_points == 1 ? std::string("1 point follows")
+                                                  : points(sum.superharmonic_points) + " follow"));
   }
   if (exchange.found()) {
     const double r = exchange.partner;
@@ -1912,19 +1935,20 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
             ? std::string("the envelope's decay rate turns once")
             : fmt::format("the envelope's decay rate turns {} times", exchange.turns.size());
     const std::string how =
-        exchange.one_way ? std::string(
-                               "the envelope's decay rate falls from the start to the "
-                               "mode's own as the other's rises to its own")
+        exchange.one_way
+            ? std::string(
+                  "the envelope's decay rate falls from the start to the mode's own as "
+                  "the other's rises to its own")
         : !exchange.turns.empty() && exchange.grows ? turns + " and the envelope grows"
         : !exchange.turns.empty()                   ? turns
                                                     : std::string("the envelope grows");
     notes.push_back(fmt::format(
         "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "
-        "of the envelope in {} the band): {} points there marked (column exchange), their "
+        "of the envelope in {} the band): {} there marked (column exchange), their "
         "damping apparent (damping plus transfer), left out of the linear values",
         channel.t0 + exchange.end_t, how,
         r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
-        sum.exchange_points));
+        points(sum.exchange_points)));
   }
   return notes;
 }
@@ -3100,14 +3124,14 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   }
   if (left_above > 0) {
     notes.push_back(fmt::format(
-        "{} points inside the span left out, above the noise: the envelope not decaying or its "
+        "{} inside the span left out, above the noise: the envelope not decaying or its "
         "damping not known to the {:.1f} % limit there",
-        left_above, 100 * options.max_damping_rel_std));
+        points(left_above), 100 * options.max_damping_rel_std));
   }
   if (left_below > 0) {
-    notes.push_back(fmt::format(
-        "{} points inside the span left out below the noise threshold (at most 2 in a row)",
-        left_below));
+    notes.push_back(
+        fmt::format("{} inside the span left out below the noise threshold (at most 2 in a row)",
+                    points(left_below)));
   }
   if (!beat_note.empty()) notes.insert(notes.begin(), beat_note);
   if (!followed.note.empty()) notes.insert(notes.begin(), followed.note);

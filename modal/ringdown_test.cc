@@ -818,6 +818,42 @@ TEST(RingdownInternalResonance, AOneWayTransferAtTheStartIsMarked) {
   }
 }
 
+// The strongest coupling of the double-beam twin (alpha 1e10), struck by a hammer (both modes
+// from rest, mode 2 a tenth as hard): mode 1 gives most of its energy to mode 2 within 0.5 s,
+// the two envelopes swinging, and its decay rate then falls to its own as mode 2 dies out. The
+// first estimates, read through those swings and the step at the impact, are too uncertain to
+// place (-0.7 +- 2.0 1/s, mode 1's own 2.3); the one-way transfer was looked for only from the
+// first of them, which does not lie above the mode's own, and none was found: 5 points from 0.6
+// to 0.9 s were read as damping up to 2.2 times mode 1's, unmarked and stated to 1.5 %, and the
+// span began at 0.6 s (1.5 decades, where the twin's independent analysis shows 2.8). Required:
+// every unmarked point's damping within 7 % of mode 1's (the transfer's tail adds up to 5 %
+// where the rate is no longer clearly apart), some points marked, and at least 2.2 decades
+// (measured 2.43 and 2.49).
+TEST(RingdownInternalResonance, AOneWayTransferAfterUncertainSwingsIsMarked) {
+  const double w1 = 2 * std::numbers::pi * 122.0, w2 = 2 * std::numbers::pi * 243.0;
+  for (const unsigned seed : {1u, 2u}) {
+    // Both modes from rest at x = 0 with velocities V2 = 0.1 V1 (amplitudes V / w).
+    const double blow = -std::numbers::pi / 2;
+    const testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+        1e10, 6.5e-5, 0.006, 1e-5, seed, 4.0, 0.1 * 6.5e-5 * w1 / w2, blow, blow);
+    const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const Backbone& b = r.backbone;
+    double worst = 0;
+    for (Eigen::Index i = 0; i < b.size(); ++i) {
+      if (b.exchange(i) == 0) worst = std::max(worst, std::abs(b.damping(i) / rec.zeta1 - 1));
+    }
+    std::printf(
+        "alpha 1e10 hammer blow, seed %u: %.2f decades, %d points marked, worst "
+        "unmarked damping error %.3f\n  %s\n",
+        seed, r.summary.amplitude_decades, r.summary.exchange_points, worst,
+        r.summary.message.c_str());
+    EXPECT_GT(r.summary.exchange_points, 0) << r.summary.message;
+    EXPECT_LE(worst, 0.07) << r.summary.message;
+    EXPECT_GE(r.summary.amplitude_decades, 2.2) << r.summary.message;
+  }
+}
+
 // The same resonance read in mode 2's band, 230:260 Hz, with mode 2 damped more (0.6 %)
 // than twice mode 1 (2 x 0.3 %): once mode 2's own ring-down has died, the band sees mode
 // 1's square, locked at 2 f1 and decaying at 2 sigma1. Those points must be marked

@@ -89,7 +89,7 @@ ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise,
 
 InternalResonanceRecord internal_resonance_record(double alpha, double x10, double zeta2,
                                                   double noise, unsigned seed, double duration_s,
-                                                  double x20, double phase2) {
+                                                  double x20, double phase2, double phase1) {
   InternalResonanceRecord r;
   const Eigen::Index n = static_cast<Eigen::Index>(std::round(duration_s * r.fs));
   const Eigen::Index pre = static_cast<Eigen::Index>(std::round(0.05 * r.fs));
@@ -105,7 +105,8 @@ InternalResonanceRecord internal_resonance_record(double alpha, double x10, doub
   };
   constexpr int kSteps = 8;
   const double h = 1.0 / (r.fs * kSteps);
-  State y{x10, 0.0, x20 * std::cos(phase2), -w2 * x20 * std::sin(phase2)};
+  State y{x10 * std::cos(phase1), -w1 * x10 * std::sin(phase1), x20 * std::cos(phase2),
+          -w2 * x20 * std::sin(phase2)};
   r.velocity = Eigen::VectorXd::Zero(n);
   r.amplitude1 = Eigen::VectorXd::Zero(n);
   r.amplitude2 = Eigen::VectorXd::Zero(n);

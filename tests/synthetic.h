@@ -67,10 +67,12 @@ struct InternalResonanceRecord {
   double f1_hz = 122.0, f2_hz = 243.0, zeta1 = 0.003;
 };
 
-/// Builds the internal-resonance record (`duration_s` long, noise realisation `seed`).
+/// Builds the internal-resonance record (`duration_s` long, noise realisation `seed`). Mode i
+/// starts at x_i = A_i cos(phase_i), x_i' = -w_i A_i sin(phase_i) (A_1 = x10, A_2 = x20): a
+/// hammer blow, from rest at x = 0 with the velocity stepping at the impact, is phase -pi/2.
 InternalResonanceRecord internal_resonance_record(double alpha, double x10, double zeta2,
                                                   double noise, unsigned seed,
                                                   double duration_s = 4.0, double x20 = 0.0,
-                                                  double phase2 = 0.0);
+                                                  double phase2 = 0.0, double phase1 = 0.0);
 
 }  // namespace jointlab::testing
