@@ -48,6 +48,16 @@ TEST(CsvReader, ReadsMetadataTimeAndUnits) {
   EXPECT_EQ(r.size(), 3);
 }
 
+// Round brackets that hold no unit are part of the name (a unit in them is refused, above).
+TEST(CsvReader, RoundBracketsWithoutAUnitArePartOfTheName) {
+  const Record r = parse_csv("time,pt3 (Z+) [m/s],pt4 (x)\n0,1,2\n0.1,2,3\n", "hit.csv");
+  ASSERT_EQ(r.channels.size(), 2u);
+  EXPECT_EQ(r.channels[0].name, "pt3 (Z+)");
+  EXPECT_EQ(r.channels[0].quantity, Quantity::kVelocity);
+  EXPECT_EQ(r.channels[1].name, "pt4 (x)");
+  EXPECT_FALSE(r.channels[1].quantity.has_value());
+}
+
 TEST(CsvReader, DetectsSemicolonAndTab) {
   for (const char* d : {";", "\t"}) {
     std::string text =
@@ -90,6 +100,11 @@ TEST(CsvReader, BadInputsGiveOneLineErrors) {
   expect_error("time,x\n0,1\n0.1,inf\n", {"hit.csv:3", "Inf"});
   expect_error("time,x,x\n0,1,2\n0.1,2,3\n", {"hit.csv:1", "two channels named 'x'"});
   expect_error("time,x [furlong]\n0,1\n0.1,2\n", {"hit.csv:1", "unknown unit 'furlong'"});
+  // A unit in round brackets: 'acc1 (g)' had been a channel of that name with no unit, read as
+  // m/s^2 under --quantity acceleration (9.81 times too small).
+  expect_error("time,acc1 (g)\n0,1\n0.1,2\n",
+               {"hit.csv:1", "column 'acc1 (g)'", "square brackets, 'acc1 [g]'"});
+  expect_error("time (s),x [m]\n0,1\n0.1,2\n", {"hit.csv:1", "'time [s]'"});
   expect_error("x,y\n1,2\n3,4\n", {"hit.csv:1", "no 'time' column"});
   expect_error("# fs: -5\nx\n1\n2\n", {"hit.csv:1", "fs"});
   expect_error("# fs: 0\nx\n1\n2\n", {"hit.csv:1", "fs"});
