@@ -285,6 +285,82 @@ Eigen::Vector2d IwanObjective::constant_rms_errors() const {
   return out;
 }
 
+std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanParameters& p,
+                                                             double z) const {
+  std::vector<double> r(residual_count_), v(residual_count_);
+  if (!evaluate(p, r.data(), nullptr, false, &z, nullptr, v.data())) return std::nullopt;
+  const auto median = [](std::vector<double> x) {
+    if (x.empty()) return 0.0;
+    const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
+    std::nth_element(x.begin(), mid, x.end());
+    return *mid;
+  };
+  // The model as given (its linear part, K_T at the start): what --mode names. At the result
+  // K_T may have run to a bound trying to reach another mode's frequency.
+  std::optional<model::LinearModes> modes;
+  try {
+    modes = model::linear_modes(model_->mass, model_->linear_stiffness());
+  } catch (const InputError&) {
+    modes.reset();  // no linear modes: no mode is named
+  }
+  std::optional<MisfitEvidence> out;
+  std::vector<double> damping_ratios;
+  double damping_max = 0;
+  int k = 0;
+  for (const IwanTarget& t : targets_) {
+    // Each curve's lowest tenth of its points by amplitude (at least 3, at most all): where the
+    // model is at its linear limit, K_T and the linear part.
+    std::vector<double> f_lo, error, noise;
+    for (const MeasuredBackbone& c : t.curves) {
+      const Eigen::Index n = c.amplitude.size();
+      std::vector<Eigen::Index> by_amplitude(static_cast<size_t>(n));
+      for (Eigen::Index j = 0; j < n; ++j) by_amplitude[static_cast<size_t>(j)] = j;
+      std::sort(by_amplitude.begin(), by_amplitude.end(),
+                [&](Eigen::Index a, Eigen::Index b) { return c.amplitude(a) < c.amplitude(b); });
+      const Eigen::Index low = std::min<Eigen::Index>(n, std::max<Eigen::Index>(3, n / 10));
+      for (Eigen::Index i = 0; i < low; ++i) {
+        const Eigen::Index j = by_amplitude[static_cast<size_t>(i)];
+        const double f = c.frequency_hz(j);
+        f_lo.push_back(f);
+        error.push_back(v[static_cast<size_t>(k + 2 * j)] / f - 1);
+        noise.push_back(std::max(stated_sigma(c, j)(0), f_floor_ * f) / f);
+      }
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const double model_z = v[static_cast<size_t>(k + 2 * j + 1)];
+        if (model_z > 0) damping_ratios.push_back(c.damping_ratio(j) / model_z);
+        damping_max = std::max(damping_max, c.damping_ratio(j));
+      }
+      k += 2 * static_cast<int>(n);
+    }
+    MisfitEvidence e;
+    e.mode = t.mode;
+    e.low_frequency_hz = median(f_lo);
+    e.low_frequency_error = median(error);
+    e.low_frequency_noise = median(noise);
+    if (modes && e.low_frequency_hz > 0) {
+      // Another elastic mode whose linear frequency lies within a third of mode R's distance
+      // from the measured one: the backbone may be that mode's.
+      const int col = modes->rigid_count + t.mode - 1;
+      if (col < modes->size()) e.mode_hz = modes->frequency_hz(col);
+      double best = std::abs(e.mode_hz / e.low_frequency_hz - 1) / 3;
+      for (int i = modes->rigid_count; i < modes->size() && e.mode_hz > 0; ++i) {
+        const double d = std::abs(modes->frequency_hz(i) / e.low_frequency_hz - 1);
+        if (i != col && d < best) {
+          best = d;
+          e.nearer_mode = i - modes->rigid_count + 1;
+          e.nearer_mode_hz = modes->frequency_hz(i);
+        }
+      }
+    }
+    if (!out || std::abs(e.low_frequency_error) > std::abs(out->low_frequency_error)) out = e;
+  }
+  if (out) {
+    out->damping_factor = median(damping_ratios);
+    out->damping_max = damping_max;
+  }
+  return out;
+}
+
 std::optional<double> IwanObjective::linear_damping(const model::IwanParameters& p) const {
   std::vector<double> r(residual_count_);
   double z = 0;
@@ -1403,6 +1479,8 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   }
   s.effective_points = noise.effective_points;
   s.noise_correlation = noise.rho;
+  // Only a misfit has a cause to name (an eigensolution of the model as given, so not always).
+  if (s.misfit()) s.evidence = objective.misfit_evidence(s.best, s.modal_ratio);
   if (cov.size() > 0) {
     for (size_t i = 0; i < free.size(); ++i) {
       for (size_t j = 0; j < free.size(); ++j) {
@@ -1420,6 +1498,54 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   // with a stated 0.7 %, z 33). With beta held, by the user or the run, it is F_S given beta.
   if (!s.held[3] && s.microslip_only()) s.relative_std(0) = 0;
   return s.best;
+}
+
+std::string IwanUpdateSummary::misfit_cause() const {
+  if (!improved || !misfit() || !evidence) return "";
+  const MisfitEvidence& e = *evidence;
+  // The linear limit: at the lowest amplitudes the model's frequency is K_T's and the linear
+  // part's. Off by far more than the noise there (and than 0.1 %, a frequency resolution), no
+  // Iwan parameter set bends the curve onto the data: the trial's wrong --mode ran into every
+  // bound, and a backbone 5 % below the model with K_T held into chi's.
+  const bool linear_off =
+      std::abs(e.low_frequency_error) > std::max(10 * e.low_frequency_noise, 1e-3);
+  if (linear_off && e.nearer_mode > 0) {
+    return fmt::format(
+        "the measured low-amplitude frequency {:.6g} Hz lies {:+.3g} % from the model's mode {} "
+        "({:.6g} Hz, linear, as given) but {:+.3g} % from its mode {} ({:.6g} Hz): the backbone "
+        "looks like mode {}'s; check --mode",
+        e.low_frequency_hz, 100 * (e.mode_hz / e.low_frequency_hz - 1), e.mode, e.mode_hz,
+        100 * (e.nearer_mode_hz / e.low_frequency_hz - 1), e.nearer_mode, e.nearer_mode_hz,
+        e.nearer_mode);
+  }
+  // Damping far above anything the joint gives alongside the measured frequencies: per cent
+  // read as a fraction is 100 times (a trial's 0.005-0.035 % table without a unit ran chi into
+  // its bound); a loss factor eta = 2 zeta read as zeta is twice. Values of 1 or more cannot be
+  // per cent of a plausible damping ratio read right, so they say nothing of it.
+  if (e.damping_factor >= 3 && e.damping_max < 1) {
+    return fmt::format(
+        "the measured damping lies a median {:.3g} times above the fitted model's, more than the "
+        "joint gives alongside the measured frequencies; a damping column in per cent read as a "
+        "fraction gives 100 times: if it is per cent, name the unit in its header "
+        "(damping_ratio [%])",
+        e.damping_factor);
+  }
+  if (e.damping_factor >= 1.7 && e.damping_factor <= 2.4 && !linear_off) {
+    return fmt::format(
+        "the measured damping lies a median {:.3g} times above the fitted model's; a loss factor "
+        "(eta = 2 zeta) given as the damping ratio would do that: if so, halve it",
+        e.damping_factor);
+  }
+  if (linear_off) {
+    return fmt::format(
+        "the fitted curve's linear limit misses the measured low-amplitude frequency {:.6g} Hz "
+        "by {:+.3g} % ({:.0f} times its noise){}: the model's linear part does not match the "
+        "measured mode; update-linear first",
+        e.low_frequency_hz, 100 * e.low_frequency_error,
+        std::abs(e.low_frequency_error) / e.low_frequency_noise,
+        held[1] ? " with Kt held" : ", Kt alone cannot bring it there");
+  }
+  return "";
 }
 
 std::string IwanUpdateSummary::report() const {
@@ -1477,6 +1603,7 @@ std::string IwanUpdateSummary::report() const {
   // Fs and beta drift together along the microslip family: a bound there is no better fit
   // beyond it, and widening the range only moves them along (Fs 38 % when it was tried).
   const bool family = !held[3] && microslip_only();
+  const std::string cause = misfit_cause();
   for (const std::string& b : at_bounds) {
     const bool along = family && (b.rfind("Fs", 0) == 0 || b.rfind("beta", 0) == 0);
     out +=
@@ -1484,13 +1611,26 @@ std::string IwanUpdateSummary::report() const {
                     "  WARNING: {}: the microslip data fix Fs and beta only together, so it "
                     "ended there along that family; a wider range moves it, not the fit\n",
                     b)
-              : fmt::format("  WARNING: {}: the best fit may lie outside the range, widen it\n", b);
+        : !cause.empty()
+            ? fmt::format(
+                  "  WARNING: {}: the misfit below pressed it there; a wider range would not "
+                  "cure that\n",
+                  b)
+            : fmt::format("  WARNING: {}: the best fit may lie outside the range, widen it\n", b);
+  }
+  if (!cause.empty()) {
+    out += fmt::format(
+        "  WARNING: the model does not describe the data, and the residuals point at the data "
+        "or the model rather than the search: {}\n",
+        cause);
   }
   // K_T sets the stuck joint's linear frequencies, which update-linear fits to the measured
   // ones first. Where the fit moves it far, it likely takes up the linear model's error: a
   // backbone 5 % below an un-updated model moved K_T by -49 % and beta by +82 %, chi 8.6 sigma
   // off, all within the noise and without a word.
-  if (improved && !held[1] && start.Kt > 0 && std::abs(best.Kt / start.Kt - 1) > 0.25) {
+  // Where the residuals name a likelier cause (misfit_cause()), that is said instead.
+  if (improved && !held[1] && start.Kt > 0 && std::abs(best.Kt / start.Kt - 1) > 0.25 &&
+      cause.empty()) {
     out += fmt::format(
         "  note: Kt moved from {:.6g} to {:.6g} N/m ({:+.0f} %): where the model's linear "
         "frequencies were not fitted to the measured ones first (update-linear), the fit takes "
@@ -1501,7 +1641,8 @@ std::string IwanUpdateSummary::report() const {
   // A search that stopped short (budget or bound) with a misfit may have missed the best fit:
   // 12 of 20 three-hit fits at the default 1500 ended at chi-square 9.7 with the truth costing
   // 1.8 there, all 40 converged with 6000.
-  if (improved && misfit() && (status == IwanUpdateStatus::kBudget || !at_bounds.empty())) {
+  if (improved && misfit() && cause.empty() &&
+      (status == IwanUpdateStatus::kBudget || !at_bounds.empty())) {
     out += fmt::format(
         "  WARNING: the search {} with the model not describing the data: it may have missed "
         "the best fit rather than the model being wrong; run again with a larger --evaluations "
@@ -1522,9 +1663,10 @@ std::string IwanUpdateSummary::report() const {
     out += fmt::format(
         "  WARNING: the residuals run in long waves along the curves (serial correlation {:.3g} "
         "from one point to the next, corrected for what the fit absorbs): the {} residuals amount "
-        "to {:.2g} independent points, too few to state a sigma (more than {:.0f} needed); "
-        "more curves (hits), or longer ones, would give one\n",
-        noise_correlation, residuals, effective_points, kMinEffectivePoints);
+        "to {:.2g} independent points, too few to state a sigma (more than {:.0f} needed); {}\n",
+        noise_correlation, residuals, effective_points, kMinEffectivePoints,
+        misfit() ? "with the model not describing the data (below), the waves are its misfit"
+                 : "more curves (hits), or longer ones, would give one");
   } else if (improved && effective_points > 0 && effective_points < 30) {
     out += fmt::format(
         "  note: the residuals are serially correlated along the curves ({:.3g} from one point "

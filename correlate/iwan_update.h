@@ -156,6 +156,21 @@ ModelBackbone model_backbone(const model::JointCondensation& model, int mode, do
                              BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
                              int points);
 
+/// What the model's misfit at a result shows of its likelier causes (IwanObjective::
+/// misfit_evidence()): a linear-limit frequency far off the measured one points at the linear
+/// model or the mode, a damping far above the model's at the units of the damping column.
+struct MisfitEvidence {
+  int mode = 0;                    ///< the target (model mode R) these numbers are of
+  double low_frequency_hz = 0;     ///< median measured frequency at each curve's lowest amplitudes
+  double low_frequency_error = 0;  ///< median (f_model - f) / f there (the linear-limit offset)
+  double low_frequency_noise = 0;  ///< median relative one-sigma of those frequencies (floored)
+  double mode_hz = 0;              ///< mode R's linear frequency in the model as given
+  int nearer_mode = 0;             ///< an elastic mode far nearer low_frequency_hz (0: none)
+  double nearer_mode_hz = 0;       ///< its linear frequency in the model as given
+  double damping_factor = 0;       ///< median measured / model damping over every point
+  double damping_max = 0;          ///< largest measured damping ratio
+};
+
 /// The objective: QSMA of the set at given parameters against the measured backbones.
 class IwanObjective {
  public:
@@ -237,6 +252,9 @@ class IwanObjective {
   std::optional<Eigen::Vector2d> rms_errors(const model::IwanParameters& p, double z) const;
   /// The same for the best constants (the constant minimising each relative RMS).
   Eigen::Vector2d constant_rms_errors() const;
+  /// MisfitEvidence of the model at (p, z), of the target whose linear-limit offset is largest;
+  /// nullopt if p cannot be evaluated.
+  std::optional<MisfitEvidence> misfit_evidence(const model::IwanParameters& p, double z) const;
   /// The targets (the measured backbones).
   const std::vector<IwanTarget>& targets() const { return targets_; }
   /// How many measured points state an uncertainty (std > 0) below the floors: (points,
@@ -351,6 +369,9 @@ struct IwanUpdateSummary {
   /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)
   Eigen::Vector3i floored = Eigen::Vector3i::Zero();
   double frequency_floor = 0, damping_floor = 0;  ///< the floors of the options
+  /// IwanObjective::misfit_evidence() at best (empty when unknown): what the report's warnings
+  /// name as a misfit's likelier cause instead of a wider range or a longer search.
+  std::optional<MisfitEvidence> evidence;
   /// True when reduced_chi2 is significantly above 1 (by more than 3 of its standard deviations
   /// sqrt(2 / dof)): the model does not describe the data within their noise and the sigma is a
   /// lower bound.
@@ -362,6 +383,10 @@ struct IwanUpdateSummary {
   /// are identified, not F_S and beta separately (docs/update-iwan.md).
   bool microslip_only() const { return top_slip > 0 && top_slip < phi_max; }
   std::vector<IwanHistoryEntry> history;  ///< every evaluation
+  /// Where the model does not describe the data (misfit()) and `evidence` shows a likelier
+  /// cause than the search (a wrong mode, the linear model, the damping column's units), that
+  /// cause in one sentence; else "".
+  std::string misfit_cause() const;
   /// One paragraph: optimiser outcome, parameters, cost.
   std::string report() const;
 };

@@ -994,5 +994,113 @@ TEST(IwanUpdateReport, AKtMovedFarFromItsStartIsNoted) {
   EXPECT_EQ(s.report().find("Kt moved"), std::string::npos) << s.report();
 }
 
+// misfit_evidence() on data the truth explains and on the same data misread. Two-chain truth,
+// one mode-1 backbone (0.05 % frequency and 3 % damping noise), evaluated at the truth: as mode 1
+// its linear limit lies within ten times its noise and no other mode is nearer; as mode 3 (the
+// next mode that moves the sensor) mode 1 is named; with the dampings 100 times larger (per cent
+// read as a fraction) the measured damping is a median 100 times the model's (to the 3 % noise).
+TEST(IwanUpdate, MisfitEvidenceNamesTheNearerModeAndTheDampingFactor) {
+  Synthetic s;
+  const model::Model m = two_chain_structure(s.truth);
+  const model::IwanParameters truth{20, 5e5, -0.5, 1.0};
+  const auto evidence = [&](int mode, double damping_scale) {
+    IwanTarget t = s.target;
+    t.mode = mode;
+    for (MeasuredBackbone& c : t.curves) {
+      c.damping_ratio *= damping_scale;
+      c.damping_std *= damping_scale;
+    }
+    const IwanObjective obj(m, "rivet", s.sensors, {t}, {});
+    return obj.misfit_evidence(truth, 0);
+  };
+  const std::optional<MisfitEvidence> right = evidence(1, 1);
+  ASSERT_TRUE(right);
+  EXPECT_EQ(right->mode, 1);
+  EXPECT_EQ(right->nearer_mode, 0);
+  EXPECT_LT(std::abs(right->low_frequency_error), 10 * right->low_frequency_noise);
+  EXPECT_NEAR(right->damping_factor, 1, 0.05);
+  // Mode 3 (201.7 Hz, the next mode that moves the sensor) for data of mode 1 (57.9 Hz).
+  const std::optional<MisfitEvidence> wrong = evidence(3, 1);
+  ASSERT_TRUE(wrong);
+  EXPECT_EQ(wrong->mode, 3);
+  EXPECT_EQ(wrong->nearer_mode, 1);
+  EXPECT_GT(wrong->low_frequency_error, 1.0);  // 201.7 Hz against 57.9 Hz
+  const std::optional<MisfitEvidence> percent = evidence(1, 100);
+  ASSERT_TRUE(percent);
+  EXPECT_NEAR(percent->damping_factor, 100, 5);
+}
+
+// A misfit whose residuals show a likelier cause names it instead of "widen it" or "a larger
+// --evaluations" (the trial's cases, their numbers): a wrong --mode (mode-1 data fitted as mode
+// 2), a linear-limit frequency off with K_T held (data 5 % below the model, --gamma 1), per-cent
+// damping read as a fraction. Where the evidence shows none of these the old advice stays.
+TEST(IwanUpdateReport, AMisfitNamesItsLikelierCauseInsteadOfAWiderRangeOrMoreEvaluations) {
+  IwanUpdateSummary s;
+  s.improved = true;
+  s.status = IwanUpdateStatus::kBudget;
+  s.evaluations = 3054;
+  s.residuals = 80;
+  s.reduced_chi2 = 881;
+  s.at_bounds = {"chi at its lower bound -0.95"};
+  MisfitEvidence e;
+  e.mode = 1;
+  e.low_frequency_hz = 115.768;
+  e.low_frequency_error = 0.0116;  // 22 times the noise below
+  e.low_frequency_noise = 5.3e-4;
+  e.mode_hz = 120.504;
+  e.damping_factor = 0.36;  // the model's damping above the measured: no unit error to name
+  e.damping_max = 0.02;
+  const std::string widen = "widen it", longer = "larger --evaluations";
+  // No evidence: the search is the suspect, as before.
+  EXPECT_NE(s.report().find(widen), std::string::npos) << s.report();
+  EXPECT_NE(s.report().find(longer), std::string::npos) << s.report();
+  // The linear limit 1.16 % off with K_T held: update-linear.
+  s.held[1] = true;
+  s.evidence = e;
+  std::string r = s.report();
+  EXPECT_NE(r.find("misses the measured low-amplitude frequency 115.768 Hz by +1.16 % (22 times "
+                   "its noise) with Kt held"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("update-linear first"), std::string::npos) << r;
+  EXPECT_EQ(r.find(widen), std::string::npos) << r;
+  EXPECT_EQ(r.find(longer), std::string::npos) << r;
+  // Within ten times its noise the linear limit says nothing.
+  s.evidence->low_frequency_error = 4e-3;
+  EXPECT_EQ(s.report().find("update-linear first"), std::string::npos) << s.report();
+  // Another mode of the model far nearer the measured frequency: the mode.
+  s.held[1] = false;
+  s.evidence->mode = 2;
+  s.evidence->low_frequency_hz = 121.849;
+  s.evidence->low_frequency_error = 0.527;
+  s.evidence->mode_hz = 284.327;
+  s.evidence->nearer_mode = 1;
+  s.evidence->nearer_mode_hz = 120.504;
+  r = s.report();
+  EXPECT_NE(r.find("lies +133 % from the model's mode 2 (284.327 Hz, linear, as given) but -1.1 % "
+                   "from its mode 1 (120.504 Hz): the backbone looks like mode 1's; check --mode"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find(widen), std::string::npos) << r;
+  // The frequencies fit, the damping lies 14.6 times above the model's, every value below 1:
+  // per cent read as a fraction.
+  s.evidence = e;
+  s.evidence->low_frequency_error = 1e-4;
+  s.evidence->damping_factor = 14.6;
+  s.evidence->damping_max = 0.0349;
+  r = s.report();
+  EXPECT_NE(r.find("a median 14.6 times above the fitted model's"), std::string::npos) << r;
+  EXPECT_NE(r.find("(damping_ratio [%])"), std::string::npos) << r;
+  EXPECT_EQ(r.find(longer), std::string::npos) << r;
+  // A damping of 1 or more is no plausible per cent read as a fraction: nothing named.
+  s.evidence->damping_max = 1.5;
+  EXPECT_EQ(s.report().find("damping_ratio [%]"), std::string::npos) << s.report();
+  EXPECT_NE(s.report().find(widen), std::string::npos) << s.report();
+  // Without a misfit nothing is named, whatever the evidence.
+  s.evidence->damping_max = 0.0349;
+  s.reduced_chi2 = 1.1;
+  EXPECT_EQ(s.report().find("damping_ratio [%]"), std::string::npos) << s.report();
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
