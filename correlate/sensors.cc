@@ -35,8 +35,9 @@ std::vector<Sensor> parse_sensors(const std::string& text, const std::string& na
     if (d.find(':') != std::string::npos) {
       const auto it = std::find(model.dof_labels.begin(), model.dof_labels.end(), d);
       if (it == model.dof_labels.end()) {
-        throw InputError(
-            where(name, n, fmt::format("dof '{}' is not a label of the model's dof_labels", d)));
+        throw InputError(where(name, n,
+                               fmt::format("dof '{}' is not a label of the model's dof_labels{}", d,
+                                           model::missing_label_hint(model, d))));
       }
       s.dof = it - model.dof_labels.begin();
     } else {

@@ -49,5 +49,26 @@ TEST(Sensors, BadInputNamesFileAndLine) {
   EXPECT_NE(message("channel,dof\na,1:3\n").find("label"), std::string::npos);
 }
 
+// A label the model lacks names what its node has: the likely slip is the component.
+TEST(Sensors, AMissingLabelNamesTheNodesLabels) {
+  model::Model m = two_chain_structure();
+  m.dof_labels.clear();
+  for (int i = 0; i < m.size(); ++i) m.dof_labels.push_back(std::to_string(1000 + i) + ":3");
+  auto message = [&](const std::string& text) {
+    try {
+      parse_sensors(text, "s.csv", m);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("channel,dof\na,1002:1\n")
+                .find("s.csv:2: dof '1002:1' is not a label of the "
+                      "model's dof_labels: node 1002 has only 1002:3"),
+            std::string::npos)
+      << message("channel,dof\na,1002:1\n");
+  EXPECT_NE(message("channel,dof\na,9:3\n").find("it has no node 9"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace jointlab::correlate

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <toml++/toml.h>
 #include <Eigen/SparseCholesky>
 
@@ -384,6 +385,26 @@ Model read_model(const fs::path& path) {
     }
   }
   return model;
+}
+
+std::string missing_label_hint(const Model& model, const std::string& label) {
+  // Name the labels the node has: a component the node lacks (x at a sensor that measures z)
+  // is the likely slip, and the fix is one of those.
+  const std::string node = label.substr(0, label.find(':'));
+  std::vector<std::string> same;
+  for (const std::string& l : model.dof_labels) {
+    if (l.substr(0, l.find(':')) == node) same.push_back(l);
+  }
+  if (same.empty()) {
+    return fmt::format(
+        ": it has no node {} (a label is \"node:component\", as in the model's dof_labels file)",
+        node);
+  }
+  constexpr size_t kShown = 6;
+  const auto shown = same.begin() + static_cast<std::ptrdiff_t>(std::min(same.size(), kShown));
+  return fmt::format(": node {} has {}{}{}", node, same.size() == 1 ? "only " : "",
+                     fmt::join(same.begin(), shown, ", "),
+                     same.size() > kShown ? fmt::format(" and {} more", same.size() - kShown) : "");
 }
 
 }  // namespace jointlab::model

@@ -63,4 +63,8 @@ Model read_model(const std::filesystem::path& path);
 /// Checks a model built in code (sizes, symmetry, positive mass, joint indices); InputError.
 void validate_model(const Model& model, const std::string& source = "model");
 
+/// What a "node:component" label the model lacks should have been, for a message: ": node 9001
+/// has only 9001:3", or ": it has no node 9001 ...".
+std::string missing_label_hint(const Model& model, const std::string& label);
+
 }  // namespace jointlab::model

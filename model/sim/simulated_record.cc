@@ -37,25 +37,8 @@ Eigen::Index resolve_dof(const Model& model, const std::string& text, const std:
     for (Eigen::Index i = 0; i < n; ++i) {
       if (model.dof_labels[static_cast<size_t>(i)] == text) return i;
     }
-    // Name the labels the node has: a component the node lacks (x at a sensor that measures
-    // z) is the likely slip, and the fix is one of those.
-    const std::string node = text.substr(0, text.find(':'));
-    std::vector<std::string> same;
-    for (const std::string& label : model.dof_labels) {
-      if (label.substr(0, label.find(':')) == node) same.push_back(label);
-    }
-    if (same.empty()) {
-      throw InputError(fmt::format(
-          "{} = \"{}\" is not a label of the model's dof_labels: it has no node {} (a label is "
-          "\"node:component\", as in the model's dof_labels file)",
-          what, text, node));
-    }
-    constexpr size_t kShown = 6;
-    const auto shown = same.begin() + static_cast<std::ptrdiff_t>(std::min(same.size(), kShown));
-    throw InputError(fmt::format(
-        "{} = \"{}\" is not a label of the model's dof_labels: node {} has {}{}{}", what, text,
-        node, same.size() == 1 ? "only " : "", fmt::join(same.begin(), shown, ", "),
-        same.size() > kShown ? fmt::format(" and {} more", same.size() - kShown) : ""));
+    throw InputError(fmt::format("{} = \"{}\" is not a label of the model's dof_labels{}", what,
+                                 text, missing_label_hint(model, text)));
   }
   throw InputError(fmt::format(
       "{} = \"{}\": expected a 0-based DOF index or a \"node:component\" label", what, text));
