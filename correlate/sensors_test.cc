@@ -32,16 +32,19 @@ TEST(Sensors, ParsesIndicesLabelsAndSigns) {
   EXPECT_EQ(t[0].dof, 3);
 }
 
+// The message parse_sensors refuses `text` (as s.csv) with, or "no error".
+std::string sensors_error(const std::string& text, const model::Model& m) {
+  try {
+    parse_sensors(text, "s.csv", m);
+  } catch (const InputError& e) {
+    return std::string(e.what());
+  }
+  return std::string("no error");
+}
+
 TEST(Sensors, BadInputNamesFileAndLine) {
   const model::Model m = two_chain_structure();
-  auto message = [&](const std::string& text) {
-    try {
-      parse_sensors(text, "s.csv", m);
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
+  const auto message = [&](const std::string& text) { return sensors_error(text, m); };
   EXPECT_NE(message("chan,dof\na,1\n").find("s.csv:1"), std::string::npos);
   EXPECT_NE(message("channel,dof\na,99\n").find("s.csv:2"), std::string::npos);
   EXPECT_NE(message("channel,dof\na,1\na,2\n").find("twice"), std::string::npos);
@@ -54,14 +57,7 @@ TEST(Sensors, AMissingLabelNamesTheNodesLabels) {
   model::Model m = two_chain_structure();
   m.dof_labels.clear();
   for (int i = 0; i < m.size(); ++i) m.dof_labels.push_back(std::to_string(1000 + i) + ":3");
-  auto message = [&](const std::string& text) {
-    try {
-      parse_sensors(text, "s.csv", m);
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
+  const auto message = [&](const std::string& text) { return sensors_error(text, m); };
   EXPECT_NE(message("channel,dof\na,1002:1\n")
                 .find("s.csv:2: dof '1002:1' is not a label of the "
                       "model's dof_labels: node 1002 has only 1002:3"),
