@@ -514,6 +514,12 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["initial_cost"] = cost(summary.initial_cost);
   result["evaluations"] = summary.evaluations;
   result["warnings"] = summary.at_bounds;
+  result["reduced_chi2"] = summary.reduced_chi2;
+  // The residuals' effective number of independent points behind the sigmas (None: unknown).
+  result["effective_points"] = summary.effective_points > 0
+                                   ? py::object(py::float_(summary.effective_points))
+                                   : py::object(py::none());
+  result["noise_correlation"] = summary.noise_correlation;
   result["report"] = summary.report() + "  " +
                      correlate::amplitude_reading(
                          mode, amplitude, false,
@@ -657,7 +663,9 @@ out             write the updated model file here, or None
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
 None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'warnings' (parameters at a bound),
-'report'.
+'reduced_chi2', 'effective_points' (the residuals' effective number of independent points; 3 or
+fewer state no sigma; None where unknown), 'noise_correlation' (their AR(1) coefficient,
+corrected for what the fit absorbs), 'report'.
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]

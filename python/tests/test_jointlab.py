@@ -273,6 +273,10 @@ def test_update_iwan_equals_the_command_line(tmp_path):
                                   evaluations=400)
     for name in ("Fs", "Kt", "chi", "beta"):
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    # The fit's statistics behind the sigmas, as the report prints them.
+    assert f"reduced chi-square {result['reduced_chi2']:.3g}" in result["report"]
+    assert result["effective_points"] is None or result["effective_points"] >= 1
+    assert 0 <= result["noise_correlation"] < 1
     # The report says what the amplitudes were read as, as the command's does.
     assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal)" in \
         result["report"]
