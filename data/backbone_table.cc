@@ -119,10 +119,6 @@ std::vector<std::string> words_of(std::string_view name) {
   return out;
 }
 
-bool starts_with(std::string_view s, std::string_view prefix) {
-  return s.substr(0, prefix.size()) == prefix;
-}
-
 // A header field that is not one of kNames, as the column it most likely means.
 struct Guess {
   int column = -1;             // index into kNames; -1: none of them
@@ -149,27 +145,28 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit) {
   const auto has = [](const std::string& w, const char* part) {
     return w.find(part) != std::string::npos;
   };
+  // Word starts, not any part of a word: 'interrupted' and 'ferrite' hold no error.
   g.uncertainty = any([&](const std::string& w) {
-                    return has(w, "std") || has(w, "sigma") || has(w, "σ") || has(w, "uncert") ||
-                           has(w, "err") || has(w, "deviation") || has(w, "±") || w == "sd" ||
-                           w == "unc" || w == "dev";
+                    return w.starts_with("std") || w.starts_with("sigma") || has(w, "σ") ||
+                           w.starts_with("uncert") || w.starts_with("err") || has(w, "deviation") ||
+                           has(w, "±") || w == "sd" || w == "unc" || w == "dev";
                   }) ||
                   base.find("+/-") != std::string::npos;
   g.relative = any([](const std::string& w) { return w == "rel" || w == "relative"; });
   g.loss_factor = any([](const std::string& w) {
-    return w == "loss" || starts_with(w, "lossfactor") || w == "eta" || w == "η";
+    return w == "loss" || w.starts_with("lossfactor") || w == "eta" || w == "η";
   });
   const bool damping = any([](const std::string& w) {
     // Not "damped": a damped frequency is a frequency.
-    return (starts_with(w, "damp") && w != "damped") || starts_with(w, "zeta") || w == "ζ" ||
+    return (w.starts_with("damp") && w != "damped") || w.starts_with("zeta") || w == "ζ" ||
            w == "xi";
   });
   const bool frequency = any([](const std::string& w) {
-    return starts_with(w, "freq") || w == "f" || w == "fn" || w == "f0" || w == "hz";
+    return w.starts_with("freq") || w == "f" || w == "fn" || w == "f0" || w == "hz";
   });
   const bool amplitude = any([](const std::string& w) {
-    return starts_with(w, "amp") || starts_with(w, "acc") || starts_with(w, "vel") ||
-           starts_with(w, "disp") || w == "a" || w == "q";
+    return w.starts_with("amp") || w.starts_with("acc") || w.starts_with("vel") ||
+           w.starts_with("disp") || w == "a" || w == "q";
   });
   if (g.loss_factor) return g;
   if (damping) {
@@ -284,8 +281,8 @@ bool looks_like_header(std::string_view line) {
   }
   // The header to write is named only where a column was not recognised at all; a renamed one
   // has its fix above.
-  const bool unknown = std::any_of(
-      fixes.begin(), fixes.end(), [](const std::string& f) { return starts_with(f, "no column"); });
+  const bool unknown = std::any_of(fixes.begin(), fixes.end(),
+                                   [](const std::string& f) { return f.starts_with("no column"); });
   throw InputError(where(file, header_line,
                          fmt::format("{}{}", fmt::join(fixes, "; "),
                                      unknown ? fmt::format(" (a backbone table's header: {}, "
@@ -311,16 +308,12 @@ void refuse_unread_uncertainties(const std::vector<std::string>& fields,
   for (size_t i = 0; i < fields.size(); ++i) {
     const Guess& g = guesses[i];
     if (!g.uncertainty) continue;
+    // Only an uncertainty of the frequency or the damping by its name: the contract ignores
+    // further columns, and 'sigma' alone may be a decay rate (the contract's own notation).
     if ((g.column == 3 || g.column == 4) && col[static_cast<size_t>(g.column)] < 0 &&
         !hinted[static_cast<size_t>(g.column)]) {
       hinted[static_cast<size_t>(g.column)] = true;
       fixes.push_back(rename_hint(i, fields[i], g));
-    } else if (g.column < 0) {
-      fixes.push_back(fmt::format(
-          "column {} '{}' looks like an uncertainty but is not read: the uncertainties read "
-          "are 'frequency_std_hz' and 'damping_std' (one standard deviation each, both or "
-          "neither); rename it to the one it is, or out of the way if it is neither",
-          i + 1, shorten(fields[i])));
     }
   }
   if (fixes.empty()) return;
@@ -365,9 +358,11 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   bool ours = false;
   for (size_t i = 0; i < fields.size(); ++i) {
     const auto [name, unit] = split_name_unit(fields[i], file, header_line);
-    if (is_point_mark(name)) marks.push_back(i);
-    if (name == "coverage_factor") coverage_col = static_cast<int>(i);
-    if (name == "coverage_factor" || name == "response_controlled") ours = true;
+    // Case-blind as the read columns are: a re-cased `process` output keeps its marks and k.
+    const std::string lowered = lower(name);
+    if (is_point_mark(lowered)) marks.push_back(i);
+    if (lowered == "coverage_factor") coverage_col = static_cast<int>(i);
+    if (lowered == "coverage_factor" || lowered == "response_controlled") ours = true;
     // Names are read case-blind ("Amplitude", "Frequency_Hz"), as a test file's "time" is.
     const auto k =
         static_cast<size_t>(std::find(kNames.begin(), kNames.end(), lower(name)) - kNames.begin());
