@@ -61,19 +61,20 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
     throw InputError(where(file, line, fmt::format("header '{}' has no name", shorten(trim(raw)))));
   // A unit in round brackets would stay part of the name, and the channel would have no unit:
   // 'acc1 (g)' with --quantity acceleration read g as m/s^2. Only a known unit is refused; a
-  // name such as 'acc1 (x)' is a name.
+  // name such as 'acc1 (x)' is a name, and so is 'force (in)' (input; inches are 'in' too).
   if (const auto open = spec.name.rfind('(');
       spec.unit_text.empty() && open != std::string::npos && spec.name.back() == ')') {
     const std::string base(trim(std::string_view(spec.name).substr(0, open)));
     const std::string unit(
         trim(std::string_view(spec.name).substr(open + 1, spec.name.size() - open - 2)));
     const bool time_unit = lower(base) == "time" && (unit == "s" || unit == "ms");
-    if (!base.empty() && (time_unit || parse_unit(unit))) {
-      throw InputError(
-          where(file, line,
-                fmt::format("column '{}': write the unit in square brackets, '{} [{}]' (in round "
-                            "brackets it is read as part of the name, and the channel has no unit)",
-                            shorten(spec.name), shorten(base), shorten(unit))));
+    if (!base.empty() && unit != "in" && (time_unit || parse_unit(unit))) {
+      throw InputError(where(
+          file, line,
+          fmt::format("column '{}': if '{}' is its unit, write it in square brackets, '{} [{}]' "
+                      "(in round brackets it is read as part of the name, and the channel has no "
+                      "unit); if it is part of the name, write the name without round brackets",
+                      shorten(spec.name), shorten(unit), shorten(base), shorten(unit))));
     }
   }
   if (lower(spec.name) == "time") {

@@ -50,8 +50,10 @@ TEST(CsvReader, ReadsMetadataTimeAndUnits) {
 
 // Round brackets that hold no unit are part of the name (a unit in them is refused, above).
 TEST(CsvReader, RoundBracketsWithoutAUnitArePartOfTheName) {
-  const Record r = parse_csv("time,pt3 (Z+) [m/s],pt4 (x)\n0,1,2\n0.1,2,3\n", "hit.csv");
-  ASSERT_EQ(r.channels.size(), 2u);
+  const Record r =
+      parse_csv("time,pt3 (Z+) [m/s],pt4 (x),force (in)\n0,1,2,3\n0.1,2,3,4\n", "hit.csv");
+  ASSERT_EQ(r.channels.size(), 3u);
+  EXPECT_EQ(r.channels[2].name, "force (in)");  // input: 'in' is a word before it is inches
   EXPECT_EQ(r.channels[0].name, "pt3 (Z+)");
   EXPECT_EQ(r.channels[0].quantity, Quantity::kVelocity);
   EXPECT_EQ(r.channels[1].name, "pt4 (x)");
@@ -103,7 +105,9 @@ TEST(CsvReader, BadInputsGiveOneLineErrors) {
   // A unit in round brackets: 'acc1 (g)' had been a channel of that name with no unit, read as
   // m/s^2 under --quantity acceleration (9.81 times too small).
   expect_error("time,acc1 (g)\n0,1\n0.1,2\n",
-               {"hit.csv:1", "column 'acc1 (g)'", "square brackets, 'acc1 [g]'"});
+               {"hit.csv:1",
+                "column 'acc1 (g)': if 'g' is its unit, write it in square "
+                "brackets, 'acc1 [g]'"});
   expect_error("time (s),x [m]\n0,1\n0.1,2\n", {"hit.csv:1", "'time [s]'"});
   expect_error("x,y\n1,2\n3,4\n", {"hit.csv:1", "no 'time' column"});
   expect_error("# fs: -5\nx\n1\n2\n", {"hit.csv:1", "fs"});
