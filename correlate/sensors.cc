@@ -33,6 +33,12 @@ std::vector<Sensor> parse_sensors(const std::string& text, const std::string& na
     }
     const std::string& d = cells[1];
     if (d.find(':') != std::string::npos) {
+      if (model.dof_labels.empty()) {
+        throw InputError(where(name, n,
+                               fmt::format("dof '{}': a \"node:component\" label needs the "
+                                           "model's matrices.dof_labels (or give a 0-based index)",
+                                           d)));
+      }
       const auto it = std::find(model.dof_labels.begin(), model.dof_labels.end(), d);
       if (it == model.dof_labels.end()) {
         throw InputError(where(name, n,
