@@ -359,11 +359,14 @@ struct IwanUpdateSummary {
   /// parameters); about 1 when the model describes the data within their stated noise.
   double reduced_chi2 = 0;
   /// The residuals' noise read as AR(1) along each curve: its lag-1 coefficient, corrected for
-  /// the slow part the fit absorbs (0 when unknown), and the effective number of independent
-  /// points (about residuals x (1 - rho) / (1 + rho), at least 1 per curve's frequencies or
-  /// dampings); 3 or fewer state no sigma.
+  /// the slow part the fit absorbs (0 when unknown).
   double noise_correlation = 0;
-  double effective_points = 0;     ///< 0 when unknown
+  /// The effective number of independent points the residuals amount to (about residuals x
+  /// (1 - rho) / (1 + rho), at least 1 per curve's frequencies or dampings; 0 when unknown).
+  double effective_points = 0;
+  /// Student's t degrees of freedom of the sigmas: effective_points less the parameters fitted;
+  /// 2 or fewer state no sigma.
+  double sigma_degrees_of_freedom = 0;
   double reference_stiffness = 0;  ///< K_s: gamma = K_T / K_s [N/m]
   size_t residuals = 0;            ///< number of residuals (2 per measured point)
   /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)

@@ -1077,8 +1077,8 @@ TEST(IwanUpdateReport, AMisfitNamesItsLikelierCauseInsteadOfAWiderRangeOrMoreEva
   s.evidence->nearer_mode = 1;
   s.evidence->nearer_mode_hz = 120.504;
   r = s.report();
-  EXPECT_NE(r.find("lies +133 % from the model's mode 2 (284.327 Hz, linear, as given) but -1.1 % "
-                   "from its mode 1 (120.504 Hz): the backbone looks like mode 1's; check --mode"),
+  EXPECT_NE(r.find("is -57.1 % off the model's mode 2 (284.327 Hz, linear, as given) but +1.12 % "
+                   "off its mode 1 (120.504 Hz): the backbone looks like mode 1's; check --mode"),
             std::string::npos)
       << r;
   EXPECT_EQ(r.find(widen), std::string::npos) << r;

@@ -519,7 +519,12 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["effective_points"] = summary.effective_points > 0
                                    ? py::object(py::float_(summary.effective_points))
                                    : py::object(py::none());
-  result["noise_correlation"] = summary.noise_correlation;
+  result["noise_correlation"] = summary.effective_points > 0
+                                    ? py::object(py::float_(summary.noise_correlation))
+                                    : py::object(py::none());
+  result["sigma_degrees_of_freedom"] =
+      summary.effective_points > 0 ? py::object(py::float_(summary.sigma_degrees_of_freedom))
+                                   : py::object(py::none());
   result["report"] = summary.report() + "  " +
                      correlate::amplitude_reading(
                          mode, amplitude, false,
@@ -663,9 +668,11 @@ out             write the updated model file here, or None
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
 None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'warnings' (parameters at a bound),
-'reduced_chi2', 'effective_points' (the residuals' effective number of independent points; 3 or
-fewer state no sigma; None where unknown), 'noise_correlation' (their AR(1) coefficient,
-corrected for what the fit absorbs), 'report'.
+'reduced_chi2', 'effective_points' (the residuals' effective number of independent points;
+None where unknown), 'noise_correlation'
+(their AR(1) coefficient, corrected for what the fit absorbs), 'sigma_degrees_of_freedom' (the
+sigmas' Student's t: effective points less the parameters fitted; 2 or fewer state no sigma),
+'report'.
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]

@@ -275,8 +275,12 @@ def test_update_iwan_equals_the_command_line(tmp_path):
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
     # The fit's statistics behind the sigmas, as the report prints them.
     assert f"reduced chi-square {result['reduced_chi2']:.3g}" in result["report"]
-    assert result["effective_points"] is None or result["effective_points"] >= 1
+    n_fitted = sum(1 for k in ("Fs", "Kt", "chi", "beta") if not result["parameters"][k]["held"])
+    assert_close(result["sigma_degrees_of_freedom"], result["effective_points"] - n_fitted)
     assert 0 <= result["noise_correlation"] < 1
+    # A sigma is stated exactly where its Student's t has a variance (more than 2 degrees).
+    stated = result["parameters"]["Kt"]["relative_std"] is not None
+    assert stated == (result["sigma_degrees_of_freedom"] > 2)
     # The report says what the amplitudes were read as, as the command's does.
     assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal)" in \
         result["report"]
