@@ -872,7 +872,8 @@ TEST(IwanUpdate, SigmaDoesNotDependOnTheSamplingDensity) {
 // and chi, pooled, must have a root mean square within 0.6-1.5: one sigma means one sigma, the
 // upper limit with room for 24 draws (the RMS of 24 standard normals lies within 0.7-1.3 at
 // 95 %), the lower one against a sigma inflated far past the spread. Measured: RMS 1.86 before
-// the bias-corrected AR(1) covariance (HAC and tau from the residuals alone), 1.30 with it.
+// the bias-corrected AR(1) covariance (HAC and tau from the residuals alone), 1.30 with it, 1.27
+// with the floor taken last and t at n_eff - p.
 TEST(IwanUpdate, SigmaHoldsUnderStronglyCorrelatedNoise) {
   const FloorTruth t;
   const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
