@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 #include <string_view>
+#include <tuple>
 #include <vector>
 
 #include <fmt/format.h>
@@ -134,10 +135,8 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit) {
   Guess g;
   std::string base = name;
   g.unit = bracket_unit;
-  if (const auto open = name.rfind('(');
-      bracket_unit.empty() && open != std::string::npos && !name.empty() && name.back() == ')') {
-    base = std::string(trim(std::string_view(name).substr(0, open)));
-    g.unit = std::string(trim(std::string_view(name).substr(open + 1, name.size() - open - 2)));
+  if (const auto round = split_round_brackets(name); bracket_unit.empty() && round) {
+    std::tie(base, g.unit) = *round;
     g.parenthesised = true;
   }
   const std::vector<std::string> words = words_of(base);

@@ -116,6 +116,13 @@ std::pair<std::string, std::string> split_name_unit(std::string_view field, cons
           std::string(trim(field.substr(open + 1, close - open - 1)))};
 }
 
+std::optional<std::pair<std::string, std::string>> split_round_brackets(std::string_view name) {
+  const auto open = name.rfind('(');
+  if (open == std::string_view::npos || name.empty() || name.back() != ')') return std::nullopt;
+  return std::pair{std::string(trim(name.substr(0, open))),
+                   std::string(trim(name.substr(open + 1, name.size() - open - 2)))};
+}
+
 void for_each_csv_line(
     std::string_view text,
     const std::function<void(const std::vector<std::string>& cells, long line)>& on_line,

@@ -75,6 +75,10 @@ std::string_view read_preamble(
 std::pair<std::string, std::string> split_name_unit(std::string_view field, const std::string& file,
                                                     long line);
 
+/// A name ending in round brackets, "acc1 (g)", as the trimmed name before them and the trimmed
+/// text inside ("acc1", "g"); none where the name does not end so.
+std::optional<std::pair<std::string, std::string>> split_round_brackets(std::string_view name);
+
 /// Calls `on_line(cells, line)` for each line of a small CSV text that is neither blank nor a
 /// '#' comment, its cells split at `delim` (libcsv quoting) and trimmed.
 void for_each_csv_line(

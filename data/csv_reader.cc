@@ -62,11 +62,8 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
   // A unit in round brackets would stay part of the name, and the channel would have no unit:
   // 'acc1 (g)' with --quantity acceleration read g as m/s^2. Only a known unit is refused; a
   // name such as 'acc1 (x)' is a name, and so is 'force (in)' (input; inches are 'in' too).
-  if (const auto open = spec.name.rfind('(');
-      spec.unit_text.empty() && open != std::string::npos && spec.name.back() == ')') {
-    const std::string base(trim(std::string_view(spec.name).substr(0, open)));
-    const std::string unit(
-        trim(std::string_view(spec.name).substr(open + 1, spec.name.size() - open - 2)));
+  if (const auto round = split_round_brackets(spec.name); spec.unit_text.empty() && round) {
+    const auto& [base, unit] = *round;
     const bool time_unit = lower(base) == "time" && (unit == "s" || unit == "ms");
     if (!base.empty() && unit != "in" && (time_unit || parse_unit(unit))) {
       throw InputError(where(
