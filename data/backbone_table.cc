@@ -50,6 +50,30 @@ std::string units_of(Quantity q) {
   return fmt::format("{} or {}", fmt::join(u, ", "), last);
 }
 
+// Why an amplitude of `quantity` (nullopt: a modal amplitude) cannot carry `unit`, a unit `u`
+// parse_unit reads, ending with the --amplitude that takes it where one does ("; a displacement
+// amplitude needs --amplitude displacement"); "" when it can. Both the refusal of a unit in square
+// brackets and the header a refusal suggests go by it, so a suggested header is one the named
+// --amplitude reads: before, 'Amplitude (mm)' with --amplitude modal was told to write
+// 'amplitude [mm]', which the same run then refused.
+std::string amplitude_kind_mismatch(const std::string& unit, const Unit& u,
+                                    std::optional<Quantity> quantity) {
+  if (quantity && u.quantity == *quantity) return "";
+  const std::string of = quantity_name(u.quantity);
+  const std::string fits =
+      u.quantity == Quantity::kForce
+          ? std::string("; no --amplitude reads a force: the amplitude is the response's")
+          : fmt::format("; {} amplitude needs --amplitude {}{}", with_article(of), of,
+                        quantity ? "" : " with --dof");
+  if (!quantity) {
+    return fmt::format("unit '{}' refused: a modal amplitude (--amplitude modal) takes no unit{}",
+                       shorten(unit), fits);
+  }
+  const std::string name = quantity_name(*quantity);
+  return fmt::format("unit '{}' measures {}, the amplitude is {} (--amplitude {}, SI unit {}){}",
+                     shorten(unit), of, with_article(name), name, si_unit(*quantity), fits);
+}
+
 // The factor a value of column k (amplitude, frequency_hz, damping_ratio, frequency_std_hz,
 // damping_std) in `unit` takes to the table's units; InputError naming the file, the column and
 // the unit when the column does not take it: a unit is converted or refused, never ignored.
@@ -71,6 +95,12 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
         "unit '{}' refused: {} is a fraction (no unit, [1] or [-]) or in per cent ([%])",
         shorten(unit), kNames[k]));
   }
+  const std::optional<Unit> u = parse_unit(unit);
+  if (u) {
+    const std::string wrong_kind = amplitude_kind_mismatch(unit, *u, quantity);
+    if (!wrong_kind.empty()) throw refuse(wrong_kind);
+    return u->to_si;
+  }
   if (!quantity) {
     throw refuse(fmt::format(
         "unit '{}' refused: a modal amplitude (--amplitude modal) takes no unit; a measured one "
@@ -78,28 +108,18 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
         shorten(unit)));
   }
   const std::string name = quantity_name(*quantity);
-  const std::optional<Unit> u = parse_unit(unit);
-  if (!u) {
-    // Units are case-sensitive (mm is not Mm, g is not G): a unit of the quantity that differs
-    // only in case is named as the fix, not read in its place.
-    for (const char* c : kAmplitudeUnits) {
-      if (lower(c) == lower(unit) && parse_unit(c)->quantity == *quantity) {
-        throw refuse(
-            fmt::format("unknown unit '{}': write 'amplitude [{}]' (units are "
-                        "case-sensitive; {} amplitude takes {})",
-                        shorten(unit), c, with_article(name), units_of(*quantity)));
-      }
+  // Units are case-sensitive (mm is not Mm, g is not G): a unit of the quantity that differs
+  // only in case is named as the fix, not read in its place.
+  for (const char* c : kAmplitudeUnits) {
+    if (lower(c) == lower(unit) && parse_unit(c)->quantity == *quantity) {
+      throw refuse(
+          fmt::format("unknown unit '{}': write 'amplitude [{}]' (units are "
+                      "case-sensitive; {} amplitude takes {})",
+                      shorten(unit), c, with_article(name), units_of(*quantity)));
     }
-    throw refuse(fmt::format("unknown unit '{}': {} amplitude takes {} (SI {})", shorten(unit),
-                             with_article(name), units_of(*quantity), si_unit(*quantity)));
   }
-  if (u->quantity != *quantity) {
-    throw refuse(fmt::format(
-        "unit '{}' measures {}, the amplitude is {} (--amplitude {}, SI "
-        "unit {})",
-        shorten(unit), quantity_name(u->quantity), with_article(name), name, si_unit(*quantity)));
-  }
-  return u->to_si;
+  throw refuse(fmt::format("unknown unit '{}': {} amplitude takes {} (SI {})", shorten(unit),
+                           with_article(name), units_of(*quantity), si_unit(*quantity)));
 }
 
 // --- What a header the reader cannot use most likely meant, for a refusal that names the fix.
@@ -129,9 +149,15 @@ struct Guess {
   std::string unit;            // the unit it gives, in [] or (); "" if none
   bool parenthesised = false;  // the unit in round brackets
   bool unit_taken = false;     // `unit` is one the guessed column takes
+  // An amplitude's known unit of another kind than --amplitude names: why it is refused and the
+  // --amplitude that takes it (amplitude_kind_mismatch); "" otherwise. `unit_measures`: the
+  // quantity of a known amplitude unit.
+  std::string kind_mismatch;
+  std::optional<Quantity> unit_measures;
 };
 
-Guess guess_column(const std::string& name, const std::string& bracket_unit) {
+Guess guess_column(const std::string& name, const std::string& bracket_unit,
+                   std::optional<Quantity> quantity) {
   Guess g;
   std::string base = name;
   g.unit = bracket_unit;
@@ -180,7 +206,13 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit) {
   if (g.column == 1 || g.column == 3) g.unit_taken = lower(g.unit) == "hz";
   if (g.column == 2 || g.column == 4)
     g.unit_taken = g.unit == "%" || g.unit == "1" || g.unit == "-";
-  if (g.column == 0) g.unit_taken = parse_unit(g.unit).has_value();
+  if (g.column == 0) {
+    if (const std::optional<Unit> u = parse_unit(g.unit)) {
+      g.unit_measures = u->quantity;
+      g.kind_mismatch = amplitude_kind_mismatch(g.unit, *u, quantity);
+      g.unit_taken = g.kind_mismatch.empty();
+    }
+  }
   return g;
 }
 
@@ -199,6 +231,15 @@ std::string rename_hint(size_t i, const std::string& field, const Guess& g) {
   const std::string base(trim(std::string_view(field).substr(0, field.find_first_of("(["))));
   std::string fix;
   std::vector<std::string> notes;
+  // A unit of another kind than --amplitude names: the header is named with the --amplitude
+  // that reads it ("...; a displacement amplitude needs --amplitude displacement and the header
+  // 'amplitude [mm]'"), not as one this run would refuse; a force's, which none reads, is not.
+  if (!g.kind_mismatch.empty()) {
+    return fmt::format("column {} '{}': {}{}", i + 1, shorten(field), g.kind_mismatch,
+                       g.unit_measures == Quantity::kForce
+                           ? std::string()
+                           : fmt::format(" and the header '{} [{}]'", name, g.unit));
+  }
   if (g.parenthesised && g.unit_taken && lower(base) == name) {
     fix = fmt::format("write the unit in square brackets, '{}'", to);
   } else {
@@ -366,7 +407,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
     const auto k =
         static_cast<size_t>(std::find(kNames.begin(), kNames.end(), lower(name)) - kNames.begin());
     if (k == kNames.size()) {
-      guesses[i] = guess_column(name, unit);
+      guesses[i] = guess_column(name, unit, quantity);
       continue;
     }
     if (col[k] >= 0) {

@@ -267,6 +267,75 @@ TEST(BackboneTable, HeaderRefusalsNameTheColumnAndTheFix) {
                   "displacement amplitude takes m, mm, um or in (SI m)"});
 }
 
+// The header a refusal suggests for an amplitude is one the --amplitude it names reads: followed
+// as written (the header, and the --amplitude where the message names another), the same table
+// reads. Before, a unit of another kind was suggested whatever --amplitude said: 'Amplitude (mm)'
+// with --amplitude modal was told to write 'amplitude [mm]', which the same run then refused
+// ("unit 'mm' refused: a modal amplitude ... takes no unit"), and with --amplitude velocity
+// likewise ("unit 'mm' measures displacement"). A force's unit, which no --amplitude reads, is
+// refused without a header to write.
+TEST(BackboneTable, ASuggestedAmplitudeHeaderIsOneTheNamedAmplitudeReads) {
+  const std::string rows = ",frequency_hz,damping_ratio\n1,10,0.01\n2,10,0.02\n";
+  const std::vector<std::optional<Quantity>> kinds = {std::nullopt, Quantity::kDisplacement,
+                                                      Quantity::kVelocity, Quantity::kAcceleration};
+  const auto kind_named = [](const std::string& m, std::optional<Quantity> q) {
+    const std::string needs = "needs --amplitude ";
+    const size_t at = m.find(needs);
+    if (at == std::string::npos) return q;
+    const std::string word =
+        m.substr(at + needs.size(), m.find_first_of(" ;", at + needs.size()) - (at + needs.size()));
+    return parse_quantity(word);
+  };
+  int n = 0;
+  for (const std::string header :
+       {"Amplitude (mm)", "Amp (m/s^2)", "amplitude (mm/s)", "Amp [g]"}) {
+    for (const std::optional<Quantity> q : kinds) {
+      const std::string name = "k" + std::to_string(++n) + ".csv";
+      const std::string m =
+          input_error_of([&] { read_backbone_table(table(name, header + rows), q); });
+      SCOPED_TRACE(name + ": " + m);
+      ASSERT_FALSE(m.empty());
+      EXPECT_EQ(m.find('\n'), std::string::npos);
+      const size_t open = m.find("'amplitude [");
+      ASSERT_NE(open, std::string::npos);
+      const std::string suggested = m.substr(open + 1, m.find('\'', open + 1) - open - 1);
+      const std::optional<Quantity> then = kind_named(m, q);
+      ASSERT_TRUE(then || m.find("needs --amplitude") == std::string::npos);
+      try {
+        EXPECT_EQ(read_backbone_table(table("f" + name, suggested + rows), then).size(), 2);
+      } catch (const InputError& e) {
+        ADD_FAILURE() << "followed, '" << suggested << "' with --amplitude "
+                      << (then ? quantity_name(*then) : "modal") << ": " << e.what();
+      }
+    }
+  }
+  expect_refusal("k_modal.csv", "Amplitude (mm)" + rows, std::nullopt,
+                 {"k_modal.csv:1: column 1 'Amplitude (mm)': unit 'mm' refused: a modal amplitude "
+                  "(--amplitude modal) takes no unit; a displacement amplitude needs --amplitude "
+                  "displacement with --dof and the header 'amplitude [mm]'"});
+  expect_refusal("k_velocity.csv", "Amplitude (mm)" + rows, Quantity::kVelocity,
+                 {"k_velocity.csv:1: column 1 'Amplitude (mm)': unit 'mm' measures displacement, "
+                  "the amplitude is a velocity (--amplitude velocity, SI unit m/s); a "
+                  "displacement amplitude needs --amplitude displacement and the header "
+                  "'amplitude [mm]'"});
+  // In square brackets the refusal names the --amplitude that reads the unit too.
+  expect_refusal("k_square.csv", "amplitude [mm/s]" + rows, std::nullopt,
+                 {"k_square.csv:1: column 'amplitude [mm/s]': unit 'mm/s' refused: a modal "
+                  "amplitude (--amplitude modal) takes no unit; a velocity amplitude needs "
+                  "--amplitude velocity with --dof"});
+  // A force: no --amplitude reads it, and no header is suggested.
+  for (const std::string header : {"Amplitude (N)", "amplitude [kN]"}) {
+    const std::string m = input_error_of(
+        [&] { read_backbone_table(table("k_force.csv", header + rows), Quantity::kVelocity); });
+    EXPECT_NE(m.find("measures force, the amplitude is a velocity (--amplitude velocity, SI unit "
+                     "m/s); no --amplitude reads a force: the amplitude is the response's"),
+              std::string::npos)
+        << m;
+    for (const char* suggestion : {"the header '", "rename it", "square brackets, '"})
+      EXPECT_EQ(m.find(suggestion), std::string::npos) << m;
+  }
+}
+
 // What cannot be read wrong is read: names case-blind (as a test file's "time"), and a
 // spreadsheet's rows of empty cells (",,") skipped like blank lines, wherever they are.
 TEST(BackboneTable, ReadsNamesCaseBlindAndSkipsRowsOfEmptyCells) {
