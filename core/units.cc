@@ -53,8 +53,8 @@ constexpr std::array kUnits = {
     Entry{"in/s2", Quantity::kAcceleration, kInch},
     Entry{"g", Quantity::kAcceleration, kStandardGravity},
     Entry{"mg", Quantity::kAcceleration, 1e-3 * kStandardGravity},
-    Entry{"n", Quantity::kForce, 1.0},
-    Entry{"kn", Quantity::kForce, 1e3},
+    Entry{"N", Quantity::kForce, 1.0},
+    Entry{"kN", Quantity::kForce, 1e3},
     Entry{"lbf", Quantity::kForce, kPoundForce},
 };
 
@@ -72,10 +72,30 @@ std::optional<Unit> parse_unit(std::string_view text) {
   const std::string s = normalise(text);
   // Case matters for m (metre) vs M and g vs G; only force units are case-blind.
   for (const Entry& e : kUnits) {
-    const bool match = e.quantity == Quantity::kForce ? lower(s) == e.name : s == e.name;
+    const bool match = e.quantity == Quantity::kForce ? lower(s) == lower(e.name) : s == e.name;
     if (match) return Unit{e.quantity, e.to_si, s};
   }
   return std::nullopt;
+}
+
+std::vector<std::string> unit_spellings(Quantity q) {
+  std::vector<std::string> out;
+  for (const Entry& e : kUnits) {
+    if (e.quantity == q) out.emplace_back(e.name);
+  }
+  return out;
+}
+
+std::vector<std::string> unit_names(Quantity q) {
+  std::vector<std::string> out;
+  std::vector<double> factors;
+  for (const Entry& e : kUnits) {
+    if (e.quantity != q || std::find(factors.begin(), factors.end(), e.to_si) != factors.end())
+      continue;
+    factors.push_back(e.to_si);
+    out.emplace_back(e.name);
+  }
+  return out;
 }
 
 std::string si_unit(Quantity q) {

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace jointlab {
 
@@ -24,6 +25,14 @@ struct Unit {
 
 /// Looks up a unit string ("g", "m/s^2", "mm/s", "in", "N", ...); nullopt if unknown.
 std::optional<Unit> parse_unit(std::string_view text);
+
+/// Every spelling parse_unit reads as a unit of `q`, in the order of its one table: displacement
+/// "m", "mm", "um", "µm", "micron", "in". A force's are read case-blind ("N" also as "n").
+std::vector<std::string> unit_spellings(Quantity q);
+
+/// One spelling per unit of `q` (the first of those with the same factor to SI), for messages
+/// that list what a column takes: displacement "m", "mm", "um", "in".
+std::vector<std::string> unit_names(Quantity q);
 
 /// The SI unit of a quantity: "m", "m/s", "m/s^2", "N".
 std::string si_unit(Quantity q);

@@ -1,5 +1,8 @@
 #include "jointlab/core/units.h"
 
+#include <string>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 namespace jointlab {
@@ -33,6 +36,30 @@ TEST(Units, UnknownUnitsAreRefused) {
   EXPECT_FALSE(parse_unit("furlong").has_value());
   EXPECT_FALSE(parse_unit("").has_value());
   EXPECT_FALSE(parse_unit("G").has_value());  // not standard gravity: ambiguous
+}
+
+// The one table, exposed: every spelling reads as its quantity, and the names listed in
+// messages are one per unit in the table's order (a reader's copy of the list lacked micron,
+// µm, m/s2 and the other spellings, so a case slip of them was not named).
+TEST(Units, SpellingsAndNamesAreTheTableParseUnitReads) {
+  for (Quantity q :
+       {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration, Quantity::kForce}) {
+    for (const std::string& s : unit_spellings(q)) {
+      const auto u = parse_unit(s);
+      ASSERT_TRUE(u.has_value()) << s;
+      EXPECT_EQ(u->quantity, q) << s;
+    }
+  }
+  const auto spellings = unit_spellings(Quantity::kDisplacement);
+  EXPECT_EQ(spellings, (std::vector<std::string>{"m", "mm", "um", "µm", "micron", "in"}));
+  EXPECT_EQ(unit_names(Quantity::kDisplacement), (std::vector<std::string>{"m", "mm", "um", "in"}));
+  EXPECT_EQ(unit_names(Quantity::kVelocity),
+            (std::vector<std::string>{"m/s", "mm/s", "um/s", "in/s"}));
+  EXPECT_EQ(unit_names(Quantity::kAcceleration),
+            (std::vector<std::string>{"m/s^2", "mm/s^2", "in/s^2", "g", "mg"}));
+  EXPECT_EQ(unit_names(Quantity::kForce), (std::vector<std::string>{"N", "kN", "lbf"}));
+  EXPECT_DOUBLE_EQ(parse_unit("n")->to_si, 1.0);  // forces case-blind, as before
+  EXPECT_DOUBLE_EQ(parse_unit("KN")->to_si, 1e3);
 }
 
 TEST(Units, QuantityNamesRoundTrip) {

@@ -31,20 +31,13 @@ constexpr std::array<const char*, 5> kNames = {"amplitude", "frequency_hz", "dam
 constexpr const char* kHeader =
     "amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]";
 
-// The amplitude units core/units.h reads, by quantity, for the messages that list them.
-constexpr std::array<const char*, 13> kAmplitudeUnits = {
-    "m", "mm", "um", "in", "m/s", "mm/s", "um/s", "in/s", "m/s^2", "mm/s^2", "in/s^2", "g", "mg"};
-
 std::string with_article(const std::string& noun) {
   return (std::string("aeiou").find(noun.front()) != std::string::npos ? "an " : "a ") + noun;
 }
 
-// "m/s^2, mm/s^2, in/s^2, g or mg": the units an amplitude of `q` takes.
+// "m/s^2, mm/s^2, in/s^2, g or mg": the units an amplitude of `q` takes (core/units.h's).
 std::string units_of(Quantity q) {
-  std::vector<std::string> u;
-  for (const char* c : kAmplitudeUnits) {
-    if (parse_unit(c)->quantity == q) u.emplace_back(c);
-  }
+  std::vector<std::string> u = unit_names(q);
   const std::string last = u.back();
   u.pop_back();
   return fmt::format("{} or {}", fmt::join(u, ", "), last);
@@ -108,10 +101,11 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
         shorten(unit)));
   }
   const std::string name = quantity_name(*quantity);
-  // Units are case-sensitive (mm is not Mm, g is not G): a unit of the quantity that differs
-  // only in case is named as the fix, not read in its place.
-  for (const char* c : kAmplitudeUnits) {
-    if (lower(c) == lower(unit) && parse_unit(c)->quantity == *quantity) {
+  // Units are case-sensitive (mm is not Mm, g is not G): a spelling of the quantity's units
+  // (every one parse_unit reads: 'Micron' names micron) that differs only in case is named as the
+  // fix, not read in its place.
+  for (const std::string& c : unit_spellings(*quantity)) {
+    if (lower(c) == lower(unit)) {
       throw refuse(
           fmt::format("unknown unit '{}': write 'amplitude [{}]' (units are "
                       "case-sensitive; {} amplitude takes {})",

@@ -1,5 +1,6 @@
 #include "jointlab/data/backbone_table.h"
 
+#include <cctype>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -334,6 +335,38 @@ TEST(BackboneTable, ASuggestedAmplitudeHeaderIsOneTheNamedAmplitudeReads) {
     for (const char* suggestion : {"the header '", "rename it", "square brackets, '"})
       EXPECT_EQ(m.find(suggestion), std::string::npos) << m;
   }
+}
+
+// A case slip of any spelling core/units.h reads is named with the spelling to write, and that
+// spelling reads as the same unit. Before, the reader kept its own copy of the unit list, without
+// micron, µm, m/s2, mm/s2, in/s2, m/s² or µm/s: 'amplitude [Micron]' was told "a displacement
+// amplitude takes m, mm, um or in (SI m)", which does not name the unit meant.
+TEST(BackboneTable, ACaseSlipOfAnyUnitSpellingIsNamed) {
+  const std::string rows = ",frequency_hz,damping_ratio\n1,10,0.01\n2,10,0.02\n";
+  int n = 0;
+  for (Quantity q : {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration}) {
+    for (const std::string& spelling : unit_spellings(q)) {
+      std::string slip = spelling;
+      for (char& c : slip) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      if (slip == spelling || parse_unit(slip)) continue;
+      const std::string name = "slip" + std::to_string(++n) + ".csv";
+      const std::string m = input_error_of(
+          [&] { read_backbone_table(table(name, "amplitude [" + slip + "]" + rows), q); });
+      const std::string says = "unknown unit '" + slip + "': write 'amplitude [";
+      const size_t at = m.find(says);
+      ASSERT_NE(at, std::string::npos) << spelling << ": " << m;
+      const size_t from = at + says.size();
+      const auto named = parse_unit(m.substr(from, m.find(']', from) - from));
+      ASSERT_TRUE(named.has_value()) << m;
+      EXPECT_EQ(named->quantity, q) << m;
+      EXPECT_EQ(named->to_si, parse_unit(spelling)->to_si) << m;
+    }
+  }
+  EXPECT_GE(n, 14);
+  expect_refusal("micron.csv", "amplitude [Micron]" + rows, Quantity::kDisplacement,
+                 {"micron.csv:1: column 'amplitude [Micron]': unknown unit 'Micron': write "
+                  "'amplitude [micron]' (units are case-sensitive; a displacement amplitude takes "
+                  "m, mm, um or in)"});
 }
 
 // What cannot be read wrong is read: names case-blind (as a test file's "time"), and a
