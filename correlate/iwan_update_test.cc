@@ -1103,5 +1103,74 @@ TEST(IwanUpdateReport, AMisfitNamesItsLikelierCauseInsteadOfAWiderRangeOrMoreEva
   EXPECT_EQ(s.report().find("damping_ratio [%]"), std::string::npos) << s.report();
 }
 
+// K_T at a bound short of the measured low-amplitude frequency: that frequency pressed it there,
+// and the line says so instead of "a wider range would not cure that" (a wider range does move
+// K_T onto the data: it takes up the linear part's error). The numbers are the command's on a
+// one-mode table 1.5 % above the model (UpdateCli.IwanKtAtABoundNamesTheLinearLimitThatPressedIt).
+// Where the model as given (gamma 1) matches the measured frequency, the range stopped the fit:
+// widen it, and neither "update-linear" nor "a larger --evaluations" is said. The plain line stays
+// where it is true: another parameter at a bound, or K_T at the bound the miss does not point to.
+TEST(IwanUpdateReport, AKtBoundNamesTheLinearLimitThatPressedIt) {
+  IwanUpdateSummary s;
+  s.improved = true;
+  s.status = IwanUpdateStatus::kConverged;
+  s.evaluations = 3064;
+  s.residuals = 120;
+  s.reduced_chi2 = 386;
+  s.at_bounds = {"gamma (Kt/Ks) at its upper bound 2"};
+  s.bound_side[1] = 1;
+  MisfitEvidence e;
+  e.mode = 1;
+  e.low_frequency_hz = 179.611;
+  e.low_frequency_error = -0.00298;  // the fitted linear limit below the data
+  e.low_frequency_noise = 1e-4;
+  e.mode_hz = 176.291;  // the model as given, 1.85 % below
+  e.damping_factor = 1.1;
+  e.damping_max = 0.004;
+  s.evidence = e;
+  const std::string plain = "the misfit below pressed it there; a wider range would not cure that";
+  std::string r = s.report();
+  EXPECT_NE(r.find("WARNING: gamma (Kt/Ks) at its upper bound 2: the measured low-amplitude "
+                   "frequency pressed it there, beyond the linear limit Kt reaches in its range "
+                   "(below); a wider range would let Kt take up the linear part's error rather "
+                   "than fit the joint"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("misses the measured low-amplitude frequency 179.611 Hz by -0.298 % (30 times "
+                   "its noise) with Kt at its upper bound, and mode 1 of the model as given (Kt = "
+                   "Ks, 176.291 Hz) by -1.85 %: the model's linear part does not match the "
+                   "measured mode; update-linear first"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find(plain), std::string::npos) << r;
+  EXPECT_EQ(r.find("Kt alone cannot bring it there"), std::string::npos) << r;
+  // At the lower bound with the linear limit below the data, the miss is not what pressed K_T
+  // down: the plain line.
+  s.at_bounds = {"gamma (Kt/Ks) at its lower bound 0.05"};
+  s.bound_side[1] = -1;
+  r = s.report();
+  EXPECT_NE(r.find("at its lower bound 0.05: " + plain), std::string::npos) << r;
+  // The model as given matches the measured frequency: the range stopped K_T short of it.
+  s.at_bounds = {"gamma (Kt/Ks) at its upper bound 0.9"};
+  s.bound_side[1] = 1;
+  s.evidence->mode_hz = 179.65;
+  s.status = IwanUpdateStatus::kBudget;
+  r = s.report();
+  EXPECT_NE(r.find("at its upper bound 0.9: the best fit may lie outside the range, widen it"),
+            std::string::npos)
+      << r;
+  for (const char* not_said : {"update-linear", "larger --evaluations", "would not cure"})
+    EXPECT_EQ(r.find(not_said), std::string::npos) << not_said << ": " << r;
+  // Another parameter at its bound with K_T held and the linear limit off: the plain line.
+  s.held[1] = true;
+  s.bound_side[1] = 0;
+  s.bound_side[2] = -1;
+  s.at_bounds = {"chi at its lower bound -0.95"};
+  s.evidence->mode_hz = 176.291;
+  r = s.report();
+  EXPECT_NE(r.find("chi at its lower bound -0.95: " + plain), std::string::npos) << r;
+  EXPECT_NE(r.find("with Kt held: the model's linear part"), std::string::npos) << r;
+}
+
 }  // namespace
 }  // namespace jointlab::correlate

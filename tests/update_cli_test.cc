@@ -901,6 +901,46 @@ TEST(UpdateCli, IwanRefusesFrequenciesTheModeCannotReachNamingTheReach) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// A backbone 1.5 % above the model's linear frequency (the one-mode model with K_s 0.8 of the
+// truth's K_T, the truth's QSMA curve with its frequencies times 1.015, 60 points to 2 phi_max)
+// runs K_T to the top of its range (gamma 2; 1.5 % needs about 2.2) while every frequency stays
+// within the model's reach. The report names what pressed it there, the measured low-amplitude
+// frequency above the linear limit, and the model as given 1.85 % below it: update-linear first.
+// Before, the bound's line said "the misfit below pressed it there; a wider range would not cure
+// that", while a wider range does move K_T onto the data, taking up the linear part's error.
+TEST(UpdateCli, IwanKtAtABoundNamesTheLinearLimitThatPressedIt) {
+  const fs::path dir = testing::scratch_dir("update_iwan_kt_bound");
+  const double k_total = std::pow(2 * M_PI * 177.0, 2);
+  const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
+  const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, 0);
+  write_backbone_table(dir / "truth.csv", m, 60, 2 * model::Iwan(truth).phi_max(), 71);
+  const auto cells = read_csv_cells(dir / "truth.csv");
+  std::string t = "amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n";
+  for (size_t i = 1; i < cells.size(); ++i) {
+    t += fmt::format("{},{:.17g},{},{:.17g},{}\n", cells[i][0], 1.015 * std::stod(cells[i][1]),
+                     cells[i][2], 1.015 * std::stod(cells[i][3]), cells[i][4]);
+  }
+  testing::write_text((dir / "above.csv").string(), t);
+  const std::string model = write_model(
+      dir, correlate::one_mode_structure(0.96 * k_total, {1.5, 0.8 * truth.Kt, -0.3, 2.0}, 0),
+      "s.toml");
+  const testing::CommandResult r = testing::run_jointlab(
+      fmt::format("update-iwan {} --set j --mode 1 --backbone {} --fs-range 0.005:50 --out {}",
+                  model, (dir / "above.csv").string(), (dir / "out").string()));
+  ASSERT_EQ(r.status, 0) << r.err;
+  RecordProperty("report", r.out);
+  EXPECT_NE(r.out.find("gamma (Kt/Ks) at its upper bound 2: the measured low-amplitude frequency "
+                       "pressed it there, beyond the linear limit Kt reaches in its range"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("with Kt at its upper bound, and mode 1 of the model as given (Kt = Ks, "
+                       "176.291 Hz) by -1.8"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("update-linear first"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("a wider range would not cure that"), std::string::npos) << r.out;
+}
+
 // The report and parameters.csv call modal_ratio at a bound exactly when it is there: Z is the
 // clamped weighted mean of the damping residuals, so at a bound it is the bound itself. Before,
 // anything below 1e-3 of --linear-damping-max (5e-5 by default) was called "at its lower bound
