@@ -370,6 +370,225 @@ double coverage_factor_of_row(double value, double before, std::string_view cell
   return value;
 }
 
+namespace {
+
+// What the header row says: where each column read is and its unit's factor, and the further
+// columns the reader uses (a `process` backbone's marks and coverage factor).
+struct Columns {
+  std::array<int, 5> col;       // index of each of kNames in a row; -1: absent
+  std::array<double, 5> scale;  // value in the file's unit -> the table's (SI, Hz, a fraction)
+  std::vector<size_t> marks;    // columns of is_point_mark: their marked rows are skipped
+  int coverage_col = -1;        // a `process` backbone's coverage_factor: k of the std columns
+  std::string amplitude_unit;   // as the header gives it ("": none)
+  bool ours = false;            // a `process` or `stepped-sine` backbone (BackboneTable)
+  size_t fields = 0;            // the number of columns the header names
+  size_t needed = 0;            // the cells a row needs: up to the last column read
+};
+
+// Reads the header's fields: each of kNames found (case-blind) with its unit's factor, the marks
+// and the coverage factor, and for every other field the column it most likely means
+// (`guesses`, for the refusals); InputError for a unit a column does not take and for two
+// fields that are the same column.
+Columns resolve_columns(const std::vector<std::string>& fields, std::optional<Quantity> quantity,
+                        std::vector<Guess>& guesses, const std::string& file, long header_line) {
+  Columns c;
+  c.col.fill(-1);
+  c.scale.fill(1.0);
+  c.fields = fields.size();
+  guesses.assign(fields.size(), Guess{});
+  for (size_t i = 0; i < fields.size(); ++i) {
+    const auto [name, unit] = split_name_unit(fields[i], file, header_line);
+    // Case-blind as the read columns are: a re-cased `process` output keeps its marks and k.
+    const std::string lowered = lower(name);
+    if (is_point_mark(lowered)) c.marks.push_back(i);
+    if (lowered == "coverage_factor") c.coverage_col = static_cast<int>(i);
+    if (lowered == "coverage_factor" || lowered == "response_controlled") c.ours = true;
+    // Names are read case-blind ("Amplitude", "Frequency_Hz"), as a test file's "time" is.
+    const auto k =
+        static_cast<size_t>(std::find(kNames.begin(), kNames.end(), lowered) - kNames.begin());
+    if (k == kNames.size()) {
+      guesses[i] = guess_column(name, unit, quantity);
+      continue;
+    }
+    if (c.col[k] >= 0) {
+      throw InputError(
+          where(file, header_line,
+                fmt::format("columns {} '{}' and {} '{}' are both {}: keep one", c.col[k] + 1,
+                            shorten(fields[static_cast<size_t>(c.col[k])]), i + 1,
+                            shorten(fields[i]), kNames[k])));
+    }
+    c.col[k] = static_cast<int>(i);
+    if (!unit.empty()) c.scale[k] = unit_scale(k, unit, quantity, file, header_line);
+    if (k == 0) c.amplitude_unit = unit;
+  }
+  c.needed = static_cast<size_t>(*std::max_element(c.col.begin(), c.col.end())) + 1;
+  return c;
+}
+
+// Refuses a header without the three required columns, with an uncertainty under another name,
+// or with one of the two uncertainties alone. `lines`: the cursor after the header, read on to
+// find a header row further down.
+void check_columns(std::string_view header, const std::vector<std::string>& fields,
+                   const std::vector<Guess>& guesses, const Columns& c, const TextLines& lines,
+                   const std::string& file, long header_line) {
+  if (c.col[0] < 0 || c.col[1] < 0 || c.col[2] < 0) {
+    refuse_header(header, fields, guesses, c.col, lines, file, header_line);
+  }
+  refuse_unread_uncertainties(fields, guesses, c.col, file, header_line);
+  if ((c.col[3] < 0) != (c.col[4] < 0)) {
+    throw InputError(where(file, header_line,
+                           fmt::format("give both frequency_std_hz and damping_std, or neither "
+                                       "(the table has {} alone)",
+                                       kNames[c.col[3] >= 0 ? 3 : 4])));
+  }
+}
+
+// Whether a line holds no row: blank, a '#' comment, or empty cells only (a spreadsheet's ",,"),
+// skipped anywhere. Otherwise `cells` holds its cells.
+bool holds_no_row(std::string_view line, CsvLineSplitter& splitter,
+                  std::vector<std::string>& cells) {
+  const std::string_view trimmed =
+      line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
+  if (trimmed.empty() || trimmed.front() == '#') return true;
+  if (!splitter.split(line, cells)) return true;
+  return std::all_of(cells.begin(), cells.end(),
+                     [](const std::string& cell) { return trim(cell).empty(); });
+}
+
+// Refuses a row with fewer cells than the columns read need, or with more than the header
+// names. With ',' between the columns, decimal commas split each number in two ("1,5" read as
+// 1 and 5), and the row would be read shifted.
+void check_cell_count(const std::vector<std::string>& cells, const Columns& c, char delim,
+                      const std::string& file, long n) {
+  if (cells.size() < c.needed) {
+    throw InputError(where(
+        file, n, fmt::format("{} cells, the header needs at least {}", cells.size(), c.needed)));
+  }
+  if (cells.size() > c.fields &&
+      std::any_of(cells.begin() + static_cast<std::ptrdiff_t>(c.fields), cells.end(),
+                  [](const std::string& cell) { return !trim(cell).empty(); })) {
+    throw InputError(where(
+        file, n,
+        fmt::format("{} cells, the header names {}: {}", cells.size(), c.fields,
+                    delim == ','
+                        ? "decimal commas with ',' separators split each number in two "
+                          "(write numbers with a decimal point, '0.0123'), or a column has no "
+                          "name in the header row"
+                        : "a column without a name in the header row")));
+  }
+}
+
+// Whether a row is marked as not the mode's own (a mark cell that is a number other than 0).
+bool marked(const std::vector<std::string>& cells, const Columns& c) {
+  return std::any_of(c.marks.begin(), c.marks.end(), [&](size_t m) {
+    if (m >= cells.size()) return false;
+    const auto v = parse_double(cells[m]);
+    return v && *v != 0;
+  });
+}
+
+// The value of column k's cell in the table's units; InputError naming the line and the column
+// for an empty cell, a decimal comma, a value that is not finite and > 0 (>= 0 for the
+// uncertainties), and a damping ratio of 1 or more.
+double read_cell(size_t k, const std::string& cell, const Columns& c, char delim,
+                 const std::string& file, long n) {
+  const auto v = parse_double(cell);
+  const bool uncertainty = k >= 3;
+  if (!v && trim(cell).empty()) {
+    throw InputError(where(file, n,
+                           fmt::format("column {} '{}' is empty: fill it or delete the row",
+                                       c.col[k] + 1, kNames[k])));
+  }
+  // A decimal comma is never read as a decimal point: "1,234" may be a thousand.
+  if (std::string point = cell; !v && cell.find(',') != std::string::npos) {
+    std::replace(point.begin(), point.end(), ',', '.');
+    if (parse_double(point)) {
+      const std::string separator = delim == '\t' ? "tab" : fmt::format("'{}'", delim);
+      throw InputError(
+          where(file, n,
+                fmt::format("decimal comma in '{}' (column {} '{}') with {} separators: write "
+                            "numbers with a decimal point, '{}', and no thousands separators "
+                            "(e.g. export with '.' as the decimal symbol)",
+                            shorten(cell), c.col[k] + 1, kNames[k], separator, shorten(point))));
+    }
+  }
+  if (!v || !std::isfinite(*v) || (uncertainty ? !(*v >= 0) : !(*v > 0))) {
+    throw InputError(where(file, n,
+                           fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,
+                                       uncertainty ? ">= 0" : "> 0")));
+  }
+  // A damping ratio of 1 or more is no ring-down (critical damping): per cent read as a
+  // fraction (a table of 0.05-4.85 % ran to a fit with an RMS damping error of 99 %).
+  if (k == 2 && *v * c.scale[k] >= 1) {
+    throw InputError(where(file, n,
+                           fmt::format("damping_ratio '{}' is not a fraction below 1; per cent? "
+                                       "write the header as 'damping_ratio [%]'",
+                                       cell)));
+  }
+  return *v * c.scale[k];
+}
+
+// The rows read: each column's values in file order, and the coverage factor (0: none).
+struct Rows {
+  std::array<std::vector<double>, 5> values;
+  double coverage = 0;
+};
+
+// Reads every row after the header: rows that hold none and marked rows skipped, each other one
+// checked and its columns read.
+Rows read_rows(TextLines& lines, char delim, const Columns& c, const std::string& file) {
+  CsvLineSplitter splitter(delim);
+  Rows rows;
+  std::vector<std::string> cells;
+  std::string_view line;
+  while (lines.next(line)) {
+    if (holds_no_row(line, splitter, cells)) continue;
+    const long n = lines.line_no();
+    check_cell_count(cells, c, delim, file, n);
+    if (marked(cells, c)) continue;
+    if (c.coverage_col >= 0 && static_cast<size_t>(c.coverage_col) < cells.size()) {
+      const std::string& cell = cells[static_cast<size_t>(c.coverage_col)];
+      rows.coverage =
+          coverage_factor_of_row(parse_double(cell).value_or(NAN), rows.coverage, cell, file, n);
+    }
+    for (size_t k = 0; k < kNames.size(); ++k) {
+      if (c.col[k] < 0) continue;
+      rows.values[k].push_back(
+          read_cell(k, cells[static_cast<size_t>(c.col[k])], c, delim, file, n));
+    }
+  }
+  return rows;
+}
+
+// The table of at least two rows, by increasing amplitude (rows of equal amplitude in file order).
+BackboneTable sorted_table(const Rows& rows, const Columns& c, const std::string& file) {
+  const size_t points = rows.values[0].size();
+  if (points < 2) {
+    throw InputError(where(
+        file, 0, fmt::format("a backbone needs at least two points, the table has {}", points)));
+  }
+  std::vector<size_t> order(points);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return rows.values[0][a] < rows.values[0][b]; });
+  BackboneTable t;
+  t.source = file;
+  t.amplitude_unit = c.amplitude_unit;
+  t.written_by_jointlab = c.ours;
+  if (rows.coverage > 0) t.coverage_factor = rows.coverage;
+  Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
+                            &t.damping_std};
+  for (size_t k = 0; k < kNames.size(); ++k) {
+    out[k]->setZero(static_cast<Eigen::Index>(points));
+    if (rows.values[k].empty()) continue;
+    for (size_t i = 0; i < points; ++i)
+      (*out[k])(static_cast<Eigen::Index>(i)) = rows.values[k][order[i]];
+  }
+  return t;
+}
+
+}  // namespace
+
 BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> quantity) {
   const std::string file = path.string();
   const auto text = read_text_file(path);
@@ -378,158 +597,11 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   const std::string_view header = read_preamble(lines, file, [](const auto&, const auto&) {});
   const long header_line = lines.line_no();
   const char delim = detect_delimiter(header);
-  CsvLineSplitter splitter(delim);
-  std::array<int, 5> col;
-  col.fill(-1);
-  std::array<double, 5> scale;  // value in the file's unit -> the table's (SI, Hz, a fraction)
-  scale.fill(1.0);
-  std::vector<size_t> marks;  // columns of is_point_mark: their marked rows are skipped
-  int coverage_col = -1;      // a `process` backbone's coverage_factor: k of the std columns
-  double coverage = 0;        // its value (0: none read yet)
-  const std::vector<std::string> fields = splitter.split(header);
-  std::vector<Guess> guesses(fields.size());  // what each field not read most likely means
-  std::string amplitude_unit;
-  bool ours = false;
-  for (size_t i = 0; i < fields.size(); ++i) {
-    const auto [name, unit] = split_name_unit(fields[i], file, header_line);
-    // Case-blind as the read columns are: a re-cased `process` output keeps its marks and k.
-    const std::string lowered = lower(name);
-    if (is_point_mark(lowered)) marks.push_back(i);
-    if (lowered == "coverage_factor") coverage_col = static_cast<int>(i);
-    if (lowered == "coverage_factor" || lowered == "response_controlled") ours = true;
-    // Names are read case-blind ("Amplitude", "Frequency_Hz"), as a test file's "time" is.
-    const auto k =
-        static_cast<size_t>(std::find(kNames.begin(), kNames.end(), lower(name)) - kNames.begin());
-    if (k == kNames.size()) {
-      guesses[i] = guess_column(name, unit, quantity);
-      continue;
-    }
-    if (col[k] >= 0) {
-      throw InputError(where(file, header_line,
-                             fmt::format("columns {} '{}' and {} '{}' are both {}: keep one",
-                                         col[k] + 1, shorten(fields[static_cast<size_t>(col[k])]),
-                                         i + 1, shorten(fields[i]), kNames[k])));
-    }
-    col[k] = static_cast<int>(i);
-    if (!unit.empty()) scale[k] = unit_scale(k, unit, quantity, file, header_line);
-    if (k == 0) amplitude_unit = unit;
-  }
-  if (col[0] < 0 || col[1] < 0 || col[2] < 0) {
-    refuse_header(header, fields, guesses, col, lines, file, header_line);
-  }
-  refuse_unread_uncertainties(fields, guesses, col, file, header_line);
-  if ((col[3] < 0) != (col[4] < 0)) {
-    throw InputError(where(file, header_line,
-                           fmt::format("give both frequency_std_hz and damping_std, or neither "
-                                       "(the table has {} alone)",
-                                       kNames[col[3] >= 0 ? 3 : 4])));
-  }
-  const size_t needed = static_cast<size_t>(*std::max_element(col.begin(), col.end())) + 1;
-  const std::string separator = delim == '\t' ? "tab" : fmt::format("'{}'", delim);
-  std::array<std::vector<double>, 5> values;
-  std::vector<std::string> cells;
-  std::string_view line;
-  while (lines.next(line)) {
-    const std::string_view trimmed =
-        line.substr(std::min(line.find_first_not_of(" \t"), line.size()));
-    if (trimmed.empty() || trimmed.front() == '#') continue;
-    if (!splitter.split(line, cells)) continue;
-    // A row of empty cells (a spreadsheet's ",,") holds nothing: skipped as a blank line is.
-    if (std::all_of(cells.begin(), cells.end(),
-                    [](const std::string& c) { return trim(c).empty(); })) {
-      continue;
-    }
-    const long n = lines.line_no();
-    if (cells.size() < needed) {
-      throw InputError(where(
-          file, n, fmt::format("{} cells, the header needs at least {}", cells.size(), needed)));
-    }
-    // More cells than the header names: with ',' between the columns, decimal commas split each
-    // number in two ("1,5" read as 1 and 5), and the row would be read shifted.
-    if (cells.size() > fields.size() &&
-        std::any_of(cells.begin() + static_cast<std::ptrdiff_t>(fields.size()), cells.end(),
-                    [](const std::string& c) { return !trim(c).empty(); })) {
-      throw InputError(where(
-          file, n,
-          fmt::format("{} cells, the header names {}: {}", cells.size(), fields.size(),
-                      delim == ','
-                          ? "decimal commas with ',' separators split each number in two "
-                            "(write numbers with a decimal point, '0.0123'), or a column has no "
-                            "name in the header row"
-                          : "a column without a name in the header row")));
-    }
-    const bool marked = std::any_of(marks.begin(), marks.end(), [&](size_t c) {
-      if (c >= cells.size()) return false;
-      const auto v = parse_double(cells[c]);
-      return v && *v != 0;
-    });
-    if (marked) continue;
-    if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
-      const std::string& cell = cells[static_cast<size_t>(coverage_col)];
-      coverage = coverage_factor_of_row(parse_double(cell).value_or(NAN), coverage, cell, file, n);
-    }
-    for (size_t k = 0; k < kNames.size(); ++k) {
-      if (col[k] < 0) continue;
-      const std::string& cell = cells[static_cast<size_t>(col[k])];
-      const auto v = parse_double(cell);
-      const bool uncertainty = k >= 3;
-      if (!v && trim(cell).empty()) {
-        throw InputError(where(file, n,
-                               fmt::format("column {} '{}' is empty: fill it or delete the row",
-                                           col[k] + 1, kNames[k])));
-      }
-      // A decimal comma is never read as a decimal point: "1,234" may be a thousand.
-      if (std::string point = cell; !v && cell.find(',') != std::string::npos) {
-        std::replace(point.begin(), point.end(), ',', '.');
-        if (parse_double(point)) {
-          throw InputError(
-              where(file, n,
-                    fmt::format("decimal comma in '{}' (column {} '{}') with {} separators: write "
-                                "numbers with a decimal point, '{}', and no thousands separators "
-                                "(e.g. export with '.' as the decimal symbol)",
-                                shorten(cell), col[k] + 1, kNames[k], separator, shorten(point))));
-        }
-      }
-      if (!v || !std::isfinite(*v) || (uncertainty ? !(*v >= 0) : !(*v > 0))) {
-        throw InputError(where(file, n,
-                               fmt::format("{} '{}' must be a finite number {}", kNames[k], cell,
-                                           uncertainty ? ">= 0" : "> 0")));
-      }
-      // A damping ratio of 1 or more is no ring-down (critical damping): per cent read as a
-      // fraction (a table of 0.05-4.85 % ran to a fit with an RMS damping error of 99 %).
-      if (k == 2 && *v * scale[k] >= 1) {
-        throw InputError(
-            where(file, n,
-                  fmt::format("damping_ratio '{}' is not a fraction below 1; per cent? write the "
-                              "header as 'damping_ratio [%]'",
-                              cell)));
-      }
-      values[k].push_back(*v * scale[k]);
-    }
-  }
-  const size_t points = values[0].size();
-  if (points < 2) {
-    throw InputError(where(
-        file, 0, fmt::format("a backbone needs at least two points, the table has {}", points)));
-  }
-  std::vector<size_t> order(points);
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return values[0][a] < values[0][b]; });
-  BackboneTable t;
-  t.source = file;
-  t.amplitude_unit = amplitude_unit;
-  t.written_by_jointlab = ours;
-  if (coverage > 0) t.coverage_factor = coverage;
-  Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
-                            &t.damping_std};
-  for (size_t k = 0; k < kNames.size(); ++k) {
-    out[k]->setZero(static_cast<Eigen::Index>(points));
-    if (values[k].empty()) continue;
-    for (size_t i = 0; i < points; ++i)
-      (*out[k])(static_cast<Eigen::Index>(i)) = values[k][order[i]];
-  }
-  return t;
+  const std::vector<std::string> fields = CsvLineSplitter(delim).split(header);
+  std::vector<Guess> guesses;  // what each field not read most likely means
+  const Columns columns = resolve_columns(fields, quantity, guesses, file, header_line);
+  check_columns(header, fields, guesses, columns, lines, file, header_line);
+  return sorted_table(read_rows(lines, delim, columns, file), columns, file);
 }
 
 }  // namespace jointlab::data
