@@ -600,7 +600,8 @@ constexpr double kMaxOffset = 0.5;
 // of the band signal; divided by the gain correction it is the floor of the corrected signal
 // at c.
 Estimate hilbert_point(const EnvelopePhase& ep, const BandSetting& s, double noise,
-                       const GainCorrection& gain, double c, double search) {
+                       const GainCorrection& gain, double c, double search,
+                       Estimate* centred = nullptr) {
   const RingdownOptions& options = s.options;
   const double start = s.start, stop = s.stop, w_min = s.w_min;
   const auto window_centre = [&](double c, double w) {
@@ -647,6 +648,11 @@ Estimate hilbert_point(const EnvelopePhase& ep, const BandSetting& s, double noi
   // the target. (The next point's search starts from the centred choice: a shifted
   // window is this point's alone.)
   const double centred_window = best.window;
+  if (centred != nullptr) {
+    *centred = best;
+    centred->log_amp = best_amp.log_amp;
+    centred->log_amp_std = best_amp.log_amp_std;
+  }
   if (!buried && best.sigma_std > options.max_damping_rel_std * std::abs(best.sigma)) {
     const double longest = std::min(options.max_window_s, stop - start);
     for (const double side : {1.0, -1.0}) {
@@ -668,14 +674,17 @@ Estimate hilbert_point(const EnvelopePhase& ep, const BandSetting& s, double noi
 // Hilbert estimates along the span, every w_min / points_per_window, each with the window
 // that determines its decay rate best (hilbert_point).
 std::vector<Estimate> hilbert_estimates(const EnvelopePhase& ep, const BandSetting& s, double noise,
-                                        const GainCorrection& gain) {
+                                        const GainCorrection& gain,
+                                        std::vector<Estimate>* centred = nullptr) {
   const double start = s.start, stop = s.stop, w_min = s.w_min;
   std::vector<Estimate> est;
   const double step = w_min / s.options.points_per_window;
   const double margin = w_min / 2 * (1 - kMaxOffset);
   double search = w_min;
   for (double c = start + margin; c <= stop - margin + 1e-12; c += step) {
-    est.push_back(hilbert_point(ep, s, noise, gain, c, search));
+    Estimate centred_one;
+    est.push_back(hilbert_point(ep, s, noise, gain, c, search, &centred_one));
+    if (centred != nullptr) centred->push_back(centred_one);
     search = est.back().next_search;
   }
   return est;
@@ -1497,7 +1506,7 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
 
 // A turn of the envelope's decay rate: the estimate where it peaks (or bottoms out).
 struct Turn {
-  const Estimate* at = nullptr;
+  const Estimate* at = nullptr;  // valid while the estimates it was found in live
   bool peak = false;
 };
 
@@ -1974,6 +1983,27 @@ void unscale(Ringdown& r, double scale) {
       "and scale";
 }
 
+// Whether the partner of an exchange found (Exchange::partner) holds energy where the band's
+// decay rate turns: its envelope at least snr_min times its own noise floor at every turn.
+bool partner_holds_energy(const Exchange& x, const BandSetting& s, Quantity measured,
+                          signal::FftCache& cache) {
+  const signal::Band sub{s.band.lo * x.partner, s.band.hi * x.partner};
+  const signal::BandSignal zs = band_signal(s.channel, measured, sub, s.options, cache);
+  const EnvelopePhase ep = envelope_phase(zs.baseband, zs.carrier_hz, zs.dt);
+  const BandSetting sp = band_setting(s.channel, sub, s.options, zs);
+  const double noise = noise_floor(ep, sp);
+  for (const Turn& turn : x.turns) {
+    const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(turn.at->t / zs.dt), 0,
+                                            ep.amp.size() - 1);
+    if (!(ep.amp(j) >= s.options.snr_min * noise)) return false;
+  }
+  return true;
+}
+
+bool beats_with_second_mode(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
+                            const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
+                            double noise);
+
 // Local estimates along the span and the band-gain correction they carry.
 struct CorrectedEstimates {
   std::vector<Estimate> est;       ///< the last pass's estimates
@@ -2013,10 +2043,18 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   };
   // The first pass: on bs's envelope and phase `ep` (made by the caller) for the Hilbert
   // method.
+  std::vector<Estimate> centred;
   std::vector<Estimate> est = options.method == Method::kHilbert
-                                  ? hilbert_estimates(ep, s, noise, {})
+                                  ? hilbert_estimates(ep, s, noise, {}, &centred)
                                   : estimates_of(z.baseband, z.carrier_hz, s, noise, {});
   exchange = exchange_of(est, noise, s, measured, cache);
+  if (!exchange.found() && !centred.empty()) {
+    Exchange swings = exchange_of(centred, noise, s, measured, cache);
+    if (swings.found() && swings.turns.size() >= 2 && !swings.grows && !swings.one_way &&
+        partner_holds_energy(swings, s, measured, cache) &&
+        !beats_with_second_mode(centred, channel, band, ep, s, noise))
+      exchange = std::move(swings);
+  }
   GainCorrection previous;
   GainCorrection gain = correct(est);
   // Iterated until ln r changes by less than kConverged anywhere in the span (each
@@ -2456,6 +2494,12 @@ TwoModes two_modes(const std::vector<Estimate>& est, const ChannelSpectrum& chan
     }
   }
   return best;
+}
+
+bool beats_with_second_mode(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
+                            const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
+                            double noise) {
+  return two_modes(est, channel, read, ep, s, noise).found();
 }
 
 // The summary's note on a second mode in the band (two_modes), with a band that would
