@@ -148,6 +148,7 @@ struct Guess {
   // quantity of a known amplitude unit.
   std::string kind_mismatch;
   std::optional<Quantity> unit_measures;
+  std::string case_slip;  ///< the unit as written where `unit` is its spelling in another case
 };
 
 Guess guess_column(const std::string& name, const std::string& bracket_unit,
@@ -201,6 +202,27 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
   if (g.column == 2 || g.column == 4)
     g.unit_taken = g.unit == "%" || g.unit == "1" || g.unit == "-";
   if (g.column == 0) {
+    // Units are case-sensitive: 'G' is no unit, but a case slip of 'g'. Suggesting the name
+    // without it ('rename it amplitude') led to the values being read in SI, 9.81 times off,
+    // without a word; the suggestion names the spelling instead (--amplitude's kind first).
+    if (!g.unit.empty() && !parse_unit(g.unit)) {
+      std::vector<Quantity> kinds;
+      if (quantity) kinds.push_back(*quantity);
+      for (const Quantity q :
+           {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration}) {
+        if (!quantity || q != *quantity) kinds.push_back(q);
+      }
+      for (const Quantity q : kinds) {
+        const std::vector<std::string> spellings = unit_spellings(q);
+        const auto c = std::find_if(spellings.begin(), spellings.end(), [&](const std::string& x) {
+          return lower(x) == lower(g.unit);
+        });
+        if (c == spellings.end()) continue;
+        g.case_slip = g.unit;
+        g.unit = *c;
+        break;
+      }
+    }
     if (const std::optional<Unit> u = parse_unit(g.unit)) {
       g.unit_measures = u->quantity;
       g.kind_mismatch = amplitude_kind_mismatch(g.unit, *u, quantity);
@@ -249,6 +271,10 @@ std::string rename_hint(size_t i, const std::string& field, const Guess& g) {
     notes.emplace_back(g.relative ? "one standard deviation of the damping ratio, absolute: a "
                                     "relative one times damping_ratio"
                                   : "one standard deviation of the damping ratio");
+  }
+  if (!g.case_slip.empty()) {
+    notes.push_back(fmt::format("units are case-sensitive: '{}' is written '{}'",
+                                shorten(g.case_slip), g.unit));
   }
   if (!notes.empty()) fix += fmt::format(" ({})", fmt::join(notes, "; "));
   return fmt::format("column {} '{}': {}", i + 1, shorten(field), fix);

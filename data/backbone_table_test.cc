@@ -288,8 +288,8 @@ TEST(BackboneTable, ASuggestedAmplitudeHeaderIsOneTheNamedAmplitudeReads) {
     return parse_quantity(word);
   };
   int n = 0;
-  for (const std::string header :
-       {"Amplitude (mm)", "Amp (m/s^2)", "amplitude (mm/s)", "Amp [g]"}) {
+  for (const std::string header : {"Amplitude (mm)", "Amp (m/s^2)", "amplitude (mm/s)", "Amp [g]",
+                                   "Amplitude (G)", "amp (MM/S)"}) {
     for (const std::optional<Quantity> q : kinds) {
       const std::string name = "k" + std::to_string(++n) + ".csv";
       const std::string m =
@@ -319,6 +319,12 @@ TEST(BackboneTable, ASuggestedAmplitudeHeaderIsOneTheNamedAmplitudeReads) {
                   "the amplitude is a velocity (--amplitude velocity, SI unit m/s); a "
                   "displacement amplitude needs --amplitude displacement and the header "
                   "'amplitude [mm]'"});
+  // A case slip in round brackets names the spelling: 'Amplitude (G)' was told to rename it
+  // 'amplitude' ("'G' is no unit of amplitude"), and the table so renamed was read in m/s^2,
+  // 9.81 times too small, without a word.
+  expect_refusal("k_slip.csv", "Amplitude (G)" + rows, Quantity::kAcceleration,
+                 {"k_slip.csv:1: column 1 'Amplitude (G)': write the unit in square brackets, "
+                  "'amplitude [g]' (units are case-sensitive: 'G' is written 'g')"});
   // In square brackets the refusal names the --amplitude that reads the unit too.
   expect_refusal("k_square.csv", "amplitude [mm/s]" + rows, std::nullopt,
                  {"k_square.csv:1: column 'amplitude [mm/s]': unit 'mm/s' refused: a modal "
