@@ -546,10 +546,15 @@ double read_cell(size_t k, const std::string& cell, const Columns& c, char delim
   // A damping ratio of 1 or more is no ring-down (critical damping): per cent read as a
   // fraction (a table of 0.05-4.85 % ran to a fit with an RMS damping error of 99 %).
   if (k == 2 && *v * c.scale[k] >= 1) {
-    throw InputError(where(file, n,
-                           fmt::format("damping_ratio '{}' is not a fraction below 1; per cent? "
-                                       "write the header as 'damping_ratio [%]'",
-                                       cell)));
+    // (Under a header already in per cent the value is no damping ratio either way.)
+    throw InputError(
+        where(file, n,
+              c.scale[k] == 1.0
+                  ? fmt::format("damping_ratio '{}' is not a fraction below 1; per cent? write the "
+                                "header as 'damping_ratio [%]'",
+                                cell)
+                  : fmt::format("damping_ratio '{}' % is 1 or more, critical damping: no ring-down",
+                                cell)));
   }
   return *v * c.scale[k];
 }

@@ -125,6 +125,9 @@ TEST(BackboneTable, RefusesUnphysicalValuesWithFileAndLine) {
       {header + "1,10,0.5\n2,10,4.85\n",
        "bad13.csv:3: damping_ratio '4.85' is not a fraction below 1; per cent? write the header "
        "as 'damping_ratio [%]'"},
+      // Under a per-cent header it is no ring-down either, and the header is not the fix.
+      {"amplitude,frequency_hz,DAMPING_RATIO [%]\n1,10,0.5\n2,10,200\n",
+       "bad14.csv:3: damping_ratio '200' % is 1 or more, critical damping: no ring-down"},
   };
   int i = 0;
   for (const auto& [text, expected] : cases) {
