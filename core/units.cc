@@ -98,6 +98,15 @@ std::vector<std::string> unit_names(Quantity q) {
   return out;
 }
 
+std::string known_units() {
+  std::string out;
+  for (const Quantity q :
+       {Quantity::kDisplacement, Quantity::kVelocity, Quantity::kAcceleration, Quantity::kForce}) {
+    for (const std::string& name : unit_names(q)) out += (out.empty() ? "" : ", ") + name;
+  }
+  return out;
+}
+
 std::string si_unit(Quantity q) {
   switch (q) {
     case Quantity::kDisplacement:

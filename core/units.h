@@ -34,6 +34,10 @@ std::vector<std::string> unit_spellings(Quantity q);
 /// that list what a column takes: displacement "m", "mm", "um", "in".
 std::vector<std::string> unit_names(Quantity q);
 
+/// Every unit parse_unit reads, one spelling each, for a refusal of an unknown one:
+/// "m, mm, um, in, m/s, mm/s, um/s, in/s, m/s^2, mm/s^2, in/s^2, g, mg, N, kN, lbf".
+std::string known_units();
+
 /// The SI unit of a quantity: "m", "m/s", "m/s^2", "N".
 std::string si_unit(Quantity q);
 

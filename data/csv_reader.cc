@@ -1,6 +1,7 @@
 #include "jointlab/data/csv_reader.h"
 
 #include "jointlab/core/text.h"
+#include "jointlab/core/units.h"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -90,11 +91,10 @@ ColumnSpec parse_header_field(std::string_view raw, const std::string& file, lon
   if (!spec.unit_text.empty()) {
     spec.unit = parse_unit(spec.unit_text);
     if (!spec.unit) {
-      throw InputError(where(file, line,
-                             fmt::format("column '{}': unknown unit '{}' (known: m, "
-                                         "mm, um, in, m/s, mm/s, in/s, m/s^2, mm/s^2, "
-                                         "g, mg, N, kN, lbf)",
-                                         shorten(spec.name), shorten(spec.unit_text))));
+      throw InputError(
+          where(file, line,
+                fmt::format("column '{}': unknown unit '{}' (known: {})", shorten(spec.name),
+                            shorten(spec.unit_text), known_units())));
     }
   }
   return spec;

@@ -1,6 +1,7 @@
 #include "jointlab/data/mat_file.h"
 
 #include "jointlab/core/text.h"
+#include "jointlab/core/units.h"
 
 #include <algorithm>
 #include <atomic>
@@ -498,12 +499,11 @@ Channel make_channel(const Named& v, const std::string& name, const std::string&
   if (!unit_text.empty()) {
     const auto unit = parse_unit(unit_text);
     if (!unit) {
-      throw InputError(where(file, 0,
-                             fmt::format("field '{}{}': unknown unit '{}' for "
-                                         "channel '{}' (known: m, mm, um, in, m/s, "
-                                         "mm/s, in/s, m/s^2, mm/s^2, g, mg, N, kN, "
-                                         "lbf)",
-                                         prefix, f.units->name, unit_text, ch.name)));
+      throw InputError(
+          where(file, 0,
+                fmt::format("field '{}{}': unknown unit '{}' for "
+                            "channel '{}' (known: {})",
+                            prefix, f.units->name, unit_text, ch.name, known_units())));
     }
     ch.quantity = unit->quantity;
     ch.unit = unit_text;

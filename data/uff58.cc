@@ -1,6 +1,7 @@
 #include "jointlab/data/uff58.h"
 
 #include "jointlab/core/text.h"
+#include "jointlab/core/units.h"
 
 #include <algorithm>
 #include <bit>
@@ -572,10 +573,8 @@ Channel make_channel(const Dataset& ds, size_t index, const std::string& file) {
   } else if (type_q) {
     if (!label.empty()) {
       throw InputError(where(file, line9,
-                             fmt::format("record 9: unknown {} unit '{}' (known: m, "
-                                         "mm, um, in, m/s, mm/s, in/s, m/s^2, "
-                                         "mm/s^2, g, mg, N, kN, lbf)",
-                                         quantity_name(*type_q), printable(label))));
+                             fmt::format("record 9: unknown {} unit '{}' (known: {})",
+                                         quantity_name(*type_q), printable(label), known_units())));
     }
     ch.quantity = type_q;  // unlabelled: SI, as the unit exponents say nothing of scale
   }
