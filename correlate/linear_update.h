@@ -29,7 +29,10 @@
 // relative frequency uncertainty; with more pairs than fitted sets, the reduced chi-square
 //     chi2_red = sum (r_i / sigma)^2 / (pairs - fitted)
 // measures the scatter the model cannot explain (model-form error), and when it exceeds 1 the
-// covariance is scaled by it.
+// covariance is scaled by it: the scale is then estimated from the residuals, so the error over
+// the scaled sigma follows Student's t over nu = pairs - fitted, and the covariance is widened
+// by nu / (nu - 2) too, in part where chi2_red is below its one-sided 1-sigma point under the
+// stated noise (the share growing from 0 at 1), and none is stated where nu <= 2.
 // Smallest stiffness: with tolerance > 0, each flat parameter is then lowered to the
 // smallest value (bisection in ln theta) at which every paired |r_i| is within the
 // tolerance; when even its lower bound meets the tolerance the frequencies do not bound it
@@ -232,13 +235,23 @@ struct LinearUpdateSummary {
   int iterations = 0;                                       ///< optimiser iterations
   std::vector<double> history;                 ///< objective after each iteration (first: start)
   std::vector<Eigen::VectorXd> theta_history;  ///< every set's stiffness at each history entry
-  std::string rule;                   ///< the rule that produced the result, for the headline
-  bool tolerance_met = true;          ///< kSmallest: false when no stiffness meets the tolerance
-  std::string ambiguity;              ///< kAmbiguous: which modes, and why
-  std::string shape_problem;          ///< kShapesRefused: what is wrong with the shapes
-  int rounds = 0;                     ///< fits run (a new round when the pairs change)
-  double reduced_chi2 = 0;            ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
-  int degrees_of_freedom = 0;         ///< pairs - fitted sets
+  std::string rule;            ///< the rule that produced the result, for the headline
+  bool tolerance_met = true;   ///< kSmallest: false when no stiffness meets the tolerance
+  std::string ambiguity;       ///< kAmbiguous: which modes, and why
+  std::string shape_problem;   ///< kShapesRefused: what is wrong with the shapes
+  int rounds = 0;              ///< fits run (a new round when the pairs change)
+  double reduced_chi2 = 0;     ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
+  int degrees_of_freedom = 0;  ///< pairs - fitted sets
+  double frequency_std = 0;    ///< the stated relative frequency uncertainty
+  /// The standard deviations rest on the scatter (reduced_chi2 > 1, with a degree of freedom
+  /// left): sqrt(reduced_chi2) times those of the stated noise, and widened by Student's t
+  /// (t_widening); false: they assume the stated frequency_std.
+  bool sigma_from_scatter = false;
+  /// The factor by which sigma_from_scatter standard deviations are widened for Student's t over
+  /// nu = degrees_of_freedom: sqrt(nu / (nu - 2)) once reduced_chi2 passes its one-sided 1-sigma
+  /// point under the stated noise, part of it between 1 and there; 0 where nu <= 2 leaves none
+  /// stated; 1 where the stated noise sets them.
+  double t_widening = 1;
   LinearEvaluation start;             ///< pairing and residuals at the start
   Eigen::MatrixXd final_mac;          ///< MAC (measured x elastic model modes) at the result
   std::vector<std::string> warnings;  ///< parameters at bounds, aliased modes, unmet tolerance
@@ -251,6 +264,12 @@ struct LinearUpdateSummary {
 /// The reduced chi-square that noise of the stated size exceeds once in 740 fits (the one-sided
 /// 3-sigma point of the chi-square distribution over degrees_of_freedom > 0, divided by it).
 double reduced_chi2_limit(int degrees_of_freedom);
+
+/// nu / (nu - 2), the variance of Student's t over nu degrees of freedom: a parameter's error over
+/// a standard deviation whose scale was estimated from the residuals of a fit with nu degrees of
+/// freedom left follows t_nu, not a normal, so such a variance is widened by it. Nothing where
+/// nu <= 2 (an infinite variance: no standard deviation can be stated).
+std::optional<double> student_t_variance(double degrees_of_freedom);
 
 /// Pairs of model modes (columns of shapes at the sensors) whose auto-MAC is at least
 /// threshold: the sensors cannot tell them apart. Each entry (j, k, MAC), j < k.
