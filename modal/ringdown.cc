@@ -3121,7 +3121,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     const std::string advice = spectral_advice(channel, band, options.taper, cache);
     sum.message = fmt::format(
         "no span of the envelope stays above {} x the noise floor with a "
-        "decaying fit whose damping is known to {:.0f} % (peak envelope "
+        "decaying fit whose damping is known to {:g} % (peak envelope "
         "{:.3e} m, noise floor {:.3e} m)",
         options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
         noise / channel.scale);
@@ -3176,6 +3176,33 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     notes.push_back(
         fmt::format("{} inside the span left out below the noise threshold (at most 2 in a row)",
                     points(left_below)));
+  }
+  // Why the span ends where the envelope stays above the noise threshold beyond it: a 13 Hz mode
+  // of a strongly nonlinear joint, rung down by `simulate`, kept 0.7-6.6 s and said nothing of
+  // its envelope above the threshold until 15 s, where its damping was known to 2-7 %.
+  size_t after_limit = 0, after_gap = 0, last_above = 0;
+  for (size_t k = run.end; k < est.size(); ++k) {
+    if (!screened.above[k]) continue;
+    ++(valid[k] ? after_gap : after_limit);
+    last_above = k;
+  }
+  if (after_limit + after_gap >= 2) {
+    const bool both = after_limit > 0 && after_gap > 0;
+    std::vector<std::string> why;
+    if (after_limit > 0) {
+      why.push_back(
+          fmt::format("{}the envelope not decaying or the damping not known to the {:.1f} % limit "
+                      "(--max-damping-std)",
+                      both ? fmt::format("{} with ", after_limit) : std::string(),
+                      100 * options.max_damping_rel_std));
+    }
+    if (after_gap > 0) {
+      why.push_back(fmt::format("{}beyond a gap of more than 2 such points",
+                                both ? fmt::format("{} ", after_gap) : std::string()));
+    }
+    notes.push_back(fmt::format(
+        "{} after the span, up to {:.4f} s, left out above the noise threshold: {}",
+        points(after_limit + after_gap), channel.t0 + est[last_above].t, fmt::join(why, ", ")));
   }
   if (!beat_note.empty()) notes.insert(notes.begin(), beat_note);
   if (!followed.note.empty()) notes.insert(notes.begin(), followed.note);

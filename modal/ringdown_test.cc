@@ -977,6 +977,53 @@ TEST(RingdownLinearValues, ZeroAmplitudeLimitHoldsTheTruth) {
   }
 }
 
+// Where the span ends with the envelope still above the noise threshold, the summary says so, to
+// when, and which limit ended it: a 13 Hz mode of a strongly nonlinear joint rung down by
+// `simulate` kept 0.7-6.6 s, its envelope above the threshold until 15 s, and said nothing. An
+// 80 Hz linear decay read with a damping limit of 0.5 % (its points' one-sigma is 0.1-5 %)
+// ends early; the time the note names is where the same record read with a 10 % limit ends
+// (the noise threshold), to within one point's spacing (about 0.01 s here).
+TEST(RingdownSpanEnd, ASpanEndedByTheDampingLimitNamesItAndHowFarTheEnvelopeGoes) {
+  const double fs = 5120, f0 = 80.0, zeta = 0.002;
+  const Eigen::Index n = static_cast<Eigen::Index>(6 * fs);
+  std::mt19937 rng(1);
+  std::normal_distribution<double> g(0.0, 1e-6);
+  const double w = 2 * std::numbers::pi * f0 * std::sqrt(1 - zeta * zeta);
+  Eigen::VectorXd x(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    x(k) = 1e-3 * std::exp(-zeta * 2 * std::numbers::pi * f0 * t) * std::cos(w * t) + g(rng);
+  }
+  signal::FftCache cache;
+  const signal::Band band{64, 96};
+  const ChannelSpectrum cs =
+      channel_spectrum(x, fs, 0.0, prepare_for({band}, RingdownOptions{}.taper), cache);
+  const auto read = [&](double limit) {
+    RingdownOptions opt;
+    opt.amplitude = Quantity::kDisplacement;
+    opt.max_damping_rel_std = limit;
+    return extract_backbone(cs, Quantity::kDisplacement, band, opt, cache);
+  };
+  const Ringdown strict = read(0.005), loose = read(0.1);
+  ASSERT_EQ(strict.summary.status, RingdownStatus::kOk) << strict.summary.message;
+  ASSERT_EQ(loose.summary.status, RingdownStatus::kOk) << loose.summary.message;
+  const std::string& m = strict.summary.message;
+  std::printf("limit 0.5 %%: %.3f to %.3f s: %s\nlimit 10 %%: %.3f to %.3f s\n",
+              strict.summary.span_start_s, strict.summary.span_end_s, m.c_str(),
+              loose.summary.span_start_s, loose.summary.span_end_s);
+  const std::string mark = "after the span, up to ";
+  const size_t at = m.find(mark);
+  ASSERT_NE(at, std::string::npos) << m;
+  EXPECT_NE(m.find("the damping not known to the 0.5 % limit (--max-damping-std)", at),
+            std::string::npos)
+      << m;
+  const double until = std::stod(m.substr(at + mark.size()));
+  EXPECT_LT(strict.summary.span_end_s, until - 0.5);
+  EXPECT_NEAR(until, loose.summary.span_end_s, 0.02);
+  // Read to the noise threshold, nothing is said of the end.
+  EXPECT_EQ(loose.summary.message.find(mark), std::string::npos) << loose.summary.message;
+}
+
 // A band that follows twice a stronger mode's frequency: mode 1 at 122 Hz (softening,
 // as three_mode_record's first mode) plus a locked second harmonic at a twentieth of
 // its amplitude, read in 230:260 Hz. At least three quarters of the kept points of that
