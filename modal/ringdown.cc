@@ -1324,9 +1324,11 @@ Eigen::Index strongest_peak(const ChannelSpectrum& channel, Eigen::Index k0, Eig
 }
 
 // What the measured samples' spectrum shows around a band with no span: the strongest peak
-// near it, or that the band is narrower than kWidths half-power widths of its mode.
+// near it, or that the band is narrower than kWidths half-power widths of its mode. `read_width`
+// is the width the mode was read through (the typed band's unless follow_mode moved it): a band
+// already read wider is not told to widen.
 std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& band, double taper,
-                            signal::FftCache& cache) {
+                            signal::FftCache& cache, double read_width = 0) {
   constexpr double kWidths = kBandWidths;
   if (channel.measured.size() < 3) return {};
   const double df = channel.measured_df();
@@ -1351,7 +1353,7 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
         fp, band.lo + edge / 2, band.hi - edge / 2);
   }
   const double hp = half_power_width(channel, fp, cache);
-  if (width < kWidths * hp) {
+  if (std::max(width, read_width) < kWidths * hp) {
     return fmt::format(
         "the band ({:.3g} Hz wide) is narrower than {:g} times the half-power width of its mode "
         "({:.3g} Hz at {:.2f} Hz): widen it to at least {:.3g} Hz",
@@ -3118,7 +3120,33 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   Run run = longest_run(est, valid, screened.above);
   if (run.count >= 2) place_end(corr, screened, run, zb, ep, sr, noise, beat);
   if (run.count < 2) {
-    const std::string advice = spectral_advice(channel, band, options.taper, cache);
+    // A moved band may hold a second mode the typed band left out, or the typed band one it
+    // could not leave out (a peak beyond the mode's track by more than its half-power
+    // half-width; without a track, beyond the spectral peak's half-power width): the LMS twin's
+    // drifting mode beside a 10 % mode at 154 Hz, read through 139.7:169.7 Hz, was told only to
+    // widen the typed band; widening leaves a mode inside it where it is.
+    std::string second;
+    if (moved && beat_note.empty()) {
+      const ModeTrack tr = track_mode(ep, noise, sr);
+      const BandPeaks peaks = band_peaks(channel, read, options.taper, 3);
+      const double half =
+          tr.points > 0 ? tr.sigma / kTwoPi : half_power_width(channel, peaks.main_hz, cache);
+      const double lo = tr.points > 0 ? tr.f_lo : peaks.main_hz,
+                   hi = tr.points > 0 ? tr.f_hi : peaks.main_hz;
+      for (const auto& [f2, ratio] : peaks.others) {
+        if (f2 > lo - half && f2 < hi + half) continue;
+        second = fmt::format(
+            "the band read ({:.2f}:{:.2f} Hz) holds a second spectral peak at {:.2f} Hz, {:.0f} % "
+            "of the mode's: a band that leaves it out may keep a span",
+            read.lo, read.hi, f2, 100 * ratio);
+        break;
+      }
+    }
+    // (A band read wider than the advice asks, or holding a second mode, is not told to widen.)
+    std::string advice = spectral_advice(
+        channel, band, options.taper, cache,
+        second.empty() ? read.hi - read.lo : std::numeric_limits<double>::infinity());
+    if (!second.empty()) advice += (advice.empty() ? "" : "; ") + second;
     sum.message = fmt::format(
         "no span of the envelope stays above {} x the noise floor with a "
         "decaying fit whose damping is known to {:g} % (peak envelope "
