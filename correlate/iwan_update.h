@@ -300,7 +300,8 @@ std::string unreachable_frequencies(const IwanObjective& objective,
 /// Why update_iwan() stopped.
 enum class IwanUpdateStatus {
   kConverged,     ///< no further improvement (Monte Carlo) or Ceres converged
-  kBudget,        ///< the evaluation budget was spent
+  kBudget,        ///< the evaluation budget was spent (global-local: the polish of the best
+                  ///< point too) before convergence; no sigma is stated
   kNoValidPoint,  ///< no sample could be evaluated
 };
 
@@ -323,6 +324,10 @@ struct IwanUpdateSummary {
   bool linear_known = false;  ///< some target has a measured linear frequency (else no error)
   int evaluations = 0;        ///< QSMA evaluations
   int rounds = 0;             ///< Monte Carlo rounds or local starts
+  /// Global-local: QSMA evaluations (counted in `evaluations`) of the polish, the local solve
+  /// that found the best point carried on from there toward its tolerance after its share of
+  /// the budget ran out, by up to another budget (0: it converged within its share).
+  int polish_evaluations = 0;
   IwanOptimizer optimizer = IwanOptimizer::kGlobalLocal;  ///< the method used
   bool improved = true;  ///< false: no sample beat the start (held parameters at their values)
   /// Free parameters that end at a bound of the search box, e.g. "Fs at its upper bound 2000 N".
@@ -333,13 +338,14 @@ struct IwanUpdateSummary {
   /// Which of (F_S, K_T, chi, beta) the options held (their sigma is not a number).
   std::array<bool, 4> held{};
   /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
-  /// unknown or held): the larger of a serial-correlation robust (Newey-West, HAC) sandwich over
-  /// each curve's points ordered by amplitude, with a bandwidth of a tenth of the curve so that
-  /// it does not depend on how densely the curve is sampled, and the Gauss-Newton covariance
-  /// scaled by the reduced chi-square when that exceeds 1; with three or more curves the
-  /// cluster-robust covariance (one cluster per curve) as a further lower limit, and the
-  /// covariance of AR(1) noise at its coefficient corrected for what the fit absorbs; widened
-  /// for few effective_points (Student's t), and 0 (unknown) where they are 3 or fewer.
+  /// unknown or held, and all 0 when the fit did not converge, kBudget): the larger of a
+  /// serial-correlation robust (Newey-West, HAC) sandwich over each curve's points ordered by
+  /// amplitude, with a bandwidth of a tenth of the curve so that it does not depend on how densely
+  /// the curve is sampled, and the Gauss-Newton covariance scaled by the reduced chi-square when
+  /// that exceeds 1; with three or more curves the cluster-robust covariance (one cluster per
+  /// curve) as a further lower limit, and the covariance of AR(1) noise at its coefficient
+  /// corrected for what the fit absorbs; widened for few effective_points (Student's t), and 0
+  /// (unknown) where they are 3 or fewer.
   Eigen::Vector4d relative_std = Eigen::Vector4d::Zero();
   /// Covariance of x = (ln F_S, ln K_T, chi, ln beta) behind relative_std (0 rows and columns
   /// for held parameters; all 0 when unknown).

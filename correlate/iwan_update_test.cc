@@ -491,9 +491,10 @@ TEST(IwanUpdate, MicroslipHitsWithPlantedScatterRecoverKtChiAndDissipation) {
   }
 }
 
-// A search that stopped short with a misfit says it may have missed the best fit (the report of
-// a summary as update_iwan leaves it after a spent budget), and says nothing of it when the model
-// describes the data or when every local solve converged.
+// A search that did not converge says so and what --evaluations to use, whatever the
+// chi-square (before, only with a misfit: a fit cut off at reduced chi-square 0.68 said nothing);
+// one that stopped at a bound with a misfit says it may have missed the best fit, and nothing of
+// it when the model describes the data.
 TEST(IwanUpdate, AShortSearchWithAMisfitSuggestsMoreEvaluations) {
   IwanUpdateSummary s;
   s.improved = true;
@@ -501,14 +502,19 @@ TEST(IwanUpdate, AShortSearchWithAMisfitSuggestsMoreEvaluations) {
   s.evaluations = 2807;
   s.residuals = 180;
   s.reduced_chi2 = 9.69;
-  const std::string warning = "it may have missed the best fit rather than the model being wrong";
-  EXPECT_NE(s.report().find(warning), std::string::npos) << s.report();
+  const std::string short_fit = "WARNING: the fit did not converge";
+  EXPECT_NE(s.report().find(short_fit), std::string::npos) << s.report();
   EXPECT_NE(s.report().find("--evaluations (e.g. 11228)"), std::string::npos) << s.report();
-  s.reduced_chi2 = 1.1;  // within 1 + 3 sqrt(2 / 180) = 1.32
-  EXPECT_EQ(s.report().find(warning), std::string::npos) << s.report();
-  s.reduced_chi2 = 9.69;
+  s.reduced_chi2 = 0.68;  // the cantilever's: no misfit, and still not converged
+  EXPECT_NE(s.report().find(short_fit), std::string::npos) << s.report();
   s.status = IwanUpdateStatus::kConverged;
-  EXPECT_EQ(s.report().find(warning), std::string::npos) << s.report();
+  EXPECT_EQ(s.report().find(short_fit), std::string::npos) << s.report();
+  const std::string missed = "it may have missed the best fit rather than the model being wrong";
+  s.at_bounds = {"Fs at its upper bound 600 N"};
+  s.reduced_chi2 = 9.69;
+  EXPECT_NE(s.report().find(missed), std::string::npos) << s.report();
+  s.reduced_chi2 = 1.1;  // within 1 + 3 sqrt(2 / 180) = 1.32
+  EXPECT_EQ(s.report().find(missed), std::string::npos) << s.report();
 }
 
 // Stated uncertainties below the floors are raised to them, and the report says how many.
@@ -674,7 +680,7 @@ TEST(IwanUpdate, ABoxWithoutTheStartGivesAResultInsideItAndNamesTheBound) {
     EXPECT_EQ(sum.at_bounds.front(), "Fs at its lower bound 60 N") << sum.report();
     EXPECT_NE(sum.report().find("WARNING: Fs at its lower bound 60 N"), std::string::npos)
         << sum.report();
-    EXPECT_EQ(sum.report().find("converged"), std::string::npos) << sum.report();
+    EXPECT_EQ(sum.report().find("Iwan update: converged"), std::string::npos) << sum.report();
   }
 }
 
@@ -907,6 +913,80 @@ TEST(IwanUpdate, SigmaHoldsUnderStronglyCorrelatedNoise) {
   std::printf("RMS z of K_T and chi over 12 seeds: %.3g\n", rms);
   EXPECT_GT(rms, 0.6);
   EXPECT_LT(rms, 1.5);
+}
+
+// The budget bounds the global search, not the final descent. The trial's cantilever (one curve,
+// default 1500 evaluations): 7 of 12 fits ended "evaluation budget spent" with the best point's
+// local solve cut off mid-descent at its share of the budget (cost 1.31 where the minimum, found
+// with 6000, costs 0.73; chi 4.6 sigma off), stated with sigmas and a reduced chi-square of 0.68
+// that raised no warning. The same here: the one-mode model with the joint 60 % of the
+// stiffness (chi -0.3, beta 0.6), one 60-point curve up to 2.5 phi_max with AR(1) noise (rho
+// 0.9) of 0.2 % in frequency and 5 % in damping, started off (F_S x0.71, K_T x0.91, chi -0.5,
+// beta 1). Before: seeds 2 and 12 ended "budget spent" at cost 0.975 and 1.405, the fits with
+// 6000 evaluations at 0.7535 and 1.1095 (themselves "budget spent"). Now the local solve from the
+// best point is carried on to its tolerance: both converge at the default budget, to the cost of
+// the 6000-evaluation fit within 1e-3 (measured: 0.7537 and 1.1091, 722 and 1 049 evaluations past
+// the budget).
+TEST(IwanUpdate, TheBestLocalSolveIsCarriedToItsToleranceAtTheDefaultBudget) {
+  const double k_total = std::pow(2 * M_PI * 13.3, 2);
+  const model::IwanParameters truth_p{0.7, 0.6 * k_total, -0.3, 0.6};
+  const model::IwanParameters start_p{truth_p.Fs * 0.71, truth_p.Kt * 0.91, -0.5, 1.0};
+  const model::Model truth = one_mode_structure(0.4 * k_total, truth_p, 0.0);
+  const model::Model start = one_mode_structure(0.4 * k_total, start_p, 0.0);
+  const double phi = model::Iwan(truth_p).phi_max();
+  for (const unsigned seed : {2u, 12u}) {
+    IwanTarget target;
+    target.curves.push_back(
+        modal_backbone(truth, 60, 1e-3 * phi, 2.5 * phi, 2e-3, 0.05, seed, 0.9));
+    const auto fit = [&](int evaluations) {
+      IwanUpdateOptions o;
+      o.bounds = default_iwan_bounds(start_p);
+      o.max_evaluations = evaluations;
+      const IwanObjective obj(start, "j", {}, {target}, o);
+      IwanUpdateSummary s;
+      update_iwan(obj, o, &s);
+      return s;
+    };
+    const IwanUpdateSummary s = fit(1500), long_fit = fit(6000);
+    SCOPED_TRACE(fmt::format("seed {}\n{}with 6000:\n{}", seed, s.report(), long_fit.report()));
+    RecordProperty(fmt::format("cost_seed{}", seed),
+                   fmt::format("{} {}", s.final_cost, long_fit.final_cost));
+    EXPECT_EQ(s.status, IwanUpdateStatus::kConverged);
+    EXPECT_NE(s.report().find("converged (the local solve from the best point met its tolerance)"),
+              std::string::npos);
+    EXPECT_LT(s.final_cost, long_fit.final_cost * (1 + 1e-3));
+    // A sigma at the minimum, where the fit converged.
+    EXPECT_GT(s.relative_std(2), 0);
+  }
+}
+
+// A fit that does not converge states no sigma and says so, whatever its chi-square: a budget of
+// the 100 samples alone leaves no local solve, and the polish of the best sample (100 more
+// evaluations) stops short of the tolerance. Before, such fits stated sigmas at the point the
+// budget left them (the cantilever: chi 4.6 sigma off at reduced chi-square 0.68, no warning).
+TEST(IwanUpdate, AFitThatDidNotConvergeStatesNoSigma) {
+  const FloorTruth t;
+  const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
+  const double phi = model::Iwan(t.iwan).phi_max();
+  IwanTarget target;
+  target.curves.push_back(modal_backbone(truth, 60, 1e-8, 2 * phi, 1e-4, 0.02, 3));
+  const model::Model start =
+      one_mode_structure(t.k0, {t.iwan.Fs * 3, t.iwan.Kt * 0.8, -0.3, 2.0}, 0.0);
+  IwanUpdateOptions o;
+  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.max_evaluations = o.samples;
+  const IwanObjective obj(start, "j", {}, {target}, o);
+  IwanUpdateSummary s;
+  update_iwan(obj, o, &s);
+  SCOPED_TRACE(s.report());
+  ASSERT_TRUE(s.improved);
+  ASSERT_EQ(s.status, IwanUpdateStatus::kBudget);
+  EXPECT_EQ(s.relative_std, Eigen::Vector4d::Zero());
+  EXPECT_EQ(s.covariance, Eigen::Matrix4d::Zero());
+  EXPECT_NE(s.report().find("Iwan update: not converged"), std::string::npos);
+  EXPECT_NE(s.report().find("(no sigma: not converged)"), std::string::npos);
+  EXPECT_NE(s.report().find("WARNING: the fit did not converge"), std::string::npos);
+  EXPECT_NE(s.report().find("run again with a larger --evaluations (e.g. "), std::string::npos);
 }
 
 TEST(IwanUpdate, BadInputIsReported) {

@@ -513,6 +513,8 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["cost"] = cost(summary.final_cost);
   result["initial_cost"] = cost(summary.initial_cost);
   result["evaluations"] = summary.evaluations;
+  // False: the search stopped before its local solve met its tolerance, and no sigma is stated.
+  result["converged"] = summary.status == correlate::IwanUpdateStatus::kConverged;
   result["warnings"] = summary.at_bounds;
   result["reduced_chi2"] = summary.reduced_chi2;
   // The residuals' effective number of independent points behind the sigmas (None: unknown).
@@ -667,7 +669,8 @@ out             write the updated model file here, or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
 None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
-(None where the model cannot be evaluated), 'evaluations', 'warnings' (parameters at a bound),
+(None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
+stopped short of a minimum and no sigma is stated), 'warnings' (parameters at a bound),
 'reduced_chi2', 'effective_points' (the residuals' effective number of independent points;
 None where unknown), 'noise_correlation'
 (their AR(1) coefficient, corrected for what the fit absorbs), 'sigma_degrees_of_freedom' (the

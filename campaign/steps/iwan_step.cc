@@ -207,9 +207,11 @@ IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptio
       history.push_back(h);
     }
     const int evaluations = best.evaluations + full.evaluations;
+    const int polish = best.polish_evaluations + full.polish_evaluations;
     if (full.final_cost < best.final_cost) best = full;
     best.history = std::move(history);
     best.evaluations = evaluations;
+    best.polish_evaluations = polish;
   }
   return best;
 }

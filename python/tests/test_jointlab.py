@@ -273,6 +273,9 @@ def test_update_iwan_equals_the_command_line(tmp_path):
                                   evaluations=400)
     for name in ("Fs", "Kt", "chi", "beta"):
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    # Converged, as the report says; a fit that is not states no sigma.
+    assert result["converged"]
+    assert result["report"].startswith("Iwan update: converged")
     # The fit's statistics behind the sigmas, as the report prints them.
     assert f"reduced chi-square {result['reduced_chi2']:.3g}" in result["report"]
     n_fitted = sum(1 for k in ("Fs", "Kt", "chi", "beta") if not result["parameters"][k]["held"])
