@@ -608,7 +608,156 @@ std::string scatter_widening(const LinearUpdateSummary& s) {
       1 / boost::math::cdf(boost::math::complement(chi2, s.reduced_chi2 * nu)));
 }
 
-// Standard deviations of the fitted sets at the result (its Jacobian). Where the frequencies of
+// A singular value of the fitted sets' Jacobian with unit columns whose square is below this
+// marks sets acting together: for two sets, a correlation of their sensitivities above 0.999.
+constexpr double kCollinearSquared = 1e-3;
+
+// The sensitivities of the fitted sets, J (columns d r / d ln theta of each), taken apart: the
+// directions of ln theta the frequencies barely see (kCollinearSquared) and the sets each one
+// moves (a share of at least a tenth of its largest), merged into groups acting together, and
+// (J^T J)^+ without those directions (right for the combinations and for the sets outside the
+// groups, where (J^T J)^-1 is rounding noise: +/- 1.11e+08 % for an Iwan element beside a
+// spring on one degree of freedom).
+struct SensitivityDirections {
+  Eigen::MatrixXd inverse;               // (J^T J)^+, near-null directions dropped
+  std::vector<std::vector<int>> groups;  // columns of J acting together, each ascending
+  std::vector<int> unseen;               // near-null directions in each group
+  int rank = 0;                          // combinations determined: columns - near-null
+};
+
+SensitivityDirections sensitivity_directions(const Eigen::MatrixXd& j) {
+  const auto n = static_cast<int>(j.cols());
+  SensitivityDirections out;
+  const Eigen::VectorXd norm = j.colwise().norm().transpose();  // > 0: no flat set is fitted
+  const Eigen::MatrixXd u = j * norm.cwiseInverse().asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(u, Eigen::ComputeFullV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  const Eigen::MatrixXd& v = svd.matrixV();
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(n, n);
+  std::vector<int> root(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) root[static_cast<size_t>(k)] = k;
+  const auto find = [&](int k) {
+    while (root[static_cast<size_t>(k)] != k) k = root[static_cast<size_t>(k)];
+    return k;
+  };
+  std::vector<int> unseen_at;  // a member of each near-null direction
+  for (int i = 0; i < n; ++i) {
+    const double s2 = i < sv.size() ? sv(i) * sv(i) : 0.0;
+    if (s2 >= kCollinearSquared) {
+      inverse += v.col(i) * v.col(i).transpose() / s2;
+      ++out.rank;
+      continue;
+    }
+    const double top = v.col(i).cwiseAbs().maxCoeff();
+    int first = -1;
+    for (int k = 0; k < n; ++k) {
+      if (std::abs(v(k, i)) < 0.1 * top) continue;
+      if (first < 0)
+        first = k;
+      else
+        root[static_cast<size_t>(find(k))] = find(first);
+    }
+    unseen_at.push_back(first);
+  }
+  out.inverse = norm.cwiseInverse().asDiagonal() * inverse * norm.cwiseInverse().asDiagonal();
+  std::vector<int> group_of(static_cast<size_t>(n), -1);
+  for (int k = 0; k < n; ++k) {
+    int& g = group_of[static_cast<size_t>(find(k))];
+    if (g < 0) {
+      g = static_cast<int>(out.groups.size());
+      out.groups.emplace_back();
+      out.unseen.push_back(0);
+    }
+    out.groups[static_cast<size_t>(g)].push_back(k);
+  }
+  for (const int k : unseen_at)
+    ++out.unseen[static_cast<size_t>(group_of[static_cast<size_t>(find(k))])];
+  // Only groups of two sets or more act together: a unit column is no combination of others
+  // each below a tenth of its share unless ten or more of them sum to it.
+  std::vector<std::vector<int>> groups;
+  std::vector<int> unseen;
+  for (size_t g = 0; g < out.groups.size(); ++g) {
+    if (out.groups[g].size() < 2 || out.unseen[g] == 0) continue;
+    groups.push_back(out.groups[g]);
+    unseen.push_back(out.unseen[g]);
+  }
+  out.groups = std::move(groups);
+  out.unseen = std::move(unseen);
+  return out;
+}
+
+// The sets acting together in `d` (columns of J over the fitted sets `fitted`) recorded in
+// s.collinear, each marked with the others in s.parameters, and one warning per group naming
+// what the frequencies determine; `cov` is the covariance of ln theta over the fitted sets (empty
+// where no sigma is stated).
+void report_collinear(const std::vector<int>& fitted, const Eigen::VectorXd& theta,
+                      const Eigen::MatrixXd& j, const SensitivityDirections& d,
+                      const Eigen::MatrixXd& cov, LinearUpdateSummary& s) {
+  for (size_t g = 0; g < d.groups.size(); ++g) {
+    const std::vector<int>& cols = d.groups[g];
+    CollinearSets c;
+    std::vector<std::string> names;
+    for (const int col : cols) {
+      c.sets.push_back(fitted[static_cast<size_t>(col)]);
+      names.push_back(s.parameters[fitted[static_cast<size_t>(col)]].name);
+    }
+    c.determined = static_cast<int>(cols.size()) - d.unseen[g];
+    for (const int col : cols) {
+      ParameterReport& r = s.parameters[fitted[static_cast<size_t>(col)]];
+      r.relative_std.reset();
+      for (const int other : cols)
+        if (other != col)
+          r.acts_with.push_back(s.parameters[fitted[static_cast<size_t>(other)]].name);
+    }
+    std::string what;
+    if (cols.size() == 2) {
+      // r sees theta_a g_a + theta_b g_b, g = d r / d theta; with g_b = weight g_a it sees
+      // w = theta_a + weight theta_b alone.
+      const int a = cols[0], b = cols[1];
+      const int ka = fitted[static_cast<size_t>(a)], kb = fitted[static_cast<size_t>(b)];
+      const ParameterReport& pa = s.parameters[ka];
+      const ParameterReport& pb = s.parameters[kb];
+      const double ta = theta(ka), tb = theta(kb);
+      const Eigen::VectorXd ga = j.col(a) / ta, gb = j.col(b) / tb;
+      c.weight = ga.dot(gb) / ga.squaredNorm();
+      c.value = ta + c.weight * tb;
+      c.correlation = std::abs(j.col(a).dot(j.col(b))) / (j.col(a).norm() * j.col(b).norm());
+      if (cov.size() > 0) {
+        const Eigen::Vector2d grad(ta / c.value, c.weight * tb / c.value);
+        Eigen::Matrix2d sub;
+        sub << cov(a, a), cov(a, b), cov(b, a), cov(b, b);
+        const double var = grad.dot(sub * grad);
+        if (var >= 0 && std::isfinite(var)) c.relative_std = std::sqrt(var);
+      }
+      const bool sum = std::abs(c.weight - 1) < 0.01;
+      what = fmt::format(
+          "their sensitivities are proportional (correlation {:.6f}), so the frequencies "
+          "determine only {}, {} = {:.6g}{}, not each (the split {:.6g} and {:.6g} is where the "
+          "fit stopped)",
+          c.correlation, sum ? "their sum" : "one combination",
+          sum ? fmt::format("{} + {}", pa.name, pb.name)
+              : fmt::format("{} + {:.4g} {}", pa.name, c.weight, pb.name),
+          c.value, c.relative_std ? fmt::format(" (+/- {:.3g} %)", 100 * *c.relative_std) : "", ta,
+          tb);
+    } else {
+      what = fmt::format(
+          "their sensitivities nearly repeat one another, so the frequencies determine only {} "
+          "combination{} of the {}, not each",
+          c.determined, c.determined == 1 ? "" : "s", cols.size());
+    }
+    const int hold = static_cast<int>(cols.size()) - c.determined;
+    s.warnings.push_back(fmt::format(
+        "{} act together: {}; hold {} of them at a value known otherwise (--hold NAME=VALUE) "
+        "and fit the other{}",
+        fmt::join(names, cols.size() == 2 ? " and " : ", "), what,
+        hold == 1 ? "one" : std::to_string(hold), cols.size() - hold == 1 ? "" : "s"));
+    s.collinear.push_back(std::move(c));
+  }
+}
+
+// Standard deviations of the fitted sets at the result (its Jacobian). Sets acting together
+// (sensitivity_directions) have none, the combination they determine is named, and the degrees
+// of freedom count the combinations determined. Where the frequencies of
 // the least-squares fit `ls` scatter more than their stated uncertainty gives (reduced
 // chi-square above 1; at the least-squares point: a rule that then moves to its tolerance adds
 // errors on purpose, not scatter), the scale is the scatter's: the covariance is scaled by the
@@ -617,16 +766,22 @@ std::string scatter_widening(const LinearUpdateSummary& s) {
 // where nu <= 2. Without the t, twoj's two joints fitted to five modes at three sensors with
 // 0.5 % noise and the default 0.1 % gave z-scores of RMS 1.63 and 1.37 over 40 seeds (largest
 // |z| 4.25): t over 3 degrees of freedom has a standard deviation of sqrt(3).
-void report_uncertainty(const LinearProblem& p, const LinearEvaluation& at,
-                        const LinearEvaluation& ls, const std::vector<char>& held,
-                        LinearUpdateSummary& s) {
+void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
+                        const LinearEvaluation& at, const LinearEvaluation& ls,
+                        const std::vector<char>& held, LinearUpdateSummary& s) {
   std::vector<int> fitted;
+  s.collinear.clear();
   for (int k = 0; k < p.size(); ++k) {
     s.parameters[k].relative_std.reset();
+    s.parameters[k].acts_with.clear();
     if (!held[static_cast<size_t>(k)] && !s.parameters[k].flat) fitted.push_back(k);
   }
+  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(fitted.size()));
+  for (size_t c = 0; c < fitted.size(); ++c) j.col(c) = at.jacobian.col(fitted[c]);
+  const SensitivityDirections d =
+      fitted.empty() ? SensitivityDirections{} : sensitivity_directions(j);
   const int pairs = static_cast<int>(ls.pairing.pairs.size());
-  s.degrees_of_freedom = pairs - static_cast<int>(fitted.size());
+  s.degrees_of_freedom = pairs - d.rank;
   const double sf = p.options.frequency_std;
   s.frequency_std = sf;
   s.reduced_chi2 = s.degrees_of_freedom > 0
@@ -647,21 +802,20 @@ void report_uncertainty(const LinearProblem& p, const LinearEvaluation& at,
         100 * sf, s.reduced_chi2, s.degrees_of_freedom, reduced_chi2_limit(s.degrees_of_freedom),
         scatter_widening(s)));
   }
-  if (s.t_widening == 0) return;
-  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(fitted.size()));
-  for (size_t c = 0; c < fitted.size(); ++c) j.col(c) = at.jacobian.col(fitted[c]);
-  const Eigen::MatrixXd jtj = j.transpose() * j;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(jtj);
-  const double scale =
-      sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
-  const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(jtj.rows(), jtj.cols())) * scale;
-  for (size_t c = 0; c < fitted.size(); ++c) {
-    const double v = cov(c, c);
-    if (v >= 0 && std::isfinite(v)) s.parameters[fitted[c]].relative_std = std::sqrt(v);
+  Eigen::MatrixXd cov;
+  if (s.t_widening > 0) {
+    const double scale =
+        sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
+    cov = d.inverse * scale;
+    for (size_t c = 0; c < fitted.size(); ++c) {
+      const double v = cov(c, c);
+      if (v >= 0 && std::isfinite(v)) s.parameters[fitted[c]].relative_std = std::sqrt(v);
+    }
   }
+  report_collinear(fitted, theta, j, d, cov, s);
   // (A sign-flipped sensor paired a 505 Hz test mode with a model mode then at 748 Hz, the one
   // pair for the one set, and the fit moved K_T 528-fold to match it exactly, "converged".)
-  if (s.degrees_of_freedom == 0 && !fitted.empty()) {
+  if (s.degrees_of_freedom == 0 && s.t_widening > 0) {
     // With no degree of freedom left a fit reaches every frequency unless a bound or the
     // pairs stop it: errors beyond 3 sigma at a pair are said (a reversed channel once left
     // 26.6 % with this warning saying the fit matched exactly).
@@ -1289,7 +1443,7 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
       s.parameters[k].held = held[static_cast<size_t>(k)];
     }
   }
-  report_uncertainty(p, at, least_squares, held, s);
+  report_uncertainty(p, theta, at, least_squares, held, s);
   warn_bounds(p, theta, s);
   warn_aliased(p, at, s);
   if (with_sweeps) sweeps(p, point, s);
@@ -1439,6 +1593,9 @@ std::string LinearUpdateSummary::report() const {
                                              : "  FLAT (not identified by the frequencies): held";
     else if (p.held)
       what = "  held";
+    else if (!p.acts_with.empty())
+      what = fmt::format("  NOT IDENTIFIED alone: acts together with {} (below)",
+                         fmt::join(p.acts_with, ", "));
     else if (p.relative_std)
       what = fmt::format("  +/- {:.3g} %", 100 * *p.relative_std);
     else if (t_widening == 0)

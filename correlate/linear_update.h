@@ -26,7 +26,13 @@
 // drifted between bounds nobody chose. One-at-a-time sweeps (theta_k times 10^[-d, d], the
 // others held) follow every pair by its full shape from the result (the paper's Figure 3).
 // Uncertainty at the result: covariance (J^T J)^-1 sigma^2 over the fitted sets, sigma the
-// relative frequency uncertainty; with more pairs than fitted sets, the reduced chi-square
+// relative frequency uncertainty. Sets whose sensitivity columns nearly repeat one another (a
+// singular value of J with unit columns below sqrt(1e-3)) act together: the frequencies fix only
+// a combination (an Iwan element and a spring on one degree of freedom: their sum), so they are
+// not identifiable and get no sigma; the inverse is then taken without those directions (the
+// pseudo-inverse, right for the combinations and the other sets), the combination of two is
+// named with its own sigma, and "fitted" below counts the combinations determined. With more
+// pairs than fitted sets, the reduced chi-square
 //     chi2_red = sum (r_i / sigma)^2 / (pairs - fitted)
 // measures the scatter the model cannot explain (model-form error), and when it exceeds 1 the
 // covariance is scaled by it: the scale is then estimated from the residuals, so the error over
@@ -203,8 +209,11 @@ struct ParameterReport {
   bool flat = false;       ///< s_k < flat_sensitivity
   /// A flat set held back at its start: where the fit had taken it, and s_k there (0: not so)
   double drifted_to = 0, drifted_sensitivity = 0;
-  bool held = false;                     ///< not fitted: held by the user, or flat
-  bool held_by_user = false;             ///< held by LinearUpdateOptions::holds
+  bool held = false;          ///< not fitted: held by the user, or flat
+  bool held_by_user = false;  ///< held by LinearUpdateOptions::holds
+  /// Fitted sets whose sensitivities this one's nearly repeats (LinearUpdateSummary::collinear):
+  /// the frequencies determine a combination of them, not this set alone (empty: none).
+  std::vector<std::string> acts_with;
   std::optional<double> relative_std;    ///< one-sigma relative uncertainty (none: not fitted)
   double smallest_within_tolerance = 0;  ///< set when the tolerance formulation lowered it
   double lower = 0, upper = 0;           ///< its bounds
@@ -215,6 +224,23 @@ struct ParameterReport {
   /// r_i of every measured mode at each multiplier, its pair followed by shape (none: unpaired
   /// or not followed)
   std::vector<std::vector<std::optional<double>>> sweep_errors;
+  /// Identified by the frequencies: neither flat nor acting together with another set.
+  bool identifiable() const { return !flat && acts_with.empty(); }
+};
+
+/// Fitted sets whose sensitivities nearly repeat one another: a direction of their ln theta the
+/// frequencies do not see (a singular value of the Jacobian, its columns scaled to unit length,
+/// below sqrt(1e-3): for two sets, a correlation of their sensitivities above 0.999), such as
+/// an Iwan element and a spring on the same degree of freedom, of which only the sum counts.
+struct CollinearSets {
+  std::vector<int> sets;   ///< indices of LinearUpdateSummary::parameters, ascending
+  int determined = 0;      ///< combinations of them the frequencies determine (< sets.size())
+  double correlation = 0;  ///< two sets: |cos| of the angle between their sensitivity columns
+  /// Two sets a, b: the combination w = theta_a + weight theta_b the frequencies determine, its
+  /// value at the result and one-sigma relative uncertainty (none where none is stated); with
+  /// more sets, weight and value are 0.
+  double weight = 0, value = 0;
+  std::optional<double> relative_std;
 };
 
 /// Why update_linear() stopped.
@@ -235,14 +261,15 @@ struct LinearUpdateSummary {
   int iterations = 0;                                       ///< optimiser iterations
   std::vector<double> history;                 ///< objective after each iteration (first: start)
   std::vector<Eigen::VectorXd> theta_history;  ///< every set's stiffness at each history entry
-  std::string rule;            ///< the rule that produced the result, for the headline
-  bool tolerance_met = true;   ///< kSmallest: false when no stiffness meets the tolerance
-  std::string ambiguity;       ///< kAmbiguous: which modes, and why
-  std::string shape_problem;   ///< kShapesRefused: what is wrong with the shapes
-  int rounds = 0;              ///< fits run (a new round when the pairs change)
-  double reduced_chi2 = 0;     ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
-  int degrees_of_freedom = 0;  ///< pairs - fitted sets
-  double frequency_std = 0;    ///< the stated relative frequency uncertainty
+  std::string rule;           ///< the rule that produced the result, for the headline
+  bool tolerance_met = true;  ///< kSmallest: false when no stiffness meets the tolerance
+  std::string ambiguity;      ///< kAmbiguous: which modes, and why
+  std::string shape_problem;  ///< kShapesRefused: what is wrong with the shapes
+  int rounds = 0;             ///< fits run (a new round when the pairs change)
+  double reduced_chi2 = 0;    ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
+  /// pairs - fitted sets (sets acting together count as the combinations determined)
+  int degrees_of_freedom = 0;
+  double frequency_std = 0;  ///< the stated relative frequency uncertainty
   /// The standard deviations rest on the scatter (reduced_chi2 > 1, with a degree of freedom
   /// left): sqrt(reduced_chi2) times those of the stated noise, and widened by Student's t
   /// (t_widening); false: they assume the stated frequency_std.
@@ -256,6 +283,7 @@ struct LinearUpdateSummary {
   Eigen::MatrixXd final_mac;          ///< MAC (measured x elastic model modes) at the result
   std::vector<std::string> warnings;  ///< parameters at bounds, aliased modes, unmet tolerance
   std::vector<ParameterReport> parameters;  ///< per parameter
+  std::vector<CollinearSets> collinear;     ///< fitted sets acting together, each group once
   LinearEvaluation final;                   ///< pairing and residuals at the result
   /// One paragraph: status, cost, pairs, per-mode errors, parameters, warnings.
   std::string report() const;

@@ -35,7 +35,8 @@ void write_linear_parameters(const std::filesystem::path& path, const LinearUpda
   for (const ParameterReport& p : s.parameters) {
     // Empty cells where there is no value: no standard deviation for a set not fitted.
     t += fmt::format("{},{},{},{},{},{},{},{}\n", cell(p.name), num(p.start), num(p.value),
-                     p.relative_std ? num(*p.relative_std) : "", num(p.sensitivity), p.flat ? 0 : 1,
+                     p.relative_std ? num(*p.relative_std) : "", num(p.sensitivity),
+                     p.identifiable() ? 1 : 0,
                      p.smallest_within_tolerance > 0 ? num(p.smallest_within_tolerance) : "",
                      p.held           ? (p.held_by_user ? "held" : "held (flat)")
                      : p.at_bound < 0 ? "at lower bound"

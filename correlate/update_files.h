@@ -2,7 +2,8 @@
 //
 // parameters.csv, one row per parameter:
 //   linear: name,initial,final,relative_std,sensitivity,identifiable,smallest_within_tolerance
-//     (relative_std 0 and identifiable 0 for a flat parameter; smallest_within_tolerance 0
+//     (relative_std empty where none is stated; identifiable 0 for a flat parameter and for
+//     sets acting together, ParameterReport::identifiable(); smallest_within_tolerance empty
 //     unless the tolerance formulation lowered it);
 //   Iwan:   name,initial,final,relative_std,identifiable,held,at_bound  for Fs [N], Kt [N/m],
 //     chi, beta, gamma = K_T / K_s and, when fitted, modal_ratio (relative_std from the
