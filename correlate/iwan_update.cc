@@ -8,6 +8,7 @@
 
 #include <ceres/ceres.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
@@ -1580,6 +1581,46 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   return s.best;
 }
 
+double slip_force_at_beta(const model::IwanParameters& p, double beta) {
+  // R = F_S (chi+1) / (phi_max^(chi+2) (beta + c)) with phi_max = F_S (1+beta) / (K_T (beta + c))
+  // is F_S^-(chi+1) (chi+1) K_T^(chi+2) (beta + c)^(chi+1) / (1+beta)^(chi+2): solved for F_S at
+  // the same R and K_T.
+  const double e = p.chi + 1, c = e / (p.chi + 2);
+  const double r = model::Iwan(p).R();
+  return std::pow(
+      e * std::pow(p.Kt, p.chi + 2) * std::pow(beta + c, e) / (r * std::pow(1 + beta, p.chi + 2)),
+      1 / e);
+}
+
+void IwanUpdateSummary::set_beta_held_by_fit(IwanBetaHold why, double free_cost) {
+  beta_hold = why;
+  free_fit_cost = free_cost;
+  if (why != IwanBetaHold::kOptions && microslip_only()) relative_std(0) = 0;
+}
+
+std::string IwanUpdateSummary::parameter_note(int k) const {
+  if (k == 3 && held[3] && beta_hold == IwanBetaHold::kMicroslip)
+    return "held at its start by the fit: microslip only so not identified";
+  if (k == 3 && held[3] && beta_hold == IwanBetaHold::kFreeFitNoBetter)
+    return "held at its start by the fit: the fit with beta free did no better";
+  if (held[k]) return "held as asked";
+  if (!improved) return "the start: no candidate improved on it";
+  const bool micro = microslip_only();
+  if (micro && (k == 0 || k == 3) && !held[3])
+    return k == 0 ? "not identified apart from beta: microslip only"
+                  : "not identified apart from Fs: microslip only";
+  if (status == IwanUpdateStatus::kBudget) return "no sigma: not converged";
+  if (micro && k == 0 && !beta_held_as_asked()) {
+    return fmt::format(
+        "given beta = {:.4g}: not identified (microslip only: the data fix only the combination "
+        "of Fs and beta)",
+        best.beta);
+  }
+  if (micro && k == 0)
+    return fmt::format("given beta = {:.4g} as held (microslip only)", best.beta);
+  return "";
+}
+
 std::string IwanUpdateSummary::misfit_cause() const {
   if (!improved || !misfit() || !evidence) return "";
   const MisfitEvidence& e = *evidence;
@@ -1639,6 +1680,32 @@ std::string IwanUpdateSummary::misfit_cause() const {
   return "";
 }
 
+namespace {
+
+// The (F_S, beta) pairs that fit microslip data alike (slip_force_at_beta() of the result at a few
+// betas, those whose phi_max stays above the largest measured slip), as the end of the report's
+// slip line.
+std::string microslip_family(const IwanUpdateSummary& s) {
+  std::vector<std::string> pairs;
+  for (const double b : {0.25, 0.5, 1.0, 2.0, 4.0}) {
+    model::IwanParameters p = s.best;
+    p.Fs = slip_force_at_beta(s.best, b);
+    p.beta = b;
+    if (!(p.Fs > 0) || !(model::Iwan(p).phi_max() > s.top_slip)) continue;
+    pairs.push_back(fmt::format("{:.3g} N at beta {:g}", p.Fs, b));
+  }
+  if (pairs.empty()) return "";
+  return fmt::format(
+      ": every (Fs, beta) with the fitted Kt and chi and the same microslip dissipation fits "
+      "these data alike ({}){}",
+      fmt::join(pairs, ", "),
+      s.beta_held_as_asked() ? std::string()
+                             : std::string("; data past phi_max separate them, or hold beta at a "
+                                           "known value with --beta"));
+}
+
+}  // namespace
+
 std::string IwanUpdateSummary::report() const {
   const bool monte_carlo = optimizer != IwanOptimizer::kGlobalLocal;
   const std::string outcome = status == IwanUpdateStatus::kNoValidPoint ? "no valid sample"
@@ -1672,13 +1739,42 @@ std::string IwanUpdateSummary::report() const {
       linear_known ? fmt::format("linear frequency error {:.3g} %", 100 * linear_error)
                    : std::string("no measured linear frequency to compare"));
   // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
+  const bool micro = improved && microslip_only();
   auto sigma = [&](int k) -> std::string {
+    // Beta held: as asked, or by the fit itself (at its start), which is no result of the data.
+    if (k == 3 && held[3]) {
+      switch (beta_hold) {
+        case IwanBetaHold::kOptions:
+          return " (held)";
+        case IwanBetaHold::kMicroslip:
+          return " (held at its start by the fit, not fitted: microslip only)";
+        case IwanBetaHold::kFreeFitNoBetter:
+          return " (held at its start by the fit, not fitted: the fit with it free did no "
+                 "better, below)";
+      }
+    }
     if (held[k]) return " (held)";
-    if (improved && (k == 0 || k == 3) && !held[3] && microslip_only())
+    // Microslip data fix F_S and beta only together: with beta free neither is a result; with
+    // beta held by the fit F_S is the slip force at that beta, its sigma that of the
+    // combination (before, "Fs 0.5 -> 0.564 N +/- 2.3 %" at beta held 1 read like a result:
+    // the truth was 0.7 N at beta 0.6, z -2 to -13 over 10 seeds); held as asked, F_S given it.
+    if (micro && (k == 0 || k == 3) && !held[3])
       return k == 0 ? " (not identified apart from beta: microslip only)"
                     : " (not identified apart from Fs: microslip only)";
     if (improved && status == IwanUpdateStatus::kBudget) return " (no sigma: not converged)";
+    const double conditional = std::sqrt(std::max(covariance(0, 0), 0.0));
+    if (micro && k == 0 && !beta_held_as_asked()) {
+      return fmt::format(
+          " given beta = {:.4g} (not identified, microslip only: the data fix only the "
+          "combination of Fs and beta, below{})",
+          best.beta,
+          conditional > 0 ? fmt::format("; +/- {:.2g} % at that beta", 100 * conditional) : "");
+    }
     if (!improved || !(relative_std(k) > 0)) return " (sigma unknown)";
+    if (micro && k == 0) {
+      return fmt::format(" +/- {:.2g} % given beta = {:.4g} as held (microslip only)",
+                         100 * relative_std(k), best.beta);
+    }
     return fmt::format(" +/- {:.2g} %", 100 * relative_std(k));
   };
   out += fmt::format(
@@ -1747,6 +1843,20 @@ std::string IwanUpdateSummary::report() const {
         "or the model rather than the search: {}\n",
         cause);
   }
+  // The fit with beta freed lost to the one with it held at its start: beta is then no result
+  // of the data, which reach macroslip where it is identified (before: "beta ... (held)", as if
+  // asked, and held 1 in parameters.csv).
+  if (held[3] && beta_hold == IwanBetaHold::kFreeFitNoBetter) {
+    out += fmt::format(
+        "  WARNING: the data reach macroslip, where beta is identified, but the fit with beta "
+        "free ended at cost {:.4g}, above this fit's {:.4g} with beta held at its start {:.4g}: "
+        "beta is not fitted and has no sigma, and the other parameters{} hold at that beta; run "
+        "again with a larger --evaluations (e.g. {}), or hold beta at a known value with "
+        "--beta\n",
+        free_fit_cost, final_cost, best.beta,
+        (relative_std.array() > 0).any() ? " and their sigmas" : "",
+        4 * std::max(evaluations, 1500));
+  }
   // K_T sets the stuck joint's linear frequencies, which update-linear fits to the measured
   // ones first. Where the fit moves it far, it likely takes up the linear model's error: a
   // backbone 5 % below an un-updated model moved K_T by -49 % and beta by +82 %, chi 8.6 sigma
@@ -1769,8 +1879,8 @@ std::string IwanUpdateSummary::report() const {
     // search cures neither.
     const std::string advice =
         !cause.empty() ? std::string(
-                             "mend the cause named above first: a longer search does not "
-                             "cure a misfit")
+                             "mend the cause named above first (a longer search cures a misfit "
+                             "only where the search is at fault)")
         : kt_range ? std::string("widen the range named above first")
                    : fmt::format("run again with a larger --evaluations (e.g. {})",
                                  4 * std::max(evaluations, 1500));
@@ -1847,8 +1957,9 @@ std::string IwanUpdateSummary::report() const {
         "  largest joint slip {:.3g} to {:.3g} m over the measured amplitudes, phi_max {:.3g} m: "
         "{}\n",
         bottom_slip, top_slip, phi_max,
-        microslip_only() ? "microslip only, Fs and beta are not identified separately"
-                         : "the data reach macroslip");
+        microslip_only()
+            ? "microslip only, Fs and beta are not identified separately" + microslip_family(*this)
+            : "the data reach macroslip");
   }
   return out;
 }

@@ -305,6 +305,19 @@ enum class IwanUpdateStatus {
   kNoValidPoint,  ///< no sample could be evaluated
 };
 
+/// Who held beta, where IwanUpdateSummary::held says it was held.
+enum class IwanBetaHold {
+  kOptions,         ///< the options (`--beta`, a campaign's [update.iwan] beta): as asked
+  kMicroslip,       ///< the fit, at its start: the data stay in microslip (campaign::fit_iwan)
+  kFreeFitNoBetter  ///< the fit, at its start: the data reach macroslip but the fit with beta
+                    ///< freed ended at a higher cost (campaign::fit_iwan)
+};
+
+/// The slip force that gives Iwan parameters p's microslip response (K_T, chi and R; F = K_T u -
+/// R u^(chi+2) / ((chi+1)(chi+2)) below phi_max) at another beta: below phi_max the two sets are
+/// the same element, so microslip data cannot tell them apart.
+double slip_force_at_beta(const model::IwanParameters& p, double beta);
+
 /// One objective value on the way.
 struct IwanHistoryEntry {
   int evaluation = 0;      ///< evaluations so far
@@ -335,8 +348,26 @@ struct IwanUpdateSummary {
   /// Per parameter (F_S, K_T, chi, beta, modal_ratio): -1 at its lower bound, +1 at its upper
   /// bound, 0 inside (or held).
   std::array<int, 5> bound_side{};
-  /// Which of (F_S, K_T, chi, beta) the options held (their sigma is not a number).
+  /// Which of (F_S, K_T, chi, beta) were held (their sigma is not a number): by the options, and
+  /// beta also by the fit itself (beta_hold).
   std::array<bool, 4> held{};
+  /// Who held beta where held[3] (set_beta_held_by_fit()).
+  IwanBetaHold beta_hold = IwanBetaHold::kOptions;
+  /// kFreeFitNoBetter: the cost the fit with beta freed ended at (above final_cost).
+  double free_fit_cost = 0;
+  /// Marks beta as held by the fit at its start for `why` (not by the options): with the data in
+  /// microslip F_S then stands for the combination of F_S and beta the data fix (the microslip
+  /// dissipation R at that beta) and states no sigma of its own (covariance keeps the one given
+  /// beta); `free_cost` is the cost of the fit with beta freed (kFreeFitNoBetter).
+  void set_beta_held_by_fit(IwanBetaHold why, double free_cost = 0);
+  /// True where beta was held by the options (the user), not by the fit.
+  bool beta_held_as_asked() const { return held[3] && beta_hold == IwanBetaHold::kOptions; }
+  /// Parameter k (F_S, K_T, chi, beta) held as asked (by the options), not by the fit.
+  bool held_as_asked(int k) const { return k == 3 ? beta_held_as_asked() : held[k]; }
+  /// What parameter k's value is, where it is not simply fitted (held, and by whom; not
+  /// identified apart from another; F_S given beta; not converged), in a few words without a
+  /// comma (parameters.csv's note column, Python's); "" for a fitted parameter.
+  std::string parameter_note(int k) const;
   /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
   /// unknown or held, and all 0 when the fit did not converge, kBudget): the larger of a
   /// serial-correlation robust (Newey-West, HAC) sandwich over each curve's points ordered by

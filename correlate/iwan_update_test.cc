@@ -989,6 +989,25 @@ TEST(IwanUpdate, AFitThatDidNotConvergeStatesNoSigma) {
   EXPECT_NE(s.report().find("run again with a larger --evaluations (e.g. "), std::string::npos);
 }
 
+// slip_force_at_beta() gives the same element below phi_max: the same K_T, chi and R, hence the
+// same virgin force at every displacement below both phi_max (the microslip family the report
+// lists), and F_S itself at the set's own beta.
+TEST(IwanUpdate, SlipForceAtAnotherBetaKeepsTheMicroslipElement) {
+  const model::IwanParameters p{0.564065, 164.801, -0.2955, 1.0};
+  EXPECT_NEAR(slip_force_at_beta(p, p.beta), p.Fs, 1e-12 * p.Fs);
+  for (const double beta : {0.25, 0.6, 2.0}) {
+    const model::IwanParameters q{slip_force_at_beta(p, beta), p.Kt, p.chi, beta};
+    const model::Iwan a(p), b(q);
+    EXPECT_NEAR(b.R() / a.R(), 1.0, 1e-12) << beta;
+    const double top = std::min(a.phi_max(), b.phi_max());
+    for (const double u : {1e-3 * top, 0.3 * top, 0.99 * top})
+      EXPECT_NEAR(b.force(u) / a.force(u), 1.0, 1e-12) << beta << " " << u;
+  }
+  // The cantilever's microslip fit (beta held 1, F_S 0.564 N): at the truth's beta 0.6 the family
+  // gives F_S 0.69 N (truth 0.7 N).
+  EXPECT_NEAR(slip_force_at_beta(p, 0.6), 0.69, 0.01);
+}
+
 TEST(IwanUpdate, BadInputIsReported) {
   const model::Model m = two_chain_structure();
   Synthetic s;

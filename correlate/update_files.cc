@@ -134,38 +134,48 @@ void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSu
     double initial, final, relative_std;  // relative_std < 0: none (held or unknown)
     bool held, separately_identified;
     int bound;
+    std::string note;  // IwanUpdateSummary::parameter_note()
   };
   auto rel = [&](int k) { return s.held[k] || !s.improved ? -1.0 : s.relative_std(k); };
   const double ks = s.reference_stiffness;
   // Below phi_max the data fix K_T, chi and R only: Fs and beta are not identified separately.
+  // `held` is 1 where held as asked (--gamma, --beta); beta held by the fit itself is 0 with its
+  // note (before, 1, as if asked).
   const bool micro = s.microslip_only();
   std::vector<Row> rows = {
-      {"Fs", s.start.Fs, s.best.Fs, rel(0), s.held[0], !micro, s.bound_side[0]},
-      {"Kt", s.start.Kt, s.best.Kt, rel(1), s.held[1], true, s.bound_side[1]},
-      {"chi", s.start.chi, s.best.chi, rel(2), s.held[2], true, s.bound_side[2]},
-      {"beta", s.start.beta, s.best.beta, rel(3), s.held[3], !micro, s.bound_side[3]},
+      {"Fs", s.start.Fs, s.best.Fs, rel(0), s.held_as_asked(0), !micro, s.bound_side[0],
+       s.parameter_note(0)},
+      {"Kt", s.start.Kt, s.best.Kt, rel(1), s.held_as_asked(1), true, s.bound_side[1],
+       s.parameter_note(1)},
+      {"chi", s.start.chi, s.best.chi, rel(2), s.held_as_asked(2), true, s.bound_side[2],
+       s.parameter_note(2)},
+      {"beta", s.start.beta, s.best.beta, rel(3), s.held_as_asked(3), !micro, s.bound_side[3],
+       s.parameter_note(3)},
   };
   if (ks > 0) {
-    rows.push_back(
-        {"gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held[1], true, s.bound_side[1]});
+    rows.push_back({"gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held_as_asked(1), true,
+                    s.bound_side[1], s.parameter_note(1)});
   }
   if (s.modal_ratio_fitted) {
-    rows.push_back({"modal_ratio", s.modal_ratio_start, s.modal_ratio,
-                    s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
-                        ? s.modal_ratio_std / s.modal_ratio
-                        : -1.0,
-                    false, true, s.bound_side[4]});
+    rows.push_back(
+        {"modal_ratio", s.modal_ratio_start, s.modal_ratio,
+         s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
+             ? s.modal_ratio_std / s.modal_ratio
+             : -1.0,
+         false, true, s.bound_side[4],
+         s.improved && s.status == IwanUpdateStatus::kBudget ? "no sigma: not converged" : ""});
   }
-  std::string t = "name,initial,final,relative_std,identifiable,held,at_bound\n";
+  std::string t = "name,initial,final,relative_std,identifiable,held,at_bound,note\n";
   for (const Row& r : rows) {
     const bool known = r.relative_std > 0;
-    t += fmt::format("{},{},{},{},{},{},{}\n", r.name, num(r.initial), num(r.final),
+    t += fmt::format("{},{},{},{},{},{},{},{}\n", r.name, num(r.initial), num(r.final),
                      known ? num(r.relative_std) : "",
                      known && r.separately_identified && r.relative_std <= identifiable_std ? 1 : 0,
                      r.held ? 1 : 0,
                      r.bound < 0   ? "lower"
                      : r.bound > 0 ? "upper"
-                                   : "");
+                                   : "",
+                     cell(r.note));
   }
   data::write_file_atomically(path, t);
 }

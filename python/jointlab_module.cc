@@ -491,7 +491,10 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
     const double r = summary.relative_std(k);
     d["relative_std"] =
         summary.held[static_cast<size_t>(k)] || !(r > 0) ? py::object(py::none()) : py::float_(r);
-    d["held"] = summary.held[static_cast<size_t>(k)];
+    // Held as asked, as parameters.csv's held; beta held by the fit itself is not fitted either.
+    d["held"] = summary.held_as_asked(k);
+    d["fitted"] = !summary.held[static_cast<size_t>(k)];
+    d["note"] = summary.parameter_note(k);
     d["at_bound"] = summary.bound_side[static_cast<size_t>(k)];
     parameters[names[k]] = d;
   }
@@ -668,7 +671,8 @@ fs_range, gamma_range, chi_range, beta_range, evaluations, seed: as the command'
 out             write the updated model file here, or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
-None, held, at_bound; modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
+None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
+parameters.csv's); modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
 stopped short of a minimum and no sigma is stated), 'warnings' (parameters at a bound),
 'reduced_chi2', 'effective_points' (the residuals' effective number of independent points;

@@ -189,6 +189,9 @@ IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptio
   IwanUpdateOptions held = io;
   if (!held.fixed_beta) held.fixed_beta = objective.initial().beta;
   correlate::update_iwan(objective, held, &best);
+  // Beta held by this fit, not as asked: the report and parameters.csv say so.
+  if (!io.fixed_beta && best.microslip_only())
+    best.set_beta_held_by_fit(correlate::IwanBetaHold::kMicroslip);
   if (!io.fixed_beta && !best.microslip_only()) {
     if (say) {
       say("update: " + best.report() +
@@ -208,7 +211,11 @@ IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptio
     }
     const int evaluations = best.evaluations + full.evaluations;
     const int polish = best.polish_evaluations + full.polish_evaluations;
-    if (full.final_cost < best.final_cost) best = full;
+    if (full.final_cost < best.final_cost) {
+      best = full;
+    } else {
+      best.set_beta_held_by_fit(correlate::IwanBetaHold::kFreeFitNoBetter, full.final_cost);
+    }
     best.history = std::move(history);
     best.evaluations = evaluations;
     best.polish_evaluations = polish;
@@ -256,7 +263,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     };
   }
   step.summary = fit_iwan(objective, io, say);
-  step.beta_held = step.summary.microslip_only() || io.fixed_beta.has_value();
+  step.beta_held = step.summary.held[3];  // as asked, in microslip, or the free fit no better
   step.curves = static_cast<int>(targets.curves());
   step.updated = objective.apply(step.summary.best, step.summary.modal_ratio);
   if (!c.truth.empty()) step.cost_known = objective.cost(read_truth(c.truth).iwan);

@@ -278,7 +278,7 @@ def test_update_iwan_equals_the_command_line(tmp_path):
     assert result["report"].startswith("Iwan update: converged")
     # The fit's statistics behind the sigmas, as the report prints them.
     assert f"reduced chi-square {result['reduced_chi2']:.3g}" in result["report"]
-    n_fitted = sum(1 for k in ("Fs", "Kt", "chi", "beta") if not result["parameters"][k]["held"])
+    n_fitted = sum(1 for k in ("Fs", "Kt", "chi", "beta") if result["parameters"][k]["fitted"])
     assert_close(result["sigma_degrees_of_freedom"], result["effective_points"] - n_fitted)
     assert 0 <= result["noise_correlation"] < 1
     # A sigma is stated exactly where its Student's t has a variance (more than 2 degrees).
