@@ -251,6 +251,10 @@ enum class LinearUpdateStatus {
   kFailed,          ///< the optimiser failed (numerical)
   kAmbiguous,       ///< the pairs cannot be decided (see LinearUpdateSummary::ambiguity)
   kShapesRefused,   ///< a channel reads reversed, or shapes lack their phase (shape_problem)
+  /// The fit ended (converged or at its iteration limit), but at the result a paired measured
+  /// mode's MAC with its partner is below mac_threshold: its pair rests on the start's MACs and
+  /// on following shapes, not on its shape (LinearUpdateSummary::unconfirmed says which, and why)
+  kPairsUnconfirmed,
 };
 
 /// Outcome of update_linear().
@@ -261,12 +265,14 @@ struct LinearUpdateSummary {
   int iterations = 0;                                       ///< optimiser iterations
   std::vector<double> history;                 ///< objective after each iteration (first: start)
   std::vector<Eigen::VectorXd> theta_history;  ///< every set's stiffness at each history entry
-  std::string rule;           ///< the rule that produced the result, for the headline
-  bool tolerance_met = true;  ///< kSmallest: false when no stiffness meets the tolerance
-  std::string ambiguity;      ///< kAmbiguous: which modes, and why
-  std::string shape_problem;  ///< kShapesRefused: what is wrong with the shapes
-  int rounds = 0;             ///< fits run (a new round when the pairs change)
-  double reduced_chi2 = 0;    ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
+  std::string rule;            ///< the rule that produced the result, for the headline
+  bool tolerance_met = true;   ///< kSmallest: false when no stiffness meets the tolerance
+  std::string ambiguity;       ///< kAmbiguous: which modes, and why
+  std::string shape_problem;   ///< kShapesRefused: what is wrong with the shapes
+  std::string unconfirmed;     ///< kPairsUnconfirmed: the pairs, why, and what to do
+  bool fit_converged = false;  ///< kPairsUnconfirmed: the fit itself met its convergence test
+  int rounds = 0;              ///< fits run (a new round when the pairs change)
+  double reduced_chi2 = 0;     ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
   /// pairs - fitted sets (sets acting together count as the combinations determined)
   int degrees_of_freedom = 0;
   double frequency_std = 0;  ///< the stated relative frequency uncertainty
