@@ -169,6 +169,17 @@ struct MisfitEvidence {
   double nearer_mode_hz = 0;       ///< its linear frequency in the model as given
   double damping_factor = 0;       ///< median measured / model damping over every point
   double damping_max = 0;          ///< largest measured damping ratio
+  /// Curves that disagree with one another (scatter between hits): over every target with two
+  /// or more curves, the share of the sum of squared residuals that one offset per curve from
+  /// its target's other curves explains (frequency and damping apart: sum over curves of n_c
+  /// (mean_c - mean)^2 of the normalised residuals, over their sum of squares); 0 with one curve
+  /// per target.
+  double between_curves_share = 0;
+  int curves = 0;  ///< the curves of the targets with two or more
+  /// Range over those curves of each one's mean relative offset from the fitted model, less
+  /// its target's mean: (f / f_model - 1) and (zeta / zeta_model - 1).
+  Eigen::Vector2d frequency_offsets = Eigen::Vector2d::Zero();
+  Eigen::Vector2d damping_offsets = Eigen::Vector2d::Zero();
 };
 
 /// The objective: QSMA of the set at given parameters against the measured backbones.
