@@ -1339,9 +1339,10 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
         d(k) = std::sqrt((*floored)(k, k) / cov(k, k));
     cov = d.asDiagonal() * cov * d.asDiagonal();
   }
-  const double nu = t_degrees_of_freedom(noise->effective_points, nf);
-  if (!(nu > 2) || !cov.allFinite()) return {};
-  return cov * (nu / (nu - 2));
+  const std::optional<double> t =
+      student_t_variance(t_degrees_of_freedom(noise->effective_points, nf));
+  if (!t || !cov.allFinite()) return {};
+  return cov * *t;
 }
 
 // The free parameters of v that end within 1e-3 of their range (in the search coordinates x) of

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/iwan_update.h"
 
 namespace jointlab::campaign {
 
@@ -52,15 +53,6 @@ bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& se
 // The slip force that, with beta, keeps p's Kt, chi and R (the microslip response):
 // from R = Fs (chi+1) / (phi_max^(chi+2) (beta+c)), phi_max = Fs (1+beta) / (Kt (beta+c)),
 // c = (chi+1)/(chi+2):  Fs^(chi+1) = (chi+1) (Kt (beta+c))^(chi+2) / (R (1+beta)^(chi+2) (beta+c)).
-double slip_force_for(const model::IwanParameters& p, double beta) {
-  const double e = p.chi + 1, c = e / (p.chi + 2);
-  const double phi = p.Fs * (1 + p.beta) / (p.Kt * (p.beta + c));
-  const double r = p.Fs * e / (std::pow(phi, p.chi + 2) * (p.beta + c));
-  return std::pow(
-      e * std::pow(p.Kt * (beta + c), p.chi + 2) / (r * std::pow(1 + beta, p.chi + 2) * (beta + c)),
-      1 / e);
-}
-
 namespace {
 
 // ln D(u) of an Iwan element at slip amplitude u, and its gradient with respect to
@@ -141,14 +133,15 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
                          fmt::format("{:+.2f} %", 100 * (u.beta / t.beta - 1)), "-",
                          "not identifiable (held)"});
       // The family of (Fs, beta) pairs that share the identified Kt, chi and R.
-      const double fs_known_beta = slip_force_for(u, t.beta);
+      const double fs_known_beta = correlate::slip_force_at_beta(u, t.beta);
       tb.rows.push_back({fmt::format("Fs at the known beta {:.4g} [N]", t.beta),
                          fmt::format("{:.4g}", fs_known_beta), fmt::format("{:.4g}", t.Fs),
                          fmt::format("{:+.2f} %", 100 * (fs_known_beta / t.Fs - 1)), "-",
                          "not judged (the identified family Fs(beta))"});
       std::vector<std::string> family;
       for (const double b : {0.25, 0.5, 1.0, 2.0, 4.0})
-        family.push_back(fmt::format("{:.3g} N at beta {:g}", slip_force_for(u, b), b));
+        family.push_back(
+            fmt::format("{:.3g} N at beta {:g}", correlate::slip_force_at_beta(u, b), b));
       const std::string family_text = fmt::format(
           " Every (Fs, beta) pair with the identified Kt, chi and R fits these backbones alike: "
           "{}; at the known beta {:.4g} it gives Fs = {:.4g} N (known {:.4g} N).",

@@ -30,9 +30,6 @@ Truth read_truth(const std::filesystem::path& path);
 /// The parameters and element name of the model's first Iwan joint; false when it has none.
 bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set);
 
-/// The slip force that, with `beta`, keeps p's K_T, chi and R (the microslip response).
-double slip_force_for(const model::IwanParameters& p, double beta);
-
 /// What the report compares with the known parameters.
 struct KnownComparison {
   Truth truth;                        ///< the known parameters
