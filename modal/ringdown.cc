@@ -2050,7 +2050,15 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
                                   ? hilbert_estimates(ep, s, noise, {}, &centred)
                                   : estimates_of(z.baseband, z.carrier_hz, s, noise, {});
   exchange = exchange_of(est, noise, s, measured, cache);
-  if (!exchange.found() && !centred.empty()) {
+  // The centred rates differ from those only where a point's window was shifted (else the same
+  // search would run twice on the same rates).
+  const auto shifted = [&] {
+    for (size_t i = 0; i < centred.size(); ++i) {
+      if (centred[i].window != est[i].window || centred[i].centre != est[i].centre) return true;
+    }
+    return false;
+  };
+  if (!exchange.found() && !centred.empty() && shifted()) {
     Exchange swings = exchange_of(centred, noise, s, measured, cache);
     if (swings.found() && swings.turns.size() >= 2 && !swings.grows && !swings.one_way &&
         partner_holds_energy(swings, s, measured, cache) &&
@@ -3129,10 +3137,12 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     if (moved && beat_note.empty()) {
       const ModeTrack tr = track_mode(ep, noise, sr);
       const BandPeaks peaks = band_peaks(channel, read, options.taper, 3);
-      const double half =
-          tr.points > 0 ? tr.sigma / kTwoPi : half_power_width(channel, peaks.main_hz, cache);
-      const double lo = tr.points > 0 ? tr.f_lo : peaks.main_hz,
-                   hi = tr.points > 0 ? tr.f_hi : peaks.main_hz;
+      double lo = peaks.main_hz, hi = peaks.main_hz, half = 0;
+      if (tr.points > 0) {
+        lo = tr.f_lo, hi = tr.f_hi, half = tr.sigma / kTwoPi;
+      } else {
+        half = half_power_width(channel, peaks.main_hz, cache);
+      }
       for (const auto& [f2, ratio] : peaks.others) {
         if (f2 > lo - half && f2 < hi + half) continue;
         second = fmt::format(
