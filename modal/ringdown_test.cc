@@ -916,6 +916,37 @@ TEST(RingdownInternalResonance, ADetunedExchangeSeenThroughCentredWindowsIsMarke
   }
 }
 
+// Both modes damped at 1 %, mode 2 struck at half mode 1's velocity (alpha 3e9): mode 2 gives
+// mode 1 energy for about 0.2 s after the impact, and mode 1's decay rate falls from twice its
+// own to two thirds of it, then rises to it: one turn, a minimum. Mode 2's rate rises all the
+// while (it gives, and it dies faster), so its turn is not within reach of mode 1's, as
+// takes_energy asks of a single turn; but a joint's damping never takes the decay below the
+// rate it settles to at low amplitude. Before, no point was marked and the unmarked damping
+// was up to 53 % off the mode's own (seeds 1 and 2: 0.527, 0.525), each point outside its
+// uncertainty. Now the dip is taken for energy fed by mode 2 (its rate clearly higher at the
+// dip than at the first estimate; its envelope above its noise threshold): 10 points marked,
+// the unmarked damping within 3.8 % and 3.0 %. Required: a point marked, every unmarked
+// point within 10 %.
+TEST(RingdownInternalResonance, ADipOfTheDecayRateFedByTheOtherModeIsMarked) {
+  const double w1 = 2 * std::numbers::pi * 122.0, w2 = 2 * std::numbers::pi * 243.0;
+  const double blow = -std::numbers::pi / 2;
+  for (const unsigned seed : {1u, 2u}) {
+    const testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+        3e9, 6.5e-5, 0.01, 1e-5, seed, 4.0, 0.5 * 6.5e-5 * w1 / w2, blow, blow, 243.0, 0.01);
+    const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    double worst = 0;
+    for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+      if (r.backbone.exchange(i) == 0)
+        worst = std::max(worst, std::abs(r.backbone.damping(i) / rec.zeta1 - 1));
+    }
+    std::printf("seed %u: %d points marked, unmarked damping worst error %.3f\n  %s\n", seed,
+                r.summary.exchange_points, worst, r.summary.message.c_str());
+    EXPECT_GT(r.summary.exchange_points, 0);
+    EXPECT_LE(worst, 0.10);
+  }
+}
+
 // The same resonance read in mode 2's band, 230:260 Hz, with mode 2 damped more (0.6 %)
 // than twice mode 1 (2 x 0.3 %): once mode 2's own ring-down has died, the band sees mode
 // 1's square, locked at 2 f1 and decaying at 2 sigma1. Those points must be marked

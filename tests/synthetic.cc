@@ -90,9 +90,10 @@ ThreeModeRecord three_mode_record(double f1_hz, double duration_s, double noise,
 InternalResonanceRecord internal_resonance_record(double alpha, double x10, double zeta2,
                                                   double noise, unsigned seed, double duration_s,
                                                   double x20, double phase2, double phase1,
-                                                  double f2_hz) {
+                                                  double f2_hz, double zeta1) {
   InternalResonanceRecord r;
   r.f2_hz = f2_hz;
+  r.zeta1 = zeta1;
   const Eigen::Index n = static_cast<Eigen::Index>(std::round(duration_s * r.fs));
   const Eigen::Index pre = static_cast<Eigen::Index>(std::round(0.05 * r.fs));
   const double w1 = 2 * std::numbers::pi * r.f1_hz, w2 = 2 * std::numbers::pi * r.f2_hz;

@@ -70,11 +70,11 @@ struct InternalResonanceRecord {
 /// Builds the internal-resonance record (`duration_s` long, noise realisation `seed`). Mode i
 /// starts at x_i = A_i cos(phase_i), x_i' = -w_i A_i sin(phase_i) (A_1 = x10, A_2 = x20): a
 /// hammer blow, from rest at x = 0 with the velocity stepping at the impact, is phase -pi/2.
-/// Mode 2 lies at `f2_hz` (243 Hz, 1 Hz below 2 f1, by default).
+/// Mode 2 lies at `f2_hz` (243 Hz, 1 Hz below 2 f1, by default); mode 1's damping is `zeta1`.
 InternalResonanceRecord internal_resonance_record(double alpha, double x10, double zeta2,
                                                   double noise, unsigned seed,
                                                   double duration_s = 4.0, double x20 = 0.0,
                                                   double phase2 = 0.0, double phase1 = 0.0,
-                                                  double f2_hz = 243.0);
+                                                  double f2_hz = 243.0, double zeta1 = 0.003);
 
 }  // namespace jointlab::testing
