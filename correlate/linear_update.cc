@@ -1054,10 +1054,19 @@ std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const Li
   return out;
 }
 
+// A warning about one measured mode's pair: a mode followed by its shape to a model mode whose
+// MAC at the result is below the threshold. update_linear() keeps it unless the line on the
+// pairs the shapes do not confirm (LinearUpdateSummary::unconfirmed) already names that mode.
+struct PairWarning {
+  int measured = -1;  // the measured mode's row
+  std::string text;
+};
+
 // The outcome of settle().
 struct Settled {
   TrackedPoint point;
-  LinearUpdateSummary record;  // history, iterations, warnings
+  LinearUpdateSummary record;           // history, iterations, warnings
+  std::vector<PairWarning> weak_pairs;  // pairs followed below the MAC threshold at the result
   LinearUpdateStatus status = LinearUpdateStatus::kFailed;
   double cost = 0;
   int rounds = 0;
@@ -1093,12 +1102,13 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
         const LinearEvaluation followed = p.evaluate(point);
         for (size_t i = 0; i < c.columns.size(); ++i) {
           if (c.columns[i] >= 0 || point.columns[i] < 0) continue;
-          out.record.warnings.push_back(fmt::format(
-              "test mode {} ({:.5g} Hz) is followed by its shape to {}, below the MAC threshold "
-              "at the result: check its measured shape",
-              measured.id(static_cast<Eigen::Index>(i)),
-              measured.frequency_hz(static_cast<Eigen::Index>(i)),
-              pair_text(followed, static_cast<int>(i))));
+          out.weak_pairs.push_back(
+              {static_cast<int>(i),
+               fmt::format("test mode {} ({:.5g} Hz) is followed by its shape to {}, below the "
+                           "MAC threshold at the result: check its measured shape",
+                           measured.id(static_cast<Eigen::Index>(i)),
+                           measured.frequency_hz(static_cast<Eigen::Index>(i)),
+                           pair_text(followed, static_cast<int>(i)))});
         }
         continue;
       }
@@ -1287,11 +1297,13 @@ std::string shape_problem(const LinearEvaluation& start, const std::vector<Senso
 }
 
 // update_linear() with the sensors' signs as given (after the start's shape checks); the
-// one-at-a-time sweeps only where `with_sweeps`.
+// one-at-a-time sweeps only where `with_sweeps`. The warnings on pairs followed below the MAC
+// threshold go to `weak_pairs` (when given), not into s.warnings: update_linear() decides.
 Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::string>& names,
                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                              const LinearUpdateOptions& options, bool with_sweeps,
-                             LinearUpdateSummary& s) {
+                             LinearUpdateSummary& s,
+                             std::vector<PairWarning>* weak_pairs = nullptr) {
   const StiffnessSets sets(model, names);
   const LinearProblem p = make_problem(sets, model, names, sensors, measured, options);
   const int minimised = options.rule == LinearRule::kSmallest
@@ -1376,6 +1388,7 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   s.theta_history.insert(s.theta_history.end(), o.record.theta_history.begin(),
                          o.record.theta_history.end());
   s.warnings = o.record.warnings;
+  if (weak_pairs) *weak_pairs = o.weak_pairs;
   s.rounds = o.rounds;
   point = o.point;
   if (o.ambiguity.empty()) {
@@ -1531,7 +1544,7 @@ std::string misfit_of_signs(const model::Model& model, const std::vector<std::st
 // the fit then pulled the coupling spring from 200 to 6.8 until the modes' shapes no longer
 // told them apart (MAC 0.48 and 0.49 at the result, errors +9.98 % and -16.5 %), and the
 // headline said "converged". Returns the line for the report naming them, why, and what to do
-// ("" when every pair is confirmed), and drops settle()'s warnings on the same modes.
+// ("" when every pair is confirmed), their rows in s.unconfirmed_modes.
 std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateOptions& options,
                               LinearUpdateSummary& s) {
   const LinearEvaluation& e = s.final;
@@ -1560,9 +1573,7 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
         other < 0 ? ""
                   : fmt::format(", and {:.3f} with model mode {} ({:.5g} Hz)", e.mac(i, other),
                                 other + 1, e.all_model_frequency_hz(other))));
-    const std::string followed =
-        fmt::format("test mode {} ({:.5g} Hz) is followed by its shape to", e.measured_id(i), fe);
-    std::erase_if(s.warnings, [&](const std::string& w) { return w.starts_with(followed); });
+    s.unconfirmed_modes.push_back(static_cast<int>(i));
   }
   if (lines.empty()) return "";
   const double sf2 = options.frequency_std * options.frequency_std;
@@ -1602,7 +1613,9 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   check_measured(sensors, measured);
   LinearUpdateSummary local;
   LinearUpdateSummary& s = summary ? *summary : local;
-  Eigen::VectorXd theta = fit_as_given(model, names, sensors, measured, options, true, s);
+  std::vector<PairWarning> weak_pairs;
+  Eigen::VectorXd theta =
+      fit_as_given(model, names, sensors, measured, options, true, s, &weak_pairs);
   if (std::string why = misfit_of_signs(model, names, sensors, measured, options, s);
       !why.empty()) {
     s.status = LinearUpdateStatus::kShapesRefused;
@@ -1615,6 +1628,14 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
       s.unconfirmed = std::move(why);
     }
   }
+  // A weak pair is warned of once: not again where the unconfirmed line names its mode.
+  std::vector<std::string> weak;
+  for (PairWarning& w : weak_pairs) {
+    if (std::find(s.unconfirmed_modes.begin(), s.unconfirmed_modes.end(), w.measured) ==
+        s.unconfirmed_modes.end())
+      weak.push_back(std::move(w.text));
+  }
+  s.warnings.insert(s.warnings.begin(), weak.begin(), weak.end());
   return theta;
 }
 

@@ -273,6 +273,8 @@ struct LinearUpdateSummary {
   bool fit_converged = false;  ///< kPairsUnconfirmed: the fit itself met its convergence test
   int rounds = 0;              ///< fits run (a new round when the pairs change)
   double reduced_chi2 = 0;     ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
+  /// kPairsUnconfirmed: the measured modes (rows) whose pairs the shapes do not confirm
+  std::vector<int> unconfirmed_modes;
   /// pairs - fitted sets (sets acting together count as the combinations determined)
   int degrees_of_freedom = 0;
   double frequency_std = 0;  ///< the stated relative frequency uncertainty

@@ -569,6 +569,7 @@ TEST(LinearUpdate, PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverge
   EXPECT_NE(s.unconfirmed.find("at two sensors a MAC tells shapes apart poorly"), std::string::npos)
       << r;
   EXPECT_NE(s.unconfirmed.find("give its shape at one sensor only"), std::string::npos) << r;
+  EXPECT_EQ(s.unconfirmed_modes, (std::vector<int>{0, 1})) << r;
   // Said once: not again as settle()'s warning on the same modes.
   EXPECT_EQ(r.find("is followed by its shape to"), std::string::npos) << r;
   EXPECT_EQ(linear_refusal(s, {}, ""), "");  // a result, written with its doubt
