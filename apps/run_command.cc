@@ -59,6 +59,10 @@ void run_run(const RunArgs& args) {
     wrong.push_back(fmt::format("no backbone in any hit for {}", fmt::join(s.no_backbone, ", ")));
   if (!s.refused.empty())
     wrong.push_back(fmt::format("{} refused its data", fmt::join(s.refused, " and ")));
+  if (!s.stopped.empty()) {
+    // "update.iwan: not run: <why>": the step and the first clause; the report has the rest.
+    for (const std::string& why : s.stopped) wrong.push_back(why.substr(0, why.find(" (")));
+  }
   if (!wrong.empty()) {
     throw InputError(fmt::format("{}: {}; everything else is written, the report says why: {}",
                                  args.campaign, fmt::join(wrong, ", and "),

@@ -51,10 +51,18 @@ ModelResults model_side(const Campaign& c, CampaignModelData data, const Measure
   r.linear = linear_update_step(c, r.data, measured.modes, o.progress);
   if (!r.linear.note.empty()) summary.notes.push_back(r.linear.note);
   if (r.linear.refused) summary.refused.push_back("update.linear");
-  const model::Model& base = r.linear.ran ? r.linear.updated : r.data.model;
-  r.iwan = iwan_update_step(c, base, r.data.sensors, measured, o.progress);
+  // Not from a linear result that cannot carry it (pairs the shapes do not confirm): stopped.
+  r.iwan = iwan_update_after(c, r.data, r.linear, measured, o.progress);
   if (!r.iwan.note.empty()) summary.notes.push_back(r.iwan.note);
   if (r.iwan.refused) summary.refused.push_back("update.iwan");
+  if (r.iwan.stopped) summary.stopped.push_back(r.iwan.note);
+  if (r.iwan.ran && r.linear.ran &&
+      r.linear.summary.status == correlate::LinearUpdateStatus::kPairsUnconfirmed) {
+    summary.notes.push_back(
+        "update.iwan: run from a linear update whose pairs the shapes do not confirm at its "
+        "result, as accept_unconfirmed_pairs = true in [update.iwan] asks: the joint rests on "
+        "those pairs");
+  }
   r.have_updated = r.linear.ran || r.iwan.ran;
   if (r.have_updated) {
     r.updated = r.iwan.ran ? r.iwan.updated : r.linear.updated;

@@ -60,6 +60,7 @@ struct RunSummary {
   int flagged_hits = 0;                   ///< hits flagged in any mode
   std::vector<std::string> notes;         ///< skipped steps and other remarks
   std::vector<std::string> refused;       ///< updates that refused their data (also in notes)
+  std::vector<std::string> stopped;       ///< steps not run after a result unfit for them: why
   std::vector<std::string> no_backbone;   ///< modes no hit gave a backbone for (report: why)
   std::filesystem::path report_html;      ///< the HTML report
   std::filesystem::path report_markdown;  ///< the Markdown report

@@ -7,7 +7,9 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include "jointlab/campaign/option_keys.h"
 #include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/modal/ringdown.h"
@@ -38,6 +40,15 @@ ReportSection left_out_section(const RunSummary& summary) {
   for (const FailedHit& f : summary.failed_hits)
     t.rows.push_back({f.file.string(), f.group, f.why});
   s.tables.push_back(t);
+  return s;
+}
+
+// At the top of the report: each step not run because the step before gave a result it must
+// not start from, and why.
+ReportSection stopped_section(const RunSummary& summary) {
+  ReportSection s;
+  s.heading = "Steps not run";
+  s.paragraphs = summary.stopped;
   return s;
 }
 
@@ -315,6 +326,24 @@ bool linearly_updated(const Campaign& c, const ModelResults& r, const std::strin
                                      element) != c.linear_update.sets.end();
 }
 
+// What the linear update's result leaves in doubt about `element`'s updated value: " (...)" or
+// "" (identified, or not a set of the linear update).
+std::string linear_doubt(const Campaign& c, const ModelResults& r, const std::string& element) {
+  if (!r.linear.ran || !linearly_updated(c, r, element)) return "";
+  const correlate::LinearUpdateSummary& s = r.linear.summary;
+  std::string doubt;
+  for (const correlate::ParameterReport& p : s.parameters) {
+    if (p.name != element) continue;
+    if (p.flat) doubt = "flat: not identified by the frequencies";
+    if (!p.acts_with.empty())
+      doubt = fmt::format("not identifiable alone: acts together with {}",
+                          fmt::join(p.acts_with, ", "));
+  }
+  if (s.status == correlate::LinearUpdateStatus::kPairsUnconfirmed)
+    doubt += std::string(doubt.empty() ? "" : "; ") + "pairs unconfirmed by the shapes";
+  return doubt.empty() ? "" : " (" + doubt + ")";
+}
+
 // The joint parameters before and after, with the known values of a simulated campaign.
 ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Truth& truth) {
   model::IwanParameters p0, p1;
@@ -334,6 +363,7 @@ ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Trut
   const bool iwan_ran = r.iwan.ran;
   if (has_iwan) {
     row(set + " Kt [N/m]", p0.Kt, p1.Kt, truth.iwan.Kt, linearly_updated(c, r, set) || iwan_ran);
+    if (!iwan_ran) pt.rows.back()[2] += linear_doubt(c, r, set);
     row(set + " Fs [N]", p0.Fs, p1.Fs, truth.iwan.Fs, iwan_ran);
     if (iwan_ran && r.iwan.summary.microslip_only())
       pt.rows.back()[2] += " (not identified: microslip data)";
@@ -350,6 +380,7 @@ ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Trut
     const double a = spring_value(r.data.model, name);
     const double b = r.have_updated ? spring_value(r.updated, name) : a;
     row(name, a, b, 0, linearly_updated(c, r, name));
+    pt.rows.back()[2] += linear_doubt(c, r, name);
   }
   return pt;
 }
@@ -367,6 +398,12 @@ ReportSection model_section(const Campaign& c, const MeasuredSide& m, const Mode
   const Truth truth = read_truth(c.truth);
   s.tables.push_back(parameter_table(c, r, truth));
   if (r.linear.ran) s.paragraphs.push_back("Linear updating: " + r.linear.summary.report());
+  if (r.iwan.stopped) {
+    const std::string prefix = "update.iwan: not run: ";
+    s.paragraphs.push_back(
+        "Iwan identification: not run: " +
+        (r.iwan.note.starts_with(prefix) ? r.iwan.note.substr(prefix.size()) : r.iwan.note) + ".");
+  }
   if (r.iwan.ran) {
     s.paragraphs.push_back("Iwan identification: " + r.iwan.summary.report());
     ReportTable mc{
@@ -425,6 +462,7 @@ Report campaign_report(const Campaign& c, const RunSummary& summary, const Measu
   Report report;
   report.title = fmt::format("Test campaign: {}", c.name);
   if (!summary.failed_hits.empty()) report.sections.push_back(left_out_section(summary));
+  if (!summary.stopped.empty()) report.sections.push_back(stopped_section(summary));
   if (!summary.no_backbone.empty()) report.sections.push_back(no_backbone_section(c, measured));
   report.sections.push_back(data_section(c, summary, figures));
   report.sections.push_back(settings_section(c));
@@ -432,6 +470,15 @@ Report campaign_report(const Campaign& c, const RunSummary& summary, const Measu
     report.sections.push_back(scatter_section(c, measured, k, figures));
   if (model) report.sections.push_back(model_section(c, measured, *model, figures));
   report.sections.push_back(notes_section(c, summary));
+  // The libraries' advice names command-line options; a campaign sets them with its keys.
+  for (ReportSection& section : report.sections) {
+    for (std::string& p : section.paragraphs) p = with_campaign_keys(p);
+    for (ReportTable& t : section.tables) {
+      t.caption = with_campaign_keys(t.caption);
+      for (std::vector<std::string>& row : t.rows)
+        for (std::string& cell : row) cell = with_campaign_keys(cell);
+    }
+  }
   return report;
 }
 

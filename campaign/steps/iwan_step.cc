@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/update_settings.h"
@@ -68,10 +69,13 @@ void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOpt
       io.fit_linear_damping = fit_linear_damping(in, key, s);
     else if (key == "linear_damping_max")
       io.linear_damping_max = in.number(key, s);
+    else if (key == "accept_unconfirmed_pairs")
+      in.flag(key, s);  // the campaign's own: accepts_unconfirmed_pairs()
     else
       in.unknown(key, s,
                  "gamma, beta, max_evaluations, samples, local_starts, seed, "
-                 "max_slip_share, compare, linear_damping, linear_damping_max");
+                 "max_slip_share, compare, linear_damping, linear_damping_max, "
+                 "accept_unconfirmed_pairs");
   }
   if (const std::string e = io.error(); !e.empty())
     throw InputError(where(c.file.string(), 0, "update.iwan: " + e));
@@ -277,6 +281,59 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   step.ran = true;
   say("update: " + step.summary.report());
   return step;
+}
+
+bool accepts_unconfirmed_pairs(const Campaign& c) {
+  const auto at = c.iwan_update.settings.find("accept_unconfirmed_pairs");
+  if (at == c.iwan_update.settings.end()) return false;
+  return UpdateSettings(c, "update.iwan").flag(at->first, at->second);
+}
+
+std::string iwan_stop_reason(const Campaign& c, const LinearStep& linear, const std::string& set) {
+  if (!linear.ran) return "";
+  const correlate::LinearUpdateSummary& s = linear.summary;
+  if (s.status == correlate::LinearUpdateStatus::kPairsUnconfirmed &&
+      !accepts_unconfirmed_pairs(c)) {
+    std::vector<std::string> modes;
+    for (const int i : s.unconfirmed_modes) modes.push_back(s.final.measured_id(i));
+    const bool one = modes.size() == 1;
+    return fmt::format(
+        "update.iwan: not run: at the linear update's result the shapes do not confirm the "
+        "pair{} of {} (MAC with the partner below update.linear mac_threshold {:g}), so the "
+        "updated model's modes may be paired crosswise with the measured ones and an Iwan joint "
+        "identified on it would pass a wrong number on; the linear updating paragraph of the "
+        "report says which modes and why. Add channels that see these modes apart or check "
+        "their signs ([[channel]] sign), or, if the pairs are known to be right, set "
+        "accept_unconfirmed_pairs = true in [update.iwan]",
+        one ? "" : "s", fmt::join(modes, " and "), linear_update_options(c).mac_threshold);
+  }
+  for (const correlate::ParameterReport& p : s.parameters) {
+    if ((p.name != set && p.name != "iwan." + set) || p.acts_with.empty()) continue;
+    return fmt::format(
+        "update.iwan: not run: the linear update determines only a combination of {} and {} "
+        "(their sensitivities repeat one another), not {}'s K_T alone, so the split the Iwan "
+        "update would start from is arbitrary and so would be its joint; leave {} out of "
+        "update.linear sets (its value as the model file gives it)",
+        p.name, fmt::join(p.acts_with, ", "), p.name,
+        p.acts_with.size() == 1 ? "one of them" : "all but one of them");
+  }
+  return "";
+}
+
+IwanStep iwan_update_after(const Campaign& c, const CampaignModelData& m, const LinearStep& linear,
+                           const MeasuredSide& measured,
+                           const std::function<void(const std::string&)>& progress) {
+  const model::Model& base = linear.ran ? linear.updated : m.model;
+  if (c.iwan_update.enabled) {
+    if (std::string why = iwan_stop_reason(c, linear, iwan_set(c, base)); !why.empty()) {
+      IwanStep step;
+      step.stopped = true;
+      step.note = std::move(why);
+      if (progress) progress(step.note);
+      return step;
+    }
+  }
+  return iwan_update_step(c, base, m.sensors, measured, progress);
 }
 
 }  // namespace jointlab::campaign

@@ -14,6 +14,7 @@
 
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/iwan_targets.h"
+#include "jointlab/campaign/steps/linear_step.h"
 #include "jointlab/campaign/steps/measured_side.h"
 #include "jointlab/campaign/steps/model_side.h"
 #include "jointlab/correlate/iwan_update.h"
@@ -59,9 +60,11 @@ struct ModeCost {
 
 /// What the Iwan update did.
 struct IwanStep {
-  bool ran = false;                      ///< the update ran
-  std::string note;                      ///< why it was skipped ("" when it ran or was off)
-  bool refused = false;                  ///< the data cannot be fitted (note says why)
+  bool ran = false;      ///< the update ran
+  std::string note;      ///< why it was skipped ("" when it ran or was off)
+  bool refused = false;  ///< the data cannot be fitted (note says why)
+  /// Not run: the linear update's result cannot carry it (note says why; iwan_stop_reason)
+  bool stopped = false;
   std::string set;                       ///< the updated set
   correlate::IwanUpdateSummary summary;  ///< its outcome (the better fit)
   bool beta_held = false;                ///< beta held: microslip data, or by the campaign
@@ -77,5 +80,25 @@ IwanStep iwan_update_step(const Campaign& campaign, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors,
                           const MeasuredSide& measured,
                           const std::function<void(const std::string&)>& progress);
+
+/// [update.iwan] accept_unconfirmed_pairs: run the Iwan update from a linear update whose pairs
+/// the shapes do not confirm at its result (default false); InputError naming the campaign file
+/// for a value that is not true or false.
+bool accepts_unconfirmed_pairs(const Campaign& campaign);
+
+/// Why the Iwan update must not start from the linear update's result, or "": pairs the shapes
+/// do not confirm at that result (LinearUpdateStatus::kPairsUnconfirmed: the model's modes may
+/// be cross-paired) unless [update.iwan] accept_unconfirmed_pairs = true, or the Iwan set
+/// `set` acting together with another set (only their combination determined: the split the
+/// Iwan joint would start from is arbitrary). Names the campaign-file keys that change it.
+std::string iwan_stop_reason(const Campaign& campaign, const LinearStep& linear,
+                             const std::string& set);
+
+/// The step after the linear update: iwan_update_step() from the linearly updated model (the
+/// campaign's where the linear update did not run), or, where iwan_stop_reason() gives a
+/// reason, not run (IwanStep::stopped, the reason in its note).
+IwanStep iwan_update_after(const Campaign& campaign, const CampaignModelData& model,
+                           const LinearStep& linear, const MeasuredSide& measured,
+                           const std::function<void(const std::string&)>& progress);
 
 }  // namespace jointlab::campaign

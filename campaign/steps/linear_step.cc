@@ -110,20 +110,35 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
   fitted.frequency_hz = measured.frequency_hz(keep);
   fitted.shapes = measured.shapes(Eigen::all, keep);
   for (Eigen::Index k : keep) {  // each keeps its place in the campaign's [[mode]] list
-    fitted.labels.push_back(measured.labels[k]);
+    fitted.labels.push_back(static_cast<size_t>(k) < measured.labels.size()
+                                ? measured.labels[static_cast<size_t>(k)]
+                                : std::string());  // labels may be empty
     fitted.ids.push_back(measured.id(k));
   }
   const Eigen::VectorXd theta =
       correlate::update_linear(m.model, c.linear_update.sets, m.sensors, fitted, lo, &step.summary);
   // A refused update (as update-linear refuses it) leaves the model as given: its stiffness
   // must not reach the Iwan update and the model-side results as if identified.
-  if (const std::string why = correlate::linear_refusal(step.summary, lo, ""); !why.empty()) {
+  std::string why = correlate::linear_refusal(step.summary, lo, "");
+  // An optimiser that failed leaves no result either: its stiffness is wherever it stopped.
+  if (why.empty() && step.summary.status == correlate::LinearUpdateStatus::kFailed)
+    why = "the optimiser failed (numerically) before a result";
+  if (!why.empty()) {
     step.refused = true;
     step.note = "update.linear: " + why + "; the model's linear part is left as given";
     return step;
   }
   step.updated = correlate::StiffnessSets(m.model, c.linear_update.sets).apply(theta);
   step.ran = true;
+  const bool at_limit = step.summary.status == correlate::LinearUpdateStatus::kIterationLimit ||
+                        (step.summary.status == correlate::LinearUpdateStatus::kPairsUnconfirmed &&
+                         !step.summary.fit_converged);
+  if (at_limit) {
+    step.note = fmt::format(
+        "update.linear: reached its iteration limit (update.linear max_iterations = {}) before "
+        "converging; the next steps start from where it stopped",
+        lo.max_iterations);
+  }
   if (progress) progress("update: " + step.summary.report());
   return step;
 }

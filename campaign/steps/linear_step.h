@@ -20,9 +20,11 @@ correlate::LinearUpdateOptions linear_update_options(const Campaign& campaign);
 
 /// What the linear update did.
 struct LinearStep {
-  bool ran = false;                        ///< the update ran
-  std::string note;                        ///< why it was skipped ("" when it ran or was off)
-  bool refused = false;                    ///< it ran and refused a result (note says why)
+  bool ran = false;  ///< the update ran
+  /// Why it was skipped or refused, or that it ran into its iteration limit ("" otherwise)
+  std::string note;
+  /// It ran and gave no result: refused as update-linear refuses, or the optimiser failed
+  bool refused = false;
   correlate::LinearUpdateSummary summary;  ///< its outcome
   model::Model updated;                    ///< the updated model (when it ran)
 };

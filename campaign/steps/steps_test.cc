@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <unistd.h>
@@ -26,6 +28,7 @@
 #include "jointlab/campaign/steps/numeric_table.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/mac.h"
+#include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/two_chain.h"
 #include "jointlab/data/stepped_sine.h"
 #include "jointlab/model/linear_modes.h"
@@ -255,6 +258,9 @@ TEST_F(Steps, LinearUpdateRecoversTheStiffness) {
   for (const model::Joint& j : step.updated.joints)
     if (j.element == "iwan.rivet") ka = j.stiffness;
   EXPECT_TRUE(Close(ka, small_->truth.ka, 1e-3));
+  // Pairs the shapes confirm: the Iwan update goes on from the result.
+  EXPECT_EQ(step.summary.status, correlate::LinearUpdateStatus::kConverged);
+  EXPECT_EQ(iwan_stop_reason(*campaign_, step, "iwan.rivet"), "");
   Campaign off = *campaign_;
   off.linear_update.sets.clear();
   EXPECT_FALSE(linear_update_step(off, d, exact, nullptr).ran);
@@ -263,6 +269,138 @@ TEST_F(Steps, LinearUpdateRecoversTheStiffness) {
   off.linear_update.sets = {"iwan.rivet"};
   EXPECT_NE(testing::input_error_of([&] { linear_update_options(off); }).find("mac_treshold"),
             std::string::npos);
+}
+
+// The twin cantilevers of
+// LinearUpdate.PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverged as a campaign's
+// model: two chains of three masses (1 and 1.05 kg, inner springs 1e4 N/m) grounded by spring.kg
+// and coupled at their tips by spring.kc, channels a and b at the tips.
+model::Model twin_chains(double kg, double kc) {
+  model::Model m;
+  const int n = 3;
+  std::vector<Eigen::Triplet<double>> mt, kt;
+  for (int i = 0; i < 2 * n; ++i) mt.emplace_back(i, i, i < n ? 1.0 : 1.05);
+  for (int c = 0; c < 2; ++c)
+    for (int i = c * n; i + 1 < (c + 1) * n; ++i)
+      for (const auto& [a, b, v] : {std::tuple{i, i, 1e4}, std::tuple{i + 1, i + 1, 1e4},
+                                    std::tuple{i, i + 1, -1e4}, std::tuple{i + 1, i, -1e4}})
+        kt.emplace_back(a, b, v);
+  m.mass.resize(2 * n, 2 * n);
+  m.mass.setFromTriplets(mt.begin(), mt.end());
+  m.stiffness.resize(2 * n, 2 * n);
+  m.stiffness.setFromTriplets(kt.begin(), kt.end());
+  for (const auto& [a, b, element, k] :
+       {std::tuple{0, model::kGround, "spring.kg", kg},
+        std::tuple{n, model::kGround, "spring.kg", kg},
+        std::tuple{n - 1, Eigen::Index{2 * n - 1}, "spring.kc", kc}}) {
+    model::Joint j;
+    j.a = a;
+    j.b = b;
+    j.element = element;
+    j.stiffness = k;
+    m.joints.push_back(j);
+  }
+  return m;
+}
+
+// The twins' six modes measured at the tips (kg 1e4, kc 500; frequencies exact, shapes
+// with 1 % noise and a phase, as the linear update's test makes them), channel a read reversed:
+// at two sensors each mode then looks like the other.
+correlate::MeasuredModes twins_measured_reversed(const std::vector<correlate::Sensor>& sensors) {
+  const model::Model truth = twin_chains(1e4, 500);
+  const model::LinearModes modes = model::linear_modes(truth.mass, truth.linear_stiffness());
+  std::vector<correlate::Sensor> reversed = sensors;
+  reversed[0].sign = -1.0;
+  const Eigen::MatrixXd at = correlate::shapes_at_sensors(reversed, modes.shapes);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  correlate::MeasuredModes m;
+  m.frequency_hz.resize(6);
+  m.shapes.resize(2, 6);
+  for (int i = 0; i < 6; ++i) {
+    m.ids.push_back(fmt::format("mode {}", i + 1));
+    m.frequency_hz(i) = modes.frequency_hz(i);
+    g(rng);  // the frequency's noise draw of the linear update's test (its noise is 0 here)
+    const double scale = at.col(i).cwiseAbs().maxCoeff();
+    for (Eigen::Index r = 0; r < 2; ++r)
+      m.shapes(r, i) = std::polar(1e-4, 0.3) * (at(r, i) + 0.01 * scale * g(rng));
+  }
+  m.labels = m.ids;
+  return m;
+}
+
+// A campaign whose linear update ends with pairs the shapes do not confirm (the twins, channel
+// a reversed, two sensors: modes 1 and 2 paired crosswise) stops before the Iwan update, with
+// one reason naming the modes and the campaign keys that change it; the Iwan update is not
+// run and nothing of it is made. Only accept_unconfirmed_pairs = true lets it go on. Before,
+// the linear step passed the result on as if converged and the Iwan update ran from it.
+TEST(IwanAfterLinear, StopsWhereTheShapesDoNotConfirmTheLinearPairs) {
+  Campaign c;
+  c.file = "twins.toml";
+  c.channels = {{"a", "2", 1}, {"b", "5", 1}};
+  for (int k = 1; k <= 6; ++k)
+    c.modes.push_back({fmt::format("mode {}", k), {1, 2}, 0, "a", {}, {}});
+  c.linear_update.enabled = true;
+  c.linear_update.sets = {"spring.kg", "spring.kc"};
+  c.iwan_update.enabled = true;
+  c.iwan_update.sets = {"iwan.rivet"};
+  CampaignModelData d;
+  d.model = twin_chains(8e3, 800);
+  d.dofs = {2, 5};
+  d.sensors = {{"a", 2, 1.0}, {"b", 5, 1.0}};
+  const LinearStep linear = linear_update_step(c, d, twins_measured_reversed(d.sensors), nullptr);
+  ASSERT_TRUE(linear.ran) << linear.note;
+  ASSERT_EQ(linear.summary.status, correlate::LinearUpdateStatus::kPairsUnconfirmed)
+      << linear.summary.report();
+  const IwanStep iwan = iwan_update_after(c, d, linear, MeasuredSide{}, nullptr);
+  EXPECT_TRUE(iwan.stopped);
+  EXPECT_FALSE(iwan.ran);
+  EXPECT_EQ(iwan.summary.evaluations, 0);
+  EXPECT_EQ(iwan.note.find("update.iwan: not run: at the linear update's result the shapes do "
+                           "not confirm the pairs of mode 1 and mode 2"),
+            0u)
+      << iwan.note;
+  EXPECT_NE(iwan.note.find("update.linear mac_threshold 0.6"), std::string::npos) << iwan.note;
+  EXPECT_NE(iwan.note.find("accept_unconfirmed_pairs = true in [update.iwan]"), std::string::npos)
+      << iwan.note;
+  // Asked for explicitly, it goes on; a value that is not true or false is refused by name.
+  c.iwan_update.settings["accept_unconfirmed_pairs"] = CampaignSetting::flag(true, 7);
+  EXPECT_EQ(iwan_stop_reason(c, linear, "iwan.rivet"), "");
+  c.iwan_update.settings["accept_unconfirmed_pairs"] = 1.0;
+  EXPECT_NE(testing::input_error_of([&] {
+              iwan_stop_reason(c, linear, "iwan.rivet");
+            }).find("update.iwan.accept_unconfirmed_pairs must be true or false"),
+            std::string::npos);
+}
+
+// The Iwan set acting together with another set in the linear update (only their combination
+// determined): the split the Iwan joint would start from is arbitrary, so it is not run either;
+// a set acting together elsewhere, or an Iwan set identified alone, stops nothing.
+TEST(IwanAfterLinear, StopsWhereTheIwanSetActsTogetherWithAnother) {
+  Campaign c;
+  c.file = "root.toml";
+  LinearStep linear;
+  linear.ran = true;
+  linear.summary.status = correlate::LinearUpdateStatus::kConverged;
+  linear.summary.parameters.resize(3);
+  linear.summary.parameters[0].name = "iwan.root";
+  linear.summary.parameters[0].acts_with = {"spring.kr"};
+  linear.summary.parameters[1].name = "spring.kr";
+  linear.summary.parameters[1].acts_with = {"iwan.root"};
+  linear.summary.parameters[2].name = "spring.tip";
+  const std::string why = iwan_stop_reason(c, linear, "iwan.root");
+  EXPECT_EQ(why.find("update.iwan: not run: the linear update determines only a combination of "
+                     "iwan.root and spring.kr"),
+            0u)
+      << why;
+  EXPECT_NE(why.find("leave one of them out of update.linear sets"), std::string::npos) << why;
+  EXPECT_EQ(iwan_stop_reason(c, linear, "root"), why);  // the set named without its kind
+  linear.summary.parameters[0].acts_with.clear();
+  linear.summary.parameters[1].acts_with.clear();
+  EXPECT_EQ(iwan_stop_reason(c, linear, "iwan.root"), "");
+  linear.summary.parameters[1].acts_with = {"spring.tip"};
+  linear.summary.parameters[2].acts_with = {"spring.kr"};
+  EXPECT_EQ(iwan_stop_reason(c, linear, "iwan.root"), "");
 }
 
 // From the truth model the Iwan update fits the one mode's three backbones and does not end
@@ -510,6 +648,65 @@ TEST_F(Steps, ReportSections) {
   ASSERT_FALSE(model->tables.empty());
   ASSERT_EQ(model->tables[0].rows.size(), 1u);
   EXPECT_EQ(model->tables[0].rows[0][3], fmt::format("{:.4f}", r.start.frequency_hz[0]));
+}
+
+// The report of a run whose Iwan update stopped: a section "Steps not run" at the top with the
+// reason, the model section saying it where the Iwan result would be, the linearly updated K_T
+// marked with its doubt; and the libraries' advice naming the campaign-file keys, not the
+// options (here a note as update-iwan words it).
+TEST_F(Steps, ReportSaysWhyTheIwanUpdateWasNotRun) {
+  ModelResults r;
+  r.data = read_campaign_model(*campaign_, small_->model);
+  r.start = evaluate_model(*campaign_, r.data.model, r.data.dofs, "start", out() / "q5", "start");
+  const model::Model t = truth();
+  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
+  const int col = lm.rigid_count + small_->model_mode - 1;
+  correlate::MeasuredModes exact;
+  exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
+  exact.shapes.resize(2, 1);
+  exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
+  exact.ids = {"mode A1"};
+  r.linear = linear_update_step(*campaign_, r.data, exact, nullptr);
+  ASSERT_TRUE(r.linear.ran);
+  // As if the shapes did not confirm its pair at the result (the twins' case above).
+  r.linear.summary.status = correlate::LinearUpdateStatus::kPairsUnconfirmed;
+  r.linear.summary.unconfirmed_modes = {0};
+  r.iwan = iwan_update_after(*campaign_, r.data, r.linear, *measured_, nullptr);
+  ASSERT_TRUE(r.iwan.stopped);
+  r.have_updated = true;
+  r.updated = r.linear.updated;
+  r.after = evaluate_model(*campaign_, r.updated, r.data.dofs, "updated", out() / "q5", "updated");
+  RunSummary summary = *first_;
+  summary.stopped.push_back(r.iwan.note);
+  summary.notes.push_back(r.iwan.note);
+  summary.notes.push_back("run again with a larger --evaluations (e.g. 3000)");
+  const CampaignFigures f = draw_figures(*campaign_, *measured_, &r, out() / "fig5");
+  const Report report = campaign_report(*campaign_, summary, *measured_, &r, f);
+  const auto section = [&](const std::string& heading) {
+    const auto s = std::find_if(report.sections.begin(), report.sections.end(),
+                                [&](const ReportSection& x) { return x.heading == heading; });
+    EXPECT_NE(s, report.sections.end()) << heading;
+    return s == report.sections.end() ? ReportSection{} : *s;
+  };
+  EXPECT_EQ(report.sections.front().heading, "Steps not run");
+  ASSERT_EQ(section("Steps not run").paragraphs.size(), 1u);
+  EXPECT_EQ(section("Steps not run")
+                .paragraphs[0]
+                .find("update.iwan: not run: at the linear "
+                      "update's result the shapes do not "
+                      "confirm the pair of mode A1"),
+            0u);
+  const ReportSection model = section("Model");
+  EXPECT_TRUE(std::any_of(model.paragraphs.begin(), model.paragraphs.end(), [](const auto& p) {
+    return p.starts_with("Iwan identification: not run: at the linear update's result");
+  }));
+  ASSERT_GE(model.tables.size(), 2u);
+  EXPECT_NE(model.tables[1].rows[0][2].find("(pairs unconfirmed by the shapes)"), std::string::npos)
+      << model.tables[1].rows[0][2];
+  const std::vector<std::string>& notes = section("Notes and errors").paragraphs;
+  EXPECT_NE(std::find(notes.begin(), notes.end(),
+                      "run again with a larger max_evaluations in [update.iwan] (e.g. 3000)"),
+            notes.end());
 }
 
 // A hit's backbone file as the campaign reads it back: points marked as not the mode's own
