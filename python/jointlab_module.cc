@@ -236,6 +236,27 @@ class Model {
   model::Model model_;
 };
 
+// The status of update_linear() as a word for Python.
+std::string linear_status_name(correlate::LinearUpdateStatus status) {
+  switch (status) {
+    case correlate::LinearUpdateStatus::kConverged:
+      return "converged";
+    case correlate::LinearUpdateStatus::kIterationLimit:
+      return "iteration_limit";
+    case correlate::LinearUpdateStatus::kTooFewPairs:
+      return "too_few_pairs";
+    case correlate::LinearUpdateStatus::kFailed:
+      return "failed";
+    case correlate::LinearUpdateStatus::kAmbiguous:
+      return "ambiguous";
+    case correlate::LinearUpdateStatus::kShapesRefused:
+      return "shapes_refused";
+    case correlate::LinearUpdateStatus::kPairsUnconfirmed:
+      return "pairs_unconfirmed";
+  }
+  return "failed";
+}
+
 // update-linear: the same inputs, options and defaults as the command; the result as Python
 // values, and the updated model file written when `out` is given.
 py::dict update_linear(const std::string& model_path, const std::vector<std::string>& sets,
@@ -308,7 +329,26 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
     d["flat"] = p.flat;
     d["held"] = p.held;
     d["at_bound"] = p.at_bound;
+    // As parameters.csv's identifiable: neither flat nor acting together with another set.
+    d["identifiable"] = p.identifiable();
+    d["acts_with"] = p.acts_with;
     parameters[py::str(p.name)] = d;
+  }
+  // Sets acting together, as the report's warning names them: the combination determined.
+  py::list collinear;
+  for (const correlate::CollinearSets& c : s.collinear) {
+    py::dict d;
+    std::vector<std::string> names;
+    for (const int k : c.sets) names.push_back(s.parameters[static_cast<size_t>(k)].name);
+    d["sets"] = names;
+    d["determined"] = c.determined;
+    d["correlation"] = c.correlation;
+    const bool pair = c.sets.size() == 2;
+    d["weight"] = pair ? py::object(py::float_(c.weight)) : py::object(py::none());
+    d["value"] = pair ? py::object(py::float_(c.value)) : py::object(py::none());
+    d["relative_std"] =
+        pair && c.relative_std ? py::object(py::float_(*c.relative_std)) : py::object(py::none());
+    collinear.append(d);
   }
   py::list modes;
   const correlate::LinearEvaluation& e = s.final;
@@ -335,6 +375,15 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
   result["modes"] = modes;
   result["rule"] = s.rule;
   result["converged"] = s.status == correlate::LinearUpdateStatus::kConverged;
+  result["status"] = linear_status_name(s.status);
+  // kPairsUnconfirmed: the line naming the pairs, why and what to do ("" otherwise), and the
+  // measured modes (as 'modes' numbers them) whose pairs the shapes do not confirm.
+  result["unconfirmed"] = s.unconfirmed;
+  py::list unconfirmed_modes;
+  for (const int i : s.unconfirmed_modes)
+    unconfirmed_modes.append(modes[static_cast<size_t>(i)]["measured"]);
+  result["unconfirmed_modes"] = unconfirmed_modes;
+  result["collinear"] = collinear;
   result["reduced_chi2"] = s.reduced_chi2;
   result["warnings"] = s.warnings;
   result["report"] = s.report();
@@ -367,6 +416,8 @@ py::dict run(const std::string& campaign_file, const std::string& out, bool forc
   d["flagged_hits"] = s.flagged_hits;
   d["notes"] = s.notes;
   d["no_backbone"] = s.no_backbone;
+  d["refused"] = s.refused;
+  d["stopped"] = s.stopped;
   d["report_html"] = s.report_html.string();
   d["report_markdown"] = s.report_markdown.string();
   d["report"] = s.report();
@@ -641,8 +692,13 @@ out            write the updated model file here (its matrices beside it), or No
 
 Pairs are made by sensor MAC within the frequency window and followed by full shape (see
 docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final, relative_std or
-None, sensitivity, flat, held, at_bound), 'modes' (measured, frequency_hz, model_mode,
-model_frequency_hz, error, mac; None where unpaired), 'rule', 'converged', 'reduced_chi2',
+None, sensitivity, flat, held, at_bound, identifiable, acts_with), 'modes' (measured,
+frequency_hz, model_mode, model_frequency_hz, error, mac; None where unpaired), 'rule',
+'converged' (False also where the shapes do not confirm the pairs at the result), 'status'
+('converged', 'iteration_limit', 'failed' or 'pairs_unconfirmed'), 'unconfirmed' (the report's
+line on pairs the shapes do not confirm, or ''), 'unconfirmed_modes' (their measured modes),
+'collinear' (sets acting together: sets, determined, correlation and, for two sets a and b, the
+combination theta_a + weight theta_b determined: weight, value, relative_std), 'reduced_chi2',
 'warnings', 'report'. Undecidable pairs, a channel reading the model reversed and shapes without
 phase raise InputError saying which.
 
@@ -694,8 +750,9 @@ threads   workers for the hits (0: every core)
 progress  callable taking one line per step, or None
 
 Returns a dict: 'hits', 'hits_processed', 'hits_reused', 'failed_hits' (one line each),
-'flagged_hits', 'notes', 'no_backbone' (modes no hit gave a backbone for), 'report_html',
-'report_markdown', 'report'. Bad input (the campaign, its model, DOFs, bands) raises InputError.
+'flagged_hits', 'notes', 'no_backbone' (modes no hit gave a backbone for), 'refused' (updates
+that refused their data), 'stopped' (why a step was not run: the Iwan update after a linear
+update whose pairs the shapes do not confirm), 'report_html', 'report_markdown', 'report'. Bad input (the campaign, its model, DOFs, bands) raises InputError.
 
     s = jointlab.run("campaign.toml", "out")
     print(s["report_html"])
