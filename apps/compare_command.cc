@@ -6,6 +6,7 @@
 // (campaign/backbone_comparison.h) are library code.
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -81,7 +82,10 @@ void run_compare(CompareArgs a) {
     std::string label = a.labels.empty() ? a.models[i] : a.labels[i];
     correlate::ModelBackbone b;
     if (phi > 0) {
-      b = correlate::model_backbone(jc, target.mode, phi, power, ref.kind,
+      // The deflection at the sensor's DOF, as update-iwan fits it (not phi q).
+      const std::optional<Eigen::Index> dof =
+          in.modal ? std::nullopt : std::optional<Eigen::Index>(in.sensors[ref.sensor].dof);
+      b = correlate::model_backbone(jc, target.mode, dof, power, ref.kind,
                                     correlate::IwanComparison::kMatched, lo, hi, a.points);
     } else {
       b.clipped = true;

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <boost/math/distributions/chi_squared.hpp>
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
@@ -158,21 +161,23 @@ IwanObjective::IwanObjective(const model::Model& model, const std::string& set,
   }
 }
 
-ModelBackbone model_backbone(const model::JointCondensation& jc, int mode, double phi, int power,
-                             BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
-                             int points) {
+ModelBackbone model_backbone(const model::JointCondensation& jc, int mode,
+                             std::optional<Eigen::Index> dof, int power, BackboneKind kind,
+                             IwanComparison comparison, double a_lo, double a_hi, int points) {
   if (mode < 1 || mode > jc.elastic_count())
     throw InputError(fmt::format("mode {} does not exist: the model has {} elastic modes", mode,
                                  jc.elastic_count()));
-  if (!(phi > 0) || !(a_lo > 0) || !(a_hi >= a_lo) || points < 2)
-    throw InputError("model backbone: need phi > 0, 0 < a_lo <= a_hi and two points or more");
+  if (!(a_lo > 0) || !(a_hi >= a_lo) || points < 2)
+    throw InputError("model backbone: need 0 < a_lo <= a_hi and two points or more");
   const bool matched = comparison == IwanComparison::kMatched;
+  // The amplitude as fitted (evaluate()): q itself, or the deflection at the sensor's DOF.
   std::vector<double> s(static_cast<size_t>(points));
   for (int i = 0; i < points; ++i)
-    s[static_cast<size_t>(i)] = a_lo * std::pow(a_hi / a_lo, i / (points - 1.0)) / phi;
+    s[static_cast<size_t>(i)] = a_lo * std::pow(a_hi / a_lo, i / (points - 1.0));
   const std::vector<QsmaAtPoint> at =
       qsma_at(jc, mode, power, s,
-              matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant);
+              matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant,
+              QsmaAtSolver::kNewton, dof);
   ModelBackbone out;
   std::vector<size_t> keep;
   for (size_t i = 0; i < at.size(); ++i)
@@ -184,7 +189,7 @@ ModelBackbone model_backbone(const model::JointCondensation& jc, int mode, doubl
   out.damping_ratio.resize(n);
   for (Eigen::Index j = 0; j < n; ++j) {
     const model::QsmaPoint& q = at[keep[static_cast<size_t>(j)]].point;
-    out.amplitude(j) = s[keep[static_cast<size_t>(j)]] * phi;
+    out.amplitude(j) = s[keep[static_cast<size_t>(j)]];
     out.frequency_hz(j) = matched ? q.ringdown_frequency_hz : q.frequency_hz;
     out.damping_ratio(j) = !matched                             ? q.damping_ratio
                            : kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
@@ -209,12 +214,11 @@ std::vector<ModelBackbone> IwanObjective::model_curves(const model::IwanParamete
       hi = std::max(hi, c.amplitude.maxCoeff());
     }
     const MeasuredBackbone& first = t.curves.front();
-    const int col = jc.modes().rigid_count + t.mode - 1;
-    const double phi =
-        first.modal ? 1.0 : std::abs(jc.modes().shapes(sensors_[first.sensor].dof, col));
+    const std::optional<Eigen::Index> dof =
+        first.modal ? std::nullopt : std::optional<Eigen::Index>(sensors_[first.sensor].dof);
     const int pw = first.modal ? 0 : amplitude_power(amplitude_);
     try {
-      out.push_back(model_backbone(jc, t.mode, phi, pw, first.kind, comparison_, lo, hi, points));
+      out.push_back(model_backbone(jc, t.mode, dof, pw, first.kind, comparison_, lo, hi, points));
     } catch (const InputError&) {
       ModelBackbone none;
       none.clipped = true;
@@ -350,7 +354,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
     }
     // Each curve's lowest tenth of its points by amplitude (at least 3, at most all): where the
     // model is at its linear limit, K_T and the linear part.
-    std::vector<double> f_lo, error, noise;
+    std::vector<double> f_lo, error, noise, z_lo, z_model_lo;
     for (const MeasuredBackbone& c : t.curves) {
       const Eigen::Index n = c.amplitude.size();
       std::vector<Eigen::Index> by_amplitude(static_cast<size_t>(n));
@@ -364,6 +368,8 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
         f_lo.push_back(f);
         error.push_back(v[static_cast<size_t>(k + 2 * j)] / f - 1);
         noise.push_back(std::max(stated_sigma(c, j)(0), f_floor_ * f) / f);
+        z_lo.push_back(c.damping_ratio(j));
+        z_model_lo.push_back(v[static_cast<size_t>(k + 2 * j + 1)]);
       }
       for (Eigen::Index j = 0; j < n; ++j) {
         const double model_z = v[static_cast<size_t>(k + 2 * j + 1)];
@@ -377,6 +383,12 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
     e.low_frequency_hz = median(f_lo);
     e.low_frequency_error = median(error);
     e.low_frequency_noise = median(noise);
+    e.low_damping = median(z_lo);
+    e.low_model_damping = median(z_model_lo);
+    std::vector<double> all_z;
+    for (const MeasuredBackbone& c : t.curves)
+      all_z.insert(all_z.end(), c.damping_ratio.begin(), c.damping_ratio.end());
+    e.median_damping = median(all_z);
     if (modes && e.low_frequency_hz > 0) {
       // Another elastic mode whose linear frequency lies within a third of mode R's distance
       // from the measured one: the backbone may be that mode's.
@@ -442,39 +454,50 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
     for (const IwanTarget& t : targets_) {
       if (t.mode > jc.elastic_count()) return false;
       const int col = modes.rigid_count + t.mode - 1;
-      // A modal amplitude is q itself (power 0, unit shape); a sensor's is |phi_R[d]| q w^p.
+      // A modal amplitude is q itself (power 0); a sensor's is |u_d| w^p, u_d the QSMA
+      // deflection at its DOF d (not |phi_R[d]| q w^p: once the joints slip the deflected
+      // shape leaves the linear mode's, qsma_at.h).
       const bool modal = t.curves.front().modal;
       const int pw = modal ? 0 : amplitude_power(amplitude_);
-      // Every point of every curve of this target on one QSMA curve: s = a / |phi_R[d]|.
-      std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>> order;
+      // Every point of every curve of this target read at one DOF on one QSMA curve.
+      std::map<Eigen::Index, std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>>>
+          by_dof;  // DOF (-1: modal) -> (s, (curve, point))
       for (size_t ci = 0; ci < t.curves.size(); ++ci) {
         const MeasuredBackbone& c = t.curves[ci];
+        const Eigen::Index dof = modal ? -1 : sensors_[c.sensor].dof;
         // A mode that leaves the sensor still (to rounding: 1e-8 of its largest motion) is
         // not the one measured there.
-        const double ph = modal ? 1.0 : std::abs(modes.shapes(sensors_[c.sensor].dof, col));
+        const double ph = modal ? 1.0 : std::abs(modes.shapes(dof, col));
         if (!(ph > 1e-8 * modes.shapes.col(col).cwiseAbs().maxCoeff())) return false;
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
-          order.push_back({c.amplitude(j) / ph, {ci, j}});
+          by_dof[dof].push_back({c.amplitude(j), {ci, j}});
       }
-      std::sort(order.begin(), order.end());
-      std::vector<double> s(order.size());
-      for (size_t i = 0; i < order.size(); ++i) s[i] = order[i].first;
       const bool matched = comparison_ == IwanComparison::kMatched;
-      const std::vector<QsmaAtPoint> at =
-          qsma_at(jc, t.mode, pw, s,
-                  matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant,
-                  from_scratch ? QsmaAtSolver::kBracketing : QsmaAtSolver::kNewton);
-      if (at.size() != s.size()) return false;
-      if (slip_range) {
-        (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);
-        (*slip_range)(1) = std::max((*slip_range)(1), at.back().point.max_slip);
-      }
+      std::vector<std::vector<QsmaAtPoint>> curves;  // kept: model_at points into them
+      curves.reserve(by_dof.size());
       // Residuals in the order of the curves and their points.
       std::vector<std::vector<const model::QsmaPoint*>> model_at(t.curves.size());
       for (size_t ci = 0; ci < t.curves.size(); ++ci)
         model_at[ci].resize(static_cast<size_t>(t.curves[ci].amplitude.size()));
-      for (size_t i = 0; i < order.size(); ++i)
-        model_at[order[i].second.first][static_cast<size_t>(order[i].second.second)] = &at[i].point;
+      for (auto& [dof, order] : by_dof) {
+        std::sort(order.begin(), order.end());
+        std::vector<double> s(order.size());
+        for (size_t i = 0; i < order.size(); ++i) s[i] = order[i].first;
+        curves.push_back(
+            qsma_at(jc, t.mode, pw, s,
+                    matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant,
+                    from_scratch ? QsmaAtSolver::kBracketing : QsmaAtSolver::kNewton,
+                    dof < 0 ? std::nullopt : std::optional<Eigen::Index>(dof)));
+        const std::vector<QsmaAtPoint>& at = curves.back();
+        if (at.size() != s.size()) return false;
+        if (slip_range) {
+          (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);
+          (*slip_range)(1) = std::max((*slip_range)(1), at.back().point.max_slip);
+        }
+        for (size_t i = 0; i < order.size(); ++i)
+          model_at[order[i].second.first][static_cast<size_t>(order[i].second.second)] =
+              &at[i].point;
+      }
       for (size_t ci = 0; ci < t.curves.size(); ++ci) {
         const MeasuredBackbone& c = t.curves[ci];
         for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
@@ -1457,6 +1480,22 @@ bool IwanUpdateSummary::misfit() const {
   return reduced_chi2 > 1 + 3 * std::sqrt(2.0 / std::max<size_t>(1, residuals));
 }
 
+// A likelihood-ratio test of the fit against the constant backbone it contains (K_T and Z
+// alone): the cost is the chi-square over the points (covariance()), and F_S and chi (and beta,
+// when free) are the extra parameters. Their gain is scaled by the reduced chi-square where
+// that exceeds 1 (the noise then larger than stated). A flat backbone (frequency and damping
+// constant within 0.01 % and 2 %) fitted with Z free ended at the constant's cost, F_S and chi
+// at their upper bounds, and the report said "widen it" and "a larger --evaluations".
+bool IwanUpdateSummary::no_slip_seen() const {
+  if (!modal_ratio_fitted || !improved || !(constant_cost > 0) || !std::isfinite(final_cost) ||
+      residuals == 0)
+    return false;
+  const double points = static_cast<double>(residuals) / 2;
+  const double gain = (constant_cost - final_cost) * points / std::max(1.0, reduced_chi2);
+  const double extra = held[3] ? 2.0 : 3.0;
+  return gain < boost::math::quantile(boost::math::chi_squared(extra), 0.95);
+}
+
 namespace {
 
 // How far a frequency may lie from the measured low-amplitude one and still match it: ten times
@@ -1704,6 +1743,22 @@ std::string IwanUpdateSummary::misfit_cause() const {
   // read as a fraction is 100 times (a trial's 0.005-0.035 % table without a unit ran chi into
   // its bound); a loss factor eta = 2 zeta read as zeta is twice. Values of 1 or more cannot be
   // per cent of a plausible damping ratio read right, so they say nothing of it.
+  // Damping the joint cannot give where its microslip adds little: at the lowest amplitudes
+  // the model's damping is the structure's own (Z, held). Measured damping that stays at least
+  // half its median there (flat, not a joint's rise with amplitude) is that missing damping: a
+  // flat 0.3 % backbone against a model without [damping] was told "a damping column in per
+  // cent read as a fraction gives 100 times" at a factor of 3.2 (a per-cent column keeps the
+  // joint's rise, and its lowest values lie well below its median).
+  if (!modal_ratio_fitted && e.damping_factor >= 1.7 && e.low_damping > 0 &&
+      e.low_damping >= 3 * e.low_model_damping && e.low_damping >= 0.5 * e.median_damping) {
+    return fmt::format(
+        "the measured damping stays near {:.3g} down to the lowest amplitudes (its median over "
+        "every point {:.3g}), where a joint's microslip adds little, while the model's damping "
+        "there is {:.3g} (its own damping, modal_ratio {:.3g}, held): that is the structure's "
+        "own damping, which the model lacks, not the joint's; fit it with --linear-damping fit "
+        "(or set [damping] modal_ratio in the model)",
+        e.low_damping, e.median_damping, e.low_model_damping, modal_ratio);
+  }
   if (e.damping_factor >= 3 && e.damping_max < 1) {
     return fmt::format(
         "the measured damping lies a median {:.3g} times above the fitted model's, more than the "
@@ -1802,6 +1857,7 @@ std::string IwanUpdateSummary::report() const {
                    : std::string("no measured linear frequency to compare"));
   // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
   const bool micro = improved && microslip_only();
+  const bool no_slip = no_slip_seen();
   auto sigma = [&](int k) -> std::string {
     // Beta held: as asked, or by the fit itself (at its start), which is no result of the data.
     if (k == 3 && held[3]) {
@@ -1816,6 +1872,7 @@ std::string IwanUpdateSummary::report() const {
       }
     }
     if (held[k]) return " (held)";
+    if (no_slip && k != 1) return " (not identified: no slip in the data, below)";
     // Microslip data fix F_S and beta only together: with beta free neither is a result; with
     // beta held by the fit F_S is the slip force at that beta, its sigma that of the
     // combination (before, "Fs 0.5 -> 0.564 N +/- 2.3 %" at beta held 1 read like a result:
@@ -1857,6 +1914,16 @@ std::string IwanUpdateSummary::report() const {
     out += fmt::format("  modal_ratio {:.4g} held (the model's own damping, in every damping)\n",
                        modal_ratio_start);
   }
+  if (no_slip) {
+    out += fmt::format(
+        "  WARNING: no slip in these data: the best constant backbone (the joint stuck, Kt and "
+        "the structure's own damping fitted) fits them as well as any Iwan joint (cost {:.4g} "
+        "against {:.4g}, a gain below what {} more parameters give by chance 1 time in 20). "
+        "The measured frequency and damping do not change with amplitude beyond their noise: "
+        "Fs, chi and beta are not identified, whatever the search, and Kt and modal_ratio are "
+        "the result; larger amplitudes, where the frequency falls, would identify the joint\n",
+        final_cost, constant_cost, held[3] ? "two" : "three");
+  }
   if (!improved || status == IwanUpdateStatus::kNoValidPoint) {
     out += fmt::format(
         "  the result is the start{}. {}\n",
@@ -1880,7 +1947,12 @@ std::string IwanUpdateSummary::report() const {
   for (const std::string& b : at_bounds) {
     const bool along = family && (b.rfind("Fs", 0) == 0 || b.rfind("beta", 0) == 0);
     const bool kt = b.rfind("gamma", 0) == 0 && kt_short;
-    if (along) {
+    if (no_slip && b.rfind("gamma", 0) != 0) {
+      out += fmt::format(
+          "  WARNING: {}: the data show no slip (above), so nothing holds it; a wider range "
+          "moves it, not the fit\n",
+          b);
+    } else if (along) {
       out += fmt::format(
           "  WARNING: {}: the microslip data fix Fs and beta only together, so it ended there "
           "along that family; a wider range moves it, not the fit\n",
@@ -1940,9 +2012,11 @@ std::string IwanUpdateSummary::report() const {
     // Where the misfit has a named cause, or K_T's range stopped it, that comes first: a longer
     // search cures neither.
     const std::string advice =
-        !cause.empty() ? std::string(
-                             "mend the cause named above first (a longer search cures a misfit "
-                             "only where the search is at fault)")
+        no_slip
+            ? std::string("the data show no slip (above), which a longer search does not change")
+        : !cause.empty() ? std::string(
+                               "mend the cause named above first (a longer search cures a misfit "
+                               "only where the search is at fault)")
         : kt_range ? std::string("widen the range named above first")
                    : fmt::format("run again with a larger --evaluations (e.g. {})",
                                  4 * std::max(evaluations, 1500));

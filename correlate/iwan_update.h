@@ -3,9 +3,11 @@
 // Parameters p = (F_S [N], gamma, chi, beta) shared by every element of the set, with
 // K_T = gamma K_s, K_s the set's linear stiffness in the given model (from the linear update).
 // Model curve: QSMA of elastic mode R (qsma.h) gives q, omega(q), zeta(q). The measuring
-// sensor (dof d, sign s) sees the displacement amplitude x = |q phi_R[d]|; the amplitude of
-// the quantity `process` reported is a = x omega^p (p = 0, 1, 2 for displacement, velocity,
-// acceleration), omega the frequency the signal oscillates at.
+// sensor (dof d, sign s) sees the displacement amplitude x = |u_d|, u_d the QSMA deflection
+// at d (qsma_at.h; q |phi_R[d]| only while the joints stick: in macroslip the deflected shape
+// leaves the linear mode's); the amplitude of the quantity `process` reported is a = x omega^p
+// (p = 0, 1, 2 for displacement, velocity, acceleration), omega the frequency the signal
+// oscillates at.
 // Like with like (the default, IwanComparison::kMatched): a ring-down backbone is compared
 // with what a ring-down of the model shows, the first-harmonic frequency and
 // D / (2 pi q dE/dq) (QSMA's ring-down columns); a stepped-sine backbone with what a steady
@@ -140,8 +142,8 @@ struct IwanUpdateOptions {
 
 /// A model's backbone as a measured one of `kind` would show it (the ring-down or steady-state
 /// pair; with IwanComparison::kSecant the secant pair), in the measured amplitude a =
-/// |phi| q omega^power (phi the shape at the measuring DOF, 1 and power 0 for the modal
-/// amplitude), at `points` amplitudes log-spaced over [a_lo, a_hi]; the model's own damping
+/// |u_d| omega^power (u_d the QSMA deflection at the measuring DOF; q and power 0 for the
+/// modal amplitude), at `points` amplitudes log-spaced over [a_lo, a_hi]; the model's own damping
 /// (JointCondensation::linear_damping) included.
 struct ModelBackbone {
   Eigen::VectorXd amplitude;      ///< a [SI of the measured amplitude]
@@ -151,10 +153,12 @@ struct ModelBackbone {
                          ///< solution past its largest load) or fails below it; the curve stops
 };
 
-/// model_backbone() of elastic mode `mode` (1-based); InputError if there is no such mode.
-ModelBackbone model_backbone(const model::JointCondensation& model, int mode, double phi, int power,
-                             BackboneKind kind, IwanComparison comparison, double a_lo, double a_hi,
-                             int points);
+/// model_backbone() of elastic mode `mode` (1-based), its amplitude the modal amplitude q
+/// (no dof) or the QSMA deflection at matrix DOF `dof` times omega^power (qsma_at.h, as
+/// update-iwan fits it); InputError if there is no such mode or it leaves `dof` still.
+ModelBackbone model_backbone(const model::JointCondensation& model, int mode,
+                             std::optional<Eigen::Index> dof, int power, BackboneKind kind,
+                             IwanComparison comparison, double a_lo, double a_hi, int points);
 
 /// What the model's misfit at a result shows of its likelier causes (IwanObjective::
 /// misfit_evidence()): a linear-limit frequency far off the measured one points at the linear
@@ -169,6 +173,9 @@ struct MisfitEvidence {
   double nearer_mode_hz = 0;       ///< its linear frequency in the model as given
   double damping_factor = 0;       ///< median measured / model damping over every point
   double damping_max = 0;          ///< largest measured damping ratio
+  /// Median measured damping ratio at each curve's lowest amplitudes (the points of
+  /// low_frequency_hz), the fitted model's there, and the median measured one over every point.
+  double low_damping = 0, low_model_damping = 0, median_damping = 0;
   /// Curves that disagree with one another (scatter between hits): over every target with two
   /// or more curves, the share of the sum of squared residuals that one offset per curve from
   /// its target's other curves explains (frequency and damping apart: sum over curves of n_c
@@ -427,6 +434,10 @@ struct IwanUpdateSummary {
   /// sqrt(2 / dof)): the model does not describe the data within their noise and the sigma is a
   /// lower bound.
   bool misfit() const;
+  /// True when Z was fitted and the fit is no better than the best constant backbone (the
+  /// joint stuck) beyond what its extra parameters give by chance 1 time in 20: the data show
+  /// no slip, and F_S, chi and beta are not identified.
+  bool no_slip_seen() const;
   double bottom_slip = 0;  ///< largest joint slip at the lowest measured amplitude, at best [m]
   double top_slip = 0;     ///< largest joint slip at the highest measured amplitude, at best [m]
   double phi_max = 0;      ///< the slip at which an element reaches macroslip, at best [m]

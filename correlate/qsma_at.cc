@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 #include <fmt/format.h>
@@ -31,8 +32,10 @@ struct State {
 
 class Curve {
  public:
-  Curve(const model::JointCondensation& m, int mode, int power, AmplitudeFrequency frequency)
+  Curve(const model::JointCondensation& m, int mode, int power, AmplitudeFrequency frequency,
+        std::optional<Eigen::Index> dof)
       : m_(m), mode_(m, mode), power_(power), frequency_(frequency) {
+    if (dof) dof_.emplace(m, mode, *dof);
     omega2_ = mode_.omega2;
     p_ = mode_.p;
     c_ = p_ / omega2_;
@@ -51,6 +54,10 @@ class Curve {
   }
 
   double omega2() const { return omega2_; }
+
+  // What s is of the linear structure per unit q omega^power: 1 for q itself, |phi_r[d]| for
+  // the deflection at DOF d.
+  double linear_shape() const { return dof_ ? dof_->shape : 1.0; }
 
   // Puts a state whose coordinate lies within 1e-8 of an element's phi_max on the side of the
   // kink the requested amplitude (ln s = target) is on: a converged state is within 1e-10 of
@@ -75,8 +82,14 @@ class Curve {
       const double q = (st.alpha + p_.dot(h)) / omega2_;
       const double dlnq = (1 + p_.dot(dh.cwiseProduct(st.tangent))) / (omega2_ * q);
       const double half = 0.5 * power_;
-      const double dlns =
+      double dlns =
           frequency_ == AmplitudeFrequency::kSecant ? (1 - half) * dlnq + half / st.alpha : dlnq;
+      if (dof_) {  // d ln u_d = (z^T t + e) / u_d d alpha in place of d ln q
+        const double dlny =
+            dof_->sign * (dof_->z.dot(st.tangent) + dof_->e) / dof_->deflection(st.alpha, st.r);
+        dlns =
+            frequency_ == AmplitudeFrequency::kSecant ? dlny + half * (1 / st.alpha - dlnq) : dlny;
+      }
       const double ln_s_kink = st.ln_s + (dlns > 0 ? dlns : slope / st.alpha) * d_kink;
       const bool want_below = target < ln_s_kink;
       const bool below = std::abs(r) < phi;
@@ -118,6 +131,12 @@ class Curve {
         for (int j = 0; j < m_.size(); ++j)
           omega2 -= p_(j) * (m_.linear_stiffness(j) - out.k1(j)) * out.r(j) / out.q;
         if (!(omega2 > 0)) return false;
+      }
+      if (dof_) {
+        const double y = dof_->deflection(alpha, out.r);
+        if (!(y > 0) || !std::isfinite(y)) return false;
+        out.ln_s = std::log(y) + 0.5 * power_ * std::log(omega2);
+        return true;
       }
       out.ln_s = std::log(out.q) + 0.5 * power_ * std::log(omega2);
       return true;
@@ -164,9 +183,23 @@ class Curve {
         }
         const double omega2 = omega2_ - big_d / q;
         if (!(omega2 > 0)) return false;
-        c = std::log(q) + half * std::log(omega2) - target;
-        grad = dq / q + half * (-dd / q + (big_d / (q * q)) * dq) / omega2;
-        dc_da = 1 / (omega2_ * q) + half * big_d / (q * q * omega2_ * omega2);
+        if (dof_) {  // ln s = ln u_d + half ln omega_1^2, u_d = sign (z^T r + e alpha)
+          const double y = dof_->deflection(alpha, st.r);
+          if (!(y > 0) || !std::isfinite(y)) return false;
+          c = std::log(y) + half * std::log(omega2) - target;
+          grad = (dof_->sign / y) * dof_->z + half * (-dd / q + (big_d / (q * q)) * dq) / omega2;
+          dc_da = dof_->sign * dof_->e / y + half * big_d / (q * q * omega2_ * omega2);
+        } else {
+          c = std::log(q) + half * std::log(omega2) - target;
+          grad = dq / q + half * (-dd / q + (big_d / (q * q)) * dq) / omega2;
+          dc_da = 1 / (omega2_ * q) + half * big_d / (q * q * omega2_ * omega2);
+        }
+      } else if (dof_) {  // ln s = ln u_d + half (ln alpha - ln q)
+        const double y = dof_->deflection(alpha, st.r);
+        if (!(y > 0) || !std::isfinite(y)) return false;
+        c = std::log(y) + half * (std::log(alpha) - std::log(q)) - target;
+        grad = (dof_->sign / y) * dof_->z - (half / q) * dq;
+        dc_da = dof_->sign * dof_->e / y + half / alpha - half / (omega2_ * q);
       } else {
         c = (1 - half) * std::log(q) + half * std::log(alpha) - target;
         grad = (1 - half) / q * dq;
@@ -251,6 +284,7 @@ class Curve {
   model::QsmaMode mode_;
   int power_;
   AmplitudeFrequency frequency_;
+  std::optional<model::QsmaDof> dof_;  // the deflection at this DOF stands for q in s
   double omega2_;
   Eigen::VectorXd p_, c_, g_;
   std::vector<std::pair<int, double>> kinks_;  // (coordinate, an element's phi_max)
@@ -359,7 +393,8 @@ State predict(const State& at, double target, double slope) {
 
 std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode, int power,
                                  const std::vector<double>& amplitudes,
-                                 AmplitudeFrequency frequency, QsmaAtSolver solver) {
+                                 AmplitudeFrequency frequency, QsmaAtSolver solver,
+                                 std::optional<Eigen::Index> dof) {
   assert(power >= 0 && power <= 2);
   assert(std::is_sorted(amplitudes.begin(), amplitudes.end()));
   if (mode < 1 || mode > model.elastic_count()) {
@@ -369,10 +404,16 @@ std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode
   std::vector<QsmaAtPoint> out;
   if (amplitudes.empty()) return out;
   assert(amplitudes.front() > 0);
-  const Curve curve(model, mode, power, frequency);
-  // Start at the load of the linear structure: s = alpha omega^(power - 2).
+  const Curve curve(model, mode, power, frequency, dof);
+  if (!(curve.linear_shape() > 0)) {
+    throw InputError(fmt::format(
+        "mode {} leaves DOF {} still: its amplitude there says nothing of the mode", mode, *dof));
+  }
+  // Start at the load of the linear structure: s = alpha shape omega^(power - 2), the shape
+  // |phi_r[d]| (1 for q).
   State at;
-  const double alpha0 = amplitudes.front() * std::pow(curve.omega2(), 1 - 0.5 * power);
+  double alpha0 = amplitudes.front() * std::pow(curve.omega2(), 1 - 0.5 * power);
+  if (dof) alpha0 /= curve.linear_shape();
   if (!curve.solve(alpha0, nullptr, at)) return {};
   double slope = 1;  // d ln s / d ln alpha of the linear structure
   bool reached = true;

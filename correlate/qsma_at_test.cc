@@ -8,6 +8,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/two_chain.h"
+#include "jointlab/tests/all_dof_newton.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::correlate {
@@ -105,6 +106,110 @@ TEST(QsmaAt, NewtonAgreesWithTheBracketingIteration) {
         EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, b.ringdown_frequency_hz, 1e-8));
         EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, b.ringdown_damping_ratio, 1e-8));
         EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, b.harmonic_damping_ratio, 1e-8));
+      }
+    }
+  }
+}
+
+// A sensor's amplitude is its deflection u_d omega^p (qsma_at.h), which in macroslip is not
+// |phi[d]| q omega^p. Third method: the all-DOF Newton (tests/all_dof_newton.h: every DOF, no
+// condensation, no constraint modes) solved at each load level of qsma()'s curve gives u_d
+// there; qsma_at() given s = |u_d| omega^p at that DOF must return the same load and columns.
+// The two-chain model spans 2e5 to 1e10 N/m, so solutions to 1e-12 of the forces agree to
+// ~1e-8 in u (and less in alpha, s rising faster than alpha in macroslip): 1e-7 is the
+// threshold. The sensor sits on chain A's free end, whose deflection per q falls more than 1 %
+// below the linear shape's at the top of the curve (checked: reading q |phi[d]| there would
+// miss the load by far more than the threshold).
+TEST(QsmaAt, SensorAmplitudesAreTheAllDofDeflectionAtTheSensor) {
+  TwoChainParameters parameters;
+  parameters.iwan = true;
+  const model::Model m = two_chain_structure(parameters);
+  const model::JointCondensation jc(m);
+  const auto [curve, automatic_end] = long_curve(jc, 30, 3);
+  ASSERT_GE(curve.size(), 30u);
+  const Eigen::Index dof = parameters.n - 1;  // chain A's last mass
+  const int column = jc.modes().rigid_count;
+  const double ph = std::abs(jc.modes().shapes(dof, column));
+  testing::AllDofNewton reference(m, jc.modes(), column);
+  std::vector<double> deflection;
+  for (const auto& c : curve) {
+    ASSERT_TRUE(reference.solve(c.force_amplitude));
+    deflection.push_back(std::abs(reference.u()(dof)));
+  }
+  EXPECT_GT(curve.back().modal_amplitude * ph / deflection.back() - 1, 0.01)
+      << "the curve does not reach where the linear shape misreads the sensor";
+  for (AmplitudeFrequency frequency :
+       {AmplitudeFrequency::kSecant, AmplitudeFrequency::kFirstHarmonic}) {
+    const bool harmonic = frequency == AmplitudeFrequency::kFirstHarmonic;
+    for (int power = 0; power <= 2; ++power) {
+      std::vector<double> s;
+      for (size_t i = 0; i < curve.size(); ++i) {
+        const double f = harmonic ? curve[i].ringdown_frequency_hz : curve[i].frequency_hz;
+        s.push_back(deflection[i] * std::pow(2 * std::numbers::pi * f, power));
+      }
+      const auto at = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kNewton, dof);
+      ASSERT_EQ(at.size(), curve.size());
+      for (size_t i = 0; i < curve.size(); ++i) {
+        SCOPED_TRACE(::testing::Message()
+                     << "harmonic " << harmonic << ", power " << power << ", point " << i);
+        const model::QsmaPoint& a = at[i].point;
+        EXPECT_TRUE(at[i].reached);
+        EXPECT_TRUE(testing::Close(a.force_amplitude, curve[i].force_amplitude, 1e-7));
+        EXPECT_TRUE(testing::Close(a.modal_amplitude, curve[i].modal_amplitude, 1e-7));
+        EXPECT_TRUE(testing::Close(a.frequency_hz, curve[i].frequency_hz, 1e-7));
+        EXPECT_TRUE(testing::Close(a.damping_ratio, curve[i].damping_ratio, 1e-7));
+        EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, curve[i].ringdown_frequency_hz, 1e-7));
+      }
+    }
+  }
+}
+
+// Newton against the bracketing iteration for a sensor's amplitude, as for q above: the
+// bordered system's tangent now carries du_d/dr and du_d/dalpha. Off the curve's own points,
+// across the knee, at chain A's grounded first mass (on the joint's near side) and its free end
+// (beyond it). Newton's point, re-solved by an
+// ordinary static solve at its load, has |u_d| omega^p = s to 1e-9 (the re-solve's 1e-12 of the
+// forces times the model's conditioning); every column agrees with the bracketing's to 1e-8, as for
+// q.
+TEST(QsmaAt, SensorNewtonAgreesWithTheBracketingIteration) {
+  const model::JointCondensation jc = iwan_chains();
+  const auto [curve, automatic_end] = long_curve(jc, 40, 3);
+  ASSERT_GE(curve.size(), 40u);
+  const model::QsmaMode mode(jc, 1);
+  for (const Eigen::Index dof : {Eigen::Index{0}, Eigen::Index{5}}) {
+    const model::QsmaDof sensor(jc, 1, dof);
+    for (AmplitudeFrequency frequency :
+         {AmplitudeFrequency::kSecant, AmplitudeFrequency::kFirstHarmonic}) {
+      const bool harmonic = frequency == AmplitudeFrequency::kFirstHarmonic;
+      for (int power = 0; power <= 2; ++power) {
+        std::vector<double> s;
+        for (const auto& c : curve)
+          s.push_back(sensor.shape * amplitude(c, power) * (1 + 1e-3 * (1 + s.size() % 3)));
+        std::sort(s.begin(), s.end());
+        const auto newton = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kNewton, dof);
+        const auto bracketing = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kBracketing, dof);
+        ASSERT_EQ(newton.size(), s.size());
+        ASSERT_EQ(bracketing.size(), s.size());
+        Eigen::VectorXd r = Eigen::VectorXd::Zero(jc.size());
+        for (size_t i = 0; i < s.size(); ++i) {
+          SCOPED_TRACE(::testing::Message() << "DOF " << dof << ", harmonic " << harmonic
+                                            << ", power " << power << ", point " << i);
+          const model::QsmaPoint& a = newton[i].point;
+          const model::QsmaPoint& b = bracketing[i].point;
+          ASSERT_TRUE(newton[i].reached);
+          ASSERT_TRUE(jc.solve(mode.g, a.force_amplitude, r, 1e6, 60).converged);
+          const double f = harmonic ? a.ringdown_frequency_hz : a.frequency_hz;
+          EXPECT_TRUE(testing::Close(
+              sensor.deflection(a.force_amplitude, r) * std::pow(2 * std::numbers::pi * f, power),
+              s[i], 1e-9));
+          EXPECT_TRUE(testing::Close(a.force_amplitude, b.force_amplitude, 1e-8));
+          EXPECT_TRUE(testing::Close(a.modal_amplitude, b.modal_amplitude, 1e-8));
+          EXPECT_TRUE(testing::Close(a.frequency_hz, b.frequency_hz, 1e-8));
+          EXPECT_TRUE(testing::Close(a.damping_ratio, b.damping_ratio, 1e-8));
+          EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, b.ringdown_frequency_hz, 1e-8));
+          EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, b.ringdown_damping_ratio, 1e-8));
+          EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, b.harmonic_damping_ratio, 1e-8));
+        }
       }
     }
   }

@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "jointlab/core/error.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/qsma.h"
@@ -84,8 +85,11 @@ MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
   o.q_max = top * full.back().modal_amplitude;
   o.q_min = std::max(full.front().modal_amplitude, 0.01 * o.q_max);
   const auto curve = model::qsma(jc, mode, o, &qs);
-  const int col = jc.modes().rigid_count + mode - 1;
-  const double ph = std::abs(jc.modes().shapes(sensors[sensor].dof, col));
+  // The sensor sees the static deflection u_d at each point's load (model::QsmaDof), not
+  // |phi[d]| q: the joint solution at that load, continued up the curve.
+  const model::QsmaMode qm(jc, mode);
+  const model::QsmaDof at_sensor(jc, mode, sensors[sensor].dof);
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(jc.size());
   const int pw = quantity == AmplitudeQuantity::kDisplacement ? 0
                  : quantity == AmplitudeQuantity::kVelocity   ? 1
                                                               : 2;
@@ -100,7 +104,11 @@ MeasuredBackbone synthetic_backbone(const model::Model& model, int mode,
     const double z = secant                               ? p.damping_ratio
                      : kind == BackboneKind::kSteppedSine ? p.harmonic_damping_ratio
                                                           : p.ringdown_damping_ratio;
-    b.amplitude(i) = p.modal_amplitude * ph * std::pow(2 * std::numbers::pi * f, pw);
+    const double runaway = 1e6 * (r.lpNorm<Eigen::Infinity>() + jc.smallest_phi_max());
+    if (!jc.solve(qm.g, p.force_amplitude, r, runaway, 60).converged)
+      throw InputError("synthetic backbone: a static solve on the QSMA curve failed");
+    b.amplitude(i) =
+        at_sensor.deflection(p.force_amplitude, r) * std::pow(2 * std::numbers::pi * f, pw);
     b.frequency_hz(i) = f * (1 + frequency_noise * g(rng));
     b.damping_ratio(i) = z * (1 + damping_noise * g(rng));
     b.frequency_std_hz(i) = frequency_noise * f;

@@ -42,7 +42,8 @@ model::Model one_mode_structure(double k0, const model::IwanParameters& p, doubl
 
 /// A backbone of elastic mode `mode` of `model` as `process` would report it at sensor
 /// `sensor`: `points` points log-spaced in modal amplitude over the two decades below `top` times
-/// the end of the automatic QSMA range (a ring-down's span), the amplitude converted to `quantity`,
+/// the end of the automatic QSMA range (a ring-down's span), the amplitude the sensor DOF's QSMA
+/// deflection (model::QsmaDof, not |phi| q) converted to `quantity`,
 /// frequency and damping perturbed by Gaussian relative noise (frequency_noise, damping_noise;
 /// seeded) and their std columns set to those noise levels. The columns are those a test of
 /// `kind` shows (QSMA's ring-down or first-harmonic pair, the amplitude at the first-harmonic

@@ -64,6 +64,7 @@ IwanSetModel::IwanSetModel(const Model& model, const std::string& set, int elast
   one.elastic_count = 1;
   const JointCondensation base(model, one);
   stiffness_ = base.condensed_stiffness();
+  constraint_modes_ = base.shared_constraint_modes();
   std::map<std::pair<Eigen::Index, Eigen::Index>, int> index;
   for (int j = 0; j < base.size(); ++j)
     index[{base.coordinates()[j].a, base.coordinates()[j].b}] = j;
@@ -196,7 +197,7 @@ std::optional<JointCondensation> IwanSetModel::at(const IwanParameters& p) const
       modes.shapes.col(rigid + k) = phi;
     }
   }
-  JointCondensation out(joints, std::move(modes), std::move(kc));
+  JointCondensation out(joints, std::move(modes), std::move(kc), constraint_modes_);
   out.set_linear_damping(modal_ratio_);
   return out;
 }

@@ -15,11 +15,14 @@
 //   Sylvester's law of inertia: A has nu(Lambda - sigma) + pi(S(sigma)) - pi(Delta) eigenvalues
 //   below sigma (Haynsworth's inertia additivity on [[Lambda - sigma, U^T], [U, -Delta^-1]]),
 //   which must be k - 1 just below the eigenvalue and k just above it.
+// - deflection: the constraint modes Psi = G B^T K_c do not change (joint_condensation.h), so
+//   every condensation shares the model's.
 // When that check fails (two modes within 1e-8 of each other, a mode that crossed another and
 // is not found from its start) at() returns nothing: the caller builds the condensation from
 // scratch.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -60,10 +63,11 @@ class IwanSetModel {
   double modal_ratio_ = 0;       // the model's own damping, carried into every condensation
   std::vector<int> coordinate_;  // per joint: its Iwan coordinate (-1: not of the set)
   int elastic_count_ = 0;
-  LinearModes modes_;          // every mode of the model
-  Eigen::VectorXd lambda_;     // elastic omega^2 of the model
-  Eigen::MatrixXd u_;          // B Phi_0, elastic columns (n_J x N_e)
-  Eigen::MatrixXd stiffness_;  // K_c,0
+  LinearModes modes_;                                        // every mode of the model
+  Eigen::VectorXd lambda_;                                   // elastic omega^2 of the model
+  Eigen::MatrixXd u_;                                        // B Phi_0, elastic columns (n_J x N_e)
+  Eigen::MatrixXd stiffness_;                                // K_c,0
+  std::shared_ptr<const Eigen::MatrixXd> constraint_modes_;  // Psi, the same at every K_T
 };
 
 }  // namespace jointlab::model

@@ -144,6 +144,15 @@ TEST(IwanSetModel, StackedBeamsMatchTheCondensationFromScratch) {
     EXPECT_LE((fast->condensed_stiffness() - scratch.condensed_stiffness()).cwiseAbs().maxCoeff(),
               1e-9 * kscale)
         << gamma;
+    // The constraint modes Psi = G B^T K_c, shared from the model as given, are those of the
+    // condensation from scratch at every K_T (joint_condensation.h: K_T leaves Psi alone); at
+    // gamma 10 a wrong Psi would be off by the joints' share of the flexibility, O(1). The same
+    // 1e-9 of rounding as K_c.
+    const double pscale = scratch.constraint_modes().cwiseAbs().maxCoeff();
+    ASSERT_EQ(fast->constraint_modes().rows(), model.size());
+    EXPECT_LE((fast->constraint_modes() - scratch.constraint_modes()).cwiseAbs().maxCoeff(),
+              1e-9 * pscale)
+        << gamma;
     for (int k = 0; k < 3; ++k) {
       const int col = rigid + k;
       EXPECT_TRUE(Close(fast->modes().omega2(col), scratch.modes().omega2(col), 1e-9))

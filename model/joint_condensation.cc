@@ -197,11 +197,24 @@ JointCondensation::JointCondensation(const Model& model, const ModesOptions& mod
   }
   stiffness_ = cl.solve(Eigen::MatrixXd::Identity(nj, nj));
   stiffness_ = 0.5 * (stiffness_ + stiffness_.transpose()).eval();
+  // Psi = G B^T K_c: the clamped solutions less their rigid-body motion (Phi_rb^T M u = 0, the
+  // constraint every static solution here meets; the modes are mass-normalised).
+  Eigen::MatrixXd psi = gbt;
+  if (modes_.rigid_count > 0) {
+    const Eigen::MatrixXd rigid = modes_.shapes.leftCols(modes_.rigid_count);
+    const Eigen::MatrixXd m_rigid = model.mass * rigid;
+    psi -= rigid * (m_rigid.transpose() * gbt);
+  }
+  constraint_modes_ = std::make_shared<const Eigen::MatrixXd>(psi * stiffness_);
 }
 
 JointCondensation::JointCondensation(const std::vector<Joint>& joints, LinearModes modes,
-                                     Eigen::MatrixXd condensed_stiffness)
-    : modes_(std::move(modes)), stiffness_(std::move(condensed_stiffness)) {
+                                     Eigen::MatrixXd condensed_stiffness,
+                                     std::shared_ptr<const Eigen::MatrixXd> constraint_modes)
+    : modes_(std::move(modes)),
+      stiffness_(std::move(condensed_stiffness)),
+      constraint_modes_(std::move(constraint_modes)) {
+  if (!constraint_modes_) constraint_modes_ = std::make_shared<const Eigen::MatrixXd>();
   set_coordinates(joints);
   assert(stiffness_.rows() == size() && stiffness_.cols() == size());
   Eigen::MatrixXd b = Eigen::MatrixXd::Zero(size(), modes_.shapes.rows());

@@ -17,8 +17,15 @@
 // C is built once per model (one sparse Cholesky of K_lin with n_rb statically determinate
 // DOFs clamped, see the constructor); each solve is a Newton iteration of size n_J with a
 // line search on Pi.
+// The deflection itself follows from r: u = G (f + B^T h(r)) and h(r) = K_c (r - r_f), so
+//   u = Psi r + G f - Psi B G f,   Psi = G B^T K_c   (n x n_J, the constraint modes),
+// Psi's column j the deflection of the unloaded structure when coordinate j moves by one and
+// the others are held. Psi does not depend on the joints' stiffness (with every coordinate
+// held the joints carry no deformation of their own): K_lin + B^T Delta B leaves K_c B G
+// alone, since K_c gains Delta while B G loses exactly (I + C Delta)^-1 of itself.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -53,10 +60,12 @@ class JointCondensation {
   explicit JointCondensation(const Model& model, const ModesOptions& modes = {});
   /// From parts computed elsewhere (iwan_set_model.h): the joints give the coordinates and
   /// their laws (in the order the model constructor groups them), with the model's linear
-  /// modes and K_c = C^{-1}; InputError as the model constructor, or if K_c is not positive
-  /// definite.
+  /// modes, K_c = C^{-1} and the constraint modes Psi (of any condensation of the same
+  /// structure: Psi does not depend on the joints' stiffness; null: none); InputError as the
+  /// model constructor, or if K_c is not positive definite.
   JointCondensation(const std::vector<Joint>& joints, LinearModes modes,
-                    Eigen::MatrixXd condensed_stiffness);
+                    Eigen::MatrixXd condensed_stiffness,
+                    std::shared_ptr<const Eigen::MatrixXd> constraint_modes = nullptr);
 
   /// The linear modes computed (rigid-body modes first) with joints at linear stiffness.
   const LinearModes& modes() const { return modes_; }
@@ -70,6 +79,14 @@ class JointCondensation {
   const Eigen::MatrixXd& flexibility() const { return flexibility_; }
   /// K_c = C^{-1}, the joint-condensed linear stiffness [N/m].
   const Eigen::MatrixXd& condensed_stiffness() const { return stiffness_; }
+  /// Psi = G B^T K_c (n x n_J, rigid-body motion removed: Phi_rb^T M Psi = 0): the static
+  /// deflection u = Psi r + G f - Psi B G f of a solution r under load f (above); empty when
+  /// the parts constructor was given none.
+  const Eigen::MatrixXd& constraint_modes() const { return *constraint_modes_; }
+  /// Psi shared, for a condensation of the same structure at other joint stiffness.
+  const std::shared_ptr<const Eigen::MatrixXd>& shared_constraint_modes() const {
+    return constraint_modes_;
+  }
   /// B Phi: the joint coordinates of every mode shape (n_J x n).
   const Eigen::MatrixXd& joint_shapes() const { return joint_shapes_; }
   /// B u for a vector of matrix DOFs.
@@ -142,6 +159,7 @@ class JointCondensation {
   std::vector<std::vector<Law>> laws_;
   std::vector<std::vector<IwanCycle>> cycles_;
   Eigen::MatrixXd flexibility_, stiffness_, joint_shapes_;
+  std::shared_ptr<const Eigen::MatrixXd> constraint_modes_;  // Psi (never null); shared by copies
   Eigen::VectorXd phi_max_, kt_;
   double phi_max_min_ = 0, chi1_min_ = 1;
   double linear_damping_ = 0;

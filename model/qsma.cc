@@ -593,6 +593,21 @@ QsmaMode::QsmaMode(const JointCondensation& model, int mode) {
   g = model.condensed_stiffness() * (p / omega2);
 }
 
+QsmaDof::QsmaDof(const JointCondensation& model, int mode, Eigen::Index dof) {
+  const Eigen::MatrixXd& psi = model.constraint_modes();
+  if (psi.rows() == 0)
+    throw InputError(
+        "QSMA: this condensation carries no constraint modes to read a DOF's deflection");
+  if (dof < 0 || dof >= psi.rows())
+    throw InputError(fmt::format("QSMA: DOF {} does not exist: the model has {}", dof, psi.rows()));
+  const QsmaMode m(model, mode);
+  const double phi = model.modes().shapes(dof, model.modes().rigid_count + mode - 1);
+  z = psi.row(dof).transpose();
+  e = (phi - z.dot(m.p)) / m.omega2;
+  sign = phi < 0 ? -1.0 : 1.0;
+  shape = std::abs(phi);
+}
+
 QsmaPoint qsma_point(const JointCondensation& m, int mode, double alpha, const Eigen::VectorXd& r,
                      const Eigen::VectorXd& solver_tangent) {
   return qsma_point(m, QsmaMode(m, mode), alpha, r, solver_tangent);

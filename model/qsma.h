@@ -124,6 +124,24 @@ struct QsmaMode {
   Eigen::VectorXd g;  ///< K_c p / omega_r^2: the joint load of unit alpha
 };
 
+/// The static deflection at one matrix DOF d of mode `mode`'s QSMA solutions, linear in the
+/// solution r and its load level alpha: u_d = z^T r + e alpha (joint_condensation.h: u = Psi r
+/// + alpha (phi_r - Psi p) / omega_r^2). What a sensor at d measures; not q phi_r[d] once the
+/// joints slip, the deflected shape then differing from the linear mode's.
+struct QsmaDof {
+  /// The constants of `dof` (0-based matrix index) on elastic mode `mode` (1-based); InputError
+  /// if the model carries no constraint modes or has no such DOF.
+  QsmaDof(const JointCondensation& model, int mode, Eigen::Index dof);
+  Eigen::VectorXd z;  ///< du_d/dr: row d of the constraint modes Psi
+  double e = 0;       ///< du_d/dalpha at fixed r: (phi_r[d] - z^T p) / omega_r^2
+  double sign = 1;    ///< the sign of phi_r[d]: sign u_d > 0 along the curve's linear start
+  double shape = 0;   ///< |phi_r[d]|
+  /// sign * u_d at (alpha, r) [m].
+  double deflection(double alpha, const Eigen::Ref<const Eigen::VectorXd>& r) const {
+    return sign * (z.dot(r) + e * alpha);
+  }
+};
+
 /// The point of elastic mode `mode` (1-based) at a converged static solution r of load level
 /// alpha, with every column; solver_tangent (dr/dalpha from the solve, may be empty) stands in
 /// where the tangent matrix is singular.

@@ -496,6 +496,17 @@ void compare_with_all_dofs(const Beams& beams, const JointCondensation& condense
     EXPECT_TRUE(Close(p.damping_ratio, zeta, 1e-6, 1e-15)) << i;
     EXPECT_TRUE(Close(p.max_slip, r.cwiseAbs().maxCoeff(), 1e-6)) << i;
     (void)omega2;
+    // The deflection read off the joint solution (QsmaDof: u_d = z^T r + e alpha, from the
+    // constraint modes with the rigid-body motion removed) against the all-DOF solution, at
+    // the top beam's axial DOFs at its ends and middle and its first transverse one: the same
+    // 1e-6 of the largest displacement (both solutions to 1e-12 of the forces, condition ~1e6).
+    const double umax = ref.u().lpNorm<Eigen::Infinity>();
+    const std::vector<Eigen::Index>& top = beams.top_u;
+    for (const Eigen::Index d : {top.front(), top[top.size() / 2], top.back(), top.front() + 1}) {
+      const QsmaDof at(condensed, mode, d);
+      EXPECT_NEAR(at.sign * at.deflection(p.force_amplitude, r), ref.u()(d), 1e-6 * umax)
+          << i << " DOF " << d;
+    }
     expect_ringdown_columns(beams.model, condensed, column, ref, p, i);
   }
   if (expected_end == QsmaTermination::kFullMacroslip) return;  // the range rule is checked apart
