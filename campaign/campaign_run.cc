@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "jointlab/campaign/option_keys.h"
 #include "jointlab/campaign/steps/campaign_figures.h"
 #include "jointlab/campaign/steps/campaign_report.h"
 #include "jointlab/campaign/steps/hits.h"
@@ -33,7 +34,8 @@ std::string RunSummary::report() const {
   if (model_reused) s += "; model up to date";
   for (const FailedHit& f : failed_hits) s += fmt::format("\n  left out: {}", f.text());
   for (const std::string& m : no_backbone) s += fmt::format("\n  {}: no backbone", m);
-  for (const std::string& n : notes) s += "\n  note: " + n;
+  // As the report says them: a campaign's settings by their keys, not the commands' options.
+  for (const std::string& n : notes) s += "\n  note: " + with_campaign_keys(n);
   s +=
       fmt::format("\n  report: {}\n  markdown: {}", report_html.string(), report_markdown.string());
   return s;

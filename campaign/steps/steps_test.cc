@@ -271,6 +271,29 @@ TEST_F(Steps, LinearUpdateRecoversTheStiffness) {
             std::string::npos);
 }
 
+// A linear update stopped by its iteration limit is passed on, but not silently: its note says
+// so and names the campaign key (before, nothing but the report's headline said it).
+TEST_F(Steps, ALinearUpdateAtItsIterationLimitSaysSo) {
+  const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
+  const model::Model t = truth();
+  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
+  const int col = lm.rigid_count + small_->model_mode - 1;
+  correlate::MeasuredModes exact;
+  exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
+  exact.shapes.resize(2, 1);
+  exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
+  Campaign c = *campaign_;
+  c.linear_update.settings["max_iterations"] = 1;
+  const LinearStep step = linear_update_step(c, d, exact, nullptr);
+  ASSERT_TRUE(step.ran) << step.note;
+  ASSERT_EQ(step.summary.status, correlate::LinearUpdateStatus::kIterationLimit)
+      << step.summary.report();
+  EXPECT_EQ(step.note,
+            "update.linear: reached its iteration limit (update.linear max_iterations = 1) before "
+            "converging; the next steps start from where it stopped");
+  EXPECT_EQ(iwan_stop_reason(c, step, "iwan.rivet"), "");
+}
+
 // The twin cantilevers of
 // LinearUpdate.PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverged as a campaign's
 // model: two chains of three masses (1 and 1.05 kg, inner springs 1e4 N/m) grounded by spring.kg
