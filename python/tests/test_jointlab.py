@@ -343,6 +343,7 @@ def test_run_equals_the_command_line(tmp_path):
     lines = []
     s = jointlab.run(str(campaign), str(tmp_path / "py"), progress=lines.append)
     assert s["hits"] == 9 and s["failed_hits"] == [] and s["no_backbone"] == []
+    assert s["refused"] == [] and s["stopped"] == []  # its linear pairs are confirmed
     assert pathlib.Path(s["report_html"]).exists()
     assert len(lines) > 5
     for name in ("scatter/mode1.bins.csv", "scatter/mode2.bins.csv", "qsma/mode1.updated.csv"):
