@@ -159,6 +159,20 @@ TEST(Campaign, LinearUpdateSettingsAreTyped) {
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), file.string() + ":14: update.iwan.samples must be a number");
   }
+  // accept_unconfirmed_pairs: true or false, false when not given, refused at its line otherwise.
+  EXPECT_FALSE(accepts_unconfirmed_pairs(parse_campaign(head + "[update.iwan]\n", file)));
+  const Campaign accept =
+      parse_campaign(head + "[update.iwan]\naccept_unconfirmed_pairs = true\n", file);
+  EXPECT_TRUE(accepts_unconfirmed_pairs(accept));
+  EXPECT_NO_THROW(iwan_update_options(accept, io, to));
+  try {
+    iwan_update_options(
+        parse_campaign(head + "[update.iwan]\naccept_unconfirmed_pairs = \"yes\"\n", file), io, to);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              file.string() + ":14: update.iwan.accept_unconfirmed_pairs must be true or false");
+  }
   fs::remove_all(dir);
 }
 
