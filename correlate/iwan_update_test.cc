@@ -1424,7 +1424,8 @@ TEST(IwanUpdate, ABackboneWithoutSlipSaysSoInsteadOfWideningTheRange) {
   const FloorTruth t;
   IwanTarget target;
   target.curves.push_back(modal_backbone(t.truth(), 30, 1e-13, 2e-12, 1e-4, 0.02, 5));
-  const IwanObjective obj(t.start(), "j", {}, {target}, t.options());
+  const model::Model start = t.start();  // the objective keeps a reference to it
+  const IwanObjective obj(start, "j", {}, {target}, t.options());
   IwanUpdateSummary s;
   update_iwan(obj, t.options(), &s);
   const std::string r = s.report();
@@ -1439,7 +1440,7 @@ TEST(IwanUpdate, ABackboneWithoutSlipSaysSoInsteadOfWideningTheRange) {
   EXPECT_LT(std::abs(s.modal_ratio / t.z - 1), 0.03) << r;
   // The slipping hits of the floor truth: slip seen.
   IwanUpdateSummary slipping;
-  const IwanObjective with_slip(t.start(), "j", {}, {t.target(20)}, t.options());
+  const IwanObjective with_slip(start, "j", {}, {t.target(20)}, t.options());
   update_iwan(with_slip, t.options(), &slipping);
   EXPECT_FALSE(slipping.no_slip_seen()) << slipping.report();
   EXPECT_EQ(slipping.report().find("no slip"), std::string::npos) << slipping.report();
