@@ -299,6 +299,8 @@ ReportTable frequency_table(const Campaign& c, const MeasuredSide& m, const Mode
                  {"mode", "test [Hz]", "test std [Hz]", "model start [Hz]", "error start",
                   "model updated [Hz]", "error updated"},
                  {}};
+  if (r.linear.ran && r.linear.summary.status == correlate::LinearUpdateStatus::kPairsUnconfirmed)
+    ft.caption += " (updated: the linear update's pairs are not confirmed by the shapes, below)";
   for (size_t k = 0; k < c.modes.size(); ++k) {
     if (r.start.frequency_hz[k] <= 0 || m.scatter[k].linear_count == 0) continue;
     const double fe = m.scatter[k].linear_frequency_hz.mean;

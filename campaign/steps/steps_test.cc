@@ -724,6 +724,9 @@ TEST_F(Steps, ReportSaysWhyTheIwanUpdateWasNotRun) {
     return p.starts_with("Iwan identification: not run: at the linear update's result");
   }));
   ASSERT_GE(model.tables.size(), 2u);
+  EXPECT_NE(model.tables[0].caption.find("pairs are not confirmed by the shapes"),
+            std::string::npos)
+      << model.tables[0].caption;
   EXPECT_NE(model.tables[1].rows[0][2].find("(pairs unconfirmed by the shapes)"), std::string::npos)
       << model.tables[1].rows[0][2];
   const std::vector<std::string>& notes = section("Notes and errors").paragraphs;
