@@ -1688,6 +1688,7 @@ std::string IwanUpdateSummary::parameter_note(int k) const {
     return "held at its start by the fit: the fit with beta free did no better";
   if (held[k]) return "held as asked";
   if (!improved) return "the start: no candidate improved on it";
+  if (k != 1 && no_slip_seen()) return "not identified: no slip in the data";
   const bool micro = microslip_only();
   if (micro && (k == 0 || k == 3) && !held[3])
     return k == 0 ? "not identified apart from beta: microslip only"

@@ -569,6 +569,9 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["evaluations"] = summary.evaluations;
   // False: the search stopped before its local solve met its tolerance, and no sigma is stated.
   result["converged"] = summary.status == correlate::IwanUpdateStatus::kConverged;
+  // True: Z fitted and the joint no better than a constant backbone (Fs, chi, beta not
+  // identified; Kt and modal_ratio are the result).
+  result["no_slip"] = summary.no_slip_seen();
   result["warnings"] = summary.at_bounds;
   result["reduced_chi2"] = summary.reduced_chi2;
   // The residuals' effective number of independent points behind the sigmas (None: unknown).
@@ -730,7 +733,9 @@ Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, rel
 None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
 parameters.csv's); modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
-stopped short of a minimum and no sigma is stated), 'warnings' (parameters at a bound),
+stopped short of a minimum and no sigma is stated), 'no_slip' (True where, the structure's own
+damping fitted, a constant backbone fits as well: Fs, chi and beta are not identified),
+'warnings' (parameters at a bound),
 'reduced_chi2', 'effective_points' (the residuals' effective number of independent points;
 None where unknown), 'noise_correlation'
 (their AR(1) coefficient, corrected for what the fit absorbs), 'sigma_degrees_of_freedom' (the

@@ -383,6 +383,7 @@ def test_update_iwan_equals_the_command_line(tmp_path):
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
     # Converged, as the report says; a fit that is not states no sigma.
     assert result["converged"]
+    assert not result["no_slip"]
     assert result["report"].startswith("Iwan update: converged")
     # The fit's statistics behind the sigmas, as the report prints them.
     assert f"reduced chi-square {result['reduced_chi2']:.3g}" in result["report"]
@@ -395,6 +396,21 @@ def test_update_iwan_equals_the_command_line(tmp_path):
     # The report says what the amplitudes were read as, as the command's does.
     assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal)" in \
         result["report"]
+    # A table without slip (the truth's linear frequency and a flat 0.3 % damping at amplitudes
+    # where the joint barely slips), the structure's own damping fitted: said, and Fs not stated.
+    flat = [(a, fr, 0.003 * (1 + 0.01 * (-1) ** i)) for i, (a, fr) in
+            enumerate(zip(q["modal_amplitude"], q["ringdown_frequency_hz"]))]
+    with open(d / "flat.csv", "w") as f:
+        f.write("amplitude,frequency_hz,damping_ratio\n")
+        for a, _, z in flat:
+            f.write(f"{a * 1e-6!r},{flat[0][1]!r},{z!r}\n")
+    flat_fit = jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "flat.csv")],
+                                    linear_damping="fit", evaluations=400)
+    assert flat_fit["no_slip"], flat_fit["report"]
+    assert "no slip in these data" in flat_fit["report"]
+    assert flat_fit["parameters"]["Fs"]["relative_std"] is None
+    assert flat_fit["parameters"]["Fs"]["note"] == "not identified: no slip in the data"
+    assert_close(flat_fit["parameters"]["modal_ratio"]["final"], 0.003, 0.01)
     with pytest.raises(jointlab.InputError, match="--mode 2: model mode 2 does not exist"):
         jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 2, [str(d / "bb.csv")])
     (d / "neg.csv").write_text("amplitude,frequency_hz,damping_ratio\n1e-4,93.0,-1e-5\n")
