@@ -169,10 +169,11 @@ struct MisfitEvidence {
   double low_frequency_error = 0;  ///< median (f_model - f) / f there (the linear-limit offset)
   double low_frequency_noise = 0;  ///< median relative one-sigma of those frequencies (floored)
   double mode_hz = 0;              ///< mode R's linear frequency in the model as given
-  int nearer_mode = 0;             ///< an elastic mode far nearer low_frequency_hz (0: none)
-  double nearer_mode_hz = 0;       ///< its linear frequency in the model as given
-  double damping_factor = 0;       ///< median measured / model damping over every point
-  double damping_max = 0;          ///< largest measured damping ratio
+  double linear_hz = 0;       ///< mode R's linear frequency at the result (K_T as fitted or held)
+  int nearer_mode = 0;        ///< an elastic mode far nearer low_frequency_hz (0: none)
+  double nearer_mode_hz = 0;  ///< its linear frequency in the model as given
+  double damping_factor = 0;  ///< median measured / model damping over every point
+  double damping_max = 0;     ///< largest measured damping ratio
   /// Median measured damping ratio at each curve's lowest amplitudes (the points of
   /// low_frequency_hz), the fitted model's there, and the median measured one over every point.
   double low_damping = 0, low_model_damping = 0, median_damping = 0;
@@ -447,8 +448,12 @@ struct IwanUpdateSummary {
   std::vector<IwanHistoryEntry> history;  ///< every evaluation
   /// Where the model does not describe the data (misfit()) and `evidence` shows a likelier
   /// cause than the search (a wrong mode, the linear model, the damping column's units), that
-  /// cause in one sentence; else "".
+  /// cause in one sentence; else "". A fit that did not converge (kBudget) names only what
+  /// rests on the model as given (a wrong mode): its residuals are not a best fit's.
   std::string misfit_cause() const;
+  /// Where the fit did not converge, what its residuals where it stopped would suggest as a
+  /// cause, if that were the best fit (no finding: the report qualifies it); else "".
+  std::string tentative_cause() const;
   /// One paragraph: optimiser outcome, parameters, cost.
   std::string report() const;
 };
