@@ -25,13 +25,10 @@ constexpr double kPi = 3.14159265358979323846;
 ModelCurve qsma_curve(const Campaign& c, const model::JointCondensation& jc,
                       const std::vector<Eigen::Index>& dofs, size_t k, const fs::path& qsma_dir,
                       const std::string& tag, std::string& note) {
-  const model::LinearModes& lm = jc.modes();
   const CampaignMode& cm = c.modes[k];
-  const int col = lm.rigid_count + cm.model_mode - 1;
   int ref = 0;
   for (size_t i = 0; i < c.channels.size(); ++i)
     if (c.channels[i].name == cm.reference) ref = static_cast<int>(i);
-  const double phi = std::abs(lm.shapes(dofs[ref], col));
   model::QsmaOptions qo;
   qo.points = c.qsma_points;
   model::QsmaSummary qs;
@@ -45,10 +42,23 @@ ModelCurve qsma_curve(const Campaign& c, const model::JointCondensation& jc,
   const int power = c.amplitude == Quantity::kDisplacement ? 0
                     : c.amplitude == Quantity::kVelocity   ? 1
                                                            : 2;
+  // The amplitude at the reference channel is its DOF's deflection (model::QsmaDof), as
+  // update-iwan fits it, not |phi| q: in macroslip the deflected shape leaves the linear mode's.
+  // Each point's joint solution, continued up the curve.
+  const model::QsmaMode mode(jc, cm.model_mode);
+  const model::QsmaDof at_reference(jc, cm.model_mode, dofs[ref]);
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(jc.size());
   Eigen::VectorXd q(n), alpha(n), slip(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const double w = 2 * kPi * pts[i].frequency_hz;
-    curve.amplitude(i) = phi * pts[i].modal_amplitude * std::pow(w, power);
+    const double runaway = 1e6 * (r.lpNorm<Eigen::Infinity>() + jc.smallest_phi_max());
+    if (!jc.solve(mode.g, pts[i].force_amplitude, r, runaway, 60).converged) {
+      throw InputError(
+          fmt::format("QSMA of campaign mode {}: the static solve at point {} of "
+                      "its curve did not converge again",
+                      k + 1, i + 1));
+    }
+    curve.amplitude(i) = at_reference.deflection(pts[i].force_amplitude, r) * std::pow(w, power);
     curve.frequency_hz(i) = pts[i].frequency_hz;
     curve.damping(i) = pts[i].damping_ratio;
     q(i) = pts[i].modal_amplitude;
