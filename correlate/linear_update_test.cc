@@ -580,6 +580,28 @@ TEST(LinearUpdate, PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverge
   ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << s.report();
   EXPECT_NEAR(theta(0) / 1e4, 1.0, 1e-5) << s.report();
   EXPECT_NEAR(theta(1) / 500, 1.0, 1e-5) << s.report();
+  // The first two modes alone: the start pairs them crosswise at MAC 0.97, which the result
+  // keeps (kc, flat, held at its start), errors +14.1 % and -15.9 % at a reduced chi-square of
+  // 4.5e4. Before, "converged"; the MACs confirm nothing at two sensors, where the pairs cross the
+  // frequency order and the fit leaves that misfit.
+  const MeasuredModes two = synthetic_measurement(twin(1e4, 500), reversed, 2, 0.0, 3);
+  update_linear(twin(8e3, 800), sets, sensors, two, {}, &s);
+  const std::string crossed = s.report();
+  EXPECT_EQ(s.status, LinearUpdateStatus::kPairsUnconfirmed) << crossed;
+  EXPECT_EQ(s.final.pairing.model_for(0), 1) << crossed;
+  EXPECT_NE(s.unconfirmed.find("test modes 1 (6.9884 Hz) and 2 (7.8833 Hz) pair crosswise to the "
+                               "frequency order"),
+            std::string::npos)
+      << crossed;
+  EXPECT_NE(s.unconfirmed.find("which wrong pairs would explain"), std::string::npos) << crossed;
+  EXPECT_EQ(s.unconfirmed_modes, (std::vector<int>{0, 1})) << crossed;
+  // Given at one sensor they pair by frequency: within 1e-5 of the truth, confirmed.
+  MeasuredModes two_by_frequency = two;
+  two_by_frequency.shapes.row(0).setZero();
+  const Eigen::VectorXd t2 = update_linear(twin(8e3, 800), sets, sensors, two_by_frequency, {}, &s);
+  EXPECT_NE(s.status, LinearUpdateStatus::kPairsUnconfirmed) << s.report();
+  EXPECT_NEAR(t2(0) / 1e4, 1.0, 1e-5) << s.report();
+  EXPECT_NEAR(t2(1) / 500, 1.0, 1e-5) << s.report();
 }
 
 // The sweeps against a second walk: each sweep point's error equals that of the mode followed
