@@ -41,6 +41,7 @@ const std::vector<OptionKey>& option_keys() {
       {"--beta", "beta in [update.iwan]"},
       {"--compare", "compare in [update.iwan]"},
       {"--linear-damping-max", "linear_damping_max in [update.iwan]"},
+      {"--linear-damping (fit|hold)", "linear_damping = \"$1\" in [update.iwan]"},
       {"--linear-damping", "linear_damping in [update.iwan]"},
       {"--seed", "seed in [update.iwan]"},
       {"--optimizer global-local", "the global-local optimiser (run's own)"},

@@ -23,6 +23,9 @@ TEST(OptionKeys, AdviceNamesTheCampaignKeys) {
   EXPECT_EQ(with_campaign_keys("--bound-factors and --bound and --linear-damping-max"),
             "lower_factor and upper_factor in [update.linear] and bounds in [update.linear] and "
             "linear_damping_max in [update.iwan]");
+  // An option with its value: the key with that value.
+  EXPECT_EQ(with_campaign_keys("fit it with --linear-damping fit (or set [damping] modal_ratio"),
+            "fit it with linear_damping = \"fit\" in [update.iwan] (or set [damping] modal_ratio");
   // The messages that already name the campaign's key say it once.
   EXPECT_EQ(with_campaign_keys("fit them with --trust-signs (a campaign's update.linear "
                                "trust_signs = true)"),
