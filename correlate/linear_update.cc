@@ -755,6 +755,60 @@ void report_collinear(const std::vector<int>& fitted, const Eigen::VectorXd& the
   }
 }
 
+// Sets the flat rule held at their start where the fit had driven them (not flat there, not
+// held by the user), acting together with fitted sets: the fit drove one toward zero because
+// another took up their common part, so the flat rule's hold fixes the split and the other's
+// value rests on it. Two springs on one joint from kj 1.2e5 and kd 3e4 (truth: their sum 4e4):
+// kd was driven to its lower bound, flat there, held at 3e4, and kj = 1e4 was stated
+// identifiable at +/- 2.83 %. They are named as acting together as fitted ones are (kj's sigma
+// dropped; the sum's is kj's, kd being held), over the fitted sets' covariance `cov` (empty:
+// none stated).
+void report_collinear_with_held_flat(const LinearProblem& p, const Eigen::VectorXd& theta,
+                                     const LinearEvaluation& at, const std::vector<char>& held,
+                                     const std::vector<int>& fitted, const Eigen::MatrixXd& cov,
+                                     LinearUpdateSummary& s) {
+  std::vector<int> with = fitted;
+  for (int k = 0; k < p.size(); ++k) {
+    const ParameterReport& r = s.parameters[k];
+    if (held[static_cast<size_t>(k)] && !r.held_by_user && r.flat && r.drifted_to > 0 &&
+        r.sensitivity >= p.options.flat_sensitivity)
+      with.push_back(k);
+  }
+  if (with.size() == fitted.size() || fitted.empty()) return;
+  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(with.size()));
+  for (size_t c = 0; c < with.size(); ++c) j.col(c) = at.jacobian.col(with[c]);
+  SensitivityDirections d = sensitivity_directions(j);
+  // Only groups holding a set held here and a fitted one: groups of fitted sets alone are
+  // reported already.
+  const auto n_fitted = static_cast<int>(fitted.size());
+  SensitivityDirections mixed;
+  for (size_t g = 0; g < d.groups.size(); ++g) {
+    const std::vector<int>& cols = d.groups[g];
+    if (cols.front() < n_fitted && cols.back() >= n_fitted) {
+      mixed.groups.push_back(cols);
+      mixed.unseen.push_back(d.unseen[g]);
+    }
+  }
+  if (mixed.groups.empty()) return;
+  Eigen::MatrixXd c;
+  if (cov.size() > 0) {
+    c = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(with.size()),
+                              static_cast<Eigen::Index>(with.size()));
+    c.topLeftCorner(n_fitted, n_fitted) = cov;
+  }
+  const size_t first = s.collinear.size(), first_warning = s.warnings.size();
+  report_collinear(with, theta, j, mixed, c, s);
+  for (size_t g = first; g < s.collinear.size(); ++g) {
+    std::vector<std::string> held_names;
+    for (const int k : s.collinear[g].sets)
+      if (held[static_cast<size_t>(k)]) held_names.push_back(s.parameters[k].name);
+    s.warnings[first_warning + (g - first)] += fmt::format(
+        "; {} was held at its start by the flat rule (the fit had driven it toward "
+        "zero), which fixes the split",
+        fmt::join(held_names, " and "));
+  }
+}
+
 // Standard deviations of the fitted sets at the result (its Jacobian). Sets acting together
 // (sensitivity_directions) have none, the combination they determine is named, and the degrees
 // of freedom count the combinations determined. Where the frequencies of
@@ -813,6 +867,7 @@ void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
     }
   }
   report_collinear(fitted, theta, j, d, cov, s);
+  report_collinear_with_held_flat(p, theta, at, held, fitted, cov, s);
   // (A sign-flipped sensor paired a 505 Hz test mode with a model mode then at 748 Hz, the one
   // pair for the one set, and the fit moved K_T 528-fold to match it exactly, "converged".)
   if (s.degrees_of_freedom == 0 && s.t_widening > 0) {

@@ -224,7 +224,8 @@ def test_update_linear_names_sets_acting_together(tmp_path):
         for i in range(2)))
     (tmp_path / "sensors.csv").write_text("channel,dof\ns0,0\ns1,1\n")
     # From a sum near the truth's (from kj 1.2e5 the fit drives kd to its lower bound, where it
-    # is flat and held: then kj alone is fitted).
+    # is flat and held at its start; the two are named as acting together all the same,
+    # LinearUpdate.ASetHeldFlatAfterTheFitDroveItAwayStillActsTogether).
     model = two_mass_spring_model(tmp_path, 2.0e4)
     model.write_text(model.read_text().replace("[spring]\n", "[spring]\nkd = 3.0e4\n")
                      + '\n[[joint]]\na = 0\nb = 1\nelement = "spring.kd"\n')
