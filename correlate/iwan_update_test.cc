@@ -1270,27 +1270,44 @@ TEST(IwanUpdate, MisfitEvidenceNamesTheNearerModeAndTheDampingFactor) {
   EXPECT_NEAR(percent->damping_factor, 100, 5);
 }
 
+// A summary of a fit that ended as `status` after `evaluations` QSMA evaluations, over
+// `residuals` residuals at reduced chi-square `chi2`: the report's wording, no fit run.
+IwanUpdateSummary reported_fit(IwanUpdateStatus status, int evaluations, size_t residuals,
+                               double chi2) {
+  IwanUpdateSummary s;
+  s.improved = true;
+  s.status = status;
+  s.evaluations = evaluations;
+  s.residuals = residuals;
+  s.reduced_chi2 = chi2;
+  return s;
+}
+
+// Misfit evidence of mode 1: the measured low-amplitude frequency, its relative noise and the
+// model's mode 1 as given; the damping factor and largest damping as given.
+MisfitEvidence mode_one_evidence(double low_hz, double noise, double mode_hz, double damping_factor,
+                                 double damping_max) {
+  MisfitEvidence e;
+  e.mode = 1;
+  e.low_frequency_hz = low_hz;
+  e.low_frequency_noise = noise;
+  e.mode_hz = mode_hz;
+  e.damping_factor = damping_factor;
+  e.damping_max = damping_max;
+  return e;
+}
+
 // A misfit whose residuals show a likelier cause names it instead of "widen it" or "a larger
 // --evaluations" (the trial's cases, their numbers): a wrong --mode (mode-1 data fitted as mode
 // 2), a linear-limit frequency off with K_T held (data 5 % below the model, --gamma 1), per-cent
 // damping read as a fraction. Where the evidence shows none of these the old advice stays. (Of a
 // converged fit: one that did not converge names none as a finding, below.)
 TEST(IwanUpdateReport, AMisfitNamesItsLikelierCauseInsteadOfAWiderRangeOrMoreEvaluations) {
-  IwanUpdateSummary s;
-  s.improved = true;
-  s.status = IwanUpdateStatus::kConverged;
-  s.evaluations = 3054;
-  s.residuals = 80;
-  s.reduced_chi2 = 881;
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 3054, 80, 881);
   s.at_bounds = {"chi at its lower bound -0.95"};
-  MisfitEvidence e;
-  e.mode = 1;
-  e.low_frequency_hz = 115.768;
-  e.low_frequency_error = 0.0116;  // 22 times the noise below
-  e.low_frequency_noise = 5.3e-4;
-  e.mode_hz = 120.504;
-  e.damping_factor = 0.36;  // the model's damping above the measured: no unit error to name
-  e.damping_max = 0.02;
+  // The model's damping above the measured (factor 0.36): no unit error to name.
+  MisfitEvidence e = mode_one_evidence(115.768, 5.3e-4, 120.504, 0.36, 0.02);
+  e.low_frequency_error = 0.0116;  // 22 times the noise
   const std::string widen = "widen it", longer = "larger --evaluations";
   // No evidence: the search is the suspect, as before.
   EXPECT_NE(s.report().find(widen), std::string::npos) << s.report();
@@ -1350,20 +1367,9 @@ TEST(IwanUpdateReport, AMisfitNamesItsLikelierCauseInsteadOfAWiderRangeOrMoreEva
 // the residuals would suggest is said only as that, qualified. A wrong --mode, which rests on
 // the model as given and not on the fit, is still named.
 TEST(IwanUpdateReport, AFitThatDidNotConvergeNamesNoCauseAsAFinding) {
-  IwanUpdateSummary s;
-  s.improved = true;
-  s.status = IwanUpdateStatus::kConverged;
-  s.evaluations = 1500;
-  s.residuals = 120;
-  s.reduced_chi2 = 40;
-  MisfitEvidence e;
-  e.mode = 1;
-  e.low_frequency_hz = 13.34;
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 1500, 120, 40);
+  MisfitEvidence e = mode_one_evidence(13.34, 2e-3, 13.35, 1.85, 0.2);
   e.low_frequency_error = 1e-4;
-  e.low_frequency_noise = 2e-3;
-  e.mode_hz = 13.35;
-  e.damping_factor = 1.85;
-  e.damping_max = 0.2;
   s.evidence = e;
   const std::string loss = "a loss factor (eta = 2 zeta) given as the damping ratio";
   // Converged: the factor 1.85 is named as the likelier cause (the test can tell the two apart).
@@ -1396,24 +1402,13 @@ TEST(IwanUpdateReport, AFitThatDidNotConvergeNamesNoCauseAsAFinding) {
 // held K_T against the measured low-amplitude frequency, beyond three times its noise. Without
 // chi at a bound, or with K_T free, or within the noise, that is not said.
 TEST(IwanUpdateReport, ChiAtItsBoundWithKtHeldNamesTheLinearFrequency) {
-  IwanUpdateSummary s;
-  s.improved = true;
-  s.status = IwanUpdateStatus::kConverged;
-  s.evaluations = 1500;
-  s.residuals = 120;
-  s.reduced_chi2 = 12;
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 1500, 120, 12);
   s.held[1] = true;
   s.at_bounds = {"chi at its lower bound -0.95"};
   s.bound_side[2] = -1;
-  MisfitEvidence e;
-  e.mode = 1;
-  e.low_frequency_hz = 13.2672;
+  MisfitEvidence e = mode_one_evidence(13.2672, 2e-4, 13.3339, 1.1, 0.2);
   e.low_frequency_error = 8e-4;  // the fitted curve meets the low data within 10 x the noise
-  e.low_frequency_noise = 2e-4;
-  e.mode_hz = 13.3339;
-  e.linear_hz = 13.3339;  // 0.503 % above the data
-  e.damping_factor = 1.1;
-  e.damping_max = 0.2;
+  e.linear_hz = 13.3339;         // 0.503 % above the data
   s.evidence = e;
   std::string r = s.report();
   EXPECT_NE(r.find("with Kt held, mode 1's linear frequency 13.3339 Hz (the curve's "
@@ -1443,22 +1438,12 @@ TEST(IwanUpdateReport, ChiAtItsBoundWithKtHeldNamesTheLinearFrequency) {
 // widen it, and neither "update-linear" nor "a larger --evaluations" is said. The plain line stays
 // where it is true: another parameter at a bound, or K_T at the bound the miss does not point to.
 TEST(IwanUpdateReport, AKtBoundNamesTheLinearLimitThatPressedIt) {
-  IwanUpdateSummary s;
-  s.improved = true;
-  s.status = IwanUpdateStatus::kConverged;
-  s.evaluations = 3064;
-  s.residuals = 120;
-  s.reduced_chi2 = 386;
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 3064, 120, 386);
   s.at_bounds = {"gamma (Kt/Ks) at its upper bound 2"};
   s.bound_side[1] = 1;
-  MisfitEvidence e;
-  e.mode = 1;
-  e.low_frequency_hz = 179.611;
+  // The model as given 1.85 % below the data.
+  MisfitEvidence e = mode_one_evidence(179.611, 1e-4, 176.291, 1.1, 0.004);
   e.low_frequency_error = -0.00298;  // the fitted linear limit below the data
-  e.low_frequency_noise = 1e-4;
-  e.mode_hz = 176.291;  // the model as given, 1.85 % below
-  e.damping_factor = 1.1;
-  e.damping_max = 0.004;
   s.evidence = e;
   const std::string plain = "the misfit below pressed it there; a wider range would not cure that";
   std::string r = s.report();
@@ -1548,20 +1533,9 @@ TEST(IwanUpdate, ABackboneWithoutSlipSaysSoInsteadOfWideningTheRange) {
 // trial (a riveted beam's mode 1, modal_ratio 0): median damping 3.16 times the fitted model's,
 // 0.003 at the lowest amplitudes against the model's 0.000817 there.
 TEST(IwanUpdateReport, FlatDampingAboveAModelWithoutItsOwnDampingNamesThatDamping) {
-  IwanUpdateSummary s;
-  s.improved = true;
-  s.status = IwanUpdateStatus::kBudget;
-  s.evaluations = 3002;
-  s.residuals = 30;
-  s.reduced_chi2 = 903;
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kBudget, 3002, 30, 903);
   s.at_bounds = {"chi at its lower bound -0.95"};
-  MisfitEvidence e;
-  e.mode = 1;
-  e.low_frequency_hz = 120.48;
-  e.low_frequency_noise = 1e-4;
-  e.mode_hz = 120.48;
-  e.damping_factor = 3.16;
-  e.damping_max = 0.0031;
+  MisfitEvidence e = mode_one_evidence(120.48, 1e-4, 120.48, 3.16, 0.0031);
   e.low_damping = 0.003;
   e.low_model_damping = 0.000817;
   e.median_damping = 0.00299;
