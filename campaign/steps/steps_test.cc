@@ -75,6 +75,19 @@ class Steps : public ::testing::Test {
   }
   static fs::path out() { return small_->dir / "out"; }
   static model::Model truth() { return correlate::two_chain_structure(small_->truth); }
+  // The truth's exact linear frequency and shape of the campaign's mode at its two sensors
+  // (DOFs 1 and 5), as a measured mode labelled `label` (none where empty).
+  static correlate::MeasuredModes exact_mode(const std::string& label) {
+    const model::Model t = truth();
+    const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
+    const int col = lm.rigid_count + small_->model_mode - 1;
+    correlate::MeasuredModes exact;
+    exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
+    exact.shapes.resize(2, 1);
+    exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
+    if (!label.empty()) exact.labels = {label};
+    return exact;
+  }
   // The truth's first-harmonic pair at 8 levels from microslip to twice the full-macroslip
   // amplitude, at the mode's reference channel (velocity amplitude).
   static correlate::MeasuredBackbone sine_pair(const CampaignModelData& d) {
@@ -260,14 +273,7 @@ TEST_F(Steps, EvaluateModelInTheMeasuredAmplitude) {
 // start 20 % low (the one frequency fixes the one parameter: to the solver's tolerance).
 TEST_F(Steps, LinearUpdateRecoversTheStiffness) {
   const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
-  const model::Model t = truth();
-  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
-  const int col = lm.rigid_count + small_->model_mode - 1;
-  correlate::MeasuredModes exact;
-  exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
-  exact.shapes.resize(2, 1);
-  exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
-  exact.labels = {"mode A1"};
+  const correlate::MeasuredModes exact = exact_mode("mode A1");
   const LinearStep step = linear_update_step(*campaign_, d, exact, nullptr);
   ASSERT_TRUE(step.ran);
   double ka = 0;
@@ -291,13 +297,7 @@ TEST_F(Steps, LinearUpdateRecoversTheStiffness) {
 // so and names the campaign key (before, nothing but the report's headline said it).
 TEST_F(Steps, ALinearUpdateAtItsIterationLimitSaysSo) {
   const CampaignModelData d = read_campaign_model(*campaign_, small_->model);
-  const model::Model t = truth();
-  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
-  const int col = lm.rigid_count + small_->model_mode - 1;
-  correlate::MeasuredModes exact;
-  exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
-  exact.shapes.resize(2, 1);
-  exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
+  const correlate::MeasuredModes exact = exact_mode("");
   Campaign c = *campaign_;
   c.linear_update.settings["max_iterations"] = 1;
   const LinearStep step = linear_update_step(c, d, exact, nullptr);
@@ -697,13 +697,7 @@ TEST_F(Steps, ReportSaysWhyTheIwanUpdateWasNotRun) {
   ModelResults r;
   r.data = read_campaign_model(*campaign_, small_->model);
   r.start = evaluate_model(*campaign_, r.data.model, r.data.dofs, "start", out() / "q5", "start");
-  const model::Model t = truth();
-  const model::LinearModes lm = model::linear_modes(t.mass, t.linear_stiffness());
-  const int col = lm.rigid_count + small_->model_mode - 1;
-  correlate::MeasuredModes exact;
-  exact.frequency_hz = Eigen::VectorXd::Constant(1, lm.frequency_hz(col));
-  exact.shapes.resize(2, 1);
-  exact.shapes << lm.shapes(1, col), lm.shapes(5, col);
+  correlate::MeasuredModes exact = exact_mode("");
   exact.ids = {"mode A1"};
   r.linear = linear_update_step(*campaign_, r.data, exact, nullptr);
   ASSERT_TRUE(r.linear.ran);
