@@ -565,36 +565,7 @@ TEST(LinearUpdate, ASetHeldFlatAfterTheFitDroveItAwayStillActsTogether) {
 // what to do; following its advice (modes 1 and 2 given at sensor b alone, so they pair by
 // frequency) the fit finds kg 1e4 and kc 500 and ends converged.
 TEST(LinearUpdate, PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverged) {
-  const auto twin = [](double kg, double kc) {
-    model::Model m;
-    const int n = 3;
-    std::vector<Eigen::Triplet<double>> mt, kt;
-    for (int i = 0; i < 2 * n; ++i) mt.emplace_back(i, i, i < n ? 1.0 : 1.05);
-    for (int c = 0; c < 2; ++c)
-      for (int i = c * n; i + 1 < (c + 1) * n; ++i) {
-        kt.emplace_back(i, i, 1e4);
-        kt.emplace_back(i + 1, i + 1, 1e4);
-        kt.emplace_back(i, i + 1, -1e4);
-        kt.emplace_back(i + 1, i, -1e4);
-      }
-    m.mass.resize(2 * n, 2 * n);
-    m.mass.setFromTriplets(mt.begin(), mt.end());
-    m.stiffness.resize(2 * n, 2 * n);
-    m.stiffness.setFromTriplets(kt.begin(), kt.end());
-    for (const auto& [a, b, element, k] :
-         {std::tuple{0, model::kGround, "spring.kg", kg},
-          std::tuple{n, model::kGround, "spring.kg", kg},
-          std::tuple{n - 1, Eigen::Index{2 * n - 1}, "spring.kc", kc}}) {
-      model::Joint j;
-      j.a = a;
-      j.b = b;
-      j.element = element;
-      j.stiffness = k;
-      m.joints.push_back(j);
-    }
-    model::validate_model(m, "twin chains");
-    return m;
-  };
+  const auto twin = twin_chains_structure;
   const std::vector<Sensor> sensors = {{"a", 2, 1.0}, {"b", 5, 1.0}};
   std::vector<Sensor> reversed = sensors;
   reversed[0].sign = -1.0;

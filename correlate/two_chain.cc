@@ -13,6 +13,35 @@
 
 namespace jointlab::correlate {
 
+model::Model twin_chains_structure(double kg, double kc) {
+  model::Model m;
+  const int n = 3;
+  std::vector<Eigen::Triplet<double>> mt, kt;
+  for (int i = 0; i < 2 * n; ++i) mt.emplace_back(i, i, i < n ? 1.0 : 1.05);
+  for (int c = 0; c < 2; ++c)
+    for (int i = c * n; i + 1 < (c + 1) * n; ++i)
+      for (const auto& [a, b, v] : {std::tuple{i, i, 1e4}, std::tuple{i + 1, i + 1, 1e4},
+                                    std::tuple{i, i + 1, -1e4}, std::tuple{i + 1, i, -1e4}})
+        kt.emplace_back(a, b, v);
+  m.mass.resize(2 * n, 2 * n);
+  m.mass.setFromTriplets(mt.begin(), mt.end());
+  m.stiffness.resize(2 * n, 2 * n);
+  m.stiffness.setFromTriplets(kt.begin(), kt.end());
+  for (const auto& [a, b, element, k] :
+       {std::tuple{0, model::kGround, "spring.kg", kg},
+        std::tuple{n, model::kGround, "spring.kg", kg},
+        std::tuple{n - 1, Eigen::Index{2 * n - 1}, "spring.kc", kc}}) {
+    model::Joint j;
+    j.a = a;
+    j.b = b;
+    j.element = element;
+    j.stiffness = k;
+    m.joints.push_back(j);
+  }
+  model::validate_model(m, "twin chains");
+  return m;
+}
+
 model::Model one_mode_structure(double k0, const model::IwanParameters& p, double z) {
   model::Model m;
   m.mass.resize(1, 1);

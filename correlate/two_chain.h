@@ -36,6 +36,11 @@ struct TwoChainParameters {
 /// Builds the two-chain model (validated).
 model::Model two_chain_structure(const TwoChainParameters& p = {});
 
+/// Twin cantilevers: two chains of three masses (1 and 1.05 kg, inner springs 1e4 N/m), each
+/// grounded at its first mass by "spring.kg" = kg and coupled at their tips (DOFs 2 and 5) by
+/// "spring.kc" = kc [N/m]; their lowest two modes are the chains in phase and in opposition.
+model::Model twin_chains_structure(double kg, double kc);
+
 /// A one-mode model: unit modal mass, a spring k0 [N/m] in parallel with one Iwan element
 /// "iwan.j" (parameters p) to ground, and the structure's own damping ratio z (modal_ratio).
 model::Model one_mode_structure(double k0, const model::IwanParameters& p, double z = 0);

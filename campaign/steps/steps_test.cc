@@ -312,41 +312,12 @@ TEST_F(Steps, ALinearUpdateAtItsIterationLimitSaysSo) {
 
 // The twin cantilevers of
 // LinearUpdate.PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverged as a campaign's
-// model: two chains of three masses (1 and 1.05 kg, inner springs 1e4 N/m) grounded by spring.kg
-// and coupled at their tips by spring.kc, channels a and b at the tips.
-model::Model twin_chains(double kg, double kc) {
-  model::Model m;
-  const int n = 3;
-  std::vector<Eigen::Triplet<double>> mt, kt;
-  for (int i = 0; i < 2 * n; ++i) mt.emplace_back(i, i, i < n ? 1.0 : 1.05);
-  for (int c = 0; c < 2; ++c)
-    for (int i = c * n; i + 1 < (c + 1) * n; ++i)
-      for (const auto& [a, b, v] : {std::tuple{i, i, 1e4}, std::tuple{i + 1, i + 1, 1e4},
-                                    std::tuple{i, i + 1, -1e4}, std::tuple{i + 1, i, -1e4}})
-        kt.emplace_back(a, b, v);
-  m.mass.resize(2 * n, 2 * n);
-  m.mass.setFromTriplets(mt.begin(), mt.end());
-  m.stiffness.resize(2 * n, 2 * n);
-  m.stiffness.setFromTriplets(kt.begin(), kt.end());
-  for (const auto& [a, b, element, k] :
-       {std::tuple{0, model::kGround, "spring.kg", kg},
-        std::tuple{n, model::kGround, "spring.kg", kg},
-        std::tuple{n - 1, Eigen::Index{2 * n - 1}, "spring.kc", kc}}) {
-    model::Joint j;
-    j.a = a;
-    j.b = b;
-    j.element = element;
-    j.stiffness = k;
-    m.joints.push_back(j);
-  }
-  return m;
-}
-
-// The twins' six modes measured at the tips (kg 1e4, kc 500; frequencies exact, shapes
-// with 1 % noise and a phase, as the linear update's test makes them), channel a read reversed:
-// at two sensors each mode then looks like the other.
+// model (correlate::twin_chains_structure), channels a and b at the tips: the twins' six modes
+// measured at the tips (kg 1e4, kc 500; frequencies exact, shapes with 1 % noise and a phase, as
+// the linear update's test makes them), channel a read reversed: at two sensors each mode then
+// looks like the other.
 correlate::MeasuredModes twins_measured_reversed(const std::vector<correlate::Sensor>& sensors) {
-  const model::Model truth = twin_chains(1e4, 500);
+  const model::Model truth = correlate::twin_chains_structure(1e4, 500);
   const model::LinearModes modes = model::linear_modes(truth.mass, truth.linear_stiffness());
   std::vector<correlate::Sensor> reversed = sensors;
   reversed[0].sign = -1.0;
@@ -384,7 +355,7 @@ TEST(IwanAfterLinear, StopsWhereTheShapesDoNotConfirmTheLinearPairs) {
   c.iwan_update.enabled = true;
   c.iwan_update.sets = {"iwan.rivet"};
   CampaignModelData d;
-  d.model = twin_chains(8e3, 800);
+  d.model = correlate::twin_chains_structure(8e3, 800);
   d.dofs = {2, 5};
   d.sensors = {{"a", 2, 1.0}, {"b", 5, 1.0}};
   const LinearStep linear = linear_update_step(c, d, twins_measured_reversed(d.sensors), nullptr);
