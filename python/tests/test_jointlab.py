@@ -173,16 +173,24 @@ def two_mass_spring_model(directory, kj):
     return d / "model.toml"
 
 
-def test_update_linear_equals_the_command_line(tmp_path):
-    # Measured: the two modes of the truth kj = 4e4 N/m with their shapes at both masses.
-    truth = 4e4
-    k = np.array([[1e5 + truth, -truth], [-truth, 2e5 + truth]])
+def two_mass_modes(directory, kj):
+    """The two modes of two_mass_spring_model with kj as measured at both masses: writes
+    modes.csv (returned) and sensors.csv (s0, s1 at DOFs 0 and 1) in directory."""
+    d = pathlib.Path(directory)
+    k = np.array([[1e5 + kj, -kj], [-kj, 2e5 + kj]])
     w2, phi = np.linalg.eigh(k)
-    table = tmp_path / "modes.csv"
+    table = d / "modes.csv"
     table.write_text("mode,frequency_hz,s0,s1\n" + "".join(
         f"{i + 1},{np.sqrt(w2[i]) / (2 * np.pi)!r},{phi[0, i]!r},{phi[1, i]!r}\n"
         for i in range(2)))
-    (tmp_path / "sensors.csv").write_text("channel,dof\ns0,0\ns1,1\n")
+    (d / "sensors.csv").write_text("channel,dof\ns0,0\ns1,1\n")
+    return table
+
+
+def test_update_linear_equals_the_command_line(tmp_path):
+    # Measured: the two modes of the truth kj = 4e4 N/m with their shapes at both masses.
+    truth = 4e4
+    table = two_mass_modes(tmp_path, truth)
     model = two_mass_spring_model(tmp_path, 1.2e5)
     r = run("update-linear", model, "--modes-table", table, "--sensors", tmp_path / "sensors.csv",
             "--set", "spring.kj", "--out", tmp_path / "cli")
@@ -216,13 +224,7 @@ def test_update_linear_names_sets_acting_together(tmp_path):
     # only their sum, so neither is identifiable alone and the sum is the combination determined,
     # as parameters.csv (identifiable 0) and the report's warning say.
     truth = 4e4
-    k = np.array([[1e5 + truth, -truth], [-truth, 2e5 + truth]])
-    w2, phi = np.linalg.eigh(k)
-    table = tmp_path / "modes.csv"
-    table.write_text("mode,frequency_hz,s0,s1\n" + "".join(
-        f"{i + 1},{np.sqrt(w2[i]) / (2 * np.pi)!r},{phi[0, i]!r},{phi[1, i]!r}\n"
-        for i in range(2)))
-    (tmp_path / "sensors.csv").write_text("channel,dof\ns0,0\ns1,1\n")
+    table = two_mass_modes(tmp_path, truth)
     # From a sum near the truth's (from kj 1.2e5 the fit drives kd to its lower bound, where it
     # is flat and held at its start; the two are named as acting together all the same,
     # LinearUpdate.ASetHeldFlatAfterTheFitDroveItAwayStillActsTogether).
