@@ -14,6 +14,16 @@
 namespace jointlab::correlate {
 namespace {
 
+// The load, frequencies and damping ratios of two QSMA points agree to relative `tolerance`.
+void expect_same_point(const model::QsmaPoint& a, const model::QsmaPoint& b, double tolerance) {
+  EXPECT_TRUE(testing::Close(a.force_amplitude, b.force_amplitude, tolerance));
+  EXPECT_TRUE(testing::Close(a.frequency_hz, b.frequency_hz, tolerance));
+  EXPECT_TRUE(testing::Close(a.damping_ratio, b.damping_ratio, tolerance));
+  EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, b.ringdown_frequency_hz, tolerance));
+  EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, b.ringdown_damping_ratio, tolerance));
+  EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, b.harmonic_damping_ratio, tolerance));
+}
+
 double amplitude(const model::QsmaPoint& p, int power) {
   return p.modal_amplitude * std::pow(2 * std::numbers::pi * p.frequency_hz, power);
 }
@@ -100,12 +110,7 @@ TEST(QsmaAt, NewtonAgreesWithTheBracketingIteration) {
         const double f = harmonic ? a.ringdown_frequency_hz : a.frequency_hz;
         EXPECT_TRUE(testing::Close(a.modal_amplitude * std::pow(2 * std::numbers::pi * f, power),
                                    s[i], 1e-12));
-        EXPECT_TRUE(testing::Close(a.force_amplitude, b.force_amplitude, 1e-8));
-        EXPECT_TRUE(testing::Close(a.frequency_hz, b.frequency_hz, 1e-8));
-        EXPECT_TRUE(testing::Close(a.damping_ratio, b.damping_ratio, 1e-8));
-        EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, b.ringdown_frequency_hz, 1e-8));
-        EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, b.ringdown_damping_ratio, 1e-8));
-        EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, b.harmonic_damping_ratio, 1e-8));
+        expect_same_point(a, b, 1e-8);
       }
     }
   }
@@ -202,13 +207,8 @@ TEST(QsmaAt, SensorNewtonAgreesWithTheBracketingIteration) {
           EXPECT_TRUE(testing::Close(
               sensor.deflection(a.force_amplitude, r) * std::pow(2 * std::numbers::pi * f, power),
               s[i], 1e-9));
-          EXPECT_TRUE(testing::Close(a.force_amplitude, b.force_amplitude, 1e-8));
           EXPECT_TRUE(testing::Close(a.modal_amplitude, b.modal_amplitude, 1e-8));
-          EXPECT_TRUE(testing::Close(a.frequency_hz, b.frequency_hz, 1e-8));
-          EXPECT_TRUE(testing::Close(a.damping_ratio, b.damping_ratio, 1e-8));
-          EXPECT_TRUE(testing::Close(a.ringdown_frequency_hz, b.ringdown_frequency_hz, 1e-8));
-          EXPECT_TRUE(testing::Close(a.ringdown_damping_ratio, b.ringdown_damping_ratio, 1e-8));
-          EXPECT_TRUE(testing::Close(a.harmonic_damping_ratio, b.harmonic_damping_ratio, 1e-8));
+          expect_same_point(a, b, 1e-8);
         }
       }
     }
