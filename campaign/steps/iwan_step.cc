@@ -299,7 +299,8 @@ std::string iwan_stop_reason(const Campaign& c, const LinearStep& linear, const 
     const bool one = modes.size() == 1;
     return fmt::format(
         "update.iwan: not run: at the linear update's result the shapes do not confirm the "
-        "pair{} of {} (MAC with the partner below update.linear mac_threshold {:g}), so the "
+        "pair{} of {} (MAC with the partner below update.linear mac_threshold {:g}, or pairs "
+        "crosswise to the frequency order at two channels with a misfit left), so the "
         "updated model's modes may be paired crosswise with the measured ones and an Iwan joint "
         "identified on it would pass a wrong number on; the linear updating paragraph of the "
         "report says which modes and why. Add channels that see these modes apart or check "
