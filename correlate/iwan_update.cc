@@ -363,7 +363,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
     }
     // Each curve's lowest tenth of its points by amplitude (at least 3, at most all): where the
     // model is at its linear limit, K_T and the linear part.
-    std::vector<double> f_lo, error, noise, z_lo, z_model_lo;
+    std::vector<double> f_lo, error, noise, z_lo, z_model_lo, all_z;
     for (const MeasuredBackbone& c : t.curves) {
       const Eigen::Index n = c.amplitude.size();
       std::vector<Eigen::Index> by_amplitude(static_cast<size_t>(n));
@@ -384,6 +384,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
         const double model_z = v[static_cast<size_t>(k + 2 * j + 1)];
         if (model_z > 0) damping_ratios.push_back(c.damping_ratio(j) / model_z);
         damping_max = std::max(damping_max, c.damping_ratio(j));
+        all_z.push_back(c.damping_ratio(j));
       }
       k += 2 * static_cast<int>(n);
     }
@@ -394,9 +395,6 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
     e.low_frequency_noise = median(noise);
     e.low_damping = median(z_lo);
     e.low_model_damping = median(z_model_lo);
-    std::vector<double> all_z;
-    for (const MeasuredBackbone& c : t.curves)
-      all_z.insert(all_z.end(), c.damping_ratio.begin(), c.damping_ratio.end());
     e.median_damping = median(all_z);
     if (modes && e.low_frequency_hz > 0) {
       // Another elastic mode whose linear frequency lies within a third of mode R's distance
