@@ -51,6 +51,17 @@ LongCurve long_curve(const model::JointCondensation& jc, int points, double reac
   return {model::qsma(jc, 1, o, &qs), automatic_end};
 }
 
+// The amplitudes s = scale q omega^p of the curve's points, each moved up by 0.1-0.3 % (off
+// qsma()'s own points: none sits on the element's phi_max, where Newton hands over), ascending.
+std::vector<double> off_curve_amplitudes(const std::vector<model::QsmaPoint>& curve, int power,
+                                         double scale = 1.0) {
+  std::vector<double> s;
+  for (const auto& c : curve)
+    s.push_back(scale * amplitude(c, power) * (1 + 1e-3 * (1 + s.size() % 3)));
+  std::sort(s.begin(), s.end());
+  return s;
+}
+
 // Second method: qsma() marches up in load; its points, converted to amplitudes s = q omega^p,
 // must come back from qsma_at() with the same load, frequency and damping. The curve runs to
 // three times the full-macroslip amplitude, across the knee. Both solve the same static problem
@@ -93,11 +104,7 @@ TEST(QsmaAt, NewtonAgreesWithTheBracketingIteration) {
        {AmplitudeFrequency::kSecant, AmplitudeFrequency::kFirstHarmonic}) {
     const bool harmonic = frequency == AmplitudeFrequency::kFirstHarmonic;
     for (int power = 0; power <= 2; ++power) {
-      std::vector<double> s;
-      // Off qsma()'s own points: none sits on the element's phi_max, where Newton hands over.
-      for (const auto& c : curve)
-        s.push_back(amplitude(c, power) * (1 + 1e-3 * (1 + s.size() % 3)));
-      std::sort(s.begin(), s.end());
+      const std::vector<double> s = off_curve_amplitudes(curve, power);
       const auto newton = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kNewton);
       const auto bracketing = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kBracketing);
       ASSERT_EQ(newton.size(), s.size());
@@ -187,10 +194,7 @@ TEST(QsmaAt, SensorNewtonAgreesWithTheBracketingIteration) {
          {AmplitudeFrequency::kSecant, AmplitudeFrequency::kFirstHarmonic}) {
       const bool harmonic = frequency == AmplitudeFrequency::kFirstHarmonic;
       for (int power = 0; power <= 2; ++power) {
-        std::vector<double> s;
-        for (const auto& c : curve)
-          s.push_back(sensor.shape * amplitude(c, power) * (1 + 1e-3 * (1 + s.size() % 3)));
-        std::sort(s.begin(), s.end());
+        const std::vector<double> s = off_curve_amplitudes(curve, power, sensor.shape);
         const auto newton = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kNewton, dof);
         const auto bracketing = qsma_at(jc, 1, power, s, frequency, QsmaAtSolver::kBracketing, dof);
         ASSERT_EQ(newton.size(), s.size());

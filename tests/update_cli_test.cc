@@ -775,6 +775,31 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+// The one-mode truth of the beta checks below: 177 Hz, K_T 4 % of the stiffness, F_S 0.5 N,
+// chi -0.5, beta 0.5, no floor.
+struct OneModeTruth {
+  double k_total = std::pow(2 * M_PI * 177.0, 2);
+  model::IwanParameters iwan{0.5, 0.04 * k_total, -0.5, 0.5};
+};
+
+// Two hits of the one-mode truth, 40 points each to top1 and top2 times phi_max (seeds seed and
+// seed + 1), as dir/hit1.csv and dir/hit2.csv, and the start (F_S x2, K_T x0.9, chi -0.3, beta
+// 1) as dir/s.toml; returns the update-iwan command on them with --fs-range 0.05:50, without
+// --out.
+std::string two_hits_command(const fs::path& dir, double top1, double top2, unsigned seed) {
+  const OneModeTruth t;
+  const double phi = model::Iwan(t.iwan).phi_max();
+  const model::Model m = correlate::one_mode_structure(0.96 * t.k_total, t.iwan, 0);
+  write_backbone_table(dir / "hit1.csv", m, 40, top1 * phi, seed);
+  write_backbone_table(dir / "hit2.csv", m, 40, top2 * phi, seed + 1);
+  const std::string model = write_model(
+      dir, correlate::one_mode_structure(0.96 * t.k_total, {1.0, 0.9 * t.iwan.Kt, -0.3, 1.0}, 0),
+      "s.toml");
+  return fmt::format(
+      "update-iwan {} --set j --mode 1 --backbone {} --backbone {} --fs-range 0.05:50", model,
+      (dir / "hit1.csv").string(), (dir / "hit2.csv").string());
+}
+
 // Microslip backbones fix K_T, chi and R, not F_S and beta apart. With beta held at its start by
 // the fit (the default) the F_S line says it is F_S given that beta and not identified, with the
 // combination's sigma spelled out as at that beta, and the slip line lists the (F_S, beta) pairs
@@ -786,18 +811,8 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
 // phi_max, start F_S x2, K_T x0.9, chi -0.3, beta 1.
 TEST(UpdateCli, IwanMicroslipSaysFsIsGivenBetaAndWhoHeldBeta) {
   const fs::path dir = testing::scratch_dir("update_iwan_microslip");
-  const double k_total = std::pow(2 * M_PI * 177.0, 2);
-  const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
-  const double phi = model::Iwan(truth).phi_max();
-  const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, 0);
-  write_backbone_table(dir / "hit1.csv", m, 40, 0.3 * phi, 41);
-  write_backbone_table(dir / "hit2.csv", m, 40, 0.4 * phi, 42);
-  const std::string model = write_model(
-      dir, correlate::one_mode_structure(0.96 * k_total, {1.0, 0.9 * truth.Kt, -0.3, 1.0}, 0),
-      "s.toml");
-  const std::string common =
-      fmt::format("update-iwan {} --set j --mode 1 --backbone {} --backbone {} --fs-range 0.05:50",
-                  model, (dir / "hit1.csv").string(), (dir / "hit2.csv").string());
+  const std::string common = two_hits_command(dir, 0.3, 0.4, 41);
+  const double truth_fs = OneModeTruth{}.iwan.Fs;
   const testing::CommandResult r = testing::run_jointlab(common + " --out " + (dir / "a").string());
   ASSERT_EQ(r.status, 0) << r.err;
   SCOPED_TRACE(r.out);
@@ -835,7 +850,7 @@ TEST(UpdateCli, IwanMicroslipSaysFsIsGivenBetaAndWhoHeldBeta) {
   const auto pb = read_parameters(dir / "b" / "parameters.csv");
   const double fs = std::stod(pb.at("Fs").at(2));
   RecordProperty("fs_given_truth_beta", std::to_string(fs));
-  EXPECT_TRUE(testing::Close(fs, truth.Fs, 0.03)) << fs;
+  EXPECT_TRUE(testing::Close(fs, truth_fs, 0.03)) << fs;
   EXPECT_NE(b.out.find(" % given beta = 0.5 as held (microslip only), Kt"), std::string::npos);
   EXPECT_NE(b.out.find("beta 1 -> 0.5 (held)"), std::string::npos);
   EXPECT_NE(pb.at("Fs").at(3), "");
@@ -852,19 +867,9 @@ TEST(UpdateCli, IwanMicroslipSaysFsIsGivenBetaAndWhoHeldBeta) {
 // phi_max, start F_S x2, K_T x0.9, chi -0.3, beta 1.
 TEST(UpdateCli, IwanSaysWhenTheFitWithBetaFreeDidNoBetter) {
   const fs::path dir = testing::scratch_dir("update_iwan_free_beta");
-  const double k_total = std::pow(2 * M_PI * 177.0, 2);
-  const model::IwanParameters truth{0.5, 0.04 * k_total, -0.5, 0.5};
-  const double phi = model::Iwan(truth).phi_max();
-  const model::Model m = correlate::one_mode_structure(0.96 * k_total, truth, 0);
-  write_backbone_table(dir / "hit1.csv", m, 40, 1.5 * phi, 31);
-  write_backbone_table(dir / "hit2.csv", m, 40, 2.5 * phi, 32);
-  const std::string model = write_model(
-      dir, correlate::one_mode_structure(0.96 * k_total, {1.0, 0.9 * truth.Kt, -0.3, 1.0}, 0),
-      "s.toml");
-  const testing::CommandResult r = testing::run_jointlab(fmt::format(
-      "update-iwan {} --set j --mode 1 --backbone {} --backbone {} --fs-range 0.05:50 "
-      "--optimizer paper-log --out {}",
-      model, (dir / "hit1.csv").string(), (dir / "hit2.csv").string(), (dir / "out").string()));
+  const testing::CommandResult r =
+      testing::run_jointlab(two_hits_command(dir, 1.5, 2.5, 31) + " --optimizer paper-log --out " +
+                            (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.err;
   SCOPED_TRACE(r.out);
   RecordProperty("report", r.out);
