@@ -89,15 +89,15 @@ struct RulePairing {
 
 /// Pairs measured modes (rows of `mac`) with model modes (columns) one to one: a candidate is
 /// a visible model mode within the frequency window with MAC >= threshold; the measured mode
-/// with the strongest candidate is paired first. Candidates within tie_mac of the best are
-/// told apart by frequency (the nearest, when it is at most half as far in ln f as the next);
-/// when frequency cannot tell them either, `ambiguity` and `ties` say so (every such mode, not
-/// the first alone: a later tie is met only once the earlier guess is made). A measured mode
-/// without a shape (`has_shape` false: none, or an entry at one sensor only, where every MAC is 1)
-/// pairs with the nearest visible-or-not model frequency in the window by the same rule (at most
-/// half as far in ln f as the next, else `ambiguity`). `model_norm2` is each model mode's
-/// squared norm at the sensors. `test_names` names the measured modes in `ambiguity` (the
-/// table's own numbers); where it is shorter, mode i is named i + 1.
+/// with the strongest candidate is paired first, the modes without a shape after all others.
+/// Candidates within tie_mac of the best are told apart by frequency (the nearest, when it is at
+/// most half as far in ln f as the next); when frequency cannot tell them either, `ambiguity` and
+/// `ties` say so (every such mode, not the first alone: a later tie is met only once the earlier
+/// guess is made). A measured mode without a shape (`has_shape` false: none, or an entry at one
+/// sensor only, where every MAC is 1) pairs with the nearest visible-or-not model frequency in the
+/// window by the same rule (at most half as far in ln f as the next, else `ambiguity`).
+/// `model_norm2` is each model mode's squared norm at the sensors. `test_names` names the measured
+/// modes in `ambiguity` (the table's own numbers); where it is shorter, mode i is named i + 1.
 RulePairing pair_by_rules(const Eigen::Ref<const Eigen::MatrixXd>& mac,
                           const Eigen::Ref<const Eigen::VectorXd>& test_frequency_hz,
                           const std::vector<bool>& has_shape,

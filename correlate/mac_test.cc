@@ -145,5 +145,25 @@ TEST(PairByRules, AModeWithoutAShapePairsByFrequencyWithinTheWindow) {
   EXPECT_EQ(p.pairing.unpaired_measured, std::vector<int>{1});
 }
 
+TEST(PairByRules, ModesWithAShapePairBeforeThoseWithout) {
+  // The two-chain structure at three sensors (two on chain A, one on chain B), started with ka
+  // four times and kb a third of the truth: test mode 1 (57.9 Hz, chain A) has MAC 0.99 with
+  // model mode 2 (66.2 Hz, chain A's first mode there); test mode 2 (59.9 Hz, chain B) is seen at
+  // one sensor only and pairs by frequency. Paired first (as if its missing MAC were 1), it took
+  // model mode 2, the nearest in frequency, and test mode 1 was left unpaired: the fit then moved
+  // ka to 6.8e5 (truth 5e5). A shape's MAC is the stronger evidence: it pairs first, and the mode
+  // without one takes the nearest of the model modes left, model mode 1 (41.2 Hz, chain B).
+  RulesCase c{Eigen::MatrixXd::Zero(2, 3),
+              (Eigen::VectorXd(2) << 57.9, 59.9).finished(),
+              (Eigen::VectorXd(3) << 41.2, 66.2, 205.5).finished(),
+              Eigen::VectorXd::Ones(3),
+              {true, false}};
+  c.mac << 0.0, 0.99, 0.52;
+  const RulePairing p = c.run();
+  EXPECT_EQ(p.pairing.model_for(0), 1);
+  EXPECT_EQ(p.pairing.model_for(1), 0);
+  EXPECT_TRUE(p.pairing.unpaired_measured.empty());
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
