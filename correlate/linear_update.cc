@@ -1678,8 +1678,11 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
   return fmt::format(
       "the shapes do not confirm the pair{} of test mode{} {}: at the result {} (the MAC "
       "threshold is {:g}); {} on the start's MACs and on following each mode's shape{}{}: add "
-      "sensors that see these modes apart, or check the signs of their shapes; to pair a mode by "
-      "frequency alone, give its shape at one sensor only (the other cells empty)",
+      "sensors that see these modes apart, or check the signs of their shapes (a campaign's "
+      "[[channel]] sign); to pair a mode by frequency alone, give its shape at one sensor only "
+      "(the other cells of its modes-table row empty); in a campaign (jointlab run), whose shapes "
+      "come from every [[channel]], leave test mode{} {} out of the linear update (list the other "
+      "[[mode]] names in [update.linear] modes)",
       one ? "" : "s", one ? "" : "s", fmt::join(ids, one ? "" : " and "), fmt::join(lines, "; "),
       options.mac_threshold, one ? "it rests" : "they rest",
       two_sensors ? ", and at two sensors a MAC tells shapes apart poorly: one sign wrong (a "
@@ -1694,7 +1697,8 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
                             : fmt::format("a chi-square of {:.3g} with no degree of freedom left",
                                           e.residuals.squaredNorm() / sf2),
                         100 * e.max_error())
-          : "");
+          : "",
+      one ? "" : "s", fmt::join(ids, one ? "" : " and "));
 }
 
 }  // namespace

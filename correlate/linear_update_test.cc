@@ -584,6 +584,13 @@ TEST(LinearUpdate, PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverge
   EXPECT_NE(s.unconfirmed.find("at two sensors a MAC tells shapes apart poorly"), std::string::npos)
       << r;
   EXPECT_NE(s.unconfirmed.find("give its shape at one sensor only"), std::string::npos) << r;
+  // A campaign's shapes come from every [[channel]], so `jointlab run` cannot give one at one
+  // sensor: its user is told what a campaign can do instead.
+  EXPECT_NE(s.unconfirmed.find("in a campaign (jointlab run), whose shapes come from every "
+                               "[[channel]], leave test modes 1 and 2 out of the linear update "
+                               "(list the other [[mode]] names in [update.linear] modes)"),
+            std::string::npos)
+      << r;
   EXPECT_EQ(s.unconfirmed_modes, (std::vector<int>{0, 1})) << r;
   // Said once: not again as settle()'s warning on the same modes.
   EXPECT_EQ(r.find("is followed by its shape to"), std::string::npos) << r;
