@@ -2,7 +2,7 @@
 // --out FIG [--label NAME]...`: the QSMA backbones of several models (ring-down columns) over the
 // measured ones, frequency and damping against amplitude (the paper's Figures 5-7), with a CSV of
 // the plotted model curves beside the figure. Argument parsing only: the measured side
-// (iwan_inputs.h), the model curves (correlate::model_backbone) and the figure
+// (campaign/iwan_inputs.h), the model curves (correlate::model_backbone) and the figure
 // (campaign/backbone_comparison.h) are library code.
 #include <filesystem>
 #include <memory>
@@ -14,9 +14,9 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
-#include "jointlab/apps/iwan_inputs.h"
 #include "jointlab/apps/print.h"
 #include "jointlab/campaign/backbone_comparison.h"
+#include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/model/joint_condensation.h"
@@ -27,7 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CompareArgs : IwanInputArgs {
+struct CompareArgs : campaign::IwanInputArgs {
   std::vector<std::string> models, labels;
   std::string mode, out;
   int points = 100;
@@ -46,7 +46,9 @@ void run_compare(CompareArgs a) {
   a.model = a.models.front();
   a.modes = {a.mode};
   const model::Model first = model::read_model(a.model);
-  const IwanInputs in = read_iwan_inputs(first, a, "compare");
+  const campaign::IwanInputs in = campaign::read_iwan_inputs(first, a, "compare");
+  if (!in.slip_screen.empty())
+    say(stdout, "slip screen (points where other modes slip the joints):\n{}", in.slip_screen);
   const correlate::IwanTarget& target = in.targets.front();
   double lo = INFINITY, hi = 0;
   for (const correlate::MeasuredBackbone& c : target.curves) {

@@ -1,7 +1,7 @@
 // `jointlab update-linear` and `jointlab update-iwan`: model updating against the output of
 // `jointlab process` or, for update-iwan, backbone tables (docs/update-linear.md,
-// docs/update-iwan.md; update-iwan's measured side is read by iwan_inputs.h, shared with
-// `compare`). Argument parsing only:
+// docs/update-iwan.md; update-iwan's measured side is read by campaign/iwan_inputs.h, shared
+// with `compare` and the Python module). Argument parsing only:
 // reading measured data (correlate/measured_data.h), the updates (linear_update.h,
 // iwan_update.h) and the files written (update_files.h, model/model_file_writer.h) are
 // library code.
@@ -17,10 +17,10 @@
 #include <CLI/CLI.hpp>
 
 #include "jointlab/apps/commands.h"
-#include "jointlab/apps/iwan_inputs.h"
 #include "jointlab/apps/print.h"
 #include "jointlab/campaign/backbone_comparison.h"
 #include "jointlab/campaign/figures.h"
+#include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/campaign/update_figures.h"
@@ -39,10 +39,6 @@ namespace jointlab::apps {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The smallest MAC at the sensors of a --mode's band with that mode of the updated model
-// without a warning: the MAC pairing's threshold (correlate::measured_mode_of's 0.6).
-constexpr double kBandMacThreshold = 0.6;
 
 struct LinearArgs {
   std::string model, measured, modes_table, sensors, out, rule = "least-squares";
@@ -153,7 +149,7 @@ void run_update_linear(const LinearArgs& a) {
   say(stdout, "{}", summary.report());
 }
 
-struct IwanArgs : IwanInputArgs {
+struct IwanArgs : campaign::IwanInputArgs {
   std::string out, set, optimizer = "global-local", compare = "matched";
   std::string linear_damping = "hold";
   std::vector<double> pareto;
@@ -201,22 +197,9 @@ correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjectiv
   return b;
 }
 
-// "; with channel s1 reversed ..." where a sign explains a band's low MAC (mode_shape_match).
-std::string reversed_hint(const correlate::ModeShapeMatch& match,
-                          const std::vector<correlate::Sensor>& sensors, int mode) {
-  if (match.reversed.empty()) return "";
-  std::vector<std::string> names;
-  for (const int k : match.reversed) names.push_back(sensors[static_cast<size_t>(k)].channel);
-  return fmt::format(
-      "; or a sign: with {} {} reversed its MAC with mode {} is {:.2g}, so check {} sign in the "
-      "sensors file",
-      names.size() == 1 ? "channel" : "channels", fmt::join(names, " and "), mode,
-      match.reversed_mac, names.size() == 1 ? "its" : "their");
-}
-
 // The fit and its files, whatever the measured data came from (the measured linear modes, when
 // known, give the Pareto front's per-mode errors).
-void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& in) {
+void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::IwanInputs& in) {
   const std::string& data_name = in.data_name;
   correlate::IwanUpdateOptions o = a.options;
   o.amplitude = in.amplitude;
@@ -283,27 +266,9 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& i
   }
   say(stdout, "{}", summary.report());
   if (!in.amplitude_note.empty()) say(stdout, "  {}\n", in.amplitude_note);
-  // Each band named for a mode must look like that mode of the updated model (not the start's:
-  // a start far off may order the modes differently). A low MAC means the band, or the sensors
-  // file, belongs to another mode: the parameters then fit that mode's data. Said, not refused:
-  // a poorly measured shape of the right mode may look like nothing.
-  if (in.measured) {
-    const model::Model updated = objective.apply(best, summary.modal_ratio);
-    for (const BandOfMode& b : in.bands) {
-      const correlate::ModeShapeMatch match =
-          correlate::mode_shape_match(updated, in.sensors, *in.measured, b.column, b.mode);
-      if (match.mac >= kBandMacThreshold) continue;
-      say(stdout,
-          "  WARNING: --mode {}: band {}'s measured shape and mode {} of the updated model have "
-          "MAC {:.2g} at the sensors (below {:g}){}: the band, or the sensors file, may belong "
-          "to another mode, and the parameters then fit that mode's data{}\n",
-          b.spec, b.band, b.mode, match.mac, kBandMacThreshold,
-          match.best_mode != b.mode ? fmt::format("; it looks most like mode {} (MAC {:.2g})",
-                                                  match.best_mode, match.best_mac)
-                                    : std::string(),
-          reversed_hint(match, in.sensors, b.mode));
-    }
-  }
+  for (const std::string& line :
+       campaign::band_shape_warnings(objective.apply(best, summary.modal_ratio), in))
+    say(stdout, "  {}\n", line);
   for (const correlate::ParetoPoint& p : front) {
     say(stdout,
         "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
@@ -322,7 +287,9 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const IwanInputs& i
 void run_update_iwan(const IwanArgs& a) {
   check_iwan_args(a);
   const model::Model m = model::read_model(a.model);
-  const IwanInputs in = read_iwan_inputs(m, a, "update-iwan");
+  const campaign::IwanInputs in = campaign::read_iwan_inputs(m, a, "update-iwan");
+  if (!in.slip_screen.empty())
+    say(stdout, "slip screen (points where other modes slip the joints):\n{}", in.slip_screen);
   fit_and_write(a, m, in);
 }
 

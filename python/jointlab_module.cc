@@ -17,6 +17,7 @@
 
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
+#include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
@@ -434,19 +435,25 @@ void check_range(const char* option, const std::optional<std::pair<double, doubl
                                  r->second, shown, d.text()));
 }
 
-// update-iwan with backbone tables (contract.md, data/backbone_table.h): the options and
-// defaults of the command; the fit `run` and the command make (campaign::fit_iwan).
-py::dict update_iwan(const std::string& model_path, const std::string& set, int mode,
-                     const std::vector<std::string>& backbones, const std::string& amplitude,
-                     const std::optional<std::string>& dof, const std::string& linear_damping,
-                     const std::optional<std::pair<double, double>>& fs_range,
-                     const std::pair<double, double>& gamma_range,
-                     const std::pair<double, double>& chi_range,
-                     const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
-                     const std::optional<std::string>& out, const py::object& progress) {
-  if (backbones.empty()) throw InputError("update-iwan: give at least one backbone table");
+// update-iwan (contract.md): backbone tables (data/backbone_table.h) or a `process` folder with
+// its sensors, read as the command reads them (campaign/iwan_inputs.h); the options and defaults
+// of the command; the fit `run` and the command make (campaign::fit_iwan).
+py::dict update_iwan(
+    const std::string& model_path, const std::string& set, const std::vector<std::string>& modes,
+    const std::vector<std::string>& backbones, const std::optional<std::string>& amplitude,
+    const std::optional<std::string>& dof, const std::string& linear_damping,
+    const std::optional<std::pair<double, double>>& fs_range,
+    const std::pair<double, double>& gamma_range, const std::pair<double, double>& chi_range,
+    const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
+    const std::optional<std::string>& out, const py::object& progress,
+    const std::optional<std::string>& measured, const std::optional<std::string>& sensors,
+    const std::vector<std::string>& channels) {
   if (linear_damping != "hold" && linear_damping != "fit")
     throw InputError(fmt::format("--linear-damping {}: expected hold or fit", linear_damping));
+  if (amplitude && *amplitude != "modal" && *amplitude != "displacement" &&
+      *amplitude != "velocity" && *amplitude != "acceleration")
+    throw InputError(fmt::format(
+        "--amplitude {}: expected modal, displacement, velocity or acceleration", *amplitude));
   check_range("--fs-range", fs_range, "Fs", "Fs");
   check_range("--gamma-range", gamma_range, "Kt", "Kt/Ks");
   check_range("--chi-range", chi_range, "chi", "chi");
@@ -456,52 +463,26 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
         fmt::format("--beta-range {}:{}: need 0 < LO < HI (beta is searched on a log scale)",
                     beta_range.first, beta_range.second));
   correlate::IwanUpdateSummary summary;
-  std::vector<correlate::Sensor> sensors_used;  // the DOF named by `dof`, for the report
-  std::vector<std::string> unitless;  // the tables whose amplitude has no unit, for the report
-  model::Model updated;
+  campaign::IwanInputs in;
+  std::vector<std::string> shape_warnings;
   {
     py::gil_scoped_release release;
     const model::Model m = model::read_model(model_path);
-    const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
-    const int elastic = linear.size() - linear.rigid_count;
-    if (mode < 1 || mode > elastic)
-      throw InputError(
-          fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic "
-                      "modes",
-                      mode, mode, model_path, elastic));
+    campaign::IwanInputArgs a;
+    a.model = model_path;
+    a.modes = modes;
+    a.backbones = backbones;
+    a.amplitude = amplitude.value_or("");
+    a.dof = dof.value_or("");
+    a.measured = measured.value_or("");
+    a.sensors = sensors.value_or("");
+    a.channels = channels;
+    in = campaign::read_iwan_inputs(m, a, "update-iwan");
+    if (!in.slip_screen.empty())
+      report(progress,
+             "slip screen (points where other modes slip the joints):\n" + in.slip_screen);
     correlate::IwanUpdateOptions o;
-    std::vector<correlate::Sensor> sensors;
-    if (amplitude == "modal") {
-      if (dof)
-        throw InputError(
-            "--dof: a modal amplitude is measured at no DOF (give --amplitude displacement, "
-            "velocity or acceleration)");
-    } else {
-      o.amplitude = amplitude == "displacement" ? correlate::AmplitudeQuantity::kDisplacement
-                    : amplitude == "velocity"   ? correlate::AmplitudeQuantity::kVelocity
-                    : amplitude == "acceleration"
-                        ? correlate::AmplitudeQuantity::kAcceleration
-                        : throw InputError(fmt::format("--amplitude {}: expected modal, "
-                                                       "displacement, velocity or acceleration",
-                                                       amplitude));
-      if (!dof)
-        throw InputError(fmt::format(
-            "--amplitude {}: give --dof NODE:COMP (or a 0-based index), where it was measured",
-            amplitude));
-      correlate::Sensor sensor;
-      sensor.dof = model::resolve_dof(m, *dof, "--dof");
-      sensor.channel = model::dof_name(m, sensor.dof);
-      sensors.push_back(sensor);
-    }
-    correlate::IwanTarget target;
-    target.mode = mode;
-    // The amplitude column's unit, when given, must measure this quantity (none: modal).
-    const std::optional<Quantity> measured =
-        amplitude == "modal" ? std::nullopt : parse_quantity(amplitude);
-    correlate::BackboneCurves read =
-        correlate::read_backbone_curves(backbones, measured, sensors.empty() ? -1 : 0);
-    target.curves = std::move(read.curves);
-    unitless = std::move(read.unitless);
+    o.amplitude = in.amplitude;
     o.fit_linear_damping = linear_damping == "fit";
     o.max_evaluations = evaluations;
     o.seed = seed;
@@ -510,8 +491,8 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
         report(progress,
                fmt::format("update-iwan: {} QSMA evaluations, best cost {:.6g}", n, best));
     };
-    sensors_used = sensors;
-    correlate::IwanObjective objective(m, set, sensors, {target}, o);
+    correlate::IwanObjective objective(m, set, in.sensors, in.targets, o);
+    if (in.measured) objective.set_linear_modes(*in.measured, 0.6);
     correlate::IwanBounds b = correlate::default_iwan_bounds(objective.initial());
     if (fs_range) b.Fs_min = fs_range->first, b.Fs_max = fs_range->second;
     b.gamma_min = gamma_range.first, b.gamma_max = gamma_range.second;
@@ -521,13 +502,15 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
     if (const std::string e = o.error(); !e.empty())
       throw InputError(fmt::format("update-iwan: {}", e));
     if (const std::string e = correlate::unreachable_frequencies(objective, o); !e.empty())
-      throw InputError(fmt::format("update-iwan: {}", e));
+      throw InputError(fmt::format("update-iwan: {}: {}", in.data_name, e));
     summary = campaign::fit_iwan(objective, o, nullptr);
     if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint)
-      throw InputError(
+      throw InputError(fmt::format(
           "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
-          "amplitudes");
-    updated = objective.apply(summary.best, summary.modal_ratio);
+          "amplitudes of {}",
+          in.data_name));
+    const model::Model updated = objective.apply(summary.best, summary.modal_ratio);
+    shape_warnings = campaign::band_shape_warnings(updated, in);
     if (out) model::write_model_file(std::filesystem::path(*out), updated);
   }
   py::dict parameters;
@@ -572,7 +555,9 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   // True: Z fitted and the joint no better than a constant backbone (Fs, chi, beta not
   // identified; Kt and modal_ratio are the result).
   result["no_slip"] = summary.no_slip_seen();
-  result["warnings"] = summary.at_bounds;
+  std::vector<std::string> warnings = summary.at_bounds;
+  warnings.insert(warnings.end(), shape_warnings.begin(), shape_warnings.end());
+  result["warnings"] = warnings;
   result["reduced_chi2"] = summary.reduced_chi2;
   // The residuals' effective number of independent points behind the sigmas (None: unknown).
   result["effective_points"] = summary.effective_points > 0
@@ -584,13 +569,45 @@ py::dict update_iwan(const std::string& model_path, const std::string& set, int 
   result["sigma_degrees_of_freedom"] =
       summary.effective_points > 0 ? py::object(py::float_(summary.sigma_degrees_of_freedom))
                                    : py::object(py::none());
-  result["report"] = summary.report() + "  " +
-                     correlate::amplitude_reading(
-                         mode, amplitude, false,
-                         sensors_used.empty() ? std::string() : sensors_used.front().channel,
-                         dof.value_or(""), unitless) +
-                     "\n";
+  // The command's report: the fit's, what the amplitudes were read as, the bands' shapes.
+  std::string text = summary.report();
+  if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
+  for (const std::string& line : shape_warnings) text += "  " + line + "\n";
+  result["report"] = text;
   return result;
+}
+
+// update_iwan with `mode` as Python gives it: an int, an 'R:BAND' string or a list of either.
+py::dict update_iwan_call(const std::string& model, const std::string& set, const py::object& mode,
+                          const std::vector<std::string>& backbones,
+                          const std::optional<std::string>& amplitude,
+                          const std::optional<std::string>& dof, const std::string& linear_damping,
+                          const std::optional<std::pair<double, double>>& fs_range,
+                          const std::pair<double, double>& gamma_range,
+                          const std::pair<double, double>& chi_range,
+                          const std::pair<double, double>& beta_range, int evaluations,
+                          unsigned seed, const std::optional<std::string>& out,
+                          const py::object& progress, const std::optional<std::string>& measured,
+                          const std::optional<std::string>& sensors,
+                          const std::vector<std::string>& channels) {
+  std::vector<std::string> modes;
+  const auto one = [&](const py::handle& h) {
+    if (py::isinstance<py::str>(h))
+      modes.push_back(h.cast<std::string>());
+    else if (py::isinstance<py::int_>(h))
+      modes.push_back(std::to_string(h.cast<long long>()));
+    else
+      throw InputError("mode: expected an int, 'R:BAND' or a list of them");
+  };
+  if (py::isinstance<py::list>(mode) || py::isinstance<py::tuple>(mode)) {
+    for (const py::handle h : mode) one(h);
+  } else {
+    one(mode);
+  }
+  if (modes.empty()) throw InputError("mode: give at least one mode");
+  return update_iwan(model, set, modes, backbones, amplitude, dof, linear_damping, fs_range,
+                     gamma_range, chi_range, beta_range, evaluations, seed, out, progress, measured,
+                     sensors, channels);
 }
 
 }  // namespace
@@ -709,22 +726,31 @@ phase raise InputError saying which.
     r["parameters"]["iwan.rivet"]["final"]
 )");
 
-  m.def("update_iwan", &update_iwan, py::arg("model"), py::arg("set"), py::arg("mode"),
-        py::arg("backbones"), py::arg("amplitude") = "modal", py::arg("dof") = py::none(),
-        py::arg("linear_damping") = "hold", py::arg("fs_range") = py::none(),
+  m.def("update_iwan", &update_iwan_call, py::arg("model"), py::arg("set"), py::arg("mode"),
+        py::arg("backbones") = std::vector<std::string>{}, py::arg("amplitude") = py::none(),
+        py::arg("dof") = py::none(), py::arg("linear_damping") = "hold",
+        py::arg("fs_range") = py::none(),
         py::arg("gamma_range") = std::pair<double, double>{0.05, 2.0},
         py::arg("chi_range") = std::pair<double, double>{-0.95, 0.0},
         py::arg("beta_range") = std::pair<double, double>{0.01, 100.0},
         py::arg("evaluations") = 1500, py::arg("seed") = 1u, py::arg("out") = py::none(),
-        py::arg("progress") = py::none(),
-        R"(Updates one Iwan set to measured backbone tables (`jointlab update-iwan --backbone`).
+        py::arg("progress") = py::none(), py::arg("measured") = py::none(),
+        py::arg("sensors") = py::none(), py::arg("channels") = std::vector<std::string>{},
+        R"(Updates one Iwan set to measured backbones (`jointlab update-iwan`): backbone tables, or
+a `process` output folder with its sensors file.
 
 model           model file (TOML), linear stiffness already updated
 set             the Iwan set ('iwan.rivet' or 'rivet')
-mode            the elastic model mode every table belongs to (from 1)
+mode            the elastic model mode: with tables, the one every table belongs to (from 1);
+                with `measured`, one or a list of R or 'R:BAND' (--mode, repeatable)
 backbones       CSV tables amplitude,frequency_hz,damping_ratio[,frequency_std_hz,damping_std]
-amplitude       'modal' (QSMA modal amplitude q, default) or 'displacement' [m], 'velocity'
-                [m/s], 'acceleration' [m/s^2] at model DOF `dof` ('NODE:COMP' or an index)
+amplitude       tables: 'modal' (QSMA modal amplitude q, the default) or 'displacement' [m],
+                'velocity' [m/s], 'acceleration' [m/s^2] at model DOF `dof` ('NODE:COMP' or an
+                index)
+measured, sensors, channels
+                instead of tables: a `jointlab process` output folder, its sensors file
+                (channel,dof) and, optionally, the channels to use (--measured, --sensors,
+                --channel); the folder records its own amplitude quantity
 linear_damping  'hold' (the model's [damping] modal_ratio) or 'fit' (identified with the joint)
 fs_range, gamma_range, chi_range, beta_range, evaluations, seed: as the command's options
 out             write the updated model file here, or None
@@ -735,7 +761,7 @@ parameters.csv's); modal_ratio -> initial, final, std, fitted), 'cost', 'initial
 (None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
 stopped short of a minimum and no sigma is stated), 'no_slip' (True where, the structure's own
 damping fitted, a constant backbone fits as well: Fs, chi and beta are not identified),
-'warnings' (parameters at a bound),
+'warnings' (parameters at a bound; a band whose shape does not look like its mode),
 'reduced_chi2', 'effective_points' (the residuals' effective number of independent points;
 None where unknown), 'noise_correlation'
 (their AR(1) coefficient, corrected for what the fit absorbs), 'sigma_degrees_of_freedom' (the
@@ -744,6 +770,8 @@ sigmas' Student's t: effective points less the parameters fitted; 2 or fewer sta
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]
+    r = jointlab.update_iwan("model.toml", "rivet", 1, measured="processed",
+                             sensors="sensors.csv")
 )");
 
   m.def("run", &run, py::arg("campaign"), py::arg("out"), py::arg("force") = false,

@@ -321,18 +321,25 @@ def test_update_linear_pairs_the_shapes_do_not_confirm_are_not_converged(tmp_pat
     assert result["parameters"]["spring.kc"]["final"] == pytest.approx(500, rel=1e-5)
 
 
-def test_run_equals_the_command_line(tmp_path):
+@pytest.fixture(scope="module")
+def riveted_model(tmp_path_factory):
+    # The example riveted beam's model, built once for the tests that need it (about 3 s).
+    directory = tmp_path_factory.mktemp("riveted")
+    r = run("build-model", SOURCE / "examples" / "riveted_beam" / "description.toml", "--out",
+            directory / "model", "--quiet")
+    assert r.returncode == 0, r.stderr
+    return directory / "model" / "model.toml"
+
+
+def test_run_equals_the_command_line(tmp_path, riveted_model):
     # The example campaign (nine hits): the scatter summaries and the updated model file of both
     # runs are the same files, byte for byte. Its model is built once for both (built in each
     # run, it was 9 s of each run's 20 s) and the Iwan step given 100 evaluations, not 400.
     example = SOURCE / "data" / "examples" / "riveted-campaign"
-    r = run("build-model", SOURCE / "examples" / "riveted_beam" / "description.toml", "--out",
-            tmp_path / "model", "--quiet")
-    assert r.returncode == 0, r.stderr
     text = (example / "campaign.toml").read_text()
     for old, new in (
             ('description = "../../../examples/riveted_beam/description.toml"',
-             f'file = "{tmp_path / "model" / "model.toml"}"'),
+             f'file = "{riveted_model}"'),
             ('truth = "truth.toml"', f'truth = "{example / "truth.toml"}"'),
             ('"low/', f'"{example}/low/'), ('"mid/', f'"{example}/mid/'),
             ('"high/', f'"{example}/high/'),
@@ -353,6 +360,44 @@ def test_run_equals_the_command_line(tmp_path):
         assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     with pytest.raises(jointlab.InputError, match="missing.toml"):
         jointlab.run(str(tmp_path / "missing.toml"), str(tmp_path / "none"))
+
+
+def test_update_iwan_from_a_process_folder_equals_the_command_line(tmp_path, riveted_model):
+    # The example campaign's mid and high hits processed in two bands, the riveted beam's model at
+    # its start and the campaign's two sensors: `measured=` reads the folder as `--measured`
+    # does, so the call and the command end at the same parameters, with the same report.
+    example = SOURCE / "data" / "examples" / "riveted-campaign"
+    hits = sorted((example / "mid").glob("*.csv")) + sorted((example / "high").glob("*.csv"))
+    r = run("process", *hits, "--band", "100:145", "--band", "440:570", "--out", tmp_path / "p")
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "sensors.csv").write_text("channel,dof\nacc_9001_z,9001:3\nacc_9003_z,9003:3\n")
+    r = run("update-iwan", riveted_model, "--set", "rivet", "--mode", "1", "--measured",
+            tmp_path / "p", "--sensors", tmp_path / "sensors.csv", "--evaluations", "100",
+            "--out", tmp_path / "cli")
+    assert r.returncode == 0, r.stderr
+    with open(tmp_path / "cli" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    result = jointlab.update_iwan(str(riveted_model), "rivet", 1, measured=str(tmp_path / "p"),
+                                  sensors=str(tmp_path / "sensors.csv"), evaluations=100)
+    for name in ("Fs", "Kt", "chi", "beta"):
+        assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    assert result["report"] == r.stdout
+    # Two modes as the command's repeated --mode (R and R:BAND): the slip screen is a progress
+    # line, as the command prints it.
+    lines = []
+    jointlab.update_iwan(str(riveted_model), "rivet", [1, "3:2"], measured=str(tmp_path / "p"),
+                         sensors=str(tmp_path / "sensors.csv"), evaluations=100,
+                         progress=lines.append)
+    assert any(line.startswith("slip screen") for line in lines), lines
+    # The command's argument errors, raised the same way.
+    with pytest.raises(jointlab.InputError, match="--amplitude and --dof describe --backbone"):
+        jointlab.update_iwan(str(riveted_model), "rivet", 1, measured=str(tmp_path / "p"),
+                             sensors=str(tmp_path / "sensors.csv"), amplitude="velocity")
+    with pytest.raises(jointlab.InputError, match="give --measured DIR with --sensors FILE"):
+        jointlab.update_iwan(str(riveted_model), "rivet", 1, measured=str(tmp_path / "p"))
+    with pytest.raises(jointlab.InputError, match="--mode 1:9: .* has no band 9"):
+        jointlab.update_iwan(str(riveted_model), "rivet", "1:9", measured=str(tmp_path / "p"),
+                             sensors=str(tmp_path / "sensors.csv"))
 
 
 def test_update_iwan_equals_the_command_line(tmp_path):
@@ -397,7 +442,7 @@ def test_update_iwan_equals_the_command_line(tmp_path):
     stated = result["parameters"]["Kt"]["relative_std"] is not None
     assert stated == (result["sigma_degrees_of_freedom"] > 2)
     # The report says what the amplitudes were read as, as the command's does.
-    assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal)" in \
+    assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal, the default)" in \
         result["report"]
     # A table without slip (the truth's linear frequency and a flat 0.3 % damping at amplitudes
     # where the joint barely slips), the structure's own damping fitted: said, and Fs not stated.

@@ -2,7 +2,8 @@
 // stepped-sine folders), or plain backbone tables (data/backbone_table.h) of a modal amplitude or
 // of a quantity at a model DOF, turned into the Iwan update's targets (campaign/iwan_targets.h
 // for a process folder, as `run` builds them). Argument handling only: the readers and the
-// targets are library code.
+// targets are library code. The command line (update-iwan, compare) and the Python module
+// read them here.
 #pragma once
 
 #include <optional>
@@ -14,7 +15,7 @@
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/model_file.h"
 
-namespace jointlab::apps {
+namespace jointlab::campaign {
 
 /// The options naming the measured backbones.
 struct IwanInputArgs {
@@ -45,11 +46,16 @@ struct IwanInputs {
   std::string data_name;                             ///< for messages
   std::string amplitude_note;     ///< --backbone: what the amplitudes were read as, for the report
   std::vector<BandOfMode> bands;  ///< each process --mode's band
+  std::string slip_screen;  ///< several process modes: per mode, the points the slip screen left
 };
 
 /// Reads the measured side named by `a` against model `m`; InputError prefixed by `command`.
-/// With several process modes it prints, per mode, the points the slip screen leaves out.
 IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
                             const std::string& command);
 
-}  // namespace jointlab::apps
+/// One line for each process --mode whose band's measured shape does not look like that mode of
+/// the `updated` model at the sensors (MAC below the pairing's 0.6): the band, or the sensors
+/// file, may belong to another mode. Empty for backbone tables.
+std::vector<std::string> band_shape_warnings(const model::Model& updated, const IwanInputs& in);
+
+}  // namespace jointlab::campaign

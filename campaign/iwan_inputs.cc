@@ -1,11 +1,11 @@
-#include "jointlab/apps/iwan_inputs.h"
+#include "jointlab/campaign/iwan_inputs.h"
 
 #include <algorithm>
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
-#include "jointlab/apps/print.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
@@ -13,7 +13,7 @@
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/sim/simulated_record.h"
 
-namespace jointlab::apps {
+namespace jointlab::campaign {
 namespace {
 
 IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std::string& command) {
@@ -101,7 +101,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
   const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
   const int elastic = linear.size() - linear.rigid_count;
-  std::vector<campaign::ModeBackbones> modes;
+  std::vector<ModeBackbones> modes;
   std::vector<BandOfMode> band_of_mode;
   for (const std::string& spec : a.modes) {
     correlate::IwanTarget t;
@@ -151,8 +151,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
       }
     }
     // Every band's backbones with their scatter summary; targets built as `run` builds them.
-    campaign::ModeBackbones mb =
-        campaign::process_run_backbones(run, sensors, band, a.channels, campaign::ScatterOptions{});
+    ModeBackbones mb = process_run_backbones(run, sensors, band, a.channels, ScatterOptions{});
     mb.name = "mode " + spec;
     mb.model_mode = t.mode;
     if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
@@ -181,22 +180,19 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
             "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
             dir, a.measured));
       }
-      campaign::ModeBackbones mb =
-          campaign::stepped_sine_run_backbones(ss, sensor, campaign::ScatterOptions{});
+      ModeBackbones mb = stepped_sine_run_backbones(ss, sensor, ScatterOptions{});
       mb.name = fmt::format("stepped sine {}", dir);
       mb.model_mode = mode;
       modes.push_back(std::move(mb));
     }
   }
-  campaign::IwanTargetOptions target_options;
+  IwanTargetOptions target_options;
   target_options.amplitude = run.amplitude;
-  const campaign::IwanTargets built = campaign::iwan_targets(m, sensors, modes, target_options);
+  const IwanTargets built = iwan_targets(m, sensors, modes, target_options);
   // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
   // say that rather than that nothing was measured.
-  if (modes.size() > 1) {
-    say(stdout, "slip screen (points where other modes slip the joints):\n{}",
-        built.screen_report(modes));
-  }
+  IwanInputs in;
+  if (modes.size() > 1) in.slip_screen = built.screen_report(modes);
   if (built.fitted.empty()) {
     std::string per_mode;
     for (size_t k = 0; k < modes.size(); ++k) {
@@ -208,7 +204,6 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
         "modes carry over {:g} % of the joint slip is left out ({}); fit the modes one at a time",
         command, 100 * target_options.max_slip_share, per_mode));
   }
-  IwanInputs in;
   in.sensors = sensors;
   in.targets = built.fitted;
   in.amplitude = run.amplitude;
@@ -218,4 +213,43 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   return in;
 }
 
-}  // namespace jointlab::apps
+std::vector<std::string> band_shape_warnings(const model::Model& updated, const IwanInputs& in) {
+  std::vector<std::string> lines;
+  if (!in.measured) return lines;
+  // The smallest MAC at the sensors of a --mode's band with that mode of the updated model
+  // without a warning: the MAC pairing's threshold (correlate::measured_mode_of's 0.6). The
+  // updated model, not the start: a start far off may order the modes differently. A low MAC
+  // means the band, or the sensors file, belongs to another mode: the parameters then fit that
+  // mode's data. Said, not refused: a poorly measured shape of the right mode may look like
+  // nothing.
+  constexpr double kBandMacThreshold = 0.6;
+  for (const BandOfMode& b : in.bands) {
+    const correlate::ModeShapeMatch match =
+        correlate::mode_shape_match(updated, in.sensors, *in.measured, b.column, b.mode);
+    if (match.mac >= kBandMacThreshold) continue;
+    // "; or a sign: with channel s1 reversed ..." where a sign explains the low MAC.
+    std::string sign;
+    if (!match.reversed.empty()) {
+      std::vector<std::string> names;
+      for (const int k : match.reversed)
+        names.push_back(in.sensors[static_cast<size_t>(k)].channel);
+      sign = fmt::format(
+          "; or a sign: with {} {} reversed its MAC with mode {} is {:.2g}, so check {} sign in "
+          "the sensors file",
+          names.size() == 1 ? "channel" : "channels", fmt::join(names, " and "), b.mode,
+          match.reversed_mac, names.size() == 1 ? "its" : "their");
+    }
+    lines.push_back(fmt::format(
+        "WARNING: --mode {}: band {}'s measured shape and mode {} of the updated model have MAC "
+        "{:.2g} at the sensors (below {:g}){}: the band, or the sensors file, may belong to "
+        "another mode, and the parameters then fit that mode's data{}",
+        b.spec, b.band, b.mode, match.mac, kBandMacThreshold,
+        match.best_mode != b.mode ? fmt::format("; it looks most like mode {} (MAC {:.2g})",
+                                                match.best_mode, match.best_mac)
+                                  : std::string(),
+        sign));
+  }
+  return lines;
+}
+
+}  // namespace jointlab::campaign
