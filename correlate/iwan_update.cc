@@ -1672,6 +1672,11 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     s.covariance.setZero();
     s.modal_ratio_std = 0;
   }
+  // Every other parameter whose words state no sigma (the start, data without slip) has no
+  // number either: parameters.csv and Python read relative_std, the report sigma_reason(), and a
+  // start that no candidate improved on stated its sigma in Python where the report said
+  // "(sigma unknown)" and parameters.csv left it empty.
+  s.clear_unstated_sigmas();
   return s.best;
 }
 
@@ -1689,30 +1694,76 @@ double slip_force_at_beta(const model::IwanParameters& p, double beta) {
 void IwanUpdateSummary::set_beta_held_by_fit(IwanBetaHold why, double free_cost) {
   beta_hold = why;
   free_fit_cost = free_cost;
-  if (why != IwanBetaHold::kOptions && microslip_only()) relative_std(0) = 0;
+  clear_unstated_sigmas();
+}
+
+IwanSigmaReason IwanUpdateSummary::sigma_reason(int k) const {
+  const bool z = k == 4;
+  if (z ? !modal_ratio_fitted : held[k]) {
+    if (k == 3 && beta_hold == IwanBetaHold::kMicroslip) return IwanSigmaReason::kBetaHeldMicroslip;
+    if (k == 3 && beta_hold == IwanBetaHold::kFreeFitNoBetter)
+      return IwanSigmaReason::kBetaHeldFreeNoBetter;
+    return IwanSigmaReason::kHeldAsAsked;
+  }
+  if (!improved || status == IwanUpdateStatus::kNoValidPoint) return IwanSigmaReason::kStart;
+  // K_T and Z are the result of data without slip; F_S, chi and beta are not identified.
+  if (k != 1 && !z && no_slip_seen()) return IwanSigmaReason::kNoSlip;
+  // Microslip data fix F_S and beta only together: with beta free neither is a result; with beta
+  // held by the fit F_S is the slip force at that beta (before, "Fs 0.5 -> 0.564 N +/- 2.3 %" at
+  // beta held 1 read like a result: the truth was 0.7 N at beta 0.6, z -2 to -13 over 10 seeds).
+  const bool micro = microslip_only();
+  if (micro && (k == 0 || k == 3) && !held[3]) return IwanSigmaReason::kMicroslipFamily;
+  if (status == IwanUpdateStatus::kBudget) return IwanSigmaReason::kNotConverged;
+  if (micro && k == 0 && !beta_held_as_asked()) return IwanSigmaReason::kGivenBeta;
+  if ((z ? modal_ratio_std : relative_std(k)) > 0)
+    return micro && k == 0 ? IwanSigmaReason::kGivenBetaAsHeld : IwanSigmaReason::kStated;
+  if (effective_points > 0 && !(sigma_degrees_of_freedom > 2))
+    return IwanSigmaReason::kTooFewPoints;
+  return IwanSigmaReason::kUnknown;
+}
+
+void IwanUpdateSummary::clear_unstated_sigmas() {
+  const auto stated = [&](int k) {
+    const IwanSigmaReason r = sigma_reason(k);
+    return r == IwanSigmaReason::kStated || r == IwanSigmaReason::kGivenBetaAsHeld;
+  };
+  for (int k = 0; k < 4; ++k)
+    if (!stated(k)) relative_std(k) = 0;
+  if (!stated(4)) modal_ratio_std = 0;
 }
 
 std::string IwanUpdateSummary::parameter_note(int k) const {
-  if (k == 3 && held[3] && beta_hold == IwanBetaHold::kMicroslip)
-    return "held at its start by the fit: microslip only so not identified";
-  if (k == 3 && held[3] && beta_hold == IwanBetaHold::kFreeFitNoBetter)
-    return "held at its start by the fit: the fit with beta free did no better";
-  if (held[k]) return "held as asked";
-  if (!improved) return "the start: no candidate improved on it";
-  if (k != 1 && no_slip_seen()) return "not identified: no slip in the data";
-  const bool micro = microslip_only();
-  if (micro && (k == 0 || k == 3) && !held[3])
-    return k == 0 ? "not identified apart from beta: microslip only"
-                  : "not identified apart from Fs: microslip only";
-  if (status == IwanUpdateStatus::kBudget) return "no sigma: not converged";
-  if (micro && k == 0 && !beta_held_as_asked()) {
-    return fmt::format(
-        "given beta = {:.4g}: not identified (microslip only: the data fix only the combination "
-        "of Fs and beta)",
-        best.beta);
+  switch (sigma_reason(k)) {
+    case IwanSigmaReason::kStated:
+      // A relative sigma of Z at 0 is no number: its absolute one is in the report.
+      return k == 4 && !(modal_ratio > 0) ? "at 0: its sigma is absolute (report)" : "";
+    case IwanSigmaReason::kGivenBetaAsHeld:
+      return fmt::format("given beta = {:.4g} as held (microslip only)", best.beta);
+    case IwanSigmaReason::kHeldAsAsked:
+      return k == 4 ? "the model's held" : "held as asked";
+    case IwanSigmaReason::kBetaHeldMicroslip:
+      return "held at its start by the fit: microslip only so not identified";
+    case IwanSigmaReason::kBetaHeldFreeNoBetter:
+      return "held at its start by the fit: the fit with beta free did no better";
+    case IwanSigmaReason::kStart:
+      return "the start: no candidate improved on it";
+    case IwanSigmaReason::kNoSlip:
+      return "not identified: no slip in the data";
+    case IwanSigmaReason::kMicroslipFamily:
+      return k == 0 ? "not identified apart from beta: microslip only"
+                    : "not identified apart from Fs: microslip only";
+    case IwanSigmaReason::kNotConverged:
+      return "no sigma: not converged";
+    case IwanSigmaReason::kGivenBeta:
+      return fmt::format(
+          "given beta = {:.4g}: not identified (microslip only: the data fix only the combination "
+          "of Fs and beta)",
+          best.beta);
+    case IwanSigmaReason::kTooFewPoints:
+      return fmt::format("sigma unknown: too few independent points ({:.2g})", effective_points);
+    case IwanSigmaReason::kUnknown:
+      return "sigma unknown: no covariance at the result (a direction the data do not fix)";
   }
-  if (micro && k == 0)
-    return fmt::format("given beta = {:.4g} as held (microslip only)", best.beta);
   return "";
 }
 
@@ -1942,45 +1993,45 @@ std::string IwanUpdateSummary::report() const {
       linear_known ? fmt::format("linear frequency error {:.3g} %", 100 * linear_error)
                    : std::string("no measured linear frequency to compare"));
   // Each parameter with its one-sigma relative uncertainty where known; held ones say so.
-  const bool micro = improved && microslip_only();
   const bool no_slip = no_slip_seen();
+  // The words of sigma_reason(), as parameters.csv's and Python's notes say them.
   auto sigma = [&](int k) -> std::string {
-    // Beta held: as asked, or by the fit itself (at its start), which is no result of the data.
-    if (k == 3 && held[3]) {
-      switch (beta_hold) {
-        case IwanBetaHold::kOptions:
-          return " (held)";
-        case IwanBetaHold::kMicroslip:
-          return " (held at its start by the fit, not fitted: microslip only)";
-        case IwanBetaHold::kFreeFitNoBetter:
-          return " (held at its start by the fit, not fitted: the fit with it free did no "
-                 "better, below)";
+    switch (sigma_reason(k)) {
+      case IwanSigmaReason::kStated:
+        return fmt::format(" +/- {:.2g} %", 100 * relative_std(k));
+      case IwanSigmaReason::kGivenBetaAsHeld:
+        return fmt::format(" +/- {:.2g} % given beta = {:.4g} as held (microslip only)",
+                           100 * relative_std(k), best.beta);
+      case IwanSigmaReason::kHeldAsAsked:
+        return " (held)";
+      case IwanSigmaReason::kBetaHeldMicroslip:
+        return " (held at its start by the fit, not fitted: microslip only)";
+      case IwanSigmaReason::kBetaHeldFreeNoBetter:
+        return " (held at its start by the fit, not fitted: the fit with it free did no better, "
+               "below)";
+      case IwanSigmaReason::kStart:
+        return " (the start: no candidate improved on it)";
+      case IwanSigmaReason::kNoSlip:
+        return " (not identified: no slip in the data, below)";
+      case IwanSigmaReason::kMicroslipFamily:
+        return k == 0 ? " (not identified apart from beta: microslip only)"
+                      : " (not identified apart from Fs: microslip only)";
+      case IwanSigmaReason::kNotConverged:
+        return " (no sigma: not converged)";
+      case IwanSigmaReason::kGivenBeta: {
+        const double conditional = std::sqrt(std::max(covariance(0, 0), 0.0));
+        return fmt::format(
+            " given beta = {:.4g} (not identified, microslip only: the data fix only the "
+            "combination of Fs and beta, below{})",
+            best.beta,
+            conditional > 0 ? fmt::format("; +/- {:.2g} % at that beta", 100 * conditional) : "");
       }
+      case IwanSigmaReason::kTooFewPoints:
+        return " (sigma unknown: too few independent points, below)";
+      case IwanSigmaReason::kUnknown:
+        return " (sigma unknown: no covariance at the result)";
     }
-    if (held[k]) return " (held)";
-    if (no_slip && k != 1) return " (not identified: no slip in the data, below)";
-    // Microslip data fix F_S and beta only together: with beta free neither is a result; with
-    // beta held by the fit F_S is the slip force at that beta, its sigma that of the
-    // combination (before, "Fs 0.5 -> 0.564 N +/- 2.3 %" at beta held 1 read like a result:
-    // the truth was 0.7 N at beta 0.6, z -2 to -13 over 10 seeds); held as asked, F_S given it.
-    if (micro && (k == 0 || k == 3) && !held[3])
-      return k == 0 ? " (not identified apart from beta: microslip only)"
-                    : " (not identified apart from Fs: microslip only)";
-    if (improved && status == IwanUpdateStatus::kBudget) return " (no sigma: not converged)";
-    const double conditional = std::sqrt(std::max(covariance(0, 0), 0.0));
-    if (micro && k == 0 && !beta_held_as_asked()) {
-      return fmt::format(
-          " given beta = {:.4g} (not identified, microslip only: the data fix only the "
-          "combination of Fs and beta, below{})",
-          best.beta,
-          conditional > 0 ? fmt::format("; +/- {:.2g} % at that beta", 100 * conditional) : "");
-    }
-    if (!improved || !(relative_std(k) > 0)) return " (sigma unknown)";
-    if (micro && k == 0) {
-      return fmt::format(" +/- {:.2g} % given beta = {:.4g} as held (microslip only)",
-                         100 * relative_std(k), best.beta);
-    }
-    return fmt::format(" +/- {:.2g} %", 100 * relative_std(k));
+    return "";
   };
   out += fmt::format(
       "  Fs {:.6g} -> {:.6g} N{}, Kt {:.6g} -> {:.6g} N/m{}, chi {:.4g} -> {:.4g}{}, beta {:.4g} "
@@ -1992,9 +2043,8 @@ std::string IwanUpdateSummary::report() const {
         "  modal_ratio (the structure's own damping) {:.6g} -> {:.6g}{}; the best constant "
         "backbone (joint barely slipping) costs {:.4g}\n",
         modal_ratio_start, modal_ratio,
-        modal_ratio_std > 0 ? fmt::format(" +/- {:.2g}", modal_ratio_std)
-        : improved && status == IwanUpdateStatus::kBudget ? " (no sigma: not converged)"
-                                                          : " (sigma unknown)",
+        sigma_reason(4) == IwanSigmaReason::kStated ? fmt::format(" +/- {:.2g}", modal_ratio_std)
+                                                    : sigma(4),
         constant_cost);
   } else if (modal_ratio_start > 0) {
     out += fmt::format("  modal_ratio {:.4g} held (the model's own damping, in every damping)\n",

@@ -332,6 +332,24 @@ enum class IwanBetaHold {
                     ///< freed ended at a higher cost (campaign::fit_iwan)
 };
 
+/// Why a parameter of an Iwan update states a sigma or not (IwanUpdateSummary::sigma_reason()):
+/// the one decision behind the report's parameter line, parameters.csv's relative_std and note,
+/// Python's and the campaign report's, so that they cannot disagree.
+enum class IwanSigmaReason {
+  kStated,                ///< fitted, its sigma stated
+  kGivenBetaAsHeld,       ///< F_S of microslip data with beta held as asked: sigma given that beta
+  kHeldAsAsked,           ///< held by the options (--gamma, --beta; modal_ratio not fitted)
+  kBetaHeldMicroslip,     ///< beta held at its start by the fit: the data stay in microslip
+  kBetaHeldFreeNoBetter,  ///< beta held at its start by the fit: the fit with it free did no better
+  kStart,                 ///< no candidate improved on the start: the start, no fit
+  kNoSlip,                ///< F_S, chi or beta of data without slip (no_slip_seen())
+  kMicroslipFamily,       ///< F_S or beta, both free, of microslip data: not identified apart
+  kNotConverged,          ///< the fit did not converge (kBudget): no sigma
+  kGivenBeta,     ///< F_S of microslip data with beta held by the fit: F_S at that beta, no result
+  kTooFewPoints,  ///< too few effective independent points (sigma_degrees_of_freedom <= 2)
+  kUnknown        ///< the covariance could not be formed at the result
+};
+
 /// The slip force that gives Iwan parameters p's microslip response (K_T, chi and R; F = K_T u -
 /// R u^(chi+2) / ((chi+1)(chi+2)) below phi_max) at another beta: below phi_max the two sets are
 /// the same element, so microslip data cannot tell them apart.
@@ -383,10 +401,18 @@ struct IwanUpdateSummary {
   bool beta_held_as_asked() const { return held[3] && beta_hold == IwanBetaHold::kOptions; }
   /// Parameter k (F_S, K_T, chi, beta) held as asked (by the options), not by the fit.
   bool held_as_asked(int k) const { return k == 3 ? beta_held_as_asked() : held[k]; }
+  /// Why parameter k (F_S, K_T, chi, beta; 4: modal_ratio) states a sigma or not. A sigma is
+  /// stated (relative_std(k) > 0, modal_ratio_std > 0) exactly for kStated and kGivenBetaAsHeld.
+  IwanSigmaReason sigma_reason(int k) const;
   /// What parameter k's value is, where it is not simply fitted (held, and by whom; not
-  /// identified apart from another; F_S given beta; not converged), in a few words without a
-  /// comma (parameters.csv's note column, Python's); "" for a fitted parameter.
+  /// identified apart from another; F_S given beta; why no sigma), in a few words without a
+  /// comma (parameters.csv's note column, Python's, the campaign report's), from sigma_reason();
+  /// "" for a fitted parameter with its sigma. k = 4: modal_ratio.
   std::string parameter_note(int k) const;
+  /// Sets relative_std (and modal_ratio_std) to 0 wherever sigma_reason() states none, so every
+  /// reader of the numbers agrees with the words (update_iwan() and set_beta_held_by_fit() call
+  /// it).
+  void clear_unstated_sigmas();
   /// One-sigma relative uncertainty of (F_S, K_T, chi, beta) at best (of |chi| for chi; 0 where
   /// unknown or held, and all 0 when the fit did not converge, kBudget): the larger of a
   /// serial-correlation robust (Newey-West, HAC) sandwich over each curve's points ordered by

@@ -717,6 +717,17 @@ TEST(IwanUpdate, MonteCarloSaysWhenNoSampleImprovesAndHeldGammaIsHeld) {
   EXPECT_TRUE(sum.at_bounds.empty());
   EXPECT_NE(sum.report().find("no candidate improved"), std::string::npos) << sum.report();
   EXPECT_NE(sum.report().find("global-local"), std::string::npos) << sum.report();
+  // The start is no fit: no sigma anywhere, and the same words in the report and the notes
+  // (parameters.csv, Python). Before, the report said "(sigma unknown)" where the notes said
+  // "the start: no candidate improved on it".
+  EXPECT_EQ(sum.relative_std, Eigen::Vector4d::Zero());
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(sum.sigma_reason(k), IwanSigmaReason::kStart);
+    EXPECT_EQ(sum.parameter_note(k), "the start: no candidate improved on it");
+  }
+  EXPECT_NE(sum.report().find("Fs 20 -> 20 N (the start: no candidate improved on it)"),
+            std::string::npos)
+      << sum.report();
   // gamma held at 0.8 while the start is at 1: never the start's K_T.
   o.fixed_gamma = 0.8;
   const model::IwanParameters q = update_iwan(obj, o, &sum);
@@ -1430,6 +1441,71 @@ TEST(IwanUpdateReport, ChiAtItsBoundWithKtHeldNamesTheLinearFrequency) {
   s.held[1] = true;
   s.evidence->linear_hz = 13.2672 * (1 + 5e-4);  // within three times the noise, and 0.1 %
   EXPECT_EQ(s.misfit_cause().find(named), std::string::npos);
+}
+
+// Every decision on a parameter's sigma is made once (sigma_reason()) and read the same in the
+// report's parameter line and in the note parameters.csv and Python carry; relative_std is
+// nonzero exactly where a sigma is stated. Before, the report and parameter_note() decided
+// apart: a fit of 3 points (6 residuals for 4 parameters) said "(sigma unknown)" in the report
+// and nothing in parameters.csv's note; data without slip kept F_S's and chi's sigmas in
+// relative_std (parameters.csv, Python) while the report called them not identified; a fitted
+// modal_ratio's note was empty wherever its sigma was unknown.
+TEST(IwanUpdateReport, EverySigmaDecisionReadsTheSameInTheReportAndTheNotes) {
+  const auto fitted = [] {
+    IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 900, 80, 1.0);
+    s.start = {1, 5e4, -0.3, 1};
+    s.best = {0.5, 5e4, -0.5, 0.5};
+    s.relative_std = Eigen::Vector4d(0.01, 0.002, 0.005, 0.03);
+    s.covariance.diagonal() = Eigen::Vector4d(1e-4, 4e-6, 6e-6, 9e-4);
+    s.effective_points = 80;
+    s.sigma_degrees_of_freedom = 76;
+    s.top_slip = 2, s.phi_max = 1;  // the data reach macroslip
+    return s;
+  }();
+  // Too few independent points: no covariance, and the count said in both.
+  IwanUpdateSummary few = fitted;
+  few.residuals = 6;
+  few.relative_std.setZero();
+  few.covariance.setZero();
+  few.effective_points = 2.4;
+  few.sigma_degrees_of_freedom = -1.6;
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(few.sigma_reason(k), IwanSigmaReason::kTooFewPoints);
+    EXPECT_EQ(few.parameter_note(k), "sigma unknown: too few independent points (2.4)");
+  }
+  EXPECT_NE(few.report().find("Fs 1 -> 0.5 N (sigma unknown: too few independent points, below)"),
+            std::string::npos)
+      << few.report();
+  // Data without slip (Z fitted, the constant backbone as good): F_S, chi and beta not
+  // identified, their sigmas cleared; K_T and Z are the result with theirs.
+  IwanUpdateSummary flat = fitted;
+  flat.modal_ratio_fitted = true;
+  flat.modal_ratio = 3e-3;
+  flat.modal_ratio_std = 1e-5;
+  flat.final_cost = flat.constant_cost = 2.3;
+  flat.clear_unstated_sigmas();
+  for (int k : {0, 2, 3}) {
+    EXPECT_EQ(flat.sigma_reason(k), IwanSigmaReason::kNoSlip);
+    EXPECT_EQ(flat.relative_std(k), 0.0) << k;
+    EXPECT_EQ(flat.parameter_note(k), "not identified: no slip in the data");
+  }
+  EXPECT_EQ(flat.relative_std(1), 0.002);
+  EXPECT_EQ(flat.parameter_note(1), "");
+  EXPECT_EQ(flat.modal_ratio_std, 1e-5);
+  EXPECT_EQ(flat.parameter_note(4), "");
+  EXPECT_NE(flat.report().find("Fs 1 -> 0.5 N (not identified: no slip in the data, below)"),
+            std::string::npos)
+      << flat.report();
+  // A fitted Z without a sigma: the note says why, as the report does.
+  IwanUpdateSummary z = few;
+  z.modal_ratio_fitted = true;
+  z.modal_ratio = 3e-3;
+  EXPECT_EQ(z.parameter_note(4), "sigma unknown: too few independent points (2.4)");
+  EXPECT_NE(z.report().find("0 -> 0.003 (sigma unknown: too few independent points, below)"),
+            std::string::npos)
+      << z.report();
+  z.status = IwanUpdateStatus::kBudget;
+  EXPECT_EQ(z.parameter_note(4), "no sigma: not converged");
 }
 
 // K_T held and data 0.5 % below the model's linear frequency with 5e-4 frequency noise, chi

@@ -157,13 +157,11 @@ void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSu
                     s.bound_side[1], s.parameter_note(1)});
   }
   if (s.modal_ratio_fitted) {
-    rows.push_back(
-        {"modal_ratio", s.modal_ratio_start, s.modal_ratio,
-         s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
-             ? s.modal_ratio_std / s.modal_ratio
-             : -1.0,
-         false, true, s.bound_side[4],
-         s.improved && s.status == IwanUpdateStatus::kBudget ? "no sigma: not converged" : ""});
+    rows.push_back({"modal_ratio", s.modal_ratio_start, s.modal_ratio,
+                    s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
+                        ? s.modal_ratio_std / s.modal_ratio
+                        : -1.0,
+                    false, true, s.bound_side[4], s.parameter_note(4)});
   }
   std::string t = "name,initial,final,relative_std,identifiable,held,at_bound,note\n";
   for (const Row& r : rows) {

@@ -366,15 +366,24 @@ ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Trut
   if (has_iwan) {
     row(set + " Kt [N/m]", p0.Kt, p1.Kt, truth.iwan.Kt, linearly_updated(c, r, set) || iwan_ran);
     if (!iwan_ran) pt.rows.back()[2] += linear_doubt(c, r, set);
+    // Each Iwan parameter's note, as parameters.csv and update-iwan's report word it
+    // (IwanUpdateSummary::sigma_reason(): one decision). Before, this table decided apart: beta
+    // held at its start by the fit read "(held)", as if asked, and data without slip said nothing.
+    const auto note = [&](int k) {
+      const std::string n = iwan_ran ? r.iwan.summary.parameter_note(k) : std::string();
+      if (!n.empty()) pt.rows.back()[2] += " (" + n + ")";
+    };
+    note(1);
     row(set + " Fs [N]", p0.Fs, p1.Fs, truth.iwan.Fs, iwan_ran);
-    if (iwan_ran && r.iwan.summary.microslip_only())
-      pt.rows.back()[2] += " (not identified: microslip data)";
+    note(0);
     row(set + " chi", p0.chi, p1.chi, truth.iwan.chi, iwan_ran);
+    note(2);
     row(set + " beta", p0.beta, p1.beta, truth.iwan.beta, iwan_ran);
-    if (iwan_ran && r.iwan.beta_held) pt.rows.back()[2] += " (held)";
+    note(3);
     if (iwan_ran && r.iwan.summary.modal_ratio_fitted) {
       row("modal_ratio (own damping)", r.iwan.summary.modal_ratio_start, r.iwan.summary.modal_ratio,
           0, true);
+      note(4);
     }
   }
   for (const std::string& name : c.linear_update.sets) {

@@ -660,6 +660,51 @@ TEST_F(Steps, ReportSections) {
   EXPECT_EQ(model->tables[0].rows[0][3], fmt::format("{:.4f}", r.start.frequency_hz[0]));
 }
 
+// The report's joint-parameter table words each Iwan parameter as parameters.csv's note and
+// update-iwan's report do (IwanUpdateSummary::parameter_note(), one decision): microslip data
+// with beta held at its start by the fit give F_S at that beta, not identified, and beta held by
+// the fit, not "(held)" as if asked (the table's own words before: "(not identified: microslip
+// data)" and "(held)"). The summary is written by hand: the words, not a fit, are checked.
+TEST_F(Steps, ReportWordsTheIwanParametersAsTheirNotes) {
+  ModelResults r;
+  r.data = read_campaign_model(*campaign_, small_->model);
+  r.start = evaluate_model(*campaign_, r.data.model, r.data.dofs, "start", out() / "q6", "start");
+  const CampaignFigures figures = draw_figures(*campaign_, *measured_, &r, out() / "fig6");
+  r.iwan.ran = true;
+  correlate::IwanUpdateSummary& s = r.iwan.summary;
+  s.improved = true;
+  s.status = correlate::IwanUpdateStatus::kConverged;
+  s.best = s.start = {20, 1e5, -0.5, 1};
+  s.relative_std = Eigen::Vector4d(0.01, 0.002, 0.005, 0);
+  s.effective_points = 60;
+  s.sigma_degrees_of_freedom = 57;
+  s.top_slip = 0.5, s.phi_max = 1;  // microslip only
+  s.held[3] = true;
+  s.set_beta_held_by_fit(correlate::IwanBetaHold::kMicroslip);
+  r.iwan.beta_held = true;
+  const Report report = campaign_report(*campaign_, *first_, *measured_, &r, figures);
+  const auto model = std::find_if(report.sections.begin(), report.sections.end(),
+                                  [](const ReportSection& x) { return x.heading == "Model"; });
+  ASSERT_NE(model, report.sections.end());
+  const auto table =
+      std::find_if(model->tables.begin(), model->tables.end(),
+                   [](const ReportTable& t) { return t.caption == "Joint parameters"; });
+  ASSERT_NE(table, model->tables.end());
+  // The updated cell of the row whose name ends so.
+  const auto updated = [&](const std::string& name) {
+    for (const auto& row : table->rows)
+      if (row[0].ends_with(name)) return row[2];
+    ADD_FAILURE() << "no row " << name;
+    return std::string();
+  };
+  EXPECT_TRUE(updated(" Fs [N]").ends_with(" (" + s.parameter_note(0) + ")")) << updated(" Fs [N]");
+  EXPECT_NE(updated(" Fs [N]").find("(given beta = 1: not identified"), std::string::npos);
+  EXPECT_TRUE(updated(" beta").ends_with(
+      " (held at its start by the fit: microslip only so not identified)"))
+      << updated(" beta");
+  EXPECT_EQ(updated(" chi").find('('), std::string::npos) << updated(" chi");
+}
+
 // The report of a run whose Iwan update stopped: a section "Steps not run" at the top with the
 // reason, the model section saying it where the Iwan result would be, the linearly updated K_T
 // marked with its doubt; and the libraries' advice naming the campaign-file keys, not the
