@@ -2083,9 +2083,19 @@ std::string IwanUpdateSummary::report() const {
   for (const std::string& b : at_bounds) {
     const bool along = family && (b.rfind("Fs", 0) == 0 || b.rfind("beta", 0) == 0);
     const bool kt = b.rfind("gamma", 0) == 0 && kt_short;
+    // Past phi_max throughout, K_T, chi and beta show only weakly: their bound is where the search
+    // drifted along what the data leave free (a table from 2.7 to 27 phi_max ran K_T to gamma 2
+    // with a sigma of 2.8e4 %, and was told to widen it and update-linear first).
+    const bool weak = macroslip_only() && cause.empty() && b.rfind("Fs", 0) != 0;
     if (no_slip && b.rfind("gamma", 0) != 0) {
       out += fmt::format(
           "  WARNING: {}: the data show no slip (above), so nothing holds it; a wider range "
+          "moves it, not the fit\n",
+          b);
+    } else if (weak) {
+      out += fmt::format(
+          "  WARNING: {}: the data lie past phi_max at every amplitude (below), where Kt, chi and "
+          "beta show only weakly, so it ended there along what the data leave free; a wider range "
           "moves it, not the fit\n",
           b);
     } else if (along) {
@@ -2133,7 +2143,7 @@ std::string IwanUpdateSummary::report() const {
   // off, all within the noise and without a word.
   // Where the residuals name a likelier cause (misfit_cause()), that is said instead.
   if (improved && !held[1] && start.Kt > 0 && std::abs(best.Kt / start.Kt - 1) > 0.25 &&
-      cause.empty()) {
+      cause.empty() && !macroslip_only()) {
     out += fmt::format(
         "  note: Kt moved from {:.6g} to {:.6g} N/m ({:+.0f} %): where the model's linear "
         "frequencies were not fitted to the measured ones first (update-linear), the fit takes "
@@ -2154,8 +2164,15 @@ std::string IwanUpdateSummary::report() const {
                                "mend the cause named above first (a longer search cures a misfit "
                                "only where the search is at fault)")
         : kt_range ? std::string("widen the range named above first")
-                   : fmt::format("run again with a larger --evaluations (e.g. {})",
-                                 4 * std::max(evaluations, 1500));
+        // A longer search of data past phi_max throughout ended at the same cost, chi at its
+        // bound and no sigma: the data, not the search, leave K_T, chi and beta free.
+        : macroslip_only()
+            ? std::string(
+                  "the data lie past phi_max at every amplitude (below), where Kt, chi and beta "
+                  "show only weakly, so a longer search may not fix them: data at amplitudes "
+                  "below phi_max would")
+            : fmt::format("run again with a larger --evaluations (e.g. {})",
+                          4 * std::max(evaluations, 1500));
     // What the residuals where it stopped would suggest is said as that, not as a finding.
     const std::string tentative = tentative_cause();
     out += fmt::format(
@@ -2243,7 +2260,13 @@ std::string IwanUpdateSummary::report() const {
         bottom_slip, top_slip, phi_max,
         microslip_only()
             ? "microslip only, Fs and beta are not identified separately" + microslip_family(*this)
-            : "the data reach macroslip");
+        : macroslip_only()
+            ? std::string(
+                  "macroslip only: every measured amplitude lies past phi_max, which fixes Fs (the "
+                  "plateau) while Kt, chi and beta, which shape the joint below phi_max, show "
+                  "only weakly (their sigmas say how weakly); data at amplitudes below phi_max "
+                  "would identify them")
+            : std::string("the data reach macroslip"));
   }
   return out;
 }

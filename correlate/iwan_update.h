@@ -471,6 +471,10 @@ struct IwanUpdateSummary {
   /// True when the data stay in microslip at best (top_slip < phi_max): then only K_T, chi and R
   /// are identified, not F_S and beta separately (docs/update-iwan.md).
   bool microslip_only() const { return top_slip > 0 && top_slip < phi_max; }
+  /// True when the data lie past phi_max at every measured amplitude at best (bottom_slip >
+  /// phi_max): F_S shows (the plateau), K_T, chi and beta, which shape the joint below phi_max,
+  /// only weakly.
+  bool macroslip_only() const { return phi_max > 0 && bottom_slip > phi_max; }
   std::vector<IwanHistoryEntry> history;  ///< every evaluation
   /// Where the model does not describe the data (misfit()) and `evidence` shows a likelier
   /// cause than the search (a wrong mode, the linear model, the damping column's units), that

@@ -1508,6 +1508,50 @@ TEST(IwanUpdateReport, EverySigmaDecisionReadsTheSameInTheReportAndTheNotes) {
   EXPECT_EQ(z.parameter_note(4), "no sigma: not converged");
 }
 
+// Backbones that lie past phi_max at every amplitude fix F_S (the plateau) but show K_T, chi and
+// beta, which shape the joint below phi_max, only weakly. The one-mode truth's table from 2.7 to
+// 27 phi_max (40 points, 1e-4 / 2 % noise, the numbers below from its command run): F_S -0.13 %
+// +/- 0.53 %, K_T +100 % at the top of its range with a sigma of 2.8e4 %, and the report said
+// "widen it" and "Kt moved ... update-linear first"; another seed's fit stopped short and was
+// told "run again with a larger --evaluations (e.g. 18340)", which, run, ended at the same cost
+// (1.971) with chi at its bound and no sigma. Now the slip line says the data are past phi_max
+// throughout, the bounds of K_T, chi and beta say a wider range moves them, not the fit, and no
+// longer search or linear update is advised for them.
+TEST(IwanUpdateReport, DataPastPhiMaxThroughoutSayKtChiAndBetaShowWeakly) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 4403, 80, 0.728);
+  s.start = {1, 49472.8, -0.3, 1};
+  s.best = {0.499367, 98927.7, -0.9034, 0.2831};
+  s.relative_std = Eigen::Vector4d(0.0053, 283, 47, 339);
+  s.effective_points = 80;
+  s.sigma_degrees_of_freedom = 76;
+  s.bottom_slip = 5e-5, s.top_slip = 5e-4, s.phi_max = 1.74e-5;
+  s.at_bounds = {"gamma (Kt/Ks) 1.99964, near its upper bound 2"};
+  s.bound_side[1] = 1;
+  ASSERT_TRUE(s.macroslip_only());
+  std::string r = s.report();
+  EXPECT_NE(r.find("macroslip only: every measured amplitude lies past phi_max"), std::string::npos)
+      << r;
+  EXPECT_NE(r.find("WARNING: gamma (Kt/Ks) 1.99964, near its upper bound 2: the data lie past "
+                   "phi_max at every amplitude (below)"),
+            std::string::npos)
+      << r;
+  for (const char* not_said : {"widen it", "update-linear", "--evaluations"})
+    EXPECT_EQ(r.find(not_said), std::string::npos) << not_said << ": " << r;
+  // Not converged: the longer search is no cure for K_T, chi and beta.
+  s.status = IwanUpdateStatus::kBudget;
+  s.relative_std.setZero();
+  s.at_bounds = {"chi at its upper bound 0"};
+  s.bound_side = {0, 0, 1, 0, 0};
+  r = s.report();
+  EXPECT_NE(r.find("WARNING: the fit did not converge"), std::string::npos) << r;
+  EXPECT_EQ(r.find("run again with a larger --evaluations"), std::string::npos) << r;
+  EXPECT_EQ(r.find("widen it"), std::string::npos) << r;
+  // Data that reach below phi_max: as before.
+  s.bottom_slip = 1e-8;
+  EXPECT_FALSE(s.macroslip_only());
+  EXPECT_NE(s.report().find("run again with a larger --evaluations"), std::string::npos);
+}
+
 // K_T held and data 0.5 % below the model's linear frequency with 5e-4 frequency noise, chi
 // inside its range: the joint cannot soften the curve that much at the lowest amplitudes, so the
 // fitted curve misses the low data by about the offset itself, +0.497 % here, just under the ten
