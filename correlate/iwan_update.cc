@@ -2210,7 +2210,17 @@ std::string IwanUpdateSummary::report() const {
   // Residuals that run in waves along a curve leave few independent points: too few, and no
   // sigma is stated rather than a wrong one (a 200-point curve with AR(1) noise of rho 0.98 has
   // about 2 per sequence); few, and the sigmas allow for it but rest on them.
-  if (improved && effective_points > 0 && !(sigma_degrees_of_freedom > 2)) {
+  // Too few points even if every residual were independent: said as such, not as waves (a
+  // correlation read off 3 points sent the user after waves).
+  const double fitted = std::round(effective_points - sigma_degrees_of_freedom);
+  if (improved && effective_points > 0 && !(sigma_degrees_of_freedom > 2) &&
+      static_cast<double>(residuals) - fitted <= 2) {
+    out += fmt::format(
+        "  WARNING: {} points ({} residuals) leave {:.0f} beyond the {:.0f} parameters fitted even "
+        "if independent: too few to state a sigma (more than 2 needed); more points, or more "
+        "curves, would give one\n",
+        residuals / 2, residuals, std::max(0.0, static_cast<double>(residuals) - fitted), fitted);
+  } else if (improved && effective_points > 0 && !(sigma_degrees_of_freedom > 2)) {
     out += fmt::format(
         "  WARNING: the residuals run in long waves along the curves (serial correlation {:.3g} "
         "from one point to the next, corrected for what the fit absorbs): the {} residuals amount "

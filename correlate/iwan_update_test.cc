@@ -1552,6 +1552,33 @@ TEST(IwanUpdateReport, DataPastPhiMaxThroughoutSayKtChiAndBetaShowWeakly) {
   EXPECT_NE(s.report().find("run again with a larger --evaluations"), std::string::npos);
 }
 
+// Three points (6 residuals) for four parameters leave two degrees of freedom even if every
+// residual were independent: too few points, which the report says as such. Before, it said
+// "the residuals run in long waves along the curves (serial correlation 0.782 ...)", a
+// correlation read off 3 points, and sent the user after waves (the one-mode truth's 3-point
+// table to 2 phi_max: the numbers below). Where the points are enough and their correlation
+// leaves too few, the waves are still named.
+TEST(IwanUpdateReport, TooFewPointsAreNamedAsSuchNotAsWaves) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 2699, 6, 0.0132);
+  s.start = {1, 49472.8, -0.3, 1};
+  s.best = {0.502379, 49357.8, -0.4915, 0.5148};
+  s.noise_correlation = 0.782;
+  s.effective_points = 2.4;
+  s.sigma_degrees_of_freedom = 2.4 - 4;
+  std::string r = s.report();
+  EXPECT_NE(r.find("WARNING: 3 points (6 residuals) leave 2 beyond the 4 parameters fitted even if "
+                   "independent: too few to state a sigma (more than 2 needed); more points, or "
+                   "more curves, would give one"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find("long waves"), std::string::npos) << r;
+  s.residuals = 80;
+  s.effective_points = 5.4;
+  s.sigma_degrees_of_freedom = 1.4;
+  r = s.report();
+  EXPECT_NE(r.find("the residuals run in long waves along the curves"), std::string::npos) << r;
+}
+
 // K_T held and data 0.5 % below the model's linear frequency with 5e-4 frequency noise, chi
 // inside its range: the joint cannot soften the curve that much at the lowest amplitudes, so the
 // fitted curve misses the low data by about the offset itself, +0.497 % here, just under the ten
