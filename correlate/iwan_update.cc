@@ -2252,6 +2252,20 @@ std::string IwanUpdateSummary::report() const {
                            : any_sigma ? "; the uncertainties (scaled by it) are a lower bound\n"
                                        : "\n")
                     : " (the model describes the data within their stated noise)\n";
+    // Far below 1 (by more than 3 of its standard deviations): the stated noise is larger than
+    // the residuals' scatter, and the sigmas, which never shrink the stated noise, are that much
+    // too wide (one table's uncertainties stated 10 times too large: reduced chi-square 0.0074,
+    // every z-score within 0.15 over 6 seeds, and nothing said). Not where floors raised them
+    // (their note, below).
+    if (!misfit() && residuals > 0 && floored(1) == 0 && floored(2) == 0 &&
+        reduced_chi2 < 1 - 3 * std::sqrt(2.0 / static_cast<double>(residuals))) {
+      out += fmt::format(
+          "  note: the reduced chi-square lies far below 1: the residuals scatter about {:.2g} "
+          "times the stated uncertainties, which overstate the noise; the sigmas rest on them "
+          "(never shrunk below them) and are as much too wide. State each point's one-sigma "
+          "uncertainty (an expanded one, k sigma, with a coverage_factor column giving k)\n",
+          std::sqrt(reduced_chi2));
+    }
   }
   // A stated uncertainty below a floor is raised to it, and the sigmas and the chi-square then
   // rest on the floor (40 fits of data with 1e-5 noise stated as such: sigmas about 10 times the
