@@ -214,6 +214,10 @@ struct ParameterReport {
   /// Fitted sets whose sensitivities this one's nearly repeats (LinearUpdateSummary::collinear):
   /// the frequencies determine a combination of them, not this set alone (empty: none).
   std::vector<std::string> acts_with;
+  /// +1: the frequencies bound it from below only, -1: from above only (moved 3 of its local
+  /// standard deviations that way, the others held, the chi-square rises by less than 4: a
+  /// stiffness whose sensitivity dies away as it stiffens); 0: both ways, or not checked
+  int one_sided = 0;
   std::optional<double> relative_std;    ///< one-sigma relative uncertainty (none: not fitted)
   double smallest_within_tolerance = 0;  ///< set when the tolerance formulation lowered it
   double lower = 0, upper = 0;           ///< its bounds
@@ -224,8 +228,9 @@ struct ParameterReport {
   /// r_i of every measured mode at each multiplier, its pair followed by shape (none: unpaired
   /// or not followed)
   std::vector<std::vector<std::optional<double>>> sweep_errors;
-  /// Identified by the frequencies: neither flat nor acting together with another set.
-  bool identifiable() const { return !flat && acts_with.empty(); }
+  /// Identified by the frequencies: neither flat, nor acting together with another set, nor
+  /// bounded from one side only.
+  bool identifiable() const { return !flat && acts_with.empty() && one_sided == 0; }
 };
 
 /// Fitted sets whose sensitivities nearly repeat one another: a direction of their ln theta the
