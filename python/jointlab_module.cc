@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
@@ -15,9 +16,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "jointlab/campaign/backbone_comparison.h"
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
 #include "jointlab/campaign/iwan_inputs.h"
+#include "jointlab/campaign/model_comparison.h"
 #include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
@@ -539,6 +542,7 @@ py::dict update_iwan(
                  ? py::object(py::float_(summary.modal_ratio_std))
                  : py::object(py::none());
   z["fitted"] = summary.modal_ratio_fitted;
+  z["note"] = summary.parameter_note(4);  // as parameters.csv's modal_ratio row
   parameters["modal_ratio"] = z;
   py::dict result;
   result["parameters"] = parameters;
@@ -574,6 +578,76 @@ py::dict update_iwan(
   if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
   for (const std::string& line : shape_warnings) text += "  " + line + "\n";
   result["report"] = text;
+  return result;
+}
+
+// `jointlab compare` without the figure unless `out` names one: the measured curves and each
+// model's QSMA backbone over their range (campaign/model_comparison.h).
+py::dict compare(const std::vector<std::string>& models, const py::object& mode,
+                 const std::vector<std::string>& backbones,
+                 const std::optional<std::string>& amplitude, const std::optional<std::string>& dof,
+                 const std::optional<std::string>& measured,
+                 const std::optional<std::string>& sensors,
+                 const std::vector<std::string>& channels, const std::vector<std::string>& labels,
+                 int points, const std::optional<std::string>& out) {
+  if (points < 2) throw InputError(fmt::format("--points {}: need at least 2", points));
+  if (out) {
+    const std::string ext = std::filesystem::path(*out).extension().string();
+    if (ext != ".png" && ext != ".svg" && ext != ".pdf")
+      throw InputError(fmt::format("--out {}: the figure must end in .png, .svg or .pdf", *out));
+  }
+  campaign::IwanInputArgs a;
+  if (py::isinstance<py::str>(mode))
+    a.modes = {mode.cast<std::string>()};
+  else if (py::isinstance<py::int_>(mode))
+    a.modes = {std::to_string(mode.cast<long long>())};
+  else
+    throw InputError("mode: expected an int or 'R:BAND'");
+  a.backbones = backbones;
+  a.amplitude = amplitude.value_or("");
+  a.dof = dof.value_or("");
+  a.measured = measured.value_or("");
+  a.sensors = sensors.value_or("");
+  a.channels = channels;
+  campaign::ModelComparison c;
+  {
+    py::gil_scoped_release release;
+    c = campaign::compare_models(models, labels, a, points);
+    if (out) {
+      const std::filesystem::path figure(*out);
+      if (!figure.parent_path().empty()) std::filesystem::create_directories(figure.parent_path());
+      campaign::plot_backbone_comparison(c.figure, figure,
+                                         std::filesystem::path(figure).replace_extension(".csv"));
+    }
+  }
+  for (const std::string& note : c.notes)
+    if (PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1) != 0) throw py::error_already_set();
+  py::list measured_curves;
+  for (correlate::MeasuredBackbone& b : c.figure.measured) {
+    py::dict d;
+    d["source"] = b.source;
+    d["amplitude"] = to_numpy(std::move(b.amplitude));
+    d["frequency_hz"] = to_numpy(std::move(b.frequency_hz));
+    d["damping_ratio"] = to_numpy(std::move(b.damping_ratio));
+    measured_curves.append(d);
+  }
+  py::list model_curves;
+  for (size_t i = 0; i < c.figure.models.size(); ++i) {
+    campaign::ModelCurve& m = c.figure.models[i];
+    py::dict d;
+    d["label"] = m.label;
+    d["amplitude"] = to_numpy(std::move(m.amplitude));
+    d["frequency_hz"] = to_numpy(std::move(m.frequency_hz));
+    d["damping_ratio"] = to_numpy(std::move(m.damping));
+    d["clipped"] = static_cast<bool>(c.clipped[i]);
+    model_curves.append(d);
+  }
+  py::dict result;
+  result["title"] = c.figure.title;
+  result["amplitude_label"] = c.figure.amplitude_label;
+  result["measured"] = measured_curves;
+  result["models"] = model_curves;
+  result["slip_screen"] = c.slip_screen;
   return result;
 }
 
@@ -757,7 +831,7 @@ out             write the updated model file here, or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
 None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
-parameters.csv's); modal_ratio -> initial, final, std, fitted), 'cost', 'initial_cost'
+parameters.csv's); modal_ratio -> initial, final, std, fitted, note), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
 stopped short of a minimum and no sigma is stated), 'no_slip' (True where, the structure's own
 damping fitted, a constant backbone fits as well: Fs, chi and beta are not identified),
@@ -772,6 +846,32 @@ sigmas' Student's t: effective points less the parameters fitted; 2 or fewer sta
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]
     r = jointlab.update_iwan("model.toml", "rivet", 1, measured="processed",
                              sensors="sensors.csv")
+)");
+
+  m.def("compare", &compare, py::arg("models"), py::arg("mode"),
+        py::arg("backbones") = std::vector<std::string>{}, py::arg("amplitude") = py::none(),
+        py::arg("dof") = py::none(), py::arg("measured") = py::none(),
+        py::arg("sensors") = py::none(), py::arg("channels") = std::vector<std::string>{},
+        py::arg("labels") = std::vector<std::string>{}, py::arg("points") = 100,
+        py::arg("out") = py::none(),
+        R"(The QSMA backbones of one or more models over measured ones (`jointlab compare`): the
+data of the paper's Figures 5-7, and the figure itself where `out` names one.
+
+models          model files (TOML) sharing their DOFs
+mode            the elastic model mode (from 1); with `measured` also 'R:BAND'
+backbones, amplitude, dof, measured, sensors, channels
+                the measured side, as update_iwan() reads it
+labels          a legend name per model (default: the file names)
+points          points per model curve (default 100)
+out             draw the figure here (.png, .svg, .pdf) with the model curves' CSV beside it
+
+Returns a dict: 'title', 'amplitude_label', 'measured' (one dict per curve: source, amplitude,
+frequency_hz, damping_ratio), 'models' (one dict per model: label, amplitude, frequency_hz,
+damping_ratio, clipped: the curve stops short of the measured range, also a UserWarning saying
+where), 'slip_screen'.
+
+    c = jointlab.compare(["start.toml", "updated.toml"], 1, ["bb.csv"], labels=["start", "fit"])
+    c["models"][1]["damping_ratio"]
 )");
 
   m.def("run", &run, py::arg("campaign"), py::arg("out"), py::arg("force") = false,

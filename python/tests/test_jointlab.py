@@ -400,6 +400,57 @@ def test_update_iwan_from_a_process_folder_equals_the_command_line(tmp_path, riv
                              sensors=str(tmp_path / "sensors.csv"))
 
 
+def test_compare_gives_the_curves_the_command_draws(tmp_path):
+    # The one-mode model's own ring-down QSMA columns as a table, against the truth and the start:
+    # the curves equal the CSV `jointlab compare` writes beside its figure (10 digits), the truth's
+    # lies on the table, and `out` draws the same figure and CSV.
+    d = tmp_path
+    (d / "M.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 1.0\n")
+    (d / "K.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 3.3e5\n")
+    body = ('[matrices]\nmass = "M.mtx"\nstiffness = "K.mtx"\n\n'
+            "[iwan.j]\nFs = {fs}\nKt = {kt}\nchi = -0.5\nbeta = 1.5\n\n"
+            '[[joint]]\na = 0\nb = "ground"\nelement = "iwan.j"\n')
+    (d / "truth.toml").write_text(body.format(fs=30.0, kt=1.4e4))
+    (d / "start.toml").write_text(body.format(fs=60.0, kt=1.2e4))
+    r = run("qsma", d / "truth.toml", "--mode", "1", "--points", "30", "--qmin", "1e-5",
+            "--qmax", "1e-3", "--out", d / "q.csv")
+    assert r.returncode == 0, r.stderr
+    q = read_csv(d / "q.csv")
+    with open(d / "bb.csv", "w") as f:
+        f.write("amplitude,frequency_hz,damping_ratio\n")
+        for a, fr, z in zip(q["modal_amplitude"], q["ringdown_frequency_hz"],
+                            q["ringdown_damping_ratio"]):
+            f.write(f"{a!r},{fr!r},{z!r}\n")
+    models = [str(d / "truth.toml"), str(d / "start.toml")]
+    r = run("compare", *models, "--backbone", d / "bb.csv", "--mode", "1", "--points", "20",
+            "--label", "truth", "--label", "start", "--out", d / "cli.png")
+    assert r.returncode == 0, r.stderr
+    c = jointlab.compare(models, 1, [str(d / "bb.csv")], labels=["truth", "start"], points=20,
+                         out=str(d / "py.png"))
+    assert [m["label"] for m in c["models"]] == ["truth", "start"]
+    assert not any(m["clipped"] for m in c["models"])
+    with open(d / "cli.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    for m in c["models"]:
+        mine = [row for row in rows if row["model"] == m["label"]]
+        assert len(mine) == len(m["amplitude"]) == 20
+        for row, a, fr, z in zip(mine, m["amplitude"], m["frequency_hz"], m["damping_ratio"]):
+            assert_close(a, float(row["amplitude"]))
+            assert_close(fr, float(row["frequency_hz"]))
+            assert_close(z, float(row["damping_ratio"]))
+    assert (d / "py.csv").read_bytes() == (d / "cli.csv").read_bytes()
+    assert (d / "py.png").stat().st_size > 0
+    # The truth's curve is the table it was made from: read between its 20 points by straight
+    # lines, within 1e-4 (the frequency changes by about 1 % between neighbouring points).
+    truth = c["models"][0]
+    np.testing.assert_allclose(np.interp(q["modal_amplitude"], truth["amplitude"],
+                                         truth["frequency_hz"]),
+                               q["ringdown_frequency_hz"], rtol=1e-4)
+    assert c["measured"][0]["source"].endswith("bb.csv")
+    with pytest.raises(jointlab.InputError, match="--label for 2 models"):
+        jointlab.compare(models, 1, [str(d / "bb.csv")], labels=["one"])
+
+
 def test_update_iwan_equals_the_command_line(tmp_path):
     # A one-mode model (unit mass, 3.3e5 N/m, an Iwan joint to ground) and its own ring-down
     # QSMA columns as a backbone table: the command and the call end at the same parameters.
