@@ -1336,13 +1336,18 @@ std::string unconfirmed_sets(const LinearProblem& p, const Eigen::SparseMatrix<d
     lines.push_back(line);
     changed[static_cast<size_t>(i)] = 1;
   }
+  // Seen by the changed pairs and by no other. A set no pair sees (kflat: every sensitivity
+  // below flat_sensitivity) is flat, held by the flat rule whatever the pairs: naming it here
+  // refused a fit that had found ka and kb exactly.
   for (int k = 0; k < p.size(); ++k) {
     if (held[static_cast<size_t>(k)]) continue;
-    double seen = 0;
-    for (const ModePair& pr : at.pairing.pairs)
-      if (!changed[static_cast<size_t>(pr.measured)])
-        seen = std::max(seen, std::abs(at.jacobian(pr.measured, k)));
-    if (seen < options.flat_sensitivity) blind.push_back(names[static_cast<size_t>(k)]);
+    double seen = 0, seen_changed = 0;
+    for (const ModePair& pr : at.pairing.pairs) {
+      double& by = changed[static_cast<size_t>(pr.measured)] ? seen_changed : seen;
+      by = std::max(by, std::abs(at.jacobian(pr.measured, k)));
+    }
+    if (seen < options.flat_sensitivity && seen_changed >= options.flat_sensitivity)
+      blind.push_back(names[static_cast<size_t>(k)]);
   }
   const std::string what = fmt::format(
       "the partners of {} changed their shape along the fit (another mode took their place, "
