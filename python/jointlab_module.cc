@@ -438,6 +438,26 @@ void check_range(const char* option, const std::optional<std::pair<double, doubl
                                  r->second, shown, d.text()));
 }
 
+// The measured side of update_iwan() and compare() as the command's options name it (absent:
+// the option not given).
+campaign::IwanInputArgs iwan_input_args(const std::vector<std::string>& modes,
+                                        const std::vector<std::string>& backbones,
+                                        const std::optional<std::string>& amplitude,
+                                        const std::optional<std::string>& dof,
+                                        const std::optional<std::string>& measured,
+                                        const std::optional<std::string>& sensors,
+                                        const std::vector<std::string>& channels) {
+  campaign::IwanInputArgs a;
+  a.modes = modes;
+  a.backbones = backbones;
+  a.amplitude = amplitude.value_or("");
+  a.dof = dof.value_or("");
+  a.measured = measured.value_or("");
+  a.sensors = sensors.value_or("");
+  a.channels = channels;
+  return a;
+}
+
 // update-iwan (contract.md): backbone tables (data/backbone_table.h) or a `process` folder with
 // its sensors, read as the command reads them (campaign/iwan_inputs.h); the options and defaults
 // of the command; the fit `run` and the command make (campaign::fit_iwan).
@@ -471,15 +491,9 @@ py::dict update_iwan(
   {
     py::gil_scoped_release release;
     const model::Model m = model::read_model(model_path);
-    campaign::IwanInputArgs a;
+    campaign::IwanInputArgs a =
+        iwan_input_args(modes, backbones, amplitude, dof, measured, sensors, channels);
     a.model = model_path;
-    a.modes = modes;
-    a.backbones = backbones;
-    a.amplitude = amplitude.value_or("");
-    a.dof = dof.value_or("");
-    a.measured = measured.value_or("");
-    a.sensors = sensors.value_or("");
-    a.channels = channels;
     in = campaign::read_iwan_inputs(m, a, "update-iwan");
     if (!in.slip_screen.empty())
       report(progress,
@@ -596,19 +610,15 @@ py::dict compare(const std::vector<std::string>& models, const py::object& mode,
     if (ext != ".png" && ext != ".svg" && ext != ".pdf")
       throw InputError(fmt::format("--out {}: the figure must end in .png, .svg or .pdf", *out));
   }
-  campaign::IwanInputArgs a;
+  std::vector<std::string> modes;
   if (py::isinstance<py::str>(mode))
-    a.modes = {mode.cast<std::string>()};
+    modes = {mode.cast<std::string>()};
   else if (py::isinstance<py::int_>(mode))
-    a.modes = {std::to_string(mode.cast<long long>())};
+    modes = {std::to_string(mode.cast<long long>())};
   else
     throw InputError("mode: expected an int or 'R:BAND'");
-  a.backbones = backbones;
-  a.amplitude = amplitude.value_or("");
-  a.dof = dof.value_or("");
-  a.measured = measured.value_or("");
-  a.sensors = sensors.value_or("");
-  a.channels = channels;
+  const campaign::IwanInputArgs a =
+      iwan_input_args(modes, backbones, amplitude, dof, measured, sensors, channels);
   campaign::ModelComparison c;
   {
     py::gil_scoped_release release;

@@ -400,19 +400,18 @@ def test_update_iwan_from_a_process_folder_equals_the_command_line(tmp_path, riv
                              sensors=str(tmp_path / "sensors.csv"))
 
 
-def test_compare_gives_the_curves_the_command_draws(tmp_path):
-    # The one-mode model's own ring-down QSMA columns as a table, against the truth and the start:
-    # the curves equal the CSV `jointlab compare` writes beside its figure (10 digits), the truth's
-    # lies on the table, and `out` draws the same figure and CSV.
-    d = tmp_path
+def one_mode_iwan(d, points):
+    # A one-mode model (unit mass, 3.3e5 N/m, an Iwan joint to ground) as truth.toml (Fs 30 N,
+    # Kt 1.4e4 N/m, chi -0.5) and start.toml (60, 1.2e4, -0.3), and the truth's own ring-down
+    # QSMA columns at `points` modal amplitudes as the backbone table bb.csv; returns the columns.
     (d / "M.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 1.0\n")
     (d / "K.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 3.3e5\n")
     body = ('[matrices]\nmass = "M.mtx"\nstiffness = "K.mtx"\n\n'
-            "[iwan.j]\nFs = {fs}\nKt = {kt}\nchi = -0.5\nbeta = 1.5\n\n"
+            "[iwan.j]\nFs = {fs}\nKt = {kt}\nchi = {chi}\nbeta = 1.5\n\n"
             '[[joint]]\na = 0\nb = "ground"\nelement = "iwan.j"\n')
-    (d / "truth.toml").write_text(body.format(fs=30.0, kt=1.4e4))
-    (d / "start.toml").write_text(body.format(fs=60.0, kt=1.2e4))
-    r = run("qsma", d / "truth.toml", "--mode", "1", "--points", "30", "--qmin", "1e-5",
+    (d / "truth.toml").write_text(body.format(fs=30.0, kt=1.4e4, chi=-0.5))
+    (d / "start.toml").write_text(body.format(fs=60.0, kt=1.2e4, chi=-0.3))
+    r = run("qsma", d / "truth.toml", "--mode", "1", "--points", str(points), "--qmin", "1e-5",
             "--qmax", "1e-3", "--out", d / "q.csv")
     assert r.returncode == 0, r.stderr
     q = read_csv(d / "q.csv")
@@ -421,6 +420,15 @@ def test_compare_gives_the_curves_the_command_draws(tmp_path):
         for a, fr, z in zip(q["modal_amplitude"], q["ringdown_frequency_hz"],
                             q["ringdown_damping_ratio"]):
             f.write(f"{a!r},{fr!r},{z!r}\n")
+    return q
+
+
+def test_compare_gives_the_curves_the_command_draws(tmp_path):
+    # The one-mode model's own ring-down QSMA columns as a table, against the truth and the start:
+    # the curves equal the CSV `jointlab compare` writes beside its figure (10 digits), the truth's
+    # lies on the table, and `out` draws the same figure and CSV.
+    d = tmp_path
+    q = one_mode_iwan(d, points=30)
     models = [str(d / "truth.toml"), str(d / "start.toml")]
     r = run("compare", *models, "--backbone", d / "bb.csv", "--mode", "1", "--points", "20",
             "--label", "truth", "--label", "start", "--out", d / "cli.png")
@@ -455,22 +463,7 @@ def test_update_iwan_equals_the_command_line(tmp_path):
     # A one-mode model (unit mass, 3.3e5 N/m, an Iwan joint to ground) and its own ring-down
     # QSMA columns as a backbone table: the command and the call end at the same parameters.
     d = tmp_path
-    (d / "M.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 1.0\n")
-    (d / "K.mtx").write_text("%%MatrixMarket matrix coordinate real symmetric\n1 1 1\n1 1 3.3e5\n")
-    body = ('[matrices]\nmass = "M.mtx"\nstiffness = "K.mtx"\n\n'
-            "[iwan.j]\nFs = {fs}\nKt = {kt}\nchi = {chi}\nbeta = 1.5\n\n"
-            '[[joint]]\na = 0\nb = "ground"\nelement = "iwan.j"\n')
-    (d / "truth.toml").write_text(body.format(fs=30.0, kt=1.4e4, chi=-0.5))
-    (d / "start.toml").write_text(body.format(fs=60.0, kt=1.2e4, chi=-0.3))
-    r = run("qsma", d / "truth.toml", "--mode", "1", "--points", "40", "--qmin", "1e-5",
-            "--qmax", "1e-3", "--out", d / "q.csv")
-    assert r.returncode == 0, r.stderr
-    q = read_csv(d / "q.csv")
-    with open(d / "bb.csv", "w") as f:
-        f.write("amplitude,frequency_hz,damping_ratio\n")
-        for a, fr, z in zip(q["modal_amplitude"], q["ringdown_frequency_hz"],
-                            q["ringdown_damping_ratio"]):
-            f.write(f"{a!r},{fr!r},{z!r}\n")
+    q = one_mode_iwan(d, points=40)
     r = run("update-iwan", d / "start.toml", "--set", "iwan.j", "--mode", "1", "--backbone",
             d / "bb.csv", "--evaluations", "400", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
