@@ -290,7 +290,11 @@ ReportSection scatter_section(const Campaign& c, const MeasuredSide& m, size_t k
         "Linear (low-amplitude) values of one hit: frequency {:.4f} Hz, damping ratio {} (one "
         "hit has no spread between tests).",
         sc.linear_frequency_hz.mean, zeta(sc.linear_damping.mean)));
-  s.figures.push_back(figures.backbone[k]);
+  // Only a figure that was drawn: draw_figures gives one per mode, but a report whose figures
+  // were not drawn (CampaignFigures{}) is still written, without them (indexing the empty
+  // vector here was a segfault).
+  if (k < figures.backbone.size() && !figures.backbone[k].image.empty())
+    s.figures.push_back(figures.backbone[k]);
   return s;
 }
 
@@ -443,7 +447,8 @@ ReportSection model_section(const Campaign& c, const MeasuredSide& m, const Mode
     kc.cost_known = r.iwan.cost_known;
     compare_with_known(kc, c.truth.filename().string(), s);
   }
-  s.figures = figures.model;
+  for (const ReportFigure& f : figures.model)
+    if (!f.image.empty()) s.figures.push_back(f);
   return s;
 }
 

@@ -660,6 +660,33 @@ TEST_F(Steps, ReportSections) {
   EXPECT_EQ(model->tables[0].rows[0][3], fmt::format("{:.4f}", r.start.frequency_hz[0]));
 }
 
+// A report whose figures were not drawn (CampaignFigures{}: no backbone figure for a mode that
+// has a backbone, no spectrum, no model figures) is written without them; indexing the empty
+// per-mode vector was a segfault.
+TEST_F(Steps, ReportWithoutFigures) {
+  ModelResults r;
+  r.data = read_campaign_model(*campaign_, small_->model);
+  r.start = evaluate_model(*campaign_, r.data.model, r.data.dofs, "start", out() / "q7", "start");
+  for (const ModelResults* model :
+       {static_cast<const ModelResults*>(nullptr), static_cast<const ModelResults*>(&r)}) {
+    const Report report =
+        campaign_report(*campaign_, *first_, *measured_, model, CampaignFigures{});
+    ASSERT_FALSE(measured_->curves[0].empty());
+    bool scatter = false;
+    for (const ReportSection& s : report.sections) {
+      EXPECT_TRUE(s.figures.empty()) << s.heading;
+      scatter |= s.heading.starts_with("Scatter summary: ");
+    }
+    EXPECT_TRUE(scatter);
+    const fs::path dir = out() / (model ? "nofig_model" : "nofig");
+    fs::create_directories(dir);
+    write_report_html(report, dir / "report.html");
+    write_report_markdown(report, dir / "report.md");
+    EXPECT_GT(fs::file_size(dir / "report.html"), 1000u);
+    EXPECT_GT(fs::file_size(dir / "report.md"), 1000u);
+  }
+}
+
 // The report's joint-parameter table words each Iwan parameter as parameters.csv's note and
 // update-iwan's report do (IwanUpdateSummary::parameter_note(), one decision): microslip data
 // with beta held at its start by the fit give F_S at that beta, not identified, and beta held by
