@@ -12,6 +12,7 @@
 #include "jointlab/apps/commands.h"
 #include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/model/fe/model_builder.h"
 #include "jointlab/model/fe/riveted_beam.h"
 
@@ -66,9 +67,9 @@ void run_build_model(const BuildModelArgs& args) {
     errs += fmt::format(" {:.3g}", 100 * e);
   }
   say(stderr,
-      "[{:6.1f} s] reduction accuracy, first {} elastic modes, reduced / full - 1 [%]:{}\n"
+      "[{:6.1f} s] reduction accuracy, first {}, reduced / full - 1 [%]:{}\n"
       "  largest {:.3g} % (raise reduction.fixed_interface_modes or --modes to lower it)\n",
-      elapsed(), n, errs, 100 * worst);
+      elapsed(), counted(n, "elastic mode"), errs, 100 * worst);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/core/units.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/model/linear_modes.h"
@@ -36,8 +37,9 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
   const int elastic = linear.size() - linear.rigid_count;
   if (t.mode < 1 || t.mode > elastic) {
-    throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes",
-                                 a.modes.front(), t.mode, a.model, elastic));
+    throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {}",
+                                 a.modes.front(), t.mode, a.model,
+                                 counted(elastic, "elastic mode")));
   }
   const std::string quantity = a.amplitude.empty() ? "modal" : a.amplitude;
   correlate::AmplitudeQuantity amplitude = correlate::AmplitudeQuantity::kVelocity;
@@ -122,9 +124,9 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
       throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
     }
     if (t.mode > elastic) {
-      throw InputError(
-          fmt::format("--mode {}: model mode {} does not exist: {} has {} elastic modes (1 to {})",
-                      spec, t.mode, a.model, elastic, elastic));
+      throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} (1 to {})",
+                                   spec, t.mode, a.model, counted(elastic, "elastic mode"),
+                                   elastic));
     }
     if (colon != std::string::npos &&
         std::none_of(run.bands.begin(), run.bands.end(),

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/model_file.h"
@@ -53,8 +54,8 @@ ModelComparison compare_models(const std::vector<std::string>& models,
     mo.elastic_count = target.mode;
     const model::JointCondensation jc(m, mo);
     if (target.mode > jc.elastic_count()) {
-      throw InputError(fmt::format("--mode {}: {} has {} elastic modes", target.mode, models[i],
-                                   jc.elastic_count()));
+      throw InputError(fmt::format("--mode {}: {} has {}", target.mode, models[i],
+                                   counted(jc.elastic_count(), "elastic mode")));
     }
     const int col = jc.modes().rigid_count + target.mode - 1;
     const double phi =

@@ -44,4 +44,10 @@ inline std::string shorten(std::string_view s, size_t max = 80) {
   return std::string(s.substr(0, n)) + "... (" + std::to_string(s.size()) + " bytes)";
 }
 
+/// `n` and `noun` for a message, the noun plural unless n is 1: counted(1, "elastic mode") is
+/// "1 elastic mode", counted(3, "elastic mode") "3 elastic modes".
+inline std::string counted(long long n, std::string_view noun) {
+  return std::to_string(n) + " " + std::string(noun) + (n == 1 ? "" : "s");
+}
+
 }  // namespace jointlab

@@ -15,6 +15,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
+#include "jointlab/core/text.h"
 #include "jointlab/correlate/qsma_at.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/linear_modes.h"
@@ -165,8 +166,8 @@ ModelBackbone model_backbone(const model::JointCondensation& jc, int mode,
                              std::optional<Eigen::Index> dof, int power, BackboneKind kind,
                              IwanComparison comparison, double a_lo, double a_hi, int points) {
   if (mode < 1 || mode > jc.elastic_count())
-    throw InputError(fmt::format("mode {} does not exist: the model has {} elastic modes", mode,
-                                 jc.elastic_count()));
+    throw InputError(fmt::format("mode {} does not exist: the model has {}", mode,
+                                 counted(jc.elastic_count(), "elastic mode")));
   if (!(a_lo > 0) || !(a_hi >= a_lo) || points < 2)
     throw InputError("model backbone: need 0 < a_lo <= a_hi and two points or more");
   const bool matched = comparison == IwanComparison::kMatched;

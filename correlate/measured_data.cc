@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/correlate/shape_checks.h"
 #include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
@@ -495,7 +496,8 @@ int measured_mode_of(const model::Model& model, const std::vector<Sensor>& senso
   const model::LinearModes modes = model::linear_modes(model.mass, model.linear_stiffness());
   const int elastic = modes.size() - modes.rigid_count;
   if (mode < 1 || mode > elastic) {
-    throw InputError(fmt::format("mode {}: the model has {} elastic modes", mode, elastic));
+    throw InputError(
+        fmt::format("mode {}: the model has {}", mode, counted(elastic, "elastic mode")));
   }
   const Eigen::MatrixXd model_shapes = shapes_at_sensors(sensors, modes.shapes.rightCols(elastic));
   const Pairing p = pair_modes(mac_matrix(measured.shapes, model_shapes), mac_threshold);
@@ -510,7 +512,8 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
   const model::LinearModes modes = model::linear_modes(model.mass, model.linear_stiffness());
   const int elastic = modes.size() - modes.rigid_count;
   if (mode < 1 || mode > elastic || column < 0 || column >= measured.shapes.cols()) {
-    throw InputError(fmt::format("mode {}: the model has {} elastic modes", mode, elastic));
+    throw InputError(
+        fmt::format("mode {}: the model has {}", mode, counted(elastic, "elastic mode")));
   }
   const Eigen::MatrixXd model_shapes = shapes_at_sensors(sensors, modes.shapes.rightCols(elastic));
   const Eigen::MatrixXd row = mac_matrix(measured.shapes.col(column), model_shapes);

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 
 namespace jointlab::correlate {
 namespace {
@@ -398,8 +399,8 @@ std::vector<QsmaAtPoint> qsma_at(const model::JointCondensation& model, int mode
   assert(power >= 0 && power <= 2);
   assert(std::is_sorted(amplitudes.begin(), amplitudes.end()));
   if (mode < 1 || mode > model.elastic_count()) {
-    throw InputError(fmt::format("mode {} does not exist: the model has {} elastic modes", mode,
-                                 model.elastic_count()));
+    throw InputError(fmt::format("mode {} does not exist: the model has {}", mode,
+                                 counted(model.elastic_count(), "elastic mode")));
   }
   std::vector<QsmaAtPoint> out;
   if (amplitudes.empty()) return out;

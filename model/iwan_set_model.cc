@@ -10,6 +10,7 @@
 #include <Eigen/Cholesky>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 
 namespace jointlab::model {
 namespace {
@@ -83,8 +84,8 @@ IwanSetModel::IwanSetModel(const Model& model, const std::string& set, int elast
   modes_ = linear_modes(model);
   const int rigid = modes_.rigid_count;
   if (elastic_count_ < 1 || elastic_count_ > modes_.size() - rigid) {
-    throw InputError(fmt::format("mode {} does not exist: the model has {} elastic modes",
-                                 elastic_count_, modes_.size() - rigid));
+    throw InputError(fmt::format("mode {} does not exist: the model has {}", elastic_count_,
+                                 counted(modes_.size() - rigid, "elastic mode")));
   }
   lambda_ = modes_.omega2.tail(modes_.size() - rigid);
   Eigen::MatrixXd b = Eigen::MatrixXd::Zero(base.size(), model.size());

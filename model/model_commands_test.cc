@@ -262,7 +262,10 @@ TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
   // A mode that does not exist.
   const Outcome r = run("qsma base.toml --mode 3 --out bad.csv");
   EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("mode 3 does not exist"), std::string::npos) << r.err;
+  // One elastic mode (two free masses: one rigid, one elastic): "1 elastic mode", not "modes".
+  EXPECT_NE(r.err.find("mode 3 does not exist: the model has 1 elastic mode (numbered from 1)"),
+            std::string::npos)
+      << r.err;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 
 namespace jointlab::model {
 namespace {
@@ -667,9 +668,9 @@ std::vector<QsmaPoint> qsma(const JointCondensation& model, int mode, const Qsma
   *summary = QsmaSummary{};
   if (mode < 1 || mode > model.elastic_count()) {
     throw InputError(
-        fmt::format("mode {} does not exist: the model has {} elastic modes "
+        fmt::format("mode {} does not exist: the model has {} "
                     "(numbered from 1)",
-                    mode, model.elastic_count()));
+                    mode, counted(model.elastic_count(), "elastic mode")));
   }
   const int column = model.modes().rigid_count + mode - 1;
   Problem problem(model, column, options, summary);
