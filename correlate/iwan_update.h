@@ -446,6 +446,10 @@ struct IwanUpdateSummary {
   /// The effective number of independent points the residuals amount to (about residuals x
   /// (1 - rho) / (1 + rho), at least 1 per curve's frequencies or dampings; 0 when unknown).
   double effective_points = 0;
+  /// The largest share of the squared residuals at the result that one third of the points
+  /// holds, each curve's points cut in thirds by amplitude and pooled over curves: about 1/3
+  /// for residuals spread evenly over the amplitudes, as noise is (0 when unknown).
+  double amplitude_share = 0;
   /// Student's t degrees of freedom of the sigmas: effective_points less the parameters fitted;
   /// 2 or fewer state no sigma.
   double sigma_degrees_of_freedom = 0;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -1577,6 +1578,81 @@ TEST(IwanUpdateReport, TooFewPointsAreNamedAsSuchNotAsWaves) {
   s.sigma_degrees_of_freedom = 1.4;
   r = s.report();
   EXPECT_NE(r.find("the residuals run in long waves along the curves"), std::string::npos) << r;
+}
+
+// Frequency noise ten times the stated (1.5e-3 relative, stated as 1.5e-4; damping 3 % as
+// stated) on a 60-point backbone of the one-mode truth (a unit mass on a spring with an Iwan
+// joint to ground), fitted from the truth: reduced chi-square 48, the model does not describe
+// the data within their stated noise, but the residuals are uncorrelated from point to point
+// (serial correlation 0) and spread evenly over the amplitudes (largest third's share 0.39), as
+// noise is, and a note says the stated uncertainties may be about sqrt(reduced chi-square) = 6.9
+// times too small. The control: the same data of a chi -0.2 joint fitted with chi held near -0.6
+// (the model wrong): reduced chi-square 281, residuals running in waves (serial correlation
+// 0.98), and no such note. Over seeds 1-16 the same held (the numbers at the report's note).
+TEST(IwanUpdate, WhiteResidualsOfAMisfitNoteThatTheStatedNoiseMayBeTooSmall) {
+  const FloorTruth t;
+  const auto fit = [&](double chi_data, std::optional<double> chi_held) {
+    model::IwanParameters truth = t.iwan;
+    truth.chi = chi_data;
+    IwanTarget target;
+    target.mode = 1;
+    MeasuredBackbone b = modal_backbone(one_mode_structure(t.k0, truth), 60, 1e-8,
+                                        2 * model::Iwan(truth).phi_max(), 1.5e-3, 0.03, 5);
+    b.frequency_std_hz *= 0.1;  // 1.5e-4 stated
+    target.curves = {b};
+    IwanUpdateOptions o = t.options();
+    o.fit_linear_damping = false;
+    o.max_evaluations = 1500;
+    model::IwanParameters start = truth;
+    if (chi_held) {  // a range of +/- 0.01 about it: the bounds need chi_min < chi_max
+      start.chi = *chi_held;
+      o.bounds.chi_min = *chi_held - 0.01;
+      o.bounds.chi_max = *chi_held + 0.01;
+    }
+    const model::Model m = one_mode_structure(t.k0, start);  // the objective keeps a reference
+    const IwanObjective obj(m, "j", {}, {target}, o);
+    IwanUpdateSummary s;
+    update_iwan(obj, o, &s);
+    return s;
+  };
+  const std::string note = "the residuals are uncorrelated from point to point";
+  const IwanUpdateSummary noise = fit(t.iwan.chi, std::nullopt);
+  std::printf("%s", noise.report().c_str());
+  EXPECT_TRUE(noise.misfit()) << noise.report();
+  EXPECT_LT(noise.noise_correlation, 0.3) << noise.report();
+  EXPECT_NE(noise.report().find(note), std::string::npos) << noise.report();
+  EXPECT_NE(noise.report().find(fmt::format("sqrt(reduced chi-square) = {:.2g} times too small",
+                                            std::sqrt(noise.reduced_chi2))),
+            std::string::npos)
+      << noise.report();
+  const IwanUpdateSummary wrong = fit(-0.2, -0.6);
+  std::printf("%s", wrong.report().c_str());
+  EXPECT_TRUE(wrong.misfit()) << wrong.report();
+  EXPECT_EQ(wrong.report().find(note), std::string::npos) << wrong.report();
+}
+
+// The note that the stated noise may be too small needs both: residuals uncorrelated from point
+// to point (serial correlation below 0.3) and spread evenly over the amplitudes (the largest
+// third's share of the chi-square within 3 standard deviations of 1/3: for 120 residuals, 60
+// points, below 1/3 + 3 sqrt((2/9) / 31) = 0.587); and a misfit to begin with.
+TEST(IwanUpdateReport, WhiteEvenResidualsOfAMisfitAloneNoteTheStatedNoise) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 1500, 120, 47.8);
+  s.effective_points = 100;
+  s.sigma_degrees_of_freedom = 96;
+  s.noise_correlation = 0.05;
+  s.amplitude_share = 0.39;
+  const std::string note =
+      "the stated uncertainties may be about sqrt(reduced chi-square) = 6.9 "
+      "times too small";
+  EXPECT_NE(s.report().find(note), std::string::npos) << s.report();
+  s.amplitude_share = 0.6;  // a misfit gathered at some amplitudes
+  EXPECT_EQ(s.report().find("uncorrelated from point to point"), std::string::npos) << s.report();
+  s.amplitude_share = 0.39;
+  s.noise_correlation = 0.35;  // waves
+  EXPECT_EQ(s.report().find("uncorrelated from point to point"), std::string::npos) << s.report();
+  s.noise_correlation = 0.05;
+  s.reduced_chi2 = 1.2;  // within 1 + 3 sqrt(2 / 120) = 1.39: no misfit
+  EXPECT_EQ(s.report().find("uncorrelated from point to point"), std::string::npos) << s.report();
 }
 
 // Uncertainties stated 10 times the noise (the one-mode truth's 40-point table, 1e-4 / 2 % noise
