@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <fmt/format.h>
@@ -307,6 +308,32 @@ std::string iwan_stop_reason(const Campaign& c, const LinearStep& linear, const 
         "their signs ([[channel]] sign), or, if the pairs are known to be right, set "
         "accept_unconfirmed_pairs = true in [update.iwan]",
         one ? "" : "s", fmt::join(modes, " and "), linear_update_options(c).mac_threshold);
+  }
+  // A [[mode]] whose model_mode is not the model mode its shape pairs it with: the Iwan update
+  // would fit another mode's QSMA curve to this backbone (a typed model_mode = 2 for the beam's
+  // first mode: K_T pressed to its bound at 5 % of the linear update's, F_S 6.2 times the truth,
+  // the report warning only after the fit). Only a pair the shapes confirm (MAC at two channels
+  // or more, at least the linear update's threshold) is evidence.
+  const double threshold = linear_update_options(c).mac_threshold;
+  for (size_t i = 0; i < linear.campaign_modes.size(); ++i) {
+    const CampaignMode& mode = c.modes[static_cast<size_t>(linear.campaign_modes[i])];
+    if (mode.model_mode <= 0 || !c.iwan_update.fits(mode.name)) continue;
+    const auto row = static_cast<Eigen::Index>(i);
+    const int j = s.final.pairing.model_for(static_cast<int>(i));
+    const std::optional<double> mac = s.final.pair_mac(row);
+    if (j < 0 || !mac || *mac < threshold || j + 1 == mode.model_mode) continue;
+    const Eigen::VectorXd& f = s.final.all_model_frequency_hz;
+    return fmt::format(
+        "update.iwan: not run: [[mode]] '{}' gives model_mode = {}, but its measured shape pairs "
+        "it with model mode {} ({:.5g} Hz, MAC {:.3f} at the channels; the measured linear "
+        "frequency is {:.5g} Hz{}), so the Iwan update would fit mode {}'s QSMA curve to mode "
+        "{}'s backbone; set model_mode = {} in that [[mode]], or check its band and channels if "
+        "mode {} is meant",
+        mode.name, mode.model_mode, j + 1, f(j), *mac, s.final.measured_frequency_hz(row),
+        mode.model_mode - 1 < f.size()
+            ? fmt::format(", model mode {}'s {:.5g} Hz", mode.model_mode, f(mode.model_mode - 1))
+            : std::string(),
+        mode.model_mode, j + 1, j + 1, mode.model_mode);
   }
   for (const correlate::ParameterReport& p : s.parameters) {
     if ((p.name != set && p.name != "iwan." + set) || p.acts_with.empty()) continue;

@@ -88,9 +88,11 @@ bool accepts_unconfirmed_pairs(const Campaign& campaign);
 
 /// Why the Iwan update must not start from the linear update's result, or "": pairs the shapes
 /// do not confirm at that result (LinearUpdateStatus::kPairsUnconfirmed: the model's modes may
-/// be cross-paired) unless [update.iwan] accept_unconfirmed_pairs = true, or the Iwan set
-/// `set` acting together with another set (only their combination determined: the split the
-/// Iwan joint would start from is arbitrary). Names the campaign-file keys that change it.
+/// be cross-paired) unless [update.iwan] accept_unconfirmed_pairs = true, a fitted [[mode]]
+/// whose model_mode differs from the model mode its shape is paired with (a confirmed MAC), or
+/// the Iwan set `set` acting together with another set (only their combination determined: the
+/// split the Iwan joint would start from is arbitrary). Names the campaign-file keys that
+/// change it.
 std::string iwan_stop_reason(const Campaign& campaign, const LinearStep& linear,
                              const std::string& set);
 

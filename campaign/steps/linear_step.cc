@@ -114,6 +114,7 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
                                 ? measured.labels[static_cast<size_t>(k)]
                                 : std::string());  // labels may be empty
     fitted.ids.push_back(measured.id(k));
+    step.campaign_modes.push_back(static_cast<int>(k));
   }
   const Eigen::VectorXd theta =
       correlate::update_linear(m.model, c.linear_update.sets, m.sensors, fitted, lo, &step.summary);

@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -27,6 +28,8 @@ struct LinearStep {
   bool refused = false;
   correlate::LinearUpdateSummary summary;  ///< its outcome
   model::Model updated;                    ///< the updated model (when it ran)
+  /// Per measured mode of the update (its index in the summary), the campaign's [[mode]] index.
+  std::vector<int> campaign_modes;
 };
 
 /// The step: runs [update.linear] on the model against `measured` (every campaign mode, in
