@@ -9,6 +9,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <unistd.h>
@@ -340,12 +341,9 @@ correlate::MeasuredModes twins_measured_reversed(const std::vector<correlate::Se
   return m;
 }
 
-// A campaign whose linear update ends with pairs the shapes do not confirm (the twins, channel
-// a reversed, two sensors: modes 1 and 2 paired crosswise) stops before the Iwan update, with
-// one reason naming the modes and the campaign keys that change it; the Iwan update is not
-// run and nothing of it is made. Only accept_unconfirmed_pairs = true lets it go on. Before,
-// the linear step passed the result on as if converged and the Iwan update ran from it.
-TEST(IwanAfterLinear, StopsWhereTheShapesDoNotConfirmTheLinearPairs) {
+// The twin cantilevers as a campaign: channels a and b at DOFs 2 and 5, six modes, kg and kc
+// updated linearly (from 8e3 and 800), then the Iwan set.
+std::pair<Campaign, CampaignModelData> twins_campaign() {
   Campaign c;
   c.file = "twins.toml";
   c.channels = {{"a", "2", 1}, {"b", "5", 1}};
@@ -359,6 +357,16 @@ TEST(IwanAfterLinear, StopsWhereTheShapesDoNotConfirmTheLinearPairs) {
   d.model = correlate::twin_chains_structure(8e3, 800);
   d.dofs = {2, 5};
   d.sensors = {{"a", 2, 1.0}, {"b", 5, 1.0}};
+  return {c, d};
+}
+
+// A campaign whose linear update ends with pairs the shapes do not confirm (the twins, channel
+// a reversed, two sensors: modes 1 and 2 paired crosswise) stops before the Iwan update, with
+// one reason naming the modes and the campaign keys that change it; the Iwan update is not
+// run and nothing of it is made. Only accept_unconfirmed_pairs = true lets it go on. Before,
+// the linear step passed the result on as if converged and the Iwan update ran from it.
+TEST(IwanAfterLinear, StopsWhereTheShapesDoNotConfirmTheLinearPairs) {
+  auto [c, d] = twins_campaign();
   const LinearStep linear = linear_update_step(c, d, twins_measured_reversed(d.sensors), nullptr);
   ASSERT_TRUE(linear.ran) << linear.note;
   ASSERT_EQ(linear.summary.status, correlate::LinearUpdateStatus::kPairsUnconfirmed)
@@ -392,20 +400,8 @@ TEST(IwanAfterLinear, StopsWhereTheShapesDoNotConfirmTheLinearPairs) {
 // the mode it pairs with and the key to set. The right model_mode, or a mode the Iwan update
 // does not fit, stops nothing.
 TEST(IwanAfterLinear, StopsWhereAModeIsTypedAsAnotherModelMode) {
-  Campaign c;
-  c.file = "twins.toml";
-  c.channels = {{"a", "2", 1}, {"b", "5", 1}};
-  for (int k = 1; k <= 6; ++k)
-    c.modes.push_back({fmt::format("mode {}", k), {1, 2}, 0, "a", {}, {}});
+  auto [c, d] = twins_campaign();
   c.modes[0].model_mode = 2;
-  c.linear_update.enabled = true;
-  c.linear_update.sets = {"spring.kg", "spring.kc"};
-  c.iwan_update.enabled = true;
-  c.iwan_update.sets = {"iwan.rivet"};
-  CampaignModelData d;
-  d.model = correlate::twin_chains_structure(8e3, 800);
-  d.dofs = {2, 5};
-  d.sensors = {{"a", 2, 1.0}, {"b", 5, 1.0}};
   const LinearStep linear =
       linear_update_step(c, d, twins_measured_reversed(d.sensors, false), nullptr);
   ASSERT_TRUE(linear.ran) << linear.note;
