@@ -75,4 +75,36 @@ std::optional<FollowedModes> follow_path(
   return now;
 }
 
+namespace {
+// MAC_M of mode `j` of `from` with mode `k` of `to` and the modes of `to` within a relative
+// `cluster` of its frequency.
+double mac_with_cluster(const Eigen::SparseMatrix<double>& mass, const ElasticModes& from, int j,
+                        const ElasticModes& to, int k, double cluster) {
+  const Eigen::VectorXd mp = mass * from.shapes.col(j);
+  const double f = to.frequency_hz(k);
+  double sum = 0;
+  for (Eigen::Index m = 0; m < to.shapes.cols(); ++m) {
+    if (m != k && !(std::abs(to.frequency_hz(m) - f) <= cluster * f)) continue;
+    const double c = to.shapes.col(m).dot(mp);
+    sum += c * c;
+  }
+  return sum;
+}
+}  // namespace
+
+bool same_partners(const Eigen::SparseMatrix<double>& mass, const ElasticModes& a,
+                   const std::vector<int>& columns_a, const ElasticModes& b,
+                   const std::vector<int>& columns_b, double min_mac, double cluster) {
+  if (columns_a.size() != columns_b.size()) return false;
+  for (size_t i = 0; i < columns_a.size(); ++i) {
+    const int ja = columns_a[i], jb = columns_b[i];
+    if ((ja < 0) != (jb < 0)) return false;
+    if (ja < 0) continue;
+    if (!(mac_with_cluster(mass, a, ja, b, jb, cluster) >= min_mac) ||
+        !(mac_with_cluster(mass, b, jb, a, ja, cluster) >= min_mac))
+      return false;
+  }
+  return true;
+}
+
 }  // namespace jointlab::correlate

@@ -63,4 +63,17 @@ std::optional<FollowedModes> follow_path(
     const Eigen::SparseMatrix<double>& mass, const ElasticModes& start,
     const std::vector<int>& tracked, const TrackingOptions& options);
 
+/// Whether two pairings pair every measured mode with the same model mode: `columns_a[i]`, a
+/// mode of `a` (or -1: unpaired), and `columns_b[i]` of `b`, modes of one mass matrix at two
+/// stiffnesses. The same ones unpaired, and each pair's shape with MAC_M at least `min_mac`
+/// with the other's partner and the modes within a relative `cluster` of its frequency (modes
+/// that close are one eigenspace to the data: their shapes mix arbitrarily from one stiffness to
+/// the next, the example beam's 747.94 and 747.97 Hz pair), both ways. Mode numbers alone cannot
+/// say it: a mode crossing or veering between the two points renumbers the modes (the beam's
+/// sixth bending mode is model mode 9 with spring.rz at 1e5 and model mode 10 with rz at 0.1,
+/// the twisting mode having passed it).
+bool same_partners(const Eigen::SparseMatrix<double>& mass, const ElasticModes& a,
+                   const std::vector<int>& columns_a, const ElasticModes& b,
+                   const std::vector<int>& columns_b, double min_mac = 0.5, double cluster = 1e-3);
+
 }  // namespace jointlab::correlate
