@@ -626,6 +626,17 @@ TEST(LinearUpdate, PairsTheShapesAtTwoSensorsNoLongerConfirmAreNotCalledConverge
   EXPECT_NEAR(t2(1) / 500, 1.0, 1e-5) << s.report();
 }
 
+// The two chains updated from ka 2e6, kb 1e5 (the first two modes in the other order than the
+// truth's 5e5 and 3e5) and kflat 1e9, default options.
+Eigen::VectorXd update_from_swapped_start(const std::vector<Sensor>& sensors,
+                                          const MeasuredModes& meas, LinearUpdateSummary* s) {
+  TwoChainParameters start;
+  start.ka = 2e6;
+  start.kb = 1e5;
+  start.kflat = 1e9;
+  return update_linear(two_chain_structure(start), kSets, sensors, meas, {}, s);
+}
+
 // Three sensors, two on chain A (indices 2 and 5) and one on chain B (index 8): chain B's modes
 // are seen at one sensor (a lab that measured that chain at one point) and pair by frequency. From
 // ka 2e6 and kb 1e5 (the first modes in the other order) test mode 2 (59.9 Hz, chain B) was paired
@@ -645,13 +656,8 @@ TEST(LinearUpdate, AModeSeenAtOneSensorDoesNotTakeThePartnerOfAModeWithAShape) {
   meas.shapes = at.leftCols(6).cast<std::complex<double>>();
   // Entries at rounding level (a chain's mode at the other chain's sensors) are not measured.
   meas.shapes = (meas.shapes.array().abs() < 1e-9).select(0.0, meas.shapes);
-  TwoChainParameters start;
-  start.ka = 2e6;
-  start.kb = 1e5;
-  start.kflat = 1e9;
   LinearUpdateSummary s;
-  const Eigen::VectorXd theta =
-      update_linear(two_chain_structure(start), kSets, sensors, meas, {}, &s);
+  const Eigen::VectorXd theta = update_from_swapped_start(sensors, meas, &s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << r;
   EXPECT_EQ(s.final.pairing.pairs.size(), 6u) << r;
@@ -719,13 +725,8 @@ TEST(LinearUpdate, ASetNoPairSeesIsNotSaidToBeSeenOnlyByUnconfirmedPairs) {
                           .finished();
   meas.shapes = shapes_at_sensors(sensors, modes.shapes).leftCols(6).cast<std::complex<double>>();
   meas.shapes = (meas.shapes.array().abs() < 1e-9).select(0.0, meas.shapes);
-  TwoChainParameters start;
-  start.ka = 2e6;
-  start.kb = 1e5;
-  start.kflat = 1e9;
   LinearUpdateSummary s;
-  const Eigen::VectorXd theta =
-      update_linear(two_chain_structure(start), kSets, sensors, meas, {}, &s);
+  const Eigen::VectorXd theta = update_from_swapped_start(sensors, meas, &s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << r;
   EXPECT_EQ(r.find("spring.kflat only these pairs see"), std::string::npos) << r;
