@@ -1668,7 +1668,15 @@ TEST(IwanUpdateReport, UncertaintiesStatedFarAboveTheScatterAreNoted) {
   EXPECT_NE(s.report().find(said), std::string::npos) << s.report();
   s.reduced_chi2 = 0.6;
   EXPECT_EQ(s.report().find("scatter about"), std::string::npos) << s.report();
+  // The example campaign's fit: 978 residuals serially correlated into 18.3 independent points,
+  // reduced chi-square 0.669, common over 18 points (3 of its standard deviations reach 1 - 0.99);
+  // against the count's limit, 0.86, it was called far below 1.
+  s.residuals = 978;
+  s.effective_points = 18.3;
+  s.reduced_chi2 = 0.669;
+  EXPECT_EQ(s.report().find("scatter about"), std::string::npos) << s.report();
   s.reduced_chi2 = 0.00738;
+  EXPECT_NE(s.report().find("scatter about"), std::string::npos) << s.report();
   s.floored = Eigen::Vector3i(40, 0, 12);
   EXPECT_EQ(s.report().find("scatter about"), std::string::npos) << s.report();
 }
