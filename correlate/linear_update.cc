@@ -1301,24 +1301,25 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
     size_t best = 0;
     for (size_t k = 1; k < results.size(); ++k)
       if (results[k].cost < results[best].cost) best = k;
-    const auto same = [&](const Tried& a, const Tried& b) {
-      return same_partners(p.model.mass, a.point.modes, a.point.columns, b.point.modes,
-                           b.point.columns);
-    };
+    // The results that pair some measured mode otherwise than the best (by shape), compared
+    // with it once each; the runner is the lowest of them.
+    std::vector<size_t> others;
     std::optional<size_t> runner;
-    for (size_t k = 0; k < results.size(); ++k)
-      if (k != best && !same(results[k], results[best]) &&
-          (!runner || results[k].cost < results[*runner].cost))
-        runner = k;
+    for (size_t k = 0; k < results.size(); ++k) {
+      if (k == best || same_partners(p.model.mass, results[k].point.modes, results[k].point.columns,
+                                     results[best].point.modes, results[best].point.columns))
+        continue;
+      others.push_back(k);
+      if (!runner || results[k].cost < results[*runner].cost) runner = k;
+    }
     const double sf2 = p.options.frequency_std * p.options.frequency_std;
     if (runner && !(2 * (results[*runner].cost - results[best].cost) / sf2 >= 9)) {
       out.ambiguity = fmt::format(
           "{}{}", fresh_end.ambiguity.empty() ? "" : fresh_end.ambiguity + "; fitted each way, ",
           differing_pairs(p, results[best].point, results[best].cost, results[*runner].point,
                           results[*runner].cost));
-      for (size_t k = 0; k < results.size(); ++k)
-        if (k != best && !same(results[k], results[best]) &&
-            2 * (results[k].cost - results[best].cost) / sf2 < 9)
+      for (const size_t k : others)
+        if (2 * (results[k].cost - results[best].cost) / sf2 < 9)
           out.rivals.push_back(results[k].point);
       if (best > 0) point = std::move(results[best].point);
       break;
