@@ -1928,6 +1928,7 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
       weak.push_back(std::move(w.text));
   }
   s.warnings.insert(s.warnings.begin(), weak.begin(), weak.end());
+  s.warnings.insert(s.warnings.begin(), measured.warnings.begin(), measured.warnings.end());
   return theta;
 }
 

@@ -102,6 +102,9 @@ struct MeasuredModes {
   /// Each mode's own name in reports and files: the table's `mode` number, the band's number, the
   /// campaign's mode name; empty (or an empty entry): its position, 1, 2, ...
   std::vector<std::string> ids;
+  /// What reading the data found worth saying (a strongly complex shape realised as real):
+  /// update_linear() puts them first among its report's warnings.
+  std::vector<std::string> warnings;
   /// ids[i], or i + 1 where it has none.
   std::string id(Eigen::Index i) const;
 };

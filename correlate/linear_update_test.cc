@@ -907,6 +907,20 @@ TEST(LinearUpdate, MeasuredModesKeepTheirOwnNumbers) {
   EXPECT_EQ(s.final.measured_id(2), "9");
 }
 
+// What reading the data found (a complex shape realised with a poor MPC, measured_data.h) is
+// in the update's report, first among its warnings.
+TEST(LinearUpdate, TheMeasuredDataWarningsComeFirstInTheReport) {
+  NoiselessMeasurement d(3, 4);
+  d.meas.warnings = {"modes.csv:3: mode 2's shape is complex: MPC 0.800"};
+  LinearUpdateOptions o;
+  o.max_iterations = 3;
+  LinearUpdateSummary s;
+  update_linear(d.m, kSets, d.sensors, d.meas, o, &s);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_EQ(s.warnings[0], d.meas.warnings[0]);
+  EXPECT_NE(s.report().find("WARNING: modes.csv:3: mode 2's shape is complex"), std::string::npos);
+}
+
 // The model-form threshold against the closed form of the chi-square distribution over 4
 // degrees of freedom, P(X > x) = exp(-x/2) (1 + x/2): 0.00135 at the limit (1e-10: the
 // quantile's own accuracy is near double rounding).

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -36,6 +38,27 @@ Eigen::MatrixXd mac_matrix(const Eigen::Ref<const Eigen::MatrixXcd>& measured,
   Eigen::MatrixXd out(measured.cols(), model.cols());
   for (Eigen::Index i = 0; i < measured.cols(); ++i) {
     for (Eigen::Index j = 0; j < model.cols(); ++j) out(i, j) = mac(measured.col(i), model.col(j));
+  }
+  return out;
+}
+
+RealisedShape realise(const Eigen::Ref<const Eigen::VectorXcd>& x) {
+  RealisedShape out;
+  const double xx = x.squaredNorm();  // x^H x = l1 + l2
+  out.shape = x.real();
+  if (!(xx > 0)) return out;
+  const std::complex<double> xtx = (x.array() * x.array()).sum();  // x^T x, |x^T x| = l1 - l2
+  out.phase = 0.5 * std::arg(xtx);
+  const Eigen::VectorXcd rotated = x * std::polar(1.0, -out.phase);
+  out.shape = rotated.real();
+  out.mpc = std::min(1.0, std::norm(xtx) / (xx * xx));
+  out.imaginary_share = std::min(1.0, rotated.imag().squaredNorm() / xx);
+  Eigen::Index top = 0;
+  out.shape.cwiseAbs().maxCoeff(&top);
+  if (out.shape(top) < 0) out.shape = -out.shape, out.phase += std::numbers::pi;
+  for (Eigen::Index k = 0; k < x.size(); ++k) {
+    if (x(k) != std::complex<double>(0.0) && out.shape(k) == 0.0)
+      out.shape(k) = std::numeric_limits<double>::min();
   }
   return out;
 }

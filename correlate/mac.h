@@ -17,6 +17,20 @@
 // and a mode with no motion at the sensors has no MAC at all, a 0/0): pair_by_rules() also
 // gates by frequency, never pairs an invisible mode, and says when it cannot decide. The
 // updating then follows each pair by its full shape (mode_tracking.h), not by MAC again.
+//
+// Realising a complex shape x = a + i b (a test-modal tool's residue or mode shape): the real
+// shape nearest it is Re(x e^{-i theta}) with theta the phase that maximises its norm, the
+// principal direction of the points x_k in the complex plane. With the 2x2 matrix
+// [a.a, a.b; a.b, b.b] of eigenvalues l1 >= l2 >= 0, theta = arg(x^T x) / 2 (plain transpose),
+// |Re(x e^{-i theta})|^2 = l1 and the imaginary part left out |Im(x e^{-i theta})|^2 = l2. The
+// modal phase collinearity
+//
+//     MPC = |x^T x|^2 / (x^H x)^2 = ((l1 - l2) / (l1 + l2))^2,     0 <= MPC <= 1,
+//
+// is 1 for a real shape times any e^{i phi} (a real normal mode) and 0 for points spread evenly
+// round the origin (x = (1, i)); for two equal entries phi apart it is cos^2 phi. It is taken
+// about the origin (not about the points' mean, as some tools do): a real shape's points lie on
+// a line through the origin.
 #pragma once
 
 #include <string>
@@ -37,6 +51,19 @@ double mac(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Ei
 /// MAC(measured.col(i), model.col(j)) at (i, j); both have one row per sensor.
 Eigen::MatrixXd mac_matrix(const Eigen::Ref<const Eigen::MatrixXcd>& measured,
                            const Eigen::Ref<const Eigen::MatrixXd>& model);
+
+/// A complex shape as the real shape nearest it (realise()).
+struct RealisedShape {
+  Eigen::VectorXd shape;       ///< Re(x e^{-i theta}), the sign making its largest entry positive
+  double phase = 0;            ///< theta [rad]
+  double mpc = 1;              ///< modal phase collinearity |x^T x|^2 / (x^H x)^2 (1 for x = 0)
+  double imaginary_share = 0;  ///< |Im(x e^{-i theta})|^2 / |x|^2 = l2 / (l1 + l2): left out
+};
+
+/// The real shape nearest complex shape `x` and its MPC. An entry of x that is not zero stays
+/// non-zero (a rotated entry exactly in quadrature becomes the smallest normal double): a zero
+/// entry means "not measured" to mac().
+RealisedShape realise(const Eigen::Ref<const Eigen::VectorXcd>& x);
 
 /// One measured mode paired with one model mode.
 struct ModePair {

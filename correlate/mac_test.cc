@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <complex>
 
 #include "jointlab/tests/test_util.h"
 
@@ -22,6 +24,50 @@ TEST(Mac, InvariantToScaleAndPhaseAndBounded) {
   const double cos2 = std::pow(w.dot(y) / (w.norm() * y.norm()), 2);
   EXPECT_TRUE(testing::Close(mac(w, y), cos2, 1e-14));
   EXPECT_EQ(mac(Eigen::VectorXd::Zero(4), y), 0.0);
+}
+
+// A real shape times e^{i phi} (a real normal mode's residue at any phase) comes back as that
+// shape up to sign, MPC 1, nothing left out: rounding alone, so 1e-14 relative.
+TEST(Mac, ARealShapeAtAnyPhaseIsRealisedAsItselfWithMpcOne) {
+  const Eigen::VectorXd y = (Eigen::VectorXd(5) << 0.3, -1.0, 0.02, 0.7, -0.45).finished();
+  for (const double phi : {0.0, 0.4, 1.5707963267948966, 2.0, -2.9, 3.14159}) {
+    const Eigen::VectorXcd x = std::polar(2.5, phi) * y.cast<std::complex<double>>();
+    const RealisedShape r = realise(x);
+    // The largest entry (-1.0) is made positive: -2.5 y.
+    EXPECT_LT((r.shape + 2.5 * y).norm(), 1e-14 * y.norm()) << "phi " << phi;
+    EXPECT_TRUE(testing::Close(r.mpc, 1.0, 1e-14)) << "phi " << phi;
+    EXPECT_LT(r.imaginary_share, 1e-28) << "phi " << phi;
+  }
+}
+
+// Known complex shapes, closed forms: x = (1, e^{i alpha}) has x^T x = 2 cos(alpha) e^{i alpha},
+// so MPC = cos^2 alpha, the realised shape cos(alpha/2) (1, 1) and the part left out sin^2(alpha/2)
+// of the whole; x = a + i b with a.b = 0 has l1 = |a|^2, l2 = |b|^2 and realises as a. Rounding
+// alone: 1e-13.
+TEST(Mac, AKnownComplexShapeHasItsClosedFormMpc) {
+  for (const double alpha : {0.1, 0.5, 1.0, 1.3}) {
+    const Eigen::Vector2cd x(1.0, std::polar(1.0, alpha));
+    const RealisedShape r = realise(x);
+    EXPECT_NEAR(r.mpc, std::pow(std::cos(alpha), 2), 1e-13) << alpha;
+    EXPECT_NEAR(r.shape(0), std::cos(alpha / 2), 1e-13) << alpha;
+    EXPECT_NEAR(r.shape(1), std::cos(alpha / 2), 1e-13) << alpha;
+    EXPECT_NEAR(r.imaginary_share, std::pow(std::sin(alpha / 2), 2), 1e-13) << alpha;
+  }
+  const Eigen::Vector4d a(1.0, 2.0, -1.0, 0.5), b(0.5, 0.0, 0.5, 0.0);  // a.b = 0
+  ASSERT_EQ(a.dot(b), 0.0);
+  const Eigen::Vector4cd x =
+      std::polar(1.0, 0.7) * (a.cast<std::complex<double>>() + std::complex<double>(0, 1) * b);
+  const RealisedShape r = realise(x);
+  const double l1 = a.squaredNorm(), l2 = b.squaredNorm();
+  EXPECT_NEAR(r.mpc, std::pow((l1 - l2) / (l1 + l2), 2), 1e-13);  // 0.7347
+  EXPECT_LT((r.shape - a).norm(), 1e-13);
+  EXPECT_NEAR(r.imaginary_share, l2 / (l1 + l2), 1e-13);
+  // Points spread evenly round the origin: MPC 0, and the entry left at quadrature stays an
+  // entry (non-zero), never "not measured".
+  const RealisedShape round = realise(Eigen::Vector2cd(1.0, std::complex<double>(0, 1)));
+  EXPECT_EQ(round.mpc, 0.0);
+  EXPECT_NE(round.shape(1), 0.0);
+  EXPECT_EQ(realise(Eigen::Vector2cd::Zero()).mpc, 1.0);
 }
 
 TEST(Mac, PairingIsOneToOneWithThresholdAndReportsUnpaired) {

@@ -1,5 +1,7 @@
 #include "jointlab/correlate/measured_data.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -11,6 +13,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
+#include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/shape_checks.h"
 #include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
@@ -61,28 +64,134 @@ AmplitudeQuantity quantity_of(const Fields& f, const std::string& name) {
 // Calls on_header(cells, line) for the first non-empty, non-comment line of a small CSV file
 // and on_row(cells, line) for each later one, after checking it has the header's width;
 // returns whether a header was seen. InputError naming the file ("cannot open the <what>").
+// With `detect`, the cells are split at whichever of ',', ';' and tab the header holds most
+// (data::detect_delimiter), else at ','.
 template <typename OnHeader, typename OnRow>
 bool for_each_csv_row(const fs::path& path, const std::string& what, OnHeader on_header,
-                      OnRow on_row) {
+                      OnRow on_row, bool detect = false) {
   const std::string name = path.string();
   const auto text = data::read_text_file(path);
   if (!text) throw InputError(fmt::format("{}: cannot open the {}", name, what));
+  char delim = ',';
+  if (detect) {
+    data::TextLines lines(data::strip_bom(*text));
+    std::string_view line;
+    while (lines.next(line)) {
+      const std::string_view t = trim(line);
+      if (t.empty() || t.front() == '#') continue;
+      delim = data::detect_delimiter(t);
+      break;
+    }
+  }
   bool header = false;
   size_t width = 0;
-  data::for_each_csv_line(*text, [&](const std::vector<std::string>& cells, long n) {
-    if (!header) {
-      on_header(cells, n);
-      header = true;
-      width = cells.size();
-      return;
-    }
-    if (cells.size() != width) {
-      throw InputError(
-          where(name, n, fmt::format("{} cells where the header has {}", cells.size(), width)));
-    }
-    on_row(cells, n);
-  });
+  data::for_each_csv_line(
+      *text,
+      [&](const std::vector<std::string>& cells, long n) {
+        if (!header) {
+          on_header(cells, n);
+          header = true;
+          width = cells.size();
+          return;
+        }
+        if (cells.size() != width) {
+          // "(0.1,0.2)" unquoted in a comma-separated file is split in two.
+          const bool split_pair =
+              delim == ',' && std::any_of(cells.begin(), cells.end(), [](const std::string& c) {
+                return !c.empty() && c.front() == '(' && c.back() != ')';
+              });
+          throw InputError(where(
+              name, n,
+              fmt::format("{} cells where the header has {}{}", cells.size(), width,
+                          split_pair ? " (a complex cell written (re,im) splits at its comma in "
+                                       "a comma-separated file: quote it, \"(0.1,0.2)\", or "
+                                       "write 0.1+0.2i)"
+                                     : "")));
+        }
+        on_row(cells, n);
+      },
+      delim);
   return header;
+}
+
+// What a shape column of a modes table holds: a whole entry (real or complex), or the real or
+// imaginary part of one; kMagnitudeOrPhase (row -1) names a sensor's magnitude or phase column.
+constexpr int kWhole = 0, kRealPart = 1, kImaginaryPart = 2, kMagnitudeOrPhase = 4;
+struct TableColumn {
+  int row = -1;        // sensor index, -1: none
+  int part = kWhole;   // kWhole, kRealPart, kImaginaryPart or kMagnitudeOrPhase
+  std::string header;  // as written
+  std::string base;    // the sensor channel, for parts
+};
+
+// The column headed `header`: a sensor channel, or one with a suffix _re/_im (also _real/_imag,
+// any case, after '_', '.' or ' ').
+TableColumn table_column(const std::vector<Sensor>& sensors, const std::string& header) {
+  TableColumn out;
+  out.header = header;
+  out.row = find_sensor(sensors, header);
+  if (out.row >= 0) return out;
+  const size_t cut = header.find_last_of("_. ");
+  if (cut == std::string::npos || cut == 0) return out;
+  std::string suffix = header.substr(cut + 1);
+  for (char& ch : suffix) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  out.base = std::string(trim(std::string_view(header).substr(0, cut)));
+  const int row = find_sensor(sensors, out.base);
+  if (row < 0) return out;
+  if (suffix == "re" || suffix == "real") {
+    out.row = row, out.part = kRealPart;
+  } else if (suffix == "im" || suffix == "imag") {
+    out.row = row, out.part = kImaginaryPart;
+  } else if (suffix == "mag" || suffix == "abs" || suffix == "amp" || suffix == "phase" ||
+             suffix == "deg" || suffix == "arg") {
+    out.part = kMagnitudeOrPhase;
+  }
+  return out;
+}
+
+// A cell as a complex number: a real number, a+bi or a-bj (blanks allowed, i or j, optionally
+// in round brackets, "bi" alone imaginary), or (a,b); nothing else, and finite parts only.
+std::optional<std::complex<double>> complex_cell(const std::string& cell) {
+  std::string t;
+  for (const char ch : cell)
+    if (!std::isspace(static_cast<unsigned char>(ch))) t += ch;
+  if (t.size() >= 2 && t.front() == '(' && t.back() == ')') t = t.substr(1, t.size() - 2);
+  const auto real = [](std::string_view x) -> std::optional<double> {
+    const std::optional<double> v = data::parse_double(x);
+    if (!v || !std::isfinite(*v)) return std::nullopt;
+    return v;
+  };
+  if (const size_t comma = t.find(','); comma != std::string::npos) {
+    if (cell.find('(') == std::string::npos) return std::nullopt;  // "0,5": a decimal comma?
+    const auto re = real(std::string_view(t).substr(0, comma));
+    const auto im = real(std::string_view(t).substr(comma + 1));
+    if (!re || !im) return std::nullopt;
+    return std::complex<double>(*re, *im);
+  }
+  if (t.empty()) return std::nullopt;
+  const char last = static_cast<char>(std::tolower(static_cast<unsigned char>(t.back())));
+  if (last != 'i' && last != 'j') {
+    const auto re = real(t);
+    if (!re) return std::nullopt;
+    return std::complex<double>(*re, 0.0);
+  }
+  const std::string_view body = std::string_view(t).substr(0, t.size() - 1);
+  // The imaginary part starts at the last sign that is neither first nor an exponent's.
+  size_t split = std::string_view::npos;
+  for (size_t k = body.size(); k-- > 1;) {
+    if ((body[k] == '+' || body[k] == '-') && body[k - 1] != 'e' && body[k - 1] != 'E') {
+      split = k;
+      break;
+    }
+  }
+  const std::string_view re_text = split == std::string_view::npos ? "" : body.substr(0, split);
+  const std::string_view im_text = split == std::string_view::npos ? body : body.substr(split);
+  std::optional<double> re = re_text.empty() ? std::optional<double>(0.0) : real(re_text);
+  std::optional<double> im = im_text.empty() || im_text == "+" ? std::optional<double>(1.0)
+                             : im_text == "-"                  ? std::optional<double>(-1.0)
+                                                               : real(im_text);
+  if (!re || !im) return std::nullopt;
+  return std::complex<double>(*re, *im);
 }
 
 // The "program" that wrote a summary, or "" when it does not say.
@@ -409,10 +518,11 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
 MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& sensors,
                                std::vector<int>* modes) {
   const std::string name = path.string();
-  std::vector<int> row_of_column;  // sensor row of each shape column
+  std::vector<TableColumn> columns;  // what each shape column holds
   std::vector<int> numbers;
   std::vector<double> freq;
-  std::vector<std::vector<double>> shape;
+  std::vector<Eigen::VectorXd> shape;
+  std::vector<std::string> warnings;
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
     if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
       // What was found, as written: 'Mode,Frequency_Hz' or 'frequency_hz [Hz]' differ only in
@@ -426,33 +536,46 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
                                          found)));
     }
     for (size_t c = 2; c < cells.size(); ++c) {
-      int row = -1;
-      for (size_t s = 0; s < sensors.size(); ++s) {
-        if (sensors[s].channel == cells[c]) row = static_cast<int>(s);
+      const TableColumn col = table_column(sensors, cells[c]);
+      if (col.row < 0) {
+        throw InputError(where(
+            name, n,
+            col.part == kMagnitudeOrPhase
+                ? fmt::format("column '{}': magnitude or phase columns are not read; give the "
+                              "real and imaginary parts ({}_re, {}_im) or complex cells (0.1+0.2i)",
+                              cells[c], col.base, col.base)
+                : fmt::format("column '{}' is not a sensor channel", cells[c])));
       }
-      if (row < 0) {
-        throw InputError(
-            where(name, n, fmt::format("column '{}' is not a sensor channel", cells[c])));
+      for (const TableColumn& other : columns) {
+        if (other.row == col.row &&
+            (other.part == col.part || other.part == kWhole || col.part == kWhole)) {
+          throw InputError(where(name, n,
+                                 fmt::format("column '{}': sensor channel {} twice", cells[c],
+                                             sensors[static_cast<size_t>(col.row)].channel)));
+        }
       }
-      for (int r : row_of_column) {
-        if (r == row) throw InputError(where(name, n, fmt::format("column '{}' twice", cells[c])));
+      columns.push_back(col);
+    }
+    for (const TableColumn& col : columns) {
+      if (col.part != kRealPart && col.part != kImaginaryPart) continue;
+      const bool paired = std::any_of(columns.begin(), columns.end(), [&](const TableColumn& o) {
+        return o.row == col.row && o.part == kRealPart + kImaginaryPart - col.part;
+      });
+      if (!paired) {
+        throw InputError(where(name, n,
+                               fmt::format("column '{}' has no {} part beside it ({}_{})",
+                                           col.header, col.part == kRealPart ? "imaginary" : "real",
+                                           col.base, col.part == kRealPart ? "im" : "re")));
       }
-      row_of_column.push_back(row);
     }
   };
   const auto on_row = [&](const std::vector<std::string>& cells, long n) {
     auto number = [&](size_t c, const char* what) {
-      double x = 0;
-      size_t used = 0;
-      try {
-        x = std::stod(cells[c], &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != cells[c].size() || !std::isfinite(x)) {
+      const std::optional<double> x = data::parse_double(cells[c]);
+      if (!x || !std::isfinite(*x)) {
         throw InputError(where(name, n, fmt::format("{} '{}' is not a number", what, cells[c])));
       }
-      return x;
+      return *x;
     };
     const double mode = number(0, "mode");
     if (mode != std::floor(mode) || mode < 1) {
@@ -465,16 +588,78 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
     }
     const double f = number(1, "frequency_hz");
     if (!(f > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
-    std::vector<double> v(sensors.size(), 0.0);
+    const auto n_s = static_cast<Eigen::Index>(sensors.size());
+    Eigen::VectorXcd v = Eigen::VectorXcd::Zero(n_s);
+    std::vector<char> given(sensors.size(), 0);  // per sensor: parts given (1 real, 2 imaginary)
     for (size_t c = 2; c < cells.size(); ++c) {
-      if (!cells[c].empty())
-        v[static_cast<size_t>(row_of_column[c - 2])] = number(c, "shape entry");
+      const TableColumn& col = columns[c - 2];
+      const std::string& cell = cells[c];
+      if (cell.empty()) continue;
+      if (col.part == kWhole) {
+        const std::optional<std::complex<double>> z = complex_cell(cell);
+        if (!z) {
+          throw InputError(
+              where(name, n,
+                    fmt::format("shape entry '{}' of column '{}' is not a number (real, or complex "
+                                "as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
+                                cell, col.header)));
+        }
+        v(col.row) = *z;
+        given[static_cast<size_t>(col.row)] = 3;
+        continue;
+      }
+      const double x = number(c, "shape entry");
+      if (col.part == kRealPart)
+        v(col.row).real(x);
+      else
+        v(col.row).imag(x);
+      given[static_cast<size_t>(col.row)] |= static_cast<char>(col.part);
+    }
+    for (const TableColumn& col : columns) {
+      const char g = given[static_cast<size_t>(col.row)];
+      if (col.part != kWhole && g != 0 && g != 3) {
+        throw InputError(
+            where(name, n,
+                  fmt::format("sensor {}: its {} part is given and its {} part empty: give both or "
+                              "neither (neither: not measured)",
+                              sensors[static_cast<size_t>(col.row)].channel,
+                              g == kRealPart ? "real" : "imaginary",
+                              g == kRealPart ? "imaginary" : "real")));
+      }
+    }
+    // Parts given as 0 and 0 are an entry of 0, which reads as not measured (mac.h).
+    Eigen::VectorXd real = v.real();
+    if (v.imag().squaredNorm() > 0) {
+      const RealisedShape r = realise(v);
+      const std::string what = fmt::format(
+          "mode {}'s shape is complex: its modal phase collinearity MPC is {:.3f} (1 for a "
+          "real normal mode), and the imaginary part left out at the phase that makes it "
+          "most nearly real holds {:.1f} % of it",
+          static_cast<int>(mode), r.mpc, 100 * r.imaginary_share);
+      if (r.mpc < kMpcRefused) {
+        throw InputError(where(
+            name, n,
+            fmt::format("{}: a real normal-mode model cannot match a shape so complex (MPC "
+                        "below {}); check the export (real and imaginary parts, not magnitude "
+                        "and phase), or leave its shape cells empty to pair it by frequency "
+                        "alone, or leave the mode out",
+                        what, kMpcRefused)));
+      }
+      if (r.mpc < kMpcPoor) {
+        warnings.push_back(
+            where(name, n,
+                  fmt::format("{}: it is paired and fitted as that real part, which a real "
+                              "normal-mode model matches only in part (MPC below {}): its MAC "
+                              "reads that part alone",
+                              what, kMpcPoor)));
+      }
+      real = r.shape;
     }
     numbers.push_back(static_cast<int>(mode));
     freq.push_back(f);
-    shape.push_back(std::move(v));
+    shape.push_back(std::move(real));
   };
-  for_each_csv_row(path, "modes table", on_header, on_row);
+  for_each_csv_row(path, "modes table", on_header, on_row, /*detect_delimiter=*/true);
   if (freq.empty()) throw InputError(fmt::format("{}: no mode in the table", name));
   MeasuredModes out;
   const auto count = static_cast<Eigen::Index>(freq.size());
@@ -482,11 +667,11 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
   out.shapes = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(sensors.size()), count);
   for (Eigen::Index i = 0; i < count; ++i) {
     out.frequency_hz(i) = freq[static_cast<size_t>(i)];
-    for (size_t s = 0; s < sensors.size(); ++s)
-      out.shapes(static_cast<Eigen::Index>(s), i) = shape[static_cast<size_t>(i)][s];
+    out.shapes.col(i) = shape[static_cast<size_t>(i)].cast<std::complex<double>>();
     out.labels.push_back(fmt::format("mode {}", numbers[static_cast<size_t>(i)]));
     out.ids.push_back(std::to_string(numbers[static_cast<size_t>(i)]));
   }
+  out.warnings = std::move(warnings);
   if (modes) *modes = numbers;
   return out;
 }

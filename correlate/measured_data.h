@@ -118,11 +118,24 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
                                                  const std::vector<std::string>& channels);
 
+/// Below this MPC (mac.h) a complex shape of a modes table is realised with a warning: 0.9,
+/// the usual floor for a normal mode of a lightly damped structure (two equal entries 18 deg
+/// apart in phase).
+inline constexpr double kMpcPoor = 0.9;
+/// Below this MPC a complex shape of a modes table is refused: 0.5, two equal entries 45 deg
+/// apart in phase, the imaginary part left out holding 15 % of the shape or more.
+inline constexpr double kMpcRefused = 0.5;
+
 /// Measured linear modes from a plain table: header `mode,frequency_hz[,<channel>...]`, one
-/// row per mode, optional real shape entries per channel (every channel a sensor; empty cells
-/// and sensors without a column are 0). `modes` (if given) receives the mode numbers. A mode
-/// without any shape entry is paired by frequency alone (linear_update.h). InputError naming
-/// the file, line and cell.
+/// row per mode, optional shape entries per channel (every channel a sensor; empty cells and
+/// sensors without a column are 0), delimited by ',', ';' or tab (the header's most frequent).
+/// An entry is real or complex (`0.1+0.2i`, `0.1-0.2j`, `(0.1+0.2j)`, `(0.1,0.2)`), or a channel
+/// is given as two columns of its real and imaginary parts (`<channel>_re`, `<channel>_im`; also
+/// `_real`/`_imag`, any case, after '_', '.' or ' '). A complex shape is realised (mac.h
+/// realise(): the real part at the phase that maximises it): with MPC below kMpcRefused the
+/// table is refused naming the mode, below kMpcPoor the MeasuredModes' warnings name it and its
+/// MPC. `modes` (if given) receives the mode numbers. A mode without any shape entry is paired
+/// by frequency alone (linear_update.h). InputError naming the file, line and cell.
 MeasuredModes read_modes_table(const std::filesystem::path& path,
                                const std::vector<Sensor>& sensors, std::vector<int>* modes);
 

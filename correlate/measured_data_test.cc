@@ -3,6 +3,7 @@
 #include <complex>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <string>
 
 #include <fmt/format.h>
@@ -224,6 +225,87 @@ TEST(MeasuredData, ReadsAPlainModesTable) {
   EXPECT_NE(testing::input_error_of([&] {
               read_modes_table(d / "bad4.csv", sensors, nullptr);
             }).find("bad4.csv:2"),
+            std::string::npos);
+}
+
+// A test-modal tool's complex shapes: a real shape y times e^{i phi} written as a+bi, a-bj,
+// (a+bj) and (a,b) cells, as _re/_im column pairs and tab-separated comes back as y up to sign
+// (written with 17 digits: 1e-12 relative), MPC 1, no warning; (1, e^{i alpha}) has MPC
+// cos^2 alpha (mac.h): alpha = 26.57 deg gives 0.800, warned naming the mode, and 60 deg gives
+// 0.250, refused naming it.
+TEST(MeasuredData, ComplexShapeCellsAreRealisedAndTheirMpcJudged) {
+  const fs::path d = fresh("complex");
+  const std::vector<Sensor> sensors{{"s1", 1, 1.0}, {"s2", 2, 1.0}, {"s3", 3, 1.0}};
+  const Eigen::Vector3d y(0.4, -1.0, 0.25);
+  const double phi = 2.2;  // the largest entry, -1, turns positive: -y
+  const auto z = [&](int k) { return std::polar(1.0, phi) * y(k); };
+  const auto ij = [&](int k, char unit) {
+    return fmt::format("{:.17g}{:+.17g}{}", z(k).real(), z(k).imag(), unit);
+  };
+  const auto pair = [&](int k) {
+    return fmt::format("({:.17g},{:.17g})", z(k).real(), z(k).imag());
+  };
+  const auto expect_minus_y = [&](const MeasuredModes& m, Eigen::Index col) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(m.shapes(k, col).real(), -y(k), 1e-12) << k;
+      EXPECT_EQ(m.shapes(k, col).imag(), 0.0) << k;
+    }
+  };
+  write(d / "cells.csv",
+        fmt::format("mode,frequency_hz,s1,s2,s3\n1,50,{},{},\"{}\"\n2,80,({}),{},{}\n", ij(0, 'i'),
+                    ij(1, 'j'), pair(2), ij(0, 'j'), ij(1, 'I'), ij(2, 'i')));
+  const MeasuredModes cells = read_modes_table(d / "cells.csv", sensors, nullptr);
+  expect_minus_y(cells, 0);
+  expect_minus_y(cells, 1);
+  EXPECT_TRUE(cells.warnings.empty());
+  write(
+      d / "parts.tsv",
+      fmt::format("mode\tfrequency_hz\ts1_re\ts1_im\ts2 Real\ts2 Imag\ts3\n1\t50\t{:.17g}\t{:.17g}"
+                  "\t{:.17g}\t{:.17g}\t{}\n",
+                  z(0).real(), z(0).imag(), z(1).real(), z(1).imag(), pair(2)));
+  expect_minus_y(read_modes_table(d / "parts.tsv", sensors, nullptr), 0);
+  // MPC cos^2 alpha at two sensors, the third not measured (left out, still 0).
+  const auto two = [&](double alpha) {
+    const std::complex<double> w = std::polar(1.0, alpha);
+    return fmt::format("mode,frequency_hz,s1,s2\n3,50,1,{:.17g}{:+.17g}i\n", w.real(), w.imag());
+  };
+  write(d / "poor.csv", two(std::atan(0.5)));  // cos^2 = 0.8
+  const MeasuredModes poor = read_modes_table(d / "poor.csv", sensors, nullptr);
+  ASSERT_EQ(poor.warnings.size(), 1u);
+  EXPECT_NE(poor.warnings[0].find("poor.csv:2: mode 3's shape is complex: its modal phase "
+                                  "collinearity MPC is 0.800"),
+            std::string::npos)
+      << poor.warnings[0];
+  EXPECT_EQ(poor.shapes(2, 0), std::complex<double>(0.0));
+  EXPECT_NEAR(poor.shapes(0, 0).real(), poor.shapes(1, 0).real(), 1e-12);  // cos(alpha/2) (1, 1)
+  write(d / "bad.csv", two(std::numbers::pi / 3));                         // cos^2 = 0.25
+  EXPECT_NE(testing::input_error_of([&] { read_modes_table(d / "bad.csv", sensors, nullptr); })
+                .find("bad.csv:2: mode 3's shape is complex: its modal phase collinearity MPC is "
+                      "0.250"),
+            std::string::npos);
+  // Defects name the column or cell.
+  const auto error_of = [&](const std::string& file, const std::string& text) {
+    write(d / file, text);
+    return testing::input_error_of([&] { read_modes_table(d / file, sensors, nullptr); });
+  };
+  EXPECT_NE(error_of("lone.csv", "mode,frequency_hz,s1_re\n1,50,1\n")
+                .find("lone.csv:1: column 's1_re' has no imaginary part beside it (s1_im)"),
+            std::string::npos);
+  EXPECT_NE(error_of("half.csv", "mode,frequency_hz,s1_re,s1_im\n1,50,1,\n")
+                .find("half.csv:2: sensor s1: its real part is given and its imaginary part empty"),
+            std::string::npos);
+  EXPECT_NE(error_of("twice.csv", "mode,frequency_hz,s1,s1_im,s1_re\n1,50,1,1,1\n")
+                .find("twice.csv:1: column 's1_im': sensor channel s1 twice"),
+            std::string::npos);
+  EXPECT_NE(error_of("mag.csv", "mode,frequency_hz,s1_mag,s1_phase\n1,50,1,0\n")
+                .find("column 's1_mag': magnitude or phase columns are not read"),
+            std::string::npos);
+  EXPECT_NE(error_of("word.csv", "mode,frequency_hz,s1\n1,50,1+2k\n")
+                .find("word.csv:2: shape entry '1+2k' of column 's1' is not a number"),
+            std::string::npos);
+  EXPECT_NE(error_of("split.csv", "mode,frequency_hz,s1\n1,50,(1,2)\n")
+                .find("split.csv:2: 4 cells where the header has 3 (a complex cell written "
+                      "(re,im) splits at its comma"),
             std::string::npos);
 }
 
