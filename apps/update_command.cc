@@ -20,9 +20,9 @@
 #include "jointlab/apps/print.h"
 #include "jointlab/campaign/backbone_comparison.h"
 #include "jointlab/campaign/figures.h"
+#include "jointlab/campaign/iwan_fit.h"
 #include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/iwan_targets.h"
-#include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/campaign/update_figures.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_update.h"
@@ -158,43 +158,22 @@ struct IwanArgs : campaign::IwanInputArgs {
   correlate::IwanUpdateOptions options;
 };
 
-// Refuses a LO:HI range that is not inside the parameter's domain (model/iwan.h).
-void check_range(const char* option, const std::vector<double>& r, const char* parameter,
-                 const char* shown) {
-  if (r.size() != 2) return;
-  const model::ParameterDomain d = model::iwan_parameter_domain(parameter);
-  if (!(d.contains(r[0]) && d.contains(r[1]) && r[0] < r[1])) {
-    throw InputError(
-        fmt::format("{} {}:{}: need LO < HI with both {} {}", option, r[0], r[1], shown, d.text()));
-  }
+// The LO:HI options given (a default shown in --help is the default box's own).
+campaign::IwanRanges ranges_of(const IwanArgs& a) {
+  const auto range = [](const std::vector<double>& r) {
+    return r.size() == 2 ? campaign::IwanRange{{r[0], r[1]}} : std::nullopt;
+  };
+  return {range(a.fs_range), range(a.gamma_range), range(a.chi_range), range(a.beta_range)};
 }
 
 void check_iwan_args(const IwanArgs& a) {
-  check_range("--fs-range", a.fs_range, "Fs", "Fs");
-  check_range("--gamma-range", a.gamma_range, "Kt", "Kt/Ks");
-  check_range("--chi-range", a.chi_range, "chi", "chi");
-  check_range("--beta-range", a.beta_range, "beta", "beta");
-  if (a.beta_range.size() == 2 && !(a.beta_range[0] > 0)) {  // beta >= 0, but searched in ln beta
-    throw InputError(
-        fmt::format("--beta-range {}:{}: need 0 < LO < HI (beta is searched on a log scale)",
-                    a.beta_range[0], a.beta_range[1]));
-  }
+  ranges_of(a).check();
   if (a.set.find('.') != std::string::npos && !a.set.starts_with("iwan.")) {
     throw InputError(fmt::format(
         "--set {}: update-iwan updates an Iwan set (iwan.<name> or <name>); springs are "
         "updated by update-linear",
         a.set));
   }
-}
-
-// The search box: the given LO:HI ranges, else the default (the same as `run`'s).
-correlate::IwanBounds bounds_of(const IwanArgs& a, const correlate::IwanObjective& obj) {
-  correlate::IwanBounds b = correlate::default_iwan_bounds(obj.initial());
-  if (a.fs_range.size() == 2) b.Fs_min = a.fs_range[0], b.Fs_max = a.fs_range[1];
-  b.gamma_min = a.gamma_range[0], b.gamma_max = a.gamma_range[1];
-  b.chi_min = a.chi_range[0], b.chi_max = a.chi_range[1];
-  b.beta_min = a.beta_range[0], b.beta_max = a.beta_range[1];
-  return b;
 }
 
 // The fit and its files, whatever the measured data came from (the measured linear modes, when
@@ -217,30 +196,15 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
   };
   correlate::IwanObjective objective(m, a.set, in.sensors, in.targets, o);
   if (in.measured) objective.set_linear_modes(*in.measured, 0.6);  // every paired mode's error
-  o.bounds = bounds_of(a, objective);
-  if (const std::string e = o.error(); !e.empty()) {
-    throw InputError(fmt::format("update-iwan: {}", e));
-  }
-  // Frequencies no parameter set can reach: said with the numbers before any fit (before, the
-  // fit's every cost was clipped to a penalty and the message blamed the amplitudes).
-  if (const std::string e = correlate::unreachable_frequencies(objective, o); !e.empty()) {
-    throw InputError(fmt::format("update-iwan: {}: {}", data_name, e));
-  }
-  std::vector<correlate::ParetoPoint> front;
-  if (!a.pareto.empty()) front = correlate::pareto_front(objective, a.pareto, o);
   // The fit `run` makes (beta held first, freed when the data reach macroslip).
-  const correlate::IwanUpdateSummary summary = campaign::fit_iwan(objective, o, nullptr);
-  const model::IwanParameters best = summary.best;
-  if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint) {
-    throw InputError(fmt::format(
-        "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
-        "amplitudes of {}{}",
-        data_name,
-        o.fixed_gamma > 0
-            ? fmt::format(" with K_T held at --gamma {} x K_s = {:.6g} N/m", o.fixed_gamma,
-                          o.fixed_gamma * objective.reference_stiffness())
-            : std::string()));
+  const correlate::IwanUpdateSummary summary =
+      campaign::checked_fit_iwan(objective, o, ranges_of(a), "update-iwan", data_name, nullptr);
+  std::vector<correlate::ParetoPoint> front;
+  if (!a.pareto.empty()) {
+    o.bounds = ranges_of(a).bounds(objective.initial());
+    front = correlate::pareto_front(objective, a.pareto, o);
   }
+  const model::IwanParameters best = summary.best;
   make_out_dir(a.out);
   model::write_model_file(fs::path(a.out) / "model.toml",
                           objective.apply(best, summary.modal_ratio));

@@ -19,9 +19,9 @@
 #include "jointlab/campaign/backbone_comparison.h"
 #include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/campaign_run.h"
+#include "jointlab/campaign/iwan_fit.h"
 #include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/model_comparison.h"
-#include "jointlab/campaign/steps/iwan_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
 #include "jointlab/correlate/iwan_update.h"
@@ -428,16 +428,6 @@ py::dict run(const std::string& campaign_file, const std::string& out, bool forc
   return d;
 }
 
-// A LO:HI range inside a parameter's domain (model/iwan.h), as update-iwan checks it.
-void check_range(const char* option, const std::optional<std::pair<double, double>>& r,
-                 const char* parameter, const char* shown) {
-  if (!r) return;
-  const model::ParameterDomain d = model::iwan_parameter_domain(parameter);
-  if (!(d.contains(r->first) && d.contains(r->second) && r->first < r->second))
-    throw InputError(fmt::format("{} {}:{}: need LO < HI with both {} {}", option, r->first,
-                                 r->second, shown, d.text()));
-}
-
 // The measured side of update_iwan() and compare() as the command's options name it (absent:
 // the option not given).
 campaign::IwanInputArgs iwan_input_args(const std::vector<std::string>& modes,
@@ -460,7 +450,7 @@ campaign::IwanInputArgs iwan_input_args(const std::vector<std::string>& modes,
 
 // update-iwan (contract.md): backbone tables (data/backbone_table.h) or a `process` folder with
 // its sensors, read as the command reads them (campaign/iwan_inputs.h); the options and defaults
-// of the command; the fit `run` and the command make (campaign::fit_iwan).
+// of the command; the fit `run` and the command make (campaign::checked_fit_iwan).
 py::dict update_iwan(
     const std::string& model_path, const std::string& set, const std::vector<std::string>& modes,
     const std::vector<std::string>& backbones, const std::optional<std::string>& amplitude,
@@ -477,14 +467,8 @@ py::dict update_iwan(
       *amplitude != "velocity" && *amplitude != "acceleration")
     throw InputError(fmt::format(
         "--amplitude {}: expected modal, displacement, velocity or acceleration", *amplitude));
-  check_range("--fs-range", fs_range, "Fs", "Fs");
-  check_range("--gamma-range", gamma_range, "Kt", "Kt/Ks");
-  check_range("--chi-range", chi_range, "chi", "chi");
-  check_range("--beta-range", beta_range, "beta", "beta");
-  if (!(beta_range.first > 0))
-    throw InputError(
-        fmt::format("--beta-range {}:{}: need 0 < LO < HI (beta is searched on a log scale)",
-                    beta_range.first, beta_range.second));
+  const campaign::IwanRanges ranges{fs_range, gamma_range, chi_range, beta_range};
+  ranges.check();
   correlate::IwanUpdateSummary summary;
   campaign::IwanInputs in;
   std::vector<std::string> shape_warnings;
@@ -510,22 +494,8 @@ py::dict update_iwan(
     };
     correlate::IwanObjective objective(m, set, in.sensors, in.targets, o);
     if (in.measured) objective.set_linear_modes(*in.measured, 0.6);
-    correlate::IwanBounds b = correlate::default_iwan_bounds(objective.initial());
-    if (fs_range) b.Fs_min = fs_range->first, b.Fs_max = fs_range->second;
-    b.gamma_min = gamma_range.first, b.gamma_max = gamma_range.second;
-    b.chi_min = chi_range.first, b.chi_max = chi_range.second;
-    b.beta_min = beta_range.first, b.beta_max = beta_range.second;
-    o.bounds = b;
-    if (const std::string e = o.error(); !e.empty())
-      throw InputError(fmt::format("update-iwan: {}", e));
-    if (const std::string e = correlate::unreachable_frequencies(objective, o); !e.empty())
-      throw InputError(fmt::format("update-iwan: {}: {}", in.data_name, e));
-    summary = campaign::fit_iwan(objective, o, nullptr);
-    if (summary.status == correlate::IwanUpdateStatus::kNoValidPoint)
-      throw InputError(fmt::format(
-          "update-iwan: no parameter set in the bounds gives a QSMA curve over the measured "
-          "amplitudes of {}",
-          in.data_name));
+    summary =
+        campaign::checked_fit_iwan(objective, o, ranges, "update-iwan", in.data_name, nullptr);
     const model::Model updated = objective.apply(summary.best, summary.modal_ratio);
     shape_warnings = campaign::band_shape_warnings(updated, in);
     if (out) model::write_model_file(std::filesystem::path(*out), updated);

@@ -188,46 +188,6 @@ ModeBackbones stepped_sine_backbones(const Campaign& c, size_t k, int sensor) {
   return mb;
 }
 
-IwanUpdateSummary fit_iwan(const IwanObjective& objective, const IwanUpdateOptions& io,
-                           const std::function<void(const std::string&)>& say) {
-  IwanUpdateSummary best;
-  IwanUpdateOptions held = io;
-  if (!held.fixed_beta) held.fixed_beta = objective.initial().beta;
-  correlate::update_iwan(objective, held, &best);
-  // Beta held by this fit, not as asked: the report and parameters.csv say so.
-  if (!io.fixed_beta && best.microslip_only())
-    best.set_beta_held_by_fit(correlate::IwanBetaHold::kMicroslip);
-  if (!io.fixed_beta && !best.microslip_only()) {
-    if (say) {
-      say("update: " + best.report() +
-          "update: the data reach macroslip; Iwan identification with beta free");
-    }
-    IwanUpdateSummary full;
-    correlate::update_iwan(objective, io, &full);
-    // One history over both fits, whichever is kept: the free fit's evaluations numbered on
-    // from the held fit's, the best the best of both so far; the evaluations of both counted.
-    std::vector<correlate::IwanHistoryEntry> history = best.history;
-    double so_far = history.empty() ? INFINITY : history.back().best;
-    for (correlate::IwanHistoryEntry h : full.history) {
-      h.evaluation += best.evaluations;
-      so_far = std::min(so_far, h.cost);
-      h.best = so_far;
-      history.push_back(h);
-    }
-    const int evaluations = best.evaluations + full.evaluations;
-    const int polish = best.polish_evaluations + full.polish_evaluations;
-    if (full.final_cost < best.final_cost) {
-      best = full;
-    } else {
-      best.set_beta_held_by_fit(correlate::IwanBetaHold::kFreeFitNoBetter, full.final_cost);
-    }
-    best.history = std::move(history);
-    best.evaluations = evaluations;
-    best.polish_evaluations = polish;
-  }
-  return best;
-}
-
 IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors, const MeasuredSide& m,
                           const std::function<void(const std::string&)>& progress) {
@@ -252,14 +212,6 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   "left out where other modes carry over {:g} % of the joint slip)",
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
                   100 * to.max_slip_share));
-  io.bounds = correlate::default_iwan_bounds(objective.initial());
-  // Frequencies no parameter set can reach are said with the numbers, as update-iwan says
-  // them, rather than fitted to a best that fits nothing.
-  if (const std::string e = correlate::unreachable_frequencies(objective, io); !e.empty()) {
-    step.refused = true;
-    step.note = "update.iwan: " + e + "; Iwan updating skipped";
-    return step;
-  }
   // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
   if (progress) {
     io.progress = [&](int evaluations, double best) {
@@ -267,7 +219,16 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
         say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
     };
   }
-  step.summary = fit_iwan(objective, io, say);
+  // update-iwan's own fit, in its default box: frequencies no parameter set can reach, and a
+  // box where no parameter set gives a curve over the amplitudes, are said with the numbers as
+  // update-iwan says them, rather than fitted to (or returned as) a best that fits nothing.
+  try {
+    step.summary = checked_fit_iwan(objective, io, IwanRanges{}, "update.iwan", "", say);
+  } catch (const InputError& e) {
+    step.refused = true;
+    step.note = std::string(e.what()) + "; Iwan updating skipped";
+    return step;
+  }
   step.beta_held = step.summary.held[3];  // as asked, in microslip, or the free fit no better
   step.curves = static_cast<int>(targets.curves());
   step.updated = objective.apply(step.summary.best, step.summary.modal_ratio);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/iwan_fit.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/campaign/steps/linear_step.h"
 #include "jointlab/campaign/steps/measured_side.h"
@@ -35,15 +36,6 @@ std::string iwan_set(const Campaign& campaign, const model::Model& model);
 /// stepped-sine files, one more entry of the same model mode with their backbones.
 std::vector<ModeBackbones> campaign_backbones(const Campaign& campaign,
                                               const MeasuredSide& measured);
-
-/// The Iwan fit `run` and `update-iwan` both make: beta held first (at options.fixed_beta, else
-/// at the objective's start), then, when that fit puts the top of the data past phi_max and
-/// beta is not held by the options, freed for a second fit; the better of the two, with the
-/// evaluations and the history of both (the second's evaluations numbered on from the first's).
-/// `say` (may be empty) hears the first fit's report before the second.
-correlate::IwanUpdateSummary fit_iwan(const correlate::IwanObjective& objective,
-                                      const correlate::IwanUpdateOptions& options,
-                                      const std::function<void(const std::string&)>& say);
 
 /// The stepped-sine backbones of campaign mode k (one curve per file, of kind stepped sine, the
 /// amplitude in the campaign's quantity), measured at sensor index `sensor`; InputError naming
