@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <glog/logging.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -669,6 +670,10 @@ py::dict update_iwan_call(const std::string& model, const std::string& set, cons
 
 PYBIND11_MODULE(jointlab, m) {
   using namespace jointlab::python;
+  // Ceres logs through glog; its lines ("Logging before InitGoogleLogging", a rejected trial
+  // point) reach no user of the program (apps/main.cc) and, as the docs promise, none of the
+  // module: nothing is printed unless a progress callable is given.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   m.doc() = R"(jointlab: amplitude-dependent frequency and damping of jointed structures.
 
 The same library as the `jointlab` program: ring-down processing, linear modes and
