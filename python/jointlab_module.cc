@@ -62,6 +62,18 @@ py::dict to_dict(data::Table table) {
   return out;
 }
 
+// The model file `path` (its matrices beside it), its folder created if missing as the commands
+// create their --out folders (a missing one was refused after the fit, naming a temporary file).
+void write_model(const std::string& path, const model::Model& m) {
+  const std::filesystem::path file(path);
+  std::error_code ec;
+  if (!file.parent_path().empty()) std::filesystem::create_directories(file.parent_path(), ec);
+  if (ec)
+    throw InputError(
+        fmt::format("{}: cannot create the output directory", file.parent_path().string()));
+  model::write_model_file(file, m);
+}
+
 // "acceleration", "velocity" or "displacement", as --quantity and --amplitude take them.
 Quantity motion(const std::string& option, const std::string& text) {
   if (text == "acceleration") return Quantity::kAcceleration;
@@ -322,7 +334,7 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
         !why.empty())
       throw InputError("update-linear: " + why);
     updated = correlate::StiffnessSets(m, sets).apply(theta);
-    if (out) model::write_model_file(std::filesystem::path(*out), updated);
+    if (out) write_model(*out, updated);
   }
   py::dict parameters;
   for (const correlate::ParameterReport& p : s.parameters) {
@@ -461,7 +473,12 @@ py::dict update_iwan(
     const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
     const std::optional<std::string>& out, const py::object& progress,
     const std::optional<std::string>& measured, const std::optional<std::string>& sensors,
-    const std::vector<std::string>& channels) {
+    const std::vector<std::string>& channels, const correlate::IwanUpdateOptions& asked) {
+  if (set.find('.') != std::string::npos && !set.starts_with("iwan."))
+    throw InputError(
+        fmt::format("--set {}: update-iwan updates an Iwan set (iwan.<name> or "
+                    "<name>); springs are updated by update-linear",
+                    set));
   if (linear_damping != "hold" && linear_damping != "fit")
     throw InputError(fmt::format("--linear-damping {}: expected hold or fit", linear_damping));
   if (amplitude && *amplitude != "modal" && *amplitude != "displacement" &&
@@ -483,7 +500,7 @@ py::dict update_iwan(
     if (!in.slip_screen.empty())
       report(progress,
              "slip screen (points where other modes slip the joints):\n" + in.slip_screen);
-    correlate::IwanUpdateOptions o;
+    correlate::IwanUpdateOptions o = asked;  // gamma, beta, linear_damping_max, threads
     o.amplitude = in.amplitude;
     o.fit_linear_damping = linear_damping == "fit";
     o.max_evaluations = evaluations;
@@ -499,7 +516,7 @@ py::dict update_iwan(
         campaign::checked_fit_iwan(objective, o, ranges, "update-iwan", in.data_name, nullptr);
     const model::Model updated = objective.apply(summary.best, summary.modal_ratio);
     shape_warnings = campaign::band_shape_warnings(updated, in);
-    if (out) model::write_model_file(std::filesystem::path(*out), updated);
+    if (out) write_model(*out, updated);
   }
   py::dict parameters;
   const char* names[] = {"Fs", "Kt", "chi", "beta"};
@@ -558,6 +575,13 @@ py::dict update_iwan(
   result["sigma_degrees_of_freedom"] =
       summary.effective_points > 0 ? py::object(py::float_(summary.sigma_degrees_of_freedom))
                                    : py::object(py::none());
+  // The noise note's other evidence: the largest share of the chi-square one third of the points
+  // (by amplitude) holds, about 1/3 for noise (None: unknown); and whether the reduced
+  // chi-square lies significantly above 1 (the report's "does not describe the data" WARNING).
+  result["amplitude_share"] = summary.amplitude_share > 0
+                                  ? py::object(py::float_(summary.amplitude_share))
+                                  : py::object(py::none());
+  result["misfit"] = summary.misfit();
   // The command's report: the fit's, what the amplitudes were read as, the bands' shapes.
   std::string text = summary.report();
   if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
@@ -644,7 +668,28 @@ py::dict update_iwan_call(const std::string& model, const std::string& set, cons
                           unsigned seed, const std::optional<std::string>& out,
                           const py::object& progress, const std::optional<std::string>& measured,
                           const std::optional<std::string>& sensors,
-                          const std::vector<std::string>& channels) {
+                          const std::vector<std::string>& channels, std::optional<double> gamma,
+                          std::optional<double> beta, double linear_damping_max, int threads) {
+  // --gamma, --beta, --linear-damping-max and --threads, checked as the command checks them.
+  correlate::IwanUpdateOptions asked;
+  if (gamma) {
+    if (!(std::isfinite(*gamma) && *gamma > 0))
+      throw InputError(fmt::format("--gamma {}: must be a finite number > 0", *gamma));
+    asked.fixed_gamma = *gamma;
+  }
+  if (beta) {
+    if (!(std::isfinite(*beta) && *beta >= 0))
+      throw InputError(
+          fmt::format("--beta {}: must be a finite number >= 0 (0: no macroslip weight)", *beta));
+    asked.fixed_beta = *beta;
+  }
+  if (!(linear_damping_max >= 1e-9 && linear_damping_max <= 0.999))
+    throw InputError(
+        fmt::format("--linear-damping-max {}: must be in [1e-09, 0.999]", linear_damping_max));
+  asked.linear_damping_max = linear_damping_max;
+  if (threads < 0 || threads > 1024)
+    throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
+  asked.threads = threads;
   std::vector<std::string> modes;
   const auto one = [&](const py::handle& h) {
     if (py::isinstance<py::str>(h))
@@ -662,7 +707,7 @@ py::dict update_iwan_call(const std::string& model, const std::string& set, cons
   if (modes.empty()) throw InputError("mode: give at least one mode");
   return update_iwan(model, set, modes, backbones, amplitude, dof, linear_damping, fs_range,
                      gamma_range, chi_range, beta_range, evaluations, seed, out, progress, measured,
-                     sensors, channels);
+                     sensors, channels, asked);
 }
 
 }  // namespace
@@ -795,6 +840,8 @@ phase raise InputError saying which.
         py::arg("evaluations") = 1500, py::arg("seed") = 1u, py::arg("out") = py::none(),
         py::arg("progress") = py::none(), py::arg("measured") = py::none(),
         py::arg("sensors") = py::none(), py::arg("channels") = std::vector<std::string>{},
+        py::arg("gamma") = py::none(), py::arg("beta") = py::none(),
+        py::arg("linear_damping_max") = 0.05, py::arg("threads") = 0,
         R"(Updates one Iwan set to measured backbones (`jointlab update-iwan`): backbone tables, or
 a `process` output folder with its sensors file.
 
@@ -811,8 +858,12 @@ measured, sensors, channels
                 (channel,dof) and, optionally, the channels to use (--measured, --sensors,
                 --channel); the folder records its own amplitude quantity
 linear_damping  'hold' (the model's [damping] modal_ratio) or 'fit' (identified with the joint)
-fs_range, gamma_range, chi_range, beta_range, evaluations, seed: as the command's options
-out             write the updated model file here, or None
+linear_damping_max
+                upper bound of a fitted modal_ratio (default 0.05, --linear-damping-max)
+gamma, beta     hold Kt / Ks, or beta (0: no macroslip weight), at this value (--gamma, --beta)
+fs_range, gamma_range, chi_range, beta_range, evaluations, seed, threads: as the command's
+                options (threads: 0 every core; the result does not depend on it)
+out             write the updated model file here (its folder created), or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
 None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
@@ -821,11 +872,13 @@ parameters.csv's); modal_ratio -> initial, final, std, fitted, note), 'cost', 'i
 stopped short of a minimum and no sigma is stated), 'no_slip' (True where, the structure's own
 damping fitted, a constant backbone fits as well: Fs, chi and beta are not identified),
 'warnings' (parameters at a bound; a band whose shape does not look like its mode),
-'reduced_chi2', 'effective_points' (the residuals' effective number of independent points;
-None where unknown), 'noise_correlation'
-(their AR(1) coefficient, corrected for what the fit absorbs), 'sigma_degrees_of_freedom' (the
-sigmas' Student's t: effective points less the parameters fitted; 2 or fewer state no sigma),
-'report'.
+'reduced_chi2', 'misfit' (True: the reduced chi-square lies significantly above 1, the report's
+WARNING that the model does not describe the data within their stated noise),
+'effective_points' (the residuals' effective number of independent points; None where unknown),
+'noise_correlation' (their AR(1) coefficient, corrected for what the fit absorbs),
+'amplitude_share' (the largest share of the chi-square one third of the points, by amplitude,
+holds: about 1/3 for noise; None where unknown), 'sigma_degrees_of_freedom' (the sigmas'
+Student's t: effective points less the parameters fitted; 2 or fewer state no sigma), 'report'.
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]

@@ -198,10 +198,15 @@ def test_update_linear_equals_the_command_line(tmp_path):
     with open(tmp_path / "cli" / "parameters.csv", newline="") as f:
         cli = {row["name"]: row for row in csv.DictReader(f)}
     lines = []
+    # `out` in a folder not yet made: made, as the command makes its --out (it was refused after
+    # the fit, naming a temporary file).
     result = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
-                                    modes_table=str(table), progress=lines.append)
+                                    modes_table=str(table), progress=lines.append,
+                                    out=str(tmp_path / "py" / "new" / "model.toml"))
     p = result["parameters"]["spring.kj"]
     assert_close(p["final"], float(cli["spring.kj"]["final"]))
+    assert (tmp_path / "py" / "new" / "model.toml").read_text() == \
+        (tmp_path / "cli" / "model.toml").read_text()
     assert abs(p["final"] / truth - 1) < 1e-6  # noise-free data: the truth
     assert result["converged"]
     assert [m["model_mode"] for m in result["modes"]] == [1, 2]
@@ -511,3 +516,40 @@ def test_update_iwan_equals_the_command_line(tmp_path, capfd):
     (d / "neg.csv").write_text("amplitude,frequency_hz,damping_ratio\n1e-4,93.0,-1e-5\n")
     with pytest.raises(jointlab.InputError, match="neg.csv:2"):
         jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "neg.csv")])
+
+
+def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
+    # The one-mode model's own QSMA table with gamma and beta held (--gamma, --beta): the call
+    # ends where the command does (10 digits, as parameters.csv), the held ones at their values;
+    # the noise note's evidence (the largest third's share of the chi-square, at least 1/3 by
+    # its definition) and the misfit flag are returned; the command's refusals are its own.
+    d = tmp_path
+    one_mode_iwan(d, points=40)
+    r = run("update-iwan", d / "start.toml", "--set", "j", "--mode", "1", "--backbone",
+            d / "bb.csv", "--evaluations", "200", "--gamma", "1.1", "--beta", "0.5",
+            "--linear-damping", "fit", "--linear-damping-max", "0.01", "--out", d / "cli")
+    assert r.returncode == 0, r.stderr
+    with open(d / "cli" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    result = jointlab.update_iwan(str(d / "start.toml"), "j", 1, [str(d / "bb.csv")],
+                                  evaluations=200, gamma=1.1, beta=0.5, linear_damping="fit",
+                                  linear_damping_max=0.01, threads=1,
+                                  out=str(d / "py" / "new" / "model.toml"))
+    assert result["report"] == r.stdout
+    for name in ("Fs", "Kt", "chi", "beta"):
+        assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+        assert result["parameters"][name]["held"] == (cli[name]["held"] == "1")
+    assert result["parameters"]["beta"]["final"] == 0.5 and result["parameters"]["Kt"]["held"]
+    assert_close(result["parameters"]["modal_ratio"]["final"],
+                 float(cli["modal_ratio"]["final"]))
+    assert (d / "py" / "new" / "model.toml").read_text() == (d / "cli" / "model.toml").read_text()
+    assert 1 / 3 <= result["amplitude_share"] <= 1
+    assert result["misfit"] == ("WARNING the model does not describe" in result["report"])
+    for kwargs, message in (({"gamma": 0.0}, "--gamma 0: must be a finite number > 0"),
+                            ({"beta": -1.0}, "--beta -1: must be a finite number >= 0"),
+                            ({"linear_damping_max": 1.5}, "--linear-damping-max 1.5: must be in"),
+                            ({"threads": -1}, "--threads -1: must be in")):
+        with pytest.raises(jointlab.InputError, match=message):
+            jointlab.update_iwan(str(d / "start.toml"), "j", 1, [str(d / "bb.csv")], **kwargs)
+    with pytest.raises(jointlab.InputError, match="--set spring.k: update-iwan updates an Iwan"):
+        jointlab.update_iwan(str(d / "start.toml"), "spring.k", 1, [str(d / "bb.csv")])
