@@ -347,6 +347,7 @@ enum class IwanSigmaReason {
   kNotConverged,          ///< the fit did not converge (kBudget): no sigma
   kGivenBeta,     ///< F_S of microslip data with beta held by the fit: F_S at that beta, no result
   kTooFewPoints,  ///< too few effective independent points (sigma_degrees_of_freedom <= 2)
+  kAtKink,        ///< fixed only by points at a kink (an element's phi_max), from one side
   kUnknown        ///< the covariance could not be formed at the result
 };
 
@@ -453,6 +454,10 @@ struct IwanUpdateSummary {
   /// Student's t degrees of freedom of the sigmas: effective_points less the parameters fitted;
   /// 2 or fewer state no sigma.
   double sigma_degrees_of_freedom = 0;
+  /// Per parameter (F_S, K_T, chi, beta): true where only the slopes of residuals at a kink of
+  /// the model (a point whose secants two sigmas each way differ: an element's phi_max between)
+  /// fix it; a slope there holds on one side only, so no sigma is stated.
+  std::array<bool, 4> fixed_at_kink{};
   double reference_stiffness = 0;  ///< K_s: gamma = K_T / K_s [N/m]
   size_t residuals = 0;            ///< number of residuals (2 per measured point)
   /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)
