@@ -3,9 +3,12 @@
 // line's one-line messages as jointlab.InputError (a ValueError). Argument conversion only: every
 // number comes from the library the program uses (style.md 13).
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <complex>
+#include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -282,8 +285,28 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
                        const std::optional<std::string>& minimize, double tolerance,
                        double frequency_window, double mac_threshold, double frequency_std,
                        const std::vector<std::string>& hold, const std::optional<std::string>& out,
-                       const py::object& progress, bool trust_signs) {
+                       const py::object& progress, bool trust_signs,
+                       const std::map<std::string, std::pair<double, double>>& bounds,
+                       const std::optional<std::pair<double, double>>& bound_factors,
+                       double alias_mac) {
+  if (sets.empty()) throw InputError("update-linear: give at least one set to update (--set)");
   correlate::LinearUpdateOptions o;
+  o.alias_mac = alias_mac;
+  // --bound NAME=LO:HI and --bound-factors LO:HI, checked as the command checks them.
+  for (const auto& [name, range] : bounds) {
+    const auto [lo, hi] = range;
+    if (!(std::isfinite(lo) && std::isfinite(hi) && lo > 0 && lo < hi))
+      throw InputError(
+          fmt::format("--bound {}={}:{}: need 0 < LO < HI (stiffness values)", name, lo, hi));
+    o.bounds.push_back({name, lo, hi});
+  }
+  if (bound_factors) {
+    const auto [lo, hi] = *bound_factors;
+    if (!(lo > 0 && lo < 1 && hi > 1 && std::isfinite(hi)))
+      throw InputError(fmt::format("--bound-factors {}:{}: need 0 < LO < 1 < HI", lo, hi));
+    o.lower_factor = lo;
+    o.upper_factor = hi;
+  }
   o.trust_signs = trust_signs;
   o.frequency_window = frequency_window;
   o.mac_threshold = mac_threshold;
@@ -297,16 +320,22 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
   } else if (rule != "least-squares") {
     throw InputError(fmt::format("--rule {}: expected least-squares or smallest", rule));
   }
+  // --hold NAME[=VALUE], read as the command reads it: the whole VALUE a finite stiffness > 0
+  // ("1e7xyz" was held at 1e7).
   for (const std::string& h : hold) {
     const size_t eq = h.rfind('=');
     correlate::ParameterHold ph{h.substr(0, eq), 0};
     if (eq != std::string::npos) {
-      try {
-        ph.value = std::stod(h.substr(eq + 1));
-      } catch (const std::exception&) {
-        throw InputError(fmt::format("--hold {}: expected NAME[=VALUE]", h));
-      }
+      const std::string text = h.substr(eq + 1);
+      char* end = nullptr;
+      ph.value = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || std::isspace(text.front()) != 0 ||
+          !std::isfinite(ph.value))
+        throw InputError(fmt::format("--hold {}: {} is not a finite number", h, text));
+      if (!(ph.value > 0))
+        throw InputError(fmt::format("--hold {}: the value must be a stiffness > 0", h));
     }
+    if (ph.name.empty()) throw InputError(fmt::format("--hold {}: expected NAME[=VALUE]", h));
     o.holds.push_back(ph);
   }
   if (const std::string e = o.error(); !e.empty())
@@ -803,6 +832,8 @@ written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy arra
       py::arg("tolerance") = 0.0, py::arg("frequency_window") = 0.5, py::arg("mac_threshold") = 0.6,
       py::arg("frequency_std") = 1e-3, py::arg("hold") = std::vector<std::string>{},
       py::arg("out") = py::none(), py::arg("progress") = py::none(), py::arg("trust_signs") = false,
+      py::arg("bounds") = std::map<std::string, std::pair<double, double>>{},
+      py::arg("bound_factors") = py::none(), py::arg("alias_mac") = 0.9,
       R"(Updates named joint stiffness sets to measured linear frequencies (`jointlab update-linear`).
 
 model          model file (TOML)
@@ -810,7 +841,10 @@ sets           element names to update, e.g. ["iwan.rivet", "spring.rz"]
 sensors        sensors file (channel,dof[,sign])
 measured       a `jointlab process` output folder, or modes_table: mode,frequency_hz[,<channel>...]
 rule           'least-squares' (default) or 'smallest' (with minimize=NAME, tolerance default 0.01)
-frequency_window, mac_threshold, frequency_std, hold=["NAME[=VALUE]"]: as the command's options
+frequency_window, mac_threshold, frequency_std, hold=["NAME[=VALUE]"], alias_mac: as the
+               command's options
+bounds         {"NAME": (lo, hi)}: absolute stiffness bounds of sets (--bound NAME=LO:HI)
+bound_factors  (lo, hi): bounds of every other set as factors of its start (default 1e-3, 1e3)
 trust_signs    fit with the sensors file's signs even when one channel reads the model reversed
 out            write the updated model file here (its matrices beside it), or None
 

@@ -217,6 +217,30 @@ def test_update_linear_equals_the_command_line(tmp_path):
     result = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
                                     modes_table=str(numbered))
     assert [m["measured"] for m in result["modes"]] == [3, 5]
+    # --bound and --alias-mac as bounds= and alias_mac=: the truth 4e4 N/m lies below the bound,
+    # so both stop at it (1e5), the same to 10 digits.
+    r = run("update-linear", model, "--modes-table", table, "--sensors", tmp_path / "sensors.csv",
+            "--set", "spring.kj", "--bound", "spring.kj=1e5:2e5", "--alias-mac", "0.95",
+            "--out", tmp_path / "cli_bound")
+    assert r.returncode == 0, r.stderr
+    with open(tmp_path / "cli_bound" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    bounded = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                                     modes_table=str(table), bounds={"spring.kj": (1e5, 2e5)},
+                                     alias_mac=0.95)
+    assert_close(bounded["parameters"]["spring.kj"]["final"], float(cli["spring.kj"]["final"]))
+    assert bounded["parameters"]["spring.kj"]["at_bound"] == -1
+    assert bounded["report"] == r.stdout
+    # The command's refusals of its options: a value not read whole, no set.
+    for kwargs, message in (({"hold": ["spring.kj=1e5xyz"]}, "1e5xyz is not a finite number"),
+                            ({"bounds": {"spring.kj": (2e5, 1e5)}}, "need 0 < LO < HI"),
+                            ({"bound_factors": (0.5, 0.9)}, "need 0 < LO < 1 < HI")):
+        with pytest.raises(jointlab.InputError, match=message):
+            jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                                   modes_table=str(table), **kwargs)
+    with pytest.raises(jointlab.InputError, match="give at least one set"):
+        jointlab.update_linear(str(model), [], str(tmp_path / "sensors.csv"),
+                               modes_table=str(table))
     # A shape that is zero at every sensor is refused as by the command.
     table.write_text("mode,frequency_hz,s0,s1\n1,50.0,0,0\n2,80.0,1,1\n")
     with pytest.raises(jointlab.InputError, match="zero at every sensor"):
