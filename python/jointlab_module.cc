@@ -8,9 +8,12 @@
 #include <complex>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
+#include <regex>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -32,6 +35,8 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
+#include "jointlab/data/names.h"
+#include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/data/table_writer.h"
 #include "jointlab/modal/process.h"
@@ -101,17 +106,49 @@ struct Backbone {
   int band = 0;                            // 1-based band
   double linear_frequency_hz = 0;          // natural frequency at zero amplitude [Hz]
   double linear_damping_ratio = 0;         // damping ratio at zero amplitude
+  double linear_frequency_std_hz = 0;      // its expanded uncertainty (k sigma) [Hz]
+  double linear_damping_std = 0;           // its expanded uncertainty (k sigma)
   std::complex<double> complex_amplitude;  // operating-shape entry [m]
   std::string report;                      // the summary paragraph of the band
 };
+
+// Names of the files `jointlab process` writes: summary.json and "<stem>.<channel>.band<k>.csv"
+// (apps/process_command.cc), replaced as a set in a folder an older run wrote.
+bool is_process_output(const std::string& name) {
+  static const std::regex backbone(R"(.*\.band[0-9]+\.csv)");
+  return name == "summary.json" || std::regex_match(name, backbone);
+}
 
 py::list process(const std::vector<std::string>& files,
                  const std::optional<std::vector<std::pair<double, double>>>& bands, int modes,
                  const std::optional<std::vector<std::string>>& channels,
                  const std::optional<std::string>& quantity, const std::string& amplitude,
-                 const py::object& progress, unsigned threads) {
+                 const py::object& progress, unsigned threads, const std::string& method,
+                 double snr_min, double max_damping_std, double coverage_factor, double min_share,
+                 const std::optional<std::string>& out) {
   modal::ProcessOptions opt;
   opt.threads = threads;
+  if (threads > 1024)
+    throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
+  if (bands && modes != 0)
+    throw InputError("process: give bands or modes=N, not both (--band excludes --modes)");
+  // --method, --snr-min, --max-damping-std, --coverage-factor and --min-share, in the command's
+  // ranges.
+  if (method != "hilbert" && method != "pff")
+    throw InputError(fmt::format("--method {}: expected hilbert or pff", method));
+  opt.ringdown.method = method == "pff" ? modal::Method::kPeaks : modal::Method::kHilbert;
+  for (const auto& [name, value, lo, hi] :
+       {std::tuple{"--snr-min", snr_min, 1.0, 1e6},
+        std::tuple{"--max-damping-std", max_damping_std, 1e-6, 10.0},
+        std::tuple{"--coverage-factor", coverage_factor, 1.0, 10.0},
+        std::tuple{"--min-share", min_share, 0.0, 0.99}}) {
+    if (!(value >= lo && value <= hi))
+      throw InputError(fmt::format("{} {}: must be in [{:g}, {:g}]", name, value, lo, hi));
+  }
+  opt.ringdown.snr_min = snr_min;
+  opt.ringdown.max_damping_rel_std = max_damping_std;
+  opt.ringdown.coverage_factor = coverage_factor;
+  opt.min_share = min_share;
   if (bands) {
     for (const auto& [lo, hi] : *bands) {
       if (!(std::isfinite(lo) && std::isfinite(hi) && lo > 0 && hi > lo))
@@ -125,29 +162,56 @@ py::list process(const std::vector<std::string>& files,
   opt.ringdown.amplitude = motion("amplitude", amplitude);
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
   if (files.empty()) throw InputError("process: no file given");
+  if (out) {
+    // Output names carry the stem (data::file_name_part): two files sharing it would collide.
+    for (size_t i = 0; i < files.size(); ++i) {
+      for (size_t k = 0; k < i; ++k) {
+        const std::string stem = std::filesystem::path(files[i]).stem().string();
+        if (data::file_name_part(stem) ==
+            data::file_name_part(std::filesystem::path(files[k]).stem().string()))
+          throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
+                                       files[k], files[i], stem));
+      }
+    }
+  }
   std::vector<modal::RecordResult> results;
   {
     py::gil_scoped_release release;
+    // `out`: the folder `jointlab process --out` writes (the backbone CSVs and summary.json that
+    // update_linear's and update_iwan's `measured` read), replacing a previous run's as a set.
+    std::optional<data::OutputStage> stage;
+    if (out) {
+      const bool old = std::filesystem::exists(std::filesystem::path(*out) / "summary.json");
+      stage.emplace(*out, "process",
+                    old ? std::function<bool(const std::string&)>(is_process_output)
+                        : std::function<bool(const std::string&)>{});
+    }
     signal::FftCache cache;
     for (const std::string& f : files) {
       report(progress, fmt::format("process: {}", f));
       const data::Record rec = data::read_record(f);
       results.push_back(modal::process_record(rec, opt, cache));
+      if (stage) modal::write_backbones(stage->path(), results.back(), opt.ringdown);
+    }
+    if (stage) {
+      modal::write_summary(stage->path(), results, opt);
+      stage->commit();
     }
   }
-  py::list out;
+  py::list backbones;
   for (const modal::RecordResult& r : results) {
     for (const modal::ChannelBand& c : r.results) {
       if (c.ringdown.summary.status != modal::RingdownStatus::kOk) continue;
       const modal::RingdownSummary& s = c.ringdown.summary;
       py::object b = py::cast(Backbone{r.source, c.channel, c.band_index, s.linear_frequency_hz,
-                                       s.linear_damping, c.complex_amplitude, s.report()});
+                                       s.linear_damping, s.linear_frequency_std_hz,
+                                       s.linear_damping_std, c.complex_amplitude, s.report()});
       py::dict columns = to_dict(modal::backbone_table(c.ringdown.backbone, opt.ringdown));
       for (auto item : columns) b.attr(item.first) = item.second;
-      out.append(b);
+      backbones.append(b);
     }
   }
-  if (out.empty()) {
+  if (backbones.empty()) {
     std::string why;
     for (const modal::RecordResult& r : results)
       for (size_t k = 0; k < r.bands.size() && why.empty(); ++k)
@@ -173,7 +237,7 @@ py::list process(const std::vector<std::string>& files,
       if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
     }
   }
-  return out;
+  return backbones;
 }
 
 py::dict read_record(const std::string& path) {
@@ -780,6 +844,8 @@ callable is given.
       .def_readonly("band", &Backbone::band)
       .def_readonly("linear_frequency_hz", &Backbone::linear_frequency_hz)
       .def_readonly("linear_damping_ratio", &Backbone::linear_damping_ratio)
+      .def_readonly("linear_frequency_std_hz", &Backbone::linear_frequency_std_hz)
+      .def_readonly("linear_damping_std", &Backbone::linear_damping_std)
       .def_readonly("complex_amplitude", &Backbone::complex_amplitude)
       .def_readonly("report", &Backbone::report)
       .def("__repr__", [](const Backbone& b) {
@@ -790,6 +856,12 @@ callable is given.
   m.def("process", &process, py::arg("files"), py::arg("bands") = py::none(), py::arg("modes") = 0,
         py::arg("channels") = py::none(), py::arg("quantity") = py::none(),
         py::arg("amplitude") = "velocity", py::arg("progress") = py::none(), py::arg("threads") = 0,
+        py::arg("method") = "hilbert",
+        py::arg("snr_min") = jointlab::modal::RingdownOptions{}.snr_min,
+        py::arg("max_damping_std") = jointlab::modal::RingdownOptions{}.max_damping_rel_std,
+        py::arg("coverage_factor") = jointlab::modal::RingdownOptions{}.coverage_factor,
+        py::arg("min_share") = jointlab::modal::ProcessOptions{}.min_share,
+        py::arg("out") = py::none(),
         R"(Impact ring-downs -> natural frequency and damping versus amplitude (`jointlab process`).
 
 files      list of test files (CSV, UFF 58, MATLAB .mat), one hit each
@@ -800,6 +872,11 @@ amplitude  quantity of the amplitude column: 'velocity' (default), 'displacement
            'acceleration' [m/s^2]
 progress   callable taking one line of text, or None (silent)
 threads    workers for each file's bands and channels (0: every core); the results do not depend on it
+method, snr_min, max_damping_std, coverage_factor, min_share
+           as the command's --method ('hilbert' or 'pff'), --snr-min, --max-damping-std,
+           --coverage-factor (k of the stated uncertainties) and --min-share
+out        also write the command's output folder here (the backbone CSVs and summary.json that
+           update_linear's and update_iwan's `measured` read), or None
 
 Returns a list of jointlab.Backbone, one per file x channel x band with a kept span, in the
 order of the files, then bands, then channels. Where the command would fail after writing what

@@ -5,6 +5,7 @@ the CSV the program writes for the same input: within 1e-9 relative (the CSV kee
 significant digits, so up to 5e-10 of rounding).
 """
 import csv
+import json
 import os
 import pathlib
 import subprocess
@@ -74,6 +75,34 @@ def test_process_equals_the_command_line(tmp_path):
         assert np.array_equal(a.frequency_hz, b.frequency_hz)
         assert np.array_equal(a.damping_ratio, b.damping_ratio)
         assert a.complex_amplitude == b.complex_amplitude
+
+
+def test_process_options_and_out_as_the_command(tmp_path):
+    # The command's --method, --snr-min, --max-damping-std, --coverage-factor and --min-share as
+    # keywords, and `out` writing its folder: the same files, byte for byte (the folder that
+    # update_linear's and update_iwan's `measured` read, made from Python alone).
+    options = {"method": "pff", "snr_min": 50.0, "max_damping_std": 0.02, "coverage_factor": 2.0,
+               "min_share": 0.2}
+    r = run("process", RECORD, "--channel", "acc1", "--band", "70:90", "--method", "pff",
+            "--snr-min", "50", "--max-damping-std", "0.02", "--coverage-factor", "2",
+            "--min-share", "0.2", "--out", tmp_path / "cli")
+    assert r.returncode == 0, r.stderr
+    (b,) = jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1"],
+                            out=str(tmp_path / "py" / "new"), **options)
+    names = sorted(f.name for f in (tmp_path / "cli").iterdir() if not f.name.startswith("."))
+    assert names == ["hammer_impact.acc1.band1.csv", "summary.json"]
+    for name in names:
+        assert (tmp_path / "py" / "new" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    assert np.all(b.coverage_factor == 2.0)
+    # The linear values' expanded uncertainties, as summary.json states them (12 digits).
+    band = json.loads((tmp_path / "cli" / "summary.json").read_text())["files"][0]["bands"][0]
+    assert_close(b.linear_frequency_std_hz, band["linear_frequency_std_hz"], 1e-11)
+    assert_close(b.linear_damping_std, band["linear_damping_std"], 1e-11)
+    for kwargs, message in (({"method": "fft"}, "--method fft: expected hilbert or pff"),
+                            ({"coverage_factor": 11.0}, "--coverage-factor 11: must be in"),
+                            ({"modes": 2}, "not both")):
+        with pytest.raises(jointlab.InputError, match=message):
+            jointlab.process([str(RECORD)], bands=[(70, 90)], **kwargs)
 
 
 def test_qsma_and_modes_equal_the_command_line(tmp_path):
