@@ -494,7 +494,10 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
     unconfirmed_modes.append(modes[static_cast<size_t>(i)]["measured"]);
   result["unconfirmed_modes"] = unconfirmed_modes;
   result["collinear"] = collinear;
-  result["reduced_chi2"] = s.reduced_chi2;
+  // None where no degree of freedom is left (the summary's 0 there is no chi-square).
+  result["degrees_of_freedom"] = s.degrees_of_freedom;
+  result["reduced_chi2"] =
+      s.degrees_of_freedom > 0 ? py::object(py::float_(s.reduced_chi2)) : py::object(py::none());
   result["warnings"] = s.warnings;
   result["report"] = s.report();
   return result;
@@ -933,7 +936,8 @@ frequency_hz, model_mode, model_frequency_hz, error, mac; None where unpaired), 
 ('converged', 'iteration_limit', 'failed' or 'pairs_unconfirmed'), 'unconfirmed' (the report's
 line on pairs the shapes do not confirm, or ''), 'unconfirmed_modes' (their measured modes),
 'collinear' (sets acting together: sets, determined, correlation and, for two sets a and b, the
-combination theta_a + weight theta_b determined: weight, value, relative_std), 'reduced_chi2',
+combination theta_a + weight theta_b determined: weight, value, relative_std),
+'degrees_of_freedom' (pairs less fitted sets), 'reduced_chi2' (None where none is left),
 'warnings', 'report'. Undecidable pairs, a channel reading the model reversed and shapes without
 phase raise InputError saying which.
 

@@ -260,6 +260,15 @@ def test_update_linear_equals_the_command_line(tmp_path):
     assert_close(bounded["parameters"]["spring.kj"]["final"], float(cli["spring.kj"]["final"]))
     assert bounded["parameters"]["spring.kj"]["at_bound"] == -1
     assert bounded["report"] == r.stdout
+    # Two pairs for one set leave one degree of freedom; one pair none, and no reduced
+    # chi-square (it was 0.0, a perfect fit's, where the report warns that nothing checks it).
+    assert result["degrees_of_freedom"] == 1 and result["reduced_chi2"] > 0
+    single = tmp_path / "single.csv"
+    single.write_text("".join(table.read_text().splitlines(keepends=True)[:2]))
+    one = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                                 modes_table=str(single))
+    assert one["degrees_of_freedom"] == 0 and one["reduced_chi2"] is None
+    assert "no degree of freedom is left" in one["report"]
     # The command's refusals of its options: a value not read whole, no set.
     for kwargs, message in (({"hold": ["spring.kj=1e5xyz"]}, "1e5xyz is not a finite number"),
                             ({"bounds": {"spring.kj": (2e5, 1e5)}}, "need 0 < LO < HI"),
