@@ -290,6 +290,8 @@ class Model {
   py::dict qsma(int mode, int points, std::optional<double> qmin,
                 std::optional<double> qmax) const {
     model::QsmaOptions options;
+    if (points < 2 || points > 100000)
+      throw InputError(fmt::format("--points {}: must be in [2, 100000]", points));
     options.points = points;
     options.q_min = qmin.value_or(0.0);
     options.q_max = qmax.value_or(0.0);
@@ -508,6 +510,8 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
 // written), as the library reports them.
 py::dict run(const std::string& campaign_file, const std::string& out, bool force, unsigned threads,
              const py::object& progress) {
+  if (threads > 1024)
+    throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
   campaign::RunSummary s;
   {
     py::gil_scoped_release release;
@@ -695,7 +699,8 @@ py::dict compare(const std::vector<std::string>& models, const py::object& mode,
                  const std::optional<std::string>& sensors,
                  const std::vector<std::string>& channels, const std::vector<std::string>& labels,
                  int points, const std::optional<std::string>& out) {
-  if (points < 2) throw InputError(fmt::format("--points {}: need at least 2", points));
+  if (points < 2 || points > 100000)
+    throw InputError(fmt::format("--points {}: must be in [2, 100000]", points));
   if (out) {
     const std::string ext = std::filesystem::path(*out).extension().string();
     if (ext != ".png" && ext != ".svg" && ext != ".pdf")
@@ -1051,7 +1056,8 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
     curve = model.qsma(mode=1, points=60)
     curve["frequency_hz"], curve["damping_ratio"]
 )")
-      .def(py::init<const std::string&>(), py::arg("path"))
+      .def(py::init<const std::string&>(), py::arg("path"),
+           py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("path", &Model::path)
       .def(
           "modes", &Model::modes, py::arg("count") = 20,

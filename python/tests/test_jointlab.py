@@ -153,6 +153,11 @@ def test_each_error_path_raises_input_error(tmp_path):
         model.qsma(mode=0)
     with pytest.raises(jointlab.InputError, match="qmin and qmax"):
         model.qsma(mode=1, qmin=-1.0)
+    # The command's range of --points (a million points was computed where the command refuses).
+    with pytest.raises(jointlab.InputError, match=r"--points 100001: must be in \[2, 100000\]"):
+        model.qsma(mode=1, points=100001)
+    with pytest.raises(jointlab.InputError, match="--threads 2000"):
+        jointlab.run(str(tmp_path / "campaign.toml"), str(tmp_path / "out"), threads=2000)
 
 
 def test_progress_is_silent_unless_asked(capfd):
