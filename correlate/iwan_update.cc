@@ -1596,9 +1596,35 @@ bool IwanUpdateSummary::misfit() const {
 // that exceeds 1 (the noise then larger than stated). A flat backbone (frequency and damping
 // constant within 0.01 % and 2 %) fitted with Z free ended at the constant's cost, F_S and chi
 // at their upper bounds, and the report said "widen it" and "a larger --evaluations".
+bool IwanUpdateSummary::joint_hardly_moved() const {
+  // At an evaluated result a slip of 0 is a mode that leaves the joint still.
+  return status != IwanUpdateStatus::kNoValidPoint && std::isfinite(final_cost) && phi_max > 0 &&
+         top_slip >= 0 && top_slip < 1e-3 * phi_max;
+}
+
+namespace {
+
+// "its largest slip at the highest measured amplitude, 8.3e-12 m, is 3.6e-08 of phi_max 0.000232
+// m" (joint_hardly_moved()), or that it leaves the joint still.
+std::string hardly_moved_words(const IwanUpdateSummary& s) {
+  if (!(s.top_slip > 0))
+    return fmt::format(
+        "it leaves the joint still: no slip at any measured amplitude, phi_max {:.3g} m",
+        s.phi_max);
+  return fmt::format(
+      "its largest slip at the highest measured amplitude, {:.3g} m, is {:.2g} of phi_max {:.3g} m",
+      s.top_slip, s.top_slip / s.phi_max, s.phi_max);
+}
+
+}  // namespace
+
 bool IwanUpdateSummary::no_slip_seen() const {
-  if (!modal_ratio_fitted || !improved || !(constant_cost > 0) || !std::isfinite(final_cost) ||
-      residuals == 0)
+  // A start no candidate improved on counts too: the constant backbone is a candidate, so the
+  // start then fits at least as well as it (a beam's first mode, whose shape leaves its two
+  // rivets at 1e-13 m of slip, was told "the result is the start. Widen the bounds or give a
+  // better start").
+  if (!modal_ratio_fitted || status == IwanUpdateStatus::kNoValidPoint || !(constant_cost > 0) ||
+      !std::isfinite(final_cost) || residuals == 0)
     return false;
   const double points = static_cast<double>(residuals) / 2;
   const double gain = (constant_cost - final_cost) * points / std::max(1.0, reduced_chi2);
@@ -1807,9 +1833,9 @@ IwanSigmaReason IwanUpdateSummary::sigma_reason(int k) const {
       return IwanSigmaReason::kBetaHeldFreeNoBetter;
     return IwanSigmaReason::kHeldAsAsked;
   }
-  if (!improved || status == IwanUpdateStatus::kNoValidPoint) return IwanSigmaReason::kStart;
   // K_T and Z are the result of data without slip; F_S, chi and beta are not identified.
   if (k != 1 && !z && no_slip_seen()) return IwanSigmaReason::kNoSlip;
+  if (!improved || status == IwanUpdateStatus::kNoValidPoint) return IwanSigmaReason::kStart;
   // Microslip data fix F_S and beta only together: with beta free neither is a result; with beta
   // held by the fit F_S is the slip force at that beta (before, "Fs 0.5 -> 0.564 N +/- 2.3 %" at
   // beta held 1 read like a result: the truth was 0.7 N at beta 0.6, z -2 to -13 over 10 seeds).
@@ -1889,7 +1915,9 @@ std::string wrong_mode(const MisfitEvidence& e) {
 // What the residuals at s.best point at (IwanUpdateSummary::misfit_cause()), read as if s.best
 // were the best fit.
 std::string residual_cause(const IwanUpdateSummary& s) {
-  if (!s.improved || !s.misfit() || !s.evidence) return "";
+  // A start no candidate improved on is read too where the joint hardly moves over the data:
+  // no Iwan parameters then change the curve, so the start is as good a fit as any.
+  if ((!s.improved && !s.joint_hardly_moved()) || !s.misfit() || !s.evidence) return "";
   const MisfitEvidence& e = *s.evidence;
   const auto& held = s.held;
   const auto& bound_side = s.bound_side;
@@ -1972,8 +2000,11 @@ std::string residual_cause(const IwanUpdateSummary& s) {
   // flat 0.3 % backbone against a model without [damping] was told "a damping column in per
   // cent read as a fraction gives 100 times" at a factor of 3.2 (a per-cent column keeps the
   // joint's rise, and its lowest values lie well below its median).
-  if (!s.modal_ratio_fitted && e.damping_factor >= 1.7 && e.low_damping > 0 &&
-      e.low_damping >= 3 * e.low_model_damping && e.low_damping >= 0.5 * e.median_damping) {
+  // A mode that leaves the joint still has no model damping at all (no ratio to take): that
+  // is the same missing damping.
+  if (!s.modal_ratio_fitted && (e.damping_factor >= 1.7 || !(e.low_model_damping > 0)) &&
+      e.low_damping > 0 && e.low_damping >= 3 * e.low_model_damping &&
+      e.low_damping >= 0.5 * e.median_damping) {
     return fmt::format(
         "the measured damping stays near {:.3g} down to the lowest amplitudes (its median over "
         "every point {:.3g}), where a joint's microslip adds little, while the model's damping "
@@ -2030,7 +2061,7 @@ std::string IwanUpdateSummary::misfit_cause() const {
   // loss factor (eta = 2 zeta) given as the damping ratio" at a damping factor of 1.85);
   // tentative_cause() gives it, to be said as such. What rests on the model as given alone
   // stands: a measured low-amplitude frequency off mode R and nearer another mode.
-  if (!improved || !misfit() || !evidence) return "";
+  if ((!improved && !joint_hardly_moved()) || !misfit() || !evidence) return "";
   if (evidence->nearer_mode > 0 && !model_as_given_matches(*evidence)) return wrong_mode(*evidence);
   return "";
 }
@@ -2165,16 +2196,31 @@ std::string IwanUpdateSummary::report() const {
         "against {:.4g}, a gain below what {} more parameters give by chance 1 time in 20). "
         "The measured frequency and damping do not change with amplitude beyond their noise: "
         "Fs, chi and beta are not identified, whatever the search, and Kt and modal_ratio are "
-        "the result; larger amplitudes, where the frequency falls, would identify the joint\n",
-        final_cost, constant_cost, held[3] ? "two" : "three");
+        "the result; {}\n",
+        final_cost, constant_cost, held[3] ? "two" : "three",
+        // A mode that hardly moves the joint: larger amplitudes of it are out of reach.
+        joint_hardly_moved()
+            ? fmt::format(
+                  "this mode hardly moves the joint ({}), so larger amplitudes of it would not "
+                  "reach phi_max: a mode whose shape slips the joint would identify it",
+                  hardly_moved_words(*this))
+            : std::string(
+                  "larger amplitudes, where the frequency falls, would identify the joint"));
   }
   if (!improved || status == IwanUpdateStatus::kNoValidPoint) {
     out += fmt::format(
-        "  the result is the start{}. {}\n",
+        "  the result is the start{}.{}\n",
         status == IwanUpdateStatus::kNoValidPoint ? " (no sample could be evaluated)" : "",
-        optimizer == IwanOptimizer::kGlobalLocal
-            ? "Widen the bounds or give a better start."
-            : "The Monte Carlo's uniform samples rarely land near the optimum in wide bounds: "
+        no_slip ? " No slip in the data (above): no start would do better."
+        : joint_hardly_moved()
+            ? fmt::format(
+                  " The measured modes hardly move the joint here ({}): the joint barely shapes "
+                  "these backbones, so neither wider bounds nor another start would change "
+                  "them; a mode whose shape slips the joint would identify it",
+                  hardly_moved_words(*this))
+        : optimizer == IwanOptimizer::kGlobalLocal
+            ? " Widen the bounds or give a better start."
+            : " The Monte Carlo's uniform samples rarely land near the optimum in wide bounds: "
               "use the global-local optimiser (--optimizer global-local).");
   }
   // Fs and beta drift together along the microslip family: a bound there is no better fit

@@ -470,6 +470,9 @@ struct IwanUpdateSummary {
   /// sqrt(2 / dof)): the model does not describe the data within their noise and the sigma is a
   /// lower bound.
   bool misfit() const;
+  /// True when the largest joint slip at the highest measured amplitude (top_slip) stays below
+  /// 1e-3 of phi_max: the fitted modes hardly move the joint, so the joint barely shapes them.
+  bool joint_hardly_moved() const;
   /// True when Z was fitted and the fit is no better than the best constant backbone (the
   /// joint stuck) beyond what its extra parameters give by chance 1 time in 20: the data show
   /// no slip, and F_S, chi and beta are not identified.
