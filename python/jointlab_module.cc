@@ -22,6 +22,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "jointlab/campaign/backbone_comparison.h"
 #include "jointlab/campaign/campaign.h"
@@ -68,6 +69,23 @@ py::dict to_dict(data::Table table) {
   for (size_t i = 0; i < table.names.size(); ++i)
     out[py::str(table.names[i])] = to_numpy(std::move(table.columns[i]));
   return out;
+}
+
+// A file or folder argument: a str or any os.PathLike (pathlib.Path), as open() takes them.
+using PathArg = std::filesystem::path;
+std::string text(const PathArg& p) { return p.string(); }
+std::optional<std::string> text(const std::optional<PathArg>& p) {
+  return p ? std::optional<std::string>(p->string()) : std::nullopt;
+}
+std::vector<std::string> text(const std::vector<PathArg>& v) {
+  std::vector<std::string> out;
+  for (const PathArg& p : v) out.push_back(p.string());
+  return out;
+}
+
+// An integer as a mode number: a Python int or a numpy integer (np.arange's, say), not a bool.
+bool is_integer(const py::handle& h) {
+  return !py::isinstance<py::bool_>(h) && PyIndex_Check(h.ptr()) != 0;
 }
 
 // The model file `path` (its matrices beside it), its folder created if missing as the commands
@@ -119,13 +137,15 @@ bool is_process_output(const std::string& name) {
   return name == "summary.json" || std::regex_match(name, backbone);
 }
 
-py::list process(const std::vector<std::string>& files,
+py::list process(const std::vector<PathArg>& file_args,
                  const std::optional<std::vector<std::pair<double, double>>>& bands, int modes,
                  const std::optional<std::vector<std::string>>& channels,
                  const std::optional<std::string>& quantity, const std::string& amplitude,
                  const py::object& progress, unsigned threads, const std::string& method,
                  double snr_min, double max_damping_std, double coverage_factor, double min_share,
-                 const std::optional<std::string>& out) {
+                 const std::optional<PathArg>& out_arg) {
+  const std::vector<std::string> files = text(file_args);
+  const std::optional<std::string> out = text(out_arg);
   modal::ProcessOptions opt;
   opt.threads = threads;
   if (threads > 1024)
@@ -240,7 +260,8 @@ py::list process(const std::vector<std::string>& files,
   return backbones;
 }
 
-py::dict read_record(const std::string& path) {
+py::dict read_record(const PathArg& path_arg) {
+  const std::string path = text(path_arg);
   data::Record rec;
   {
     py::gil_scoped_release release;
@@ -269,7 +290,7 @@ py::dict read_record(const std::string& path) {
 /// A model file, read once.
 class Model {
  public:
-  explicit Model(const std::string& path) : path_(path), model_(model::read_model(path)) {}
+  explicit Model(const PathArg& path) : path_(text(path)), model_(model::read_model(path_)) {}
   const std::string& path() const { return path_; }
 
   py::array_t<double> modes(int count) const {
@@ -345,16 +366,19 @@ std::string linear_status_name(correlate::LinearUpdateStatus status) {
 
 // update-linear: the same inputs, options and defaults as the command; the result as Python
 // values, and the updated model file written when `out` is given.
-py::dict update_linear(const std::string& model_path, const std::vector<std::string>& sets,
-                       const std::string& sensors_path, const std::optional<std::string>& measured,
-                       const std::optional<std::string>& modes_table, const std::string& rule,
+py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>& sets,
+                       const PathArg& sensors_arg, const std::optional<PathArg>& measured_arg,
+                       const std::optional<PathArg>& modes_table_arg, const std::string& rule,
                        const std::optional<std::string>& minimize, double tolerance,
                        double frequency_window, double mac_threshold, double frequency_std,
-                       const std::vector<std::string>& hold, const std::optional<std::string>& out,
+                       const std::vector<std::string>& hold, const std::optional<PathArg>& out_arg,
                        const py::object& progress, bool trust_signs,
                        const std::map<std::string, std::pair<double, double>>& bounds,
                        const std::optional<std::pair<double, double>>& bound_factors,
                        double alias_mac) {
+  const std::string model_path = text(model_arg), sensors_path = text(sensors_arg);
+  const std::optional<std::string> measured = text(measured_arg),
+                                   modes_table = text(modes_table_arg), out = text(out_arg);
   if (sets.empty()) throw InputError("update-linear: give at least one set to update (--set)");
   correlate::LinearUpdateOptions o;
   o.alias_mac = alias_mac;
@@ -508,8 +532,9 @@ py::dict update_linear(const std::string& model_path, const std::vector<std::str
 // run: a whole campaign into `out`, as `jointlab run`; the summary as a dict. Hits that could
 // not be processed and modes without a backbone are listed, not raised (everything else is
 // written), as the library reports them.
-py::dict run(const std::string& campaign_file, const std::string& out, bool force, unsigned threads,
+py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, unsigned threads,
              const py::object& progress) {
+  const std::string campaign_file = text(campaign_arg), out = text(out_arg);
   if (threads > 1024)
     throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
   campaign::RunSummary s;
@@ -692,13 +717,16 @@ py::dict update_iwan(
 
 // `jointlab compare` without the figure unless `out` names one: the measured curves and each
 // model's QSMA backbone over their range (campaign/model_comparison.h).
-py::dict compare(const std::vector<std::string>& models, const py::object& mode,
-                 const std::vector<std::string>& backbones,
+py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
+                 const std::vector<PathArg>& backbone_args,
                  const std::optional<std::string>& amplitude, const std::optional<std::string>& dof,
-                 const std::optional<std::string>& measured,
-                 const std::optional<std::string>& sensors,
+                 const std::optional<PathArg>& measured_arg,
+                 const std::optional<PathArg>& sensors_arg,
                  const std::vector<std::string>& channels, const std::vector<std::string>& labels,
-                 int points, const std::optional<std::string>& out) {
+                 int points, const std::optional<PathArg>& out_arg) {
+  const std::vector<std::string> models = text(model_args), backbones = text(backbone_args);
+  const std::optional<std::string> measured = text(measured_arg), sensors = text(sensors_arg),
+                                   out = text(out_arg);
   if (points < 2 || points > 100000)
     throw InputError(fmt::format("--points {}: must be in [2, 100000]", points));
   if (out) {
@@ -709,8 +737,8 @@ py::dict compare(const std::vector<std::string>& models, const py::object& mode,
   std::vector<std::string> modes;
   if (py::isinstance<py::str>(mode))
     modes = {mode.cast<std::string>()};
-  else if (py::isinstance<py::int_>(mode))
-    modes = {std::to_string(mode.cast<long long>())};
+  else if (is_integer(mode))
+    modes = {std::to_string(py::int_(mode).cast<long long>())};
   else
     throw InputError("mode: expected an int or 'R:BAND'");
   const campaign::IwanInputArgs a =
@@ -758,17 +786,17 @@ py::dict compare(const std::vector<std::string>& models, const py::object& mode,
 }
 
 // update_iwan with `mode` as Python gives it: an int, an 'R:BAND' string or a list of either.
-py::dict update_iwan_call(const std::string& model, const std::string& set, const py::object& mode,
-                          const std::vector<std::string>& backbones,
+py::dict update_iwan_call(const PathArg& model, const std::string& set, const py::object& mode,
+                          const std::vector<PathArg>& backbones,
                           const std::optional<std::string>& amplitude,
                           const std::optional<std::string>& dof, const std::string& linear_damping,
                           const std::optional<std::pair<double, double>>& fs_range,
                           const std::pair<double, double>& gamma_range,
                           const std::pair<double, double>& chi_range,
                           const std::pair<double, double>& beta_range, int evaluations,
-                          unsigned seed, const std::optional<std::string>& out,
-                          const py::object& progress, const std::optional<std::string>& measured,
-                          const std::optional<std::string>& sensors,
+                          unsigned seed, const std::optional<PathArg>& out,
+                          const py::object& progress, const std::optional<PathArg>& measured,
+                          const std::optional<PathArg>& sensors,
                           const std::vector<std::string>& channels, std::optional<double> gamma,
                           std::optional<double> beta, double linear_damping_max, int threads) {
   // --gamma, --beta, --linear-damping-max and --threads, checked as the command checks them.
@@ -795,8 +823,9 @@ py::dict update_iwan_call(const std::string& model, const std::string& set, cons
   const auto one = [&](const py::handle& h) {
     if (py::isinstance<py::str>(h))
       modes.push_back(h.cast<std::string>());
-    else if (py::isinstance<py::int_>(h))
-      modes.push_back(std::to_string(h.cast<long long>()));
+    else if (is_integer(h))
+      modes.push_back(
+          std::to_string(py::int_(py::reinterpret_borrow<py::object>(h)).cast<long long>()));
     else
       throw InputError("mode: expected an int, 'R:BAND' or a list of them");
   };
@@ -806,9 +835,9 @@ py::dict update_iwan_call(const std::string& model, const std::string& set, cons
     one(mode);
   }
   if (modes.empty()) throw InputError("mode: give at least one mode");
-  return update_iwan(model, set, modes, backbones, amplitude, dof, linear_damping, fs_range,
-                     gamma_range, chi_range, beta_range, evaluations, seed, out, progress, measured,
-                     sensors, channels, asked);
+  return update_iwan(text(model), set, modes, text(backbones), amplitude, dof, linear_damping,
+                     fs_range, gamma_range, chi_range, beta_range, evaluations, seed, text(out),
+                     progress, text(measured), text(sensors), channels, asked);
 }
 
 }  // namespace
@@ -1056,8 +1085,7 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
     curve = model.qsma(mode=1, points=60)
     curve["frequency_hz"], curve["damping_ratio"]
 )")
-      .def(py::init<const std::string&>(), py::arg("path"),
-           py::call_guard<py::gil_scoped_release>())
+      .def(py::init<const PathArg&>(), py::arg("path"), py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("path", &Model::path)
       .def(
           "modes", &Model::modes, py::arg("count") = 20,

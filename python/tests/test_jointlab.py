@@ -87,8 +87,9 @@ def test_process_options_and_out_as_the_command(tmp_path):
             "--snr-min", "50", "--max-damping-std", "0.02", "--coverage-factor", "2",
             "--min-share", "0.2", "--out", tmp_path / "cli")
     assert r.returncode == 0, r.stderr
-    (b,) = jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1"],
-                            out=str(tmp_path / "py" / "new"), **options)
+    # Paths as pathlib.Path (any os.PathLike, as open() takes them; a TypeError before).
+    (b,) = jointlab.process([RECORD], bands=[(70, 90)], channels=["acc1"],
+                            out=tmp_path / "py" / "new", **options)
     names = sorted(f.name for f in (tmp_path / "cli").iterdir() if not f.name.startswith("."))
     assert names == ["hammer_impact.acc1.band1.csv", "summary.json"]
     for name in names:
@@ -598,10 +599,12 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
     assert r.returncode == 0, r.stderr
     with open(d / "cli" / "parameters.csv", newline="") as f:
         cli = {row["name"]: row for row in csv.DictReader(f)}
-    result = jointlab.update_iwan(str(d / "start.toml"), "j", 1, [str(d / "bb.csv")],
+    # pathlib paths and a numpy integer as the mode (a loop over np.arange gives them: refused
+    # before as 'expected an int').
+    result = jointlab.update_iwan(d / "start.toml", "j", np.int64(1), [d / "bb.csv"],
                                   evaluations=200, gamma=1.1, beta=0.5, linear_damping="fit",
                                   linear_damping_max=0.01, threads=1,
-                                  out=str(d / "py" / "new" / "model.toml"))
+                                  out=d / "py" / "new" / "model.toml")
     assert result["report"] == r.stdout
     for name in ("Fs", "Kt", "chi", "beta"):
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
