@@ -212,6 +212,13 @@ py::list process(const std::vector<PathArg>& file_args,
       const data::Record rec = data::read_record(f);
       results.push_back(modal::process_record(rec, opt, cache));
       if (stage) modal::write_backbones(stage->path(), results.back(), opt.ringdown);
+      // The command's stderr line for each channel and band: the span kept, or why none was
+      // (a channel near a node, no span above the noise), which no Backbone carries.
+      if (!progress.is_none()) {
+        for (const modal::ChannelBand& c : results.back().results)
+          report(progress, fmt::format("{} {} band {}: {}", f, c.channel, c.band_index,
+                                       c.ringdown.summary.report()));
+      }
     }
     if (stage) {
       modal::write_summary(stage->path(), results, opt);
@@ -907,7 +914,8 @@ channels   channel names to process (default: every non-force channel)
 quantity   'acceleration', 'velocity' or 'displacement' for channels without a unit
 amplitude  quantity of the amplitude column: 'velocity' (default), 'displacement' [m],
            'acceleration' [m/s^2]
-progress   callable taking one line of text, or None (silent)
+progress   callable taking one line of text, or None (silent): each file, then the command's
+           line for each channel and band (the span kept, or why no backbone was given)
 threads    workers for each file's bands and channels (0: every core); the results do not depend on it
 method, snr_min, max_damping_std, coverage_factor, min_share
            as the command's --method ('hilbert' or 'pff'), --snr-min, --max-damping-std,

@@ -161,10 +161,16 @@ def test_each_error_path_raises_input_error(tmp_path):
         jointlab.run(str(tmp_path / "campaign.toml"), str(tmp_path / "out"), threads=2000)
 
 
-def test_progress_is_silent_unless_asked(capfd):
+def test_progress_is_silent_unless_asked(capfd, tmp_path):
+    # Around 1527 Hz acc2 sees the mode at 6.9 % of acc1's amplitude, below --min-share: no
+    # Backbone, and why is the command's stderr line, here a progress line (it was lost).
+    r = run("process", RECORD, "--band", "1480:1580", "--out", tmp_path / "cli")
+    assert r.returncode == 0, r.stderr
     lines = []
-    jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1"], progress=lines.append)
-    assert lines == [f"process: {RECORD}"]
+    backbones = jointlab.process([str(RECORD)], bands=[(1480, 1580)], progress=lines.append)
+    assert [b.channel for b in backbones] == ["acc1", "acc3"]
+    assert lines == [f"process: {RECORD}"] + r.stderr.splitlines()
+    assert "acc2 band 1: no backbone: sees this mode at 6.9 %" in lines[2]
     out, err = capfd.readouterr()
     assert out == "" and err == ""
 
