@@ -36,6 +36,7 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
+#include "jointlab/correlate/update_files.h"
 #include "jointlab/data/names.h"
 #include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"
@@ -532,6 +533,15 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
   result["reduced_chi2"] =
       s.degrees_of_freedom > 0 ? py::object(py::float_(s.reduced_chi2)) : py::object(py::none());
   result["warnings"] = s.warnings;
+  // The MAC at the result, as mac.csv: a row per measured mode ('modes' order), a column per
+  // model mode from 1 (those up to 1.5 times the highest measured frequency, and past every pair).
+  const Eigen::MatrixXd& mac = e.mac;
+  const Eigen::Index cols = correlate::mac_columns(s);
+  py::array_t<double> mac_array({mac.rows(), cols});
+  auto cell = mac_array.mutable_unchecked<2>();
+  for (Eigen::Index i = 0; i < mac.rows(); ++i)
+    for (Eigen::Index j = 0; j < cols; ++j) cell(i, j) = mac(i, j);
+  result["mac"] = mac_array;
   result["report"] = s.report();
   return result;
 }
@@ -668,6 +678,14 @@ py::dict update_iwan(
     d["note"] = summary.parameter_note(k);
     d["at_bound"] = summary.bound_side[static_cast<size_t>(k)];
     parameters[names[k]] = d;
+  }
+  // gamma = Kt / Ks, as parameters.csv's gamma row: Kt's sigma, hold, bound and note.
+  if (const double ks = summary.reference_stiffness; ks > 0) {
+    py::dict g = parameters["Kt"].cast<py::dict>();
+    g = py::dict(**g);  // a copy, not Kt's own dict
+    g["initial"] = summary.start.Kt / ks;
+    g["final"] = summary.best.Kt / ks;
+    parameters["gamma"] = g;
   }
   py::dict z;
   z["initial"] = summary.modal_ratio_start;
@@ -979,7 +997,8 @@ frequency_hz, model_mode, model_frequency_hz, error, mac; None where unpaired), 
 line on pairs the shapes do not confirm, or ''), 'unconfirmed_modes' (their measured modes),
 'collinear' (sets acting together: sets, determined, correlation and, for two sets a and b, the
 combination theta_a + weight theta_b determined: weight, value, relative_std),
-'degrees_of_freedom' (pairs less fitted sets), 'reduced_chi2' (None where none is left),
+'mac' (the MAC matrix at the result, as mac.csv: a row per measured mode, a column per
+model mode from 1), 'degrees_of_freedom' (pairs less fitted sets), 'reduced_chi2' (None where none is left),
 'warnings', 'report'. Undecidable pairs, a channel reading the model reversed and shapes without
 phase raise InputError saying which.
 
@@ -1022,8 +1041,8 @@ fs_range, gamma_range, chi_range, beta_range, evaluations, seed, threads: as the
                 options (threads: 0 every core; the result does not depend on it)
 out             write the updated model file here (its folder created), or None
 
-Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta -> initial, final, relative_std or
-None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
+Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta, and gamma = Kt / Ks as
+parameters.csv's row -> initial, final, relative_std or None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
 parameters.csv's); modal_ratio -> initial, final, std, fitted, note), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
 stopped short of a minimum and no sigma is stated), 'no_slip' (True where, the structure's own

@@ -251,6 +251,11 @@ def test_update_linear_equals_the_command_line(tmp_path):
     assert abs(p["final"] / truth - 1) < 1e-6  # noise-free data: the truth
     assert result["converged"]
     assert [m["model_mode"] for m in result["modes"]] == [1, 2]
+    # The MAC matrix at the result, as mac.csv (measured rows, model columns from 1).
+    with open(tmp_path / "cli" / "mac.csv", newline="") as f:
+        mac = [row[1:] for row in csv.reader(f)][1:]
+    assert result["mac"].dtype == np.float64
+    assert_close(result["mac"], np.array(mac, dtype=float))
     assert lines and lines[0].startswith("update-linear: iteration")
     # Each mode keeps the table's own number, as modes.csv writes it.
     numbered = tmp_path / "numbered.csv"
@@ -612,9 +617,11 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
                                   linear_damping_max=0.01, threads=1,
                                   out=d / "py" / "new" / "model.toml")
     assert result["report"] == r.stdout
-    for name in ("Fs", "Kt", "chi", "beta"):
+    for name in ("Fs", "Kt", "chi", "beta", "gamma"):
+        assert_close(result["parameters"][name]["initial"], float(cli[name]["initial"]))
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
         assert result["parameters"][name]["held"] == (cli[name]["held"] == "1")
+    assert_close(result["parameters"]["gamma"]["final"], 1.1)  # held there, as parameters.csv
     assert result["parameters"]["beta"]["final"] == 0.5 and result["parameters"]["Kt"]["held"]
     assert_close(result["parameters"]["modal_ratio"]["final"],
                  float(cli["modal_ratio"]["final"]))
