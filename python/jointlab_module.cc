@@ -300,6 +300,8 @@ class Model {
  public:
   explicit Model(const PathArg& path) : path_(text(path)), model_(model::read_model(path_)) {}
   const std::string& path() const { return path_; }
+  /// The damping ratio of every elastic mode ([damping] modal_ratio; 0 without one).
+  double modal_ratio() const { return model_.modal_ratio; }
 
   py::array_t<double> modes(int count) const {
     if (count < 1) throw InputError(fmt::format("--count {}: must be >= 1", count));
@@ -1114,6 +1116,9 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
 )")
       .def(py::init<const PathArg&>(), py::arg("path"), py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("path", &Model::path)
+      .def_property_readonly("modal_ratio", &Model::modal_ratio,
+                             "The damping ratio of every elastic mode: the model's [damping] "
+                             "modal_ratio, 0 without one (as `jointlab modes` prints it).")
       .def(
           "modes", &Model::modes, py::arg("count") = 20,
           R"(The elastic natural frequencies [Hz] among the lowest `count` modes (as `jointlab modes

@@ -120,6 +120,11 @@ def test_qsma_and_modes_equal_the_command_line(tmp_path):
         rows = list(csv.DictReader(f))  # mode,frequency_hz,kind
     elastic = [float(r["frequency_hz"]) for r in rows if r["kind"] == "elastic"]
     assert_close(jointlab.Model(str(model)).modes(count=20), elastic)
+    # The damping the command prints beside the table (the model has no [damping]: 0).
+    assert "every elastic mode: 0 (the model has no [damping])" in r.stdout
+    assert jointlab.Model(str(model)).modal_ratio == 0
+    model.write_text(model.read_text() + "\n[damping]\nmodal_ratio = 0.002\n")
+    assert jointlab.Model(model).modal_ratio == 0.002
 
 
 def test_read_record_gives_channels_in_si(tmp_path):
