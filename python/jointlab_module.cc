@@ -888,7 +888,7 @@ callable is given.
     bb = jointlab.process(["hammer_impact.csv"], bands=[(70, 90)], channels=["acc1"])
     print(bb[0].linear_frequency_hz, bb[0].frequency_hz[:5], bb[0].damping_ratio[:5])
     model = jointlab.Model("model.toml")
-    print(model.modes(count=5))               # elastic natural frequencies [Hz]
+    print(model.modes(count=10))              # elastic natural frequencies [Hz]
     curve = model.qsma(mode=1, points=60)     # dict of numpy arrays
 )";
   py::register_exception<jointlab::InputError>(m, "InputError", PyExc_ValueError);
@@ -1122,7 +1122,8 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
       .def(
           "modes", &Model::modes, py::arg("count") = 20,
           R"(The elastic natural frequencies [Hz] among the lowest `count` modes (as `jointlab modes
---count`, rigid-body modes left out), every joint at its linear stiffness, ascending.)")
+--count`, rigid-body modes left out: a free-free model's six count, so count=5 gives none),
+every joint at its linear stiffness, ascending.)")
       .def("qsma", &Model::qsma, py::arg("mode"), py::arg("points") = 50,
            py::arg("qmin") = py::none(), py::arg("qmax") = py::none(),
            R"(Quasi-Static Modal Analysis of elastic mode `mode` (from 1), as `jointlab qsma`.
