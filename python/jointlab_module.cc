@@ -770,13 +770,21 @@ py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
     throw InputError("mode: expected an int or 'R:BAND'");
   const campaign::IwanInputArgs a =
       iwan_input_args(modes, backbones, amplitude, dof, measured, sensors, channels);
+  // The figure's folder, made before the curves are computed: one that cannot be made is the
+  // user's mistake, said as such (it was a RuntimeError after the QSMA curves).
+  if (out) {
+    const std::filesystem::path folder = std::filesystem::path(*out).parent_path();
+    std::error_code ec;
+    if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+    if (ec || !(folder.empty() || std::filesystem::is_directory(folder)))
+      throw InputError(fmt::format("{}: cannot create the output directory", folder.string()));
+  }
   campaign::ModelComparison c;
   {
     py::gil_scoped_release release;
     c = campaign::compare_models(models, labels, a, points);
     if (out) {
       const std::filesystem::path figure(*out);
-      if (!figure.parent_path().empty()) std::filesystem::create_directories(figure.parent_path());
       campaign::plot_backbone_comparison(c.figure, figure,
                                          std::filesystem::path(figure).replace_extension(".csv"));
     }

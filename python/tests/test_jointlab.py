@@ -546,6 +546,9 @@ def test_compare_gives_the_curves_the_command_draws(tmp_path):
     assert c["measured"][0]["source"].endswith("bb.csv")
     with pytest.raises(jointlab.InputError, match="--label for 2 models"):
         jointlab.compare(models, 1, [str(d / "bb.csv")], labels=["one"])
+    # A figure folder that cannot be made (under a file): the user's mistake, not a RuntimeError.
+    with pytest.raises(jointlab.InputError, match="cannot create the output directory"):
+        jointlab.compare(models, 1, [str(d / "bb.csv")], out=str(d / "bb.csv" / "c.png"))
 
 
 def test_update_iwan_equals_the_command_line(tmp_path, capfd):
