@@ -102,12 +102,13 @@ void write_model(const std::string& path, const model::Model& m) {
 }
 
 // "acceleration", "velocity" or "displacement", as --quantity and --amplitude take them.
+// The command's message (apps/cli_args.cc): "--quantity force: expected displacement, ...".
 Quantity motion(const std::string& option, const std::string& text) {
-  if (text == "acceleration") return Quantity::kAcceleration;
-  if (text == "velocity") return Quantity::kVelocity;
-  if (text == "displacement") return Quantity::kDisplacement;
-  throw InputError(fmt::format("{}={}: expected acceleration, velocity or displacement", option,
-                               text.empty() ? "''" : text));
+  const std::optional<Quantity> q = parse_quantity(text);
+  if (!q || *q == Quantity::kForce)
+    throw InputError(fmt::format("{} {}: expected displacement, velocity or acceleration", option,
+                                 text.empty() ? "''" : text));
+  return *q;
 }
 
 // Progress to a Python callable (or nowhere): the GIL is taken for the call only, and a pending
@@ -179,8 +180,8 @@ py::list process(const std::vector<PathArg>& file_args,
   }
   opt.modes = modes;
   if (channels) opt.channels = *channels;
-  if (quantity) opt.quantity = motion("quantity", *quantity);
-  opt.ringdown.amplitude = motion("amplitude", amplitude);
+  if (quantity) opt.quantity = motion("--quantity", *quantity);
+  opt.ringdown.amplitude = motion("--amplitude", amplitude);
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
   if (files.empty()) throw InputError("process: no file given");
   if (out) {

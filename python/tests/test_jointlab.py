@@ -150,8 +150,12 @@ def test_a_malformed_file_raises_a_value_error_naming_it(tmp_path):
 def test_each_error_path_raises_input_error(tmp_path):
     with pytest.raises(jointlab.InputError, match="need 0 < LO < HI"):
         jointlab.process([str(RECORD)], bands=[(90, 70)])
-    with pytest.raises(jointlab.InputError, match="expected acceleration, velocity"):
+    # The command's own words (it was "amplitude=speed: expected acceleration, ...").
+    with pytest.raises(jointlab.InputError,
+                       match="^--amplitude speed: expected displacement, velocity or acceleration$"):
         jointlab.process([str(RECORD)], bands=[(70, 90)], amplitude="speed")
+    with pytest.raises(jointlab.InputError, match="^--quantity force: expected displacement"):
+        jointlab.process([str(RECORD)], bands=[(70, 90)], quantity="force")
     with pytest.raises(jointlab.InputError):
         jointlab.Model(str(tmp_path / "missing.toml"))
     model = jointlab.Model(str(two_mass_model(tmp_path)))
