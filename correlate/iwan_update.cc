@@ -2244,6 +2244,14 @@ std::string IwanUpdateSummary::report() const {
   // "would not cure that" was wrong there: a wider range does move it onto the data).
   const bool kt_short = kt_stopped_short(*this);
   const bool kt_range = kt_short && model_as_given_matches(*evidence) && evidence->nearer_mode == 0;
+  // The relative sigma stated for the parameter a bound line names (0: none stated).
+  const auto stated_at_bound = [&](const std::string& b) {
+    static const char* prefixes[] = {"Fs", "gamma", "chi", "beta"};
+    for (int k = 0; k < 4; ++k)
+      if (b.rfind(prefixes[k], 0) == 0)
+        return sigma_reason(k) == IwanSigmaReason::kStated ? relative_std(k) : 0.0;
+    return 0.0;
+  };
   for (const std::string& b : at_bounds) {
     const bool along = family && (b.rfind("Fs", 0) == 0 || b.rfind("beta", 0) == 0);
     const bool kt = b.rfind("gamma", 0) == 0 && kt_short;
@@ -2277,6 +2285,14 @@ std::string IwanUpdateSummary::report() const {
       out += fmt::format(
           "  WARNING: {}: the misfit below pressed it there; a wider range would not cure that\n",
           b);
+    } else if (const double sd = stated_at_bound(b); sd > 0.5) {
+      // A parameter the data hardly fix (not identifiable, its sigma over half its value) ends
+      // at a bound along what they leave free: the lap joint's mode 2, whose joint barely moves,
+      // put gamma at 2 +/- 78 % (the truth 1.6) and was told to widen the range.
+      out += fmt::format(
+          "  WARNING: {}: the data hardly fix it (+/- {:.2g} %), so it ended there along what "
+          "they leave free; a wider range moves it, not the fit\n",
+          b, 100 * sd);
     } else {
       out += fmt::format("  WARNING: {}: the best fit may lie outside the range, widen it\n", b);
     }
