@@ -130,6 +130,7 @@ struct Backbone {
   double linear_damping_std = 0;           // its expanded uncertainty (k sigma)
   std::complex<double> complex_amplitude;  // operating-shape entry [m]
   std::string report;                      // the summary paragraph of the band
+  bool reference = false;                  // the band's reference channel in its file
 };
 
 // Names of the files `jointlab process` writes: summary.json and "<stem>.<channel>.band<k>.csv"
@@ -235,6 +236,9 @@ py::list process(const std::vector<PathArg>& file_args,
       py::object b = py::cast(Backbone{r.source, c.channel, c.band_index, s.linear_frequency_hz,
                                        s.linear_damping, s.linear_frequency_std_hz,
                                        s.linear_damping_std, c.complex_amplitude, s.report()});
+      // As summary.json's reference_channel: the curve update_iwan and compare read by default.
+      const auto k = static_cast<size_t>(c.band_index - 1);
+      b.cast<Backbone&>().reference = k < r.reference.size() && r.reference[k] == c.channel;
       py::dict columns = to_dict(modal::backbone_table(c.ringdown.backbone, opt.ringdown));
       for (auto item : columns) b.attr(item.first) = item.second;
       backbones.append(b);
@@ -911,7 +915,9 @@ callable is given.
                        "(expanded, k = .coverage_factor), .damped_frequency_hz, "
                        ".decay_rate_1_per_s, .displacement_m, .snr, .window_s, .harmonic, "
                        ".exchange (1 where the mode exchanges energy with another: damping "
-                       "apparent).")
+                       "apparent), .reference (True for the band's reference channel in its "
+                       "file, summary.json's reference_channel: the curve update_iwan and compare "
+                       "read by default).")
       .def_readonly("file", &Backbone::file)
       .def_readonly("channel", &Backbone::channel)
       .def_readonly("band", &Backbone::band)
@@ -921,6 +927,7 @@ callable is given.
       .def_readonly("linear_damping_std", &Backbone::linear_damping_std)
       .def_readonly("complex_amplitude", &Backbone::complex_amplitude)
       .def_readonly("report", &Backbone::report)
+      .def_readonly("reference", &Backbone::reference)
       .def("__repr__", [](const Backbone& b) {
         return fmt::format("<jointlab.Backbone {} {} band {}: {:.6g} Hz, zeta {:.4g}>", b.file,
                            b.channel, b.band, b.linear_frequency_hz, b.linear_damping_ratio);

@@ -69,6 +69,10 @@ def test_process_equals_the_command_line(tmp_path):
         assert not b.exchange.any()  # an ordinary record: no point exchanges energy
         assert 78 < b.linear_frequency_hz < 83  # the Brake-Reuss beam's first mode, ~80.5 Hz
         assert 0 < b.linear_damping_ratio < 0.05
+    # The band's reference channel, as summary.json names it: one backbone per band.
+    summary = json.loads((out / "summary.json").read_text())
+    reference = summary["files"][0]["bands"][0]["reference_channel"]
+    assert [b.channel for b in backbones if b.reference] == [reference]
     # Channels on one worker or several: the same numbers, bit for bit.
     one = jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1", "acc3"], threads=1)
     for a, b in zip(one, backbones):
