@@ -1642,6 +1642,27 @@ TEST(IwanUpdateReport, EverySigmaDecisionReadsTheSameInTheReportAndTheNotes) {
       << z.report();
   z.status = IwanUpdateStatus::kBudget;
   EXPECT_EQ(z.parameter_note(4), "no sigma: not converged");
+  // F_S and beta fixed only by the slopes of points at phi_max (the kink probe): no sigma, in
+  // the notes, the report's words and its note line alike; K_T and chi keep theirs.
+  IwanUpdateSummary kink = fitted;
+  kink.fixed_at_kink = {true, false, false, true};
+  kink.clear_unstated_sigmas();
+  for (int k : {0, 3}) {
+    EXPECT_EQ(kink.sigma_reason(k), IwanSigmaReason::kAtKink);
+    EXPECT_EQ(kink.relative_std(k), 0.0) << k;
+    EXPECT_EQ(kink.parameter_note(k),
+              "sigma unknown: fixed only by points at phi_max, from one side");
+  }
+  EXPECT_EQ(kink.relative_std(1), 0.002);
+  EXPECT_EQ(kink.parameter_note(2), "");
+  EXPECT_NE(kink.report().find("Fs 1 -> 0.5 N (sigma unknown: fixed only by points at phi_max, "
+                               "from one side, below)"),
+            std::string::npos)
+      << kink.report();
+  EXPECT_NE(kink.report().find("note: Fs and beta are fixed only by the slopes of points at "
+                               "phi_max"),
+            std::string::npos)
+      << kink.report();
 }
 
 // Backbones that lie past phi_max at every amplitude fix F_S (the plateau) but show K_T, chi and
