@@ -580,6 +580,9 @@ py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, un
   for (const campaign::FailedHit& f : s.failed_hits) failed.append(f.text());
   d["failed_hits"] = failed;
   d["flagged_hits"] = s.flagged_hits;
+  // As the report's "model built" / "model up to date": built in this run, or reused.
+  d["model_built"] = s.model_built;
+  d["model_reused"] = s.model_reused;
   d["notes"] = s.notes;
   d["no_backbone"] = s.no_backbone;
   d["refused"] = s.refused;
@@ -1115,7 +1118,8 @@ threads   workers for the hits (0: every core)
 progress  callable taking one line per step, or None
 
 Returns a dict: 'hits', 'hits_processed', 'hits_reused', 'failed_hits' (one line each),
-'flagged_hits', 'notes', 'no_backbone' (modes no hit gave a backbone for), 'refused' (updates
+'flagged_hits', 'model_built' (built in this run), 'model_reused' (the built
+model up to date), 'notes', 'no_backbone' (modes no hit gave a backbone for), 'refused' (updates
 that refused their data), 'stopped' (why a step was not run: the Iwan update after a linear
 update whose pairs the shapes do not confirm), 'report_html', 'report_markdown', 'report'. Bad input (the campaign, its model, DOFs, bands) raises InputError.
 

@@ -451,6 +451,9 @@ def test_run_equals_the_command_line(tmp_path, riveted_model):
     s = jointlab.run(str(campaign), str(tmp_path / "py"), progress=lines.append)
     assert s["hits"] == 9 and s["failed_hits"] == [] and s["no_backbone"] == []
     assert s["refused"] == [] and s["stopped"] == []  # its linear pairs are confirmed
+    # A model file given, not a description: neither built nor reused, as the report says.
+    assert s["model_built"] is False and s["model_reused"] is False
+    assert "model" not in s["report"].splitlines()[0]
     assert pathlib.Path(s["report_html"]).exists()
     assert len(lines) > 5
     for name in ("scatter/mode1.bins.csv", "scatter/mode2.bins.csv", "qsma/mode1.updated.csv"):
