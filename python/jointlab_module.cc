@@ -483,6 +483,12 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
     // As parameters.csv's identifiable: neither flat nor acting together with another set.
     d["identifiable"] = p.identifiable();
     d["acts_with"] = p.acts_with;
+    // +1 / -1: the frequencies bound it from below / above only (not identifiable either).
+    d["one_sided"] = p.one_sided;
+    // As parameters.csv's column: the smallest value within the tolerance (None: not lowered).
+    d["smallest_within_tolerance"] = p.smallest_within_tolerance > 0
+                                         ? py::object(py::float_(p.smallest_within_tolerance))
+                                         : py::object(py::none());
     parameters[py::str(p.name)] = d;
   }
   // Sets acting together, as the report's warning names them: the combination determined.
@@ -1011,7 +1017,8 @@ out            write the updated model file here (its matrices beside it), or No
 
 Pairs are made by sensor MAC within the frequency window and followed by full shape (see
 docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final, relative_std or
-None, sensitivity, flat, held, at_bound, identifiable, acts_with), 'modes' (measured,
+None, sensitivity, flat, held, at_bound, identifiable, acts_with, one_sided (+1 / -1: bound by the
+frequencies from below / above only), smallest_within_tolerance (None: not lowered)), 'modes' (measured,
 frequency_hz, model_mode, model_frequency_hz, error, mac; None where unpaired), 'rule',
 'converged' (False also where the shapes do not confirm the pairs at the result), 'status'
 ('converged', 'iteration_limit', 'failed' or 'pairs_unconfirmed'), 'unconfirmed' (the report's

@@ -259,6 +259,7 @@ def test_update_linear_equals_the_command_line(tmp_path):
                                     out=str(tmp_path / "py" / "new" / "model.toml"))
     p = result["parameters"]["spring.kj"]
     assert_close(p["final"], float(cli["spring.kj"]["final"]))
+    assert p["one_sided"] == 0 and p["smallest_within_tolerance"] is None  # an empty cell
     assert (tmp_path / "py" / "new" / "model.toml").read_text() == \
         (tmp_path / "cli" / "model.toml").read_text()
     assert abs(p["final"] / truth - 1) < 1e-6  # noise-free data: the truth
@@ -299,6 +300,18 @@ def test_update_linear_equals_the_command_line(tmp_path):
                                  modes_table=str(single))
     assert one["degrees_of_freedom"] == 0 and one["reduced_chi2"] is None
     assert "no degree of freedom is left" in one["report"]
+    # The paper's rule: the smallest stiffness within 1 %, parameters.csv's column.
+    r = run("update-linear", model, "--modes-table", table, "--sensors", tmp_path / "sensors.csv",
+            "--set", "spring.kj", "--rule", "smallest", "--minimize", "spring.kj",
+            "--out", tmp_path / "cli_smallest")
+    assert r.returncode == 0, r.stderr
+    with open(tmp_path / "cli_smallest" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    smallest = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
+                                      modes_table=str(table), rule="smallest",
+                                      minimize="spring.kj")
+    assert_close(smallest["parameters"]["spring.kj"]["smallest_within_tolerance"],
+                 float(cli["spring.kj"]["smallest_within_tolerance"]))
     # The command's refusals of its options: a value not read whole, no set.
     for kwargs, message in (({"hold": ["spring.kj=1e5xyz"]}, "1e5xyz is not a finite number"),
                             ({"bounds": {"spring.kj": (2e5, 1e5)}}, "need 0 < LO < HI"),
