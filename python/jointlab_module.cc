@@ -847,7 +847,8 @@ py::dict update_iwan_call(const PathArg& model, const std::string& set, const py
                           const py::object& progress, const std::optional<PathArg>& measured,
                           const std::optional<PathArg>& sensors,
                           const std::vector<std::string>& channels, std::optional<double> gamma,
-                          std::optional<double> beta, double linear_damping_max, int threads) {
+                          std::optional<double> beta, double linear_damping_max, int threads,
+                          const std::string& optimizer, const std::string& compare) {
   // --gamma, --beta, --linear-damping-max and --threads, checked as the command checks them.
   correlate::IwanUpdateOptions asked;
   if (gamma) {
@@ -868,6 +869,17 @@ py::dict update_iwan_call(const PathArg& model, const std::string& set, const py
   if (threads < 0 || threads > 1024)
     throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
   asked.threads = threads;
+  // --optimizer and --compare.
+  if (optimizer != "paper" && optimizer != "paper-log" && optimizer != "global-local")
+    throw InputError(
+        fmt::format("--optimizer {}: expected paper, paper-log or global-local", optimizer));
+  asked.optimizer = optimizer == "paper"       ? correlate::IwanOptimizer::kPaper
+                    : optimizer == "paper-log" ? correlate::IwanOptimizer::kPaperLog
+                                               : correlate::IwanOptimizer::kGlobalLocal;
+  if (compare != "matched" && compare != "secant")
+    throw InputError(fmt::format("--compare {}: expected matched or secant", compare));
+  asked.comparison = compare == "secant" ? correlate::IwanComparison::kSecant
+                                         : correlate::IwanComparison::kMatched;
   std::vector<std::string> modes;
   const auto one = [&](const py::handle& h) {
     if (py::isinstance<py::str>(h))
@@ -1046,6 +1058,7 @@ phase raise InputError saying which.
         py::arg("sensors") = py::none(), py::arg("channels") = std::vector<std::string>{},
         py::arg("gamma") = py::none(), py::arg("beta") = py::none(),
         py::arg("linear_damping_max") = 0.05, py::arg("threads") = 0,
+        py::arg("optimizer") = "global-local", py::arg("compare") = "matched",
         R"(Updates one Iwan set to measured backbones (`jointlab update-iwan`): backbone tables, or
 a `process` output folder with its sensors file.
 
@@ -1067,6 +1080,9 @@ linear_damping_max
 gamma, beta     hold Kt / Ks, or beta (0: no macroslip weight), at this value (--gamma, --beta)
 fs_range, gamma_range, chi_range, beta_range, evaluations, seed, threads: as the command's
                 options (threads: 0 every core; the result does not depend on it)
+optimizer       'global-local' (default), 'paper' or 'paper-log' (--optimizer)
+compare         'matched' (default: each backbone against the model pair its test shows) or
+                'secant' (QSMA's secant pair, as the paper) (--compare)
 out             write the updated model file here (its folder created), or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta, and gamma = Kt / Ks as

@@ -638,7 +638,8 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
     one_mode_iwan(d, points=40)
     r = run("update-iwan", d / "start.toml", "--set", "j", "--mode", "1", "--backbone",
             d / "bb.csv", "--evaluations", "200", "--gamma", "1.1", "--beta", "0.5",
-            "--linear-damping", "fit", "--linear-damping-max", "0.01", "--out", d / "cli")
+            "--linear-damping", "fit", "--linear-damping-max", "0.01", "--optimizer", "paper-log",
+            "--compare", "secant", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
     with open(d / "cli" / "parameters.csv", newline="") as f:
         cli = {row["name"]: row for row in csv.DictReader(f)}
@@ -646,8 +647,8 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
     # before as 'expected an int').
     result = jointlab.update_iwan(d / "start.toml", "j", np.int64(1), [d / "bb.csv"],
                                   evaluations=200, gamma=1.1, beta=0.5, linear_damping="fit",
-                                  linear_damping_max=0.01, threads=1,
-                                  out=d / "py" / "new" / "model.toml")
+                                  linear_damping_max=0.01, threads=1, optimizer="paper-log",
+                                  compare="secant", out=d / "py" / "new" / "model.toml")
     assert result["report"] == r.stdout
     for name in ("Fs", "Kt", "chi", "beta", "gamma"):
         assert_close(result["parameters"][name]["initial"], float(cli[name]["initial"]))
@@ -663,7 +664,9 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
     for kwargs, message in (({"gamma": 0.0}, "--gamma 0: must be a finite number > 0"),
                             ({"beta": -1.0}, "--beta -1: must be a finite number >= 0"),
                             ({"linear_damping_max": 1.5}, "--linear-damping-max 1.5: must be in"),
-                            ({"threads": -1}, "--threads -1: must be in")):
+                            ({"threads": -1}, "--threads -1: must be in"),
+                            ({"optimizer": "ga"}, "--optimizer ga: expected paper"),
+                            ({"compare": "tangent"}, "--compare tangent: expected matched")):
         with pytest.raises(jointlab.InputError, match=message):
             jointlab.update_iwan(str(d / "start.toml"), "j", 1, [str(d / "bb.csv")], **kwargs)
     with pytest.raises(jointlab.InputError, match="--set spring.k: update-iwan updates an Iwan"):
