@@ -619,6 +619,14 @@ campaign::IwanInputArgs iwan_input_args(const std::vector<std::string>& modes,
   return a;
 }
 
+// update-iwan's --stepped-sine, --stepped-sine-channel and --stepped-sine-mode (none: empty, "",
+// 0: the command's defaults).
+struct SteppedSineArgs {
+  std::vector<std::string> folders;  // `jointlab stepped-sine` output folders
+  std::string channel;               // the sensor channel of their response
+  int mode = 0;                      // their elastic model mode (0: the first --mode)
+};
+
 // update-iwan (contract.md): backbone tables (data/backbone_table.h) or a `process` folder with
 // its sensors, read as the command reads them (campaign/iwan_inputs.h); the options and defaults
 // of the command; the fit `run` and the command make (campaign::checked_fit_iwan).
@@ -631,7 +639,8 @@ py::dict update_iwan(
     const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
     const std::optional<std::string>& out, const py::object& progress,
     const std::optional<std::string>& measured, const std::optional<std::string>& sensors,
-    const std::vector<std::string>& channels, const correlate::IwanUpdateOptions& asked) {
+    const std::vector<std::string>& channels, const correlate::IwanUpdateOptions& asked,
+    const SteppedSineArgs& sine) {
   if (set.find('.') != std::string::npos && !set.starts_with("iwan."))
     throw InputError(
         fmt::format("--set {}: update-iwan updates an Iwan set (iwan.<name> or "
@@ -654,6 +663,9 @@ py::dict update_iwan(
     campaign::IwanInputArgs a =
         iwan_input_args(modes, backbones, amplitude, dof, measured, sensors, channels);
     a.model = model_path;
+    a.stepped_sine = sine.folders;
+    a.stepped_sine_channel = sine.channel;
+    a.stepped_sine_mode = sine.mode;
     in = campaign::read_iwan_inputs(m, a, "update-iwan");
     if (!in.slip_screen.empty())
       report(progress,
@@ -835,20 +847,27 @@ py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
 }
 
 // update_iwan with `mode` as Python gives it: an int, an 'R:BAND' string or a list of either.
-py::dict update_iwan_call(const PathArg& model, const std::string& set, const py::object& mode,
-                          const std::vector<PathArg>& backbones,
-                          const std::optional<std::string>& amplitude,
-                          const std::optional<std::string>& dof, const std::string& linear_damping,
-                          const std::optional<std::pair<double, double>>& fs_range,
-                          const std::pair<double, double>& gamma_range,
-                          const std::pair<double, double>& chi_range,
-                          const std::pair<double, double>& beta_range, int evaluations,
-                          unsigned seed, const std::optional<PathArg>& out,
-                          const py::object& progress, const std::optional<PathArg>& measured,
-                          const std::optional<PathArg>& sensors,
-                          const std::vector<std::string>& channels, std::optional<double> gamma,
-                          std::optional<double> beta, double linear_damping_max, int threads,
-                          const std::string& optimizer, const std::string& compare) {
+py::dict update_iwan_call(
+    const PathArg& model, const std::string& set, const py::object& mode,
+    const std::vector<PathArg>& backbones, const std::optional<std::string>& amplitude,
+    const std::optional<std::string>& dof, const std::string& linear_damping,
+    const std::optional<std::pair<double, double>>& fs_range,
+    const std::pair<double, double>& gamma_range, const std::pair<double, double>& chi_range,
+    const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
+    const std::optional<PathArg>& out, const py::object& progress,
+    const std::optional<PathArg>& measured, const std::optional<PathArg>& sensors,
+    const std::vector<std::string>& channels, std::optional<double> gamma,
+    std::optional<double> beta, double linear_damping_max, int threads,
+    const std::string& optimizer, const std::string& compare,
+    const std::vector<PathArg>& stepped_sine,
+    const std::optional<std::string>& stepped_sine_channel, int stepped_sine_mode) {
+  if (stepped_sine_mode < 0)
+    throw InputError(
+        fmt::format("--stepped-sine-mode {}: elastic modes count from 1 (0: the "
+                    "first mode)",
+                    stepped_sine_mode));
+  const SteppedSineArgs sine{text(stepped_sine), stepped_sine_channel.value_or(""),
+                             stepped_sine_mode};
   // --gamma, --beta, --linear-damping-max and --threads, checked as the command checks them.
   correlate::IwanUpdateOptions asked;
   if (gamma) {
@@ -898,7 +917,7 @@ py::dict update_iwan_call(const PathArg& model, const std::string& set, const py
   if (modes.empty()) throw InputError("mode: give at least one mode");
   return update_iwan(text(model), set, modes, text(backbones), amplitude, dof, linear_damping,
                      fs_range, gamma_range, chi_range, beta_range, evaluations, seed, text(out),
-                     progress, text(measured), text(sensors), channels, asked);
+                     progress, text(measured), text(sensors), channels, asked, sine);
 }
 
 }  // namespace
@@ -1059,6 +1078,8 @@ phase raise InputError saying which.
         py::arg("gamma") = py::none(), py::arg("beta") = py::none(),
         py::arg("linear_damping_max") = 0.05, py::arg("threads") = 0,
         py::arg("optimizer") = "global-local", py::arg("compare") = "matched",
+        py::arg("stepped_sine") = std::vector<std::string>{},
+        py::arg("stepped_sine_channel") = py::none(), py::arg("stepped_sine_mode") = 0,
         R"(Updates one Iwan set to measured backbones (`jointlab update-iwan`): backbone tables, or
 a `process` output folder with its sensors file.
 
@@ -1083,6 +1104,11 @@ fs_range, gamma_range, chi_range, beta_range, evaluations, seed, threads: as the
 optimizer       'global-local' (default), 'paper' or 'paper-log' (--optimizer)
 compare         'matched' (default: each backbone against the model pair its test shows) or
                 'secant' (QSMA's secant pair, as the paper) (--compare)
+stepped_sine, stepped_sine_channel, stepped_sine_mode
+                `jointlab stepped-sine` output folders fitted with the hammer data, each
+                against the steady-state pair; the sensor channel of their response (default:
+                the only sensor) and their model mode (0: the first mode) (--stepped-sine,
+                --stepped-sine-channel, --stepped-sine-mode)
 out             write the updated model file here (its folder created), or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta, and gamma = Kt / Ks as

@@ -671,3 +671,49 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
             jointlab.update_iwan(str(d / "start.toml"), "j", 1, [str(d / "bb.csv")], **kwargs)
     with pytest.raises(jointlab.InputError, match="--set spring.k: update-iwan updates an Iwan"):
         jointlab.update_iwan(str(d / "start.toml"), "spring.k", 1, [str(d / "bb.csv")])
+
+
+def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
+    # The one-mode truth struck (`simulate`, 200 N) and processed, and ten of its own QSMA
+    # steady-state points as a `stepped-sine` output folder (velocity at the sensor, q 2 pi f for
+    # the unit mass): stepped_sine= fits them with the hit as --stepped-sine does, the same
+    # parameters (10 digits) and report (the slip screen a progress line); without them the fit
+    # ends elsewhere.
+    d = tmp_path
+    q = one_mode_iwan(d, points=40)
+    r = run("simulate", d / "truth.toml", "--impact", "0", "--force", "200", "--duration", "2",
+            "--fs", "2048", "--modal-damping", "0.001", "--out", d / "hit.csv", "--quiet")
+    assert r.returncode == 0, r.stderr
+    r = run("process", d / "hit.csv", "--band", "60:130", "--out", d / "p")
+    assert r.returncode == 0, r.stderr
+    (d / "sensors.csv").write_text("channel,dof\nacc_0,0\n")
+    (d / "sine").mkdir()
+    (d / "sine" / "summary.json").write_text(json.dumps({
+        "program": "jointlab stepped-sine", "amplitude_quantity": "velocity",
+        "amplitude_unit": "m/s",
+        "files": [{"file": "sweeps.csv", "output": "sweeps.backbone.csv", "levels": []}]}))
+    with open(d / "sine" / "sweeps.backbone.csv", "w") as f:
+        f.write("amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n")
+        for a, fr, z in list(zip(q["modal_amplitude"], q["frequency_hz"],
+                                 q["harmonic_damping_ratio"]))[::4]:
+            f.write(f"{a * 2 * np.pi * fr!r},{fr!r},{z!r},{fr * 1e-4!r},{z * 0.02!r}\n")
+    r = run("update-iwan", d / "start.toml", "--set", "j", "--mode", "1", "--measured", d / "p",
+            "--sensors", d / "sensors.csv", "--stepped-sine", d / "sine", "--linear-damping",
+            "fit", "--evaluations", "200", "--out", d / "cli")
+    assert r.returncode == 0, r.stderr
+    with open(d / "cli" / "parameters.csv", newline="") as f:
+        cli = {row["name"]: row for row in csv.DictReader(f)}
+    lines = []
+    both = jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p",
+                                sensors=d / "sensors.csv", stepped_sine=[d / "sine"],
+                                linear_damping="fit", evaluations=200, progress=lines.append)
+    for name in ("Fs", "Kt", "chi", "beta"):
+        assert_close(both["parameters"][name]["final"], float(cli[name]["final"]))
+    assert lines[0].startswith("slip screen") and "stepped sine" in lines[0]
+    assert lines[0] + both["report"] == r.stdout
+    hit = jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p",
+                               sensors=d / "sensors.csv", linear_damping="fit", evaluations=200)
+    assert abs(hit["parameters"]["Fs"]["final"] / both["parameters"]["Fs"]["final"] - 1) > 0.1
+    with pytest.raises(jointlab.InputError, match="--stepped-sine-mode -1"):
+        jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p", sensors=d / "sensors.csv",
+                             stepped_sine=[d / "sine"], stepped_sine_mode=-1)
