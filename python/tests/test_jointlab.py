@@ -635,7 +635,7 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
     # the noise note's evidence (the largest third's share of the chi-square, at least 1/3 by
     # its definition) and the misfit flag are returned; the command's refusals are its own.
     d = tmp_path
-    one_mode_iwan(d, points=40)
+    q = one_mode_iwan(d, points=40)
     r = run("update-iwan", d / "start.toml", "--set", "j", "--mode", "1", "--backbone",
             d / "bb.csv", "--evaluations", "200", "--gamma", "1.1", "--beta", "0.5",
             "--linear-damping", "fit", "--linear-damping-max", "0.01", "--optimizer", "paper-log",
@@ -661,6 +661,20 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
     assert (d / "py" / "new" / "model.toml").read_text() == (d / "cli" / "model.toml").read_text()
     assert 1 / 3 <= result["amplitude_share"] <= 1
     assert result["misfit"] == ("WARNING the model does not describe" in result["report"])
+    # The truth's own curve with 1.5e-3 frequency noise stated as 1.5e-4: the report's note that
+    # the residuals look like noise, and its evidence returned (serial correlation under 0.3,
+    # no third of the points, by amplitude, holding much more than 1/3 of the chi-square).
+    rng = np.random.default_rng(3)
+    with open(d / "noisy.csv", "w") as f:
+        f.write("amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n")
+        for a, fr, z in zip(q["modal_amplitude"], q["ringdown_frequency_hz"],
+                            q["ringdown_damping_ratio"]):
+            f.write(f"{a!r},{fr * (1 + 1.5e-3 * rng.standard_normal())!r},"
+                    f"{z * (1 + 0.02 * rng.standard_normal())!r},{fr * 1.5e-4!r},{z * 0.02!r}\n")
+    noisy = jointlab.update_iwan(d / "truth.toml", "j", 1, [d / "noisy.csv"], evaluations=300)
+    assert "spread evenly over the amplitudes, as noise is" in noisy["report"]
+    assert noisy["misfit"] and noisy["noise_correlation"] < 0.3
+    assert 1 / 3 <= noisy["amplitude_share"] < 0.5
     for kwargs, message in (({"gamma": 0.0}, "--gamma 0: must be a finite number > 0"),
                             ({"beta": -1.0}, "--beta -1: must be a finite number >= 0"),
                             ({"linear_damping_max": 1.5}, "--linear-damping-max 1.5: must be in"),
