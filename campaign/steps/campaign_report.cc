@@ -445,6 +445,12 @@ ReportSection model_section(const Campaign& c, const MeasuredSide& m, const Mode
     kc.curves = r.iwan.curves;
     kc.iwan = r.iwan.summary;
     kc.cost_known = r.iwan.cost_known;
+    if (r.iwan.ran && !r.iwan.summary.held[1]) {
+      kc.kt_std = r.iwan.summary.relative_std(1);
+    } else if (r.linear.ran && linearly_updated(c, r, set)) {
+      for (const correlate::ParameterReport& p : r.linear.summary.parameters)
+        if (p.name == set && p.relative_std) kc.kt_std = *p.relative_std;
+    }
     compare_with_known(kc, c.truth.filename().string(), s);
   }
   for (const ReportFigure& f : figures.model)

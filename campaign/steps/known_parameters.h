@@ -40,6 +40,9 @@ struct KnownComparison {
   int curves = 0;                     ///< backbones the Iwan update fitted
   correlate::IwanUpdateSummary iwan;  ///< the Iwan update's outcome
   double cost_known = 0;              ///< the Iwan update's cost at the known parameters
+  /// The updated K_T's relative one-sigma uncertainty from the update that set it (the Iwan
+  /// update where it fitted K_T, else the linear update); 0: none stated.
+  double kt_std = 0;
 };
 
 /// Adds the "Updated versus known" table and its paragraph to `section`.

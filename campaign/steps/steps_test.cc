@@ -23,6 +23,7 @@
 #include "jointlab/campaign/steps/campaign_report.h"
 #include "jointlab/campaign/steps/hits.h"
 #include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/linear_step.h"
 #include "jointlab/campaign/steps/measured_side.h"
 #include "jointlab/campaign/steps/model_side.h"
@@ -850,6 +851,61 @@ TEST(BackboneFileOfAHit, LeavesOutPointsMarkedHarmonicOrExchange) {
                             "time_s,amplitude,frequency_hz,damping_ratio\n0.1,0.02,57.5,0.004\n"
                             "0.2,0.01,57.8,0.003\n");
   EXPECT_EQ(read_backbone_file(plain, "hit", "level1").curve.amplitude.size(), 2);
+}
+
+}  // namespace
+}  // namespace jointlab::campaign
+
+namespace jointlab::campaign {
+namespace {
+
+// A truth file without [scatter] (nothing planted): K_T and F_S are judged against twice the
+// update's own sigma, as chi and beta are. Before, they had no tolerance ("none known") and
+// were "NO" recovered at any difference: F_S -0.30 % with +/- 0.35 % stated.
+TEST(KnownParameters, WithoutPlantedScatterTheUpdatesOwnSigmaJudges) {
+  KnownComparison k;
+  k.truth.present = true;
+  k.truth.iwan = {40, 1e7, -0.3, 0.8};
+  k.updated = {40 * (1 - 0.003), 1e7 * (1 + 0.001), -0.31, 0.8 * 1.05};
+  k.kt_updated = true;
+  k.iwan_ran = true;
+  k.curves = 6;
+  k.iwan.top_slip = 2, k.iwan.bottom_slip = 0.1, k.iwan.phi_max = 1;  // past phi_max
+  k.iwan.relative_std = Eigen::Vector4d(0.0035, 0.002, 0.05, 0.1);
+  k.kt_std = 0.002;
+  ReportSection s;
+  compare_with_known(k, "truth.toml", s);
+  ASSERT_EQ(s.tables.size(), 1u);
+  const auto row = [&](const std::string& name) {
+    for (const auto& r : s.tables[0].rows)
+      if (r[0] == name) return r;
+    ADD_FAILURE() << "no row " << name;
+    return std::vector<std::string>(6);
+  };
+  EXPECT_EQ(row("Kt [N/m]")[4], "0.4 % (2 x its uncertainty 0.2 %, none planted)");
+  EXPECT_EQ(row("Kt [N/m]")[5], "yes");
+  EXPECT_EQ(row("Fs [N]")[4], "0.7 % (2 x its uncertainty 0.35 %, none planted)");
+  EXPECT_EQ(row("Fs [N]")[5], "yes");
+  ASSERT_FALSE(s.paragraphs.empty());
+  EXPECT_NE(s.paragraphs[0].find("recovers all 4 identified quantities"), std::string::npos)
+      << s.paragraphs[0];
+  EXPECT_NE(s.paragraphs[0].find("where none was planted (Kt, Fs, chi, beta)"), std::string::npos)
+      << s.paragraphs[0];
+  // F_S 1 % off at +/- 0.35 %: not recovered; planted scatter, where given, still judges.
+  k.updated.Fs = 40 * 1.01;
+  ReportSection t;
+  compare_with_known(k, "truth.toml", t);
+  bool fs_missed = false;
+  for (const auto& r : t.tables[0].rows) fs_missed |= r[0] == "Fs [N]" && r[5] == "NO";
+  EXPECT_TRUE(fs_missed);
+  k.truth.scatter_fs = 0.01;
+  ReportSection u;
+  compare_with_known(k, "truth.toml", u);
+  for (const auto& r : u.tables[0].rows) {
+    if (r[0] == "Fs [N]") {
+      EXPECT_EQ(r[4], "2.0 % (2 x planted 1.0 %)");
+    }
+  }
 }
 
 }  // namespace
