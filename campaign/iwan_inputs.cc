@@ -195,17 +195,11 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   // say that rather than that nothing was measured.
   IwanInputs in;
   if (modes.size() > 1) in.slip_screen = built.screen_report(modes);
-  if (built.fitted.empty()) {
-    std::string per_mode;
-    for (size_t k = 0; k < modes.size(); ++k) {
-      per_mode += fmt::format("{}{}: {} of {}", per_mode.empty() ? "" : ", ", modes[k].name,
-                              built.points_screened[k].second, built.points_screened[k].first);
-    }
-    throw InputError(fmt::format(
-        "{}: the slip screen leaves no backbone of at least two points: every point where other "
-        "modes carry over {:g} % of the joint slip is left out ({}); fit the modes one at a time",
-        command, 100 * target_options.max_slip_share, per_mode));
-  }
+  if (const std::string why = built.screened_out(modes, target_options.max_slip_share);
+      !why.empty())
+    throw InputError(fmt::format("{}: {}", command, why));
+  if (built.fitted.empty())
+    throw InputError(fmt::format("{}: no mode has a backbone of at least two points", command));
   in.sensors = sensors;
   in.targets = built.fitted;
   in.amplitude = run.amplitude;

@@ -70,6 +70,9 @@ struct IwanTargets {
   std::vector<std::pair<Eigen::Index, Eigen::Index>> points_screened;
   /// One line per fitted mode with a screen: "mode 1:1: 12 of 480 points left out ...".
   std::string screen_report(const std::vector<ModeBackbones>& modes) const;
+  /// Where no fitted target is left because the slip screen (at `max_slip_share`) left out every
+  /// point of every fitted mode: why, with the points per mode and what to do; "" otherwise.
+  std::string screened_out(const std::vector<ModeBackbones>& modes, double max_slip_share) const;
   size_t curves() const;  ///< backbones over the fitted targets
 };
 

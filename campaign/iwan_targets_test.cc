@@ -120,6 +120,22 @@ TEST(IwanTargets, PointsWhereAnotherModeSlipsTheJointsAreLeftOut) {
   const std::string report = t3.screen_report(three);
   EXPECT_NE(report.find(three[0].name + ": 10 of 10 points left out"), std::string::npos) << report;
   EXPECT_EQ(std::count(report.begin(), report.end(), '\n'), 3) << report;
+  EXPECT_EQ(t3.screened_out(three, 0.05), "");  // two modes are left to fit
+  // The loud mode only reported: the fitted mode loses every point, and why is said with the
+  // counts, not as "fit the modes one at a time" (its one-mode curve would take the other
+  // mode's slip as its own).
+  ModeBackbones loud_reported = mode(chain_a[1], flat("hit", 150, 0.01, 100));
+  loud_reported.fitted = false;
+  const std::vector<ModeBackbones> none_left = {first, loud_reported};
+  const IwanTargets t0 = iwan_targets(m, sensors, none_left, {});
+  EXPECT_TRUE(t0.fitted.empty());
+  const std::string why = t0.screened_out(none_left, 0.05);
+  EXPECT_NE(why.find("over 5 % of the joint slip is left out (" + first.name + ": 10 of 10, "),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("strike where the fitted modes dominate the joint slip"), std::string::npos)
+      << why;
+  EXPECT_EQ(alone.screened_out({first}, 0.05), "");
 }
 
 }  // namespace

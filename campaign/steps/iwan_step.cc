@@ -202,6 +202,12 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   iwan_update_options(c, io, to);
   const std::vector<ModeBackbones> backbones = campaign_backbones(c, m);
   const IwanTargets targets = iwan_targets(base, sensors, backbones, to);
+  if (const std::string why = targets.screened_out(backbones, to.max_slip_share); !why.empty()) {
+    step.refused = true;
+    step.note = "update.iwan: " + why +
+                "; Iwan updating skipped ([update.iwan] max_slip_share sets the share)";
+    return step;
+  }
   if (targets.fitted.empty()) {
     step.note = "update.iwan: no mode names its model mode (model_mode); Iwan updating skipped";
     return step;
