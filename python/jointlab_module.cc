@@ -1,8 +1,8 @@
 // The `jointlab` Python module: the library's process, record reading, modes, QSMA, update-linear,
 // update-iwan, compare and run with numpy arrays in and out (docs/python.md), the same options and
-// defaults as the command line, and the command
-// line's one-line messages as jointlab.InputError (a ValueError). Argument conversion only: every
-// number comes from the library the program uses (style.md 13).
+// defaults as the command line, and the command line's one-line messages as jointlab.InputError
+// (a ValueError). Argument conversion only: every number comes from the library the program uses
+// (style.md 13).
 #include <algorithm>
 #include <cctype>
 #include <cmath>
