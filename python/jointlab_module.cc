@@ -620,12 +620,13 @@ campaign::IwanInputArgs iwan_input_args(const std::vector<std::string>& modes,
   return a;
 }
 
-// update-iwan's --stepped-sine, --stepped-sine-channel and --stepped-sine-mode (none: empty, "",
-// 0: the command's defaults).
+// update-iwan's --stepped-sine, --stepped-sine-channel, --stepped-sine-mode and --pareto (none:
+// empty, "", 0: the command's defaults).
 struct SteppedSineArgs {
   std::vector<std::string> folders;  // `jointlab stepped-sine` output folders
   std::string channel;               // the sensor channel of their response
   int mode = 0;                      // their elastic model mode (0: the first --mode)
+  std::vector<double> pareto;        // gamma values of a Pareto front
 };
 
 // update-iwan (contract.md): backbone tables (data/backbone_table.h) or a `process` folder with
@@ -658,6 +659,7 @@ py::dict update_iwan(
   correlate::IwanUpdateSummary summary;
   campaign::IwanInputs in;
   std::vector<std::string> shape_warnings;
+  std::vector<correlate::ParetoPoint> front;
   {
     py::gil_scoped_release release;
     const model::Model m = model::read_model(model_path);
@@ -685,6 +687,10 @@ py::dict update_iwan(
     if (in.measured) objective.set_linear_modes(*in.measured, 0.6);
     summary =
         campaign::checked_fit_iwan(objective, o, ranges, "update-iwan", in.data_name, nullptr);
+    if (!sine.pareto.empty()) {  // as the command: in the search box, after the fit
+      o.bounds = ranges.bounds(objective.initial());
+      front = correlate::pareto_front(objective, sine.pareto, o);
+    }
     const model::Model updated = objective.apply(summary.best, summary.modal_ratio);
     shape_warnings = campaign::band_shape_warnings(updated, in);
     if (out) write_model(*out, updated);
@@ -765,6 +771,36 @@ py::dict update_iwan(
   std::string text = summary.report();
   if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
   for (const std::string& line : shape_warnings) text += "  " + line + "\n";
+  // The Pareto front (pareto=): a dict per gamma, and the command's lines in the report.
+  py::list pareto;
+  for (const correlate::ParetoPoint& p : front) {
+    py::dict d;
+    d["gamma"] = p.gamma;
+    d["Fs"] = p.params.Fs;
+    d["Kt"] = p.params.Kt;
+    d["chi"] = p.params.chi;
+    d["beta"] = p.params.beta;
+    d["linear_error"] = p.linear_error;
+    d["backbone_cost"] = p.backbone_cost;
+    d["dominated"] = p.dominated;
+    py::list errors;  // per measured linear mode; None: unpaired
+    for (const std::optional<double>& e : p.mode_errors)
+      errors.append(e ? py::object(py::float_(*e)) : py::object(py::none()));
+    d["mode_errors"] = errors;
+    pareto.append(d);
+    text += fmt::format(
+        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
+        "error {:.3g} %, backbone cost {:.4g}{}\n",
+        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
+        p.backbone_cost, p.dominated ? " (dominated)" : "");
+    std::string line = "    linear error per measured mode [%]:";
+    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
+      line += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
+                               : fmt::format(" {}: unpaired", i + 1);
+    }
+    if (!p.mode_errors.empty()) text += line + "\n";
+  }
+  result["pareto"] = pareto;
   result["report"] = text;
   return result;
 }
@@ -848,27 +884,33 @@ py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
 }
 
 // update_iwan with `mode` as Python gives it: an int, an 'R:BAND' string or a list of either.
-py::dict update_iwan_call(
-    const PathArg& model, const std::string& set, const py::object& mode,
-    const std::vector<PathArg>& backbones, const std::optional<std::string>& amplitude,
-    const std::optional<std::string>& dof, const std::string& linear_damping,
-    const std::optional<std::pair<double, double>>& fs_range,
-    const std::pair<double, double>& gamma_range, const std::pair<double, double>& chi_range,
-    const std::pair<double, double>& beta_range, int evaluations, unsigned seed,
-    const std::optional<PathArg>& out, const py::object& progress,
-    const std::optional<PathArg>& measured, const std::optional<PathArg>& sensors,
-    const std::vector<std::string>& channels, std::optional<double> gamma,
-    std::optional<double> beta, double linear_damping_max, int threads,
-    const std::string& optimizer, const std::string& compare,
-    const std::vector<PathArg>& stepped_sine,
-    const std::optional<std::string>& stepped_sine_channel, int stepped_sine_mode) {
+py::dict update_iwan_call(const PathArg& model, const std::string& set, const py::object& mode,
+                          const std::vector<PathArg>& backbones,
+                          const std::optional<std::string>& amplitude,
+                          const std::optional<std::string>& dof, const std::string& linear_damping,
+                          const std::optional<std::pair<double, double>>& fs_range,
+                          const std::pair<double, double>& gamma_range,
+                          const std::pair<double, double>& chi_range,
+                          const std::pair<double, double>& beta_range, int evaluations,
+                          unsigned seed, const std::optional<PathArg>& out,
+                          const py::object& progress, const std::optional<PathArg>& measured,
+                          const std::optional<PathArg>& sensors,
+                          const std::vector<std::string>& channels, std::optional<double> gamma,
+                          std::optional<double> beta, double linear_damping_max, int threads,
+                          const std::string& optimizer, const std::string& compare,
+                          const std::vector<PathArg>& stepped_sine,
+                          const std::optional<std::string>& stepped_sine_channel,
+                          int stepped_sine_mode, const std::vector<double>& pareto) {
   if (stepped_sine_mode < 0)
     throw InputError(
-        fmt::format("--stepped-sine-mode {}: elastic modes count from 1 (0: the "
-                    "first mode)",
+        fmt::format("--stepped-sine-mode {}: elastic modes count from 1 (0: the first mode)",
                     stepped_sine_mode));
+  for (const double g : pareto) {
+    if (!(std::isfinite(g) && g > 0))
+      throw InputError(fmt::format("--pareto {}: gamma values must be finite and > 0", g));
+  }
   const SteppedSineArgs sine{text(stepped_sine), stepped_sine_channel.value_or(""),
-                             stepped_sine_mode};
+                             stepped_sine_mode, pareto};
   // --gamma, --beta, --linear-damping-max and --threads, checked as the command checks them.
   correlate::IwanUpdateOptions asked;
   if (gamma) {
@@ -1081,6 +1123,7 @@ phase raise InputError saying which.
         py::arg("optimizer") = "global-local", py::arg("compare") = "matched",
         py::arg("stepped_sine") = std::vector<std::string>{},
         py::arg("stepped_sine_channel") = py::none(), py::arg("stepped_sine_mode") = 0,
+        py::arg("pareto") = std::vector<double>{},
         R"(Updates one Iwan set to measured backbones (`jointlab update-iwan`): backbone tables, or
 a `process` output folder with its sensors file.
 
@@ -1110,6 +1153,10 @@ stepped_sine, stepped_sine_channel, stepped_sine_mode
                 against the steady-state pair; the sensor channel of their response (default:
                 the only sensor) and their model mode (0: the first mode) (--stepped-sine,
                 --stepped-sine-channel, --stepped-sine-mode)
+pareto          gamma values of a Pareto front (--pareto): 'pareto' in the result, one dict per
+                gamma (gamma, Fs, Kt, chi, beta, linear_error, backbone_cost, dominated,
+                mode_errors: per measured linear mode, None where unpaired), and the
+                command's lines in the report
 out             write the updated model file here (its folder created), or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta, and gamma = Kt / Ks as

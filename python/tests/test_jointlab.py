@@ -692,7 +692,7 @@ def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
     # steady-state points as a `stepped-sine` output folder (velocity at the sensor, q 2 pi f for
     # the unit mass): stepped_sine= fits them with the hit as --stepped-sine does, the same
     # parameters (10 digits) and report (the slip screen a progress line); without them the fit
-    # ends elsewhere.
+    # ends elsewhere. A Pareto front at two gammas (--pareto) comes with it, as pareto.csv.
     d = tmp_path
     q = one_mode_iwan(d, points=40)
     r = run("simulate", d / "truth.toml", "--impact", "0", "--force", "200", "--duration", "2",
@@ -713,21 +713,33 @@ def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
             f.write(f"{a * 2 * np.pi * fr!r},{fr!r},{z!r},{fr * 1e-4!r},{z * 0.02!r}\n")
     r = run("update-iwan", d / "start.toml", "--set", "j", "--mode", "1", "--measured", d / "p",
             "--sensors", d / "sensors.csv", "--stepped-sine", d / "sine", "--linear-damping",
-            "fit", "--evaluations", "200", "--out", d / "cli")
+            "fit", "--evaluations", "200", "--pareto", "0.9,1.1", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
     with open(d / "cli" / "parameters.csv", newline="") as f:
         cli = {row["name"]: row for row in csv.DictReader(f)}
     lines = []
     both = jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p",
                                 sensors=d / "sensors.csv", stepped_sine=[d / "sine"],
-                                linear_damping="fit", evaluations=200, progress=lines.append)
+                                linear_damping="fit", evaluations=200, pareto=[0.9, 1.1],
+                                progress=lines.append)
     for name in ("Fs", "Kt", "chi", "beta"):
         assert_close(both["parameters"][name]["final"], float(cli[name]["final"]))
     assert lines[0].startswith("slip screen") and "stepped sine" in lines[0]
     assert lines[0] + both["report"] == r.stdout
+    with open(d / "cli" / "pareto.csv", newline="") as f:
+        front = list(csv.DictReader(f))
+    assert [p["gamma"] for p in both["pareto"]] == [0.9, 1.1]
+    for p, row in zip(both["pareto"], front):
+        for name in ("Fs", "Kt", "chi", "beta", "linear_error", "backbone_cost"):
+            assert_close(p[name], float(row[name]))
+        assert p["dominated"] == (row["dominated"] == "1")
+        assert_close(p["mode_errors"][0], float(row["linear_error1"]))
     hit = jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p",
                                sensors=d / "sensors.csv", linear_damping="fit", evaluations=200)
     assert abs(hit["parameters"]["Fs"]["final"] / both["parameters"]["Fs"]["final"] - 1) > 0.1
+    with pytest.raises(jointlab.InputError, match="--pareto 0: gamma values must be"):
+        jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p", sensors=d / "sensors.csv",
+                             pareto=[1.0, 0.0])
     with pytest.raises(jointlab.InputError, match="--stepped-sine-mode -1"):
         jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p", sensors=d / "sensors.csv",
                              stepped_sine=[d / "sine"], stepped_sine_mode=-1)
