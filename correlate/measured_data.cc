@@ -471,6 +471,7 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
   if (values[0].empty()) throw InputError(where(name, 0, "no backbone point"));
   MeasuredBackbone b;
   b.sensor = sensor;
+  b.source = name;  // for messages, and which hit a curve is where several are returned
   auto vec = [](const std::vector<double>& v) {
     return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
   };

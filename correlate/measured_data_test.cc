@@ -81,6 +81,9 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
   EXPECT_EQ(refs[1].sensor, 0);
   EXPECT_EQ(refs[0].amplitude(1), 0.01);
   EXPECT_EQ(refs[0].damping_std(0), 0.0001);
+  // Each curve says which backbone file (so which hit) it is: compare() returns them by it.
+  EXPECT_TRUE(refs[0].source.ends_with("hit1.a5.band1.csv")) << refs[0].source;
+  EXPECT_TRUE(refs[1].source.ends_with("hit2.b2.band1.csv")) << refs[1].source;
   EXPECT_EQ(measured_backbones(run, sensors, 1, {"a5"}).size(), 2u);
   EXPECT_NE(testing::input_error_of([&] {
               measured_backbones(run, sensors, 2, {});
