@@ -103,12 +103,17 @@ std::string shown(const fs::path& path) {
 AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
   const fs::path dir = path_.has_parent_path() ? path_.parent_path() : fs::path(".");
   const std::string prefix = path_.filename().string() + ".tmp-";
+  // Said of the file asked for, not of the temporary a missing folder would fail to create.
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw InputError(where(shown(path_), 0,
+                           fmt::format("cannot create output file: no folder {}", dir.string())));
+  }
   remove_stale_temporaries(dir, prefix);
   tmp_ = temporary_name(dir, prefix);
   claim_ = TemporaryClaim(tmp_);
   out_.open(tmp_, std::ios::binary | std::ios::trunc);
   if (!out_) {
-    std::error_code ec;
     fs::remove(tmp_, ec);
     throw InputError(where(shown(path_), 0, "cannot create output file"));
   }

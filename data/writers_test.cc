@@ -32,6 +32,19 @@ TEST(AtomicFile, UncommittedLeavesNothing) {
   }
 }
 
+// A file in a folder that does not exist: the message names the file asked for and the
+// missing folder, not the temporary that could not be created ("x/m.mtx.tmp-cf5bf123").
+TEST(AtomicFile, AMissingFolderIsNamedWithTheFile) {
+  const fs::path p = scratch("no-such-folder") / "m.mtx";
+  fs::remove_all(p.parent_path());
+  const std::string e = testing::input_error_of([&] { AtomicFile f(p); });
+  EXPECT_NE(
+      e.find(p.string() + ": cannot create output file: no folder " + p.parent_path().string()),
+      std::string::npos)
+      << e;
+  EXPECT_EQ(e.find(".tmp-"), std::string::npos) << e;
+}
+
 TEST(Table, WritesHeaderAndRowsAndRefusesNaN) {
   Table t;
   t.add("a", Eigen::Vector2d(1.0, 0.5));
