@@ -41,7 +41,13 @@ void run_compare(CompareArgs a) {
     say(stdout, "slip screen (points where other modes slip the joints):\n{}", c.slip_screen);
   for (const std::string& note : c.notes) say(stderr, "{}\n", note);
   const fs::path csv = fs::path(a.out).replace_extension(".csv");
-  if (!fs::path(a.out).parent_path().empty()) fs::create_directories(fs::path(a.out).parent_path());
+  if (const fs::path dir = fs::path(a.out).parent_path(); !dir.empty()) {
+    std::error_code ec;  // one line, not an internal error (made only now: a refusal
+                         // above leaves no folder behind)
+    fs::create_directories(dir, ec);
+    if (!fs::is_directory(dir))
+      throw InputError(fmt::format("--out {}: cannot create the folder {}", a.out, dir.string()));
+  }
   campaign::plot_backbone_comparison(c.figure, a.out, csv);
   say(stdout, "compare: wrote {} and {}\n", a.out, csv.string());
 }

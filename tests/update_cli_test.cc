@@ -726,6 +726,14 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
       (dir / "hit2.csv").string(), (dir / "cmp" / "fig.png").string()));
   ASSERT_EQ(c.status, 0) << c.err;
   EXPECT_GT(fs::file_size(dir / "cmp" / "fig.png"), 10000u);
+  // A folder that cannot be made (under a file) is one line and exit 2; before, "internal
+  // error: filesystem error".
+  const testing::CommandResult nf = testing::run_jointlab(
+      fmt::format("compare {} --backbone {} --mode 1 --out {}", model, (dir / "hit1.csv").string(),
+                  (dir / "hit1.csv" / "sub" / "fig.png").string()));
+  EXPECT_EQ(nf.status, 2) << nf.err;
+  EXPECT_NE(nf.err.find("cannot create the folder"), std::string::npos) << nf.err;
+  EXPECT_EQ(nf.err.find("internal error"), std::string::npos) << nf.err;
   const auto cells = read_csv_cells(dir / "cmp" / "fig.csv");
   ASSERT_GT(cells.size(), 100u);
   EXPECT_EQ(cells[0],
