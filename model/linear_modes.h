@@ -18,7 +18,8 @@
 // DOFs only the lowest modes are computed, by shift-invert Lanczos on a sparse Cholesky
 // factorization of K_lin - sigma M (fe/sparse_eigen.h, sigma = -1e-6 lambda_s), then checked
 // for members of a repeated eigenvalue (the rigid-body modes) Lanczos missed, by the same
-// solve with the found modes projected out; otherwise every mode, densely. Each shape's largest-magnitude entry is positive.
+// solve with the found modes projected out; otherwise every mode, densely. Each shape's
+// largest-magnitude entry is positive.
 #pragma once
 
 #include <string>
