@@ -233,19 +233,7 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
   for (const std::string& line :
        campaign::band_shape_warnings(objective.apply(best, summary.modal_ratio), in))
     say(stdout, "  {}\n", line);
-  for (const correlate::ParetoPoint& p : front) {
-    say(stdout,
-        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
-        "error {:.3g} %, backbone cost {:.4g}{}\n",
-        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
-        p.backbone_cost, p.dominated ? " (dominated)" : "");
-    std::string modes = "    linear error per measured mode [%]:";
-    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
-      modes += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
-                                : fmt::format(" {}: unpaired", i + 1);
-    }
-    if (!p.mode_errors.empty()) say(stdout, "{}\n", modes);
-  }
+  say(stdout, "{}", campaign::pareto_report(front));
 }
 
 void run_update_iwan(const IwanArgs& a) {

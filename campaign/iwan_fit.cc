@@ -117,4 +117,23 @@ IwanUpdateSummary checked_fit_iwan(const IwanObjective& objective, IwanUpdateOpt
   return summary;
 }
 
+std::string pareto_report(const std::vector<correlate::ParetoPoint>& front) {
+  std::string text;
+  for (const correlate::ParetoPoint& p : front) {
+    text += fmt::format(
+        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
+        "error {:.3g} %, backbone cost {:.4g}{}\n",
+        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
+        p.backbone_cost, p.dominated ? " (dominated)" : "");
+    if (p.mode_errors.empty()) continue;
+    std::string line = "    linear error per measured mode [%]:";
+    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
+      line += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
+                               : fmt::format(" {}: unpaired", i + 1);
+    }
+    text += line + "\n";
+  }
+  return text;
+}
+
 }  // namespace jointlab::campaign

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/model/iwan.h"
@@ -55,5 +56,10 @@ correlate::IwanUpdateSummary checked_fit_iwan(const correlate::IwanObjective& ob
                                               const IwanRanges& ranges, const std::string& command,
                                               const std::string& data_name,
                                               const std::function<void(const std::string&)>& say);
+
+/// The report's lines of a Pareto front (correlate::pareto_front), as update-iwan prints them and
+/// the Python module returns them: per gamma the parameters, the linear error and the backbone
+/// cost, then each measured mode's linear error; "" for an empty front.
+std::string pareto_report(const std::vector<correlate::ParetoPoint>& front);
 
 }  // namespace jointlab::campaign

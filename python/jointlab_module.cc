@@ -788,18 +788,8 @@ py::dict update_iwan(
       errors.append(e ? py::object(py::float_(*e)) : py::object(py::none()));
     d["mode_errors"] = errors;
     pareto.append(d);
-    text += fmt::format(
-        "  Pareto gamma {:.4g}: Fs {:.6g} N, Kt {:.6g} N/m, chi {:.4g}, beta {:.4g}, linear "
-        "error {:.3g} %, backbone cost {:.4g}{}\n",
-        p.gamma, p.params.Fs, p.params.Kt, p.params.chi, p.params.beta, 100 * p.linear_error,
-        p.backbone_cost, p.dominated ? " (dominated)" : "");
-    std::string line = "    linear error per measured mode [%]:";
-    for (size_t i = 0; i < p.mode_errors.size(); ++i) {
-      line += p.mode_errors[i] ? fmt::format(" {}: {:.3g}", i + 1, 100 * *p.mode_errors[i])
-                               : fmt::format(" {}: unpaired", i + 1);
-    }
-    if (!p.mode_errors.empty()) text += line + "\n";
   }
+  text += campaign::pareto_report(front);
   result["pareto"] = pareto;
   result["report"] = text;
   return result;

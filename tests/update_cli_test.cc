@@ -492,6 +492,8 @@ TEST(UpdateCli, IwanRecoversTheParametersFromTwoHits) {
   ASSERT_EQ(g.status, 0) << g.err;
   const auto pg = read_parameters(dir / "gamma" / "parameters.csv");
   EXPECT_TRUE(testing::Close(std::stod(pg.at("Kt").at(2)), 0.1 * 3 * truth.ka, 1e-9));
+  EXPECT_NE(g.out.find("  Pareto gamma 0.1: Fs "), std::string::npos) << g.out;
+  EXPECT_NE(g.out.find("    linear error per measured mode [%]: 1: "), std::string::npos) << g.out;
   const auto pareto = read_csv_cells(dir / "gamma" / "pareto.csv");
   ASSERT_EQ(pareto.size(), 3u);
   ASSERT_EQ(pareto[0].size(), 10u);
