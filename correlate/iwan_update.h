@@ -348,6 +348,8 @@ enum class IwanSigmaReason {
   kGivenBeta,     ///< F_S of microslip data with beta held by the fit: F_S at that beta, no result
   kTooFewPoints,  ///< too few effective independent points (sigma_degrees_of_freedom <= 2)
   kAtKink,        ///< fixed only by points at a kink (an element's phi_max), from one side
+  kModelMisfit,   ///< the model does not describe the data and its residuals are no noise
+                  ///< (IwanUpdateSummary::misfit_sets_the_error()): no sigma
   kUnknown        ///< the covariance could not be formed at the result
 };
 
@@ -470,6 +472,17 @@ struct IwanUpdateSummary {
   /// sqrt(2 / dof)): the model does not describe the data within their noise and the sigma is a
   /// lower bound.
   bool misfit() const;
+  /// True when the residuals look like noise: uncorrelated from point to point
+  /// (noise_correlation below 0.3) and spread evenly over the amplitudes (amplitude_share within
+  /// three of its standard deviations under noise of 1/3); false when unknown.
+  bool residuals_look_like_noise() const;
+  /// True when the misfit, not the noise, sets the parameters' error, so no sigma is stated
+  /// (IwanSigmaReason::kModelMisfit): reduced_chi2 above 1 by more than three of its standard
+  /// deviations over the effective_points (sqrt(2 / n_eff): serially correlated noise scatters
+  /// it more than the count says), residuals that are no noise (residuals_look_like_noise()),
+  /// and no scatter between three or more curves explaining half the chi-square (the
+  /// cluster-robust covariance allows for that).
+  bool misfit_sets_the_error() const;
   /// True when the largest joint slip at the highest measured amplitude (top_slip) stays below
   /// 1e-3 of phi_max: the fitted modes hardly move the joint, so the joint barely shapes them.
   bool joint_hardly_moved() const;
