@@ -281,6 +281,12 @@ struct LinearUpdateSummary {
   bool fit_converged = false;  ///< kPairsUnconfirmed: the fit itself met its convergence test
   int rounds = 0;              ///< fits run (a new round when the pairs change)
   double reduced_chi2 = 0;     ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
+  double chi2 = 0;             ///< sum (r/sigma)^2 of the least-squares fit
+  /// Fits from different starts behind the result: 1, or 1 + the restarts tried where the fit
+  /// from the start left scatter beyond the noise (reduced_chi2_limit)
+  int starts = 1;
+  /// The restarts tried and which won, for the report ("": none tried)
+  std::string restarts;
   /// kPairsUnconfirmed: the measured modes (rows) whose pairs the shapes do not confirm
   std::vector<int> unconfirmed_modes;
   /// pairs - fitted sets (sets acting together count as the combinations determined)
