@@ -127,52 +127,54 @@ void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSu
   data::write_file_atomically(path, t);
 }
 
-void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSummary& s,
-                           double identifiable_std) {
-  struct Row {
-    const char* name;
-    double initial, final, relative_std;  // relative_std < 0: none (held or unknown)
-    bool held, separately_identified;
-    int bound;
-    std::string note;  // IwanUpdateSummary::parameter_note()
-  };
+std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
+                                                  double identifiable_std) {
   auto rel = [&](int k) { return s.held[k] || !s.improved ? -1.0 : s.relative_std(k); };
   const double ks = s.reference_stiffness;
   // Below phi_max the data fix K_T, chi and R only: Fs and beta are not identified separately.
-  // `held` is 1 where held as asked (--gamma, --beta); beta held by the fit itself is 0 with its
-  // note (before, 1, as if asked).
+  // `held` is true where held as asked (--gamma, --beta); beta held by the fit itself is false
+  // with its note (before, true, as if asked).
   const bool micro = s.microslip_only();
-  std::vector<Row> rows = {
-      {"Fs", s.start.Fs, s.best.Fs, rel(0), s.held_as_asked(0), !micro, s.bound_side[0],
-       s.parameter_note(0)},
-      {"Kt", s.start.Kt, s.best.Kt, rel(1), s.held_as_asked(1), true, s.bound_side[1],
-       s.parameter_note(1)},
-      {"chi", s.start.chi, s.best.chi, rel(2), s.held_as_asked(2), true, s.bound_side[2],
-       s.parameter_note(2)},
-      {"beta", s.start.beta, s.best.beta, rel(3), s.held_as_asked(3), !micro, s.bound_side[3],
-       s.parameter_note(3)},
+  const auto row = [&](const char* name, double initial, double final, double relative_std,
+                       bool held, bool separately_identified, int bound, std::string note) {
+    IwanParameterRow r{name, initial, final, relative_std, false, held, bound, std::move(note)};
+    r.identifiable = relative_std > 0 && separately_identified && relative_std <= identifiable_std;
+    return r;
+  };
+  std::vector<IwanParameterRow> rows = {
+      row("Fs", s.start.Fs, s.best.Fs, rel(0), s.held_as_asked(0), !micro, s.bound_side[0],
+          s.parameter_note(0)),
+      row("Kt", s.start.Kt, s.best.Kt, rel(1), s.held_as_asked(1), true, s.bound_side[1],
+          s.parameter_note(1)),
+      row("chi", s.start.chi, s.best.chi, rel(2), s.held_as_asked(2), true, s.bound_side[2],
+          s.parameter_note(2)),
+      row("beta", s.start.beta, s.best.beta, rel(3), s.held_as_asked(3), !micro, s.bound_side[3],
+          s.parameter_note(3)),
   };
   if (ks > 0) {
-    rows.push_back({"gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held_as_asked(1), true,
-                    s.bound_side[1], s.parameter_note(1)});
+    rows.push_back(row("gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held_as_asked(1), true,
+                       s.bound_side[1], s.parameter_note(1)));
   }
   if (s.modal_ratio_fitted) {
-    rows.push_back({"modal_ratio", s.modal_ratio_start, s.modal_ratio,
-                    s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
-                        ? s.modal_ratio_std / s.modal_ratio
-                        : -1.0,
-                    false, true, s.bound_side[4], s.parameter_note(4)});
+    rows.push_back(row("modal_ratio", s.modal_ratio_start, s.modal_ratio,
+                       s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
+                           ? s.modal_ratio_std / s.modal_ratio
+                           : -1.0,
+                       false, true, s.bound_side[4], s.parameter_note(4)));
   }
+  return rows;
+}
+
+void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSummary& s,
+                           double identifiable_std) {
   std::string t = "name,initial,final,relative_std,identifiable,held,at_bound,note\n";
-  for (const Row& r : rows) {
-    const bool known = r.relative_std > 0;
+  for (const IwanParameterRow& r : iwan_parameter_rows(s, identifiable_std)) {
     t += fmt::format("{},{},{},{},{},{},{},{}\n", r.name, num(r.initial), num(r.final),
-                     known ? num(r.relative_std) : "",
-                     known && r.separately_identified && r.relative_std <= identifiable_std ? 1 : 0,
+                     r.relative_std > 0 ? num(r.relative_std) : "", r.identifiable ? 1 : 0,
                      r.held ? 1 : 0,
-                     r.bound < 0   ? "lower"
-                     : r.bound > 0 ? "upper"
-                                   : "",
+                     r.at_bound < 0   ? "lower"
+                     : r.at_bound > 0 ? "upper"
+                                      : "",
                      cell(r.note));
   }
   data::write_file_atomically(path, t);

@@ -27,6 +27,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "jointlab/correlate/iwan_update.h"
@@ -53,8 +54,26 @@ void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSumma
 /// Writes the linear update's sweeps.csv (one-at-a-time sweeps, every mode's error).
 void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSummary& s);
 
-/// Writes the Iwan update's parameters.csv; a parameter is identifiable when its relative
-/// standard deviation is known and at most identifiable_std.
+/// One row of the Iwan update's parameters.csv.
+struct IwanParameterRow {
+  std::string name;           ///< Fs, Kt, chi, beta, gamma or modal_ratio
+  double initial = 0;         ///< at the start
+  double final = 0;           ///< at the result
+  double relative_std = -1;   ///< relative one-sigma uncertainty; < 0: none stated
+  bool identifiable = false;  ///< 0 < relative_std <= identifiable_std, and separately identified
+  bool held = false;          ///< held as the options asked
+  int at_bound = 0;           ///< -1: at the lower bound of its range, +1: upper, 0: inside
+  std::string note;           ///< IwanUpdateSummary::parameter_note()
+};
+
+/// The rows of the Iwan update's parameters.csv: Fs, Kt, chi, beta, gamma (K_T / K_s, when
+/// known) and, when fitted, modal_ratio; a parameter is identifiable when its relative standard
+/// deviation is known and at most identifiable_std and, for Fs and beta, the data reach
+/// macroslip. The file and the Python module's result both read them.
+std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
+                                                  double identifiable_std = 0.5);
+
+/// Writes the Iwan update's parameters.csv (iwan_parameter_rows()).
 void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSummary& s,
                            double identifiable_std = 0.5);
 

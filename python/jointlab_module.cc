@@ -731,6 +731,11 @@ py::dict update_iwan(
   z["fitted"] = summary.modal_ratio_fitted;
   z["note"] = summary.parameter_note(4);  // as parameters.csv's modal_ratio row
   parameters["modal_ratio"] = z;
+  // parameters.csv's identifiable column, from the rows the file is written from (modal_ratio
+  // only where fitted).
+  for (const auto& [name, value] : parameters) value.cast<py::dict>()["identifiable"] = false;
+  for (const correlate::IwanParameterRow& r : correlate::iwan_parameter_rows(summary))
+    parameters[py::str(r.name)].cast<py::dict>()["identifiable"] = r.identifiable;
   py::dict result;
   result["parameters"] = parameters;
   // A cost the model could not evaluate (+inf) is None, never a number.

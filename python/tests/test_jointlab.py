@@ -654,6 +654,8 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
         assert_close(result["parameters"][name]["initial"], float(cli[name]["initial"]))
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
         assert result["parameters"][name]["held"] == (cli[name]["held"] == "1")
+    for name in ("Fs", "Kt", "chi", "beta", "gamma", "modal_ratio"):  # the file's column
+        assert result["parameters"][name]["identifiable"] == (cli[name]["identifiable"] == "1")
     assert_close(result["parameters"]["gamma"]["final"], 1.1)  # held there, as parameters.csv
     assert result["parameters"]["beta"]["final"] == 0.5 and result["parameters"]["Kt"]["held"]
     assert_close(result["parameters"]["modal_ratio"]["final"],
@@ -725,6 +727,7 @@ def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
                                 progress=lines.append)
     for name in ("Fs", "Kt", "chi", "beta"):
         assert_close(both["parameters"][name]["final"], float(cli[name]["final"]))
+        assert both["parameters"][name]["identifiable"] == (cli[name]["identifiable"] == "1")
     assert lines[0].startswith("slip screen") and "stepped sine" in lines[0]
     assert lines[0] + both["report"] == r.stdout
     with open(d / "cli" / "pareto.csv", newline="") as f:
