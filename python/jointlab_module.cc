@@ -546,6 +546,10 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
   result["degrees_of_freedom"] = s.degrees_of_freedom;
   result["reduced_chi2"] =
       s.degrees_of_freedom > 0 ? py::object(py::float_(s.reduced_chi2)) : py::object(py::none());
+  // The fits from different starts behind the result (1, or 1 + the restarts tried where the
+  // fit from the start left scatter beyond the noise) and the report's line on them ("": none).
+  result["starts"] = s.starts;
+  result["restarts"] = s.restarts;
   result["warnings"] = s.warnings;
   // The MAC at the result, as mac.csv: a row per measured mode ('modes' order), a column per
   // model mode from 1 (those up to 1.5 times the highest measured frequency, and past every pair).

@@ -264,6 +264,7 @@ def test_update_linear_equals_the_command_line(tmp_path):
         (tmp_path / "cli" / "model.toml").read_text()
     assert abs(p["final"] / truth - 1) < 1e-6  # noise-free data: the truth
     assert result["converged"]
+    assert result["starts"] == 1 and result["restarts"] == ""  # a fit within the noise: no restart
     assert [m["model_mode"] for m in result["modes"]] == [1, 2]
     # The MAC matrix at the result, as mac.csv (measured rows, model columns from 1).
     with open(tmp_path / "cli" / "mac.csv", newline="") as f:
