@@ -34,6 +34,7 @@
 
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -177,6 +178,14 @@ struct MisfitEvidence {
   /// Median measured damping ratio at each curve's lowest amplitudes (the points of
   /// low_frequency_hz), the fitted model's there, and the median measured one over every point.
   double low_damping = 0, low_model_damping = 0, median_damping = 0;
+  /// Median over the curves of the share of each one's softening at its low end: the measured
+  /// frequency's drop from its lowest fifth of points by amplitude to its second fifth, over
+  /// the drop from the lowest fifth to the highest (medians of each); NaN: unknown (fewer than
+  /// 10 points a curve, or no softening). A joint's power law softens from zero amplitude on
+  /// (0.040-0.053 for chi -0.5 over three and a half decades); a joint kept slipping by another
+  /// mode is flat there (-0.002 to 0.017).
+  double low_softening_share = NAN;
+  int targets = 0;  ///< the objective's targets (modes): one K_T sets every linear limit
   /// Curves that disagree with one another (scatter between hits): over every target with two
   /// or more curves, the share of the sum of squared residuals that one offset per curve from
   /// its target's other curves explains (frequency and damping apart: sum over curves of n_c
