@@ -1,7 +1,10 @@
-// libFuzzer target: summary.json of `jointlab process` as the updating commands read it
-// (strict JSON, then the fields), on arbitrary bytes.
+// libFuzzer target: the measured side of the updating commands on arbitrary bytes, read twice:
+// as summary.json of `jointlab process` (strict JSON, then the fields) and as an update-linear
+// modes table (mode,frequency_hz and shape cells, real or complex, ',' ';' or tab delimited)
+// against three sensors s1, s2 and s3.
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "fuzz_util.h"
 #include "jointlab/core/error.h"
@@ -12,6 +15,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   jointlab::fuzz::write_bytes(dir / "summary.json", data, size);
   try {
     jointlab::correlate::read_process_run(dir);
+  } catch (const jointlab::InputError&) {
+  }
+  static const std::vector<jointlab::correlate::Sensor> sensors = {
+      {"s1", 0, 1.0}, {"s2", 1, -1.0}, {"s3", 2, 1.0}};
+  jointlab::fuzz::write_bytes(dir / "modes.csv", data, size);
+  try {
+    std::vector<int> modes;
+    jointlab::correlate::read_modes_table(dir / "modes.csv", sensors, &modes);
   } catch (const jointlab::InputError&) {
   }
   return 0;
