@@ -98,6 +98,18 @@ std::string id_or_position(const std::vector<std::string>& ids, Eigen::Index i) 
 
 std::string MeasuredModes::id(Eigen::Index i) const { return id_or_position(ids, i); }
 
+MeasuredModes MeasuredModes::columns(const std::vector<Eigen::Index>& keep) const {
+  MeasuredModes out;
+  out.frequency_hz = frequency_hz(keep);
+  out.shapes = shapes(Eigen::all, keep);
+  for (const Eigen::Index k : keep) {
+    const auto u = static_cast<size_t>(k);
+    out.labels.push_back(u < labels.size() ? labels[u] : std::string());
+    out.ids.push_back(id(k));
+  }
+  return out;
+}
+
 std::string LinearEvaluation::measured_id(Eigen::Index i) const {
   return id_or_position(measured_ids, i);
 }
@@ -1900,21 +1912,10 @@ std::string misfit_of_signs(const model::Model& model, const std::vector<std::st
 
 // `measured` without mode (column) `drop`.
 MeasuredModes without_mode(const MeasuredModes& measured, Eigen::Index drop) {
-  MeasuredModes out;
-  const Eigen::Index n = measured.frequency_hz.size();
-  out.frequency_hz.resize(n - 1);
-  out.shapes.resize(measured.shapes.rows(), n - 1);
-  for (Eigen::Index i = 0, k = 0; i < n; ++i) {
-    if (i == drop) continue;
-    out.frequency_hz(k) = measured.frequency_hz(i);
-    out.shapes.col(k) = measured.shapes.col(i);
-    const auto u = static_cast<size_t>(i);
-    if (u < measured.labels.size()) out.labels.push_back(measured.labels[u]);
-    out.ids.push_back(measured.id(i));
-    ++k;
-  }
-  if (out.labels.size() != static_cast<size_t>(n - 1)) out.labels.clear();
-  return out;
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i)
+    if (i != drop) keep.push_back(i);
+  return measured.columns(keep);
 }
 
 // Why a fit's misfit is one measured mode that the model does not match, or "". A trial's lap

@@ -107,6 +107,9 @@ struct MeasuredModes {
   std::vector<std::string> warnings;
   /// ids[i], or i + 1 where it has none.
   std::string id(Eigen::Index i) const;
+  /// The modes in columns `keep`, in that order, each with its frequency, shape, label ("" where
+  /// it has none) and id (id(i): its own name stays where its position changes); no warnings.
+  MeasuredModes columns(const std::vector<Eigen::Index>& keep) const;
 };
 
 /// One evaluation of the linear objective.

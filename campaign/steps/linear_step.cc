@@ -107,15 +107,8 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
         "update.linear: no fitted mode has a measured linear frequency; linear updating skipped";
     return step;
   }
-  fitted.frequency_hz = measured.frequency_hz(keep);
-  fitted.shapes = measured.shapes(Eigen::all, keep);
-  for (Eigen::Index k : keep) {  // each keeps its place in the campaign's [[mode]] list
-    fitted.labels.push_back(static_cast<size_t>(k) < measured.labels.size()
-                                ? measured.labels[static_cast<size_t>(k)]
-                                : std::string());  // labels may be empty
-    fitted.ids.push_back(measured.id(k));
-    step.campaign_modes.push_back(static_cast<int>(k));
-  }
+  fitted = measured.columns(keep);  // each keeps its id: its place in the [[mode]] list
+  for (Eigen::Index k : keep) step.campaign_modes.push_back(static_cast<int>(k));
   const Eigen::VectorXd theta =
       correlate::update_linear(m.model, c.linear_update.sets, m.sensors, fitted, lo, &step.summary);
   // A refused update (as update-linear refuses it) leaves the model as given: its stiffness
