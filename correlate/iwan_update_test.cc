@@ -48,6 +48,11 @@ IwanBounds box_around(const TwoChainParameters& start) {
   return {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
 }
 
+// The same box around an Iwan parameter set's F_S.
+IwanBounds box_around(const model::IwanParameters& start) {
+  return {start.Fs / 30, start.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+}
+
 // The default update in the box around the start, with a budget of `evaluations`.
 IwanUpdateOptions options_around(const TwoChainParameters& start, int evaluations) {
   IwanUpdateOptions o;
@@ -906,7 +911,7 @@ TEST(IwanUpdate, APointOnPhiMaxDoesNotShrinkBetasSigma) {
     for (const double top : {1.2 * phi, 1.6 * phi, third_top})
       target.curves.push_back(modal_backbone(truth, 30, 1e-8, top, 0, 0, 1));
     IwanUpdateOptions o;
-    o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+    o.bounds = box_around(t.iwan);
     o.max_evaluations = 600;
     const IwanObjective obj(truth, "j", {}, {target}, o);
     IwanUpdateSummary s;
@@ -938,7 +943,7 @@ TEST(IwanUpdate, APointJustPastPhiMaxDoesNotPinItsSigma) {
       one_mode_structure(t.k0, {t.iwan.Fs * 1.5, t.iwan.Kt * 0.9, -0.4, 0.8}, 0.0);
   const double phi = model::Iwan(t.iwan).phi_max();
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   o.threads = 1;
   const double truth_p[] = {t.iwan.Fs, t.iwan.Kt, t.iwan.chi, t.iwan.beta};
   double sum2 = 0;
@@ -1021,7 +1026,7 @@ TEST(IwanUpdate, SigmaHoldsUnderStronglyCorrelatedNoise) {
       one_mode_structure(t.k0, {t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7}, 0.0);
   const double phi = model::Iwan(t.iwan).phi_max();
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   o.max_evaluations = 600;
   double sum = 0;
   int count = 0;
@@ -1106,7 +1111,7 @@ TEST(IwanUpdate, AFitThatDidNotConvergeStatesNoSigma) {
   const model::Model start =
       one_mode_structure(t.k0, {t.iwan.Fs * 3, t.iwan.Kt * 0.8, -0.3, 2.0}, 0.0);
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   o.max_evaluations = o.samples;
   const IwanObjective obj(start, "j", {}, {target}, o);
   IwanUpdateSummary s;
@@ -1167,7 +1172,7 @@ TEST(IwanUpdate, CurvesThatDisagreeWithOneAnotherAreNamedAsScatterBetweenHits) {
     return tg;
   };
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   const model::Model start =
       one_mode_structure(t.k0, {t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7}, 0.0);
   const IwanObjective scattered(start, "j", {}, {target(1, true)}, o);
@@ -2044,6 +2049,17 @@ MeasuredBackbone backbone_with_other_slip(const model::Model& truth, int points,
   return b;
 }
 
+// The misfit tests' three hits of the one-mode truth: 40 points each from q = 1e-8 to 1.5, 2 and
+// 2.5 phi_max, another mode adding q_other to the joint's slip, 1e-4 frequency and 2 % damping
+// noise (seeds 100-102).
+IwanTarget three_hits_with_other_slip(const model::Model& truth, double phi, double q_other) {
+  IwanTarget target;
+  for (int h = 0; h < 3; ++h)
+    target.curves.push_back(backbone_with_other_slip(truth, 40, 1e-8, (1.5 + 0.5 * h) * phi,
+                                                     q_other, 1e-4, 0.02, 100 + h));
+  return target;
+}
+
 // Where the model does not describe the data and the residuals are no noise, the misfit, not the
 // noise, sets the parameters' error: no sigma is stated, and the report says why. The one-mode
 // truth (F_S 0.5 N, K_T 4 % of the stiffness, chi -0.5, beta 0.5), three 40-point hits to 1.5, 2
@@ -2063,14 +2079,11 @@ TEST(IwanUpdate, AMisfitWhoseResidualsAreNoNoiseStatesNoSigma) {
   const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
   const double phi = model::Iwan(t.iwan).phi_max();
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   o.threads = 1;
   const model::IwanParameters start{t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7};
   const auto fit = [&](double k0_model, double q_other, model::IwanParameters* p) {
-    IwanTarget target;
-    for (int h = 0; h < 3; ++h)
-      target.curves.push_back(backbone_with_other_slip(truth, 40, 1e-8, (1.5 + 0.5 * h) * phi,
-                                                       q_other, 1e-4, 0.02, 100 + h));
+    const IwanTarget target = three_hits_with_other_slip(truth, phi, q_other);
     const model::Model m = one_mode_structure(k0_model, start);  // the objective keeps it
     const IwanObjective obj(m, "j", {}, {target}, o);
     IwanUpdateSummary s;
@@ -2199,15 +2212,12 @@ TEST(IwanUpdate, ALinearLimitMissedForDampingNamesTheOwnDampingOrAnotherModesSli
   const FloorTruth t;
   const double phi = model::Iwan(t.iwan).phi_max();
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   o.threads = 1;
   const model::IwanParameters start{t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7};
   const auto fit = [&](double z_data, double q_other, double k0_model, double gamma) {
     const model::Model truth = one_mode_structure(t.k0, t.iwan, z_data);
-    IwanTarget target;
-    for (int h = 0; h < 3; ++h)
-      target.curves.push_back(backbone_with_other_slip(truth, 40, 1e-8, (1.5 + 0.5 * h) * phi,
-                                                       q_other, 1e-4, 0.02, 100 + h));
+    const IwanTarget target = three_hits_with_other_slip(truth, phi, q_other);
     model::IwanParameters p0 = start;
     IwanUpdateOptions oo = o;
     if (gamma > 0) p0.Kt = t.iwan.Kt, oo.fixed_gamma = gamma;
@@ -2268,15 +2278,12 @@ TEST(IwanUpdate, KtHeldOwnDampingAndAnotherModesSlipAreNamedByTheLowEnd) {
   const FloorTruth t;
   const double phi = model::Iwan(t.iwan).phi_max();
   IwanUpdateOptions o;
-  o.bounds = {t.iwan.Fs / 30, t.iwan.Fs * 30, 0.05, 2.0, -0.95, 0.0, 0.01, 100};
+  o.bounds = box_around(t.iwan);
   o.threads = 1;
   o.fixed_gamma = 1;
   const auto report = [&](double z_data, double q_other, double kt_scale) {
     const model::Model truth = one_mode_structure(t.k0, t.iwan, z_data);
-    IwanTarget target;
-    for (int h = 0; h < 3; ++h)
-      target.curves.push_back(backbone_with_other_slip(truth, 40, 1e-8, (1.5 + 0.5 * h) * phi,
-                                                       q_other, 1e-4, 0.02, 100 + h));
+    const IwanTarget target = three_hits_with_other_slip(truth, phi, q_other);
     const model::Model m =
         one_mode_structure(t.k0, {t.iwan.Fs * 1.3, t.iwan.Kt * kt_scale, -0.4, 0.7});
     const IwanObjective obj(m, "j", {}, {target}, o);
