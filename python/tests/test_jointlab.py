@@ -32,6 +32,12 @@ def read_csv(path):
     return {name: values[:, k] for k, name in enumerate(header)}
 
 
+def read_parameters(directory):
+    """The command's parameters.csv in `directory`: its rows (dicts of text cells) by name."""
+    with open(directory / "parameters.csv", newline="") as f:
+        return {row["name"]: row for row in csv.DictReader(f)}
+
+
 def assert_close(actual, expected, rel=1e-9):
     actual, expected = np.asarray(actual), np.asarray(expected)
     assert actual.shape == expected.shape
@@ -249,8 +255,7 @@ def test_update_linear_equals_the_command_line(tmp_path):
     r = run("update-linear", model, "--modes-table", table, "--sensors", tmp_path / "sensors.csv",
             "--set", "spring.kj", "--out", tmp_path / "cli")
     assert r.returncode == 0, r.stderr
-    with open(tmp_path / "cli" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(tmp_path / "cli")
     lines = []
     # `out` in a folder not yet made: made, as the command makes its --out (it was refused after
     # the fit, naming a temporary file).
@@ -284,8 +289,7 @@ def test_update_linear_equals_the_command_line(tmp_path):
             "--set", "spring.kj", "--bound", "spring.kj=1e5:2e5", "--alias-mac", "0.95",
             "--out", tmp_path / "cli_bound")
     assert r.returncode == 0, r.stderr
-    with open(tmp_path / "cli_bound" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(tmp_path / "cli_bound")
     bounded = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
                                      modes_table=str(table), bounds={"spring.kj": (1e5, 2e5)},
                                      alias_mac=0.95)
@@ -306,8 +310,7 @@ def test_update_linear_equals_the_command_line(tmp_path):
             "--set", "spring.kj", "--rule", "smallest", "--minimize", "spring.kj",
             "--out", tmp_path / "cli_smallest")
     assert r.returncode == 0, r.stderr
-    with open(tmp_path / "cli_smallest" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(tmp_path / "cli_smallest")
     smallest = jointlab.update_linear(str(model), ["spring.kj"], str(tmp_path / "sensors.csv"),
                                       modes_table=str(table), rule="smallest",
                                       minimize="spring.kj")
@@ -346,8 +349,7 @@ def test_update_linear_names_sets_acting_together(tmp_path):
     r = run("update-linear", model, "--modes-table", table, "--sensors", tmp_path / "sensors.csv",
             "--set", sets[0], "--set", sets[1], "--out", tmp_path / "cli")
     assert r.returncode == 0, r.stderr
-    with open(tmp_path / "cli" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(tmp_path / "cli")
     result = jointlab.update_linear(str(model), sets, str(tmp_path / "sensors.csv"),
                                     modes_table=str(table))
     for name, other in zip(sets, reversed(sets)):
@@ -489,8 +491,7 @@ def test_update_iwan_from_a_process_folder_equals_the_command_line(tmp_path, riv
             tmp_path / "p", "--sensors", tmp_path / "sensors.csv", "--evaluations", "100",
             "--out", tmp_path / "cli")
     assert r.returncode == 0, r.stderr
-    with open(tmp_path / "cli" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(tmp_path / "cli")
     result = jointlab.update_iwan(str(riveted_model), "rivet", 1, measured=str(tmp_path / "p"),
                                   sensors=str(tmp_path / "sensors.csv"), evaluations=100)
     for name in ("Fs", "Kt", "chi", "beta"):
@@ -584,8 +585,7 @@ def test_update_iwan_equals_the_command_line(tmp_path, capfd):
     r = run("update-iwan", d / "start.toml", "--set", "iwan.j", "--mode", "1", "--backbone",
             d / "bb.csv", "--evaluations", "400", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
-    with open(d / "cli" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(d / "cli")
     result = jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "bb.csv")],
                                   evaluations=400)
     for name in ("Fs", "Kt", "chi", "beta"):
@@ -642,8 +642,7 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
             "--linear-damping", "fit", "--linear-damping-max", "0.01", "--optimizer", "paper-log",
             "--compare", "secant", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
-    with open(d / "cli" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(d / "cli")
     # pathlib paths and a numpy integer as the mode (a loop over np.arange gives them: refused
     # before as 'expected an int').
     result = jointlab.update_iwan(d / "start.toml", "j", np.int64(1), [d / "bb.csv"],
@@ -719,8 +718,7 @@ def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
             "--sensors", d / "sensors.csv", "--stepped-sine", d / "sine", "--linear-damping",
             "fit", "--evaluations", "200", "--pareto", "0.9,1.1", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
-    with open(d / "cli" / "parameters.csv", newline="") as f:
-        cli = {row["name"]: row for row in csv.DictReader(f)}
+    cli = read_parameters(d / "cli")
     lines = []
     both = jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p",
                                 sensors=d / "sensors.csv", stepped_sine=[d / "sine"],
