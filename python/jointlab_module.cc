@@ -699,32 +699,29 @@ py::dict update_iwan(
     shape_warnings = campaign::band_shape_warnings(updated, in);
     if (out) write_model(*out, updated);
   }
+  // One dict per row of parameters.csv (Fs, Kt, chi, beta, gamma = Kt / Ks when known), from
+  // the rows the file is written from; modal_ratio always, with its absolute std.
+  const std::vector<correlate::IwanParameterRow> rows = correlate::iwan_parameter_rows(summary);
   py::dict parameters;
-  const char* names[] = {"Fs", "Kt", "chi", "beta"};
-  const double start[] = {summary.start.Fs, summary.start.Kt, summary.start.chi,
-                          summary.start.beta};
-  const double best[] = {summary.best.Fs, summary.best.Kt, summary.best.chi, summary.best.beta};
-  for (int k = 0; k < 4; ++k) {
+  bool z_identifiable = false;
+  for (const correlate::IwanParameterRow& r : rows) {
+    if (r.name == "modal_ratio") {
+      z_identifiable = r.identifiable;
+      continue;
+    }
+    // gamma is Kt over the reference stiffness: Kt's hold, sigma, bound and note.
+    const int k = r.name == "Fs" ? 0 : r.name == "chi" ? 2 : r.name == "beta" ? 3 : 1;
     py::dict d;
-    d["initial"] = start[k];
-    d["final"] = best[k];
-    const double r = summary.relative_std(k);
-    d["relative_std"] =
-        summary.held[static_cast<size_t>(k)] || !(r > 0) ? py::object(py::none()) : py::float_(r);
+    d["initial"] = r.initial;
+    d["final"] = r.final;
+    d["relative_std"] = r.relative_std > 0 ? py::object(py::float_(r.relative_std)) : py::none();
     // Held as asked, as parameters.csv's held; beta held by the fit itself is not fitted either.
-    d["held"] = summary.held_as_asked(k);
+    d["held"] = r.held;
     d["fitted"] = !summary.held[static_cast<size_t>(k)];
-    d["note"] = summary.parameter_note(k);
-    d["at_bound"] = summary.bound_side[static_cast<size_t>(k)];
-    parameters[names[k]] = d;
-  }
-  // gamma = Kt / Ks, as parameters.csv's gamma row: Kt's sigma, hold, bound and note.
-  if (const double ks = summary.reference_stiffness; ks > 0) {
-    py::dict g = parameters["Kt"].cast<py::dict>();
-    g = py::dict(**g);  // a copy, not Kt's own dict
-    g["initial"] = summary.start.Kt / ks;
-    g["final"] = summary.best.Kt / ks;
-    parameters["gamma"] = g;
+    d["note"] = r.note;
+    d["at_bound"] = r.at_bound;
+    d["identifiable"] = r.identifiable;
+    parameters[py::str(r.name)] = d;
   }
   py::dict z;
   z["initial"] = summary.modal_ratio_start;
@@ -734,12 +731,8 @@ py::dict update_iwan(
                  : py::object(py::none());
   z["fitted"] = summary.modal_ratio_fitted;
   z["note"] = summary.parameter_note(4);  // as parameters.csv's modal_ratio row
+  z["identifiable"] = z_identifiable;
   parameters["modal_ratio"] = z;
-  // parameters.csv's identifiable column, from the rows the file is written from (modal_ratio
-  // only where fitted).
-  for (const auto& [name, value] : parameters) value.cast<py::dict>()["identifiable"] = false;
-  for (const correlate::IwanParameterRow& r : correlate::iwan_parameter_rows(summary))
-    parameters[py::str(r.name)].cast<py::dict>()["identifiable"] = r.identifiable;
   py::dict result;
   result["parameters"] = parameters;
   // A cost the model could not evaluate (+inf) is None, never a number.

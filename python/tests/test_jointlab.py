@@ -38,6 +38,26 @@ def read_parameters(directory):
         return {row["name"]: row for row in csv.DictReader(f)}
 
 
+def assert_iwan_parameters_as_file(result, cli):
+    """update_iwan's parameters agree with the command's parameters.csv row by row."""
+    bound = {"lower": -1, "upper": 1, "": 0}
+    for name, row in cli.items():
+        p = result["parameters"][name]
+        assert_close(p["final"], float(row["final"]))
+        if name == "modal_ratio":  # the dict gives Z's absolute std, the file its relative
+            std = None if p["std"] is None else p["std"] / p["final"]
+        else:
+            std = p["relative_std"]
+        assert (std is None) == (row["relative_std"] == ""), name
+        if std is not None:
+            assert_close(std, float(row["relative_std"]))
+        assert p["identifiable"] == (row["identifiable"] == "1"), name
+        if name != "modal_ratio":
+            assert p["held"] == (row["held"] == "1"), name
+            assert p["at_bound"] == bound[row["at_bound"]], name
+        assert p["note"] == row["note"], name
+
+
 def assert_close(actual, expected, rel=1e-9):
     actual, expected = np.asarray(actual), np.asarray(expected)
     assert actual.shape == expected.shape
@@ -494,8 +514,7 @@ def test_update_iwan_from_a_process_folder_equals_the_command_line(tmp_path, riv
     cli = read_parameters(tmp_path / "cli")
     result = jointlab.update_iwan(str(riveted_model), "rivet", 1, measured=str(tmp_path / "p"),
                                   sensors=str(tmp_path / "sensors.csv"), evaluations=100)
-    for name in ("Fs", "Kt", "chi", "beta"):
-        assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    assert_iwan_parameters_as_file(result, cli)
     assert result["report"] == r.stdout
     # Two modes as the command's repeated --mode (R and R:BAND): the slip screen is a progress
     # line, as the command prints it.
@@ -588,8 +607,7 @@ def test_update_iwan_equals_the_command_line(tmp_path, capfd):
     cli = read_parameters(d / "cli")
     result = jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "bb.csv")],
                                   evaluations=400)
-    for name in ("Fs", "Kt", "chi", "beta"):
-        assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
+    assert_iwan_parameters_as_file(result, cli)
     # Converged, as the report says; a fit that is not states no sigma.
     assert result["converged"]
     assert not result["no_slip"]
@@ -650,6 +668,7 @@ def test_update_iwan_holds_and_noise_evidence_as_the_command(tmp_path):
                                   linear_damping_max=0.01, threads=1, optimizer="paper-log",
                                   compare="secant", out=d / "py" / "new" / "model.toml")
     assert result["report"] == r.stdout
+    assert_iwan_parameters_as_file(result, cli)
     for name in ("Fs", "Kt", "chi", "beta", "gamma"):
         assert_close(result["parameters"][name]["initial"], float(cli[name]["initial"]))
         assert_close(result["parameters"][name]["final"], float(cli[name]["final"]))
@@ -724,9 +743,7 @@ def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
                                 sensors=d / "sensors.csv", stepped_sine=[d / "sine"],
                                 linear_damping="fit", evaluations=200, pareto=[0.9, 1.1],
                                 progress=lines.append)
-    for name in ("Fs", "Kt", "chi", "beta"):
-        assert_close(both["parameters"][name]["final"], float(cli[name]["final"]))
-        assert both["parameters"][name]["identifiable"] == (cli[name]["identifiable"] == "1")
+    assert_iwan_parameters_as_file(both, cli)
     assert lines[0].startswith("slip screen") and "stepped sine" in lines[0]
     assert lines[0] + both["report"] == r.stdout
     with open(d / "cli" / "pareto.csv", newline="") as f:
