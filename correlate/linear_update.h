@@ -220,11 +220,15 @@ struct ParameterReport {
   /// Fitted sets whose sensitivities this one's nearly repeats (LinearUpdateSummary::collinear):
   /// the frequencies determine a combination of them, not this set alone (empty: none).
   std::vector<std::string> acts_with;
-  /// +1: the frequencies bound it from below only, -1: from above only (moved 3 of its local
-  /// standard deviations that way, the others held, the chi-square rises by less than 4: a
-  /// stiffness whose sensitivity dies away as it stiffens); 0: both ways, or not checked
+  /// +1: the frequencies bound it from below only, -1: from above only (moved that way to its
+  /// bound, the other sets fitted again, the chi-square rises by less than 9, or the pairs are
+  /// lost first: a stiffness whose sensitivity dies away as it stiffens); 0: both ways, or not
+  /// checked
   int one_sided = 0;
-  std::optional<double> relative_std;    ///< one-sigma relative uncertainty (none: not fitted)
+  std::optional<double> relative_std;  ///< one-sigma relative uncertainty (none: not fitted)
+  /// Where relative_std is a third of the chi-square profile's 3-sigma distance, wider than the
+  /// local slope gives: the local slope's (none: relative_std is the local slope's)
+  std::optional<double> slope_std;
   double smallest_within_tolerance = 0;  ///< set when the tolerance formulation lowered it
   double lower = 0, upper = 0;           ///< its bounds
   int at_bound = 0;                      ///< -1: ends at its lower bound, +1: upper, 0: inside
