@@ -1,6 +1,9 @@
 #include "jointlab/campaign/iwan_inputs.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
 #include <set>
 
 #include <fmt/format.h>
@@ -10,7 +13,9 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
 #include "jointlab/core/units.h"
+#include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/sensors.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/sim/simulated_record.h"
 
@@ -83,6 +88,55 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   return in;
 }
 
+// The measured column (band) paired with elastic mode `mode` (1-based) by update-linear's rules
+// (correlate::pair_by_rules, default PairingRules: MAC >= 0.6, the model frequency within +-50 %
+// of the band's, a mode invisible at the sensors never paired by MAC, a band whose shape is read
+// at one sensor paired by frequency). A bare MAC argmax over every elastic mode let a high mode
+// aliased at a few sensors take the band: a lap beam's 243 Hz band had MAC 0.99998 with mode 2
+// (246.6 Hz) and 0.999996 with mode 32 (3797 Hz) at five z sensors, and `--mode 2` was refused.
+// Returns -1 when none pairs; `why` then lists each band's frequency and MAC with the mode.
+int band_column_of(const model::LinearModes& linear, const std::vector<correlate::Sensor>& sensors,
+                   const correlate::MeasuredModes& measured, const std::vector<int>& bands,
+                   int mode, std::string& why) {
+  const int elastic = linear.size() - linear.rigid_count;
+  const Eigen::MatrixXd at =
+      correlate::shapes_at_sensors(sensors, linear.shapes.rightCols(elastic));
+  Eigen::VectorXd model_hz(elastic);
+  for (int j = 0; j < elastic; ++j) model_hz(j) = linear.frequency_hz(linear.rigid_count + j);
+  std::vector<bool> has_shape(static_cast<size_t>(measured.frequency_hz.size()));
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i)
+    has_shape[static_cast<size_t>(i)] = (measured.shapes.col(i).array().abs() > 0.0).count() >= 2;
+  const Eigen::MatrixXd mac = correlate::mac_matrix(measured.shapes, at);
+  const correlate::PairingRules rules;
+  const correlate::RulePairing rp =
+      correlate::pair_by_rules(mac, measured.frequency_hz, has_shape, model_hz,
+                               at.colwise().squaredNorm().transpose(), rules);
+  for (const correlate::ModePair& p : rp.pairing.pairs) {
+    if (p.model == mode - 1) return p.measured;
+  }
+  std::vector<std::string> seen;
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
+    seen.push_back(fmt::format("band {} ({:.5g} Hz, MAC {:.3f})", bands[static_cast<size_t>(i)],
+                               measured.frequency_hz(i), mac(i, mode - 1)));
+  }
+  why = fmt::format(
+      "model mode {} ({:.5g} Hz) pairs with no measured band (a pair needs MAC >= {:g} at the "
+      "sensors and the frequencies within {:g} %, the band not taken by a mode that matches it "
+      "better): {}",
+      mode, model_hz(mode - 1), rules.mac_threshold, 100 * rules.frequency_window,
+      fmt::join(seen, ", "));
+  return -1;
+}
+
+// "4.9 %" or "4.9 to 5.3 %": a share at the two ends of a range, the smaller first.
+std::string percent_range(double a, double b) {
+  const double lo = 100 * std::min(a, b), hi = 100 * std::max(a, b);
+  const auto text = [](double x) {
+    return x >= 10 ? fmt::format("{:.0f}", x) : fmt::format("{:.2g}", x);
+  };
+  const std::string l = text(lo), h = text(hi);
+  return l == h ? l + " %" : fmt::format("{} to {} %", l, h);
+}
 }  // namespace
 
 IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
@@ -140,11 +194,11 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
     }
     int col = -1;
     if (colon == std::string::npos) {
-      col = correlate::measured_mode_of(m, sensors, measured, t.mode, 0.6);
+      std::string why;
+      col = band_column_of(linear, sensors, measured, bands, t.mode, why);
       if (col < 0) {
-        throw InputError(
-            fmt::format("--mode {}: no measured band pairs with model mode {} by MAC; give R:BAND",
-                        spec, t.mode));
+        throw InputError(fmt::format(
+            "--mode {}: {}; if one of these bands is this mode's, give R:BAND", spec, why));
       }
       band = bands[static_cast<size_t>(col)];
     } else {
@@ -213,7 +267,7 @@ std::vector<std::string> band_shape_warnings(const model::Model& updated, const 
   std::vector<std::string> lines;
   if (!in.measured) return lines;
   // The smallest MAC at the sensors of a --mode's band with that mode of the updated model
-  // without a warning: the MAC pairing's threshold (correlate::measured_mode_of's 0.6). The
+  // without a warning: the MAC pairing's threshold (band_column_of's 0.6). The
   // updated model, not the start: a start far off may order the modes differently. A low MAC
   // means the band, or the sensors file, belongs to another mode: the parameters then fit that
   // mode's data. Said, not refused: a poorly measured shape of the right mode may look like
@@ -244,6 +298,90 @@ std::vector<std::string> band_shape_warnings(const model::Model& updated, const 
                                                 match.best_mode, match.best_mac)
                                   : std::string(),
         sign));
+  }
+  return lines;
+}
+
+std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& m, int mode,
+                                                            double q) {
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  const int col = linear.rigid_count + mode - 1;
+  std::vector<std::pair<std::string, double>> out;
+  if (mode < 1 || col >= linear.size()) return out;
+  const Eigen::VectorXd phi = linear.shapes.col(col);
+  double total = 0;
+  for (const model::Joint& j : m.joints) {
+    if (!j.iwan) continue;
+    const double slip = std::abs(phi(j.a) - (j.b == model::kGround ? 0.0 : phi(j.b))) * q;
+    const double d = j.iwan->dissipation(slip);
+    auto at =
+        std::find_if(out.begin(), out.end(), [&](const auto& e) { return e.first == j.element; });
+    if (at == out.end()) at = out.insert(out.end(), {j.element, 0.0});
+    at->second += d;
+    total += d;
+  }
+  if (!(total > 0)) return {};
+  for (auto& e : out) e.second /= total;
+  return out;
+}
+
+std::vector<std::string> set_share_warnings(const model::Model& m, const std::string& set,
+                                            const std::vector<correlate::Sensor>& sensors,
+                                            const std::vector<correlate::IwanTarget>& targets,
+                                            correlate::AmplitudeQuantity amplitude,
+                                            const std::string& option) {
+  std::vector<std::string> lines;
+  const std::string full = set.starts_with("iwan.") ? set : "iwan." + set;
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  const int power = correlate::amplitude_power(amplitude);
+  for (const correlate::IwanTarget& t : targets) {
+    const int col = linear.rigid_count + t.mode - 1;
+    if (t.mode < 1 || col >= linear.size()) continue;
+    // The measured range as modal amplitudes, through the linear mode's shape at each sensor.
+    double q_low = std::numeric_limits<double>::infinity(), q_high = 0;
+    for (const correlate::MeasuredBackbone& c : t.curves) {
+      double shape = 1;
+      if (!c.modal) {
+        if (c.sensor < 0 || c.sensor >= static_cast<int>(sensors.size())) continue;
+        shape = std::abs(linear.shapes(sensors[static_cast<size_t>(c.sensor)].dof, col));
+      }
+      if (!(shape > 0)) continue;
+      for (Eigen::Index i = 0; i < c.amplitude.size(); ++i) {
+        const double omega = 2 * std::numbers::pi * c.frequency_hz(i);
+        const double q = c.amplitude(i) / (shape * (c.modal ? 1.0 : std::pow(omega, power)));
+        if (!(q > 0) || !std::isfinite(q)) continue;
+        q_low = std::min(q_low, q), q_high = std::max(q_high, q);
+      }
+    }
+    if (!(q_high > 0)) continue;
+    const auto low = iwan_set_shares(m, t.mode, q_low), high = iwan_set_shares(m, t.mode, q_high);
+    if (low.empty() || high.empty()) continue;
+    const auto share = [&](const std::vector<std::pair<std::string, double>>& v,
+                           const std::string& name) {
+      for (const auto& [n, x] : v)
+        if (n == name) return x;
+      return 0.0;
+    };
+    const double own_low = share(low, full), own_high = share(high, full);
+    if (own_low >= 0.5 || own_high >= 0.5) continue;
+    std::vector<std::string> others;
+    std::string carrier;
+    double most = -1;
+    for (const auto& [name, x] : low) {
+      if (name == full) continue;
+      const double y = share(high, name);
+      others.push_back(fmt::format("{} {}", name, percent_range(x, y)));
+      if (x + y > most) most = x + y, carrier = name;
+    }
+    lines.push_back(fmt::format(
+        "WARNING: mode {}'s joint dissipation comes mostly from other Iwan sets than {}: in the "
+        "model as given, over the measured amplitudes (modal amplitude {:.3g} to {:.3g}, read "
+        "through the linear mode's shape), {} carries {} of it ({}). The fit moves {} "
+        "to take up what the other sets' held values miss, so its parameters, sigmas and the "
+        "causes named above read their misfit as {}'s. Fit the set that carries mode {} against "
+        "it ({} {}), then {} against a mode it carries",
+        t.mode, full, q_low, q_high, full, percent_range(own_low, own_high),
+        fmt::join(others, ", "), full, full, t.mode, option, carrier, full));
   }
   return lines;
 }

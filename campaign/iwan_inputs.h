@@ -8,6 +8,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "jointlab/correlate/iwan_update.h"
@@ -57,5 +58,24 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
 /// the `updated` model at the sensors (MAC below the pairing's 0.6): the band, or the sensors
 /// file, may belong to another mode. Empty for backbone tables.
 std::vector<std::string> band_shape_warnings(const model::Model& updated, const IwanInputs& in);
+
+/// Per Iwan set (named as in the model file, "iwan.<name>", in the order first met), its share
+/// of elastic mode `mode`'s joint dissipation per cycle in `m` as given at modal amplitude `q`:
+/// each Iwan element slipping |B phi_R| q, as the linear mode moves it (model::Iwan's Masing
+/// dissipation, past phi_max too). Shares sum to 1; empty where the mode slips no Iwan element.
+std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& m, int mode,
+                                                            double q);
+
+/// One line for each target whose joint dissipation in `m` as given comes mostly from Iwan sets
+/// other than `set` over its measured amplitudes (the fitted set's share below one half at the
+/// lowest and the highest, read as modal amplitudes through the linear mode's shape at each
+/// curve's sensor): the fit then moves `set` to take up what the held sets' values miss, and
+/// its residuals, sigmas and advice read that misfit as this set's. `option` names the set's
+/// option in the advice ("--set", or "sets in [update.iwan]").
+std::vector<std::string> set_share_warnings(const model::Model& m, const std::string& set,
+                                            const std::vector<correlate::Sensor>& sensors,
+                                            const std::vector<correlate::IwanTarget>& targets,
+                                            correlate::AmplitudeQuantity amplitude,
+                                            const std::string& option);
 
 }  // namespace jointlab::campaign
