@@ -137,6 +137,11 @@ struct IwanUpdateOptions {
   /// range): every candidate is scored at its own best Z (variable projection).
   bool fit_linear_damping = false;
   double linear_damping_max = 0.05;  ///< upper bound of a fitted Z
+  /// True when the model's linear part was fitted to measured linear frequencies before this
+  /// update (the campaign's linear step): the report states the linear part's systematic effect
+  /// on the parameters (IwanUpdateSummary::linear_part_sensitivity) without sending to
+  /// update-linear.
+  bool linear_part_updated = false;
   /// What is wrong with these options, or "".
   std::string error() const;
 };
@@ -183,7 +188,8 @@ struct MisfitEvidence {
   /// the drop from the lowest fifth to the highest (medians of each); NaN: unknown (fewer than
   /// 10 points a curve, or no softening). A joint's power law softens from zero amplitude on
   /// (0.040-0.053 for chi -0.5 over three and a half decades); a joint kept slipping by another
-  /// mode is flat there (-0.002 to 0.017).
+  /// mode is flat there (-0.002 to 0.017). It only leans between the two: a joint nearly linear in
+  /// amplitude (chi -0.05: 0.005) reads flat, data that start near the other mode's slip soften.
   double low_softening_share = NAN;
   int targets = 0;  ///< the objective's targets (modes): one K_T sets every linear limit
   /// Curves that disagree with one another (scatter between hits): over every target with two
@@ -285,6 +291,12 @@ class IwanObjective {
   std::optional<MisfitEvidence> misfit_evidence(const model::IwanParameters& p, double z) const;
   /// The targets (the measured backbones).
   const std::vector<IwanTarget>& targets() const { return targets_; }
+  /// Residuals at (p, z), as residuals_at(), of the model with its structure's stiffness K (the
+  /// matrix without the joints) times `factor`: the derivative of the fit with respect to an
+  /// error of the linear part (IwanUpdateSummary::linear_part_sensitivity). Evaluated on a model
+  /// set up anew; false where it cannot be evaluated.
+  bool residuals_with_structure_stiffness(const model::IwanParameters& p, double z, double factor,
+                                          double* r) const;
   /// How many measured points state an uncertainty (std > 0) below the floors: (points,
   /// frequencies below frequency_floor f, dampings below damping_floor zeta); those are raised
   /// to the floor.
@@ -474,6 +486,26 @@ struct IwanUpdateSummary {
   /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)
   Eigen::Vector3i floored = Eigen::Vector3i::Zero();
   double frequency_floor = 0, damping_floor = 0;  ///< the floors of the options
+  /// The linear part's systematic sensitivity, per parameter (F_S, K_T, chi, beta): the relative
+  /// change of the result (of |chi| for chi; 0 for a held parameter) per relative change of mode
+  /// `sensitivity_mode`'s linear frequency (at the result's K_T) made by an error of the rest of
+  /// the model, its structure's stiffness K (the matrix without the joints). At the minimum the
+  /// cost's gradient stays 0 as K moves, so dx/ds = -(J^T J)^-1 J^T dr/ds (s = ln of K's factor,
+  /// Gauss-Newton), over the free parameters of the covariance. No residual shows such an error
+  /// where K_T is free: K_T takes the linear frequency up and the rest bends to follow (the
+  /// one-mode truth with K 0.1 % stiffer: reduced chi-square 1.14-1.31, white residuals, K_T
+  /// -2.4 %, F_S -5 %). All 0 when unknown (not converged, the start, no Jacobian).
+  Eigen::Vector4d linear_part_sensitivity = Eigen::Vector4d::Zero();
+  int sensitivity_mode = 0;  ///< the model mode R whose linear frequency the sensitivity is per
+  /// d ln f_R / d ln K at the result: the share of mode R's strain energy in the structure
+  /// (without the joints), halved; converts the sensitivity to one per error of K.
+  double frequency_per_stiffness = 0;
+  bool linear_part_updated = false;  ///< IwanUpdateOptions::linear_part_updated
+  /// The relative error of mode R's linear frequency (from the rest of the model) that moves
+  /// parameter k (F_S, K_T, chi, beta) by its stated sigma: relative_std(k) /
+  /// |linear_part_sensitivity(k)|; the sigma holds only where the linear part is right to that.
+  /// 0 where either is unknown or no sigma is stated.
+  double linear_part_tolerance(int k) const;
   /// IwanObjective::misfit_evidence() at best (empty when unknown): what the report's warnings
   /// name as a misfit's likelier cause instead of a wider range or a longer search.
   std::optional<MisfitEvidence> evidence;

@@ -1336,7 +1336,10 @@ TEST(IwanUpdateReport, AModeThatHardlyMovesTheJointIsSaidSoNotSentToWiderBounds)
       EXPECT_EQ(s.parameter_note(2), "not identified: no slip in the data") << r;
     } else {
       EXPECT_NE(r.find("The measured modes hardly move the joint here"), std::string::npos) << r;
-      EXPECT_NE(r.find("that is the structure's own damping"), std::string::npos) << r;
+      EXPECT_NE(r.find("That is the structure's own damping, which the model lacks (modal_ratio "
+                       "0, held): this mode hardly moves the joint"),
+                std::string::npos)
+          << r;
     }
   }
 }
@@ -2049,13 +2052,14 @@ MeasuredBackbone backbone_with_other_slip(const model::Model& truth, int points,
   return b;
 }
 
-// The misfit tests' three hits of the one-mode truth: 40 points each from q = 1e-8 to 1.5, 2 and
-// 2.5 phi_max, another mode adding q_other to the joint's slip, 1e-4 frequency and 2 % damping
-// noise (seeds 100-102).
-IwanTarget three_hits_with_other_slip(const model::Model& truth, double phi, double q_other) {
+// The misfit tests' three hits of the one-mode truth: 40 points each (or `points`) from q = 1e-8
+// to 1.5, 2 and 2.5 phi_max, another mode adding q_other to the joint's slip, 1e-4 frequency and
+// 2 % damping noise (seeds 100-102).
+IwanTarget three_hits_with_other_slip(const model::Model& truth, double phi, double q_other,
+                                      int points = 40) {
   IwanTarget target;
   for (int h = 0; h < 3; ++h)
-    target.curves.push_back(backbone_with_other_slip(truth, 40, 1e-8, (1.5 + 0.5 * h) * phi,
+    target.curves.push_back(backbone_with_other_slip(truth, points, 1e-8, (1.5 + 0.5 * h) * phi,
                                                      q_other, 1e-4, 0.02, 100 + h));
   return target;
 }
@@ -2190,6 +2194,69 @@ TEST(IwanUpdateReport, NoSigmaWhereTheMisfitNotTheNoiseSetsTheError) {
   EXPECT_EQ(near.sigma_reason(2), IwanSigmaReason::kStated);
 }
 
+// An error of the rest of the model that K_T takes up leaves no trace in the residuals (the model's
+// structure stiffness 0.1 % above the data's: reduced chi-square 1.31, K_T -2.4 % and F_S -5 %
+// at 27 and 17 of their sigmas, and nothing said), so the report states how far such an error
+// moves each parameter, per 0.1 % of mode R's linear frequency, computed at the result
+// (IwanUpdateSummary::linear_part_sensitivity), and the accuracy of that frequency each sigma
+// needs. Checked against a second method, the refit on the model with K 0.1 % stiffer: the
+// one-mode truth's three 40-point hits (1e-4 / 2 % noise, seeds 100-102) give -50.0 and -111 per
+// unit of ln f_R for K_T and F_S (K_T's is the algebra of the linear frequency: -k0 / (K_T
+// d ln f / d ln K), -24 / 0.48), and the refit moves them by 1.013 and 0.939 times that times
+// the frequency's 0.048 %. The rate is the tangent: across +-0.1 % it changes by 2.6 % (K_T) and
+// 4 % (F_S) (at +-0.01 % the refits agree within 0.5 %), so K_T within 3 % and F_S within 10 %.
+// Beta's rate changes by 25 % across the step (its refit 1.43 times the tangent): not checked.
+TEST(IwanUpdate, TheLinearPartsEffectOnTheParametersIsStatedAndMatchesARefit) {
+  const FloorTruth t;
+  const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
+  const IwanTarget target = three_hits_with_other_slip(truth, model::Iwan(t.iwan).phi_max(), 0);
+  IwanUpdateOptions o;
+  o.bounds = box_around(t.iwan);
+  o.threads = 1;
+  const model::IwanParameters start{t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7};
+  const auto fit = [&](double k0, model::IwanParameters* p) {
+    const model::Model m = one_mode_structure(k0, start);  // the objective keeps it
+    const IwanObjective obj(m, "j", {}, {target}, o);
+    IwanUpdateSummary s;
+    *p = update_iwan(obj, o, &s);
+    return s;
+  };
+  model::IwanParameters right, stiffer;
+  const IwanUpdateSummary s = fit(t.k0, &right);
+  const IwanUpdateSummary off = fit(t.k0 * 1.001, &stiffer);
+  ASSERT_EQ(s.status, IwanUpdateStatus::kConverged) << s.report();
+  ASSERT_EQ(off.status, IwanUpdateStatus::kConverged) << off.report();
+  EXPECT_EQ(s.sensitivity_mode, 1);
+  // d ln f / d ln k0 of the one-mode model: k0 / (2 (k0 + K_T)).
+  EXPECT_NEAR(s.frequency_per_stiffness, t.k0 / (2 * (t.k0 + right.Kt)), 1e-4);
+  const double dlnf = std::log(1.001) * s.frequency_per_stiffness;
+  EXPECT_NEAR(std::log(stiffer.Kt / right.Kt) / (s.linear_part_sensitivity(1) * dlnf), 1, 0.03)
+      << s.report();
+  EXPECT_NEAR(std::log(stiffer.Fs / right.Fs) / (s.linear_part_sensitivity(0) * dlnf), 1, 0.10)
+      << s.report();
+  // Both move by many of their sigmas, with nothing in the residuals: the report says so.
+  EXPECT_FALSE(off.misfit_sets_the_error()) << off.report();
+  EXPECT_GT(std::abs(std::log(stiffer.Kt / right.Kt)) / s.relative_std(1), 10) << s.report();
+  EXPECT_NEAR(s.linear_part_tolerance(1),
+              s.relative_std(1) / std::abs(s.linear_part_sensitivity(1)), 1e-12);
+  const std::string r = off.report();
+  EXPECT_NE(r.find("linear part: a 0.1 % error in mode 1's linear frequency from the rest of the "
+                   "model (its stiffness without the joints 0.208 % off) moves Kt by -5.1 %"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("Kt takes the frequency up; the sigmas hold only where that frequency is "
+                   "right to 0.00"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("(update-linear)"), std::string::npos) << r;
+  // After a linear update (run's linear step) the rates stand without sending there again.
+  IwanUpdateSummary updated = off;
+  updated.linear_part_updated = true;
+  EXPECT_EQ(updated.report().find("(update-linear)"), std::string::npos) << updated.report();
+  EXPECT_NE(updated.report().find("the model was fitted to the measured linear frequencies first"),
+            std::string::npos);
+}
+
 // A misfit whose linear limit misses the low data with K_T free names the damping that pulled it
 // there, not the linear part, and tells the structure's own damping from another mode's slip by
 // the measured frequency's low end. The one-mode truth and start of the test above (three
@@ -2206,8 +2273,9 @@ TEST(IwanUpdateReport, NoSigmaWhereTheMisfitNotTheNoiseSetsTheError) {
 //   above the data (51 times the noise), chi at its bound: update-linear first, as before (with
 //   K_T free, 0.4 % or 1 % stiffer, K_T takes it up and no cause is named, before and after).
 // Before, the first three were told "the model's linear part does not match the measured mode;
-// update-linear first". The threshold of 2.5 % lies a factor 2 above the flat cases and below
-// the softening one here, so one seed each decides it.
+// update-linear first". The low end only leans (the test below): both causes are named, with the
+// refit that decides, and the lean follows the share. The threshold of 2.5 % lies a factor 2
+// above the flat cases and below the softening one here, so one seed each decides the lean.
 TEST(IwanUpdate, ALinearLimitMissedForDampingNamesTheOwnDampingOrAnotherModesSlip) {
   const FloorTruth t;
   const double phi = model::Iwan(t.iwan).phi_max();
@@ -2227,17 +2295,18 @@ TEST(IwanUpdate, ALinearLimitMissedForDampingNamesTheOwnDampingOrAnotherModesSli
     update_iwan(obj, oo, &s);
     return s;
   };
-  const std::string own = "is the structure's own damping (roughly constant in amplitude)";
-  const std::string other = "as where another mode slipping the same joint in these hits";
+  const std::string own = "the structure's own damping (roughly constant in amplitude)";
+  const std::string other = "another mode slipping the same joint in these hits";
   const std::string linear = "update-linear first";
+  const std::string refit = "Refit with --linear-damping fit";
   {
     const IwanUpdateSummary s = fit(5e-4, 0, t.k0, 0);
     const std::string r = s.report();
     ASSERT_TRUE(s.evidence) << r;
     EXPECT_GT(s.evidence->low_softening_share, 0.04) << r;
-    EXPECT_NE(r.find(own), std::string::npos) << r;
-    EXPECT_NE(r.find("Fit it with --linear-damping fit"), std::string::npos) << r;
-    EXPECT_EQ(r.find(other), std::string::npos) << r;
+    EXPECT_NE(r.find("which is no error of the linear part"), std::string::npos) << r;
+    EXPECT_NE(r.find("leans toward the structure's own damping"), std::string::npos) << r;
+    EXPECT_NE(r.find(refit), std::string::npos) << r;
     EXPECT_EQ(r.find(linear), std::string::npos) << r;
   }
   for (double q : {0.1 * phi, 0.3 * phi}) {
@@ -2245,10 +2314,9 @@ TEST(IwanUpdate, ALinearLimitMissedForDampingNamesTheOwnDampingOrAnotherModesSli
     const std::string r = s.report();
     ASSERT_TRUE(s.evidence) << r;
     EXPECT_LT(s.evidence->low_softening_share, 0.0125) << r;
-    EXPECT_NE(r.find(other), std::string::npos) << r;
+    EXPECT_NE(r.find("leans toward another mode's slip"), std::string::npos) << r;
     EXPECT_NE(r.find("screen the hits with the other modes' backbones"), std::string::npos) << r;
-    EXPECT_EQ(r.find(own), std::string::npos) << r;
-    EXPECT_EQ(r.find("--linear-damping fit"), std::string::npos) << r;
+    EXPECT_NE(r.find(refit), std::string::npos) << r;
     EXPECT_EQ(r.find(linear), std::string::npos) << r;
   }
   {
@@ -2293,8 +2361,8 @@ TEST(IwanUpdate, KtHeldOwnDampingAndAnotherModesSlipAreNamedByTheLowEnd) {
   };
   const std::string other = "as where another mode slipping the same joint in these hits";
   std::string r = report(5e-4, 0, 1.0);
-  EXPECT_NE(r.find("that is the structure's own damping, which the model lacks"), std::string::npos)
-      << r;
+  EXPECT_NE(r.find("not the joint's. That is the structure's own damping"), std::string::npos) << r;
+  EXPECT_NE(r.find("leans toward the structure's own damping"), std::string::npos) << r;
   EXPECT_EQ(r.find(other), std::string::npos) << r;
   r = report(0, 0.1 * phi, 1.0);
   EXPECT_NE(r.find("with Kt held, the measured low-amplitude frequency"), std::string::npos) << r;
@@ -2302,9 +2370,52 @@ TEST(IwanUpdate, KtHeldOwnDampingAndAnotherModesSlipAreNamedByTheLowEnd) {
   EXPECT_EQ(r.find("update-linear first"), std::string::npos) << r;
   EXPECT_EQ(r.find("--linear-damping fit"), std::string::npos) << r;
   r = report(0, 0.1 * phi, 0.9);
-  EXPECT_NE(r.find(other), std::string::npos) << r;
+  EXPECT_NE(r.find("leans toward another mode's slip"), std::string::npos) << r;
   EXPECT_EQ(r.find("a loss factor"), std::string::npos) << r;
-  EXPECT_EQ(r.find("--linear-damping fit"), std::string::npos) << r;
+}
+
+// The frequency's low end leans between the structure's own damping and another mode's slip but
+// does not decide, so a misfit of either names both, with the refit that tells them apart. On the
+// one-mode truth's three hits (1e-4 / 2 % noise, K_T free, model without its own damping):
+// - a joint nearly linear in amplitude (chi -0.05) with own damping 5e-4, 40 points a curve over
+//   3.5 decades: the low end reads 0.56 % (flat), and it was named another mode's slip alone
+//   ("Strike so that the fitted mode dominates"); with --linear-damping fit these data fit at a
+//   reduced chi-square of 1.09 (Z 4.97e-4), so the own damping is what is missing;
+// - chi -0.5 with own damping, 8 points a curve (too few to read the low end): named "the model's
+//   linear part does not match the measured mode; update-linear first" (the linear part is the
+//   truth's), as were own damping and another mode's slip at every chi from -0.05 to -0.9.
+// Elsewhere the lean went wrong too (another mode adding 0.1 phi_max over 2.5 decades read 3.5 %
+// for chi -0.5 and 5.0 % for chi -0.9, softening: named own damping alone); the sweep is in
+// docs/update-iwan.md.
+TEST(IwanUpdate, TheLowEndLeansButDoesNotDecideBetweenOwnDampingAndAnotherModesSlip) {
+  const FloorTruth t;
+  IwanUpdateOptions o;
+  o.bounds = box_around(t.iwan);
+  o.threads = 1;
+  const auto report = [&](double chi, int points) {
+    model::IwanParameters joint = t.iwan;
+    joint.chi = chi;
+    const model::Model truth = one_mode_structure(t.k0, joint, 5e-4);
+    const IwanTarget target =
+        three_hits_with_other_slip(truth, model::Iwan(joint).phi_max(), 0, points);
+    const model::Model m = one_mode_structure(t.k0, {joint.Fs * 1.3, joint.Kt * 0.9, -0.4, 0.7});
+    const IwanObjective obj(m, "j", {}, {target}, o);
+    IwanUpdateSummary s;
+    update_iwan(obj, o, &s);
+    return s.report();
+  };
+  const std::string both =
+      "That is the structure's own damping (roughly constant in amplitude), which the model lacks "
+      "(modal_ratio 0, held), or another mode slipping the same joint in these hits";
+  std::string r = report(-0.05, 40);
+  EXPECT_NE(r.find(both), std::string::npos) << r;
+  EXPECT_NE(r.find("leans toward another mode's slip, but does not decide"), std::string::npos)
+      << r;
+  EXPECT_NE(r.find("Refit with --linear-damping fit"), std::string::npos) << r;
+  r = report(-0.5, 8);
+  EXPECT_NE(r.find(both), std::string::npos) << r;
+  EXPECT_NE(r.find("leans neither way here (fewer than 10 points a curve"), std::string::npos) << r;
+  EXPECT_EQ(r.find("update-linear first"), std::string::npos) << r;
 }
 
 }  // namespace

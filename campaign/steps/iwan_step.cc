@@ -190,7 +190,8 @@ ModeBackbones stepped_sine_backbones(const Campaign& c, size_t k, int sensor) {
 
 IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors, const MeasuredSide& m,
-                          const std::function<void(const std::string&)>& progress) {
+                          const std::function<void(const std::string&)>& progress,
+                          bool linear_updated) {
   const auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
@@ -200,6 +201,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   IwanUpdateOptions io;
   IwanTargetOptions to;
   iwan_update_options(c, io, to);
+  io.linear_part_updated = linear_updated;
   const std::vector<ModeBackbones> backbones = campaign_backbones(c, m);
   const IwanTargets targets = iwan_targets(base, sensors, backbones, to);
   if (const std::string why = targets.screened_out(backbones, to.max_slip_share); !why.empty()) {
@@ -328,7 +330,7 @@ IwanStep iwan_update_after(const Campaign& c, const CampaignModelData& m, const 
       return step;
     }
   }
-  return iwan_update_step(c, base, m.sensors, measured, progress);
+  return iwan_update_step(c, base, m.sensors, measured, progress, linear.ran);
 }
 
 }  // namespace jointlab::campaign

@@ -67,11 +67,14 @@ struct IwanStep {
 };
 
 /// The step: runs [update.iwan] from `base` (the linearly updated model, else the campaign's)
-/// against the measured side; skipped when off or without targets.
+/// against the measured side; skipped when off or without targets. `linear_updated`: `base` is
+/// the linear update's result (IwanUpdateOptions::linear_part_updated: the report states the
+/// linear part's effect without sending to update-linear).
 IwanStep iwan_update_step(const Campaign& campaign, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors,
                           const MeasuredSide& measured,
-                          const std::function<void(const std::string&)>& progress);
+                          const std::function<void(const std::string&)>& progress,
+                          bool linear_updated = false);
 
 /// [update.iwan] accept_unconfirmed_pairs: run the Iwan update from a linear update whose pairs
 /// the shapes do not confirm at its result (default false); InputError naming the campaign file
