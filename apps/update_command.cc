@@ -236,7 +236,7 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
   // A set fitted against a mode whose joint dissipation other sets carry (in the model as given):
   // what misfits is the other sets' held values, not this set.
   for (const std::string& line :
-       campaign::set_share_warnings(m, a.set, in.sensors, in.targets, in.amplitude, "--set"))
+       campaign::set_share_warnings(m, a.set, in.sensors, in.targets, in.amplitude, "--set {}"))
     say(stdout, "  {}\n", line);
   say(stdout, "{}", campaign::pareto_report(front));
 }

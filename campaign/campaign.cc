@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <toml++/toml.h>
 
 #include "jointlab/core/error.h"
@@ -124,6 +125,17 @@ CampaignUpdate read_update(const Context& ctx, const toml::node& n, const std::s
     } else if (k == "sets") {
       for (const toml::node& s : array(ctx, value, field + ".sets"))
         u.sets.push_back(text(ctx, s, field + ".sets"));
+      // run identifies one Iwan set; a second one named was left out without a word (a beam
+      // with bolts and rivets, sets = ["iwan.bolt", "iwan.rivet"], fitted the bolts alone to
+      // both modes, the rivets' mode included).
+      if (field == "update.iwan" && u.sets.size() > 1) {
+        ctx.fail(value,
+                 fmt::format("update.iwan.sets names {} Iwan sets ({}), but run identifies one: "
+                             "name the one to identify and, in update.iwan modes, the [[mode]]s "
+                             "whose joint dissipation it carries; identify another set in a run "
+                             "of its own or with update-iwan --set",
+                             u.sets.size(), fmt::join(u.sets, ", ")));
+      }
     } else if (k == "modes") {
       for (const toml::node& s : array(ctx, value, field + ".modes"))
         u.modes.push_back(text(ctx, s, field + ".modes"));

@@ -160,6 +160,17 @@ TEST(Campaign, LinearUpdateSettingsAreTyped) {
     EXPECT_EQ(std::string(e.what()), file.string() + ":14: update.iwan.samples must be a number");
   }
   // accept_unconfirmed_pairs: true or false, false when not given, refused at its line otherwise.
+  // run identifies one Iwan set: a second named in update.iwan sets is refused at its line, not
+  // left out without a word (update.linear tunes any number).
+  try {
+    parse_campaign(head + "[update.iwan]\nsets = [\"iwan.bolt\", \"iwan.rivet\"]\n", file);
+    ADD_FAILURE() << "two Iwan sets accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(":14: update.iwan.sets names 2 Iwan sets (iwan.bolt, "
+                                         "iwan.rivet), but run identifies one"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_FALSE(accepts_unconfirmed_pairs(parse_campaign(head + "[update.iwan]\n", file)));
   const Campaign accept =
       parse_campaign(head + "[update.iwan]\naccept_unconfirmed_pairs = true\n", file);

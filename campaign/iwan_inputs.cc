@@ -379,9 +379,10 @@ std::vector<std::string> set_share_warnings(const model::Model& m, const std::st
         "through the linear mode's shape), {} carries {} of it ({}). The fit moves {} "
         "to take up what the other sets' held values miss, so its parameters, sigmas and the "
         "causes named above read their misfit as {}'s. Fit the set that carries mode {} against "
-        "it ({} {}), then {} against a mode it carries",
+        "it ({}), then {} against a mode it carries",
         t.mode, full, q_low, q_high, full, percent_range(own_low, own_high),
-        fmt::join(others, ", "), full, full, t.mode, option, carrier, full));
+        fmt::join(others, ", "), full, full, t.mode, fmt::format(fmt::runtime(option), carrier),
+        full));
   }
   return lines;
 }

@@ -70,8 +70,9 @@ std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& 
 /// other than `set` over its measured amplitudes (the fitted set's share below one half at the
 /// lowest and the highest, read as modal amplitudes through the linear mode's shape at each
 /// curve's sensor): the fit then moves `set` to take up what the held sets' values miss, and
-/// its residuals, sigmas and advice read that misfit as this set's. `option` names the set's
-/// option in the advice ("--set", or "sets in [update.iwan]").
+/// its residuals, sigmas and advice read that misfit as this set's. `option` is how the advice
+/// names the set to fit, "{}" standing for it ("--set {}"; run: "sets = [\"{}\"] in
+/// [update.iwan]").
 std::vector<std::string> set_share_warnings(const model::Model& m, const std::string& set,
                                             const std::vector<correlate::Sensor>& sensors,
                                             const std::vector<correlate::IwanTarget>& targets,

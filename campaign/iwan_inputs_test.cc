@@ -124,14 +124,14 @@ TEST(IwanInputs, ASetFittedAgainstAModeAnotherSetCarriesIsNamed) {
   c.frequency_hz = Eigen::VectorXd::Constant(5, linear.frequency_hz(linear.rigid_count));
   t.curves = {c};
   const auto bolt =
-      set_share_warnings(m, "bolt", {}, {t}, correlate::AmplitudeQuantity::kVelocity, "--set");
+      set_share_warnings(m, "bolt", {}, {t}, correlate::AmplitudeQuantity::kVelocity, "--set {}");
   ASSERT_EQ(bolt.size(), 1u);
   EXPECT_NE(bolt.front().find("iwan.bolt carries 0 % of it (iwan.rivet 100 %)"), std::string::npos)
       << bolt.front();
   EXPECT_NE(bolt.front().find("(--set iwan.rivet)"), std::string::npos) << bolt.front();
-  EXPECT_TRUE(
-      set_share_warnings(m, "iwan.rivet", {}, {t}, correlate::AmplitudeQuantity::kVelocity, "--set")
-          .empty());
+  EXPECT_TRUE(set_share_warnings(m, "iwan.rivet", {}, {t}, correlate::AmplitudeQuantity::kVelocity,
+                                 "--set {}")
+                  .empty());
 }
 
 }  // namespace

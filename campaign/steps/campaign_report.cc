@@ -421,6 +421,7 @@ ReportSection model_section(const Campaign& c, const MeasuredSide& m, const Mode
   }
   if (r.iwan.ran) {
     s.paragraphs.push_back("Iwan identification: " + r.iwan.summary.report());
+    for (const std::string& w : r.iwan.warnings) s.paragraphs.push_back(w);
     ReportTable mc{
         "Backbone cost per mode (mean squared error in units of the scatter between "
         "hits: about 2 when the model lies within it)",

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/update_settings.h"
 #include "jointlab/core/error.h"
@@ -250,6 +251,11 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   }
   step.ran = true;
   say("update: " + step.summary.report());
+  // The set fitted against a mode whose joint dissipation other sets carry, in the model the fit
+  // starts from: what misfits is their held values, not this set.
+  step.warnings = set_share_warnings(base, step.set, sensors, targets.fitted, io.amplitude,
+                                     "sets = [\"{}\"] in [update.iwan], its [[mode]]s in modes");
+  for (const std::string& w : step.warnings) say("update: " + w);
   return step;
 }
 

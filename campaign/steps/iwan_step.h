@@ -64,6 +64,9 @@ struct IwanStep {
   std::vector<ModeCost> mode_costs;      ///< per mode with a target, fitted or not
   double cost_known = 0;                 ///< cost at the known parameters (0: none given)
   model::Model updated;                  ///< the updated model (when it ran)
+  /// What the report says beside the fit's own report: each fitted mode whose joint dissipation
+  /// other Iwan sets carry (campaign::set_share_warnings).
+  std::vector<std::string> warnings;
 };
 
 /// The step: runs [update.iwan] from `base` (the linearly updated model, else the campaign's)
