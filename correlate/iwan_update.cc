@@ -2503,9 +2503,13 @@ std::string IwanUpdateSummary::report() const {
     std::vector<std::string> moves, holds;
     for (const int k : {1, 0, 2, 3}) {
       if (linear_part_sensitivity(k) == 0) continue;
-      moves.push_back(
-          fmt::format("{} by {:+.2g} %", names[k], 100 * 1e-3 * linear_part_sensitivity(k)));
-      if (const double t = linear_part_tolerance(k); t > 0)
+      // A rate below 0.001 % per 0.1 % is no move worth its digits (chi of a one-mode fit:
+      // -1.2e-08 %), and a sigma that holds to a 10 % error of the linear frequency is not
+      // limited by the linear part (that chi: "4e+06 %").
+      const double move = 100 * 1e-3 * linear_part_sensitivity(k);
+      moves.push_back(std::abs(move) < 1e-3 ? fmt::format("{} by less than 0.001 %", names[k])
+                                            : fmt::format("{} by {:+.2g} %", names[k], move));
+      if (const double t = linear_part_tolerance(k); t > 0 && t <= 0.1)
         holds.push_back(fmt::format("{:.2g} % ({})", 100 * t, names[k]));
     }
     out += fmt::format(

@@ -2255,6 +2255,13 @@ TEST(IwanUpdate, TheLinearPartsEffectOnTheParametersIsStatedAndMatchesARefit) {
   EXPECT_EQ(updated.report().find("(update-linear)"), std::string::npos) << updated.report();
   EXPECT_NE(updated.report().find("the model was fitted to the measured linear frequencies first"),
             std::string::npos);
+  // A rate of next to nothing (a one-mode fit's chi: -1.2e-08 % per 0.1 %) is said so, and the
+  // tolerance it gives (4e+06 %, a sigma the linear part does not limit) is left out.
+  IwanUpdateSummary flat = off;
+  flat.linear_part_sensitivity(2) = 1e-7 * (flat.best.chi < 0 ? -1 : 1);
+  const std::string line = flat.report().substr(flat.report().find("linear part:"));
+  EXPECT_NE(line.find("chi by less than 0.001 %"), std::string::npos) << line;
+  EXPECT_EQ(line.substr(0, line.find('\n')).find("(chi)"), std::string::npos) << line;
 }
 
 // A misfit whose linear limit misses the low data with K_T free names the damping that pulled it

@@ -721,6 +721,13 @@ py::dict update_iwan(
     d["note"] = r.note;
     d["at_bound"] = r.at_bound;
     d["identifiable"] = r.identifiable;
+    // The linear part's systematic effect (the report's "linear part:" line): the relative change
+    // of the parameter per relative error of mode R's linear frequency from the rest of the
+    // model, and the error of that frequency its sigma holds to; None where unknown.
+    const double rate = summary.linear_part_sensitivity(k),
+                 holds = summary.linear_part_tolerance(k);
+    d["linear_part_sensitivity"] = rate != 0 && !r.held ? py::object(py::float_(rate)) : py::none();
+    d["linear_part_tolerance"] = holds > 0 ? py::object(py::float_(holds)) : py::none();
     parameters[py::str(r.name)] = d;
   }
   py::dict z;

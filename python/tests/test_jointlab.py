@@ -620,6 +620,13 @@ def test_update_iwan_equals_the_command_line(tmp_path, capfd):
     # A sigma is stated exactly where its Student's t has a variance (more than 2 degrees).
     stated = result["parameters"]["Kt"]["relative_std"] is not None
     assert stated == (result["sigma_degrees_of_freedom"] > 2)
+    # The linear part's systematic effect as the report's "linear part:" line states it: the
+    # change per 0.1 % error of mode 1's linear frequency (two digits), stated for Kt here.
+    rates = {k: result["parameters"][k]["linear_part_sensitivity"] for k in ("Fs", "Kt", "chi")}
+    assert rates["Kt"] is not None
+    for name, rate in rates.items():
+        if rate is not None and abs(0.1 * rate) >= 1e-3:  # smaller: "by less than 0.001 %"
+            assert f"{name} by {0.1 * rate:+.2g} %" in result["report"], (name, rate)
     # The report says what the amplitudes were read as, as the command's does.
     assert "amplitudes read as mode 1's QSMA modal amplitude q (--amplitude modal, the default)" in \
         result["report"]
