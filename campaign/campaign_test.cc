@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/campaign/steps/iwan_step.h"
+#include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/linear_step.h"
 #include "jointlab/core/error.h"
 #include "jointlab/tests/test_util.h"
@@ -184,6 +185,38 @@ TEST(Campaign, LinearUpdateSettingsAreTyped) {
     EXPECT_EQ(std::string(e.what()),
               file.string() + ":14: update.iwan.accept_unconfirmed_pairs must be true or false");
   }
+  fs::remove_all(dir);
+}
+
+// A truth file of a model with two Iwan sets gives one table per set; the fitted set's is read
+// (before: `missing iwan.Fs`), and without the set named, or naming one it lacks, it is refused
+// naming the tables. A flat [iwan] is read whatever the set.
+TEST(Campaign, ATruthFileGivesTheFittedSetsTableOfSeveral) {
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_campaign_truth");
+  const fs::path two = dir / "two.toml", flat = dir / "flat.toml";
+  std::ofstream(two) << "[iwan.bolt]\nKt = 2e7\nFs = 60.0\nchi = -0.4\nbeta = 1.0\n"
+                        "[iwan.rivet]\nKt = 8e6\nFs = 40.0\nchi = -0.5\nbeta = 0.5\n"
+                        "[scatter]\nKt = 0.02\n";
+  std::ofstream(flat) << "[iwan]\nKt = 1.2e7\nFs = 40.0\nchi = -0.4\nbeta = 0.8\n";
+  const Truth rivet = read_truth(two, "iwan.rivet");
+  EXPECT_EQ(rivet.iwan.Kt, 8e6);
+  EXPECT_EQ(rivet.iwan.Fs, 40.0);
+  EXPECT_EQ(rivet.iwan.beta, 0.5);
+  EXPECT_EQ(rivet.scatter_kt, 0.02);
+  EXPECT_EQ(read_truth(two, "bolt").iwan.Fs, 60.0);
+  EXPECT_EQ(read_truth(flat, "iwan.bolt").iwan.Kt, 1.2e7);
+  const auto message = [](const fs::path& p, const std::string& set) {
+    try {
+      read_truth(p, set);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message(two, "").find("holds the known values of 2 sets (iwan.bolt, iwan.rivet)"),
+            std::string::npos);
+  EXPECT_NE(message(two, "iwan.nut").find("no [iwan.nut] for the fitted set iwan.nut"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -410,7 +410,7 @@ ReportSection model_section(const Campaign& c, const MeasuredSide& m, const Mode
                                      model.iwan_count()));
   for (const std::string& n : r.start.qsma_notes) s.paragraphs.push_back("QSMA " + n);
   s.tables.push_back(frequency_table(c, m, r));
-  const Truth truth = read_truth(c.truth);
+  const Truth truth = read_truth(c.truth, truth_set(c));
   s.tables.push_back(parameter_table(c, r, truth));
   if (r.linear.ran) s.paragraphs.push_back("Linear updating: " + r.linear.summary.report());
   if (r.iwan.stopped) {

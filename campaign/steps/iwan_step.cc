@@ -241,7 +241,7 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   step.beta_held = step.summary.held[3];  // as asked, in microslip, or the free fit no better
   step.curves = static_cast<int>(targets.curves());
   step.updated = objective.apply(step.summary.best, step.summary.modal_ratio);
-  if (!c.truth.empty()) step.cost_known = objective.cost(read_truth(c.truth).iwan);
+  if (!c.truth.empty()) step.cost_known = objective.cost(read_truth(c.truth, truth_set(c)).iwan);
   // Each mode's backbone cost at the start and at the result, fitted or not: a mode the
   // one-mode QSMA cannot describe (its joints moved by another mode) stands out.
   for (const auto& [k, t] : targets.every) {

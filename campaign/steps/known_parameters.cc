@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <fmt/format.h>
@@ -16,7 +18,7 @@ namespace jointlab::campaign {
 
 namespace fs = std::filesystem;
 
-Truth read_truth(const fs::path& path) {
+Truth read_truth(const fs::path& path, const std::string& set) {
   Truth t;
   if (path.empty()) return t;
   toml::table doc;
@@ -26,18 +28,51 @@ Truth read_truth(const fs::path& path) {
     throw InputError(where(path.string(), static_cast<long>(e.source().begin.line),
                            std::string(e.description())));
   }
-  const auto get = [&](const char* table, const char* key, bool required) {
-    const auto v = doc[table][key].value<double>();
+  // [iwan] holds the fitted set's values, or one table per set ([iwan.bolt], [iwan.rivet]) of
+  // which the fitted one is read: a model with two sets has two truths, and a truth file of
+  // two tables was refused as `missing iwan.Fs`.
+  std::string table = "iwan";
+  const toml::table* iwan = doc["iwan"].as_table();
+  if (iwan && !iwan->contains("Fs")) {
+    std::vector<std::string> sets;
+    for (auto&& [key, value] : *iwan)
+      if (value.is_table()) sets.push_back("iwan." + std::string(key.str()));
+    if (!sets.empty()) {
+      const std::string bare = set.starts_with("iwan.") ? set.substr(5) : set;
+      if (bare.empty()) {
+        throw InputError(where(
+            path.string(), 0,
+            fmt::format("[iwan] holds the known values of {} sets ({}): name the fitted one in "
+                        "[update.iwan] sets, and its known values are read from its table",
+                        sets.size(), fmt::join(sets, ", "))));
+      }
+      if (!(*iwan)[bare].is_table()) {
+        throw InputError(where(path.string(), 0,
+                               fmt::format("no [iwan.{}] for the fitted set iwan.{} (tables: {})",
+                                           bare, bare, fmt::join(sets, ", "))));
+      }
+      table = "iwan." + bare;
+      iwan = (*iwan)[bare].as_table();
+    }
+  }
+  const auto get = [&](const toml::table* from, const std::string& name, const char* key,
+                       bool required) {
+    const auto v = from ? (*from)[key].value<double>() : std::nullopt;
     if (!v && required)
-      throw InputError(where(path.string(), 0, fmt::format("missing {}.{}", table, key)));
+      throw InputError(where(path.string(), 0, fmt::format("missing {}.{}", name, key)));
     return v.value_or(0.0);
   };
   t.present = true;
-  t.iwan = {get("iwan", "Fs", true), get("iwan", "Kt", true), get("iwan", "chi", true),
-            get("iwan", "beta", true)};
-  t.scatter_kt = get("scatter", "Kt", false);
-  t.scatter_fs = get("scatter", "Fs", false);
+  t.iwan = {get(iwan, table, "Fs", true), get(iwan, table, "Kt", true),
+            get(iwan, table, "chi", true), get(iwan, table, "beta", true)};
+  const toml::table* scatter = doc["scatter"].as_table();
+  t.scatter_kt = get(scatter, "scatter", "Kt", false);
+  t.scatter_fs = get(scatter, "scatter", "Fs", false);
   return t;
+}
+
+std::string truth_set(const Campaign& c) {
+  return c.iwan_update.sets.empty() ? std::string() : c.iwan_update.sets.front();
 }
 
 bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set) {
@@ -199,20 +234,39 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
         k.cost_known, k.iwan.final_cost,
         k.iwan.final_cost <= k.cost_known ? " (the optimiser reaches at least the known fit)"
                                           : " (the optimiser stopped short of the known fit)");
-  s.paragraphs.push_back(fmt::format(
-      "Known parameters ({}): {}. Tolerance: twice the planted one-sigma hit-to-hit scatter "
-      "(Kt {:.1f} %, Fs {:.1f} %); where none was planted ({}), twice the update's own "
-      "one-sigma uncertainty, which the planted scatter causes{}.{}",
-      truth_name, verdict, 100 * k.truth.scatter_kt, 100 * k.truth.scatter_fs,
-      k.truth.scatter_kt > 0 && k.truth.scatter_fs > 0 ? "chi, beta"
-      : k.truth.scatter_kt > 0                         ? "Fs, chi, beta"
-      : k.truth.scatter_fs > 0                         ? "Kt, chi, beta"
-                                                       : "Kt, Fs, chi, beta",
-      k.curves > 0 ? fmt::format(" (robust to correlated points: the {} hits' backbones, not "
-                                 "their points, are the independent samples)",
-                                 k.curves)
-                   : std::string(),
-      micro));
+  // The tolerance's source per quantity: planted scatter where the truth file gives it, else
+  // the update's own uncertainty (without any planted, "planted ... (Kt 0.0 %, Fs 0.0 %)" was
+  // said beside "where none was planted (Kt, Fs, chi, beta)").
+  std::vector<std::string> planted, from_fit;
+  if (k.truth.scatter_kt > 0)
+    planted.push_back(fmt::format("Kt {:.1f} %", 100 * k.truth.scatter_kt));
+  else
+    from_fit.emplace_back("Kt");
+  if (k.truth.scatter_fs > 0)
+    planted.push_back(fmt::format("Fs {:.1f} %", 100 * k.truth.scatter_fs));
+  else
+    from_fit.emplace_back("Fs");
+  from_fit.emplace_back("chi");
+  from_fit.emplace_back("beta");
+  const std::string robust = k.curves > 0
+                                 ? fmt::format(
+                                       " (robust to correlated points: the {} hits' backbones, not "
+                                       "their points, are the independent samples)",
+                                       k.curves)
+                                 : std::string();
+  const std::string tolerance =
+      planted.empty()
+          ? fmt::format(
+                "Tolerance: none was planted (Kt, Fs, chi, beta): twice the update's own "
+                "one-sigma uncertainty, from the scatter between hits{}",
+                robust)
+          : fmt::format(
+                "Tolerance: twice the planted one-sigma hit-to-hit scatter ({}); where "
+                "none was planted ({}), twice the update's own one-sigma uncertainty, "
+                "which the planted scatter causes{}",
+                fmt::join(planted, ", "), fmt::join(from_fit, ", "), robust);
+  s.paragraphs.push_back(
+      fmt::format("Known parameters ({}): {}. {}.{}", truth_name, verdict, tolerance, micro));
 }
 
 }  // namespace jointlab::campaign

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "jointlab/campaign/campaign.h"
 #include "jointlab/campaign/report.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/model/iwan.h"
@@ -24,8 +25,13 @@ struct Truth {
   double scatter_fs = 0;       ///< planted relative hit-to-hit scatter of F_S
 };
 
-/// Reads a truth file (empty path: none); InputError naming the file and field.
-Truth read_truth(const std::filesystem::path& path);
+/// Reads a truth file (empty path: none); InputError naming the file and field. Its [iwan] holds
+/// the fitted set's known values, or one table per set ([iwan.bolt], [iwan.rivet]): then the
+/// table of `set` ("iwan.<name>" or "<name>", [update.iwan] sets), which must be named.
+Truth read_truth(const std::filesystem::path& path, const std::string& set = "");
+
+/// The set whose known values a campaign's truth file gives: [update.iwan] sets' one, or "".
+std::string truth_set(const Campaign& campaign);
 
 /// The parameters and element name of the model's first Iwan joint; false when it has none.
 bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set);

@@ -889,8 +889,12 @@ TEST(KnownParameters, WithoutPlantedScatterTheUpdatesOwnSigmaJudges) {
   ASSERT_FALSE(s.paragraphs.empty());
   EXPECT_NE(s.paragraphs[0].find("recovers all 4 identified quantities"), std::string::npos)
       << s.paragraphs[0];
-  EXPECT_NE(s.paragraphs[0].find("where none was planted (Kt, Fs, chi, beta)"), std::string::npos)
+  // Nothing planted: the tolerance's one source, not "planted ... (Kt 0.0 %, Fs 0.0 %)" beside it.
+  EXPECT_NE(s.paragraphs[0].find("Tolerance: none was planted (Kt, Fs, chi, beta): twice the "
+                                 "update's own one-sigma uncertainty"),
+            std::string::npos)
       << s.paragraphs[0];
+  EXPECT_EQ(s.paragraphs[0].find("0.0 %"), std::string::npos) << s.paragraphs[0];
   // F_S 1 % off at +/- 0.35 %: not recovered; planted scatter, where given, still judges.
   k.updated.Fs = 40 * 1.01;
   ReportSection t;

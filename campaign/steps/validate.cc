@@ -13,7 +13,7 @@ namespace jointlab::campaign {
 void validate_settings(const Campaign& c) {
   // The truth file and the stepped-sine files are read now, not after the hits: a defect
   // in one of them once stopped a run only after its minutes of processing.
-  read_truth(c.truth);
+  read_truth(c.truth, truth_set(c));
   for (size_t k = 0; k < c.modes.size(); ++k) {
     if (!c.modes[k].stepped_sine.empty()) stepped_sine_backbones(c, k, 0);
   }
