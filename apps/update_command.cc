@@ -188,6 +188,9 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
   o.comparison = a.compare == "secant" ? correlate::IwanComparison::kSecant
                                        : correlate::IwanComparison::kMatched;
   o.fit_linear_damping = a.linear_damping == "fit";
+  // A model whose mode frequencies already match the measured linear ones (update-linear's
+  // result) is said to be so, rather than sent to update-linear again.
+  o.linear_part_updated = campaign::linear_part_matches(m, in.targets);
   // Long fits say how they go: every 250 evaluations, the best cost so far, on stderr.
   o.progress = [](int evaluations, double best) {
     if (evaluations % 250 == 0) {

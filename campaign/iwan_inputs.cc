@@ -387,4 +387,17 @@ std::vector<std::string> set_share_warnings(const model::Model& m, const std::st
   return lines;
 }
 
+bool linear_part_matches(const model::Model& m, const std::vector<correlate::IwanTarget>& targets,
+                         double tolerance) {
+  if (targets.empty()) return false;
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  for (const correlate::IwanTarget& t : targets) {
+    const int col = linear.rigid_count + t.mode - 1;
+    if (t.mode < 1 || col >= linear.size() || !(t.linear_frequency_hz > 0)) return false;
+    if (!(std::abs(linear.frequency_hz(col) / t.linear_frequency_hz - 1) <= tolerance))
+      return false;
+  }
+  return true;
+}
+
 }  // namespace jointlab::campaign

@@ -79,4 +79,11 @@ std::vector<std::string> set_share_warnings(const model::Model& m, const std::st
                                             correlate::AmplitudeQuantity amplitude,
                                             const std::string& option);
 
+/// True when every target has a measured linear frequency and mode R of `m` (joints at K_T) lies
+/// within `tolerance` (relative) of it: the model's linear part matches the measured linear
+/// frequencies (update-linear's result), which update-iwan states
+/// (IwanUpdateOptions::linear_part_updated) instead of sending to update-linear.
+bool linear_part_matches(const model::Model& m, const std::vector<correlate::IwanTarget>& targets,
+                         double tolerance = 1e-4);
+
 }  // namespace jointlab::campaign

@@ -134,5 +134,22 @@ TEST(IwanInputs, ASetFittedAgainstAModeAnotherSetCarriesIsNamed) {
                   .empty());
 }
 
+// update-iwan after update-linear: the model's mode frequency equals the measured linear one, and
+// the report said "fit the model's linear part ... (update-linear)" all the same. A target whose
+// model mode lies within 1e-4 of its measured linear frequency counts as fitted; 1e-3 off, or
+// no measured frequency (a backbone table), does not.
+TEST(IwanInputs, ALinearPartMatchingTheMeasuredFrequenciesCountsAsUpdated) {
+  const model::Model m = correlate::two_chain_structure({.iwan = true});
+  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+  correlate::IwanTarget t;
+  t.mode = 2;
+  t.linear_frequency_hz = linear.frequency_hz(linear.rigid_count + 1) * (1 + 2e-5);
+  EXPECT_TRUE(linear_part_matches(m, {t}));
+  t.linear_frequency_hz *= 1 + 1e-3;
+  EXPECT_FALSE(linear_part_matches(m, {t}));
+  t.linear_frequency_hz = 0;
+  EXPECT_FALSE(linear_part_matches(m, {t}));
+}
+
 }  // namespace
 }  // namespace jointlab::campaign
