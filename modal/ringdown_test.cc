@@ -379,15 +379,19 @@ TEST(RingdownBandGain, ModeOnTheBandsSlopeKeepsItsSpan) {
 // linear mode at 412 Hz rings beside it; white noise of 4 m/s^2 per sample puts the
 // band's noise floor near 0.1 m/s^2, so the mode starts 60 dB above it. Its authors'
 // band, 148.9:158.9 Hz, puts the mode 1-3 Hz above the lower edge. `neighbour_hz` > 0
-// adds a linear mode there (100 m/s^2 at the impact, damping 0.3 %).
+// adds a linear mode there (`neighbour_acc` m/s^2 at the impact, damping `neighbour_zeta`).
+// At another sample rate `fs` the noise per sample `noise` keeps its density when scaled by
+// sqrt(fs / 51200).
 struct LmsTwin {
   double fs = 51200;
   Eigen::VectorXd x;         // acceleration [m/s^2]
   testing::SlowFlowMode m1;  // the planted backbone (displacement amplitude)
 };
 
-LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0, double noise = 4.0, double shift_hz = 0) {
+LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0, double noise = 4.0, double shift_hz = 0,
+                 double neighbour_acc = 100.0, double neighbour_zeta = 0.003, double fs = 51200) {
   LmsTwin t;
+  t.fs = fs;
   const Eigen::Index n = static_cast<Eigen::Index>(2.55 * t.fs);
   const Eigen::Index pre = static_cast<Eigen::Index>(0.1 * t.fs);
   const double two_pi = 2 * std::numbers::pi;
@@ -412,7 +416,7 @@ LmsTwin lms_twin(unsigned seed, double neighbour_hz = 0, double noise = 4.0, dou
   };
   Eigen::VectorXd ring = testing::slow_flow(t.m1, t.fs, n - pre).acceleration;
   ring += linear(412.0, 0.004, 150.0, 1.1);
-  if (neighbour_hz > 0) ring += linear(neighbour_hz, 0.003, 100.0, 2.3);
+  if (neighbour_hz > 0) ring += linear(neighbour_hz, neighbour_zeta, neighbour_acc, 2.3);
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, noise);
   t.x.resize(n);
@@ -637,13 +641,14 @@ TEST(RingdownBandGain, AClippedRecordIsReadAfterItsRange) {
 // (the summary names the neighbour), so whatever is kept is mode 1's: every frequency
 // within 0.05 % (a neighbour passed at a tenth of mode 1's size would swing it by
 // 0.1 x 4 Hz / 150 Hz = 0.3 %) and the median damping within 5 %; with the neighbour 9 Hz
-// below the band, issue 26's 1.2 decades. Measured: 140 Hz 1.35-1.45 decades, 144 Hz
-// 0.54-0.84, 146 Hz none on seed 1 and 0.14 on seed 2, worst frequency error 7.3e-5,
-// median damping errors at most 0.9 %. The closer the neighbour, the narrower the band
-// must stay on its side and the longer its filter settles (1.2 s for 146 Hz), while the
+// below the band, issue 26's 1.2 decades. Measured: 140 Hz 1.42-1.56 decades, 144 Hz
+// 1.07-1.15, 146 Hz 0.48-0.59, worst frequency error 1.4e-4, median damping errors at most
+// 1.5 % (before the held band left the mode's track on its slope: 1.35-1.46, 0.69-1.02, and
+// none on seed 1 and 0.21 on seed 2). The closer the neighbour, the narrower the band must stay
+// on its side and the longer its filter settles (0.8 s for 146 Hz, 1.2 s before), while the
 // record's backward continuation holds for 0.45 s: an edge that passes 150 Hz and stops
-// 146 Hz rings for about a second whichever side it is on. (On seed 2 the 146 Hz peak is
-// placed at 145.0 Hz, where the smoothed spectrum still rises.)
+// 146 Hz rings for most of a second whichever side it is on. (On seed 2 the smoothed
+// spectrum's peak lies at 145.0 Hz; the measured samples' bump at 146.1 Hz holds the band.)
 TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
   for (const double neighbour : {146.0, 144.0, 140.0}) {
     for (const unsigned seed : {1u, 2u}) {
@@ -671,6 +676,69 @@ TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
       EXPECT_LE(e.z, 0.05) << neighbour << " seed " << seed;
     }
   }
+}
+
+// The LMS twin with a weaker neighbour just below its authors' band, as a real record of
+// another lab may have: a linear mode at 146 Hz (2.9 Hz below the band, 4-5.7 Hz below the
+// mode) of 0.1, 0.3 or 1 times the mode's 350 m/s^2 at the impact, damping 0.1 or 0.3 %, and
+// one at 147 Hz of 0.1 or 0.3 times it, damping 0.1 %. Sampled at 5120 Hz (the noise density
+// as at 51.2 kHz) to keep the test cheap; the physics is the same. Before, none of the eight
+// kept a point but one (0.24 decades): a band held back from a neighbour had to leave the
+// mode's track with three half-power half-widths in its flat part, so it was read through
+// 10.5-12 Hz, whose filter settles in 1-1.2 s where the record's backward continuation holds
+// 0.45 s, and its points' damping was known to 1.6-4 %; and a 147 Hz mode a tenth of its size,
+// a bump of 1.2-1.3 times the mode's skirt in the spectrum, was not found at all: the band was
+// moved over it, and their beat lifted the noise floor 1.4-27 times. Now a held band leaves the
+// track on its slope (its gain divided out) and is 12-17 Hz wide, and a moved band whose noise
+// floor stands 1.25 times above the typed band's (scaled to its bandwidth) is held back from the
+// nearest bump of the spectrum beyond the typed edge. Measured: 146 Hz 0.14-0.71 decades (median
+// 0.66), 147 Hz 0.34 each; median frequency errors at most 6.1e-5, median damping errors at
+// most 1.6 %. Required: every record keeps a backbone of its mode (at least 0.1 decades) with issue
+// 26's accuracy (median errors 5e-4 in frequency, 5 % in damping), every frequency within 5e-4 (a
+// neighbour passed at a tenth of the mode would swing it by 0.1 x 4 Hz / 150 Hz = 0.3 %), a
+// median of 0.45 decades at 146 Hz, and the summary naming the neighbour that held the band
+// (at 147 Hz and 0.1 times the mode, the bump the moved band showed). What is still lost is the
+// start: the held bands settle in 0.7-1 s, the continuation holds 0.45 s (the 412 Hz mode, passed
+// at 18 % by the continuation's low-pass, grows past its limit backwards).
+TEST(RingdownBandGain, AWeakerNeighbourJustBelowTheBandLeavesTheModeItsPoints) {
+  struct Case {
+    double hz, share, zeta;
+  };
+  const double fs = 5120, noise = 4.0 * std::sqrt(fs / 51200);
+  std::vector<double> decades_146;
+  for (const Case c : {Case{146, 0.1, 0.001}, Case{146, 0.1, 0.003}, Case{146, 0.3, 0.001},
+                       Case{146, 0.3, 0.003}, Case{146, 1.0, 0.001}, Case{146, 1.0, 0.003},
+                       Case{147, 0.1, 0.001}, Case{147, 0.3, 0.001}}) {
+    const LmsTwin t = lms_twin(1, c.hz, noise, 0, 350 * c.share, c.zeta, fs);
+    const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+    char where[80];
+    std::snprintf(where, sizeof where, "neighbour %g Hz, %g x, damping %g", c.hz, c.share, c.zeta);
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << where << ": " << r.summary.message;
+    const Medians e = medians(r.backbone, t.m1);
+    double worst_f = 0;
+    for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+      const double f = t.m1.omega_n(r.backbone.displacement(i)) / (2 * std::numbers::pi);
+      worst_f = std::max(worst_f, std::abs(r.backbone.frequency_hz(i) / f - 1));
+    }
+    std::printf(
+        "LMS twin + %s: %ld points, %.2f decades, median f err %.1e (worst %.1e), median "
+        "z err %.3f\n",
+        where, long(r.backbone.size()), r.summary.amplitude_decades, e.f, worst_f, e.z);
+    EXPECT_GE(r.summary.amplitude_decades, 0.1) << where << ": " << r.summary.message;
+    EXPECT_LE(e.f, 5e-4) << where;
+    EXPECT_LE(worst_f, 5e-4) << where;
+    EXPECT_LE(e.z, 0.05) << where;
+    EXPECT_NE(r.summary.message.find("held back by a neighbouring mode's spectral peak at 14"),
+              std::string::npos)
+        << where << ": " << r.summary.message;
+    if (c.hz == 147 && c.share == 0.1) {  // found by its beat alone
+      EXPECT_NE(r.summary.message.find("a bump on the mode's skirt"), std::string::npos)
+          << where << ": " << r.summary.message;
+    }
+    if (c.hz == 146) decades_146.push_back(r.summary.amplitude_decades);
+  }
+  std::sort(decades_146.begin(), decades_146.end());
+  EXPECT_GE(decades_146[decades_146.size() / 2], 0.45);
 }
 
 // A second mode inside the typed band, 154 Hz beside the LMS twin's drifting mode (149.9 to
