@@ -171,16 +171,19 @@ void write_model_directory(const std::filesystem::path& out, const ReducedModel&
       "dofs.csv labels: node 1000*s + r = reference node of rivet r on strip s (components",
       "1..6 = x, y, z, rx, ry, rz); other nonzero nodes = sensors; node 0 = modal coordinate",
       "(component = mode number). K is the structure WITHOUT its joints.",
-      "iwan.rivet: x and y of every rivet; spring.kz: z [N/m]; spring.rxy: rx and ry, spring.rz:",
-      "rz [N*m/rad]."};
-  const Iwan rivet(IwanParameters{d.fs, d.kt, d.chi, d.beta});
+      d.joint_sets.empty()
+          ? "iwan.rivet: x and y of every rivet; spring.kz: z [N/m]; spring.rxy: rx and ry, "
+            "spring.rz:"
+          : "iwan.<set>: x and y of the rivets of each [[joint_set]], iwan.rivet: of the others;",
+      d.joint_sets.empty() ? "rz [N*m/rad]."
+                           : "spring.kz: z [N/m]; spring.rxy: rx and ry, spring.rz: rz [N*m/rad]."};
   for (const ReducedJoint& j : m.joints) {
     Joint joint;
     joint.a = j.a;
     joint.b = j.b;
     joint.element = j.element;
     joint.stiffness = joint_stiffness(d, j.element);
-    if (j.element.starts_with("iwan.")) joint.iwan = rivet;
+    if (j.element.starts_with("iwan.")) joint.iwan = Iwan(joint_iwan(d, j.element));
     model.joints.push_back(std::move(joint));
     comments.joints.push_back(j.comment);
   }

@@ -87,5 +87,39 @@ TEST(ModelBuilder, WritesAModelDirectoryThatReadsBack) {
             1e-14 * Eigen::MatrixXd(r.mass).cwiseAbs().maxCoeff());
 }
 
+// A description with a [[joint_set]] writes a model file of two Iwan sets, each with its own
+// parameters, that reads back (a beam model of four rivets, the end two bolted).
+TEST(ModelBuilder, AJointSetIsWrittenAsAnIwanSetOfItsOwn) {
+  RivetedBeamDescription d = default_riveted_beam();
+  d.shell = false;
+  d.element_size = 0.02;
+  d.rivets = {{0.02, 0.0}, {0.24, 0.0}, {0.26, 0.0}, {0.48, 0.0}};
+  d.joint_sets.push_back({"bolt", {1, 4}, 2e7, 60.0, -0.4, 1.0});
+  d.fixed_interface_modes = 4;
+  d.source = "sets.toml";
+  const ReducedModel r = build_reduced_model(d, {});
+  ASSERT_TRUE(r.summary.ok);
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_model_builder_sets_test");
+  fs::remove_all(dir);
+  write_model_directory(dir, r);
+  const Model m = read_model(dir / "model.toml");
+  int bolts = 0, rivets = 0;
+  for (const Joint& j : m.joints) {
+    if (!j.iwan) continue;
+    if (j.element == "iwan.bolt") {
+      ++bolts;
+      EXPECT_EQ(j.iwan->slip_force(), 60.0);
+      EXPECT_EQ(j.iwan->chi(), -0.4);
+      EXPECT_EQ(j.stiffness, 2e7);
+    } else {
+      ++rivets;
+      EXPECT_EQ(j.element, "iwan.rivet");
+      EXPECT_EQ(j.iwan->slip_force(), d.fs);
+    }
+  }
+  EXPECT_EQ(bolts, 4);
+  EXPECT_EQ(rivets, 4);
+}
+
 }  // namespace
 }  // namespace jointlab::model::fe

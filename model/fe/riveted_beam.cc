@@ -1,10 +1,12 @@
 #include "jointlab/model/fe/riveted_beam.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -133,8 +135,9 @@ RivetedBeamDescription read_riveted_beam_description(const std::filesystem::path
     throw InputError(where(r.file, static_cast<long>(e.source().begin.line),
                            fmt::format("TOML syntax: {}", e.description())));
   }
-  r.reject_unknown(doc, "",
-                   {"strips", "material", "mesh", "rivets", "joints", "reduction", "sensor"});
+  r.reject_unknown(
+      doc, "",
+      {"strips", "material", "mesh", "rivets", "joints", "joint_set", "reduction", "sensor"});
   RivetedBeamDescription d = default_riveted_beam();
   d.source = path.string();
 
@@ -195,6 +198,44 @@ RivetedBeamDescription read_riveted_beam_description(const std::filesystem::path
   d.kz = r.number(j, "joints", "kz").value_or(d.kz);
   d.rxy = r.number(j, "joints", "rxy").value_or(d.rxy);
   d.rz = r.number(j, "joints", "rz").value_or(d.rz);
+
+  // [[joint_set]]: some rivets with an Iwan set of their own (a bolted pair beside riveted
+  // ones); its parameters default to [joints]'.
+  if (const toml::node* jn = doc.get("joint_set")) {
+    const toml::array* arr = jn->as_array();
+    if (!arr) r.fail(jn, "'joint_set' must be an array of tables [[joint_set]]");
+    int k = 0;
+    for (const toml::node& item : *arr) {
+      ++k;
+      const toml::table* t = item.as_table();
+      const std::string name = fmt::format("joint_set[{}]", k);
+      if (!t) r.fail(&item, fmt::format("'{}' must be a table", name));
+      r.reject_unknown(*t, name, {"name", "rivets", "Kt", "Fs", "chi", "beta"});
+      JointSetDescription js;
+      const toml::node* nn = t->get("name");
+      if (!nn || !nn->is_string())
+        r.fail(nn ? nn : &item, fmt::format("field '{}.name' is required, a word", name));
+      js.name = *nn->value<std::string>();
+      const toml::node* rn = t->get("rivets");
+      const toml::array* ra = rn ? rn->as_array() : nullptr;
+      if (!ra || ra->empty())
+        r.fail(rn ? rn : &item,
+               fmt::format("field '{}.rivets' is required: a non-empty array of rivet numbers "
+                           "(1-based, as in dofs.csv)",
+                           name));
+      for (const toml::node& v : *ra) {
+        const auto n = v.value<int64_t>();
+        if (!v.is_integer() || !n)
+          r.fail(&v, fmt::format("field '{}.rivets': each entry must be a rivet number", name));
+        js.rivets.push_back(static_cast<int>(*n));
+      }
+      js.kt = r.number(t, name, "Kt").value_or(d.kt);
+      js.fs = r.number(t, name, "Fs").value_or(d.fs);
+      js.chi = r.number(t, name, "chi").value_or(d.chi);
+      js.beta = r.number(t, name, "beta").value_or(d.beta);
+      d.joint_sets.push_back(std::move(js));
+    }
+  }
 
   const toml::table* red = r.table(doc, "reduction");
   if (red) r.reject_unknown(*red, "reduction", {"fixed_interface_modes"});
@@ -269,6 +310,24 @@ void validate(const RivetedBeamDescription& d) {
   positive(d.coupling_radius, "rivets.coupling_radius");
   if (const std::string e = model::iwan_parameter_error({d.fs, d.kt, d.chi, d.beta}); !e.empty())
     fail(fmt::format("field 'joints.{}'{}", e.substr(0, e.find(' ')), e.substr(e.find(' '))));
+  std::set<std::string> set_names;
+  for (std::size_t k = 0; k < d.joint_sets.size(); ++k) {
+    const JointSetDescription& js = d.joint_sets[k];
+    const std::string field = fmt::format("joint_set[{}]", k + 1);
+    const bool word = !js.name.empty() && std::all_of(js.name.begin(), js.name.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+    });
+    if (!word)
+      fail(fmt::format("field '{}.name' = '{}' must be a word (letters, digits, _ or -)", field,
+                       js.name));
+    if (js.name == "rivet" || !set_names.insert(js.name).second)
+      fail(fmt::format("field '{}.name' = '{}' is taken ({})", field, js.name,
+                       js.name == "rivet" ? "iwan.rivet is [joints]' set of the other rivets"
+                                          : "two [[joint_set]] share it"));
+    if (const std::string e = model::iwan_parameter_error({js.fs, js.kt, js.chi, js.beta});
+        !e.empty())
+      fail(fmt::format("field '{}.{}'{}", field, e.substr(0, e.find(' ')), e.substr(e.find(' '))));
+  }
   positive(d.kz, "joints.kz");
   positive(d.rxy, "joints.rxy");
   positive(d.rz, "joints.rz");
@@ -294,6 +353,17 @@ void validate(const RivetedBeamDescription& d) {
             fmt::format("rivets: rivets {} and {} share a beam station; the beam model needs "
                         "rivets at distinct x (more than mesh.size / 4 apart)",
                         k + 1, i + 1));
+  }
+  std::map<int, std::string> set_of_rivet;
+  for (std::size_t k = 0; k < d.joint_sets.size(); ++k) {
+    for (const int r : d.joint_sets[k].rivets) {
+      if (r < 1 || r > static_cast<int>(d.rivets.size()))
+        fail(fmt::format("field 'joint_set[{}].rivets': rivet {} does not exist (1 to {})", k + 1,
+                         r, d.rivets.size()));
+      if (const auto [at, fresh] = set_of_rivet.emplace(r, d.joint_sets[k].name); !fresh)
+        fail(fmt::format("field 'joint_set[{}].rivets': rivet {} is in set '{}' already", k + 1, r,
+                         at->second));
+    }
   }
   std::set<int> labels;
   for (std::size_t i = 0; i < d.sensors.size(); ++i) {
@@ -391,14 +461,25 @@ RivetedBeam build_riveted_beam(const RivetedBeamDescription& d) {
   for (const auto& sn : sensors) out.boundary.push_back(sn);
   static const char* const kElement[6] = {"iwan.rivet", "iwan.rivet", "spring.kz",
                                           "spring.rxy", "spring.rxy", "spring.rz"};
+  std::vector<std::string> iwan(static_cast<std::size_t>(nr), "iwan.rivet");
+  for (const JointSetDescription& js : d.joint_sets)
+    for (const int r : js.rivets) iwan[static_cast<std::size_t>(r - 1)] = "iwan." + js.name;
   for (int r = 0; r < nr; ++r)
     for (int c = 1; c <= 6; ++c)
-      out.joints.push_back({r + 1, ref[0][r], ref[1][r], c, kElement[c - 1]});
+      out.joints.push_back({r + 1, ref[0][r], ref[1][r], c,
+                            c <= 2 ? iwan[static_cast<std::size_t>(r)] : kElement[c - 1]});
   return out;
 }
 
+IwanParameters joint_iwan(const RivetedBeamDescription& d, const std::string& element) {
+  if (element == "iwan.rivet") return {d.fs, d.kt, d.chi, d.beta};
+  for (const JointSetDescription& js : d.joint_sets)
+    if (element == "iwan." + js.name) return {js.fs, js.kt, js.chi, js.beta};
+  throw std::invalid_argument("unknown joint element " + element);
+}
+
 double joint_stiffness(const RivetedBeamDescription& d, const std::string& element) {
-  if (element == "iwan.rivet") return d.kt;
+  if (element.starts_with("iwan.")) return joint_iwan(d, element).Kt;
   if (element == "spring.kz") return d.kz;
   if (element == "spring.rxy") return d.rxy;
   if (element == "spring.rz") return d.rz;

@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 
 #include "jointlab/model/fe/fe_model.h"
+#include "jointlab/model/iwan.h"
 
 namespace jointlab::model::fe {
 
@@ -33,29 +34,41 @@ struct SensorDescription {
   std::vector<int> components;  ///< 1..6 = x, y, z, rx, ry, rz.
 };
 
+/// A named Iwan set of some of the rivets (`[[joint_set]]`): their x and y elements become
+/// "iwan.<name>" with these parameters; the other rivets keep "iwan.rivet" and [joints].
+struct JointSetDescription {
+  std::string name;         ///< Set name (a word, not "rivet").
+  std::vector<int> rivets;  ///< Its rivets, 1-based, as numbered in dofs.csv.
+  double kt = 0;            ///< Iwan K_T [N/m].
+  double fs = 0;            ///< Iwan slip force F_S [N].
+  double chi = 0;           ///< Iwan exponent χ.
+  double beta = 0;          ///< Iwan macroslip weight β.
+};
+
 /// Everything the riveted beam generator needs (see docs/model-description.md).
 struct RivetedBeamDescription {
-  std::string source = "description";      ///< File name, for messages.
-  double length = 0.5;                     ///< Strip length L [m].
-  double width = 0.0254;                   ///< Strip width b [m].
-  double thickness = 0.003175;             ///< Strip thickness t [m].
-  double overlap = 0.5;                    ///< Length of the lapped region [m] (≤ L).
-  double youngs_modulus = 69e9;            ///< E [Pa].
-  double poissons_ratio = 0.33;            ///< ν.
-  double density = 2700;                   ///< ρ [kg/m³].
-  bool shell = true;                       ///< Shell (MITC4) model, else beam model.
-  double element_size = 0.0025;            ///< Target element edge [m].
-  std::vector<Eigen::Vector2d> rivets;     ///< Rivet positions (x, y) [m].
-  double coupling_radius = 0.004;          ///< Patch radius of the distributing couplings [m].
-  double kt = 1e7;                         ///< Iwan K_T = k_x = k_y of each rivet [N/m].
-  double fs = 50;                          ///< Iwan slip force F_S [N].
-  double chi = -0.5;                       ///< Iwan exponent χ.
-  double beta = 1.0;                       ///< Iwan macroslip weight β.
-  double kz = 1e8;                         ///< Normal spring [N/m].
-  double rxy = 1e3;                        ///< Bending (rx, ry) springs [N·m/rad].
-  double rz = 1e2;                         ///< Twisting (rz) spring [N·m/rad].
-  std::vector<SensorDescription> sensors;  ///< Measurement points.
-  int fixed_interface_modes = 60;          ///< Fixed-interface modes kept by the reduction.
+  std::string source = "description";           ///< File name, for messages.
+  double length = 0.5;                          ///< Strip length L [m].
+  double width = 0.0254;                        ///< Strip width b [m].
+  double thickness = 0.003175;                  ///< Strip thickness t [m].
+  double overlap = 0.5;                         ///< Length of the lapped region [m] (≤ L).
+  double youngs_modulus = 69e9;                 ///< E [Pa].
+  double poissons_ratio = 0.33;                 ///< ν.
+  double density = 2700;                        ///< ρ [kg/m³].
+  bool shell = true;                            ///< Shell (MITC4) model, else beam model.
+  double element_size = 0.0025;                 ///< Target element edge [m].
+  std::vector<Eigen::Vector2d> rivets;          ///< Rivet positions (x, y) [m].
+  double coupling_radius = 0.004;               ///< Patch radius of the distributing couplings [m].
+  double kt = 1e7;                              ///< Iwan K_T = k_x = k_y of each rivet [N/m].
+  double fs = 50;                               ///< Iwan slip force F_S [N].
+  double chi = -0.5;                            ///< Iwan exponent χ.
+  double beta = 1.0;                            ///< Iwan macroslip weight β.
+  double kz = 1e8;                              ///< Normal spring [N/m].
+  double rxy = 1e3;                             ///< Bending (rx, ry) springs [N·m/rad].
+  double rz = 1e2;                              ///< Twisting (rz) spring [N·m/rad].
+  std::vector<SensorDescription> sensors;       ///< Measurement points.
+  std::vector<JointSetDescription> joint_sets;  ///< Rivets with Iwan sets of their own.
+  int fixed_interface_modes = 60;               ///< Fixed-interface modes kept by the reduction.
 };
 
 /// `count` rivets in two staggered rows at y = ±row_offset along the overlap.
@@ -99,7 +112,10 @@ struct RivetedBeam {
 /// Builds the model of a validated description.
 RivetedBeam build_riveted_beam(const RivetedBeamDescription& d);
 
-/// The linear stiffness of a joint element name under d (K_T for the Iwan element).
+/// The linear stiffness of a joint element name under d (K_T for an Iwan element).
 double joint_stiffness(const RivetedBeamDescription& d, const std::string& element);
+
+/// The Iwan parameters of element "iwan.rivet" or "iwan.<joint set>" under d.
+IwanParameters joint_iwan(const RivetedBeamDescription& d, const std::string& element);
 
 }  // namespace jointlab::model::fe

@@ -106,5 +106,48 @@ TEST(RivetedBeam, TooSmallCouplingRadiusIsReported) {
   EXPECT_THROW(build_riveted_beam(d), InputError);
 }
 
+// [[joint_set]]: a bolt pair at the ends beside riveted ones is two Iwan sets, which a
+// description could not say (a two-set beam's model.toml had its 8 bolt elements renamed by
+// hand). The named rivets' x and y elements become iwan.<name>, their parameters default to
+// [joints]'; a rivet in two sets, a rivet that does not exist, the name "rivet" and an Iwan
+// parameter out of its domain are refused naming the field.
+TEST(RivetedBeam, AJointSetGivesItsRivetsAnIwanSetOfTheirOwn) {
+  const std::string head =
+      "[mesh]\nelement = \"beam\"\nsize = 0.01\n[rivets]\npositions = [[0.02, 0.0], "
+      "[0.24, 0.0], [0.26, 0.0], [0.48, 0.0]]\n[joints]\nFs = 40.0\nchi = -0.5\n";
+  const RivetedBeamDescription d = read_riveted_beam_description(
+      scratch("sets.toml",
+              head + "[[joint_set]]\nname = \"bolt\"\nrivets = [1, 4]\nKt = 2e7\nFs = 60.0\n"));
+  ASSERT_EQ(d.joint_sets.size(), 1u);
+  const IwanParameters bolt = joint_iwan(d, "iwan.bolt"), rivet = joint_iwan(d, "iwan.rivet");
+  EXPECT_EQ(bolt.Kt, 2e7);
+  EXPECT_EQ(bolt.Fs, 60.0);
+  EXPECT_EQ(bolt.chi, -0.5);  // [joints]'
+  EXPECT_EQ(rivet.Fs, 40.0);
+  EXPECT_EQ(joint_stiffness(d, "iwan.bolt"), 2e7);
+  const RivetedBeam b = build_riveted_beam(d);
+  ASSERT_EQ(b.joints.size(), 4u * 6u);
+  for (const RivetJoint& j : b.joints) {
+    const bool bolted = j.rivet == 1 || j.rivet == 4;
+    if (j.component <= 2) {
+      EXPECT_EQ(j.element, bolted ? "iwan.bolt" : "iwan.rivet") << j.rivet;
+    } else if (j.component == 3) {
+      EXPECT_EQ(j.element, "spring.kz");
+    }
+  }
+  const auto says = [&](const std::string& sets, const std::string& what) {
+    const std::string e = error_of(head + sets);
+    EXPECT_NE(e.find(what), std::string::npos) << e;
+  };
+  says("[[joint_set]]\nname = \"bolt\"\nrivets = [5]\n",
+       "field 'joint_set[1].rivets': rivet 5 does not exist (1 to 4)");
+  says("[[joint_set]]\nname = \"a\"\nrivets = [1]\n[[joint_set]]\nname = \"b\"\nrivets = [1]\n",
+       "field 'joint_set[2].rivets': rivet 1 is in set 'a' already");
+  says("[[joint_set]]\nname = \"rivet\"\nrivets = [1]\n", "'joint_set[1].name' = 'rivet' is taken");
+  says("[[joint_set]]\nname = \"bolt\"\nrivets = [1]\nchi = 0.5\n", "joint_set[1].chi");
+  says("[[joint_set]]\nname = \"bolt\"\nrivets = [1]\nKs = 1.0\n", "joint_set[1].Ks");
+  says("[[joint_set]]\nrivets = [1]\n", "'joint_set[1].name' is required");
+}
+
 }  // namespace
 }  // namespace jointlab::model::fe
