@@ -231,17 +231,9 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
     const std::string name = k == 0 ? "backbones" : fmt::format("backbones_{}", k + 1);
     campaign::plot_backbone_comparison(c, fs::path(a.out) / (name + ".png"), {});
   }
-  say(stdout, "{}", summary.report());
-  if (!in.amplitude_note.empty()) say(stdout, "  {}\n", in.amplitude_note);
-  for (const std::string& line :
-       campaign::band_shape_warnings(objective.apply(best, summary.modal_ratio), in))
-    say(stdout, "  {}\n", line);
-  // A set fitted against a mode whose joint dissipation other sets carry (in the model as given):
-  // what misfits is the other sets' held values, not this set.
-  for (const std::string& line :
-       campaign::set_share_warnings(m, a.set, in.sensors, in.targets, in.amplitude, "--set {}"))
-    say(stdout, "  {}\n", line);
-  say(stdout, "{}", campaign::pareto_report(front));
+  say(stdout, "{}",
+      campaign::update_iwan_report(summary, m, objective.apply(best, summary.modal_ratio), a.set,
+                                   in, front));
 }
 
 void run_update_iwan(const IwanArgs& a) {

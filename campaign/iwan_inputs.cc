@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "jointlab/campaign/iwan_fit.h"
 #include "jointlab/campaign/iwan_targets.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
@@ -261,6 +262,22 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   in.data_name = a.measured;
   in.bands = std::move(band_of_mode);
   return in;
+}
+
+std::string update_iwan_report(const correlate::IwanUpdateSummary& s, const model::Model& given,
+                               const model::Model& updated, const std::string& set,
+                               const IwanInputs& in,
+                               const std::vector<correlate::ParetoPoint>& front,
+                               const std::string& set_option) {
+  std::string text = s.report();
+  if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
+  for (const std::string& line : band_shape_warnings(updated, in)) text += "  " + line + "\n";
+  // A set fitted against a mode whose joint dissipation other sets carry: what misfits is the
+  // other sets' held values, not this set.
+  for (const std::string& line :
+       set_share_warnings(given, set, in.sensors, in.targets, in.amplitude, set_option))
+    text += "  " + line + "\n";
+  return text + pareto_report(front);
 }
 
 std::vector<std::string> band_shape_warnings(const model::Model& updated, const IwanInputs& in) {

@@ -79,6 +79,17 @@ std::vector<std::string> set_share_warnings(const model::Model& m, const std::st
                                             correlate::AmplitudeQuantity amplitude,
                                             const std::string& option);
 
+/// update-iwan's report as the command prints it and the Python module returns it: the fit's
+/// (IwanUpdateSummary::report()), what the amplitudes were read as, the bands' shapes in the
+/// `updated` model (band_shape_warnings), the sets that carry the modes' joint dissipation in
+/// the `given` one (set_share_warnings, the advice naming a set as `set_option`) and the Pareto
+/// front's lines (pareto_report).
+std::string update_iwan_report(const correlate::IwanUpdateSummary& s, const model::Model& given,
+                               const model::Model& updated, const std::string& set,
+                               const IwanInputs& in,
+                               const std::vector<correlate::ParetoPoint>& front,
+                               const std::string& set_option = "--set {}");
+
 /// True when every target has a measured linear frequency and mode R of `m` (joints at K_T) lies
 /// within `tolerance` (relative) of it: the model's linear part matches the measured linear
 /// frequencies (update-linear's result), which update-iwan states

@@ -664,6 +664,7 @@ py::dict update_iwan(
   campaign::IwanInputs in;
   std::vector<std::string> shape_warnings;
   std::vector<correlate::ParetoPoint> front;
+  std::string text;  // the command's report
   {
     py::gil_scoped_release release;
     const model::Model m = model::read_model(model_path);
@@ -680,6 +681,9 @@ py::dict update_iwan(
     correlate::IwanUpdateOptions o = asked;  // gamma, beta, linear_damping_max, threads
     o.amplitude = in.amplitude;
     o.fit_linear_damping = linear_damping == "fit";
+    // As the command: a model whose modes match the measured linear frequencies is said to be
+    // linearly updated, not sent to update-linear.
+    o.linear_part_updated = campaign::linear_part_matches(m, in.targets);
     o.max_evaluations = evaluations;
     o.seed = seed;
     o.progress = [&progress](int n, double best) {
@@ -697,6 +701,10 @@ py::dict update_iwan(
     }
     const model::Model updated = objective.apply(summary.best, summary.modal_ratio);
     shape_warnings = campaign::band_shape_warnings(updated, in);
+    for (std::string& line :
+         campaign::set_share_warnings(m, set, in.sensors, in.targets, in.amplitude, "--set {}"))
+      shape_warnings.push_back(std::move(line));
+    text = campaign::update_iwan_report(summary, m, updated, set, in, front);
     if (out) write_model(*out, updated);
   }
   // One dict per row of parameters.csv (Fs, Kt, chi, beta, gamma = Kt / Ks when known), from
@@ -776,10 +784,6 @@ py::dict update_iwan(
                                   ? py::object(py::float_(summary.amplitude_share))
                                   : py::object(py::none());
   result["misfit"] = summary.misfit();
-  // The command's report: the fit's, what the amplitudes were read as, the bands' shapes.
-  std::string text = summary.report();
-  if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
-  for (const std::string& line : shape_warnings) text += "  " + line + "\n";
   // The Pareto front (pareto=): a dict per gamma, and the command's lines in the report.
   py::list pareto;
   for (const correlate::ParetoPoint& p : front) {
@@ -798,7 +802,6 @@ py::dict update_iwan(
     d["mode_errors"] = errors;
     pareto.append(d);
   }
-  text += campaign::pareto_report(front);
   result["pareto"] = pareto;
   result["report"] = text;
   return result;

@@ -557,6 +557,30 @@ def one_mode_iwan(d, points):
     return q
 
 
+def test_update_iwan_names_the_set_that_carries_the_mode_as_the_command(tmp_path):
+    # The one-mode truth's table fitted with a second Iwan set beside the joint (as stiff as
+    # the truth's, slipping at 100 times the force: next to no dissipation in the model as given)
+    # as the set to update: the command and the call both say that the other set carries the
+    # mode's joint dissipation, in the report and (the call) in its warnings.
+    d = tmp_path
+    one_mode_iwan(d, points=20)
+    # The joint beside it softer than the truth's (Kt 1e4 N/m), so that the data lie within what
+    # the updated set reaches with it.
+    body = (d / "truth.toml").read_text().replace("Kt = 14000.0", "Kt = 10000.0")
+    assert "Kt = 10000.0" in body
+    (d / "two.toml").write_text(
+        body + "\n[iwan.k]\nFs = 3000.0\nKt = 1.4e4\nchi = -0.5\nbeta = 1.0\n\n"
+        '[[joint]]\na = 0\nb = "ground"\nelement = "iwan.k"\n')
+    r = run("update-iwan", d / "two.toml", "--set", "k", "--mode", "1", "--backbone",
+            d / "bb.csv", "--evaluations", "100", "--out", d / "cli")
+    assert r.returncode == 0, r.stderr
+    result = jointlab.update_iwan(d / "two.toml", "k", 1, [d / "bb.csv"], evaluations=100)
+    assert result["report"] == r.stdout
+    shares = [w for w in result["warnings"] if "iwan.j" in w and "carries" in w]
+    assert len(shares) == 1, result["warnings"]
+    assert shares[0] in r.stdout
+
+
 def test_compare_gives_the_curves_the_command_draws(tmp_path):
     # The one-mode model's own ring-down QSMA columns as a table, against the truth and the start:
     # the curves equal the CSV `jointlab compare` writes beside its figure (10 digits), the truth's
