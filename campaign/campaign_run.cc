@@ -5,6 +5,7 @@
 #include <utility>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "jointlab/campaign/option_keys.h"
 #include "jointlab/campaign/steps/campaign_figures.h"
@@ -18,6 +19,7 @@
 #include "jointlab/campaign/steps/validate.h"
 #include "jointlab/core/error.h"
 #include "jointlab/data/output_stage.h"
+#include "jointlab/model/model_file_writer.h"
 
 namespace jointlab::campaign {
 
@@ -43,6 +45,27 @@ std::string RunSummary::report() const {
 
 namespace {
 
+// The updated model as a model file with its matrices (DIR/updated/model.toml): what a second
+// run, `simulate`, `compare` or `qsma` starts from, headed by what updated it and where the
+// report says how far the data fix each value.
+void write_updated_model(const Campaign& c, const ModelResults& r, const fs::path& path) {
+  model::ModelFileComments comments;
+  comments.header.push_back(fmt::format("The model `jointlab run` updated for the campaign {}:",
+                                        c.file.filename().string()));
+  if (r.linear.ran)
+    comments.header.push_back(fmt::format("- [update.linear] sets {}{}",
+                                          fmt::join(c.linear_update.sets, ", "),
+                                          r.linear.note.empty() ? "" : " (see its note)"));
+  if (r.iwan.ran)
+    comments.header.push_back(fmt::format("- [update.iwan] set {}", r.iwan.set));
+  else if (!r.iwan.note.empty())
+    comments.header.push_back("- not the Iwan joints: [update.iwan] did not run (see the report)");
+  comments.header.push_back(
+      "report.md says how far the data fix each value (sigmas, flat or unidentified sets) and");
+  comments.header.push_back("what it warns of; read it before using these values.");
+  model::write_model_file(path, r.updated, {}, comments);
+}
+
 // The model side (method.md Figure 1, right): evaluate the model, update its linear
 // stiffness, then its Iwan joints, and evaluate the updated model.
 ModelResults model_side(const Campaign& c, CampaignModelData data, const MeasuredSide& measured,
@@ -50,7 +73,7 @@ ModelResults model_side(const Campaign& c, CampaignModelData data, const Measure
   ModelResults r;
   r.data = std::move(data);
   r.start = evaluate_model(c, r.data.model, r.data.dofs, "model, start", out / "qsma", "start");
-  r.linear = linear_update_step(c, r.data, measured.modes, o.progress);
+  r.linear = linear_update_step(c, r.data, measured.modes, o.progress, &measured);
   if (!r.linear.note.empty()) summary.notes.push_back(r.linear.note);
   if (r.linear.refused) summary.refused.push_back("update.linear");
   // Not from a linear result that cannot carry it (pairs the shapes do not confirm): stopped.
@@ -69,14 +92,16 @@ ModelResults model_side(const Campaign& c, CampaignModelData data, const Measure
   if (r.have_updated) {
     r.updated = r.iwan.ran ? r.iwan.updated : r.linear.updated;
     r.after = evaluate_model(c, r.updated, r.data.dofs, "model, updated", out / "qsma", "updated");
+    fs::create_directories(out / "updated");
+    write_updated_model(c, r, out / "updated" / "model.toml");
   }
   return r;
 }
 
 // What `run` writes into its output folder (the staging folder replaces these as a set).
 bool is_run_output(const std::string& name) {
-  static const std::set<std::string> names{"model",   "hits",        "scatter",  "qsma",
-                                           "figures", "report.html", "report.md"};
+  static const std::set<std::string> names{"model",   "hits",    "scatter",     "qsma",
+                                           "updated", "figures", "report.html", "report.md"};
   return names.count(name) > 0;
 }
 

@@ -141,6 +141,17 @@ TEST(RunCli, SmallCampaignEndToEnd) {
   const double f_updated = first_value(out / "qsma/mode1.updated.csv", "frequency_hz");
   EXPECT_GT(std::abs(f_start / s.frequency_hz - 1), 0.01) << f_start;
   EXPECT_LT(std::abs(f_updated / s.frequency_hz - 1), 0.006) << f_updated << " " << s.frequency_hz;
+  // The updated model is written as a model file (with its matrices) that the commands read:
+  // its QSMA's lowest point is the updated linear frequency, not the start's 2 % off.
+  const fs::path updated = out / "updated" / "model.toml";
+  ASSERT_TRUE(fs::exists(updated));
+  EXPECT_NE(testing::read_file(updated).find("[update.iwan] set iwan.rivet"), std::string::npos);
+  const testing::CommandResult q =
+      testing::run_jointlab(fmt::format("qsma {} --mode {} --out {}", updated.string(),
+                                        s.model_mode, (dir / "updated_qsma.csv").string()));
+  ASSERT_EQ(q.status, 0) << q.err;
+  const double f_file = first_value(dir / "updated_qsma.csv", "frequency_hz");
+  EXPECT_LT(std::abs(f_file / s.frequency_hz - 1), 0.006) << f_file << " " << s.frequency_hz;
   // The Iwan update fits the backbones better than the linearly updated start.
   const size_t at = report.find("Iwan identification: ");
   ASSERT_NE(at, std::string::npos);
