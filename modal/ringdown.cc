@@ -1334,8 +1334,7 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
   const double df = channel.measured_df();
   const double width = band.hi - band.lo;
   const auto bin = [&](double f) {
-    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1,
-                                    channel.measured.size() - 1);
+    return channel.measured_bin(f, 1, channel.measured.size() - 1);
   };
   const Eigen::Index k0 = bin(band.lo - width), k1 = bin(band.hi + width);
   if (k1 <= k0 + 2) return {};
@@ -1372,11 +1371,8 @@ std::string spectral_advice(const ChannelSpectrum& channel, const signal::Band& 
 // of 5 % damping in 80:120 Hz once had every point flagged as following twice a "mode" at
 // 40:60 Hz that is not there.
 bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub) {
-  const double df = channel.measured_df();
   const Eigen::Index last = channel.measured.size() - 1;
-  const auto bin = [&](double f) {
-    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 0, last);
-  };
+  const auto bin = [&](double f) { return channel.measured_bin(f, 0, last); };
   const Eigen::Index k0 = bin(sub.lo), k1 = bin(sub.hi);
   if (k1 <= k0 + 4) return true;  // too few bins to tell: leave the decision to the fits
   const SpectrumMagnitudes mag(channel.measured, k0, k1);
@@ -2289,9 +2285,7 @@ BandPeaks band_peaks(const ChannelSpectrum& channel, const signal::Band& band, d
   if (channel.measured.size() < 8) return out;
   const double df = channel.measured_df();
   const Eigen::Index last = channel.measured.size() - 2;
-  const auto bin = [&](double f) {
-    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1, last);
-  };
+  const auto bin = [&](double f) { return channel.measured_bin(f, 1, last); };
   const Eigen::Index k0 = bin(band.lo), k1 = bin(band.hi);
   if (k1 < k0 + 6) return out;
   const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
@@ -2503,9 +2497,7 @@ bool is_sideband(const ChannelSpectrum& channel, const signal::Band& read, doubl
   const Eigen::Index n = channel.measured.size();
   if (n < 8 || !(df > 0)) return false;
   const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
-  const auto bin = [&](double f) {
-    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1, n - 2);
-  };
+  const auto bin = [&](double f) { return channel.measured_bin(f, 1, n - 2); };
   const Eigen::Index k2 = bin(f2);
   // A stronger local maximum within 3 bins (or 1 % of f) of f.
   const auto stronger_peak_at = [&](double f) {
@@ -2745,9 +2737,7 @@ double resolved_neighbour(const ChannelSpectrum& channel, const signal::Band& ty
   if (channel.measured.size() < 8) return 0.0;
   const double df = channel.measured_df();
   const Eigen::Index last = channel.measured.size() - 2;
-  const auto bin = [&](double f) {
-    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1, last);
-  };
+  const auto bin = [&](double f) { return channel.measured_bin(f, 1, last); };
   const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
   const Eigen::Index k0 = bin(typed.lo), k1 = bin(typed.hi);
   if (k1 < k0 + 2) return 0.0;
@@ -2793,9 +2783,7 @@ double nearest_peak_beyond(const ChannelSpectrum& channel, const signal::Band& t
   if (channel.measured.size() < 8) return 0.0;
   const double df = channel.measured_df();
   const Eigen::Index last = channel.measured.size() - 2;
-  const auto bin = [&](double f) {
-    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / df)), 1, last);
-  };
+  const auto bin = [&](double f) { return channel.measured_bin(f, 1, last); };
   const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
   const double width = typed.hi - typed.lo;
   std::vector<double> around;

@@ -69,6 +69,8 @@
 // fits then run over the extremum index.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -191,6 +193,11 @@ struct ChannelSpectrum {
   /// Spacing of `measured`'s bins [Hz].
   double measured_df() const {
     return fs * static_cast<double>(measured_step) / static_cast<double>(n_fft);
+  }
+  /// Bin of `measured` nearest `f` [Hz], clamped to [lo, hi].
+  Eigen::Index measured_bin(double f, Eigen::Index lo, Eigen::Index hi) const {
+    return std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::round(f / measured_df())), lo,
+                                    hi);
   }
   Eigen::Index n_record = 0;  ///< samples analysed (continuations included)
   Eigen::Index n_fft = 0;     ///< padded length (twice n_record, or n_record and pad_s if long)
