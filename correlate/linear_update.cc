@@ -107,6 +107,7 @@ MeasuredModes MeasuredModes::columns(const std::vector<Eigen::Index>& keep) cons
     out.labels.push_back(u < labels.size() ? labels[u] : std::string());
     out.ids.push_back(id(k));
   }
+  if (frequency_std.size() == frequency_hz.size()) out.frequency_std = frequency_std(keep);
   return out;
 }
 
@@ -2310,9 +2311,17 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
 
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
                               const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
-  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
+                              const LinearUpdateOptions& given, LinearUpdateSummary* summary) {
+  if (const std::string e = given.error(); !e.empty()) throw InputError("update-linear: " + e);
   check_measured(sensors, measured);
+  // Files of a mode that disagree widen its frequency's uncertainty; one serves every mode.
+  LinearUpdateOptions options = given;
+  if (measured.frequency_std.size() > 0) {
+    if (measured.frequency_std.size() != measured.frequency_hz.size() ||
+        !(measured.frequency_std.array() >= 0).all() || !measured.frequency_std.allFinite())
+      throw InputError("measured modes: frequency_std must be finite and >= 0, one per mode");
+    options.frequency_std = std::max(options.frequency_std, measured.frequency_std.maxCoeff());
+  }
   LinearUpdateSummary local;
   LinearUpdateSummary& s = summary ? *summary : local;
   std::vector<PairWarning> weak_pairs;

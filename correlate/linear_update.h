@@ -105,6 +105,10 @@ struct MeasuredModes {
   /// What reading the data found worth saying (a strongly complex shape realised as real):
   /// update_linear() puts them first among its report's warnings.
   std::vector<std::string> warnings;
+  /// Per mode, the relative one-sigma uncertainty of its frequency that its data show (files
+  /// that disagree: measured_data.h linear_spread()); empty or 0: none. update_linear() raises
+  /// its frequency_std to the largest (one uncertainty serves every mode).
+  Eigen::VectorXd frequency_std;
   /// ids[i], or i + 1 where it has none.
   std::string id(Eigen::Index i) const;
   /// The modes in columns `keep`, in that order, each with its frequency, shape, label ("" where

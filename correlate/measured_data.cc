@@ -293,6 +293,15 @@ ProcessRun read_process_run(const fs::path& dir) {
       if (band.find("linear_frequency_hz")) {
         pb.linear_frequency_hz = f.number(band, bp, "linear_frequency_hz");
         if (!(pb.linear_frequency_hz > 0)) f.fail(bp + ".linear_frequency_hz", "must be > 0");
+        // Optional: what says whether the files agree and how their level moves them.
+        for (const auto& [key, value] :
+             {std::pair{"linear_frequency_std_hz", &pb.linear_frequency_std_hz},
+              std::pair{"linear_fit_amplitude_min", &pb.linear_fit_amplitude_min}}) {
+          const JsonValue* v = band.find(key);
+          if (!v || v->is_null()) continue;
+          *value = f.number(band, bp, key);
+          if (!(*value >= 0) || !std::isfinite(*value)) f.fail(bp + "." + key, "must be >= 0");
+        }
       }
       const JsonValue& shape = f.get(band, bp, "operating_shape", JsonValue::Type::kArray);
       for (size_t c = 0; c < shape.items().size(); ++c) {
@@ -371,6 +380,103 @@ std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, 
   return out;
 }
 
+LinearSpread linear_spread(const std::string& mode, const std::vector<LinearReading>& readings,
+                           double frequency_std, const std::string& unit) {
+  LinearSpread out;
+  const size_t n = readings.size();
+  if (n == 0) return out;
+  double sum = 0, lo = readings[0].frequency_hz, hi = lo, stated2 = 0, largest = 0;
+  double level_lo = readings[0].level, level_hi = level_lo;
+  bool all_stated = true;
+  for (const LinearReading& r : readings) {
+    sum += r.frequency_hz;
+    lo = std::min(lo, r.frequency_hz), hi = std::max(hi, r.frequency_hz);
+    level_lo = std::min(level_lo, r.level), level_hi = std::max(level_hi, r.level);
+    all_stated = all_stated && r.std_hz > 0;
+    stated2 += r.std_hz * r.std_hz / static_cast<double>(n);
+    largest = std::max(largest, r.std_hz);
+  }
+  const double mean = sum / static_cast<double>(n);
+  out.frequency_hz = mean;
+  if (n < 2) return out;
+  double ss = 0, chi2 = 0;
+  for (const LinearReading& r : readings) {
+    ss += (r.frequency_hz - mean) * (r.frequency_hz - mean);
+    if (all_stated) chi2 += std::pow((r.frequency_hz - mean) / r.std_hz, 2);
+  }
+  const int dof = static_cast<int>(n) - 1;
+  const double sd = std::sqrt(ss / dof);
+  // Unstated uncertainties cannot show agreement: the spread is then all there is.
+  const bool disagree = !all_stated || chi2 / dof > reduced_chi2_limit(dof);
+  if (!disagree || !(sd > 0)) return out;
+  // A line f = a + b ln(level): its slope below 0 by more than 3 sigmas (the residuals' scatter
+  // or the stated uncertainties, the larger) is a frequency that falls as the level rises.
+  if (level_lo > 0 && level_hi >= 2 * level_lo) {
+    double mx = 0;
+    for (const LinearReading& r : readings) mx += std::log(r.level) / static_cast<double>(n);
+    double sxx = 0, sxy = 0;
+    for (const LinearReading& r : readings) {
+      sxx += std::pow(std::log(r.level) - mx, 2);
+      sxy += (std::log(r.level) - mx) * (r.frequency_hz - mean);
+    }
+    const double b = sxy / sxx;
+    double var = stated2;
+    if (n > 2) {
+      double ssr = 0;
+      for (const LinearReading& r : readings)
+        ssr += std::pow(r.frequency_hz - mean - b * (std::log(r.level) - mx), 2);
+      var = std::max(var, ssr / static_cast<double>(n - 2));
+    }
+    out.falls_with_level = var > 0 && b < -3 * std::sqrt(var / sxx);
+  }
+  out.relative_std = out.falls_with_level ? (hi - lo) / mean : sd / mean;
+  if (!(out.relative_std > frequency_std)) return out;
+  std::vector<std::string> each;
+  double low_sum = 0;
+  int low_count = 0;
+  for (const LinearReading& r : readings) {
+    const bool lowest = out.falls_with_level && r.level <= 2 * level_lo;
+    if (lowest) low_sum += r.frequency_hz, ++low_count;
+    each.push_back(r.level > 0 ? fmt::format("{} {:.2f} Hz at {:.3g}{}", r.source, r.frequency_hz,
+                                             r.level, unit.empty() ? "" : " " + unit)
+                               : fmt::format("{} {:.2f} Hz", r.source, r.frequency_hz));
+  }
+  // What the spread exceeds: the update's uncertainty, and the readings' own where stated.
+  const std::string beyond =
+      all_stated ? fmt::format(
+                       "more than the update's frequency uncertainty ({:.2g} %) and than their "
+                       "stated uncertainties (up to {:.2g} Hz) allow",
+                       100 * frequency_std, largest)
+                 : fmt::format(
+                       "more than the update's frequency uncertainty ({:.2g} %) allows (not "
+                       "every one states its own)",
+                       100 * frequency_std);
+  if (out.falls_with_level) {
+    out.frequency_hz = low_sum / low_count;
+    // The range over the value, as a relative uncertainty of the value.
+    out.relative_std = (hi - lo) / out.frequency_hz;
+    out.note = fmt::format(
+        "{}: the {} files' linear frequencies ({}) spread over {:.2f} to {:.2f} Hz, {}, and fall "
+        "as the hit's level (the lowest amplitude each read) rises: the "
+        "joint still slips at the lowest amplitudes read, so every one is below the linear "
+        "frequency and the stiffness of the joint sets this mode fixes comes out biased low. "
+        "The update takes the lowest-level files' {:.2f} Hz (levels within a factor 2 of the "
+        "lowest, {} of {}) with an uncertainty of {:.2g} % (their range, to which the update's is "
+        "raised for every mode), which covers the change the levels read make, not what "
+        "lies below the lowest: hit more gently, or read lower amplitudes, for the linear value",
+        mode, n, fmt::join(each, ", "), lo, hi, beyond, out.frequency_hz, low_count, n,
+        100 * out.relative_std);
+  } else {
+    out.note = fmt::format(
+        "{}: the {} files' linear frequencies ({}) spread over {:.2f} to {:.2f} Hz (standard "
+        "deviation {:.3g} Hz), {}, with no trend with the hit's level: the "
+        "update takes their mean {:.2f} Hz with an uncertainty of {:.2g} % (their standard "
+        "deviation, to which the update's is raised for every mode)",
+        mode, n, fmt::join(each, ", "), lo, hi, sd, beyond, mean, 100 * out.relative_std);
+  }
+  return out;
+}
+
 MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
                              std::vector<int>* bands) {
   const std::string summary = (run.dir / "summary.json").string();
@@ -386,17 +492,26 @@ MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& s
   if (bands) bands->clear();
   Eigen::Index col = 0;
   bool any_sensor = false;
+  m.frequency_std = Eigen::VectorXd::Zero(m.frequency_hz.size());
+  const std::string unit = run.amplitude == AmplitudeQuantity::kDisplacement ? "m"
+                           : run.amplitude == AmplitudeQuantity::kVelocity   ? "m/s"
+                                                                             : "m/s^2";
   for (const auto& [k, list] : by_band) {
-    double sum = 0;
+    std::vector<LinearReading> readings;
     int best_count = -1;
     const ProcessBand* best = nullptr;
     for (const ProcessBand* b : list) {
-      sum += b->linear_frequency_hz;
+      readings.push_back({b->source, b->linear_frequency_hz, b->linear_frequency_std_hz,
+                          b->linear_fit_amplitude_min});
       int count = 0;
       for (const auto& [channel, value] : b->shape) count += find_sensor(sensors, channel) >= 0;
       if (count > best_count) best_count = count, best = b;
     }
-    m.frequency_hz(col) = sum / static_cast<double>(list.size());
+    const LinearSpread spread = linear_spread(fmt::format("band {}", k), readings,
+                                              LinearUpdateOptions{}.frequency_std, unit);
+    m.frequency_hz(col) = spread.frequency_hz;
+    m.frequency_std(col) = spread.relative_std;
+    if (!spread.note.empty()) m.warnings.push_back(spread.note);
     for (const auto& [channel, value] : best->shape) {
       const int s = find_sensor(sensors, channel);
       if (s >= 0) m.shapes(s, col) = value, any_sensor = true;

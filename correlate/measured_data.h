@@ -6,10 +6,12 @@
 // band (columns time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz,
 // damping_std, ...; amplitude in the SI unit of summary.json's "amplitude_quantity").
 // Linear data: band k becomes one measured mode. Its frequency is the mean over the files
-// that report a linear frequency for k; its shape at the sensors (sensors.h, sensor order)
-// is the operating shape of the file that measured most of the sensor channels (the first
-// such file), 0 at sensors no file measured. A band no file gives a linear frequency for is
-// left out.
+// that report a linear frequency for k (where they disagree and fall with the hit's level,
+// the lowest-level files', with the uncertainty the spread shows: linear_spread()); its shape
+// at the sensors (sensors.h, sensor order) is the operating shape of the file that measured
+// most of the sensor channels (the first such file), 0 at sensors no file measured. A band
+// no file gives a linear frequency for is left out.
+//
 // Backbones: every output of band k whose channel is selected becomes one MeasuredBackbone
 // (several hits and channels give several curves). By default only each file's reference
 // channel of the band is selected (the channel its linear data come from).
@@ -32,10 +34,13 @@ namespace jointlab::correlate {
 
 /// One band of one processed file, as summary.json describes it.
 struct ProcessBand {
-  std::string source;              ///< the processed file
-  int band = 0;                    ///< k, from 1
-  std::string reference_channel;   ///< channel of the linear data
-  double linear_frequency_hz = 0;  ///< 0 when the summary gives none
+  std::string source;                  ///< the processed file
+  int band = 0;                        ///< k, from 1
+  std::string reference_channel;       ///< channel of the linear data
+  double linear_frequency_hz = 0;      ///< 0 when the summary gives none
+  double linear_frequency_std_hz = 0;  ///< its stated one-sigma uncertainty (0: none given)
+  /// The lowest amplitude its linear fit read (linear_fit_amplitude_min; 0: none given)
+  double linear_fit_amplitude_min = 0;
   std::vector<std::pair<std::string, std::complex<double>>> shape;  ///< channel, amplitude
 };
 
@@ -82,9 +87,44 @@ SteppedSineRun read_stepped_sine_run(const std::filesystem::path& dir);
 /// BackboneKind::kSteppedSine; InputError when no file gave a backbone.
 std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor);
 
+/// One file's (hit's) linear frequency of a mode: the backbone's straight-line fit at the lowest
+/// amplitude it read, not an extrapolation to zero amplitude.
+struct LinearReading {
+  std::string source;       ///< the file or hit
+  double frequency_hz = 0;  ///< its linear frequency [Hz]
+  double std_hz = 0;        ///< its stated one-sigma uncertainty [Hz] (0: not stated)
+  double level = 0;         ///< the lowest amplitude it was read at [SI] (0: unknown)
+};
+
+/// What the readings of one mode say about its linear frequency.
+struct LinearSpread {
+  double frequency_hz = 0;  ///< the value to fit (0: no reading)
+  /// The relative one-sigma uncertainty the readings show (0: one reading, or they agree within
+  /// their stated uncertainties)
+  double relative_std = 0;
+  bool falls_with_level = false;  ///< the frequency falls as the level rises (joint slips)
+  std::string note;  ///< the warning, where relative_std exceeds the update's (else "")
+};
+
+/// The linear frequency of mode `mode` (a name for the note) from its readings. Where they
+/// disagree by more than their stated uncertainties allow (their chi-square over the mean
+/// beyond its 3-sigma point; unstated: they disagree) the relative uncertainty is their
+/// standard deviation over the mean. Where besides they fall as the level rises (a straight
+/// line in ln level with a slope below 0 by more than 3 of its sigmas, levels a factor 2 apart
+/// or more), the joint still slips at the lowest amplitudes read: every reading is below the
+/// linear frequency, and the relative uncertainty is their range over the value. Where that
+/// uncertainty exceeds `frequency_std` (the update's), the value is the mean of the lowest-level
+/// readings (levels within a factor 2 of the lowest) where they fall with level, else the mean
+/// of all, and `note` says so, naming the readings and their levels (in `unit`); elsewhere the
+/// value is the mean of all.
+LinearSpread linear_spread(const std::string& mode, const std::vector<LinearReading>& readings,
+                           double frequency_std, const std::string& unit = "");
+
 /// Linear modal data per band at the sensors; `bands` (if given) receives the band number of
-/// each measured mode. InputError when no band has a linear frequency or no sensor channel
-/// appears in any operating shape.
+/// each measured mode. Each band's frequency and its uncertainty are linear_spread()'s over
+/// the files that give one (against the update's default frequency_std); its note goes to the
+/// warnings. InputError when no band has a linear frequency or no sensor channel appears in
+/// any operating shape.
 MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
                              std::vector<int>* bands = nullptr);
 

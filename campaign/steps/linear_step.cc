@@ -8,6 +8,8 @@
 #include "jointlab/campaign/steps/update_settings.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
+#include "jointlab/core/units.h"
+#include "jointlab/correlate/measured_data.h"
 
 namespace jointlab::campaign {
 
@@ -77,9 +79,33 @@ correlate::LinearUpdateOptions linear_update_options(const Campaign& c) {
   return lo;
 }
 
+namespace {
+
+// Each kept hit's linear frequency of mode k, at the lowest amplitude its backbone read (the
+// hit cache keeps no stated uncertainty of it: 0).
+std::vector<correlate::LinearReading> hit_readings(const Campaign& c, const MeasuredSide& side,
+                                                   size_t k) {
+  std::vector<correlate::LinearReading> out;
+  if (k >= side.curves.size()) return out;
+  const std::vector<correlate::Curve>& curves = side.curves[k];
+  for (size_t h = 0; h < curves.size(); ++h) {
+    const correlate::Curve& cv = curves[h];
+    const bool flagged = k < side.scatter.size() && h < side.scatter[k].hits.size() &&
+                         side.scatter[k].hits[h].outlier;
+    if (!cv.has_linear || !(cv.linear_frequency_hz > 0) || (flagged && c.scatter.exclude_outliers))
+      continue;
+    out.push_back({cv.id, cv.linear_frequency_hz, 0,
+                   cv.amplitude.size() > 0 ? cv.amplitude.minCoeff() : 0.0});
+  }
+  return out;
+}
+
+}  // namespace
+
 LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
                               const correlate::MeasuredModes& measured,
-                              const std::function<void(const std::string&)>& progress) {
+                              const std::function<void(const std::string&)>& progress,
+                              const MeasuredSide* side) {
   LinearStep step;
   if (!c.linear_update.enabled) return step;
   if (c.linear_update.sets.empty()) {
@@ -109,6 +135,21 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
   }
   fitted = measured.columns(keep);  // each keeps its id: its place in the [[mode]] list
   for (Eigen::Index k : keep) step.campaign_modes.push_back(static_cast<int>(k));
+  if (side) {
+    fitted.frequency_std = Eigen::VectorXd::Zero(fitted.frequency_hz.size());
+    for (size_t i = 0; i < keep.size(); ++i) {
+      const auto k = static_cast<size_t>(keep[i]);
+      const std::vector<correlate::LinearReading> readings = hit_readings(c, *side, k);
+      if (readings.empty()) continue;
+      const correlate::LinearSpread spread = correlate::linear_spread(
+          c.modes[k].name, readings, lo.frequency_std, si_unit(c.amplitude));
+      const auto col = static_cast<Eigen::Index>(i);
+      if (spread.note.empty()) continue;  // within the update's uncertainty: the mean, as given
+      fitted.frequency_hz(col) = spread.frequency_hz;
+      fitted.frequency_std(col) = spread.relative_std;
+      fitted.warnings.push_back(spread.note);
+    }
+  }
   const Eigen::VectorXd theta =
       correlate::update_linear(m.model, c.linear_update.sets, m.sensors, fitted, lo, &step.summary);
   // A refused update (as update-linear refuses it) leaves the model as given: its stiffness

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include "jointlab/campaign/campaign.h"
+#include "jointlab/campaign/steps/measured_side.h"
 #include "jointlab/campaign/steps/model_side.h"
 #include "jointlab/correlate/linear_update.h"
 
@@ -34,9 +35,14 @@ struct LinearStep {
 
 /// The step: runs [update.linear] on the model against `measured` (every campaign mode, in
 /// order; modes without a measured linear frequency, 0, are left out); skipped when off,
-/// without sets or without a mode to fit.
+/// without sets or without a mode to fit. With `side` (the hits behind `measured`), each fitted
+/// mode's frequency and uncertainty are correlate::linear_spread()'s over its kept hits' linear
+/// frequencies, each at the lowest amplitude its backbone read: hits that disagree beyond the
+/// update's frequency_std widen it, and where they fall with the level the lowest-level hits'
+/// value is fitted, with a warning that the joint still slips there.
 LinearStep linear_update_step(const Campaign& campaign, const CampaignModelData& model,
                               const correlate::MeasuredModes& measured,
-                              const std::function<void(const std::string&)>& progress);
+                              const std::function<void(const std::string&)>& progress,
+                              const MeasuredSide* side = nullptr);
 
 }  // namespace jointlab::campaign
