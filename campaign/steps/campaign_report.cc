@@ -305,9 +305,17 @@ ReportTable frequency_table(const Campaign& c, const MeasuredSide& m, const Mode
                  {}};
   if (r.linear.ran && r.linear.summary.status == correlate::LinearUpdateStatus::kPairsUnconfirmed)
     ft.caption += " (updated: the linear update's pairs are not confirmed by the shapes, below)";
+  std::vector<std::string> lowest;  // modes whose update fitted the lowest-level hits' value
   for (size_t k = 0; k < c.modes.size(); ++k) {
     if (r.start.frequency_hz[k] <= 0 || m.scatter[k].linear_count == 0) continue;
-    const double fe = m.scatter[k].linear_frequency_hz.mean;
+    // The value the linear update fitted, where it ran: the hits' mean, or, where their linear
+    // frequencies fall with the level, the lowest-level hits' (its warning says so). The table
+    // showed the mean there, beside a model updated to another value.
+    double fe = m.scatter[k].linear_frequency_hz.mean;
+    if (r.linear.ran && k < r.linear.lowest_level_hz.size() && r.linear.lowest_level_hz[k] > 0) {
+      fe = r.linear.lowest_level_hz[k];
+      lowest.push_back(c.modes[k].name);
+    }
     ft.rows.push_back({c.modes[k].name, fmt::format("{:.4f}", fe),
                        m.scatter[k].linear_frequency_hz.has_spread()
                            ? spread(m.scatter[k].linear_frequency_hz.std)
@@ -317,6 +325,11 @@ ReportTable frequency_table(const Campaign& c, const MeasuredSide& m, const Mode
                        r.have_updated ? fmt::format("{:.4f}", r.after.frequency_hz[k]) : "-",
                        r.have_updated ? pct(100 * (r.after.frequency_hz[k] - fe) / fe) : "-"});
   }
+  if (!lowest.empty())
+    ft.caption += fmt::format(
+        " (test, {}: the lowest-level hits' linear frequency, which the linear update fitted, not "
+        "the mean of every hit's: they fall with the level, see its warning)",
+        fmt::join(lowest, ", "));
   return ft;
 }
 

@@ -147,6 +147,10 @@ LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
       if (spread.note.empty()) continue;  // within the update's uncertainty: the mean, as given
       fitted.frequency_hz(col) = spread.frequency_hz;
       fitted.frequency_std(col) = spread.relative_std;
+      if (spread.falls_with_level) {
+        step.lowest_level_hz.resize(c.modes.size(), 0.0);
+        step.lowest_level_hz[k] = spread.frequency_hz;
+      }
       fitted.warnings.push_back(spread.note);
     }
   }

@@ -31,6 +31,9 @@ struct LinearStep {
   model::Model updated;                    ///< the updated model (when it ran)
   /// Per measured mode of the update (its index in the summary), the campaign's [[mode]] index.
   std::vector<int> campaign_modes;
+  /// Per [[mode]], where its hits' linear frequencies fall with the level, the lowest-level
+  /// hits' value the update fitted instead of their mean [Hz] (0: the mean, or not fitted).
+  std::vector<double> lowest_level_hz;
 };
 
 /// The step: runs [update.linear] on the model against `measured` (every campaign mode, in

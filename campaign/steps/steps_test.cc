@@ -428,6 +428,10 @@ TEST(LinearStep, HitsThatFallWithTheLevelFitTheLowestWithTheSpreadsUncertainty) 
             std::string::npos)
       << step.summary.warnings[0];
   EXPECT_NE(step.summary.warnings[0].find("the joint still slips"), std::string::npos);
+  // The report's test column shows the value fitted (mode 1), not the mean; mode 2 the mean.
+  ASSERT_EQ(step.lowest_level_hz.size(), c.modes.size());
+  EXPECT_NEAR(step.lowest_level_hz[0], f1 * (1 - 0.002), 1e-9 * f1);
+  EXPECT_EQ(step.lowest_level_hz[1], 0.0);
   const double truth[2] = {1e4, 500};
   ASSERT_EQ(step.summary.parameters.size(), 2u);
   for (int k = 0; k < 2; ++k) {
@@ -439,6 +443,7 @@ TEST(LinearStep, HitsThatFallWithTheLevelFitTheLowestWithTheSpreadsUncertainty) 
   // Without the hits (as before): the mean at the update's 0.1 %.
   const LinearStep plain = linear_update_step(c, d, mean, nullptr);
   EXPECT_EQ(plain.summary.frequency_std, 1e-3);
+  EXPECT_TRUE(plain.lowest_level_hz.empty());
   // ... where kg came out 1.8 % low at +/- 0.37 %: z = -5.0.
   ASSERT_TRUE(plain.summary.parameters[0].relative_std);
   EXPECT_GT(std::abs(plain.summary.parameters[0].value / truth[0] - 1) /
