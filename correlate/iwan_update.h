@@ -203,6 +203,22 @@ struct MisfitEvidence {
   /// its target's mean: (f / f_model - 1) and (zeta / zeta_model - 1).
   Eigen::Vector2d frequency_offsets = Eigen::Vector2d::Zero();
   Eigen::Vector2d damping_offsets = Eigen::Vector2d::Zero();
+  /// A curve unlike the others (empty: none): of a target with four or more curves, the one
+  /// whose offset (frequency or damping) lies farthest from the mean of its target's others, in
+  /// their spread and its own noise, with a chance below 1 % (Bonferroni over the curves and the
+  /// two quantities) that random scatter between hits puts it there (Student's t with the others
+  /// less 1 degrees of freedom). Its offsets do not scatter with the others': they follow that
+  /// hit (another strike point, another mode slipping the joint), and a cluster covariance that
+  /// reads them as random understates the error.
+  std::string apart_curve;
+  double apart_t = 0;                                      ///< its t (above); 0: none
+  Eigen::Vector2d apart_offset = Eigen::Vector2d::Zero();  ///< its (frequency, damping) offset
+  /// Range of the others' offsets of the quantity that sets it apart (frequency or damping).
+  Eigen::Vector2d apart_others = Eigen::Vector2d::Zero();
+  bool apart_in_damping = false;  ///< apart_t is of the damping offsets (else frequency)
+  int apart_points = 0;           ///< its points
+  /// Its lowest and highest amplitude (the options' amplitude quantity, SI units).
+  Eigen::Vector2d apart_amplitude = Eigen::Vector2d::Zero();
 };
 
 /// The objective: QSMA of the set at given parameters against the measured backbones.
@@ -521,9 +537,14 @@ struct IwanUpdateSummary {
   /// (IwanSigmaReason::kModelMisfit): reduced_chi2 above 1 by more than three of its standard
   /// deviations over the effective_points (sqrt(2 / n_eff): serially correlated noise scatters
   /// it more than the count says), residuals that are no noise (residuals_look_like_noise()),
-  /// and no scatter between three or more curves explaining half the chi-square (the
-  /// cluster-robust covariance allows for that).
+  /// and no scatter between curves that explains it (scatter_explains_misfit()).
   bool misfit_sets_the_error() const;
+  /// True when random scatter between hits explains the misfit, so the cluster-robust covariance
+  /// (one cluster per curve, Student's t with the curves less 1 degrees of freedom) states the
+  /// sigmas: offsets of each curve from the others explain half the chi-square or more, four or
+  /// more curves (more than 2 degrees of freedom), and no curve lies apart from the others
+  /// (MisfitEvidence::apart_curve: offsets that follow a hit are no random scatter).
+  bool scatter_explains_misfit() const;
   /// True when the largest joint slip at the highest measured amplitude (top_slip) stays below
   /// 1e-3 of phi_max: the fitted modes hardly move the joint, so the joint barely shapes them.
   bool joint_hardly_moved() const;
