@@ -172,6 +172,7 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
       if (keep.size() < 2) continue;
       const Eigen::Index n = static_cast<Eigen::Index>(keep.size());
       MeasuredBackbone mb = correlate::sized_backbone(kind, mode.sensors[c], n);
+      mb.source = cv.id;  // the hit, as the report names a curve apart ("curve 7" before)
       for (Eigen::Index j = 0; j < n; ++j) {
         const Eigen::Index i = keep[static_cast<size_t>(j)];
         mb.amplitude(j) = cv.amplitude(i);

@@ -59,6 +59,9 @@ TEST(IwanTargets, WeightsFromTheScatterOrTheOwnUncertainty) {
   for (ScatterBin& b : mb.scatter.bins) b.curves = 2;  // as the bins without hit b
   const IwanTargets two = iwan_targets(m, sensors, {mb}, {});
   ASSERT_EQ(two.fitted[0].curves.size(), 2u);
+  // Each curve is named by its hit, as the report names a curve apart from the others.
+  EXPECT_EQ(two.fitted[0].curves[0].source, "a");
+  EXPECT_EQ(two.fitted[0].curves[1].source, "c");
   EXPECT_EQ(two.fitted[0].curves[0].frequency_std_hz(3), 0.5);
   EXPECT_EQ(two.fitted[0].curves[0].damping_std(3), 1e-4);
   EXPECT_EQ(two.fitted[0].curves[1].frequency_std_hz(3), 0.0);
