@@ -367,9 +367,11 @@ std::string linear_doubt(const Campaign& c, const ModelResults& r, const std::st
 ReportTable parameter_table(const Campaign& c, const ModelResults& r, const Truth& truth) {
   model::IwanParameters p0, p1;
   std::string set;
-  const bool has_iwan = first_iwan(r.data.model, p0, set);
+  // The fitted set's (the truth file gives its table), not the first Iwan joint's: with two
+  // sets the first may be another's (a [[joint_set]] bolt before the rivets).
+  const bool has_iwan = first_iwan(r.data.model, p0, set, truth_set(c));
   p1 = p0;
-  if (r.have_updated) first_iwan(r.updated, p1, set);
+  if (r.have_updated) first_iwan(r.updated, p1, set, truth_set(c));
   ReportTable pt{
       "Joint parameters", {"parameter", "start", "updated", "known", "updated / known"}, {}};
   const auto row = [&](const std::string& name, double a, double b, double known,
@@ -447,9 +449,9 @@ ReportSection model_section(const Campaign& c, const MeasuredSide& m, const Mode
   }
   model::IwanParameters p0, p1;
   std::string set;
-  if (truth.present && first_iwan(model, p0, set)) {
+  if (truth.present && first_iwan(model, p0, set, truth_set(c))) {
     p1 = p0;
-    if (r.have_updated) first_iwan(r.updated, p1, set);
+    if (r.have_updated) first_iwan(r.updated, p1, set, truth_set(c));
     KnownComparison kc;
     kc.truth = truth;
     kc.updated = p1;

@@ -75,9 +75,11 @@ std::string truth_set(const Campaign& c) {
   return c.iwan_update.sets.empty() ? std::string() : c.iwan_update.sets.front();
 }
 
-bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set) {
+bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set,
+                const std::string& want) {
   for (const model::Joint& j : m.joints) {
     if (!j.iwan) continue;
+    if (!want.empty() && j.element != want && j.element != "iwan." + want) continue;
     p = {j.iwan->slip_force(), j.iwan->stiffness(), j.iwan->chi(), j.iwan->beta()};
     set = j.element;
     return true;

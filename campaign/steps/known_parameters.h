@@ -33,8 +33,10 @@ Truth read_truth(const std::filesystem::path& path, const std::string& set = "")
 /// The set whose known values a campaign's truth file gives: [update.iwan] sets' one, or "".
 std::string truth_set(const Campaign& campaign);
 
-/// The parameters and element name of the model's first Iwan joint; false when it has none.
-bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set);
+/// The parameters and element name of the model's Iwan set `want` ("iwan.<name>" or "<name>";
+/// "" the first Iwan joint's set); false when the model has no such joint.
+bool first_iwan(const model::Model& m, model::IwanParameters& p, std::string& set,
+                const std::string& want = "");
 
 /// What the report compares with the known parameters.
 struct KnownComparison {

@@ -918,6 +918,31 @@ TEST(BackboneFileOfAHit, LeavesOutPointsMarkedHarmonicOrExchange) {
 namespace jointlab::campaign {
 namespace {
 
+// The report's joint table and known-parameters comparison read the fitted set (the truth file
+// gives its table), not the model's first Iwan joint: with two sets the first may be another's
+// (a [[joint_set]] bolt written before the rivets), which was judged against the rivets' truth.
+TEST(KnownParameters, TheFittedSetIsReadNotTheFirstIwanJoint) {
+  model::Model m = correlate::two_chain_structure({.iwan = true});
+  for (model::Joint& j : m.joints) {
+    if (j.element != "spring.kb") continue;
+    j.element = "iwan.bolt";
+    j.iwan = model::Iwan(30.0, 2 * j.stiffness, -0.4, 1.0);
+  }
+  // The bolt first, as the builder writes a bolt that is rivet 1.
+  std::stable_partition(m.joints.begin(), m.joints.end(),
+                        [](const model::Joint& j) { return j.element == "iwan.bolt"; });
+  model::IwanParameters p;
+  std::string set;
+  ASSERT_TRUE(first_iwan(m, p, set));
+  EXPECT_EQ(set, "iwan.bolt");
+  for (const std::string want : {"iwan.rivet", "rivet"}) {
+    ASSERT_TRUE(first_iwan(m, p, set, want)) << want;
+    EXPECT_EQ(set, "iwan.rivet");
+    EXPECT_NE(p.Fs, 30.0);
+  }
+  EXPECT_FALSE(first_iwan(m, p, set, "iwan.none"));
+}
+
 // A truth file without [scatter] (nothing planted): K_T and F_S are judged against twice the
 // update's own sigma, as chi and beta are. Before, they had no tolerance ("none known") and
 // were "NO" recovered at any difference: F_S -0.30 % with +/- 0.35 % stated.
