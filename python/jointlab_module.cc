@@ -5,6 +5,7 @@
 // (style.md 13).
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <cstdlib>
@@ -119,6 +120,22 @@ void report(const py::object& progress, const std::string& line) {
   if (PyErr_CheckSignals() != 0) throw py::error_already_set();
   if (!progress.is_none()) progress(line);
 }
+
+// A pending Ctrl-C ends the work with KeyboardInterrupt; checked at most every 0.1 s, so that a
+// check at each of many short steps (QSMA evaluations) costs no GIL round trip each.
+class InterruptCheck {
+ public:
+  void operator()() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_ < std::chrono::milliseconds(100)) return;
+    last_ = now;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_{};
+};
 
 /// One backbone of process(): its identity, linear values and columns (set as attributes).
 struct Backbone {
@@ -456,6 +473,8 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
   correlate::LinearUpdateSummary s;
   Eigen::VectorXd theta;
   model::Model updated;
+  // Per measured mode (by its id), the relative std its files' spread shows (> 0 only).
+  std::map<std::string, double> spread;
   {
     py::gil_scoped_release release;
     const model::Model m = model::read_model(model_path);
@@ -463,6 +482,8 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
     const correlate::MeasuredModes meas =
         measured ? correlate::measured_modes(correlate::read_process_run(*measured), sensors)
                  : correlate::read_modes_table(*modes_table, sensors, nullptr);
+    for (Eigen::Index i = 0; i < meas.frequency_std.size(); ++i)
+      if (meas.frequency_std(i) > 0) spread[meas.id(i)] = meas.frequency_std(i);
     theta = correlate::update_linear(m, sets, sensors, meas, o, &s);
     if (const std::string why =
             correlate::linear_refusal(s, o, measured ? *measured : *modes_table);
@@ -477,9 +498,13 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
     d["initial"] = p.start;
     d["final"] = p.value;
     d["relative_std"] = p.relative_std ? py::object(py::float_(*p.relative_std)) : py::none();
+    // Where relative_std is a third of the chi-square profile's 3-sigma distance (wider): the
+    // local slope's, which the report names as understating it (None: relative_std is it).
+    d["slope_std"] = p.slope_std ? py::object(py::float_(*p.slope_std)) : py::none();
     d["sensitivity"] = p.sensitivity;
     d["flat"] = p.flat;
     d["held"] = p.held;
+    d["held_by_user"] = p.held_by_user;  // held by `hold`, not for being flat
     d["at_bound"] = p.at_bound;
     // As parameters.csv's identifiable: neither flat nor acting together with another set.
     d["identifiable"] = p.identifiable();
@@ -526,6 +551,12 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
     d["error"] = j < 0 ? py::object(py::none()) : py::object(py::float_(e.residuals(i)));
     const std::optional<double> mac = e.pair_mac(i);
     d["mac"] = mac ? py::object(py::float_(*mac)) : py::object(py::none());
+    // The relative one-sigma uncertainty of its frequency that its files' spread shows (their
+    // linear frequencies disagree beyond their stated uncertainties: the report's WARNING on the
+    // band); None where they agree, or one file or a table gives it.
+    const auto sd = spread.find(id);
+    d["frequency_spread_std"] =
+        sd == spread.end() ? py::object(py::none()) : py::object(py::float_(sd->second));
     modes.append(d);
   }
   py::dict result;
@@ -542,6 +573,9 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
     unconfirmed_modes.append(modes[static_cast<size_t>(i)]["measured"]);
   result["unconfirmed_modes"] = unconfirmed_modes;
   result["collinear"] = collinear;
+  // The standard deviations rest on the residuals' scatter (reduced_chi2 > 1: scaled by its root
+  // and widened by Student's t), not on the stated frequency uncertainty.
+  result["sigma_from_scatter"] = s.sigma_from_scatter;
   // None where no degree of freedom is left (the summary's 0 there is no chi-square).
   result["degrees_of_freedom"] = s.degrees_of_freedom;
   result["reduced_chi2"] =
@@ -686,10 +720,21 @@ py::dict update_iwan(
     o.linear_part_updated = campaign::linear_part_matches(m, in.targets);
     o.max_evaluations = evaluations;
     o.seed = seed;
-    o.progress = [&progress](int n, double best) {
-      if (n % 250 == 0)
+    // Ctrl-C is checked at every evaluation (a 400-evaluation fit of the example campaign ran
+    // its 8 s to the end), and a line goes to `progress` at the first evaluation at or past each
+    // multiple of 250: the local solves' count steps over some (a 423-evaluation fit of 400 said
+    // nothing). A second fit (beta freed) counts from 0 again.
+    int last = 0;
+    InterruptCheck interrupted;
+    o.progress = [&progress, &last, &interrupted](int n, double best) {
+      if (n < last) last = 0;
+      const bool line = n / 250 > last / 250;
+      last = n;
+      if (line)
         report(progress,
                fmt::format("update-iwan: {} QSMA evaluations, best cost {:.6g}", n, best));
+      else
+        interrupted();
     };
     correlate::IwanObjective objective(m, set, in.sensors, in.targets, o);
     if (in.measured) objective.set_linear_modes(*in.measured, 0.6);
@@ -1092,10 +1137,14 @@ trust_signs    fit with the sensors file's signs even when one channel reads the
 out            write the updated model file here (its matrices beside it), or None
 
 Pairs are made by sensor MAC within the frequency window and followed by full shape (see
-docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final, relative_std or
-None, sensitivity, flat, held, at_bound, identifiable, acts_with, one_sided (+1 / -1: bound by the
-frequencies from below / above only), smallest_within_tolerance (None: not lowered)), 'modes' (measured,
-frequency_hz, model_mode, model_frequency_hz, error, mac; None where unpaired), 'rule',
+docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final [N/m or N*m/rad],
+relative_std (one sigma, relative) or None, slope_std (where relative_std is the chi-square
+profile's, wider: the local slope's, which the report says understates it; else None),
+sensitivity, flat, held, held_by_user (held by `hold`), at_bound, identifiable, acts_with,
+one_sided (+1 / -1: bound by the frequencies from below / above only), smallest_within_tolerance
+(None: not lowered)), 'modes' (measured, frequency_hz, model_mode, model_frequency_hz, error
+(relative), mac; None where unpaired; frequency_spread_std: the relative one-sigma spread of the
+files' linear frequencies where they disagree, the report's WARNING on the band, else None), 'rule',
 'converged' (False also where the shapes do not confirm the pairs at the result), 'status'
 ('converged', 'iteration_limit', 'failed' or 'pairs_unconfirmed'), 'unconfirmed' (the report's
 line on pairs the shapes do not confirm, or ''), 'unconfirmed_modes' (their measured modes),
@@ -1103,7 +1152,9 @@ line on pairs the shapes do not confirm, or ''), 'unconfirmed_modes' (their meas
 combination theta_a + weight theta_b determined: weight, value, relative_std),
 'mac' (the MAC matrix at the result, as mac.csv: a row per measured mode, a column per
 model mode from 1), 'degrees_of_freedom' (pairs less fitted sets), 'reduced_chi2' (None where none is left),
-'warnings', 'report'. Undecidable pairs, a channel reading the model reversed and shapes without
+'sigma_from_scatter' (True: the sigmas rest on the residuals' scatter, not the stated noise),
+'starts' (fits from different starts behind the result), 'restarts' (the report's line on them,
+or ''), 'warnings', 'report'. Undecidable pairs, a channel reading the model reversed and shapes without
 phase raise InputError saying which.
 
     r = jointlab.update_linear("model.toml", ["iwan.rivet"], "sensors.csv", measured="processed")
@@ -1162,8 +1213,12 @@ pareto          gamma values of a Pareto front (--pareto): 'pareto' in the resul
 out             write the updated model file here (its folder created), or None
 
 Returns a dict: 'parameters' (Fs [N], Kt [N/m], chi, beta, and gamma = Kt / Ks as
-parameters.csv's row -> initial, final, relative_std or None, held (as asked), fitted (False where held, as asked or by the fit), at_bound, note (as
-parameters.csv's); modal_ratio -> initial, final, std, fitted, note), 'cost', 'initial_cost'
+parameters.csv's row -> initial, final, relative_std or None, held (as asked), fitted (False
+where held, as asked or by the fit), at_bound, note and identifiable (as parameters.csv's),
+linear_part_sensitivity (the relative change per relative error of mode R's linear frequency
+from the rest of the model: the report's 'linear part:' line; -16 moves Kt by -1.6 % per 0.1 %)
+and linear_part_tolerance (the relative error of that frequency its sigma holds to), None where
+unknown; modal_ratio -> initial, final, std (absolute), fitted, note, identifiable), 'cost', 'initial_cost'
 (None where the model cannot be evaluated), 'evaluations', 'converged' (False: the search
 stopped short of a minimum and no sigma is stated), 'no_slip' (True where, the structure's own
 damping fitted, a constant backbone fits as well: Fs, chi and beta are not identified),
@@ -1174,7 +1229,12 @@ WARNING that the model does not describe the data within their stated noise),
 'noise_correlation' (their AR(1) coefficient, corrected for what the fit absorbs),
 'amplitude_share' (the largest share of the chi-square one third of the points, by amplitude,
 holds: about 1/3 for noise; None where unknown), 'sigma_degrees_of_freedom' (the sigmas'
-Student's t: effective points less the parameters fitted; 2 or fewer state no sigma), 'report'.
+Student's t: effective points less the parameters fitted; 2 or fewer state no sigma),
+'pareto' (with `pareto`: one dict per gamma, else []), 'report'.
+
+progress        callable taking one line, or None: the slip screen with several modes, and a
+                line at the first evaluation at or past each multiple of 250. Ctrl-C ends the
+                call with KeyboardInterrupt within an evaluation (0.1 s of checking).
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]

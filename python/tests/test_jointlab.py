@@ -8,7 +8,9 @@ import csv
 import json
 import os
 import pathlib
+import signal
 import subprocess
+import threading
 
 import numpy as np
 import pytest
@@ -353,6 +355,56 @@ def test_update_linear_equals_the_command_line(tmp_path):
                                modes_table=str(table))
 
 
+def test_update_linear_states_the_spread_and_the_sigmas_of_its_report(tmp_path):
+    # A process folder of three hits of the two-mass truth (kj = 4e4 N/m): mode 1 read at
+    # 1, 1.005 and 0.995 times its frequency (stated to 1e-5, no trend with level), mode 2 the
+    # same in each. The report's WARNING on band 1 and its profile sigma (with the local slope's,
+    # which it says understates it) are fields of the result, as the report prints them.
+    truth = 4e4
+    model = two_mass_spring_model(tmp_path, 1.2e5)
+    w2, phi = np.linalg.eigh(np.array([[1e5 + truth, -truth], [-truth, 2e5 + truth]]))
+    f = np.sqrt(w2) / (2 * np.pi)
+    (tmp_path / "sensors.csv").write_text("channel,dof\ns0,0\ns1,1\n")
+    files = []
+    for hit, (scale, level) in enumerate(((1.0, 1e-3), (1.005, 1.1e-3), (0.995, 1.2e-3))):
+        bands = []
+        for i in range(2):
+            fi = f[i] * (scale if i == 0 else 1.0)
+            bands.append({
+                "band": i + 1, "low_hz": 0.8 * fi, "high_hz": 1.2 * fi,
+                "reference_channel": "s0", "linear_frequency_hz": fi,
+                "linear_frequency_std_hz": 1e-5 * fi, "linear_damping_ratio": 1e-3,
+                "linear_damping_std": 1e-5, "linear_fit_amplitude_min": level,
+                "operating_shape": [{"channel": f"s{k}", "real_m": phi[k, i], "imag_m": 0}
+                                    for k in range(2)]})
+        files.append({"file": f"hit{hit}.csv", "bands": bands, "outputs": []})
+    (tmp_path / "p").mkdir()
+    (tmp_path / "p" / "summary.json").write_text(json.dumps({
+        "program": "jointlab process", "method": "hilbert", "amplitude_quantity": "velocity",
+        "amplitude_unit": "m/s", "coverage_factor": 3, "files": files}))
+    r = run("update-linear", model, "--measured", tmp_path / "p", "--sensors",
+            tmp_path / "sensors.csv", "--set", "spring.kj", "--out", tmp_path / "cli")
+    assert r.returncode == 0, r.stderr
+    result = jointlab.update_linear(model, ["spring.kj"], tmp_path / "sensors.csv",
+                                    measured=tmp_path / "p")
+    assert result["report"] == r.stdout
+    assert any(w.startswith("band 1: the 3 files' linear frequencies") for w in result["warnings"])
+    # Band 1's files spread by a standard deviation of 0.5 % of their mean (n - 1: 0.005 to
+    # rounding, 1e-9); band 2's agree, no spread stated.
+    spread = [m["frequency_spread_std"] for m in result["modes"]]
+    assert_close(spread[0], 0.005)
+    assert spread[1] is None
+    p = result["parameters"]["spring.kj"]
+    assert p["held_by_user"] is False and result["sigma_from_scatter"] is False
+    # The sigma and the local slope's, three digits each as the report prints them.
+    assert p["slope_std"] is not None and p["slope_std"] < p["relative_std"]
+    assert (f"+/- {100 * p['relative_std']:.3g} % (a third of where the chi-square's profile "
+            f"rises by 9; the local slope's {100 * p['slope_std']:.3g} % understates it)"
+            ) in result["report"]
+    cli = read_parameters(tmp_path / "cli")
+    assert_close(p["relative_std"], float(cli["spring.kj"]["relative_std"]))
+
+
 def test_update_linear_names_sets_acting_together(tmp_path):
     # Two springs between the same two masses (spring.kj beside spring.kd): every frequency sees
     # only their sum, so neither is identifiable alone and the sum is the combination determined,
@@ -517,12 +569,31 @@ def test_update_iwan_from_a_process_folder_equals_the_command_line(tmp_path, riv
     assert_iwan_parameters_as_file(result, cli)
     assert result["report"] == r.stdout
     # Two modes as the command's repeated --mode (R and R:BAND): the slip screen is a progress
-    # line, as the command prints it.
+    # line, as the command prints it. Ctrl-C during the fit ends it (the 100 evaluations, 4 s,
+    # ran to the end, the model written, and only then KeyboardInterrupt): sent from another
+    # thread once the slip screen's line is out, so that it lands while the fit runs.
     lines = []
-    jointlab.update_iwan(str(riveted_model), "rivet", [1, "3:2"], measured=str(tmp_path / "p"),
-                         sensors=str(tmp_path / "sensors.csv"), evaluations=100,
-                         progress=lines.append)
+    screened = threading.Event()
+    sender = threading.Thread(
+        target=lambda: screened.wait(60) and lines and os.kill(os.getpid(), signal.SIGINT))
+
+    def progress(line):
+        lines.append(line)
+        screened.set()
+
+    handler = signal.signal(signal.SIGINT, signal.default_int_handler)
+    sender.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            jointlab.update_iwan(riveted_model, "rivet", [1, "3:2"], measured=tmp_path / "p",
+                                 sensors=tmp_path / "sensors.csv", evaluations=100,
+                                 progress=progress, out=tmp_path / "stopped" / "model.toml")
+    finally:
+        screened.set()
+        sender.join()
+        signal.signal(signal.SIGINT, handler)
     assert any(line.startswith("slip screen") for line in lines), lines
+    assert not (tmp_path / "stopped" / "model.toml").exists()
     # The command's argument errors, raised the same way.
     with pytest.raises(jointlab.InputError, match="--amplitude and --dof describe --backbone"):
         jointlab.update_iwan(str(riveted_model), "rivet", 1, measured=str(tmp_path / "p"),
@@ -629,9 +700,16 @@ def test_update_iwan_equals_the_command_line(tmp_path, capfd):
             d / "bb.csv", "--evaluations", "400", "--out", d / "cli")
     assert r.returncode == 0, r.stderr
     cli = read_parameters(d / "cli")
+    lines = []
     result = jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "bb.csv")],
-                                  evaluations=400)
+                                  evaluations=400, progress=lines.append)
     assert_iwan_parameters_as_file(result, cli)
+    # A progress line at the first evaluation at or past 250: the local solve's count steps over
+    # 250 itself here (423 evaluations, and no line at all, as the command prints none).
+    assert len(lines) == 1, lines
+    words = lines[0].split()
+    assert words[0] == "update-iwan:" and words[2:6] == ["QSMA", "evaluations,", "best", "cost"]
+    assert 250 <= int(words[1]) <= result["evaluations"]
     # Converged, as the report says; a fit that is not states no sigma.
     assert result["converged"]
     assert not result["no_slip"]
