@@ -58,6 +58,8 @@ struct ProcessRun {
   AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< backbone amplitude quantity
   std::vector<ProcessBand> bands;                              ///< every file's bands
   std::vector<ProcessOutput> outputs;                          ///< every file's outputs
+  /// k of the *_std values (summary.json's coverage_factor: expanded, k sigma; absent: 1)
+  double coverage_factor = 1.0;
 };
 
 /// Reads DIR/summary.json; InputError naming the file and the field (or line and byte), and

@@ -479,5 +479,47 @@ TEST(MeasuredData, TheAmplitudeLineSaysZeroToPeakAndTheUnitAssumed) {
       << displacement;
 }
 
+// Review findings on linear_spread (helper-52): process states k sigma (summary.json's
+// coverage_factor), which the agreement test must divide out; the chi-square is about the
+// weighted mean; a slope whose variance comes from the residuals is judged by Student's t.
+TEST(MeasuredData, TheSpreadsTestsReadOneSigmaTheWeightedMeanAndStudentsT) {
+  // Two files 0.6 Hz apart at 0.08 Hz one sigma, written as process writes them, 0.24 Hz at k 3:
+  // read as one sigma the chi-square is 3.1 and they agreed; it is 28, and they disagree.
+  const auto modes_with = [](const std::string& coverage) {
+    std::string files;
+    for (int h = 0; h < 2; ++h) {
+      files += fmt::format(
+          R"({}{{"file": "hit{}.csv", "bands": [{{"band": 1, "reference_channel": "a",
+              "linear_frequency_hz": {}, "linear_frequency_std_hz": 0.24,
+              "operating_shape": [{{"channel": "a", "real_m": 1, "imag_m": 0}}]}}],
+              "outputs": []}})",
+          h ? "," : "", h, h ? 245.3 : 244.7);
+    }
+    const fs::path d = fresh("coverage_factor" + coverage);
+    write(d / "summary.json",
+          fmt::format(R"({{"program": "jointlab process", "amplitude_quantity": "velocity",
+                          {}"files": [{}]}})",
+                      coverage.empty() ? "" : "\"coverage_factor\": " + coverage + ", ", files));
+    return measured_modes(read_process_run(d), {{"a", 0, 1.0}});
+  };
+  EXPECT_EQ(modes_with("1").frequency_std(0), 0);  // 0.24 Hz as one sigma: they agree
+  EXPECT_EQ(modes_with("").frequency_std(0), 0);   // no coverage_factor: one sigma
+  const MeasuredModes k3 = modes_with("3");
+  EXPECT_NEAR(k3.frequency_std(0), 0.6 / std::sqrt(2.0) / 245.0, 1e-12);  // their std
+  // Two precise files that agree and a third ten times less precise 0.5 Hz off: about the
+  // weighted mean the chi-square is 0.25 (they agree); about the plain mean it was 555.
+  const LinearSpread w = linear_spread(
+      "band 1", {{"a", 100.0, 0.01, 0}, {"b", 100.0, 0.01, 0}, {"c", 100.5, 1.0, 0}}, 1e-3);
+  EXPECT_EQ(w.relative_std, 0);
+  EXPECT_TRUE(w.note.empty());
+  // Three levels without stated uncertainties, a slope of t = -8.7 from its residuals: beyond
+  // the normal's 3 (falling, before), within Student's t with 1 degree of freedom (31.8).
+  const LinearSpread t = linear_spread(
+      "band 1", {{"a", 100.3, 0, 1e-4}, {"b", 100.0, 0, 2e-4}, {"c", 99.8, 0, 4e-4}}, 1e-3);
+  EXPECT_FALSE(t.falls_with_level);
+  EXPECT_NEAR(t.frequency_hz, (100.3 + 100.0 + 99.8) / 3, 1e-12);
+  EXPECT_GT(t.relative_std, 1e-3);  // they disagree all the same: their spread
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
