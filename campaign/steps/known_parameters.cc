@@ -115,7 +115,7 @@ Eigen::Vector4d log_dissipation_gradient(const model::IwanParameters& p, double 
 
 // The "Known parameters" table and paragraph: per quantity the updated and the known value,
 // the difference, the tolerance (twice the planted one-sigma scatter where scatter was planted,
-// else twice the update's own one-sigma uncertainty from the scatter between hits) and whether
+// else twice the update's own one-sigma uncertainty) and whether
 // the update recovers it. Parameters the data cannot identify are said to be so.
 void compare_with_known(const KnownComparison& k, const std::string& truth_name, ReportSection& s) {
   const model::IwanParameters& t = k.truth.iwan;
@@ -250,17 +250,19 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
     from_fit.emplace_back("Fs");
   from_fit.emplace_back("chi");
   from_fit.emplace_back("beta");
-  const std::string robust = k.curves > 0
-                                 ? fmt::format(
-                                       " (robust to correlated points: the {} hits' backbones, not "
-                                       "their points, are the independent samples)",
-                                       k.curves)
-                                 : std::string();
+  // The update's covariance is at least the cluster-robust one (one cluster per curve) only
+  // with three curves or more (IwanObjective's covariance); with fewer it rests on the points.
+  const std::string robust = k.curves >= 3 ? fmt::format(
+                                                 " (at least what the scatter between the {} hits' "
+                                                 "backbones gives: they, not their points, are the "
+                                                 "independent samples)",
+                                                 k.curves)
+                                           : std::string();
   const std::string tolerance =
       planted.empty()
           ? fmt::format(
                 "Tolerance: none was planted (Kt, Fs, chi, beta): twice the update's own "
-                "one-sigma uncertainty, from the scatter between hits{}",
+                "one-sigma uncertainty{}",
                 robust)
           : fmt::format(
                 "Tolerance: twice the planted one-sigma hit-to-hit scatter ({}); where "

@@ -979,6 +979,16 @@ TEST(KnownParameters, WithoutPlantedScatterTheUpdatesOwnSigmaJudges) {
             std::string::npos)
       << s.paragraphs[0];
   EXPECT_EQ(s.paragraphs[0].find("0.0 %"), std::string::npos) << s.paragraphs[0];
+  // Six hits: the sigma is at least the scatter between their backbones (the cluster-robust
+  // covariance); with two there is none such, and the paragraph does not claim it.
+  EXPECT_NE(s.paragraphs[0].find("the 6 hits' backbones"), std::string::npos) << s.paragraphs[0];
+  KnownComparison two = k;
+  two.curves = 2;
+  ReportSection s2;
+  compare_with_known(two, "truth.toml", s2);
+  ASSERT_FALSE(s2.paragraphs.empty());
+  EXPECT_EQ(s2.paragraphs[0].find("backbones"), std::string::npos) << s2.paragraphs[0];
+  EXPECT_EQ(s2.paragraphs[0].find("scatter between hits"), std::string::npos) << s2.paragraphs[0];
   // F_S 1 % off at +/- 0.35 %: not recovered; planted scatter, where given, still judges.
   k.updated.Fs = 40 * 1.01;
   ReportSection t;
