@@ -139,16 +139,23 @@ class InterruptCheck {
 
 /// One backbone of process(): its identity, linear values and columns (set as attributes).
 struct Backbone {
-  std::string file;                        // the record processed
-  std::string channel;                     // its channel
-  int band = 0;                            // 1-based band
-  double linear_frequency_hz = 0;          // natural frequency at zero amplitude [Hz]
-  double linear_damping_ratio = 0;         // damping ratio at zero amplitude
-  double linear_frequency_std_hz = 0;      // its expanded uncertainty (k sigma) [Hz]
-  double linear_damping_std = 0;           // its expanded uncertainty (k sigma)
-  std::complex<double> complex_amplitude;  // operating-shape entry [m]
-  std::string report;                      // the summary paragraph of the band
-  bool reference = false;                  // the band's reference channel in its file
+  std::string file;     // the record processed
+  std::string channel;  // its channel
+  int band = 0;         // 1-based band
+  // The linear values: none where the band has none (linear_reason says why), as summary.json
+  std::optional<double> linear_frequency_hz;       // natural frequency at low amplitude [Hz]
+  std::optional<double> linear_damping_ratio;      // damping ratio at low amplitude
+  std::optional<double> linear_frequency_std_hz;   // its expanded uncertainty (k sigma) [Hz]
+  std::optional<double> linear_damping_std;        // its expanded uncertainty (k sigma)
+  std::complex<double> complex_amplitude;          // operating-shape entry [m]
+  std::string report;                              // the summary paragraph of the band
+  bool reference = false;                          // the band's reference channel in its file
+  std::string amplitude_quantity;                  // what .amplitude measures ("velocity", ...)
+  std::string amplitude_unit;                      // its SI unit ("m/s")
+  std::optional<double> linear_fit_amplitude_min;  // lowest amplitude of that fit [SI]
+  std::optional<double> linear_fit_amplitude_max;  // highest amplitude of that fit [SI]
+  std::string linear_reason;                       // why there are no linear values ("")
+  double noise_floor_m = 0;                        // noise floor of the displacement envelope [m]
 };
 
 // Names of the files `jointlab process` writes: summary.json and "<stem>.<channel>.band<k>.csv"
@@ -251,12 +258,33 @@ py::list process(const std::vector<PathArg>& file_args,
     for (const modal::ChannelBand& c : r.results) {
       if (c.ringdown.summary.status != modal::RingdownStatus::kOk) continue;
       const modal::RingdownSummary& s = c.ringdown.summary;
-      py::object b = py::cast(Backbone{r.source, c.channel, c.band_index, s.linear_frequency_hz,
-                                       s.linear_damping, s.linear_frequency_std_hz,
-                                       s.linear_damping_std, c.complex_amplitude, s.report()});
+      // No linear values (every point superharmonic, say): None, not 0 (summary.json writes
+      // none, with linear_reason; 0 Hz was returned).
+      const auto linear = [&s](double v) {
+        return s.has_linear() ? std::optional<double>(v) : std::nullopt;
+      };
+      Backbone bb;
+      bb.file = r.source;
+      bb.channel = c.channel;
+      bb.band = c.band_index;
+      bb.linear_frequency_hz = linear(s.linear_frequency_hz);
+      bb.linear_damping_ratio = linear(s.linear_damping);
+      bb.linear_frequency_std_hz = linear(s.linear_frequency_std_hz);
+      bb.linear_damping_std = linear(s.linear_damping_std);
+      bb.complex_amplitude = c.complex_amplitude;
+      bb.report = s.report();
       // As summary.json's reference_channel: the curve update_iwan and compare read by default.
       const auto k = static_cast<size_t>(c.band_index - 1);
-      b.cast<Backbone&>().reference = k < r.reference.size() && r.reference[k] == c.channel;
+      bb.reference = k < r.reference.size() && r.reference[k] == c.channel;
+      // As summary.json: the amplitude's quantity and unit, the span of the linear values' fit
+      // (the level a hit's linear frequency was read at) and the noise floor.
+      bb.amplitude_quantity = quantity_name(opt.ringdown.amplitude);
+      bb.amplitude_unit = si_unit(opt.ringdown.amplitude);
+      bb.linear_fit_amplitude_min = linear(s.linear_fit_min);
+      bb.linear_fit_amplitude_max = linear(s.linear_fit_max);
+      bb.linear_reason = s.linear_reason;
+      bb.noise_floor_m = s.noise_floor_m;
+      py::object b = py::cast(std::move(bb));
       py::dict columns = to_dict(modal::backbone_table(c.ringdown.backbone, opt.ringdown));
       for (auto item : columns) b.attr(item.first) = item.second;
       backbones.append(b);
@@ -282,6 +310,16 @@ py::list process(const std::vector<PathArg>& file_args,
       if (std::string w = modal::band_without_backbone(r, static_cast<int>(k) + 1); !w.empty())
         why.push_back(fmt::format("band {} ({:g}:{:g} Hz): no backbone at any channel; {}", k + 1,
                                   r.bands[k].lo, r.bands[k].hi, w));
+    }
+    // A band whose reference channel has a backbone but no linear values, as the command fails
+    // on it (update_linear reads no frequency for the band from this file).
+    for (const modal::ChannelBand& c : r.results) {
+      const auto k = static_cast<size_t>(c.band_index - 1);
+      const modal::RingdownSummary& s = c.ringdown.summary;
+      if (k < r.bands.size() && k < r.reference.size() && c.channel == r.reference[k] &&
+          s.status == modal::RingdownStatus::kOk && !s.has_linear())
+        why.push_back(fmt::format("band {} ({:g}:{:g} Hz): {}: {}", k + 1, r.bands[k].lo,
+                                  r.bands[k].hi, c.channel, s.linear_reason));
     }
     for (const std::string& w : why) {
       const std::string message = fmt::format("process: {}: {}", r.source, w);
@@ -1038,7 +1076,10 @@ callable is given.
 
   py::class_<Backbone>(m, "Backbone", py::dynamic_attr(),
                        "One backbone of process(): .file, .channel, .band (1-based), "
-                       ".linear_frequency_hz [Hz], .linear_damping_ratio, .complex_amplitude [m] "
+                       ".linear_frequency_hz [Hz], .linear_damping_ratio and their expanded "
+                       "uncertainties .linear_frequency_std_hz, .linear_damping_std (None where "
+                       "the band has no linear values: .linear_reason says why), "
+                       ".complex_amplitude [m] "
                        "(operating-shape entry), .report, and numpy arrays named as the backbone "
                        "CSV's columns: .time_s [s], .amplitude [SI of the amplitude quantity], "
                        ".frequency_hz [Hz], .damping_ratio, .frequency_std_hz [Hz], .damping_std "
@@ -1047,7 +1088,9 @@ callable is given.
                        ".exchange (1 where the mode exchanges energy with another: damping "
                        "apparent), .reference (True for the band's reference channel in its "
                        "file, summary.json's reference_channel: the curve update_iwan and compare "
-                       "read by default).")
+                       "read by default), .amplitude_quantity and .amplitude_unit ('velocity', "
+                       "'m/s'), .linear_fit_amplitude_min / _max (the amplitudes the linear "
+                       "values were read over), .noise_floor_m [m].")
       .def_readonly("file", &Backbone::file)
       .def_readonly("channel", &Backbone::channel)
       .def_readonly("band", &Backbone::band)
@@ -1058,9 +1101,25 @@ callable is given.
       .def_readonly("complex_amplitude", &Backbone::complex_amplitude)
       .def_readonly("report", &Backbone::report)
       .def_readonly("reference", &Backbone::reference)
+      .def_readonly("amplitude_quantity", &Backbone::amplitude_quantity,
+                    "What .amplitude measures: 'velocity', 'displacement' or 'acceleration'.")
+      .def_readonly("amplitude_unit", &Backbone::amplitude_unit,
+                    "The SI unit of .amplitude: 'm/s', 'm' or 'm/s^2'.")
+      .def_readonly("linear_fit_amplitude_min", &Backbone::linear_fit_amplitude_min,
+                    "Lowest amplitude of the straight-line fit behind the linear values [SI of "
+                    ".amplitude]: the level the linear frequency was read at, not zero.")
+      .def_readonly("linear_fit_amplitude_max", &Backbone::linear_fit_amplitude_max,
+                    "Highest amplitude of that fit [SI of .amplitude].")
+      .def_readonly("noise_floor_m", &Backbone::noise_floor_m,
+                    "Noise floor of the displacement envelope [m].")
+      .def_readonly("linear_reason", &Backbone::linear_reason,
+                    "Why the linear values are None (every point superharmonic, say), or ''.")
       .def("__repr__", [](const Backbone& b) {
+        if (!b.linear_frequency_hz || !b.linear_damping_ratio)
+          return fmt::format("<jointlab.Backbone {} {} band {}: no linear values>", b.file,
+                             b.channel, b.band);
         return fmt::format("<jointlab.Backbone {} {} band {}: {:.6g} Hz, zeta {:.4g}>", b.file,
-                           b.channel, b.band, b.linear_frequency_hz, b.linear_damping_ratio);
+                           b.channel, b.band, *b.linear_frequency_hz, *b.linear_damping_ratio);
       });
 
   m.def("process", &process, py::arg("files"), py::arg("bands") = py::none(), py::arg("modes") = 0,

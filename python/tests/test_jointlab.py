@@ -131,6 +131,13 @@ def test_process_options_and_out_as_the_command(tmp_path):
     band = json.loads((tmp_path / "cli" / "summary.json").read_text())["files"][0]["bands"][0]
     assert_close(b.linear_frequency_std_hz, band["linear_frequency_std_hz"], 1e-11)
     assert_close(b.linear_damping_std, band["linear_damping_std"], 1e-11)
+    # The amplitude's quantity and unit, the amplitudes the linear values were read over and the
+    # noise floor, as summary.json (12 digits).
+    assert (b.amplitude_quantity, b.amplitude_unit) == ("velocity", "m/s")
+    assert_close(b.linear_fit_amplitude_min, band["linear_fit_amplitude_min"], 1e-11)
+    assert_close(b.linear_fit_amplitude_max, band["linear_fit_amplitude_max"], 1e-11)
+    output = json.loads((tmp_path / "cli" / "summary.json").read_text())["files"][0]["outputs"][0]
+    assert_close(b.noise_floor_m, output["noise_floor_m"], 1e-11)
     for kwargs, message in (({"method": "fft"}, "--method fft: expected hilbert or pff"),
                             ({"coverage_factor": 11.0}, "--coverage-factor 11: must be in"),
                             ({"modes": 2}, "not both")):
@@ -239,6 +246,19 @@ def test_fewer_modes_than_asked_are_returned_with_a_warning(tmp_path):
     left_out = [line for line in lines if "is left out" in line]
     assert len(left_out) == 1 and "100.00 Hz" in left_out[0] and "superharmonic" in left_out[0]
     assert r.stderr.count("is left out") == 1
+    # A band on the harmonic (90:110 Hz): a backbone every point of which is superharmonic, so
+    # no linear values. The command writes none (summary.json's linear_reason) and exits 2;
+    # here the values are None (they were 0 Hz and 0, and no warning) and a warning says why.
+    r = run("process", record, "--band", "40:60", "--band", "90:110", "--out", tmp_path / "b")
+    assert r.returncode == 2, r.stderr
+    band = json.loads((tmp_path / "b" / "summary.json").read_text())["files"][0]["bands"][1]
+    with pytest.warns(UserWarning, match="band 2 .90:110 Hz.: acc1: no linear values"):
+        one, harmonic = jointlab.process([record], bands=[(40, 60), (90, 110)])
+    assert harmonic.linear_reason == band["linear_reason"] and "linear_frequency_hz" not in band
+    assert harmonic.linear_frequency_hz is None and harmonic.linear_damping_ratio is None
+    assert harmonic.linear_frequency_std_hz is None and harmonic.linear_fit_amplitude_min is None
+    assert "no linear values" in repr(harmonic) and harmonic.harmonic.all()
+    assert one.linear_reason == "" and abs(one.linear_frequency_hz / 50.0 - 1) < 1e-3
 
 
 def two_mass_spring_model(directory, kj):
