@@ -91,6 +91,12 @@ bool is_integer(const py::handle& h) {
   return !py::isinstance<py::bool_>(h) && PyIndex_Check(h.ptr()) != 0;
 }
 
+// An integer's decimal text, however large (10**30 raised a RuntimeError, "Unable to cast", as
+// a long long): the command's reader then says what is wrong with it.
+std::string integer_text(const py::handle& h) {
+  return py::str(py::int_(py::reinterpret_borrow<py::object>(h))).cast<std::string>();
+}
+
 // The model file `path` (its matrices beside it), its folder created if missing as the commands
 // create their --out folders (a missing one was refused after the fit, naming a temporary file).
 void write_model(const std::string& path, const model::Model& m) {
@@ -205,6 +211,8 @@ py::list process(const std::vector<PathArg>& file_args,
     }
   }
   opt.modes = modes;
+  if (channels && channels->empty())
+    throw InputError("process: channels=[] names no channel (None: every non-force channel)");
   if (channels) opt.channels = *channels;
   if (quantity) opt.quantity = motion("--quantity", *quantity);
   opt.ringdown.amplitude = motion("--amplitude", amplitude);
@@ -913,7 +921,7 @@ py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
   if (py::isinstance<py::str>(mode))
     modes = {mode.cast<std::string>()};
   else if (is_integer(mode))
-    modes = {std::to_string(py::int_(mode).cast<long long>())};
+    modes = {integer_text(mode)};
   else
     throw InputError("mode: expected an int or 'R:BAND'");
   const campaign::IwanInputArgs a =
@@ -1032,8 +1040,7 @@ py::dict update_iwan_call(const PathArg& model, const std::string& set, const py
     if (py::isinstance<py::str>(h))
       modes.push_back(h.cast<std::string>());
     else if (is_integer(h))
-      modes.push_back(
-          std::to_string(py::int_(py::reinterpret_borrow<py::object>(h)).cast<long long>()));
+      modes.push_back(integer_text(h));
     else
       throw InputError("mode: expected an int, 'R:BAND' or a list of them");
   };

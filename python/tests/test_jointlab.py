@@ -195,9 +195,19 @@ def test_each_error_path_raises_input_error(tmp_path):
         jointlab.process([str(RECORD)], bands=[(70, 90)], amplitude="speed")
     with pytest.raises(jointlab.InputError, match="^--quantity force: expected displacement"):
         jointlab.process([str(RECORD)], bands=[(70, 90)], quantity="force")
+    # An empty list of channels is a mistake, not every channel (as it was: None is that).
+    with pytest.raises(jointlab.InputError, match=r"channels=\[\] names no channel"):
+        jointlab.process([RECORD], bands=[(70, 90)], channels=[])
     with pytest.raises(jointlab.InputError):
         jointlab.Model(str(tmp_path / "missing.toml"))
-    model = jointlab.Model(str(two_mass_model(tmp_path)))
+    model_file = two_mass_model(tmp_path)
+    model = jointlab.Model(str(model_file))
+    # A mode too large for a C++ integer is the command's message (a RuntimeError, "Unable to
+    # cast Python instance", before), checked before any input is read.
+    with pytest.raises(jointlab.InputError, match="^--mode 1000000000000000000000000000000: "):
+        jointlab.update_iwan(model_file, "j", 10**30, ["none.csv"])
+    with pytest.raises(jointlab.InputError, match="^--mode 1000000000000000000000000000000: "):
+        jointlab.compare([model_file], 10**30, ["none.csv"])
     with pytest.raises(jointlab.InputError, match="--mode 0"):
         model.qsma(mode=0)
     with pytest.raises(jointlab.InputError, match="qmin and qmax"):
