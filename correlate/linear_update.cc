@@ -121,6 +121,11 @@ double LinearEvaluation::max_error() const {
   return m;
 }
 
+double LinearEvaluation::weighted_squared_norm() const {
+  if (weights.size() != residuals.size()) return residuals.squaredNorm();
+  return residuals.cwiseProduct(weights).squaredNorm();
+}
+
 std::optional<double> LinearEvaluation::pair_mac(Eigen::Index i) const {
   const int j = pairing.model_for(static_cast<int>(i));
   const auto k = static_cast<size_t>(i);
@@ -354,6 +359,8 @@ struct LinearProblem {
   const LinearUpdateOptions& options;
   Eigen::VectorXd start, lower, upper;
   TrackingOptions tracking;
+  // Per measured mode, w_i = frequency_std / sigma_i, sigma_i its own uncertainty where wider.
+  Eigen::VectorXd weight;
 
   int size() const { return sets.size(); }
 
@@ -370,6 +377,7 @@ struct LinearProblem {
     const Eigen::VectorXd theta = x.array().exp();
     TrackedPoint p{x, elastic_modes(model.mass, sets.stiffness(theta)), {}};
     e = evaluate_by_rules(sets, sensors, measured, theta, p.modes, rules(), p.columns);
+    e.weights = weight;
     return p;
   }
 
@@ -394,7 +402,16 @@ struct LinearProblem {
   }
 
   LinearEvaluation evaluate(const TrackedPoint& p) const {
-    return evaluate_pairs(sets, sensors, measured, p.x.array().exp(), p.modes, p.columns);
+    LinearEvaluation e =
+        evaluate_pairs(sets, sensors, measured, p.x.array().exp(), p.modes, p.columns);
+    e.weights = weight;
+    return e;
+  }
+
+  // Each pair's row of the Jacobian over its own mode's sigma (times frequency_std): the rows of
+  // the chi-square's (J^T W^2 J).
+  Eigen::MatrixXd weighted_jacobian(const LinearEvaluation& e) const {
+    return weight.asDiagonal() * e.jacobian;
   }
 };
 
@@ -441,10 +458,10 @@ class LinearCost : public ceres::CostFunction {
     if (!at) return false;  // a pair lost on the way: the optimiser shrinks its step
     const LinearEvaluation e = p_.evaluate(*at);
     const int m = num_residuals();
-    for (int i = 0; i < m; ++i) residuals[i] = e.residuals(i);
+    for (int i = 0; i < m; ++i) residuals[i] = p_.weight(i) * e.residuals(i);
     if (jacobians && jacobians[0]) {
       for (int i = 0; i < m; ++i) {
-        for (int k = 0; k < n; ++k) jacobians[0][i * n + k] = e.jacobian(i, k);
+        for (int k = 0; k < n; ++k) jacobians[0][i * n + k] = p_.weight(i) * e.jacobian(i, k);
       }
     }
     return true;
@@ -514,6 +531,14 @@ ceres::TerminationType fit(const LinearProblem& p, TrackedPoint& point,
   return cs.termination_type;
 }
 
+// Each measured mode's relative frequency uncertainty: the stated frequency_std, or the mode's own
+// (MeasuredModes::frequency_std) where wider.
+Eigen::VectorXd mode_sigma(const MeasuredModes& measured, double frequency_std) {
+  Eigen::VectorXd out = Eigen::VectorXd::Constant(measured.frequency_hz.size(), frequency_std);
+  if (measured.frequency_std.size() == out.size()) out = out.cwiseMax(measured.frequency_std);
+  return out;
+}
+
 // The problem with the bounds of the options (start x factors, then the named bounds).
 LinearProblem make_problem(const StiffnessSets& sets, const model::Model& model,
                            const std::vector<std::string>& names,
@@ -524,7 +549,8 @@ LinearProblem make_problem(const StiffnessSets& sets, const model::Model& model,
       throw InputError(fmt::format("parameter set '{}': starting stiffness must be > 0", names[k]));
     }
   }
-  LinearProblem p{sets, model, names, sensors, measured, options, sets.initial(), {}, {}, {}};
+  LinearProblem p{sets, model, names, sensors, measured, options, sets.initial(), {}, {}, {}, {}};
+  p.weight = options.frequency_std / mode_sigma(measured, options.frequency_std).array();
   p.lower = p.start * options.lower_factor;
   p.upper = p.start * options.upper_factor;
   for (const ParameterBound& b : options.bounds) {
@@ -593,6 +619,18 @@ double t_widening(double reduced_chi2, int degrees_of_freedom) {
   const double w =
       std::clamp((reduced_chi2 - 1) / (reduced_chi2_one_sigma(degrees_of_freedom) - 1), 0.0, 1.0);
   return std::sqrt(1 + w * (*t - 1));
+}
+
+// The stated frequency uncertainty sf for the report, with each measured mode whose own sigma is
+// wider (id(i) names mode i): "0.1 %, test mode 2's 0.427 %".
+template <class Id>
+std::string stated_noise(double sf, const Eigen::VectorXd& sigma, const Id& id) {
+  std::vector<std::string> wider;
+  for (Eigen::Index i = 0; i < sigma.size(); ++i)
+    if (sigma(i) > sf * (1 + 1e-9))
+      wider.push_back(fmt::format("test mode {}'s {:.3g} %", id(i), 100 * sigma(i)));
+  if (wider.empty()) return fmt::format("{:.3g} %", 100 * sf);
+  return fmt::format("{:.3g} %, {}", 100 * sf, fmt::join(wider, ", "));
 }
 
 // What the standard deviations of a scatter-set scale are, for the report: "rest on the
@@ -789,8 +827,9 @@ void report_collinear_with_held_flat(const LinearProblem& p, const Eigen::Vector
       with.push_back(k);
   }
   if (with.size() == fitted.size() || fitted.empty()) return;
-  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(with.size()));
-  for (size_t c = 0; c < with.size(); ++c) j.col(c) = at.jacobian.col(with[c]);
+  const Eigen::MatrixXd jw = p.weighted_jacobian(at);
+  Eigen::MatrixXd j(jw.rows(), static_cast<Eigen::Index>(with.size()));
+  for (size_t c = 0; c < with.size(); ++c) j.col(c) = jw.col(with[c]);
   SensitivityDirections d = sensitivity_directions(j);
   // Only groups holding a set held here and a fitted one: groups of fitted sets alone are
   // reported already.
@@ -845,29 +884,34 @@ void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
     s.parameters[k].acts_with.clear();
     if (!held[static_cast<size_t>(k)] && !s.parameters[k].flat) fitted.push_back(k);
   }
-  Eigen::MatrixXd j(at.jacobian.rows(), static_cast<Eigen::Index>(fitted.size()));
-  for (size_t c = 0; c < fitted.size(); ++c) j.col(c) = at.jacobian.col(fitted[c]);
+  // Each row over its own mode's sigma: (J^T W^2 J)^-1 frequency_std^2 is the covariance.
+  const Eigen::MatrixXd jw = p.weighted_jacobian(at);
+  Eigen::MatrixXd j(jw.rows(), static_cast<Eigen::Index>(fitted.size()));
+  for (size_t c = 0; c < fitted.size(); ++c) j.col(c) = jw.col(fitted[c]);
   const SensitivityDirections d =
       fitted.empty() ? SensitivityDirections{} : sensitivity_directions(j);
   const int pairs = static_cast<int>(ls.pairing.pairs.size());
   s.degrees_of_freedom = pairs - d.rank;
   const double sf = p.options.frequency_std;
   s.frequency_std = sf;
-  s.chi2 = ls.residuals.squaredNorm() / (sf * sf);
+  s.mode_frequency_std = mode_sigma(p.measured, sf);
+  s.chi2 = ls.weighted_squared_norm() / (sf * sf);
   s.reduced_chi2 = s.degrees_of_freedom > 0 ? s.chi2 / s.degrees_of_freedom : 0.0;
   s.sigma_from_scatter = s.degrees_of_freedom > 0 && s.reduced_chi2 > 1;
   s.t_widening = s.sigma_from_scatter ? t_widening(s.reduced_chi2, s.degrees_of_freedom) : 1.0;
   if (fitted.empty()) return;
+  const std::string noise =
+      stated_noise(sf, s.mode_frequency_std, [&](Eigen::Index i) { return p.measured.id(i); });
   // A model-form error only where noise of the stated size would rarely scatter so far (above
   // the one-sided 3-sigma point of the chi-square distribution: 4.45 over 4 degrees of freedom;
   // "above 1" was said for 7 of 20 fits of exact data with the stated noise).
   if (s.degrees_of_freedom > 0 && s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom)) {
     s.warnings.push_back(fmt::format(
-        "the frequencies scatter beyond their stated uncertainty ({:.3g} %): reduced chi-square "
+        "the frequencies scatter beyond their stated uncertainty ({}): reduced chi-square "
         "{:.3g} over {} degrees of freedom (noise of that size stays below {:.3g} but once in 740 "
         "fits), so the model does not describe them to within it (model-form error); the "
         "standard deviations {}",
-        100 * sf, s.reduced_chi2, s.degrees_of_freedom, reduced_chi2_limit(s.degrees_of_freedom),
+        noise, s.reduced_chi2, s.degrees_of_freedom, reduced_chi2_limit(s.degrees_of_freedom),
         scatter_widening(s)));
   }
   Eigen::MatrixXd cov;
@@ -888,7 +932,7 @@ void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
     // With no degree of freedom left a fit reaches every frequency unless a bound or the
     // pairs stop it: errors beyond 3 sigma at a pair are said (a reversed channel once left
     // 26.6 % with this warning saying the fit matched exactly).
-    const double chi2 = ls.residuals.squaredNorm() / (sf * sf);
+    const double chi2 = ls.weighted_squared_norm() / (sf * sf);
     s.warnings.push_back(
         chi2 > 9.0 * pairs
             ? fmt::format(
@@ -900,9 +944,9 @@ void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
             : fmt::format(
                   "{} pair(s) for {} fitted set(s): no degree of freedom is left, so the fit "
                   "matches the frequencies exactly whatever the pairs and nothing checks them or "
-                  "the model (the standard deviations only assume the stated {:.3g} %); add "
+                  "the model (the standard deviations only assume the stated {}); add "
                   "measured modes or sensors",
-                  pairs, fitted.size(), 100 * sf));
+                  pairs, fitted.size(), noise));
   }
 }
 
@@ -956,7 +1000,7 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
       side.lost = true;
       return side;
     }
-    const double rise = std::max(0.0, (e->residuals.squaredNorm() - base) / scale);
+    const double rise = std::max(0.0, (e->weighted_squared_norm() - base) / scale);
     if (rise >= 9) {
       const double t9 =
           t_lo + (3 - std::sqrt(r_lo)) / (std::sqrt(rise) - std::sqrt(r_lo)) * (t - t_lo);
@@ -998,7 +1042,7 @@ void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const L
   const double sf = p.options.frequency_std;
   const double scale =
       sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
-  const double base = at.residuals.squaredNorm();
+  const double base = at.weighted_squared_norm();
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[k];
     if (!r.relative_std || !(*r.relative_std > 0)) continue;
@@ -1989,7 +2033,7 @@ std::string misfit_of_signs(const model::Model& model, const std::vector<std::st
   const auto misfit = [&](const LinearUpdateSummary& x) {
     if (x.degrees_of_freedom >= 1)
       return std::pair{x.reduced_chi2, reduced_chi2_limit(x.degrees_of_freedom)};
-    return std::pair{x.final.residuals.squaredNorm() / sf2,
+    return std::pair{x.final.weighted_squared_norm() / sf2,
                      9.0 * static_cast<double>(x.final.pairing.pairs.size())};
   };
   const auto [given, given_limit] = misfit(s);
@@ -2065,10 +2109,14 @@ std::string misfit_of_one_mode(const model::Model& model, const std::vector<std:
       !(given > std::max(100.0, reduced_chi2_limit(s.degrees_of_freedom))))
     return "";
   const LinearEvaluation& e = s.final;
+  // The largest errors in sigmas of their own modes first.
+  const auto weighted = [&](int i) {
+    return e.residuals(i) * (e.weights.size() == e.residuals.size() ? e.weights(i) : 1.0);
+  };
   std::vector<int> order;
   for (const ModePair& q : e.pairing.pairs) order.push_back(q.measured);
   std::sort(order.begin(), order.end(),
-            [&](int a, int b) { return std::abs(e.residuals(a)) > std::abs(e.residuals(b)); });
+            [&](int a, int b) { return std::abs(weighted(a)) > std::abs(weighted(b)); });
   if (order.size() > 8) order.resize(8);
   struct Without {
     int mode = -1;
@@ -2154,15 +2202,16 @@ std::string misfit_of_one_mode(const model::Model& model, const std::vector<std:
         j + 1, e.all_model_frequency_hz(j), next + 1,
         next >= 0 ? e.all_model_frequency_hz(next) : 0.0);
   };
+  const std::string noise = stated_noise(options.frequency_std, s.mode_frequency_std,
+                                         [&](Eigen::Index i) { return measured.id(i); });
   if (fits.size() == 1 || fits[1].chi2 - fits[0].chi2 >= 9) {
     const int i = fits[0].mode;
     const std::string head = fmt::format(
         "test mode {} ({:.5g} Hz), {}, {:+.3g} % off, leaves a reduced chi-square of {:.3g} over "
         "{} degrees of freedom (largest frequency error {:.3g} %), far beyond the stated noise "
-        "({:.3g} %); without it the other {} pair and fit to {}, within that noise",
+        "({}); without it the other {} pair and fit to {}, within that noise",
         measured.id(i), measured.frequency_hz(i), partner(i), 100 * e.residuals(i), given,
-        s.degrees_of_freedom, 100 * e.max_error(), 100 * options.frequency_std,
-        e.pairing.pairs.size() - 1, fits[0].text);
+        s.degrees_of_freedom, 100 * e.max_error(), noise, e.pairing.pairs.size() - 1, fits[0].text);
     if (by_frequency(i)) {
       return fmt::format(
           "{}. Without a shape its pair rests on the nearest model frequency at the start, which "
@@ -2193,13 +2242,13 @@ std::string misfit_of_one_mode(const model::Model& model, const std::vector<std:
   return fmt::format(
       "one of test modes {} is likely one the model does not match or paired wrongly, and the "
       "data cannot tell which: the fit leaves a reduced chi-square of {:.3g} over {} degrees of "
-      "freedom (largest frequency error {:.3g} %), far beyond the stated noise ({:.3g} %); {}, "
+      "freedom (largest frequency error {:.3g} %), far beyond the stated noise ({}); {}, "
       "each within that noise. Check those modes (a mode the model does not have, a wrong "
       "frequency, a pair by frequency alone from a start far from the truth, or a model that "
       "lacks what moves it), and leave the one that is wrong out of the table (its row; in a "
       "campaign, list the other [[mode]] names in [update.linear] modes)",
       fmt::join(ids, ids.size() == 2 ? " and " : ", "), given, s.degrees_of_freedom,
-      100 * e.max_error(), 100 * options.frequency_std, fmt::join(each, "; "));
+      100 * e.max_error(), noise, fmt::join(each, "; "));
 }
 
 // The pairs at the result whose MAC with their partner is below the threshold (a shape at two
@@ -2245,7 +2294,7 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
   const bool misfit =
       s.degrees_of_freedom > 0
           ? s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom)
-          : e.residuals.squaredNorm() / sf2 > 9.0 * static_cast<double>(e.pairing.pairs.size());
+          : e.weighted_squared_norm() / sf2 > 9.0 * static_cast<double>(e.pairing.pairs.size());
   // Pairs crosswise to the frequency order (the lower test mode with the higher model mode), each
   // shape at two sensors, where the fit leaves a misfit: their MACs confirm nothing, as one sign
   // wrong turns one shape into the other. The twin cantilevers' first two modes alone, channel a
@@ -2301,7 +2350,7 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
                         s.degrees_of_freedom > 0
                             ? fmt::format("a reduced chi-square of {:.3g}", s.reduced_chi2)
                             : fmt::format("a chi-square of {:.3g} with no degree of freedom left",
-                                          e.residuals.squaredNorm() / sf2),
+                                          e.weighted_squared_norm() / sf2),
                         100 * e.max_error())
           : "",
       one ? "" : "s", fmt::join(ids, one ? "" : " and "));
@@ -2311,17 +2360,15 @@ std::string unconfirmed_pairs(const MeasuredModes& measured, const LinearUpdateO
 
 Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::string>& names,
                               const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                              const LinearUpdateOptions& given, LinearUpdateSummary* summary) {
-  if (const std::string e = given.error(); !e.empty()) throw InputError("update-linear: " + e);
+                              const LinearUpdateOptions& options, LinearUpdateSummary* summary) {
+  if (const std::string e = options.error(); !e.empty()) throw InputError("update-linear: " + e);
   check_measured(sensors, measured);
-  // Files of a mode that disagree widen its frequency's uncertainty; one serves every mode.
-  LinearUpdateOptions options = given;
-  if (measured.frequency_std.size() > 0) {
-    if (measured.frequency_std.size() != measured.frequency_hz.size() ||
-        !(measured.frequency_std.array() >= 0).all() || !measured.frequency_std.allFinite())
-      throw InputError("measured modes: frequency_std must be finite and >= 0, one per mode");
-    options.frequency_std = std::max(options.frequency_std, measured.frequency_std.maxCoeff());
-  }
+  // Files of a mode that disagree widen that mode's frequency uncertainty (mode_sigma): its
+  // residual weighs less, and only the sets it fixes widen.
+  if (measured.frequency_std.size() > 0 &&
+      (measured.frequency_std.size() != measured.frequency_hz.size() ||
+       !(measured.frequency_std.array() >= 0).all() || !measured.frequency_std.allFinite()))
+    throw InputError("measured modes: frequency_std must be finite and >= 0, one per mode");
   LinearUpdateSummary local;
   LinearUpdateSummary& s = summary ? *summary : local;
   std::vector<PairWarning> weak_pairs;
@@ -2421,6 +2468,13 @@ std::string LinearUpdateSummary::report() const {
                     fe, j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
                     mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
   }
+  const auto id = [&](Eigen::Index i) { return final.measured_id(i); };
+  const std::string noise = stated_noise(frequency_std, mode_frequency_std, id);
+  if (noise != stated_noise(frequency_std, Eigen::VectorXd(), id))
+    out += fmt::format(
+        "  frequency uncertainty: {} (a mode whose files disagree: its residual is divided by its "
+        "own, so it weighs less and widens only the sets it fixes)\n",
+        noise);
   if (degrees_of_freedom > 0) {
     // Scatter below the 3-sigma level does not make the stated noise right: with few degrees of
     // freedom, noise several times larger often scatters as little.
@@ -2432,14 +2486,13 @@ std::string LinearUpdateSummary::report() const {
         degrees_of_freedom,
         reduced_chi2 > limit || !any_fitted ? ""
         : reduced_chi2 > 1
-            ? fmt::format(
-                  " (more than noise of the stated {:.3g} % gives on average, below {:.3g}, "
-                  "its 3-sigma level: the scatter cannot tell whether the noise is that "
-                  "or larger, so the standard deviations {})",
-                  100 * frequency_std, limit, scatter_widening(*this))
-            : fmt::format(" (no more than noise of the stated {:.3g} % gives; the standard "
+            ? fmt::format(" (more than noise of the stated {} gives on average, below {:.3g}, "
+                          "its 3-sigma level: the scatter cannot tell whether the noise is that "
+                          "or larger, so the standard deviations {})",
+                          noise, limit, scatter_widening(*this))
+            : fmt::format(" (no more than noise of the stated {} gives; the standard "
                           "deviations assume that noise{})",
-                          100 * frequency_std, few_degrees_note(*this)));
+                          noise, few_degrees_note(*this)));
   }
   for (const ParameterReport& p : parameters) {
     std::string what;

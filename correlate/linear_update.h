@@ -15,8 +15,13 @@
 // new pairs (at most three rounds), and pairs that still differ stop the update (kAmbiguous).
 // Residuals over measured modes i
 //     r_i = (f_model,p(i) - f_exp,i) / f_exp,i            (no residual when i is unpaired)
-// and the objective is 1/2 sum r_i^2. The optimiser (Ceres, trust region, bounds) works on
-// x_k = ln theta_k, with the analytic eigenvalue sensitivity
+// each weighted by its own mode's relative frequency uncertainty
+//     sigma_i = max(frequency_std, MeasuredModes::frequency_std_i),   w_i = frequency_std / sigma_i
+// and the objective is 1/2 sum (w_i r_i)^2 (1/2 sum r_i^2 where every mode has the stated
+// frequency_std): a mode whose files disagree counts for less, and widens only the sets it
+// fixes. The chi-square sum (r_i / sigma_i)^2 below, the covariance, the profiles, the restarts'
+// and the pairings' tests "within the noise" all use these weights. The optimiser (Ceres, trust
+// region, bounds) works on x_k = ln theta_k, with the analytic eigenvalue sensitivity
 //     d omega_i^2 / d theta_k = phi_i^T S_k phi_i,  so  d r_i / d x_k = theta_k phi_i^T S_k phi_i
 //                                                         / (8 pi^2 f_model f_exp).
 // Identifiability: s_k = max_i |d r_i / d x_k|, the largest relative frequency change per unit
@@ -25,15 +30,15 @@
 // puts it) and the others are fitted again, so that no answer depends on where a flat set
 // drifted between bounds nobody chose. One-at-a-time sweeps (theta_k times 10^[-d, d], the
 // others held) follow every pair by its full shape from the result (the paper's Figure 3).
-// Uncertainty at the result: covariance (J^T J)^-1 sigma^2 over the fitted sets, sigma the
-// relative frequency uncertainty. Sets whose sensitivity columns nearly repeat one another (a
-// singular value of J with unit columns below sqrt(1e-3)) act together: the frequencies fix only
-// a combination (an Iwan element and a spring on one degree of freedom: their sum), so they are
-// not identifiable and get no sigma; the inverse is then taken without those directions (the
-// pseudo-inverse, right for the combinations and the other sets), the combination of two is
-// named with its own sigma, and "fitted" below counts the combinations determined. With more
-// pairs than fitted sets, the reduced chi-square
-//     chi2_red = sum (r_i / sigma)^2 / (pairs - fitted)
+// Uncertainty at the result: covariance (J^T W^2 J)^-1 frequency_std^2 over the fitted sets,
+// W = diag(w_i): each row of J over its own mode's sigma_i. Sets whose sensitivity columns nearly
+// repeat one another (a singular value of J with unit columns below sqrt(1e-3)) act together: the
+// frequencies fix only a combination (an Iwan element and a spring on one degree of freedom: their
+// sum), so they are not identifiable and get no sigma; the inverse is then taken without those
+// directions (the pseudo-inverse, right for the combinations and the other sets), the combination
+// of two is named with its own sigma, and "fitted" below counts the combinations determined. With
+// more pairs than fitted sets, the reduced chi-square
+//     chi2_red = sum (r_i / sigma_i)^2 / (pairs - fitted)
 // measures the scatter the model cannot explain (model-form error), and when it exceeds 1 the
 // covariance is scaled by it: the scale is then estimated from the residuals, so the error over
 // the scaled sigma follows Student's t over nu = pairs - fitted, and the covariance is widened
@@ -106,8 +111,8 @@ struct MeasuredModes {
   /// update_linear() puts them first among its report's warnings.
   std::vector<std::string> warnings;
   /// Per mode, the relative one-sigma uncertainty of its frequency that its data show (files
-  /// that disagree: measured_data.h linear_spread()); empty or 0: none. update_linear() raises
-  /// its frequency_std to the largest (one uncertainty serves every mode).
+  /// that disagree: measured_data.h linear_spread()); empty or 0: none. update_linear() divides
+  /// that mode's residual by the larger of it and its frequency_std (each mode its own).
   Eigen::VectorXd frequency_std;
   /// ids[i], or i + 1 where it has none.
   std::string id(Eigen::Index i) const;
@@ -133,10 +138,15 @@ struct LinearEvaluation {
   std::string ambiguity;                  ///< pairing by rules: what it cannot decide, or ""
   std::vector<PairingTie> ties;           ///< pairing by rules: the modes paired by a guess
   std::vector<std::string> measured_ids;  ///< MeasuredModes::ids
+  /// Per measured mode, w_i = frequency_std / sigma_i, the weight of its residual in the cost and
+  /// the chi-square (update_linear() sets it; empty: 1 each)
+  Eigen::VectorXd weights;
   /// Measured mode i's own name (MeasuredModes::id).
   std::string measured_id(Eigen::Index i) const;
-  /// 1/2 sum r_i^2.
-  double cost() const { return 0.5 * residuals.squaredNorm(); }
+  /// sum (w_i r_i)^2 (sum r_i^2 where weights is empty).
+  double weighted_squared_norm() const;
+  /// 1/2 sum (w_i r_i)^2.
+  double cost() const { return 0.5 * weighted_squared_norm(); }
   /// The MAC of measured mode i's pair where it reads a shape; nothing when i is unpaired or
   /// its shape has fewer than two sensors.
   std::optional<double> pair_mac(Eigen::Index i) const;
@@ -291,8 +301,8 @@ struct LinearUpdateSummary {
   std::string unconfirmed;     ///< kPairsUnconfirmed: the pairs, why, and what to do
   bool fit_converged = false;  ///< kPairsUnconfirmed: the fit itself met its convergence test
   int rounds = 0;              ///< fits run (a new round when the pairs change)
-  double reduced_chi2 = 0;     ///< sum (r/sigma)^2 / (pairs - fitted); 0: no dof left
-  double chi2 = 0;             ///< sum (r/sigma)^2 of the least-squares fit
+  double reduced_chi2 = 0;     ///< sum (r_i/sigma_i)^2 / (pairs - fitted); 0: no dof left
+  double chi2 = 0;             ///< sum (r_i/sigma_i)^2 of the least-squares fit
   /// Fits from different starts behind the result: 1, or 1 + the restarts tried where the fit
   /// from the start left scatter beyond the noise (reduced_chi2_limit)
   int starts = 1;
@@ -303,6 +313,9 @@ struct LinearUpdateSummary {
   /// pairs - fitted sets (sets acting together count as the combinations determined)
   int degrees_of_freedom = 0;
   double frequency_std = 0;  ///< the stated relative frequency uncertainty
+  /// Per measured mode, the relative frequency uncertainty its residual was divided by:
+  /// max(frequency_std, MeasuredModes::frequency_std_i)
+  Eigen::VectorXd mode_frequency_std;
   /// The standard deviations rest on the scatter (reduced_chi2 > 1, with a degree of freedom
   /// left): sqrt(reduced_chi2) times those of the stated noise, and widened by Student's t
   /// (t_widening); false: they assume the stated frequency_std.

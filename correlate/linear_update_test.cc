@@ -379,6 +379,72 @@ TEST(LinearUpdate, TheReducedChiSquareWidensTheUncertaintyOfAModelFormError) {
   EXPECT_GT(worst_unwidened, 3.0);  // without the widening the truth would lie outside
 }
 
+// Each measured mode's own frequency uncertainty weighs its residual. On the two chains (ka moves
+// chain A's modes only, kb chain B's; kflat held), the five lowest modes exact, chain B's given a
+// 0.5 % uncertainty and chain A's the stated 0.1 %: ka's sigma is the one 0.1 % for every mode
+// gives and kb's the one 0.5 % for every mode gives (the same chi-square profiles: equal to 1e-9),
+// and each is the closed form sigma / |J_k| over its own chain's modes (to 2 %: the profile walk
+// may state a third of where the chi-square rises by 9, a little wider than the local slope).
+// Before, the largest (0.5 %) served every mode: ka's sigma came out 5 times the closed form's.
+TEST(LinearUpdate, EachModesOwnFrequencyUncertaintyWidensOnlyTheSetsItFixes) {
+  const TwoChainParameters truth_p;
+  const model::Model truth = two_chain_structure(truth_p);
+  TwoChainParameters start_p;
+  start_p.ka = 4e5;
+  start_p.kb = 2.4e5;
+  const model::Model model = two_chain_structure(start_p);
+  const auto sensors = chain_sensors(6);
+  const MeasuredModes exact = synthetic_measurement(truth, sensors, 5, 0.0, 7);
+  // Which chain each mode belongs to, and the closed form: the Jacobian at the truth.
+  const StiffnessSets at_truth(truth, kSets);
+  const LinearEvaluation e =
+      evaluate_linear(at_truth, truth, sensors, exact, at_truth.initial(), 0.6);
+  ASSERT_EQ(e.pairing.pairs.size(), 5u);
+  MeasuredModes meas = exact;
+  meas.frequency_std = Eigen::VectorXd::Zero(5);
+  double jj[2] = {0, 0};
+  int in_b = 0;
+  for (int i = 0; i < 5; ++i) {
+    const bool b = std::abs(e.jacobian(i, 1)) > std::abs(e.jacobian(i, 0));
+    ASSERT_LT(std::abs(e.jacobian(i, b ? 0 : 1)), 1e-12);  // the chains do not couple
+    jj[b ? 1 : 0] += e.jacobian(i, b ? 1 : 0) * e.jacobian(i, b ? 1 : 0);
+    if (b) meas.frequency_std(i) = 5e-3;
+    in_b += b;
+  }
+  ASSERT_GE(in_b, 1);
+  ASSERT_LE(in_b, 4);
+  LinearUpdateOptions o;
+  o.holds = {{"spring.kflat", 0}};
+  LinearUpdateSummary s;
+  const Eigen::VectorXd theta = update_linear(model, kSets, sensors, meas, o, &s);
+  ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << s.report();
+  EXPECT_NEAR(theta(0) / truth_p.ka, 1, 1e-6);
+  EXPECT_NEAR(theta(1) / truth_p.kb, 1, 1e-6);
+  EXPECT_EQ(s.frequency_std, 1e-3);
+  ASSERT_EQ(s.mode_frequency_std.size(), 5);
+  for (int i = 0; i < 5; ++i)
+    EXPECT_EQ(s.mode_frequency_std(i), std::max(1e-3, meas.frequency_std(i)));
+  ASSERT_TRUE(s.parameters[0].relative_std && s.parameters[1].relative_std) << s.report();
+  // The second method: the same data with one uncertainty for every mode.
+  const auto uniform = [&](double sf) {
+    LinearUpdateOptions u = o;
+    u.frequency_std = sf;
+    LinearUpdateSummary r;
+    update_linear(model, kSets, sensors, exact, u, &r);
+    return r;
+  };
+  const LinearUpdateSummary a = uniform(1e-3), b = uniform(5e-3);
+  ASSERT_TRUE(a.parameters[0].relative_std && b.parameters[1].relative_std);
+  EXPECT_NEAR(*s.parameters[0].relative_std / *a.parameters[0].relative_std, 1, 1e-9);
+  EXPECT_NEAR(*s.parameters[1].relative_std / *b.parameters[1].relative_std, 1, 1e-9);
+  EXPECT_NEAR(*s.parameters[0].relative_std / (1e-3 / std::sqrt(jj[0])), 1, 0.02);
+  EXPECT_NEAR(*s.parameters[1].relative_std / (5e-3 / std::sqrt(jj[1])), 1, 0.02);
+  // The report says which modes carry a wider uncertainty.
+  const std::string report = s.report();
+  EXPECT_NE(report.find("frequency uncertainty: 0.1 %, test mode"), std::string::npos) << report;
+  EXPECT_NE(report.find("'s 0.5 %"), std::string::npos) << report;
+}
+
 // The standard deviations against the truth over 200 seeds (Monte Carlo): ka and kb fitted to the
 // two-chain structure's lowest five modes (kflat held), so 3 degrees of freedom, with frequency
 // noise five times the stated frequency_std (0.5 % against 0.1 %) and, as a control, equal to it.

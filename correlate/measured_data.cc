@@ -486,9 +486,10 @@ LinearSpread linear_spread(const std::string& mode, const std::vector<LinearRead
         "joint still slips at the lowest amplitudes read, so every one is below the linear "
         "frequency and the stiffness of the joint sets this mode fixes comes out biased low. "
         "The update takes the lowest-level files' {:.2f} Hz (levels within a factor 2 of the "
-        "lowest, {} of {}) with an uncertainty of {:.2g} % (their range, to which the update's is "
-        "raised for every mode), which covers the change the levels read make, not what "
-        "lies below the lowest: hit more gently, or read lower amplitudes, for the linear value",
+        "lowest, {} of {}) with an uncertainty of {:.2g} % (their range, by which the update "
+        "divides this mode's residual; the other modes keep theirs), which covers the change the "
+        "levels read make, not what lies below the lowest: hit more gently, or read lower "
+        "amplitudes, for the linear value",
         mode, n, fmt::join(each, ", "), lo, hi, beyond, out.frequency_hz, low_count, n,
         100 * out.relative_std);
   } else {
@@ -496,7 +497,8 @@ LinearSpread linear_spread(const std::string& mode, const std::vector<LinearRead
         "{}: the {} files' linear frequencies ({}) spread over {:.2f} to {:.2f} Hz (standard "
         "deviation {:.3g} Hz), {}, with no trend with the hit's level: the "
         "update takes their mean {:.2f} Hz with an uncertainty of {:.2g} % (their standard "
-        "deviation, to which the update's is raised for every mode)",
+        "deviation, by which the update divides this mode's residual; the other modes keep "
+        "theirs)",
         mode, n, fmt::join(each, ", "), lo, hi, sd, beyond, mean, 100 * out.relative_std);
   }
   return out;

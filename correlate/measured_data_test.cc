@@ -155,8 +155,8 @@ TEST(MeasuredData, LinearFrequenciesWithinTheirUncertaintyOrWithoutTrendKeepTheM
 }
 
 // From process's summary.json to the update: the band's files' stated uncertainties and lowest
-// amplitudes are read, the band's frequency is the lowest-level files', and update_linear() states
-// its sigmas at the spread's uncertainty (before: 0.1 %, whatever the files showed).
+// amplitudes are read, the band's frequency is the lowest-level files', and update_linear() weighs
+// that band's residual by the spread's uncertainty (before: 0.1 %, whatever the files showed).
 TEST(MeasuredData, ABandThatFallsWithTheLevelWidensTheLinearUpdate) {
   TwoChainParameters p;
   const model::Model model = two_chain_structure(p);
@@ -201,8 +201,11 @@ TEST(MeasuredData, ABandThatFallsWithTheLevelWidensTheLinearUpdate) {
   EXPECT_NE(m.warnings[0].find("band 1: the 4 files'"), std::string::npos) << m.warnings[0];
   LinearUpdateSummary s;
   update_linear(model, {"spring.ka", "spring.kb"}, sensors, m, LinearUpdateOptions{}, &s);
-  // One uncertainty for every mode: the update's, raised to band 1's.
-  EXPECT_NEAR(s.frequency_std, m.frequency_std(0), 1e-15);
+  // Each mode its own uncertainty: band 1's residual over its spread, band 2's over the update's.
+  EXPECT_EQ(s.frequency_std, LinearUpdateOptions{}.frequency_std);
+  ASSERT_EQ(s.mode_frequency_std.size(), 2);
+  EXPECT_NEAR(s.mode_frequency_std(0), m.frequency_std(0), 1e-15);
+  EXPECT_EQ(s.mode_frequency_std(1), LinearUpdateOptions{}.frequency_std);
   ASSERT_FALSE(s.warnings.empty());
   EXPECT_EQ(s.warnings[0], m.warnings[0]);
 }
