@@ -693,13 +693,23 @@ TEST(RingdownBandGain, FollowingTheModeStopsShortOfANeighbour) {
 // floor stands 1.25 times above the typed band's (scaled to its bandwidth) is held back from the
 // nearest bump of the spectrum beyond the typed edge. Measured: 146 Hz 0.14-0.71 decades (median
 // 0.66), 147 Hz 0.34 each; median frequency errors at most 6.1e-5, median damping errors at
-// most 1.6 %. Required: every record keeps a backbone of its mode (at least 0.1 decades) with issue
-// 26's accuracy (median errors 5e-4 in frequency, 5 % in damping), every frequency within 5e-4 (a
-// neighbour passed at a tenth of the mode would swing it by 0.1 x 4 Hz / 150 Hz = 0.3 %), a
-// median of 0.45 decades at 146 Hz, and the summary naming the neighbour that held the band
-// (at 147 Hz and 0.1 times the mode, the bump the moved band showed). What is still lost is the
-// start: the held bands settle in 0.7-1 s, the continuation holds 0.45 s (the 412 Hz mode, passed
-// at 18 % by the continuation's low-pass, grows past its limit backwards).
+// most 1.6 %. The first kept point, though, read the damping 3.8-4.1 % high at 1.39-1.44 times
+// its stated 3 sigma in five of the eight (the gain correction's error falling 12 % -> 1.6 % ->
+// 0.3 % of the decay rate over the span's first three estimates, the third kept); its error is
+// now at least the one before it and it is dropped: 146 Hz 0.48-0.57 decades (median 0.54) where
+// 0.48-0.71 (0.68), every point within 0.91 of its stated uncertainty. Where the span was that
+// point and one more (147 Hz), nothing is kept, the summary saying the gain's correction was not
+// known to the damping limit; so too at 146 Hz, 0.1 times the mode and 0.3 % damping, whose first
+// two points (0.14 decades) had been within their uncertainty (the rule cannot tell them apart:
+// their correction's error falls 3.5 % -> 2.0 % -> 0.56 % of the decay rate).
+// Required: every backbone kept within its stated uncertainty (damping and frequency, k sigma),
+// with issue 26's accuracy (median errors 5e-4 in frequency, 5 % in damping), every frequency
+// within 5e-4 (a neighbour passed at a tenth of the mode would swing it by 0.1 x 4 Hz / 150 Hz =
+// 0.3 %); at 146 Hz a backbone of at least 0.1 decades but where noted and a median of 0.45
+// decades; and the summary naming the neighbour that held the band (at 147 Hz and 0.1 times the
+// mode, the bump the moved band showed). What is still lost is the start: the held bands settle in
+// 0.7-1 s, the continuation holds 0.45 s (the 412 Hz mode, passed at 18 % by the continuation's
+// low-pass, grows past its limit backwards).
 TEST(RingdownBandGain, AWeakerNeighbourJustBelowTheBandLeavesTheModeItsPoints) {
   struct Case {
     double hz, share, zeta;
@@ -713,24 +723,40 @@ TEST(RingdownBandGain, AWeakerNeighbourJustBelowTheBandLeavesTheModeItsPoints) {
     const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
     char where[80];
     std::snprintf(where, sizeof where, "neighbour %g Hz, %g x, damping %g", c.hz, c.share, c.zeta);
+    EXPECT_NE(r.summary.message.find("held back by a neighbouring mode's spectral peak at 14"),
+              std::string::npos)
+        << where << ": " << r.summary.message;
+    // The span was the biased first point and one more.
+    const bool may_refuse = c.hz == 147 || (c.share == 0.1 && c.zeta == 0.003);
+    if (may_refuse && r.summary.status != RingdownStatus::kOk) {
+      std::printf("LMS twin + %s: nothing kept\n", where);
+      EXPECT_NE(r.summary.message.find("the correction for the band's gain was not known"),
+                std::string::npos)
+          << where << ": " << r.summary.message;
+      if (c.hz == 146) decades_146.push_back(0.0);
+      continue;
+    }
     ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << where << ": " << r.summary.message;
     const Medians e = medians(r.backbone, t.m1);
-    double worst_f = 0;
+    double worst_f = 0, worst_stated = 0;
     for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
-      const double f = t.m1.omega_n(r.backbone.displacement(i)) / (2 * std::numbers::pi);
+      const double a = r.backbone.displacement(i);
+      const double f = t.m1.omega_n(a) / (2 * std::numbers::pi);
       worst_f = std::max(worst_f, std::abs(r.backbone.frequency_hz(i) / f - 1));
+      worst_stated = std::max(
+          {worst_stated, std::abs(r.backbone.damping(i) - t.m1.zeta(a)) / r.backbone.damping_std(i),
+           std::abs(r.backbone.frequency_hz(i) - f) / r.backbone.frequency_std_hz(i)});
     }
     std::printf(
         "LMS twin + %s: %ld points, %.2f decades, median f err %.1e (worst %.1e), median "
-        "z err %.3f\n",
-        where, long(r.backbone.size()), r.summary.amplitude_decades, e.f, worst_f, e.z);
+        "z err %.3f, worst error / stated %.2f\n",
+        where, long(r.backbone.size()), r.summary.amplitude_decades, e.f, worst_f, e.z,
+        worst_stated);
+    EXPECT_LE(worst_stated, 1.0) << where;
     EXPECT_GE(r.summary.amplitude_decades, 0.1) << where << ": " << r.summary.message;
     EXPECT_LE(e.f, 5e-4) << where;
     EXPECT_LE(worst_f, 5e-4) << where;
     EXPECT_LE(e.z, 0.05) << where;
-    EXPECT_NE(r.summary.message.find("held back by a neighbouring mode's spectral peak at 14"),
-              std::string::npos)
-        << where << ": " << r.summary.message;
     if (c.hz == 147 && c.share == 0.1) {  // found by its beat alone
       EXPECT_NE(r.summary.message.find("a bump on the mode's skirt"), std::string::npos)
           << where << ": " << r.summary.message;
