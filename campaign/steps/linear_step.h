@@ -41,8 +41,9 @@ struct LinearStep {
 /// without sets or without a mode to fit. With `side` (the hits behind `measured`), each fitted
 /// mode's frequency and uncertainty are correlate::linear_spread()'s over its kept hits' linear
 /// frequencies, each at the lowest amplitude its backbone read: hits that disagree beyond the
-/// update's frequency_std widen it, and where they fall with the level the lowest-level hits'
-/// value is fitted, with a warning that the joint still slips there.
+/// update's frequency_std widen that mode's uncertainty (its residual's own sigma), and where
+/// they fall with the level the lowest-level hits' value is fitted, with a warning that the
+/// joint still slips there.
 LinearStep linear_update_step(const Campaign& campaign, const CampaignModelData& model,
                               const correlate::MeasuredModes& measured,
                               const std::function<void(const std::string&)>& progress,

@@ -422,7 +422,11 @@ TEST(LinearStep, HitsThatFallWithTheLevelFitTheLowestWithTheSpreadsUncertainty) 
   const LinearStep step = linear_update_step(c, d, mean, nullptr, &side);
   ASSERT_TRUE(step.ran) << step.note;
   EXPECT_NEAR(step.summary.final.measured_frequency_hz(0), f1 * (1 - 0.002), 1e-9 * f1);
-  EXPECT_NEAR(step.summary.frequency_std, 0.006 / (1 - 0.002), 1e-12);
+  // Mode 1's residual over its spread; mode 2 keeps the update's 0.1 %.
+  EXPECT_EQ(step.summary.frequency_std, 1e-3);
+  ASSERT_EQ(step.summary.mode_frequency_std.size(), 2);
+  EXPECT_NEAR(step.summary.mode_frequency_std(0), 0.006 / (1 - 0.002), 1e-12);
+  EXPECT_EQ(step.summary.mode_frequency_std(1), 1e-3);
   ASSERT_FALSE(step.summary.warnings.empty());
   EXPECT_NE(step.summary.warnings[0].find("mode 1: the 4 files' linear frequencies"),
             std::string::npos)
