@@ -192,11 +192,9 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
   // result) is said to be so, rather than sent to update-linear again.
   o.linear_part_updated = campaign::linear_part_matches(m, in.targets);
   // Long fits say how they go: every 250 evaluations, the best cost so far, on stderr.
-  o.progress = [](int evaluations, double best) {
-    if (evaluations % 250 == 0) {
-      say(stderr, "update-iwan: {} QSMA evaluations, best cost {:.6g}\n", evaluations, best);
-    }
-  };
+  o.progress = campaign::progress_every(250, [](int evaluations, double best) {
+    say(stderr, "update-iwan: {} QSMA evaluations, best cost {:.6g}\n", evaluations, best);
+  });
   correlate::IwanObjective objective(m, a.set, in.sensors, in.targets, o);
   if (in.measured) objective.set_linear_modes(*in.measured, 0.6);  // every paired mode's error
   // The fit `run` makes (beta held first, freed when the data reach macroslip).

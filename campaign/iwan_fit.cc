@@ -1,5 +1,6 @@
 #include "jointlab/campaign/iwan_fit.h"
 
+#include <cassert>
 #include <cmath>
 #include <vector>
 
@@ -115,6 +116,21 @@ IwanUpdateSummary checked_fit_iwan(const IwanObjective& objective, IwanUpdateOpt
             : std::string()));
   }
   return summary;
+}
+
+std::function<void(int, double)> progress_every(int every, std::function<void(int, double)> line,
+                                                std::function<void()> between) {
+  assert(every > 0);
+  return [every, line = std::move(line), between = std::move(between), last = 0](
+             int n, double best) mutable {
+    if (n < last) last = 0;
+    const bool due = n / every > last / every;
+    last = n;
+    if (due && line)
+      line(n, best);
+    else if (!due && between)
+      between();
+  };
 }
 
 std::string pareto_report(const std::vector<correlate::ParetoPoint>& front) {

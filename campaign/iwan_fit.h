@@ -57,6 +57,13 @@ correlate::IwanUpdateSummary checked_fit_iwan(const correlate::IwanObjective& ob
                                               const std::string& data_name,
                                               const std::function<void(const std::string&)>& say);
 
+/// An Iwan fit's progress callback (IwanUpdateOptions::progress) that calls `line` at the first
+/// evaluation at or past each multiple of `every` (the local solves' count steps over some: a
+/// test on exact multiples of 250 said nothing in a 423-evaluation fit) and `between` (may be
+/// empty) at the others; a count that starts again (the fit with beta freed) starts again.
+std::function<void(int, double)> progress_every(int every, std::function<void(int, double)> line,
+                                                std::function<void()> between = {});
+
 /// The report's lines of a Pareto front (correlate::pareto_front), as update-iwan prints them and
 /// the Python module returns them: per gamma the parameters, the linear error and the backbone
 /// cost, then each measured mode's linear error; "" for an empty front.

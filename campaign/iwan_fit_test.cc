@@ -87,5 +87,19 @@ TEST(CheckedFitIwan, FrequenciesOutOfTheBoxsReachAreRefusedBeforeAnyFit) {
             "");
 }
 
+// The progress line comes at the first evaluation at or past each multiple of 250: the local
+// solves' count steps over multiples (a 423-evaluation fit of the one-mode model, counted
+// 1, ..., 248, 253, 259, ...: no line at all where the test was n % 250 == 0); a second fit
+// counting from 1 again gets its own lines; the evaluations between call `between`.
+TEST(ProgressEvery, ALineAtTheFirstEvaluationPastEachMultiple) {
+  std::vector<int> lines;
+  int between = 0;
+  const auto progress = progress_every(
+      250, [&](int n, double) { lines.push_back(n); }, [&] { ++between; });
+  for (int n : {1, 2, 248, 253, 259, 499, 506, 750, 3, 251}) progress(n, 1.0);
+  EXPECT_EQ(lines, (std::vector<int>{253, 506, 750, 251}));
+  EXPECT_EQ(between, 6);
+}
+
 }  // namespace
 }  // namespace jointlab::campaign

@@ -770,18 +770,14 @@ py::dict update_iwan(
     // its 8 s to the end), and a line goes to `progress` at the first evaluation at or past each
     // multiple of 250: the local solves' count steps over some (a 423-evaluation fit of 400 said
     // nothing). A second fit (beta freed) counts from 0 again.
-    int last = 0;
     InterruptCheck interrupted;
-    o.progress = [&progress, &last, &interrupted](int n, double best) {
-      if (n < last) last = 0;
-      const bool line = n / 250 > last / 250;
-      last = n;
-      if (line)
-        report(progress,
-               fmt::format("update-iwan: {} QSMA evaluations, best cost {:.6g}", n, best));
-      else
-        interrupted();
-    };
+    o.progress = campaign::progress_every(
+        250,
+        [&progress](int n, double best) {
+          report(progress,
+                 fmt::format("update-iwan: {} QSMA evaluations, best cost {:.6g}", n, best));
+        },
+        [&interrupted] { interrupted(); });
     correlate::IwanObjective objective(m, set, in.sensors, in.targets, o);
     if (in.measured) objective.set_linear_modes(*in.measured, 0.6);
     summary =

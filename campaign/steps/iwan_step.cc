@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "jointlab/campaign/iwan_fit.h"
 #include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/steps/known_parameters.h"
 #include "jointlab/campaign/steps/update_settings.h"
@@ -223,10 +224,9 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   100 * to.max_slip_share));
   // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
   if (progress) {
-    io.progress = [&](int evaluations, double best) {
-      if (evaluations % 250 == 0)
-        say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
-    };
+    io.progress = progress_every(250, [&](int evaluations, double best) {
+      say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
+    });
   }
   // update-iwan's own fit, in its default box: frequencies no parameter set can reach, and a
   // box where no parameter set gives a curve over the amplitudes, are said with the numbers as
