@@ -93,8 +93,11 @@ std::string update_iwan_report(const correlate::IwanUpdateSummary& s, const mode
 /// True when every target has a measured linear frequency and mode R of `m` (joints at K_T) lies
 /// within `tolerance` (relative) of it: the model's linear part matches the measured linear
 /// frequencies (update-linear's result), which update-iwan states
-/// (IwanUpdateOptions::linear_part_updated) instead of sending to update-linear.
+/// (IwanUpdateOptions::linear_part_updated) instead of sending to update-linear. The default is
+/// three times update-linear's frequency uncertainty (0.1 %): its result with degrees of freedom
+/// left misses a mode by about that (one set fitted to two modes of the example beam: 0.02 %,
+/// which 1e-4 called not updated, and update-iwan sent the user back to update-linear).
 bool linear_part_matches(const model::Model& m, const std::vector<correlate::IwanTarget>& targets,
-                         double tolerance = 1e-4);
+                         double tolerance = 3e-3);
 
 }  // namespace jointlab::campaign

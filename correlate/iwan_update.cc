@@ -2625,9 +2625,9 @@ std::string IwanUpdateSummary::report() const {
                       : fmt::format("; the sigmas hold only where that frequency is right to {}",
                                     fmt::join(holds, ", ")),
         linear_part_updated
-            ? "the model was fitted to the measured linear frequencies first (the linear "
-              "update): the error it leaves in the linear part carries into the parameters at "
-              "these rates"
+            ? "the model's linear frequencies match the measured ones (a linear update's "
+              "result): the error left in its linear part carries into the parameters at these "
+              "rates"
             : "fit the model's linear part to measured linear frequencies (update-linear) before "
               "reading the parameters closer than that");
   }
@@ -2762,10 +2762,10 @@ std::string IwanUpdateSummary::report() const {
         "  note: Kt moved from {:.6g} to {:.6g} N/m ({:+.0f} %): {}\n", start.Kt, best.Kt,
         100 * (best.Kt / start.Kt - 1),
         linear_part_updated
-            ? "away from the linear update's, which fitted the model's linear frequencies to the "
-              "measured ones: the backbones' low-amplitude limit disagrees with those frequencies, "
-              "or Kt takes up what beta and chi do not describe; hold Kt at the linear update's "
-              "(--gamma 1) and see whether the fit still holds"
+            ? "away from the model's, whose linear frequencies match the measured ones (a "
+              "linear update's result): the backbones' low-amplitude limit disagrees with those "
+              "frequencies, or Kt takes up what beta and chi do not describe; hold Kt at the "
+              "model's (--gamma 1) and see whether the fit still holds"
             : "where the model's linear frequencies were not fitted to the measured ones first "
               "(update-linear), the fit takes their error up into Kt, beta and chi; update them "
               "first, or hold Kt (--gamma, Kt / Ks) and see whether the fit still holds");

@@ -1460,7 +1460,7 @@ TEST(IwanUpdateReport, AKtMovedFarFromItsStartIsNoted) {
   // (before, it did, while the "linear part:" line said the linear update was done).
   s.linear_part_updated = true;
   EXPECT_NE(s.report().find("note: Kt moved from 1e+07 to 6.16e+06 N/m (-38 %): away from the "
-                            "linear update's"),
+                            "model's, whose linear frequencies match the measured ones"),
             std::string::npos)
       << s.report();
   EXPECT_EQ(s.report().find("update-linear"), std::string::npos) << s.report();
@@ -2345,7 +2345,7 @@ TEST(IwanUpdate, TheLinearPartsEffectOnTheParametersIsStatedAndMatchesARefit) {
   IwanUpdateSummary updated = off;
   updated.linear_part_updated = true;
   EXPECT_EQ(updated.report().find("(update-linear)"), std::string::npos) << updated.report();
-  EXPECT_NE(updated.report().find("the model was fitted to the measured linear frequencies first"),
+  EXPECT_NE(updated.report().find("the model's linear frequencies match the measured ones"),
             std::string::npos);
   // A rate of next to nothing (a one-mode fit's chi: -1.2e-08 % per 0.1 %) is said so, and the
   // tolerance it gives (4e+06 %, a sigma the linear part does not limit) is left out.
