@@ -1,5 +1,6 @@
 #include "jointlab/signal/fft.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cstdlib>
 #include <cstring>
@@ -74,9 +75,13 @@ struct Fft::Impl {
   // back, so that a lack of them is std::bad_alloc here, which callers can name. A best
   // effort: where the system promises memory it has not got (Linux overcommit), the probe
   // succeeds and FFTW may still abort when it touches its tables.
+  // At least 8 MB whatever the size: a small plan made when the process is at its limit (a
+  // 1e6-sample record under ulimit -v 140 MB, planning the gain correction's short transform)
+  // aborted in FFTW's twiddle allocation, where the probe had been skipped below 2^16 points.
   void probe_planning_memory(size_t bytes_a_point = 12) const {
-    if (n < (Eigen::Index{1} << 16)) return;
-    void* volatile p = std::malloc(bytes_a_point * static_cast<size_t>(n));  // kept
+    constexpr size_t kHeadroom = size_t{8} << 20;
+    void* volatile p =
+        std::malloc(std::max(kHeadroom, bytes_a_point * static_cast<size_t>(n)));  // kept
     if (!p) throw std::bad_alloc();
     std::free(p);
   }

@@ -880,7 +880,7 @@ TEST(OutOfMemory, TheRecordIsNamedAtEveryLimit) {
     std::fclose(f);
   }
   std::map<int, int> statuses;
-  for (const int mb : {80, 100, 120, 140, 160, 192, 256, 512}) {
+  for (const int mb : {80, 100, 120, 130, 140, 150, 160, 192, 256, 512}) {
     SCOPED_TRACE(fmt::format("ulimit -v {} MB", mb));
     const std::string cmd = fmt::format(
         "ulimit -v {}; exec {}/bin/jointlab process {} --band 80:120 --threads 1 --out {}/out "
