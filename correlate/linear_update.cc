@@ -582,17 +582,6 @@ void report_sensitivity(const LinearProblem& p, const LinearEvaluation& at,
 
 }  // namespace
 
-double reduced_chi2_limit(int degrees_of_freedom) {
-  assert(degrees_of_freedom > 0);
-  const boost::math::chi_squared chi2(degrees_of_freedom);
-  return boost::math::quantile(chi2, 0.99865) / degrees_of_freedom;
-}
-
-std::optional<double> student_t_variance(double degrees_of_freedom) {
-  if (!(degrees_of_freedom > 2) || !std::isfinite(degrees_of_freedom)) return std::nullopt;
-  return degrees_of_freedom / (degrees_of_freedom - 2);
-}
-
 namespace {
 
 // The reduced chi-square that noise of the stated size exceeds in one fit in 6.3 (the one-sided

@@ -68,6 +68,7 @@
 
 #include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/mode_tracking.h"
+#include "jointlab/correlate/noise_limits.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/model/model_file.h"
 
@@ -334,16 +335,6 @@ struct LinearUpdateSummary {
   /// One paragraph: status, cost, pairs, per-mode errors, parameters, warnings.
   std::string report() const;
 };
-
-/// The reduced chi-square that noise of the stated size exceeds once in 740 fits (the one-sided
-/// 3-sigma point of the chi-square distribution over degrees_of_freedom > 0, divided by it).
-double reduced_chi2_limit(int degrees_of_freedom);
-
-/// nu / (nu - 2), the variance of Student's t over nu degrees of freedom: a parameter's error over
-/// a standard deviation whose scale was estimated from the residuals of a fit with nu degrees of
-/// freedom left follows t_nu, not a normal, so such a variance is widened by it. Nothing where
-/// nu <= 2 (an infinite variance: no standard deviation can be stated).
-std::optional<double> student_t_variance(double degrees_of_freedom);
 
 /// Pairs of model modes (columns of shapes at the sensors) whose auto-MAC is at least
 /// threshold: the sensors cannot tell them apart. Each entry (j, k, MAC), j < k.

@@ -15,6 +15,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
 #include "jointlab/correlate/mac.h"
+#include "jointlab/correlate/noise_limits.h"
 #include "jointlab/correlate/shape_checks.h"
 #include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
