@@ -1402,6 +1402,33 @@ std::optional<Eigen::MatrixXd> sandwich(const IwanObjective& objective, const Se
   return cov;
 }
 
+// The residuals at x +/- h along each free parameter in turn (x = (ln F_S, ln gamma, chi,
+// ln beta), h = 1e-4, as the local solve; Z, index 4, linearly at h = 1e-6), handed to
+// column(j, h, r_plus, r_minus); false where the model cannot be evaluated at one of them. The
+// covariance's slopes and the linear part's sensitivity take the same steps.
+template <typename Column>
+bool central_differences(const IwanObjective& objective, const std::vector<int>& free,
+                         const Vec4& v, double z, Column&& column) {
+  const double Ks = objective.reference_stiffness();
+  Eigen::VectorXd rp(objective.residual_count()), rm(objective.residual_count());
+  const Vec4 x0 = to_x(v);
+  for (int j = 0; j < static_cast<int>(free.size()); ++j) {
+    const double h = free[j] == 4 ? 1e-6 : 1e-4;
+    Vec4 xp = x0, xm = x0;
+    double zp = z, zm = z;
+    if (free[j] == 4) {
+      zp += h, zm -= h;
+    } else {
+      xp(free[j]) += h, xm(free[j]) -= h;
+    }
+    if (!objective.residuals_at(to_params(to_v(xp.data()), Ks), zp, rp.data()) ||
+        !objective.residuals_at(to_params(to_v(xm.data()), Ks), zm, rm.data()))
+      return false;
+    column(j, h, rp, rm);
+  }
+  return true;
+}
+
 // Covariance of x = (ln F_S, ln gamma, chi, ln beta[, Z]) at v and the structure's own damping z
 // (ln gamma and ln K_T differ by a constant), over the free parameters `free` (indices 0-3, and 4
 // for a fitted Z); empty when unknown. The larger, variance by variance, of
@@ -1433,33 +1460,18 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
   const double Ks = objective.reference_stiffness();
   Eigen::MatrixXd J(m, nf), Jf(m, nf), Jb(m, nf);
   Eigen::VectorXd r(m);
-  std::vector<double> rp(m), rm(m);
   if (!objective.residuals_at(to_params(v, Ks), z, r.data())) return {};
   const double n_points = m / 2.0;
   *reduced_chi2 = r.squaredNorm() * n_points / std::max(1, m - nf);
-  const Vec4 x0 = to_x(v);
-  for (int j = 0; j < nf; ++j) {
-    // Z enters linearly: a step of 1e-4 of its range; the others in x as the local solve.
-    const double h = free[j] == 4 ? 1e-6 : 1e-4;
-    Vec4 xp = x0, xm = x0;
-    double zp = z, zm = z;
-    if (free[j] == 4) {
-      zp += h;
-      zm -= h;
-    } else {
-      xp(free[j]) += h;
-      xm(free[j]) -= h;
-    }
-    if (!objective.residuals_at(to_params(to_v(xp.data()), Ks), zp, rp.data()) ||
-        !objective.residuals_at(to_params(to_v(xm.data()), Ks), zm, rm.data())) {
-      return {};
-    }
-    for (int i = 0; i < m; ++i) {
-      J(i, j) = (rp[i] - rm[i]) / (2 * h);
-      Jf(i, j) = (rp[i] - r(i)) / h;
-      Jb(i, j) = (r(i) - rm[i]) / h;
-    }
-  }
+  // Central slopes, and the one-sided ones for a kink (below).
+  if (!central_differences(
+          objective, free, v, z,
+          [&](int j, double h, const Eigen::VectorXd& rp, const Eigen::VectorXd& rm) {
+            J.col(j) = (rp - rm) / (2 * h);
+            Jf.col(j) = (rp - r) / h;
+            Jb.col(j) = (r - rm) / h;
+          }))
+    return {};
   const SerialOrder order = serial_order(objective, r);
   const double tau = residual_correlation_time(order, r);
   *noise = serial_noise(order, J, r, tau);
@@ -1518,6 +1530,8 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
   // a direction (J^T J without them singular), the parameters along it have no sigma
   // (fixed_at_kink) and the others theirs from the pseudo-inverse, which leaves that direction out.
   std::vector<bool> at_kink(static_cast<size_t>(m), false);
+  const Vec4 x0 = to_x(v);
+  std::vector<double> rp(m), rm(m);
   for (int pass = 0; pass < 3; ++pass) {
     const Eigen::MatrixXd total = stated(cov);
     if (!total.allFinite()) return {};
@@ -1600,22 +1614,12 @@ bool linear_part_sensitivity(const IwanObjective& objective, const std::vector<i
   const model::IwanParameters p = to_params(v, Ks);
   Eigen::MatrixXd J(m, nf);
   Eigen::VectorXd rp(m), rm(m), dr(m);
-  const Vec4 x0 = to_x(v);
-  for (int j = 0; j < nf; ++j) {
-    const double h = free[j] == 4 ? 1e-6 : 1e-4;
-    Vec4 xp = x0, xm = x0;
-    double zp = z, zm = z;
-    if (free[j] == 4) {
-      zp += h, zm -= h;
-    } else {
-      xp(free[j]) += h, xm(free[j]) -= h;
-    }
-    if (!objective.residuals_at(to_params(to_v(xp.data()), Ks), zp, rp.data()) ||
-        !objective.residuals_at(to_params(to_v(xm.data()), Ks), zm, rm.data())) {
-      return false;
-    }
-    J.col(j) = (rp - rm) / (2 * h);
-  }
+  if (!central_differences(
+          objective, free, v, z,
+          [&](int j, double h, const Eigen::VectorXd& plus, const Eigen::VectorXd& minus) {
+            J.col(j) = (plus - minus) / (2 * h);
+          }))
+    return false;
   const double hs = 1e-4;
   if (!objective.residuals_with_structure_stiffness(p, z, std::exp(hs), rp.data()) ||
       !objective.residuals_with_structure_stiffness(p, z, std::exp(-hs), rm.data())) {
