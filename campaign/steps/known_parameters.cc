@@ -124,11 +124,20 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
                  {"quantity", "updated", "known", "difference", "tolerance", "recovered"},
                  {}};
   int recovered = 0, judged = 0;
-  std::vector<std::string> missed, unidentified;
+  std::vector<std::string> missed, unidentified, unjudged;
   const auto judge = [&](const std::string& name, double got, double known, double tol,
                          const std::string& why) {
     const double r = got / known - 1;
-    const bool ok = tol > 0 && std::abs(r) <= tol;
+    // No tolerance (none planted, and the update stated no sigma: a misfit, too few points):
+    // not judged, rather than "NO" at any difference (the two-set beam's K_T, 1.25 % off).
+    if (!(tol > 0)) {
+      unjudged.push_back(name);
+      tb.rows.push_back({name, fmt::format("{:.4g}", got), fmt::format("{:.4g}", known),
+                         fmt::format("{:+.2f} %", 100 * r), "none known",
+                         "not judged (no sigma stated)"});
+      return;
+    }
+    const bool ok = std::abs(r) <= tol;
     ++judged;
     if (ok)
       ++recovered;
@@ -136,11 +145,15 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
       missed.push_back(name);
     tb.rows.push_back({name, fmt::format("{:.4g}", got), fmt::format("{:.4g}", known),
                        fmt::format("{:+.2f} %", 100 * r),
-                       tol > 0 ? fmt::format("{:.1f} % ({})", 100 * tol, why) : "none known",
-                       ok ? "yes" : "NO"});
+                       fmt::format("{:.1f} % ({})", 100 * tol, why), ok ? "yes" : "NO"});
   };
+  // The update's own sigma: at least the scatter between the hits' backbones from three hits
+  // on (the cluster-robust covariance), else the points' noise.
   const auto own = [&] {
-    return fmt::format("2 x its uncertainty from the scatter between the {} hits", k.curves);
+    return k.curves >= 3
+               ? fmt::format("2 x its uncertainty, at least the scatter between the {} hits",
+                             k.curves)
+               : std::string("2 x its uncertainty");
   };
   // Twice the planted scatter where the truth file plants one, else twice the update's own
   // sigma (0: none known). Before, a truth file without [scatter] left K_T and F_S with no
@@ -222,12 +235,17 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
   }
   s.tables.push_back(tb);
   std::string verdict =
-      judged == 0 ? std::string("no quantity was identified by an update, so none is judged")
+      judged == 0 && !unjudged.empty()
+          ? std::string("no identified quantity has a tolerance to judge it by")
+      : judged == 0 ? std::string("no quantity was identified by an update, so none is judged")
       : missed.empty()
           ? fmt::format("the update recovers all {} identified quantities within the tolerance",
                         judged)
           : fmt::format("the update recovers {} of {} identified quantities; NOT recovered: {}",
                         recovered, judged, fmt::join(missed, ", "));
+  if (!unjudged.empty())
+    verdict += fmt::format("; not judged, the update stating no sigma for them: {}",
+                           fmt::join(unjudged, ", "));
   if (!unidentified.empty())
     verdict += fmt::format("; not identifiable from these data: {}", fmt::join(unidentified, ", "));
   if (k.iwan_ran && k.cost_known > 0)

@@ -993,6 +993,22 @@ TEST(KnownParameters, WithoutPlantedScatterTheUpdatesOwnSigmaJudges) {
   ASSERT_FALSE(s2.paragraphs.empty());
   EXPECT_EQ(s2.paragraphs[0].find("backbones"), std::string::npos) << s2.paragraphs[0];
   EXPECT_EQ(s2.paragraphs[0].find("scatter between hits"), std::string::npos) << s2.paragraphs[0];
+  // No sigma stated (a misfit) and none planted: not judged, rather than "NO" at any difference.
+  KnownComparison none = k;
+  none.kt_std = 0;
+  none.iwan.relative_std.setZero();
+  ReportSection s3;
+  compare_with_known(none, "truth.toml", s3);
+  for (const auto& r : s3.tables[0].rows) {
+    if (r[0] == "Kt [N/m]" || r[0] == "chi") {
+      EXPECT_EQ(r[5], "not judged (no sigma stated)");
+    }
+  }
+  EXPECT_NE(s3.paragraphs[0].find("no identified quantity has a tolerance to judge it by; not "
+                                  "judged, the update stating no sigma for them: Kt [N/m], chi, "
+                                  "Fs [N], beta"),
+            std::string::npos)
+      << s3.paragraphs[0];
   // F_S 1 % off at +/- 0.35 %: not recovered; planted scatter, where given, still judges.
   k.updated.Fs = 40 * 1.01;
   ReportSection t;
