@@ -506,7 +506,7 @@ LinearSpread linear_spread(const std::string& mode, const std::vector<LinearRead
 }
 
 MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
-                             std::vector<int>* bands) {
+                             std::vector<int>* bands, double frequency_std) {
   const std::string summary = (run.dir / "summary.json").string();
   std::map<int, std::vector<const ProcessBand*>> by_band;
   for (const ProcessBand& b : run.bands) {
@@ -538,8 +538,8 @@ MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& s
       for (const auto& [channel, value] : b->shape) count += find_sensor(sensors, channel) >= 0;
       if (count > best_count) best_count = count, best = b;
     }
-    const LinearSpread spread = linear_spread(fmt::format("band {}", k), readings,
-                                              LinearUpdateOptions{}.frequency_std, unit);
+    const LinearSpread spread =
+        linear_spread(fmt::format("band {}", k), readings, frequency_std, unit);
     m.frequency_hz(col) = spread.frequency_hz;
     m.frequency_std(col) = spread.relative_std;
     if (!spread.note.empty()) m.warnings.push_back(spread.note);

@@ -124,11 +124,12 @@ LinearSpread linear_spread(const std::string& mode, const std::vector<LinearRead
 
 /// Linear modal data per band at the sensors; `bands` (if given) receives the band number of
 /// each measured mode. Each band's frequency and its uncertainty are linear_spread()'s over
-/// the files that give one (against the update's default frequency_std); its note goes to the
+/// the files that give one (against `frequency_std`, the update's); its note goes to the
 /// warnings. InputError when no band has a linear frequency or no sensor channel appears in
 /// any operating shape.
 MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
-                             std::vector<int>* bands = nullptr);
+                             std::vector<int>* bands = nullptr,
+                             double frequency_std = LinearUpdateOptions{}.frequency_std);
 
 /// A backbone of `kind` measured at sensor index `sensor` with `points` points, all zero.
 MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points);

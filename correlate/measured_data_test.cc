@@ -488,27 +488,32 @@ TEST(MeasuredData, TheAmplitudeLineSaysZeroToPeakAndTheUnitAssumed) {
 TEST(MeasuredData, TheSpreadsTestsReadOneSigmaTheWeightedMeanAndStudentsT) {
   // Two files 0.6 Hz apart at 0.08 Hz one sigma, written as process writes them, 0.24 Hz at k 3:
   // read as one sigma the chi-square is 3.1 and they agreed; it is 28, and they disagree.
-  const auto modes_with = [](const std::string& coverage) {
+  const auto modes_with = [](const std::string& coverage, double half_apart = 0.3,
+                             double stated = 0.24, double frequency_std = 1e-3) {
     std::string files;
     for (int h = 0; h < 2; ++h) {
       files += fmt::format(
           R"({}{{"file": "hit{}.csv", "bands": [{{"band": 1, "reference_channel": "a",
-              "linear_frequency_hz": {}, "linear_frequency_std_hz": 0.24,
+              "linear_frequency_hz": {}, "linear_frequency_std_hz": {},
               "operating_shape": [{{"channel": "a", "real_m": 1, "imag_m": 0}}]}}],
               "outputs": []}})",
-          h ? "," : "", h, h ? 245.3 : 244.7);
+          h ? "," : "", h, 245.0 + (h ? half_apart : -half_apart), stated);
     }
     const fs::path d = fresh("coverage_factor" + coverage);
     write(d / "summary.json",
           fmt::format(R"({{"program": "jointlab process", "amplitude_quantity": "velocity",
                           {}"files": [{}]}})",
                       coverage.empty() ? "" : "\"coverage_factor\": " + coverage + ", ", files));
-    return measured_modes(read_process_run(d), {{"a", 0, 1.0}});
+    return measured_modes(read_process_run(d), {{"a", 0, 1.0}}, nullptr, frequency_std);
   };
   EXPECT_EQ(modes_with("1").frequency_std(0), 0);  // 0.24 Hz as one sigma: they agree
   EXPECT_EQ(modes_with("").frequency_std(0), 0);   // no coverage_factor: one sigma
   const MeasuredModes k3 = modes_with("3");
   EXPECT_NEAR(k3.frequency_std(0), 0.6 / std::sqrt(2.0) / 245.0, 1e-12);  // their std
+  // Files 0.2 Hz apart (0.058 %) at 0.01 Hz: within update-linear's default 0.1 %, no note; the
+  // update's own --frequency-std 0.05 % reaches the test (it was always judged against 0.1 %).
+  EXPECT_TRUE(modes_with("3", 0.1, 0.03).warnings.empty());
+  EXPECT_EQ(modes_with("3", 0.1, 0.03, 5e-4).warnings.size(), 1u);
   // Two precise files that agree and a third ten times less precise 0.5 Hz off: about the
   // weighted mean the chi-square is 0.25 (they agree); about the plain mean it was 555.
   const LinearSpread w = linear_spread(
