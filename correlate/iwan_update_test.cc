@@ -845,6 +845,8 @@ struct FloorTruth {
   model::Model start() const {
     return one_mode_structure(k0, {iwan.Fs * 3, iwan.Kt * 0.8, -0.3, 2.0}, 0.0);
   }
+  // A start a little off the truth (F_S x1.3, K_T x0.9, chi -0.4, beta 0.7), so the fit moves.
+  model::IwanParameters near() const { return {iwan.Fs * 1.3, iwan.Kt * 0.9, -0.4, 0.7}; }
   // Three hits of 60 points each from q = 1e-8 m to 1.5, 2 and 2.5 phi_max, 1e-4 frequency and
   // 2 % damping noise.
   IwanTarget target(int points = 60, int hits = 3) const {
@@ -1021,9 +1023,7 @@ TEST(IwanUpdate, SigmaDoesNotDependOnTheSamplingDensity) {
 TEST(IwanUpdate, SigmaHoldsUnderStronglyCorrelatedNoise) {
   const FloorTruth t;
   const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
-  // The start off the truth (F_S x1.3, K_T x0.9, chi -0.4, beta 0.7), so the fit moves.
-  const model::Model start =
-      one_mode_structure(t.k0, {t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7}, 0.0);
+  const model::Model start = one_mode_structure(t.k0, t.near(), 0.0);
   const double phi = model::Iwan(t.iwan).phi_max();
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
@@ -1146,6 +1146,24 @@ TEST(IwanUpdate, SlipForceAtAnotherBetaKeepsTheMicroslipElement) {
   EXPECT_NEAR(slip_force_at_beta(p, 0.6), 0.69, 0.01);
 }
 
+// Hits of the one-mode truth that disagree with one another: f.size() curves of `points` points
+// from q = 1e-8 to (1.5 + step h) phi_max, 5e-4 frequency and 2 % damping noise (seeds seed + h),
+// curve h's frequency times 1 + f[h] and damping times 1 + z[h], named "hit h+1".
+IwanTarget offset_hits(const model::Model& truth, double phi, int points, double step,
+                       unsigned seed, const std::vector<double>& f, const std::vector<double>& z) {
+  IwanTarget tg;
+  for (size_t h = 0; h < f.size(); ++h) {
+    const double d = static_cast<double>(h);
+    MeasuredBackbone b = modal_backbone(truth, points, 1e-8, (1.5 + step * d) * phi, 5e-4, 0.02,
+                                        seed + static_cast<unsigned>(h));
+    b.frequency_hz *= 1 + f[h];
+    b.damping_ratio *= 1 + z[h];
+    b.source = fmt::format("hit {}", h + 1);
+    tg.curves.push_back(b);
+  }
+  return tg;
+}
+
 // Hit-to-hit scatter (the trial's H/o1): four curves of the one-mode truth, each with its own
 // offset (+0.2 %, -0.2 %, 0, +0.1 % in frequency; +5 %, -5 %, 0, -2.5 % in damping) on 0.05 % and
 // 2 % noise. The offsets between the curves explain most of the chi-square, and the report names
@@ -1161,23 +1179,19 @@ TEST(IwanUpdate, CurvesThatDisagreeWithOneAnotherAreNamedAsScatterBetweenHits) {
   const FloorTruth t;
   const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
   const double phi = model::Iwan(t.iwan).phi_max();
-  const double f_offset[] = {2e-3, -2e-3, 0, 1e-3}, z_offset[] = {0.05, -0.05, 0, -0.025};
   const auto target = [&](double z_factor, bool offsets) {
-    IwanTarget tg;
-    for (int h = 0; h < 4; ++h) {
-      MeasuredBackbone b =
-          modal_backbone(truth, 40, 1e-8, (1.5 + 0.5 * h) * phi, 5e-4, 0.02, 21 + h);
-      b.frequency_hz *= 1 + (offsets ? f_offset[h] : 0.0);
-      b.damping_ratio *= z_factor * (1 + (offsets ? z_offset[h] : 0.0));
+    IwanTarget tg = offsets ? offset_hits(truth, phi, 40, 0.5, 21, {2e-3, -2e-3, 0, 1e-3},
+                                          {0.05, -0.05, 0, -0.025})
+                            : offset_hits(truth, phi, 40, 0.5, 21, {0, 0, 0, 0}, {0, 0, 0, 0});
+    for (MeasuredBackbone& b : tg.curves) {
+      b.damping_ratio *= z_factor;
       b.damping_std *= z_factor;
-      tg.curves.push_back(b);
     }
     return tg;
   };
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
-  const model::Model start =
-      one_mode_structure(t.k0, {t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7}, 0.0);
+  const model::Model start = one_mode_structure(t.k0, t.near(), 0.0);
   const IwanObjective scattered(start, "j", {}, {target(1, true)}, o);
   IwanUpdateSummary s;
   update_iwan(scattered, o, &s);
@@ -1232,24 +1246,15 @@ TEST(IwanUpdate, ACurveApartFromTheOthersIsNoScatterAndStatesNoSigma) {
   const FloorTruth t;
   const model::Model truth = one_mode_structure(t.k0, t.iwan, 0.0);
   const double phi = model::Iwan(t.iwan).phi_max();
-  const double f_offset[] = {1e-3, -1e-3, 0, 5e-4, -5e-4, 0};
   const auto target = [&](int curves, double apart) {
-    const double z_offset[] = {0.03, -0.03, 0, 0.015, -0.015, apart};
-    IwanTarget tg;
-    for (int h = 0; h < curves; ++h) {
-      MeasuredBackbone b =
-          modal_backbone(truth, 30, 1e-8, (1.5 + 0.2 * h) * phi, 5e-4, 0.02, 41 + h);
-      b.frequency_hz *= 1 + f_offset[h];
-      b.damping_ratio *= 1 + z_offset[h];
-      b.source = fmt::format("hit {}", h + 1);
-      tg.curves.push_back(b);
-    }
-    return tg;
+    std::vector<double> f{1e-3, -1e-3, 0, 5e-4, -5e-4, 0}, z{0.03, -0.03, 0, 0.015, -0.015, apart};
+    f.resize(static_cast<size_t>(curves));
+    z.resize(static_cast<size_t>(curves));
+    return offset_hits(truth, phi, 30, 0.2, 41, f, z);
   };
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
-  const model::Model start =
-      one_mode_structure(t.k0, {t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7}, 0.0);
+  const model::Model start = one_mode_structure(t.k0, t.near(), 0.0);
   const IwanObjective apart(start, "j", {}, {target(6, 0.6)}, o);
   const std::optional<MisfitEvidence> e = apart.misfit_evidence(t.iwan, 0);
   ASSERT_TRUE(e);
@@ -2167,7 +2172,7 @@ TEST(IwanUpdate, AMisfitWhoseResidualsAreNoNoiseStatesNoSigma) {
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
   o.threads = 1;
-  const model::IwanParameters start{t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7};
+  const model::IwanParameters start = t.near();
   const auto fit = [&](double k0_model, double q_other, model::IwanParameters* p) {
     const IwanTarget target = three_hits_with_other_slip(truth, phi, q_other);
     const model::Model m = one_mode_structure(k0_model, start);  // the objective keeps it
@@ -2305,7 +2310,7 @@ TEST(IwanUpdate, TheLinearPartsEffectOnTheParametersIsStatedAndMatchesARefit) {
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
   o.threads = 1;
-  const model::IwanParameters start{t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7};
+  const model::IwanParameters start = t.near();
   const auto fit = [&](double k0, model::IwanParameters* p) {
     const model::Model m = one_mode_structure(k0, start);  // the objective keeps it
     const IwanObjective obj(m, "j", {}, {target}, o);
@@ -2381,7 +2386,7 @@ TEST(IwanUpdate, ALinearLimitMissedForDampingNamesTheOwnDampingOrAnotherModesSli
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
   o.threads = 1;
-  const model::IwanParameters start{t.iwan.Fs * 1.3, t.iwan.Kt * 0.9, -0.4, 0.7};
+  const model::IwanParameters start = t.near();
   const auto fit = [&](double z_data, double q_other, double k0_model, double gamma) {
     const model::Model truth = one_mode_structure(t.k0, t.iwan, z_data);
     const IwanTarget target = three_hits_with_other_slip(truth, phi, q_other);
