@@ -268,15 +268,17 @@ std::string update_iwan_report(const correlate::IwanUpdateSummary& s, const mode
                                const model::Model& updated, const std::string& set,
                                const IwanInputs& in,
                                const std::vector<correlate::ParetoPoint>& front,
-                               const std::string& set_option) {
+                               const std::string& set_option, std::vector<std::string>* warnings) {
   std::string text = s.report();
   if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
-  for (const std::string& line : band_shape_warnings(updated, in)) text += "  " + line + "\n";
+  std::vector<std::string> lines = band_shape_warnings(updated, in);
   // A set fitted against a mode whose joint dissipation other sets carry: what misfits is the
   // other sets' held values, not this set.
-  for (const std::string& line :
+  for (std::string& line :
        set_share_warnings(given, set, in.sensors, in.targets, in.amplitude, set_option))
-    text += "  " + line + "\n";
+    lines.push_back(std::move(line));
+  for (const std::string& line : lines) text += "  " + line + "\n";
+  if (warnings) *warnings = std::move(lines);
   return text + pareto_report(front);
 }
 
@@ -319,9 +321,9 @@ std::vector<std::string> band_shape_warnings(const model::Model& updated, const 
   return lines;
 }
 
-std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& m, int mode,
-                                                            double q) {
-  const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
+std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& m,
+                                                            const model::LinearModes& linear,
+                                                            int mode, double q) {
   const int col = linear.rigid_count + mode - 1;
   std::vector<std::pair<std::string, double>> out;
   if (mode < 1 || col >= linear.size()) return out;
@@ -371,7 +373,8 @@ std::vector<std::string> set_share_warnings(const model::Model& m, const std::st
       }
     }
     if (!(q_high > 0)) continue;
-    const auto low = iwan_set_shares(m, t.mode, q_low), high = iwan_set_shares(m, t.mode, q_high);
+    const auto low = iwan_set_shares(m, linear, t.mode, q_low),
+               high = iwan_set_shares(m, linear, t.mode, q_high);
     if (low.empty() || high.empty()) continue;
     const auto share = [&](const std::vector<std::pair<std::string, double>>& v,
                            const std::string& name) {

@@ -14,6 +14,7 @@
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/sensors.h"
+#include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::campaign {
@@ -63,8 +64,10 @@ std::vector<std::string> band_shape_warnings(const model::Model& updated, const 
 /// of elastic mode `mode`'s joint dissipation per cycle in `m` as given at modal amplitude `q`:
 /// each Iwan element slipping |B phi_R| q, as the linear mode moves it (model::Iwan's Masing
 /// dissipation, past phi_max too). Shares sum to 1; empty where the mode slips no Iwan element.
-std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& m, int mode,
-                                                            double q);
+/// `linear`: m's linear modes (model::linear_modes of its linear stiffness).
+std::vector<std::pair<std::string, double>> iwan_set_shares(const model::Model& m,
+                                                            const model::LinearModes& linear,
+                                                            int mode, double q);
 
 /// One line for each target whose joint dissipation in `m` as given comes mostly from Iwan sets
 /// other than `set` over its measured amplitudes (the fitted set's share below one half at the
@@ -83,12 +86,14 @@ std::vector<std::string> set_share_warnings(const model::Model& m, const std::st
 /// (IwanUpdateSummary::report()), what the amplitudes were read as, the bands' shapes in the
 /// `updated` model (band_shape_warnings), the sets that carry the modes' joint dissipation in
 /// the `given` one (set_share_warnings, the advice naming a set as `set_option`) and the Pareto
-/// front's lines (pareto_report).
+/// front's lines (pareto_report). `warnings` (if given) receives the band-shape and set-share
+/// lines as they stand in it.
 std::string update_iwan_report(const correlate::IwanUpdateSummary& s, const model::Model& given,
                                const model::Model& updated, const std::string& set,
                                const IwanInputs& in,
                                const std::vector<correlate::ParetoPoint>& front,
-                               const std::string& set_option = "--set {}");
+                               const std::string& set_option = "--set {}",
+                               std::vector<std::string>* warnings = nullptr);
 
 /// True when every target has a measured linear frequency and mode R of `m` (joints at K_T) lies
 /// within `tolerance` (relative) of it: the model's linear part matches the measured linear

@@ -109,7 +109,7 @@ TEST(IwanInputs, ASetFittedAgainstAModeAnotherSetCarriesIsNamed) {
     if (std::abs(linear.shapes(4, col)) > std::abs(linear.shapes(10, col))) mode_a = k;
   }
   ASSERT_GT(mode_a, 0);
-  const auto shares = iwan_set_shares(m, mode_a, 1e-4);
+  const auto shares = iwan_set_shares(m, linear, mode_a, 1e-4);
   ASSERT_EQ(shares.size(), 2u);
   double rivet = 0;
   for (const auto& [name, x] : shares)

@@ -788,11 +788,8 @@ py::dict update_iwan(
       front = correlate::pareto_front(objective, sine.pareto, o);
     }
     const model::Model updated = objective.apply(summary.best, summary.modal_ratio);
-    shape_warnings = campaign::band_shape_warnings(updated, in);
-    for (std::string& line :
-         campaign::set_share_warnings(m, set, in.sensors, in.targets, in.amplitude, "--set {}"))
-      shape_warnings.push_back(std::move(line));
-    text = campaign::update_iwan_report(summary, m, updated, set, in, front);
+    text = campaign::update_iwan_report(summary, m, updated, set, in, front, "--set {}",
+                                        &shape_warnings);
     if (out) write_model(*out, updated);
   }
   // One dict per row of parameters.csv (Fs, Kt, chi, beta, gamma = Kt / Ks when known), from
