@@ -1,13 +1,10 @@
 #include "jointlab/data/abaqus_matrix.h"
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <string>
 
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
 
@@ -61,9 +58,7 @@ TEST(AbaqusMatrix, UpperFullAndCoordinateLayouts) {
 }
 
 TEST(AbaqusMatrix, MassAndStiffnessShareLabelledIndices) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / fmt::format("jointlab-abaqus-{}", getpid());
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = testing::scratch_folder("abaqus");
   std::ofstream(dir / "K.mtx") << kStiffLower;
   // Mass only on the translations of node 20 and a node 30 K does not have.
   std::ofstream(dir / "M.mtx") << "20,1,20,1,0.5\n20,2,20,2,0.5\n30,1,30,1,0.25\n";

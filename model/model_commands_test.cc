@@ -27,13 +27,7 @@ namespace fs = std::filesystem;
 using testing::Close;
 constexpr double kTwoPi = 2 * std::numbers::pi;
 
-fs::path dir() {
-  // One folder per process: ctest runs these tests side by side in separate processes.
-  const fs::path d =
-      fs::temp_directory_path() / ("jointlab_model_commands_test-" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
+fs::path dir() { return testing::scratch_folder("model_commands"); }
 
 void write(const std::string& name, const std::string& text) {
   std::ofstream(dir() / name) << text;

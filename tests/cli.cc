@@ -22,10 +22,7 @@ std::string slurp(const std::string& path) {
 
 std::string scratch_dir(const std::string& name) {
   namespace fs = std::filesystem;
-  // One folder per process: ctest runs the tests of one program side by side, each in its own
-  // process, and a shared folder would be cleared under another test's feet.
-  const fs::path dir =
-      fs::temp_directory_path() / ("jointlab_test_" + name + "-" + std::to_string(::getpid()));
+  const fs::path dir = scratch_root() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();
@@ -37,7 +34,7 @@ void write_text(const std::string& path, const std::string& text) {
 }
 
 CommandResult run_jointlab(const std::string& args) {
-  const std::string dir = scratch_dir("cli_capture_" + std::to_string(::getpid()));
+  const std::string dir = scratch_dir("cli_capture");
   const std::string out = dir + "/out.txt", err = dir + "/err.txt";
   const std::string cmd =
       binary_dir() + "/bin/jointlab " + args + " > " + out + " 2> " + err + " < /dev/null";

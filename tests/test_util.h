@@ -62,11 +62,33 @@ inline std::string read_file(const std::filesystem::path& path) {
   return ss.str();
 }
 
-/// A temporary folder named after `folder`, made per process (ctest runs the cases
-/// of one program side by side, so a shared folder would be cleared under them).
+/// This process's folder under the system temporary folder, holding every scratch folder
+/// its tests make; removed when the process ends (kept when JOINTLAB_KEEP_SCRATCH is set,
+/// to look at after a failure). One per process: ctest runs the cases of one program side
+/// by side, so a shared folder would be cleared under them.
+inline const std::filesystem::path& scratch_root() {
+  struct Root {
+    pid_t owner = getpid();
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("jointlab-test-" + std::to_string(getpid()));
+    Root() = default;
+    Root(const Root&) = delete;
+    Root& operator=(const Root&) = delete;
+    // A forked child that exits normally runs this too: only the process that made the
+    // folder removes it.
+    ~Root() {
+      std::error_code ec;
+      if (getpid() == owner && !std::getenv("JOINTLAB_KEEP_SCRATCH"))
+        std::filesystem::remove_all(path, ec);
+    }
+  };
+  static const Root root;
+  return root.path;
+}
+
+/// A temporary folder named after `folder` in scratch_root().
 inline std::filesystem::path scratch_folder(const std::string& folder) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / (folder + "-" + std::to_string(getpid()));
+  const std::filesystem::path dir = scratch_root() / folder;
   std::filesystem::create_directories(dir);
   return dir;
 }
