@@ -398,6 +398,24 @@ double coverage_factor_of_row(double value, double before, std::string_view cell
 
 namespace {
 
+// Whether a further column's name labels the hit or test a row belongs to ('hit', 'Test No.',
+// 'run_id', 'file_name'): a word for a curve, then at most words for a number, an id or a name.
+// Not a force or level: a stepped sine's level labels a point.
+bool is_curve_label(std::string_view name) {
+  static constexpr std::array<std::string_view, 11> kCurve = {
+      "hit",    "test",   "run",         "curve", "record",  "shot",
+      "impact", "series", "measurement", "file",  "filename"};
+  static constexpr std::array<std::string_view, 9> kTag = {"id",  "no",    "nr",   "number", "num",
+                                                           "idx", "index", "name", "label"};
+  const std::vector<std::string> words = words_of(name);
+  const auto in = [](const auto& set, const std::string& w) {
+    return std::find(set.begin(), set.end(), w) != set.end();
+  };
+  return !words.empty() && in(kCurve, words.front()) &&
+         std::all_of(words.begin() + 1, words.end(),
+                     [&](const std::string& w) { return in(kTag, w) || in(kCurve, w); });
+}
+
 // What the header row says: where each column read is and its unit's factor, and the further
 // columns the reader uses (a `process` backbone's marks and coverage factor).
 struct Columns {
@@ -405,6 +423,7 @@ struct Columns {
   std::array<double, 5> scale;  // value in the file's unit -> the table's (SI, Hz, a fraction)
   std::vector<size_t> marks;    // columns of is_point_mark: their marked rows are skipped
   int coverage_col = -1;        // a `process` backbone's coverage_factor: k of the std columns
+  std::vector<size_t> labels;   // columns naming the hit or test a row is of (is_curve_label)
   std::string amplitude_unit;   // as the header gives it ("": none)
   bool ours = false;            // a `process` or `stepped-sine` backbone (BackboneTable)
   size_t fields = 0;            // the number of columns the header names
@@ -434,6 +453,7 @@ Columns resolve_columns(const std::vector<std::string>& fields, std::optional<Qu
         static_cast<size_t>(std::find(kNames.begin(), kNames.end(), lowered) - kNames.begin());
     if (k == kNames.size()) {
       guesses[i] = guess_column(name, unit, quantity);
+      if (is_curve_label(name)) c.labels.push_back(i);
       continue;
     }
     if (c.col[k] >= 0) {
@@ -563,6 +583,8 @@ double read_cell(size_t k, const std::string& cell, const Columns& c, char delim
 struct Rows {
   std::array<std::vector<double>, 5> values;
   double coverage = 0;
+  /// Per Columns::labels column, each row's cell (trimmed) and line.
+  std::vector<std::vector<std::pair<std::string, long>>> labels;
 };
 
 // Reads every row after the header: rows that hold none and marked rows skipped, each other one
@@ -570,6 +592,7 @@ struct Rows {
 Rows read_rows(TextLines& lines, char delim, const Columns& c, const std::string& file) {
   CsvLineSplitter splitter(delim);
   Rows rows;
+  rows.labels.resize(c.labels.size());
   std::vector<std::string> cells;
   std::string_view line;
   while (lines.next(line)) {
@@ -587,8 +610,52 @@ Rows read_rows(TextLines& lines, char delim, const Columns& c, const std::string
       rows.values[k].push_back(
           read_cell(k, cells[static_cast<size_t>(c.col[k])], c, delim, file, n));
     }
+    for (size_t j = 0; j < c.labels.size(); ++j) {
+      const size_t i = c.labels[j];
+      rows.labels[j].emplace_back(i < cells.size() ? std::string(trim(cells[i])) : "", n);
+    }
   }
   return rows;
+}
+
+// Refuses a table whose label column (is_curve_label) holds two or more values on two rows or
+// more each: several hits one under another, a lab's long file. Read as one curve, the hits'
+// offsets from one another looked like the model's misfit (six hits of a beam with K_T and F_S
+// scattered between them: one file per hit named the scatter and stated F_S -0.30 % +/- 0.19 %;
+// the same rows as one file stated no sigma and named no cause, or the structure's own damping
+// where the scatter was larger). A value on one row only labels a point (a run per level).
+void refuse_several_curves(const Rows& rows, const Columns& c,
+                           const std::vector<std::string>& fields, const std::string& file) {
+  for (size_t j = 0; j < c.labels.size(); ++j) {
+    const auto& cells = rows.labels[j];
+    std::vector<std::pair<std::string, size_t>> counts;  // value, rows
+    for (const auto& [value, line] : cells) {
+      auto it = std::find_if(counts.begin(), counts.end(),
+                             [&](const auto& v) { return v.first == value; });
+      if (it == counts.end()) {
+        counts.emplace_back(value, 1);
+      } else {
+        ++it->second;
+      }
+    }
+    const auto curves =
+        std::count_if(counts.begin(), counts.end(), [](const auto& v) { return v.second >= 2; });
+    if (curves < 2) continue;
+    const auto change = std::find_if(cells.begin(), cells.end(),
+                                     [&](const auto& v) { return v.first != cells.front().first; });
+    const std::string& name = fields[c.labels[j]];
+    throw InputError(where(
+        file, change->second,
+        fmt::format("column {} '{}' changes from '{}' (line {}) to '{}' here: the file holds {} "
+                    "curves ({} values of '{}'), and a backbone table is one curve, one hit or "
+                    "test, per file: read as one, the hits' offsets from one another look like "
+                    "the model's misfit, and the fit states no sigma or names a wrong cause; "
+                    "write each hit's rows to a file of its own and give each file "
+                    "(update-iwan --backbone, or a campaign mode's backbones)",
+                    c.labels[j] + 1, shorten(name), shorten(cells.front().first),
+                    cells.front().second, shorten(change->first), counts.size(), counts.size(),
+                    shorten(name))));
+  }
 }
 
 // The table of at least two rows, by increasing amplitude (rows of equal amplitude in file order).
@@ -632,7 +699,9 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   std::vector<Guess> guesses;  // what each field not read most likely means
   const Columns columns = resolve_columns(fields, quantity, guesses, file, header_line);
   check_columns(header, fields, guesses, columns, lines, file, header_line);
-  return sorted_table(read_rows(lines, delim, columns, file), columns, file);
+  const Rows rows = read_rows(lines, delim, columns, file);
+  refuse_several_curves(rows, columns, fields, file);
+  return sorted_table(rows, columns, file);
 }
 
 }  // namespace jointlab::data

@@ -18,8 +18,11 @@
 // Tables written otherwise (docs/backbone-table.md): names are read case-blind and rows of empty
 // cells (",,") skipped; everything else is refused with the fix named: a unit in round
 // brackets, a lab's own column names, lines above the header without '#', decimal commas (never
-// read as points nor as separators), and, while the two uncertainties are not both read, a column
-// that looks like one (std, sigma, err, ...): ignored, the fit would use its floors unseen.
+// read as points nor as separators), while the two uncertainties are not both read, a column
+// that looks like one (std, sigma, err, ...): ignored, the fit would use its floors unseen, and
+// several hits in one file, told apart by a label column ('hit', 'test', 'run_id', ...) two of
+// whose values hold two rows or more each: read as one curve, the scatter between the hits would
+// pass for the model's misfit.
 #pragma once
 
 #include <filesystem>

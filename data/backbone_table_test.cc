@@ -460,5 +460,51 @@ TEST(BackboneTable, RefusesUncertaintiesUnderOtherNames) {
             2);
 }
 
+// A lab's long file: several hits one under another, told apart by a column naming the hit.
+// Read as one curve, the hits' offsets from one another looked like the model's misfit (six
+// hits of a beam, Kt and Fs scattered by 0.4 % and 1 % between them: one file per hit gave
+// Fs -0.30 % +/- 0.19 % and named the scatter between the hits; the same rows in one file
+// with a 'hit' column stated no sigma and named no cause, and with 2 % and 3 % scatter named
+// the structure's own damping instead). Refused, naming the fix.
+TEST(BackboneTable, RefusesSeveralCurvesInOneFile) {
+  const std::string rows =
+      "1,1e-5,93.75,6.5e-4\n1,3e-5,93.70,7.0e-4\n2,1.2e-5,93.74,6.6e-4\n"
+      "2,3.3e-5,93.69,7.1e-4\n";
+  expect_refusal("long.csv", "hit,amplitude,frequency_hz,damping_ratio\n" + rows, std::nullopt,
+                 {"long.csv:4: column 1 'hit' changes from '1' (line 2) to '2' here: the file "
+                  "holds 2 curves (2 values of 'hit'), and a backbone table is one curve, one hit "
+                  "or test, per file",
+                  "write each hit's rows to a file of its own"});
+  // Any name that labels a hit or test, any case, with a number or id word after it.
+  for (const char* label : {"Test", "run_no", "Hit #", "record_id", "file_name", "shot number"}) {
+    expect_refusal("label.csv",
+                   std::string(label) + ",amplitude,frequency_hz,damping_ratio\n" + rows,
+                   std::nullopt, {"label.csv:4: column 1 '" + std::string(label) + "' changes"});
+  }
+  // One value throughout is one curve; a value per row (a stepped sine's run per level) labels
+  // points, not curves; other names are further columns, ignored.
+  const auto one =
+      read_backbone_table(table("one.csv",
+                                "hit,amplitude,frequency_hz,damping_ratio\n3,1e-5,93.75,6.5e-4\n"
+                                "3,3e-5,93.70,7.0e-4\n3,5e-5,93.6,8.0e-4\n"),
+                          std::nullopt);
+  EXPECT_EQ(one.size(), 3);
+  const auto per_row =
+      read_backbone_table(table("per_row.csv",
+                                "run,amplitude,frequency_hz,damping_ratio\n1,1e-5,93.75,6.5e-4\n"
+                                "2,3e-5,93.70,7.0e-4\n3,5e-5,93.6,8.0e-4\n"),
+                          std::nullopt);
+  EXPECT_EQ(per_row.size(), 3);
+  for (const char* further : {"note", "hits_total", "testing", "level"}) {
+    EXPECT_EQ(read_backbone_table(
+                  table("further.csv",
+                        std::string(further) + ",amplitude,frequency_hz,damping_ratio\n" + rows),
+                  std::nullopt)
+                  .size(),
+              4)
+        << further;
+  }
+}
+
 }  // namespace
 }  // namespace jointlab::data
