@@ -1,0 +1,19 @@
+// What the Iwan update's cause line and report share (internal): the tests of the fitted curve's
+// linear limit against the measured low-amplitude frequency (MisfitEvidence).
+#pragma once
+
+#include <string>
+
+#include "jointlab/correlate/iwan_update.h"
+
+namespace jointlab::correlate::iwan_detail {
+
+/// The model as given (K_T = K_s, gamma 1: the stiffness update-linear fits to the measured linear
+/// frequencies) has mode R at the measured low-amplitude frequency.
+bool model_as_given_matches(const MisfitEvidence& e);
+
+/// K_T ended at a bound short of the measured low-amplitude frequency: the linear limit misses it
+/// on the side the bound kept K_T from (below the data at the upper bound, above at the lower).
+bool kt_stopped_short(const IwanUpdateSummary& s);
+
+}  // namespace jointlab::correlate::iwan_detail
