@@ -1,0 +1,61 @@
+// Pairs decided by the data in update_linear() (internal): least squares with the pairs
+// followed by shape, the pairs made afresh by the rules at the result, each candidate pairing
+// fitted, and the lowest cost kept where it is lower by at least 9 in chi-square units
+// (2 (c_other - c_best) / sigma_f^2); otherwise the pairs cannot be decided.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/SparseCore>
+
+#include "jointlab/correlate/linear_problem.h"
+
+namespace jointlab::correlate::detail {
+
+/// At most this many candidate pairings are fitted from the start: each is a whole fit
+/// (seconds on a thousand-DOF model), and more guesses than this say the sensors do not see
+/// the modes apart.
+constexpr size_t kMaxPairings = 16;
+
+/// A warning about one measured mode's pair: a mode followed by its shape to a model mode whose
+/// MAC at the result is below the threshold. update_linear() keeps it unless the line on the
+/// pairs the shapes do not confirm (LinearUpdateSummary::unconfirmed) already names that mode.
+struct PairWarning {
+  int measured = -1;  ///< the measured mode's row
+  std::string text;   ///< the warning
+};
+
+/// The outcome of settle().
+struct Settled {
+  TrackedPoint point;                   ///< the result
+  LinearUpdateSummary record;           ///< history, iterations, warnings
+  std::vector<PairWarning> weak_pairs;  ///< pairs followed below the MAC threshold at the result
+  LinearUpdateStatus status = LinearUpdateStatus::kFailed;  ///< the fit's
+  double cost = 0;                                          ///< at the result
+  int rounds = 0;                                           ///< fits run
+  std::string ambiguity;  ///< non-empty: the pairs cannot be decided
+  /// With an ambiguity: the results that pair some mode otherwise and fit as well as `point`.
+  std::vector<TrackedPoint> rivals;
+  LinearEvaluation fresh_end;  ///< the pairs made afresh by the rules at the result
+};
+
+/// The pairings to try where the rules pair `at` (made afresh at `point`) by a guess: every
+/// combination of one candidate for each of the first `ties` ties; else `point`.
+std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const LinearEvaluation& at,
+                                             size_t ties);
+
+/// Least squares with pairs followed by shape from `point`, the pairs at its result decided by
+/// the data.
+Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<char>& held);
+
+/// Why the update stops because a fitted set only pairs the sensors cannot confirm see, or "";
+/// where the result stands, *warning says which pairs changed.
+std::string unconfirmed_sets(const LinearProblem& p, const Eigen::SparseMatrix<double>& mass,
+                             const TrackedPoint& start, const TrackedPoint& end,
+                             const MeasuredModes& measured, const LinearUpdateOptions& options,
+                             const std::vector<char>& held, const std::vector<std::string>& names,
+                             std::string* warning);
+
+}  // namespace jointlab::correlate::detail

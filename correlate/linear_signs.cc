@@ -1,0 +1,136 @@
+// Channels read reversed: at the start, and as the fit's misfit shows (linear_signs.h).
+#include "jointlab/correlate/linear_signs.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "jointlab/correlate/linear_fit.h"
+#include "jointlab/correlate/noise_limits.h"
+#include "jointlab/correlate/shape_checks.h"
+
+namespace jointlab::correlate::detail {
+namespace {
+
+// Where the channels with measured entries other than `reversed` are at most one more than
+// them, the clause saying that reversing those instead is the same (MAC ignores a shape's
+// overall sign: with three of five channels mounted reversed the checks name the other two,
+// and either fix fits alike); else "".
+std::string same_as_the_others(const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                               const std::vector<int>& reversed) {
+  std::vector<std::string> others;
+  for (Eigen::Index k = 0; k < measured.shapes.rows(); ++k)
+    if ((measured.shapes.row(k).array().abs() > 0.0).any() &&
+        std::find(reversed.begin(), reversed.end(), static_cast<int>(k)) == reversed.end())
+      others.push_back(sensors[static_cast<size_t>(k)].channel);
+  if (others.empty() || others.size() > reversed.size() + 1) return "";
+  return fmt::format(
+      " (or, as a shape's sign as a whole is arbitrary, the same: {} reversed instead)",
+      fmt::join(others, ", "));
+}
+
+}  // namespace
+
+// What is wrong with the measured shapes against the model at the start (shape_checks.h), or "".
+std::string shape_problem(const LinearEvaluation& start, const std::vector<Sensor>& sensors,
+                          const MeasuredModes& measured, const LinearUpdateOptions& options) {
+  std::vector<std::string> ids;
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) ids.push_back(measured.id(i));
+  if (std::string why =
+          phaseless_shapes(measured.shapes, measured.frequency_hz, start.model_at_sensors,
+                           start.all_model_frequency_hz, ids, options.frequency_window);
+      !why.empty())
+    return why;
+  if (options.trust_signs) return "";
+  const SignCheck c =
+      check_channel_signs(measured.shapes, measured.frequency_hz, start.model_at_sensors,
+                          start.all_model_frequency_hz, start.hidden, options.frequency_window);
+  if (c.channels.empty()) return "";
+  std::vector<std::string> names, signs;
+  for (const int k : c.channels) {
+    const Sensor& r = sensors[static_cast<size_t>(k)];
+    names.push_back(r.channel);
+    signs.push_back(fmt::format("{} sign {:+g}", r.channel, -r.sign));
+  }
+  const std::string which = fmt::format("{}", fmt::join(names, " and "));
+  const bool one = names.size() == 1;
+  return fmt::format(
+      "channel{} {} read{} the model reversed: as given, {} of {} measured modes (with entries at "
+      "three sensors or more) have a model mode within the frequency window at MAC >= 0.9 (mean "
+      "best MAC {:.3f}); with {} reversed, {} of {} have (mean {:.3f}), so {} likely wrong "
+      "(mounted the other way round): give {}{} in the sensors file (a campaign's [[channel]] "
+      "sign), or, if the sign{} right, fit the shapes as given with --trust-signs (a campaign's "
+      "update.linear trust_signs = true)",
+      one ? "" : "s", which, one ? "s" : "", c.matched, c.counted, c.mean_mac, which,
+      c.matched_reversed, c.counted, c.mean_mac_reversed, one ? "its sign is" : "their signs are",
+      fmt::join(signs, " and "), same_as_the_others(sensors, measured, c.channels),
+      one ? " is" : "s are");
+}
+
+// Why a fit's misfit is one or two channels read reversed, or "". The start's check
+// (shape_problem) cannot tell when every measured mode matches some model mode either way:
+// on the example beam with s2 and s4 reversed and modes 1, 4 and 5 alone, all three matched as
+// given, the fit paired mode 5 with a model mode 38 % away and gave K_T 5.1e6 against 1.2e7,
+// "converged", with reduced chi-square 7.6e4. So where a fit leaves scatter beyond the noise
+// (reduced_chi2_limit) and the reversal that matches the shapes best at the start matches as
+// many modes with a higher mean MAC (SignCheck::best_looks_better), that reversal is fitted
+// too; when it pairs as many modes and its reduced chi-square is within the noise, or a
+// hundredth of the given signs' (a model-form error both share), the signs are refused.
+std::string misfit_of_signs(const model::Model& model, const std::vector<std::string>& names,
+                            const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                            const LinearUpdateOptions& options, const LinearUpdateSummary& s) {
+  // The scatter per degree of freedom and where noise keeps it; with none left (as many pairs
+  // as fitted sets) the whole chi-square, which a fit that reached every frequency leaves near
+  // 0, against 3 sigma at each pair (a bound stopped it, or pairs no stiffness can meet).
+  const double sf2 = options.frequency_std * options.frequency_std;
+  const auto misfit = [&](const LinearUpdateSummary& x) {
+    if (x.degrees_of_freedom >= 1)
+      return std::pair{x.reduced_chi2, reduced_chi2_limit(x.degrees_of_freedom)};
+    return std::pair{x.final.weighted_squared_norm() / sf2,
+                     9.0 * static_cast<double>(x.final.pairing.pairs.size())};
+  };
+  const auto [given, given_limit] = misfit(s);
+  if (options.trust_signs || !fitted(s) || !(given > given_limit)) return "";
+  const SignCheck c =
+      check_channel_signs(measured.shapes, measured.frequency_hz, s.start.model_at_sensors,
+                          s.start.all_model_frequency_hz, s.start.hidden, options.frequency_window);
+  if (!c.best_looks_better()) return "";
+  std::vector<Sensor> reversed = sensors;
+  std::vector<std::string> which, signs;
+  for (const int k : c.best) {
+    Sensor& r = reversed[static_cast<size_t>(k)];
+    r.sign = -r.sign;
+    which.push_back(r.channel);
+    signs.push_back(fmt::format("{} sign {:+g}", r.channel, r.sign));
+  }
+  LinearUpdateOptions o = options;
+  o.trust_signs = true;
+  o.progress = nullptr;
+  LinearUpdateSummary r;
+  fit_as_given(model, names, reversed, measured, o, false, r);
+  if (!fitted(r) || (s.degrees_of_freedom >= 1 && r.degrees_of_freedom < 1) ||
+      r.final.pairing.pairs.size() < s.final.pairing.pairs.size())
+    return "";
+  const auto [again, again_limit] = misfit(r);
+  if (!(again <= std::max(again_limit, given / 100))) return "";
+  const std::string scatter =
+      s.degrees_of_freedom >= 1
+          ? fmt::format("a reduced chi-square of {:.3g} over {} degrees of freedom", given,
+                        s.degrees_of_freedom)
+          : fmt::format("a chi-square of {:.3g} with no degree of freedom left", given);
+  const bool one = which.size() == 1;
+  return fmt::format(
+      "channel{} {} likely read{} the model reversed: as given, the fit leaves {} (largest "
+      "frequency error {:.3g} %), beyond the noise the frequencies state; with {} reversed it "
+      "leaves {:.3g} (largest error {:.3g} %), pairing {} of {} measured modes, so the fit tells "
+      "what the shapes alone did not: give {}{} in the sensors file (a campaign's [[channel]] "
+      "sign), or, if the sign{} right, fit the shapes as given with --trust-signs (a campaign's "
+      "update.linear trust_signs = true)",
+      one ? "" : "s", fmt::join(which, " and "), one ? "s" : "", scatter, 100 * s.final.max_error(),
+      fmt::join(which, " and "), again, 100 * r.final.max_error(), r.final.pairing.pairs.size(),
+      measured.frequency_hz.size(), fmt::join(signs, " and "),
+      same_as_the_others(sensors, measured, c.best), one ? " is" : "s are");
+}
+
+}  // namespace jointlab::correlate::detail

@@ -1,0 +1,21 @@
+// Channels read reversed, for update_linear() (internal): the start's check of the measured
+// shapes against the model (shape_checks.h), and a fit's misfit that the best reversal removes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "jointlab/correlate/linear_update.h"
+
+namespace jointlab::correlate::detail {
+
+/// What is wrong with the measured shapes against the model at the start (shape_checks.h), or "".
+std::string shape_problem(const LinearEvaluation& start, const std::vector<Sensor>& sensors,
+                          const MeasuredModes& measured, const LinearUpdateOptions& options);
+
+/// Why a fit's misfit is one or two channels read reversed, or "".
+std::string misfit_of_signs(const model::Model& model, const std::vector<std::string>& names,
+                            const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                            const LinearUpdateOptions& options, const LinearUpdateSummary& s);
+
+}  // namespace jointlab::correlate::detail
