@@ -23,6 +23,186 @@ MeasuredModes without_mode(const MeasuredModes& measured, Eigen::Index drop) {
   return measured.columns(keep);
 }
 
+// The paired measured modes of `e`, the largest errors in sigmas of their own modes first (8 at
+// most).
+std::vector<int> largest_errors(const LinearEvaluation& e) {
+  const auto weighted = [&](int i) {
+    return e.residuals(i) * (e.weights.size() == e.residuals.size() ? e.weights(i) : 1.0);
+  };
+  std::vector<int> order;
+  for (const ModePair& q : e.pairing.pairs) order.push_back(q.measured);
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return std::abs(weighted(a)) > std::abs(weighted(b)); });
+  if (order.size() > 8) order.resize(8);
+  return order;
+}
+
+// A refit without one measured mode that fits within the noise.
+struct Without {
+  int mode = -1;
+  double chi2 = 0;  // the refit's chi-square (not reduced)
+  std::string text;
+};
+
+// The fit again without one measured mode: the mode, the fit's summary and theta.
+struct Refit {
+  int mode;
+  LinearUpdateSummary r;
+  Eigen::VectorXd theta;
+};
+
+// Refit `f` into `fits` where it pairs every other mode of `e` and leaves scatter within the
+// noise and a hundredth of the `given` reduced chi-square, or less.
+void judge_refit(const Refit& f, const LinearEvaluation& e, double given,
+                 const std::vector<std::string>& names, std::vector<Without>& fits) {
+  const int i = f.mode;
+  const LinearUpdateSummary& r = f.r;
+  const Eigen::VectorXd& theta = f.theta;
+  if (!fitted(r) || r.degrees_of_freedom < 1 ||
+      r.final.pairing.pairs.size() + 1 < e.pairing.pairs.size())
+    return;
+  const double again = r.reduced_chi2;
+  if (!(again <= reduced_chi2_limit(r.degrees_of_freedom)) ||
+      !(given >= 100 * std::max(again, 1.0)))
+    return;
+  std::vector<std::string> values;
+  for (size_t k = 0; k < names.size() && k < r.parameters.size(); ++k)
+    values.push_back(fmt::format("{} {:.4g}{}", names[k], theta(static_cast<Eigen::Index>(k)),
+                                 r.parameters[k].held ? " (held)" : ""));
+  fits.push_back(
+      {i, again * r.degrees_of_freedom,
+       fmt::format("{:.3g} over {} (largest error {:.3g} %; {}{})", again, r.degrees_of_freedom,
+                   100 * r.final.max_error(), fmt::join(values, ", "),
+                   r.starts > 1 ? fmt::format("; the best of {} starts", r.starts) : "")});
+}
+
+// Each mode of `order` left out in turn and the rest fitted again, the refits that fit within
+// the noise in order of chi-square. Each refit from the start first; where none fits within the
+// noise, those of the 3 largest errors again from the restarts (restart_if_misfit; 2 per set
+// each, so at most 6 per set in all, on a result that was wrong anyway): the lap joint above
+// with a row at 300 Hz the model does not have, left out, stopped where the whole table had
+// (K_T 1.5e9) in 4 of 6 seeds, and the update ended "converged" with K_T held (flat) at 2e7
+// against 6e7.
+std::vector<Without> fits_without_each(const model::Model& model,
+                                       const std::vector<std::string>& names,
+                                       const std::vector<Sensor>& sensors,
+                                       const MeasuredModes& measured,
+                                       const LinearUpdateOptions& options,
+                                       const LinearEvaluation& e, double given,
+                                       const std::vector<int>& order) {
+  std::vector<Without> fits;
+  LinearUpdateOptions o = options;
+  o.progress = nullptr;
+  std::vector<Refit> refits;
+  for (const int i : order) {
+    Refit f{i, {}, {}};
+    f.theta = fit_as_given(model, names, sensors, without_mode(measured, i), o, false, f.r);
+    refits.push_back(std::move(f));
+  }
+  for (const Refit& f : refits) judge_refit(f, e, given, names, fits);
+  if (fits.empty()) {
+    for (size_t q = 0; q < refits.size() && q < 3; ++q) {
+      Refit& f = refits[q];
+      const MeasuredModes without = without_mode(measured, f.mode);
+      std::optional<TrackedPoint> end;
+      restart_if_misfit(model, names, sensors, without, o, f.r, f.theta, end, nullptr);
+      judge_refit(f, e, given, names, fits);
+    }
+  }
+  if (fits.empty()) return fits;
+  std::sort(fits.begin(), fits.end(),
+            [](const Without& a, const Without& b) { return a.chi2 < b.chi2; });
+  return fits;
+}
+
+// Whether measured mode i of `e` has no shape the MAC can read. Such a mode rests on the nearest
+// model frequency at the start, which a start far from the truth gets wrong: a trial's lap joint
+// at one sensor (model mode 3 not in the table, K_T started at a third of the truth) paired its
+// 376 Hz mode with model mode 7 (385 Hz at the start) where the truth's mode 6 (359 Hz at the
+// start) is it, in 3 of 8 seeds, and blaming the mode alone would have had the user drop a mode
+// the model has.
+bool by_frequency(const LinearEvaluation& e, int i) {
+  return static_cast<size_t>(i) < e.mac_reads_shape.size() &&
+         !e.mac_reads_shape[static_cast<size_t>(i)];
+}
+
+// How measured mode i of `e` is paired, for the message.
+std::string partner(const LinearEvaluation& e, const MeasuredModes& measured, int i) {
+  if (!by_frequency(e, i)) return fmt::format("paired with {}", pair_text(e, i));
+  const int j = e.pairing.model_for(i);
+  int next = -1;
+  for (int k = 0; k < static_cast<int>(e.all_model_frequency_hz.size()); ++k) {
+    if (k == j) continue;
+    const double d = std::abs(std::log(e.all_model_frequency_hz(k) / measured.frequency_hz(i)));
+    if (next < 0 ||
+        d < std::abs(std::log(e.all_model_frequency_hz(next) / measured.frequency_hz(i))))
+      next = k;
+  }
+  return fmt::format(
+      "paired by frequency alone (no shape at two sensors) with model mode {} ({:.5g} Hz; the "
+      "next nearest is model mode {}, {:.5g} Hz)",
+      j + 1, e.all_model_frequency_hz(j), next + 1,
+      next >= 0 ? e.all_model_frequency_hz(next) : 0.0);
+}
+
+// The refusal naming the one mode `w` whose leaving out fits within the noise (`noise`, the
+// stated noise for the message).
+std::string one_mode_named(const Without& w, const MeasuredModes& measured,
+                           const LinearUpdateSummary& s, const std::string& noise) {
+  const LinearEvaluation& e = s.final;
+  const double given = s.reduced_chi2;
+  const int i = w.mode;
+  const std::string head = fmt::format(
+      "test mode {} ({:.5g} Hz), {}, {:+.3g} % off, leaves a reduced chi-square of {:.3g} over "
+      "{} degrees of freedom (largest frequency error {:.3g} %), far beyond the stated noise "
+      "({}); without it the other {} pair and fit to {}, within that noise",
+      measured.id(i), measured.frequency_hz(i), partner(e, measured, i), 100 * e.residuals(i),
+      given, s.degrees_of_freedom, 100 * e.max_error(), noise, e.pairing.pairs.size() - 1, w.text);
+  if (by_frequency(e, i)) {
+    return fmt::format(
+        "{}. Without a shape its pair rests on the nearest model frequency at the start, which "
+        "a start far from the truth gets wrong, or it may be a mode the model does not have or "
+        "a wrong frequency: give its shape at two sensors or more, or start the sets nearer "
+        "(the model file's values; the fit without it is above), or leave it out of the table "
+        "(its row; in a campaign, list the other [[mode]] names in [update.linear] modes) to "
+        "update on the others",
+        head);
+  }
+  return fmt::format(
+      "{}. It is likely one the model does not match: a mode the model does not have (an "
+      "in-plane, torsion or fixture mode, or a spurious peak), a wrong frequency, or the model "
+      "may lack what moves it: check it, and leave it out of the table (its row; in a "
+      "campaign, list the other [[mode]] names in [update.linear] modes) to update on the "
+      "others",
+      head);
+}
+
+// The refusal naming every mode of `fits`, the data unable to tell which is wrong.
+std::string modes_named(const std::vector<Without>& fits, const MeasuredModes& measured,
+                        const LinearUpdateSummary& s, const std::string& noise) {
+  const LinearEvaluation& e = s.final;
+  const double given = s.reduced_chi2;
+  std::vector<std::string> ids, each;
+  for (const Without& w : fits) {
+    ids.push_back(measured.id(w.mode));
+    each.push_back(
+        fmt::format("without test mode {} ({:.5g} Hz, {}, {:+.3g} % off) the others "
+                    "fit to {}",
+                    measured.id(w.mode), measured.frequency_hz(w.mode),
+                    partner(e, measured, w.mode), 100 * e.residuals(w.mode), w.text));
+  }
+  return fmt::format(
+      "one of test modes {} is likely one the model does not match or paired wrongly, and the "
+      "data cannot tell which: the fit leaves a reduced chi-square of {:.3g} over {} degrees of "
+      "freedom (largest frequency error {:.3g} %), far beyond the stated noise ({}); {}, "
+      "each within that noise. Check those modes (a mode the model does not have, a wrong "
+      "frequency, a pair by frequency alone from a start far from the truth, or a model that "
+      "lacks what moves it), and leave the one that is wrong out of the table (its row; in a "
+      "campaign, list the other [[mode]] names in [update.linear] modes)",
+      fmt::join(ids, ids.size() == 2 ? " and " : ", "), given, s.degrees_of_freedom,
+      100 * e.max_error(), noise, fmt::join(each, "; "));
+}
+
 }  // namespace
 
 // Why a fit's misfit is one measured mode that the model does not match, or "". A trial's lap
@@ -47,146 +227,14 @@ std::string misfit_of_one_mode(const model::Model& model, const std::vector<std:
       !(given > std::max(100.0, reduced_chi2_limit(s.degrees_of_freedom))))
     return "";
   const LinearEvaluation& e = s.final;
-  // The largest errors in sigmas of their own modes first.
-  const auto weighted = [&](int i) {
-    return e.residuals(i) * (e.weights.size() == e.residuals.size() ? e.weights(i) : 1.0);
-  };
-  std::vector<int> order;
-  for (const ModePair& q : e.pairing.pairs) order.push_back(q.measured);
-  std::sort(order.begin(), order.end(),
-            [&](int a, int b) { return std::abs(weighted(a)) > std::abs(weighted(b)); });
-  if (order.size() > 8) order.resize(8);
-  struct Without {
-    int mode = -1;
-    double chi2 = 0;  // the refit's chi-square (not reduced)
-    std::string text;
-  };
-  std::vector<Without> fits;
-  LinearUpdateOptions o = options;
-  o.progress = nullptr;
-  // Each refit from the start first; where none fits within the noise, those of the 3 largest
-  // errors again from the restarts (restart_if_misfit; 2 per set each, so at most 6 per set in
-  // all, on a result that was wrong anyway): the lap joint above with a row at 300 Hz the model
-  // does not have, left out, stopped where the whole table had (K_T 1.5e9) in 4 of 6 seeds, and
-  // the update ended "converged" with K_T held (flat) at 2e7 against 6e7.
-  struct Refit {
-    int mode;
-    LinearUpdateSummary r;
-    Eigen::VectorXd theta;
-  };
-  std::vector<Refit> refits;
-  for (const int i : order) {
-    Refit f{i, {}, {}};
-    f.theta = fit_as_given(model, names, sensors, without_mode(measured, i), o, false, f.r);
-    refits.push_back(std::move(f));
-  }
-  const auto judge = [&](const Refit& f) {
-    const int i = f.mode;
-    const LinearUpdateSummary& r = f.r;
-    const Eigen::VectorXd& theta = f.theta;
-    if (!fitted(r) || r.degrees_of_freedom < 1 ||
-        r.final.pairing.pairs.size() + 1 < e.pairing.pairs.size())
-      return;
-    const double again = r.reduced_chi2;
-    if (!(again <= reduced_chi2_limit(r.degrees_of_freedom)) ||
-        !(given >= 100 * std::max(again, 1.0)))
-      return;
-    std::vector<std::string> values;
-    for (size_t k = 0; k < names.size() && k < r.parameters.size(); ++k)
-      values.push_back(fmt::format("{} {:.4g}{}", names[k], theta(static_cast<Eigen::Index>(k)),
-                                   r.parameters[k].held ? " (held)" : ""));
-    fits.push_back(
-        {i, again * r.degrees_of_freedom,
-         fmt::format("{:.3g} over {} (largest error {:.3g} %; {}{})", again, r.degrees_of_freedom,
-                     100 * r.final.max_error(), fmt::join(values, ", "),
-                     r.starts > 1 ? fmt::format("; the best of {} starts", r.starts) : "")});
-  };
-  for (const Refit& f : refits) judge(f);
-  if (fits.empty()) {
-    for (size_t q = 0; q < refits.size() && q < 3; ++q) {
-      Refit& f = refits[q];
-      const MeasuredModes without = without_mode(measured, f.mode);
-      std::optional<TrackedPoint> end;
-      restart_if_misfit(model, names, sensors, without, o, f.r, f.theta, end, nullptr);
-      judge(f);
-    }
-  }
+  const std::vector<Without> fits =
+      fits_without_each(model, names, sensors, measured, options, e, given, largest_errors(e));
   if (fits.empty()) return "";
-  std::sort(fits.begin(), fits.end(),
-            [](const Without& a, const Without& b) { return a.chi2 < b.chi2; });
-  // A mode without a shape the MAC can read rests on the nearest model frequency at the start,
-  // which a start far from the truth gets wrong: a trial's lap joint at one sensor (model mode 3
-  // not in the table, K_T started at a third of the truth) paired its 376 Hz mode with model mode
-  // 7 (385 Hz at the start) where the truth's mode 6 (359 Hz at the start) is it, in 3 of 8
-  // seeds, and blaming the mode alone would have had the user drop a mode the model has.
-  const auto by_frequency = [&](int i) {
-    return static_cast<size_t>(i) < e.mac_reads_shape.size() &&
-           !e.mac_reads_shape[static_cast<size_t>(i)];
-  };
-  const auto partner = [&](int i) {
-    if (!by_frequency(i)) return fmt::format("paired with {}", pair_text(e, i));
-    const int j = e.pairing.model_for(i);
-    int next = -1;
-    for (int k = 0; k < static_cast<int>(e.all_model_frequency_hz.size()); ++k) {
-      if (k == j) continue;
-      const double d = std::abs(std::log(e.all_model_frequency_hz(k) / measured.frequency_hz(i)));
-      if (next < 0 ||
-          d < std::abs(std::log(e.all_model_frequency_hz(next) / measured.frequency_hz(i))))
-        next = k;
-    }
-    return fmt::format(
-        "paired by frequency alone (no shape at two sensors) with model mode {} ({:.5g} Hz; the "
-        "next nearest is model mode {}, {:.5g} Hz)",
-        j + 1, e.all_model_frequency_hz(j), next + 1,
-        next >= 0 ? e.all_model_frequency_hz(next) : 0.0);
-  };
   const std::string noise = stated_noise(options.frequency_std, s.mode_frequency_std,
                                          [&](Eigen::Index i) { return measured.id(i); });
-  if (fits.size() == 1 || fits[1].chi2 - fits[0].chi2 >= 9) {
-    const int i = fits[0].mode;
-    const std::string head = fmt::format(
-        "test mode {} ({:.5g} Hz), {}, {:+.3g} % off, leaves a reduced chi-square of {:.3g} over "
-        "{} degrees of freedom (largest frequency error {:.3g} %), far beyond the stated noise "
-        "({}); without it the other {} pair and fit to {}, within that noise",
-        measured.id(i), measured.frequency_hz(i), partner(i), 100 * e.residuals(i), given,
-        s.degrees_of_freedom, 100 * e.max_error(), noise, e.pairing.pairs.size() - 1, fits[0].text);
-    if (by_frequency(i)) {
-      return fmt::format(
-          "{}. Without a shape its pair rests on the nearest model frequency at the start, which "
-          "a start far from the truth gets wrong, or it may be a mode the model does not have or "
-          "a wrong frequency: give its shape at two sensors or more, or start the sets nearer "
-          "(the model file's values; the fit without it is above), or leave it out of the table "
-          "(its row; in a campaign, list the other [[mode]] names in [update.linear] modes) to "
-          "update on the others",
-          head);
-    }
-    return fmt::format(
-        "{}. It is likely one the model does not match: a mode the model does not have (an "
-        "in-plane, torsion or fixture mode, or a spurious peak), a wrong frequency, or the model "
-        "may lack what moves it: check it, and leave it out of the table (its row; in a "
-        "campaign, list the other [[mode]] names in [update.linear] modes) to update on the "
-        "others",
-        head);
-  }
-  std::vector<std::string> ids, each;
-  for (const Without& w : fits) {
-    ids.push_back(measured.id(w.mode));
-    each.push_back(
-        fmt::format("without test mode {} ({:.5g} Hz, {}, {:+.3g} % off) the others "
-                    "fit to {}",
-                    measured.id(w.mode), measured.frequency_hz(w.mode), partner(w.mode),
-                    100 * e.residuals(w.mode), w.text));
-  }
-  return fmt::format(
-      "one of test modes {} is likely one the model does not match or paired wrongly, and the "
-      "data cannot tell which: the fit leaves a reduced chi-square of {:.3g} over {} degrees of "
-      "freedom (largest frequency error {:.3g} %), far beyond the stated noise ({}); {}, "
-      "each within that noise. Check those modes (a mode the model does not have, a wrong "
-      "frequency, a pair by frequency alone from a start far from the truth, or a model that "
-      "lacks what moves it), and leave the one that is wrong out of the table (its row; in a "
-      "campaign, list the other [[mode]] names in [update.linear] modes)",
-      fmt::join(ids, ids.size() == 2 ? " and " : ", "), given, s.degrees_of_freedom,
-      100 * e.max_error(), noise, fmt::join(each, "; "));
+  if (fits.size() == 1 || fits[1].chi2 - fits[0].chi2 >= 9)
+    return one_mode_named(fits[0], measured, s, noise);
+  return modes_named(fits, measured, s, noise);
 }
 
 }  // namespace jointlab::correlate::detail

@@ -37,6 +37,61 @@ std::string few_degrees_note(const LinearUpdateSummary& s) {
       100 * p);
 }
 
+// One row of the report's table per measured mode: its frequency, its partner's and the error.
+std::string mode_rows(const LinearEvaluation& final) {
+  std::string out;
+  for (Eigen::Index i = 0; i < final.residuals.size(); ++i) {
+    const int j = final.pairing.model_for(static_cast<int>(i));
+    const double fe = final.measured_frequency_hz(i);
+    if (j < 0) {
+      out += fmt::format("  {:>8}  {:>10.5g}  unpaired\n", final.measured_id(i), fe);
+      continue;
+    }
+    const std::optional<double> mac = final.pair_mac(i);
+    out +=
+        fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {}\n", final.measured_id(i),
+                    fe, j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
+                    mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
+  }
+  return out;
+}
+
+// The report's line on one set: start, value, sensitivity and what the frequencies say of it
+// (`t_widening` 0: no standard deviation stated).
+std::string parameter_line(const ParameterReport& p, double t_widening) {
+  std::string what;
+  if (p.flat)
+    what = p.smallest_within_tolerance > 0 ? "  FLAT (not identified by the frequencies)"
+                                           : "  FLAT (not identified by the frequencies): held";
+  else if (p.held)
+    what = "  held";
+  else if (!p.acts_with.empty())
+    what = fmt::format("  NOT IDENTIFIED alone: acts together with {} (below)",
+                       fmt::join(p.acts_with, ", "));
+  else if (p.one_sided != 0)
+    what = fmt::format("  NOT IDENTIFIED: bounded from {} only (below)",
+                       p.one_sided > 0 ? "below" : "above");
+  else if (p.relative_std && p.slope_std)
+    what = fmt::format(
+        "  +/- {:.3g} % (a third of where the chi-square's profile rises by 9; the local "
+        "slope's {:.3g} % understates it)",
+        100 * *p.relative_std, 100 * *p.slope_std);
+  else if (p.relative_std)
+    what = fmt::format("  +/- {:.3g} %", 100 * *p.relative_std);
+  else if (t_widening == 0)
+    what = "  no standard deviation (see the reduced chi-square)";
+  // A set held back from where the fit took it is flat there, not here: both are said.
+  const std::string drifted = p.drifted_to > 0
+                                  ? fmt::format(" here, {:.3g} at {:.6g} where the fit took it",
+                                                p.drifted_sensitivity, p.drifted_to)
+                                  : "";
+  std::string out = fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}{}", p.name, p.start,
+                                p.value, p.sensitivity, drifted, what);
+  if (p.smallest_within_tolerance > 0) out += "  (smallest within tolerance)";
+  out += "\n";
+  return out;
+}
+
 }  // namespace
 
 std::string LinearUpdateSummary::report() const {
@@ -62,19 +117,7 @@ std::string LinearUpdateSummary::report() const {
   if (!shape_problem.empty()) out += fmt::format("  {}\n", shape_problem);
   if (!unconfirmed.empty()) out += fmt::format("  {}\n", unconfirmed);
   out += "  measured  f_exp [Hz]  model mode  f_model [Hz]  error [%]    MAC\n";
-  for (Eigen::Index i = 0; i < final.residuals.size(); ++i) {
-    const int j = final.pairing.model_for(static_cast<int>(i));
-    const double fe = final.measured_frequency_hz(i);
-    if (j < 0) {
-      out += fmt::format("  {:>8}  {:>10.5g}  unpaired\n", final.measured_id(i), fe);
-      continue;
-    }
-    const std::optional<double> mac = final.pair_mac(i);
-    out +=
-        fmt::format("  {:>8}  {:>10.5g}  {:>10}  {:>12.5g}  {:>9.3f}  {}\n", final.measured_id(i),
-                    fe, j + 1, final.model_frequency_hz(i), 100 * final.residuals(i),
-                    mac ? fmt::format("{:.3f}", *mac) : "  -  (no shape)");
-  }
+  out += mode_rows(final);
   const auto id = [&](Eigen::Index i) { return final.measured_id(i); };
   const std::string noise = stated_noise(frequency_std, mode_frequency_std, id);
   if (noise != stated_noise(frequency_std, Eigen::VectorXd(), id))
@@ -101,38 +144,7 @@ std::string LinearUpdateSummary::report() const {
                           "deviations assume that noise{})",
                           noise, few_degrees_note(*this)));
   }
-  for (const ParameterReport& p : parameters) {
-    std::string what;
-    if (p.flat)
-      what = p.smallest_within_tolerance > 0 ? "  FLAT (not identified by the frequencies)"
-                                             : "  FLAT (not identified by the frequencies): held";
-    else if (p.held)
-      what = "  held";
-    else if (!p.acts_with.empty())
-      what = fmt::format("  NOT IDENTIFIED alone: acts together with {} (below)",
-                         fmt::join(p.acts_with, ", "));
-    else if (p.one_sided != 0)
-      what = fmt::format("  NOT IDENTIFIED: bounded from {} only (below)",
-                         p.one_sided > 0 ? "below" : "above");
-    else if (p.relative_std && p.slope_std)
-      what = fmt::format(
-          "  +/- {:.3g} % (a third of where the chi-square's profile rises by 9; the local "
-          "slope's {:.3g} % understates it)",
-          100 * *p.relative_std, 100 * *p.slope_std);
-    else if (p.relative_std)
-      what = fmt::format("  +/- {:.3g} %", 100 * *p.relative_std);
-    else if (t_widening == 0)
-      what = "  no standard deviation (see the reduced chi-square)";
-    // A set held back from where the fit took it is flat there, not here: both are said.
-    const std::string drifted = p.drifted_to > 0
-                                    ? fmt::format(" here, {:.3g} at {:.6g} where the fit took it",
-                                                  p.drifted_sensitivity, p.drifted_to)
-                                    : "";
-    out += fmt::format("  {}: {:.6g} -> {:.6g}  sensitivity {:.3g}{}{}", p.name, p.start, p.value,
-                       p.sensitivity, drifted, what);
-    if (p.smallest_within_tolerance > 0) out += "  (smallest within tolerance)";
-    out += "\n";
-  }
+  for (const ParameterReport& p : parameters) out += parameter_line(p, t_widening);
   for (const std::string& w : warnings) out += fmt::format("  WARNING: {}\n", w);
   return out;
 }

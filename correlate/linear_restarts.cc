@@ -12,6 +12,105 @@
 
 namespace jointlab::correlate::detail {
 
+namespace {
+
+// The sensitivity of set k at an evaluation (-1: nothing paired to judge it by).
+double sensitivity_at(const LinearEvaluation& e, int k) {
+  return e.jacobian.rows() > 0 ? e.jacobian.col(k).cwiseAbs().maxCoeff() : -1.0;
+}
+
+// Whether set k is flat at the start and at the restart's start `from` (sensitivity below
+// flat_sensitivity at both: moving it there changes no frequency by more than a few tenths of a
+// per cent): it leaves the other sets the landscape they had, and the flat rule holds it back at
+// its start in the end. The example beam's kz, rxy and rz (sensitivity 1e-13 to 5e-5) were 6 of
+// its 8 restarts, about 3 s of CPU each: over 3 seeds of 0.3 % noise (0.1 % stated) 16 of
+// those 18 fits came back to the given fit and 2 to one that did not win. Where so, `skipped`
+// receives `which` with both sensitivities.
+bool flat_at_both_starts(const LinearProblem& p, const LinearUpdateSummary& s,
+                         const Eigen::VectorXd& from, int k, const std::string& which,
+                         std::vector<std::string>& skipped) {
+  const double here = sensitivity_at(s.start, k);
+  if (here >= 0 && here < p.options.flat_sensitivity) {
+    LinearEvaluation e;
+    p.fresh(from.array().log(), e);
+    const double there = sensitivity_at(e, k);
+    if (there >= 0 && there < p.options.flat_sensitivity) {
+      skipped.push_back(
+          fmt::format("{} (sensitivity {:.2g} there, {:.2g} at the start)", which, there, here));
+      return true;
+    }
+  }
+  return false;
+}
+
+// What the restart `which` left (`r`), against the given fit `s`, for s.restarts.
+std::string restart_left(const std::string& which, const LinearUpdateSummary& r,
+                         const LinearUpdateSummary& s, const MeasuredModes& measured) {
+  if (!fitted(r))
+    return fmt::format("{} ended {}", which,
+                       r.status == LinearUpdateStatus::kAmbiguous ? "with pairs it could not decide"
+                                                                  : "without a result");
+  return fmt::format("{} left {}{}", which,
+                     r.degrees_of_freedom >= 1
+                         ? fmt::format("{:.3g} over {}", r.reduced_chi2, r.degrees_of_freedom)
+                         : "no degree of freedom",
+                     r.final.pairing.pairs.size() < s.final.pairing.pairs.size()
+                         ? fmt::format(" pairing {} of {} modes", r.final.pairing.pairs.size(),
+                                       measured.frequency_hz.size())
+                         : "");
+}
+
+// Whether the restart's fit `r` beats `s`: lower in all and per degree of freedom, over at
+// least as many pairs. A set the flat rule held at one result and fitted at another lowers the
+// chi-square by being freed alone (the chain and rotor's kt, held flat at 4.4e3: 220 over 2;
+// fitted from 4.4e4 to 5140: 195 over 1), and holding one lowers it per degree of freedom (the
+// two chains, noise five times the stated: 172 over 3, and with kb flat 176 over 4).
+bool restart_wins(const LinearUpdateSummary& r, const LinearUpdateSummary& s) {
+  return !(r.degrees_of_freedom < 1 ||
+           r.final.pairing.pairs.size() < s.final.pairing.pairs.size() ||
+           !(r.chi2 < s.chi2 * (1 - 1e-3)) || !(r.reduced_chi2 < s.reduced_chi2 * (1 - 1e-3)));
+}
+
+// s.restarts: what was tried (`tried`, `skipped`) from the given fit's chi-square over its
+// degrees of freedom, and which won (`won`, "": none); then, the misfit beyond the noise being
+// the model's only now, the model-form warning says from how many starts.
+void describe_restarts(double given_chi2, int given_dof, const std::vector<std::string>& tried,
+                       const std::vector<std::string>& skipped, const std::string& won,
+                       bool cut_short, double flat_sensitivity, LinearUpdateSummary& s) {
+  const bool misfit =
+      s.degrees_of_freedom >= 1 && s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom);
+  const std::string not_fitted =
+      skipped.empty()
+          ? std::string()
+          : fmt::format(
+                "; not fitted from {}: flat there and at the start (sensitivity below {:.3g}), so "
+                "the frequencies hardly see the move and the other sets would start as they did",
+                fmt::join(skipped, ", "), flat_sensitivity);
+  const std::string outcome =
+      tried.empty() ? "so the result is the start's"
+      : won.empty() ? fmt::format("none fitted better, so the result is the start's{}",
+                                  misfit ? " and the misfit no search from there removes" : "")
+                    : fmt::format("the fit from {} won (its result is the one reported){}", won,
+                                  misfit      ? ", and still leaves scatter beyond the noise"
+                                  : cut_short ? "; within the noise, so no other start was tried"
+                                              : "");
+  s.restarts = fmt::format(
+      "restarts: from the start the fit left a reduced chi-square of {:.3g} over {} degrees of "
+      "freedom, beyond the noise (above {:.3g}), so it was fitted again from {} other start{} "
+      "(each set's start times and divided by 10, one at a time){}{}{}; {}",
+      given_chi2 / given_dof, given_dof, reduced_chi2_limit(given_dof), tried.size(),
+      tried.size() == 1 ? "" : "s", tried.empty() ? "" : ": ", fmt::join(tried, ", "), not_fitted,
+      outcome);
+  // Only now is a misfit beyond the noise the model's: the warning says from how many starts.
+  for (std::string& x : s.warnings) {
+    const std::string tag = "(model-form error)";
+    if (const size_t at = x.find(tag); at != std::string::npos)
+      x.replace(at, tag.size(), fmt::format("(model-form error, from {} starts)", s.starts));
+  }
+}
+
+}  // namespace
+
 // A fit that leaves scatter beyond the noise (reduced_chi2_limit, the report's model-form
 // threshold) may have stopped in a local minimum rather than found the model wanting. A lap
 // joint (two 0.6 m strips lapped over 0.3 m, 6 rivets, one sensor at the far tip, the model's
@@ -41,10 +140,6 @@ void restart_if_misfit(const model::Model& model, const std::vector<std::string>
   std::string won;
   const double given_chi2 = s.chi2;
   const int given_dof = s.degrees_of_freedom;
-  // The sensitivity of set k at an evaluation (-1: nothing paired to judge it by).
-  const auto sensitivity = [](const LinearEvaluation& e, int k) {
-    return e.jacobian.rows() > 0 ? e.jacobian.col(k).cwiseAbs().maxCoeff() : -1.0;
-  };
   bool within_noise = false, cut_short = false;
   for (int k = 0; k < p.size() && !cut_short; ++k) {
     if (std::any_of(options.holds.begin(), options.holds.end(),
@@ -60,53 +155,15 @@ void restart_if_misfit(const model::Model& model, const std::vector<std::string>
       if (!(std::abs(std::log(from(k) / begin(k))) > 1e-3)) continue;  // a bound at the start
       const std::string which =
           fmt::format("{} {} ({:.4g})", names[k], factor > 1 ? "x10" : "/10", from(k));
-      // A set flat at the start and at the restart's start (sensitivity below flat_sensitivity
-      // at both: moving it there changes no frequency by more than a few tenths of a per cent)
-      // leaves the other sets the landscape they had, and the flat rule holds it back at its
-      // start in the end. The example beam's kz, rxy and rz (sensitivity 1e-13 to 5e-5) were 6 of
-      // its 8 restarts, about 3 s of CPU each: over 3 seeds of 0.3 % noise (0.1 % stated) 16 of
-      // those 18 fits came back to the given fit and 2 to one that did not win.
-      const double here = sensitivity(s.start, k);
-      if (here >= 0 && here < options.flat_sensitivity) {
-        LinearEvaluation e;
-        p.fresh(from.array().log(), e);
-        const double there = sensitivity(e, k);
-        if (there >= 0 && there < options.flat_sensitivity) {
-          skipped.push_back(fmt::format("{} (sensitivity {:.2g} there, {:.2g} at the start)", which,
-                                        there, here));
-          continue;
-        }
-      }
+      if (flat_at_both_starts(p, s, from, k, which, skipped)) continue;
       LinearUpdateSummary r;
       std::vector<PairWarning> w;
       std::optional<TrackedPoint> e;
       Eigen::VectorXd t =
           fit_as_given(model, names, sensors, measured, options, false, r, &w, &from, &e);
       ++s.starts;
-      if (!fitted(r)) {
-        tried.push_back(fmt::format("{} ended {}", which,
-                                    r.status == LinearUpdateStatus::kAmbiguous
-                                        ? "with pairs it could not decide"
-                                        : "without a result"));
-        continue;
-      }
-      tried.push_back(
-          fmt::format("{} left {}{}", which,
-                      r.degrees_of_freedom >= 1
-                          ? fmt::format("{:.3g} over {}", r.reduced_chi2, r.degrees_of_freedom)
-                          : "no degree of freedom",
-                      r.final.pairing.pairs.size() < s.final.pairing.pairs.size()
-                          ? fmt::format(" pairing {} of {} modes", r.final.pairing.pairs.size(),
-                                        measured.frequency_hz.size())
-                          : ""));
-      // Lower in all and per degree of freedom: a set the flat rule held at one result and
-      // fitted at another lowers the chi-square by being freed alone (the chain and rotor's kt,
-      // held flat at 4.4e3: 220 over 2; fitted from 4.4e4 to 5140: 195 over 1), and holding one
-      // lowers it per degree of freedom (the two chains, noise five times the stated: 172 over
-      // 3, and with kb flat 176 over 4).
-      if (r.degrees_of_freedom < 1 || r.final.pairing.pairs.size() < s.final.pairing.pairs.size() ||
-          !(r.chi2 < s.chi2 * (1 - 1e-3)) || !(r.reduced_chi2 < s.reduced_chi2 * (1 - 1e-3)))
-        continue;
+      tried.push_back(restart_left(which, r, s, measured));
+      if (!fitted(r) || !restart_wins(r, s)) continue;
       won = which;
       r.start = std::move(s.start);
       r.initial_cost = s.initial_cost;
@@ -122,36 +179,8 @@ void restart_if_misfit(const model::Model& model, const std::vector<std::string>
     }
   }
   if (tried.empty() && skipped.empty()) return;
-  const bool misfit =
-      s.degrees_of_freedom >= 1 && s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom);
-  const std::string not_fitted =
-      skipped.empty()
-          ? std::string()
-          : fmt::format(
-                "; not fitted from {}: flat there and at the start (sensitivity below {:.3g}), so "
-                "the frequencies hardly see the move and the other sets would start as they did",
-                fmt::join(skipped, ", "), options.flat_sensitivity);
-  const std::string outcome =
-      tried.empty() ? "so the result is the start's"
-      : won.empty() ? fmt::format("none fitted better, so the result is the start's{}",
-                                  misfit ? " and the misfit no search from there removes" : "")
-                    : fmt::format("the fit from {} won (its result is the one reported){}", won,
-                                  misfit      ? ", and still leaves scatter beyond the noise"
-                                  : cut_short ? "; within the noise, so no other start was tried"
-                                              : "");
-  s.restarts = fmt::format(
-      "restarts: from the start the fit left a reduced chi-square of {:.3g} over {} degrees of "
-      "freedom, beyond the noise (above {:.3g}), so it was fitted again from {} other start{} "
-      "(each set's start times and divided by 10, one at a time){}{}{}; {}",
-      given_chi2 / given_dof, given_dof, reduced_chi2_limit(given_dof), tried.size(),
-      tried.size() == 1 ? "" : "s", tried.empty() ? "" : ": ", fmt::join(tried, ", "), not_fitted,
-      outcome);
-  // Only now is a misfit beyond the noise the model's: the warning says from how many starts.
-  for (std::string& x : s.warnings) {
-    const std::string tag = "(model-form error)";
-    if (const size_t at = x.find(tag); at != std::string::npos)
-      x.replace(at, tag.size(), fmt::format("(model-form error, from {} starts)", s.starts));
-  }
+  describe_restarts(given_chi2, given_dof, tried, skipped, won, cut_short, options.flat_sensitivity,
+                    s);
 }
 
 }  // namespace jointlab::correlate::detail

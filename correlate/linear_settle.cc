@@ -110,6 +110,110 @@ std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const Li
   return out;
 }
 
+namespace {
+
+// The candidate pairings at a fit's result (`again`, the pairs made afresh there; `fresh_end`
+// its evaluation) not tried before, each recorded in `tried`. A pairing that leaves a followed
+// mode unpaired would win on cost by dropping a residual: it is not a candidate; the weak pair
+// is said instead, in `weak_pairs`.
+std::vector<TrackedPoint> untried_candidates(const LinearProblem& p, const TrackedPoint& again,
+                                             const LinearEvaluation& fresh_end,
+                                             const TrackedPoint& point,
+                                             std::vector<std::vector<int>>& tried,
+                                             std::vector<PairWarning>& weak_pairs) {
+  const MeasuredModes& measured = p.measured;
+  const auto pairs_of = [](const TrackedPoint& t) {
+    return std::count_if(t.columns.begin(), t.columns.end(), [](int c) { return c >= 0; });
+  };
+  std::vector<TrackedPoint> candidates;
+  for (TrackedPoint& c : candidate_pairings(again, fresh_end, 1)) {
+    if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) continue;
+    tried.push_back(c.columns);
+    if (pairs_of(c) < pairs_of(point)) {
+      const LinearEvaluation followed = p.evaluate(point);
+      for (size_t i = 0; i < c.columns.size(); ++i) {
+        if (c.columns[i] >= 0 || point.columns[i] < 0) continue;
+        weak_pairs.push_back(
+            {static_cast<int>(i),
+             fmt::format("test mode {} ({:.5g} Hz) is followed by its shape to {}, below the "
+                         "MAC threshold at the result: check its measured shape",
+                         measured.id(static_cast<Eigen::Index>(i)),
+                         measured.frequency_hz(static_cast<Eigen::Index>(i)),
+                         pair_text(followed, static_cast<int>(i)))});
+      }
+      continue;
+    }
+    candidates.push_back(std::move(c));
+  }
+  return candidates;
+}
+
+// One pairing fitted at a fit's result: its result, cost, termination and record.
+struct Tried {
+  TrackedPoint point;
+  double cost = 0;
+  ceres::TerminationType tt = ceres::CONVERGENCE;
+  LinearUpdateSummary record;
+};
+
+// The followed pairs at `point` (first) and each candidate, fitted; `rounds` counts the fits.
+std::vector<Tried> fit_candidates(const LinearProblem& p, const TrackedPoint& point,
+                                  std::vector<TrackedPoint>& candidates,
+                                  const std::vector<char>& held, int& rounds) {
+  std::vector<Tried> results;
+  results.push_back({point, p.evaluate(point).cost(), ceres::CONVERGENCE, {}});
+  for (TrackedPoint& c : candidates) {
+    Tried t{std::move(c), 0, ceres::CONVERGENCE, {}};
+    t.tt = fit(p, t.point, held, &t.record);
+    ++rounds;
+    t.cost = p.evaluate(t.point).cost();
+    results.push_back(std::move(t));
+  }
+  return results;
+}
+
+// The result of lowest cost (`best`), the results that pair some measured mode otherwise than
+// it (by shape), compared with it once each (`others`), and the lowest of those (`runner`).
+void rank_results(const LinearProblem& p, const std::vector<Tried>& results, size_t& best,
+                  std::vector<size_t>& others, std::optional<size_t>& runner) {
+  best = 0;
+  for (size_t k = 1; k < results.size(); ++k)
+    if (results[k].cost < results[best].cost) best = k;
+  for (size_t k = 0; k < results.size(); ++k) {
+    if (k == best || same_partners(p.model.mass, results[k].point.modes, results[k].point.columns,
+                                   results[best].point.modes, results[best].point.columns))
+      continue;
+    others.push_back(k);
+    if (!runner || results[k].cost < results[*runner].cost) runner = k;
+  }
+}
+
+// The warning where the pairs followed by shape (results[0]) fit decisively better than the
+// sensors' own: kept, said.
+std::string kept_followed(const std::vector<Tried>& results, const LinearEvaluation& fresh_end) {
+  std::vector<std::string> costs;
+  for (size_t k = 0; k < results.size(); ++k)
+    costs.push_back(fmt::format("{:.4g}{}", results[k].cost, k == 0 ? " as followed" : ""));
+  return fmt::format(
+      "at the result the sensors alone would pair differently ({}), but those pairs fit "
+      "worse (costs {}): kept the pairs followed by shape",
+      fresh_end.ambiguity.empty() ? "MAC and frequency" : fresh_end.ambiguity,
+      fmt::join(costs, ", "));
+}
+
+// The winning candidate `w` as the fit's result so far: its status, and its history after
+// the fit's in `record`.
+void take_candidate(const Tried& w, Settled& out) {
+  out.status = status_of(w.tt);
+  out.record.history.insert(out.record.history.end(), w.record.history.begin(),
+                            w.record.history.end());
+  out.record.theta_history.insert(out.record.theta_history.end(), w.record.theta_history.begin(),
+                                  w.record.theta_history.end());
+  out.record.iterations += w.record.iterations;
+}
+
+}  // namespace
+
 // Least squares with pairs followed by shape from `point`. At its result the pairs are made
 // afresh by the rules; where they differ, or where the sensors cannot tell two candidates
 // apart (a twisting mode veering with a bending mode), each candidate pairing is fitted too
@@ -117,7 +221,6 @@ std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const Li
 // chi-square units, 2 (c_other - c_best) / sigma_f^2; otherwise the pairs cannot be decided.
 Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<char>& held) {
   Settled out;
-  const MeasuredModes& measured = p.measured;
   std::vector<std::vector<int>> tried{point.columns};
   out.status = status_of(fit(p, point, held, &out.record));
   out.rounds = 1;
@@ -129,66 +232,19 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
     TrackedPoint again = p.fresh(point.x, out.fresh_end);
     const LinearEvaluation& fresh_end = out.fresh_end;
     if (again.columns == point.columns && fresh_end.ambiguity.empty()) break;
-    // A pairing that leaves a followed mode unpaired would win on cost by dropping a residual:
-    // it is not a candidate; the weak pair is said instead.
-    const auto pairs_of = [](const TrackedPoint& t) {
-      return std::count_if(t.columns.begin(), t.columns.end(), [](int c) { return c >= 0; });
-    };
-    std::vector<TrackedPoint> candidates;
-    for (TrackedPoint& c : candidate_pairings(again, fresh_end, 1)) {
-      if (std::find(tried.begin(), tried.end(), c.columns) != tried.end()) continue;
-      tried.push_back(c.columns);
-      if (pairs_of(c) < pairs_of(point)) {
-        const LinearEvaluation followed = p.evaluate(point);
-        for (size_t i = 0; i < c.columns.size(); ++i) {
-          if (c.columns[i] >= 0 || point.columns[i] < 0) continue;
-          out.weak_pairs.push_back(
-              {static_cast<int>(i),
-               fmt::format("test mode {} ({:.5g} Hz) is followed by its shape to {}, below the "
-                           "MAC threshold at the result: check its measured shape",
-                           measured.id(static_cast<Eigen::Index>(i)),
-                           measured.frequency_hz(static_cast<Eigen::Index>(i)),
-                           pair_text(followed, static_cast<int>(i)))});
-        }
-        continue;
-      }
-      candidates.push_back(std::move(c));
-    }
+    std::vector<TrackedPoint> candidates =
+        untried_candidates(p, again, fresh_end, point, tried, out.weak_pairs);
     if (candidates.empty() && fresh_end.ambiguity.empty()) break;
     // The followed pairs and each candidate, fitted; the lowest cost wins unless a result that
     // pairs some measured mode with another model mode (by shape: a mode crossing between two
     // results renumbers the modes, and the example beam's sixth bending mode, model mode 9
     // with spring.rz at 1e5 and 10 with rz at 0.1, was taken for two pairings, "cannot be
     // decided" in 3 of 12 seeds of 0.1 % noise) fits within 9 chi-square units of it.
-    struct Tried {
-      TrackedPoint point;
-      double cost = 0;
-      ceres::TerminationType tt = ceres::CONVERGENCE;
-      LinearUpdateSummary record;
-    };
-    std::vector<Tried> results;
-    results.push_back({point, p.evaluate(point).cost(), ceres::CONVERGENCE, {}});
-    for (TrackedPoint& c : candidates) {
-      Tried t{std::move(c), 0, ceres::CONVERGENCE, {}};
-      t.tt = fit(p, t.point, held, &t.record);
-      ++out.rounds;
-      t.cost = p.evaluate(t.point).cost();
-      results.push_back(std::move(t));
-    }
+    std::vector<Tried> results = fit_candidates(p, point, candidates, held, out.rounds);
     size_t best = 0;
-    for (size_t k = 1; k < results.size(); ++k)
-      if (results[k].cost < results[best].cost) best = k;
-    // The results that pair some measured mode otherwise than the best (by shape), compared
-    // with it once each; the runner is the lowest of them.
     std::vector<size_t> others;
     std::optional<size_t> runner;
-    for (size_t k = 0; k < results.size(); ++k) {
-      if (k == best || same_partners(p.model.mass, results[k].point.modes, results[k].point.columns,
-                                     results[best].point.modes, results[best].point.columns))
-        continue;
-      others.push_back(k);
-      if (!runner || results[k].cost < results[*runner].cost) runner = k;
-    }
+    rank_results(p, results, best, others, runner);
     const double sf2 = p.options.frequency_std * p.options.frequency_std;
     if (runner && !(2 * (results[*runner].cost - results[best].cost) / sf2 >= 9)) {
       out.ambiguity = fmt::format(
@@ -202,27 +258,11 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
       break;
     }
     if (best == 0) {
-      // The pairs followed by shape fit decisively better than the sensors' own: kept, said.
-      if (runner) {
-        std::vector<std::string> costs;
-        for (size_t k = 0; k < results.size(); ++k)
-          costs.push_back(fmt::format("{:.4g}{}", results[k].cost, k == 0 ? " as followed" : ""));
-        out.record.warnings.push_back(fmt::format(
-            "at the result the sensors alone would pair differently ({}), but those pairs fit "
-            "worse (costs {}): kept the pairs followed by shape",
-            fresh_end.ambiguity.empty() ? "MAC and frequency" : fresh_end.ambiguity,
-            fmt::join(costs, ", ")));
-      }
+      if (runner) out.record.warnings.push_back(kept_followed(results, fresh_end));
       break;
     }
-    Tried& w = results[best];
-    out.status = status_of(w.tt);
-    out.record.history.insert(out.record.history.end(), w.record.history.begin(),
-                              w.record.history.end());
-    out.record.theta_history.insert(out.record.theta_history.end(), w.record.theta_history.begin(),
-                                    w.record.theta_history.end());
-    out.record.iterations += w.record.iterations;
-    point = std::move(w.point);
+    take_candidate(results[best], out);
+    point = std::move(results[best].point);
     tried.push_back(point.columns);
   }
   out.point = std::move(point);
