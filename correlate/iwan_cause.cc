@@ -121,25 +121,12 @@ std::string own_damping_or_other_slip(const IwanUpdateSummary& s) {
       s.modal_ratio, lean, strike);
 }
 
-// What the residuals at s.best point at (IwanUpdateSummary::misfit_cause()), read as if s.best
-// were the best fit.
-std::string residual_cause(const IwanUpdateSummary& s) {
-  // A start no candidate improved on is read too where the joint hardly moves over the data:
-  // no Iwan parameters then change the curve, so the start is as good a fit as any.
-  if ((!s.improved && !s.joint_hardly_moved()) || !s.misfit() || !s.evidence) return "";
+// Curves that disagree with one another: offsets of each curve from the others explain most
+// of the chi-square. Scatter between hits (the trial's three curves, each with its own 0.2 %
+// frequency and 5 % damping offset: reduced chi-square 9.6, and the report asked for 4 times
+// the evaluations while the sigmas, one cluster per curve, were right); no search cures it.
+std::string scatter_cause(const IwanUpdateSummary& s) {
   const MisfitEvidence& e = *s.evidence;
-  const auto& held = s.held;
-  const auto& bound_side = s.bound_side;
-  // The linear limit: at the lowest amplitudes the model's frequency is K_T's and the linear
-  // part's. Off by far more than the noise there (and than 0.1 %, a frequency resolution), no
-  // Iwan parameter set bends the curve onto the data: the trial's wrong --mode ran into every
-  // bound, and a backbone 5 % below the model with K_T held into chi's.
-  const bool linear_off = linear_limit_off(e);
-  if (linear_off && e.nearer_mode > 0) return wrong_mode(e);
-  // Curves that disagree with one another: offsets of each curve from the others explain most
-  // of the chi-square. Scatter between hits (the trial's three curves, each with its own 0.2 %
-  // frequency and 5 % damping offset: reduced chi-square 9.6, and the report asked for 4 times
-  // the evaluations while the sigmas, one cluster per curve, were right); no search cures it.
   if (e.curves >= 2 && e.between_curves_share >= 0.5) {
     return fmt::format(
         "the {} curves disagree with one another by more than their stated noise: an offset of "
@@ -173,17 +160,24 @@ std::string residual_cause(const IwanUpdateSummary& s) {
                                     "curves would give a sigma)",
                                     e.curves, e.curves - 1, e.curves - 1 == 1 ? "" : "s")));
   }
-  // K_T held, so the curve's linear limit is mode R's linear frequency at the held K_T. Off the
-  // measured low-amplitude frequency by more than three times its noise (and 0.1 %), that is the
-  // linear part's error where the joint does not take it up: chi ran to its bound, where the
-  // microslip softening is nearly even in amplitude and shifts the whole curve onto the low data
-  // (data 0.5 % below the model with --gamma 1: the report said "widen it" and "--evaluations"),
-  // or the fitted curve still misses the low data on the side of the offset by more than three
-  // times their noise (the same data with chi inside its range: the curve 0.497 % above them, 9.9
-  // times the 5e-4 noise, under linear_limit_off()'s ten, and no cause named at a reduced
-  // chi-square of 52). A joint can only soften: data above the linear frequency are never its.
-  // Where the fitted curve meets the low data with chi inside its range, the joint's softening at
-  // the lowest amplitudes may be real, and the misfit has another cause.
+  return "";
+}
+
+// K_T held, so the curve's linear limit is mode R's linear frequency at the held K_T. Off the
+// measured low-amplitude frequency by more than three times its noise (and 0.1 %), that is the
+// linear part's error where the joint does not take it up: chi ran to its bound, where the
+// microslip softening is nearly even in amplitude and shifts the whole curve onto the low data
+// (data 0.5 % below the model with --gamma 1: the report said "widen it" and "--evaluations"),
+// or the fitted curve still misses the low data on the side of the offset by more than three
+// times their noise (the same data with chi inside its range: the curve 0.497 % above them, 9.9
+// times the 5e-4 noise, under linear_limit_off()'s ten, and no cause named at a reduced
+// chi-square of 52). A joint can only soften: data above the linear frequency are never its.
+// Where the fitted curve meets the low data with chi inside its range, the joint's softening at
+// the lowest amplitudes may be real, and the misfit has another cause.
+std::string held_kt_cause(const IwanUpdateSummary& s) {
+  const MisfitEvidence& e = *s.evidence;
+  const auto& held = s.held;
+  const auto& bound_side = s.bound_side;
   if (held[1] && e.linear_hz > 0 && e.low_frequency_hz > 0) {
     const double off = e.linear_hz / e.low_frequency_hz - 1;
     const double tolerance = std::max(3 * e.low_frequency_noise, 1e-3);
@@ -240,18 +234,24 @@ std::string residual_cause(const IwanUpdateSummary& s) {
           how);
     }
   }
-  // K_T free and not stopped short by its range, one target: K_T alone sets the curve's linear
-  // limit, and a linear part 0.4 % or 1 % too stiff is taken up by it (the one-mode truth's
-  // three hits: the fitted curve meets the low data within 3e-5). A linear limit left off the
-  // low data there was bent for the rest of the data: where the fitted curve lies above them
-  // with the measured damping there above the model's, K_T rose to steepen the joint's curve
-  // onto that damping. Which damping, the structure's own or another mode's slip, the frequency's
-  // low end only leans between (own_damping_or_other_slip()). Before, both were told "the model's
-  // linear part does not match the measured mode; update-linear first", and still were with
-  // fewer than 10 points a curve (8: every one of chi -0.05 to -0.9 over 3.5 decades), or over
-  // 1.5-2.5 decades, where the joint's damping at the low end hides the own damping's excess
-  // (chi -0.05 over 1.5 decades: the limit +0.109 %, 11 times the noise; chi -0.5 with 8 points
-  // over 2.5 decades: +0.102 %, 10 times).
+  return "";
+}
+
+// K_T free and not stopped short by its range, one target: K_T alone sets the curve's linear
+// limit, and a linear part 0.4 % or 1 % too stiff is taken up by it (the one-mode truth's
+// three hits: the fitted curve meets the low data within 3e-5). A linear limit left off the
+// low data there was bent for the rest of the data: where the fitted curve lies above them
+// with the measured damping there above the model's, K_T rose to steepen the joint's curve
+// onto that damping. Which damping, the structure's own or another mode's slip, the frequency's
+// low end only leans between (own_damping_or_other_slip()). Before, both were told "the model's
+// linear part does not match the measured mode; update-linear first", and still were with
+// fewer than 10 points a curve (8: every one of chi -0.05 to -0.9 over 3.5 decades), or over
+// 1.5-2.5 decades, where the joint's damping at the low end hides the own damping's excess
+// (chi -0.05 over 1.5 decades: the limit +0.109 %, 11 times the noise; chi -0.5 with 8 points
+// over 2.5 decades: +0.102 %, 10 times).
+std::string free_kt_cause(const IwanUpdateSummary& s, bool linear_off) {
+  const MisfitEvidence& e = *s.evidence;
+  const auto& held = s.held;
   if (linear_off && !held[1] && e.targets == 1 && !kt_stopped_short(s)) {
     if (e.low_frequency_error > 0 && e.low_model_damping > 0 &&
         e.low_damping > 1.1 * e.low_model_damping) {
@@ -273,24 +273,29 @@ std::string residual_cause(const IwanUpdateSummary& s) {
         e.low_frequency_hz, 100 * e.low_frequency_error,
         std::abs(e.low_frequency_error) / e.low_frequency_noise, own_damping_or_other_slip(s));
   }
-  // Damping far above anything the joint gives alongside the measured frequencies: per cent
-  // read as a fraction is 100 times (a trial's 0.005-0.035 % table without a unit ran chi into
-  // its bound); a loss factor eta = 2 zeta read as zeta is twice. Values of 1 or more cannot be
-  // per cent of a plausible damping ratio read right, so they say nothing of it.
-  // Damping the joint cannot give where its microslip adds little: at the lowest amplitudes
-  // the model's damping is the structure's own (Z, held). Measured damping that stays at least
-  // half its median there (flat, not a joint's rise with amplitude) is that missing damping: a
-  // flat 0.3 % backbone against a model without [damping] was told "a damping column in per
-  // cent read as a fraction gives 100 times" at a factor of 3.2 (a per-cent column keeps the
-  // joint's rise, and its lowest values lie well below its median).
-  // A mode that leaves the joint still has no model damping at all (no ratio to take): that
-  // is the same missing damping.
-  // The measured frequency softening at the low end as a joint's does (low_softening_share)
-  // says so too where the median factor stays under 1.7 (K_T held at the truth's on data with
-  // the structure's own damping 5e-4: 1.64-1.65, the low damping 3.9 times the model's, and no
-  // cause named before). Another mode slipping the joint gives the same low end (K_T held 10 %
-  // low on data of another mode adding 0.1 phi_max, 8 points a curve: named own damping alone),
-  // so both are named, with the refit that tells them apart (own_damping_or_other_slip()).
+  return "";
+}
+
+// Damping far above anything the joint gives alongside the measured frequencies: per cent
+// read as a fraction is 100 times (a trial's 0.005-0.035 % table without a unit ran chi into
+// its bound); a loss factor eta = 2 zeta read as zeta is twice. Values of 1 or more cannot be
+// per cent of a plausible damping ratio read right, so they say nothing of it.
+// Damping the joint cannot give where its microslip adds little: at the lowest amplitudes
+// the model's damping is the structure's own (Z, held). Measured damping that stays at least
+// half its median there (flat, not a joint's rise with amplitude) is that missing damping: a
+// flat 0.3 % backbone against a model without [damping] was told "a damping column in per
+// cent read as a fraction gives 100 times" at a factor of 3.2 (a per-cent column keeps the
+// joint's rise, and its lowest values lie well below its median).
+// A mode that leaves the joint still has no model damping at all (no ratio to take): that
+// is the same missing damping.
+// The measured frequency softening at the low end as a joint's does (low_softening_share)
+// says so too where the median factor stays under 1.7 (K_T held at the truth's on data with
+// the structure's own damping 5e-4: 1.64-1.65, the low damping 3.9 times the model's, and no
+// cause named before). Another mode slipping the joint gives the same low end (K_T held 10 %
+// low on data of another mode adding 0.1 phi_max, 8 points a curve: named own damping alone),
+// so both are named, with the refit that tells them apart (own_damping_or_other_slip()).
+std::string flat_damping_cause(const IwanUpdateSummary& s) {
+  const MisfitEvidence& e = *s.evidence;
   if (!s.modal_ratio_fitted &&
       (e.damping_factor >= 1.7 || !(e.low_model_damping > 0) ||
        e.low_softening_share >= kLowSofteningShare) &&
@@ -303,13 +308,18 @@ std::string residual_cause(const IwanUpdateSummary& s) {
         e.low_damping, e.median_damping, e.low_model_damping, s.modal_ratio,
         own_damping_or_other_slip(s));
   }
-  // Wherever else the measured frequency is flat at the low end (low_softening_share) with the
-  // measured damping there twice the fitted model's or more, the joint slips there as no one-mode
-  // Iwan curve does (another mode adding 0.1 phi_max, K_T held 10 % low: low damping 5.6 times the
-  // model's, share 0.003-0.009; before, "a loss factor ... halve it" at a median factor of 1.73,
-  // and before that "the structure's own damping"). A loss factor or a per-cent column keeps the
-  // joint's softening there; the structure's own damping with a joint nearly linear in amplitude
-  // does not (own_damping_or_other_slip()).
+  return "";
+}
+
+// Wherever else the measured frequency is flat at the low end (low_softening_share) with the
+// measured damping there twice the fitted model's or more, the joint slips there as no one-mode
+// Iwan curve does (another mode adding 0.1 phi_max, K_T held 10 % low: low damping 5.6 times the
+// model's, share 0.003-0.009; before, "a loss factor ... halve it" at a median factor of 1.73,
+// and before that "the structure's own damping"). A loss factor or a per-cent column keeps the
+// joint's softening there; the structure's own damping with a joint nearly linear in amplitude
+// does not (own_damping_or_other_slip()).
+std::string low_end_slip_cause(const IwanUpdateSummary& s) {
+  const MisfitEvidence& e = *s.evidence;
   if (e.low_softening_share < kLowSofteningShare && e.low_model_damping > 0 &&
       e.low_damping >= 2 * e.low_model_damping) {
     return fmt::format(
@@ -319,6 +329,13 @@ std::string residual_cause(const IwanUpdateSummary& s) {
         e.low_damping, e.low_damping / e.low_model_damping, e.low_model_damping,
         own_damping_or_other_slip(s));
   }
+  return "";
+}
+
+// A damping column in per cent read as a fraction (100 times), or a loss factor read as the
+// damping ratio (twice).
+std::string damping_units_cause(const IwanUpdateSummary& s, bool linear_off) {
+  const MisfitEvidence& e = *s.evidence;
   if (e.damping_factor >= 3 && e.damping_max < 1) {
     return fmt::format(
         "the measured damping lies a median {:.3g} times above the fitted model's, more than the "
@@ -333,6 +350,15 @@ std::string residual_cause(const IwanUpdateSummary& s) {
         "(eta = 2 zeta) given as the damping ratio would do that: if so, halve it",
         e.damping_factor);
   }
+  return "";
+}
+
+// The fitted curve's linear limit off the measured low-amplitude frequency, with K_T held, at a
+// bound short of it, or unable to reach it alone: the linear part.
+std::string linear_part_cause(const IwanUpdateSummary& s, bool linear_off) {
+  const MisfitEvidence& e = *s.evidence;
+  const auto& held = s.held;
+  const auto& bound_side = s.bound_side;
   if (linear_off) {
     // K_T stopped by its range short of a frequency the model as given (gamma 1) has: the range
     // kept the fit from it, not the linear part (a gamma range of 0.05-0.9 on a model whose K_s
@@ -354,6 +380,29 @@ std::string residual_cause(const IwanUpdateSummary& s) {
         e.low_frequency_hz, 100 * e.low_frequency_error,
         std::abs(e.low_frequency_error) / e.low_frequency_noise, kt);
   }
+  return "";
+}
+
+// What the residuals at s.best point at (IwanUpdateSummary::misfit_cause()), read as if s.best
+// were the best fit.
+std::string residual_cause(const IwanUpdateSummary& s) {
+  // A start no candidate improved on is read too where the joint hardly moves over the data:
+  // no Iwan parameters then change the curve, so the start is as good a fit as any.
+  if ((!s.improved && !s.joint_hardly_moved()) || !s.misfit() || !s.evidence) return "";
+  const MisfitEvidence& e = *s.evidence;
+  // The linear limit: at the lowest amplitudes the model's frequency is K_T's and the linear
+  // part's. Off by far more than the noise there (and than 0.1 %, a frequency resolution), no
+  // Iwan parameter set bends the curve onto the data: the trial's wrong --mode ran into every
+  // bound, and a backbone 5 % below the model with K_T held into chi's.
+  const bool linear_off = linear_limit_off(e);
+  if (linear_off && e.nearer_mode > 0) return wrong_mode(e);
+  if (std::string c = scatter_cause(s); !c.empty()) return c;
+  if (std::string c = held_kt_cause(s); !c.empty()) return c;
+  if (std::string c = free_kt_cause(s, linear_off); !c.empty()) return c;
+  if (std::string c = flat_damping_cause(s); !c.empty()) return c;
+  if (std::string c = low_end_slip_cause(s); !c.empty()) return c;
+  if (std::string c = damping_units_cause(s, linear_off); !c.empty()) return c;
+  if (std::string c = linear_part_cause(s, linear_off); !c.empty()) return c;
   return "";
 }
 
