@@ -111,22 +111,16 @@ Eigen::Vector4d log_dissipation_gradient(const model::IwanParameters& p, double 
   return g;
 }
 
-}  // namespace
-
-// The "Known parameters" table and paragraph: per quantity the updated and the known value,
-// the difference, the tolerance (twice the planted one-sigma scatter where scatter was planted,
-// else twice the update's own one-sigma uncertainty) and whether
-// the update recovers it. Parameters the data cannot identify are said to be so.
-void compare_with_known(const KnownComparison& k, const std::string& truth_name, ReportSection& s) {
-  const model::IwanParameters& t = k.truth.iwan;
-  const model::IwanParameters& u = k.updated;
-  ReportTable tb{"Updated versus known (" + truth_name + ")",
-                 {"quantity", "updated", "known", "difference", "tolerance", "recovered"},
-                 {}};
+// The "Updated versus known" table as it is filled, with the tallies its verdict needs.
+struct KnownTable {
+  ReportTable tb;
   int recovered = 0, judged = 0;
   std::vector<std::string> missed, unidentified, unjudged;
-  const auto judge = [&](const std::string& name, double got, double known, double tol,
-                         const std::string& why) {
+
+  // The row of quantity `name`: recovered where |got / known - 1| <= tol (`why` says whence the
+  // tolerance).
+  void judge(const std::string& name, double got, double known, double tol,
+             const std::string& why) {
     const double r = got / known - 1;
     // No tolerance (none planted, and the update stated no sigma: a misfit, too few points):
     // not judged, rather than "NO" at any difference (the two-set beam's K_T, 1.25 % off).
@@ -146,117 +140,123 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
     tb.rows.push_back({name, fmt::format("{:.4g}", got), fmt::format("{:.4g}", known),
                        fmt::format("{:+.2f} %", 100 * r),
                        fmt::format("{:.1f} % ({})", 100 * tol, why), ok ? "yes" : "NO"});
-  };
-  // The update's own sigma: at least the scatter between the hits' backbones from three hits
-  // on (the cluster-robust covariance), else the points' noise.
-  const auto own = [&] {
-    return k.curves >= 3
-               ? fmt::format("2 x its uncertainty, at least the scatter between the {} hits",
-                             k.curves)
-               : std::string("2 x its uncertainty");
-  };
+  }
+
   // Twice the planted scatter where the truth file plants one, else twice the update's own
   // sigma (0: none known). Before, a truth file without [scatter] left K_T and F_S with no
   // tolerance, and so "NO recovered" at any difference (F_S -0.30 % with +/- 0.35 % stated).
-  const auto judge_planted = [&](const std::string& name, double got, double known, double planted,
-                                 double own_std) {
+  void judge_planted(const std::string& name, double got, double known, double planted,
+                     double own_std) {
     if (planted > 0)
       judge(name, got, known, 2 * planted, fmt::format("2 x planted {:.1f} %", 100 * planted));
     else
       judge(name, got, known, 2 * own_std,
             fmt::format("2 x its uncertainty {:.2g} %, none planted", 100 * own_std));
-  };
-  if (k.kt_updated) judge_planted("Kt [N/m]", u.Kt, t.Kt, k.truth.scatter_kt, k.kt_std);
-  std::string micro;
-  if (k.iwan_ran) {
-    judge("chi", u.chi, t.chi, 2 * k.iwan.relative_std(2), own());
-    if (k.iwan.microslip_only()) {
-      // The identified combination: the dissipation per cycle of one element at the geometric
-      // middle of the measured slip range (D = 4 R u^(chi+3)/((chi+2)(chi+3)) below phi_max).
-      const double uref = std::sqrt(k.iwan.bottom_slip * k.iwan.top_slip);
-      const Eigen::Vector4d gt = log_dissipation_gradient(t, uref);
-      const double planted = std::hypot(gt(0) * k.truth.scatter_fs, gt(1) * k.truth.scatter_kt);
-      const Eigen::Vector4d gu = log_dissipation_gradient(u, uref);
-      const double own_sd = std::sqrt(std::max(0.0, gu.dot(k.iwan.covariance * gu)));
-      const double tol = 2 * std::max(planted, own_sd);
-      judge(fmt::format("D({:.3g} m) [J]", uref), std::exp(log_dissipation(u, uref)),
-            std::exp(log_dissipation(t, uref)), tol,
-            planted >= own_sd ? fmt::format("2 x planted {:.1f} % via Kt and Fs", 100 * planted)
-                              : fmt::format("2 x its uncertainty {:.1f} %", 100 * own_sd));
-      unidentified = {"Fs", "beta"};
-      tb.rows.push_back({"Fs [N]", fmt::format("{:.4g}", u.Fs), fmt::format("{:.4g}", t.Fs),
-                         fmt::format("{:+.2f} %", 100 * (u.Fs / t.Fs - 1)), "-",
-                         "not identifiable (microslip)"});
-      tb.rows.push_back({"beta", fmt::format("{:.4g}", u.beta), fmt::format("{:.4g}", t.beta),
-                         fmt::format("{:+.2f} %", 100 * (u.beta / t.beta - 1)), "-",
-                         "not identifiable (held)"});
-      // The family of (Fs, beta) pairs that share the identified Kt, chi and R.
-      const double fs_known_beta = correlate::slip_force_at_beta(u, t.beta);
-      tb.rows.push_back({fmt::format("Fs at the known beta {:.4g} [N]", t.beta),
-                         fmt::format("{:.4g}", fs_known_beta), fmt::format("{:.4g}", t.Fs),
-                         fmt::format("{:+.2f} %", 100 * (fs_known_beta / t.Fs - 1)), "-",
-                         "not judged (the identified family Fs(beta))"});
-      std::vector<std::string> family;
-      for (const double b : {0.25, 0.5, 1.0, 2.0, 4.0})
-        family.push_back(
-            fmt::format("{:.3g} N at beta {:g}", correlate::slip_force_at_beta(u, b), b));
-      const std::string family_text = fmt::format(
-          " Every (Fs, beta) pair with the identified Kt, chi and R fits these backbones alike: "
-          "{}; at the known beta {:.4g} it gives Fs = {:.4g} N (known {:.4g} N).",
-          fmt::join(family, ", "), t.beta, fs_known_beta, t.Fs);
-      micro = fmt::format(
-          " The backbones stay in microslip: over the measured amplitudes the most loaded joint "
-          "slips {:.3g} to {:.3g} m, at most {:.0f} % of phi_max ({:.3g} m in the updated model). "
-          "Below phi_max an Iwan element's response depends on Kt, chi and R alone, so these data "
-          "fix Kt, chi and R but not Fs and beta separately: beta is held at its starting value "
-          "{:.4g} and Fs is the slip force that gives the identified R with it. The table "
-          "compares the identified combination instead: D(u), the energy one joint element "
-          "dissipates per cycle at the middle slip u = {:.3g} m (D = 4 R u^(chi+3) / ((chi+2) "
-          "(chi+3))), whose planted scatter follows from that of Kt and Fs. Fs and beta need "
-          "backbones that reach past phi_max.",
-          k.iwan.bottom_slip, k.iwan.top_slip, 100 * k.iwan.top_slip / k.iwan.phi_max,
-          k.iwan.phi_max, u.beta, uref);
-      micro += family_text;
-    } else {
-      judge_planted("Fs [N]", u.Fs, t.Fs, k.truth.scatter_fs, k.iwan.relative_std(0));
-      if (k.beta_held) {
-        unidentified.push_back("beta");
-        tb.rows.push_back({"beta", fmt::format("{:.4g}", u.beta), fmt::format("{:.4g}", t.beta),
-                           fmt::format("{:+.2f} %", 100 * (u.beta / t.beta - 1)), "-",
-                           "held by the campaign"});
-      } else {
-        judge("beta", u.beta, t.beta, 2 * k.iwan.relative_std(3), own());
-      }
-    }
-  } else {
-    unidentified = {"Fs", "chi", "beta"};
-    micro =
-        " Fs, chi and beta are not identified (update.iwan is off): their starting values stand.";
   }
-  s.tables.push_back(tb);
+};
+
+// The update's own sigma: at least the scatter between the hits' backbones from three hits
+// on (the cluster-robust covariance), else the points' noise.
+std::string own_sigma(int curves) {
+  return curves >= 3
+             ? fmt::format("2 x its uncertainty, at least the scatter between the {} hits", curves)
+             : std::string("2 x its uncertainty");
+}
+
+// Backbones that stay in microslip: the identified combination judged, the dissipation per
+// cycle of one element at the geometric middle of the measured slip range (D = 4 R
+// u^(chi+3)/((chi+2)(chi+3)) below phi_max), Fs and beta said to be not identifiable, and the
+// family of (Fs, beta) pairs that share the identified Kt, chi and R. Returns the paragraph's
+// words on it.
+std::string judge_microslip(const KnownComparison& k, KnownTable& j) {
+  const model::IwanParameters& t = k.truth.iwan;
+  const model::IwanParameters& u = k.updated;
+  const double uref = std::sqrt(k.iwan.bottom_slip * k.iwan.top_slip);
+  const Eigen::Vector4d gt = log_dissipation_gradient(t, uref);
+  const double planted = std::hypot(gt(0) * k.truth.scatter_fs, gt(1) * k.truth.scatter_kt);
+  const Eigen::Vector4d gu = log_dissipation_gradient(u, uref);
+  const double own_sd = std::sqrt(std::max(0.0, gu.dot(k.iwan.covariance * gu)));
+  const double tol = 2 * std::max(planted, own_sd);
+  j.judge(fmt::format("D({:.3g} m) [J]", uref), std::exp(log_dissipation(u, uref)),
+          std::exp(log_dissipation(t, uref)), tol,
+          planted >= own_sd ? fmt::format("2 x planted {:.1f} % via Kt and Fs", 100 * planted)
+                            : fmt::format("2 x its uncertainty {:.1f} %", 100 * own_sd));
+  j.unidentified = {"Fs", "beta"};
+  j.tb.rows.push_back({"Fs [N]", fmt::format("{:.4g}", u.Fs), fmt::format("{:.4g}", t.Fs),
+                       fmt::format("{:+.2f} %", 100 * (u.Fs / t.Fs - 1)), "-",
+                       "not identifiable (microslip)"});
+  j.tb.rows.push_back({"beta", fmt::format("{:.4g}", u.beta), fmt::format("{:.4g}", t.beta),
+                       fmt::format("{:+.2f} %", 100 * (u.beta / t.beta - 1)), "-",
+                       "not identifiable (held)"});
+  // The family of (Fs, beta) pairs that share the identified Kt, chi and R.
+  const double fs_known_beta = correlate::slip_force_at_beta(u, t.beta);
+  j.tb.rows.push_back({fmt::format("Fs at the known beta {:.4g} [N]", t.beta),
+                       fmt::format("{:.4g}", fs_known_beta), fmt::format("{:.4g}", t.Fs),
+                       fmt::format("{:+.2f} %", 100 * (fs_known_beta / t.Fs - 1)), "-",
+                       "not judged (the identified family Fs(beta))"});
+  std::vector<std::string> family;
+  for (const double b : {0.25, 0.5, 1.0, 2.0, 4.0})
+    family.push_back(fmt::format("{:.3g} N at beta {:g}", correlate::slip_force_at_beta(u, b), b));
+  const std::string family_text = fmt::format(
+      " Every (Fs, beta) pair with the identified Kt, chi and R fits these backbones alike: "
+      "{}; at the known beta {:.4g} it gives Fs = {:.4g} N (known {:.4g} N).",
+      fmt::join(family, ", "), t.beta, fs_known_beta, t.Fs);
+  std::string micro = fmt::format(
+      " The backbones stay in microslip: over the measured amplitudes the most loaded joint "
+      "slips {:.3g} to {:.3g} m, at most {:.0f} % of phi_max ({:.3g} m in the updated model). "
+      "Below phi_max an Iwan element's response depends on Kt, chi and R alone, so these data "
+      "fix Kt, chi and R but not Fs and beta separately: beta is held at its starting value "
+      "{:.4g} and Fs is the slip force that gives the identified R with it. The table "
+      "compares the identified combination instead: D(u), the energy one joint element "
+      "dissipates per cycle at the middle slip u = {:.3g} m (D = 4 R u^(chi+3) / ((chi+2) "
+      "(chi+3))), whose planted scatter follows from that of Kt and Fs. Fs and beta need "
+      "backbones that reach past phi_max.",
+      k.iwan.bottom_slip, k.iwan.top_slip, 100 * k.iwan.top_slip / k.iwan.phi_max, k.iwan.phi_max,
+      u.beta, uref);
+  micro += family_text;
+  return micro;
+}
+
+// Backbones that reach macroslip: Fs judged, and beta unless the campaign held it.
+void judge_macroslip(const KnownComparison& k, KnownTable& j) {
+  const model::IwanParameters& t = k.truth.iwan;
+  const model::IwanParameters& u = k.updated;
+  j.judge_planted("Fs [N]", u.Fs, t.Fs, k.truth.scatter_fs, k.iwan.relative_std(0));
+  if (k.beta_held) {
+    j.unidentified.push_back("beta");
+    j.tb.rows.push_back({"beta", fmt::format("{:.4g}", u.beta), fmt::format("{:.4g}", t.beta),
+                         fmt::format("{:+.2f} %", 100 * (u.beta / t.beta - 1)), "-",
+                         "held by the campaign"});
+  } else {
+    j.judge("beta", u.beta, t.beta, 2 * k.iwan.relative_std(3), own_sigma(k.curves));
+  }
+}
+
+// The paragraph's verdict: how many identified quantities the update recovers, which are not
+// judged and which the data cannot identify.
+std::string verdict_of(const KnownTable& j) {
   std::string verdict =
-      judged == 0 && !unjudged.empty()
+      j.judged == 0 && !j.unjudged.empty()
           ? std::string("no identified quantity has a tolerance to judge it by")
-      : judged == 0 ? std::string("no quantity was identified by an update, so none is judged")
-      : missed.empty()
+      : j.judged == 0 ? std::string("no quantity was identified by an update, so none is judged")
+      : j.missed.empty()
           ? fmt::format("the update recovers all {} identified quantities within the tolerance",
-                        judged)
+                        j.judged)
           : fmt::format("the update recovers {} of {} identified quantities; NOT recovered: {}",
-                        recovered, judged, fmt::join(missed, ", "));
-  if (!unjudged.empty())
+                        j.recovered, j.judged, fmt::join(j.missed, ", "));
+  if (!j.unjudged.empty())
     verdict += fmt::format("; not judged, the update stating no sigma for them: {}",
-                           fmt::join(unjudged, ", "));
-  if (!unidentified.empty())
-    verdict += fmt::format("; not identifiable from these data: {}", fmt::join(unidentified, ", "));
-  if (k.iwan_ran && k.cost_known > 0)
-    micro += fmt::format(
-        " The backbone cost is {:.4g} at the known parameters and {:.4g} at the updated ones{}.",
-        k.cost_known, k.iwan.final_cost,
-        k.iwan.final_cost <= k.cost_known ? " (the optimiser reaches at least the known fit)"
-                                          : " (the optimiser stopped short of the known fit)");
-  // The tolerance's source per quantity: planted scatter where the truth file gives it, else
-  // the update's own uncertainty (without any planted, "planted ... (Kt 0.0 %, Fs 0.0 %)" was
-  // said beside "where none was planted (Kt, Fs, chi, beta)").
+                           fmt::join(j.unjudged, ", "));
+  if (!j.unidentified.empty())
+    verdict +=
+        fmt::format("; not identifiable from these data: {}", fmt::join(j.unidentified, ", "));
+  return verdict;
+}
+
+// The tolerance's source per quantity: planted scatter where the truth file gives it, else
+// the update's own uncertainty (without any planted, "planted ... (Kt 0.0 %, Fs 0.0 %)" was
+// said beside "where none was planted (Kt, Fs, chi, beta)").
+std::string tolerance_of(const KnownComparison& k) {
   std::vector<std::string> planted, from_fit;
   if (k.truth.scatter_kt > 0)
     planted.push_back(fmt::format("Kt {:.1f} %", 100 * k.truth.scatter_kt));
@@ -276,19 +276,54 @@ void compare_with_known(const KnownComparison& k, const std::string& truth_name,
                                                  "independent samples)",
                                                  k.curves)
                                            : std::string();
-  const std::string tolerance =
-      planted.empty()
-          ? fmt::format(
-                "Tolerance: none was planted (Kt, Fs, chi, beta): twice the update's own "
-                "one-sigma uncertainty{}",
-                robust)
-          : fmt::format(
-                "Tolerance: twice the planted one-sigma hit-to-hit scatter ({}); where "
-                "none was planted ({}), twice the update's own one-sigma uncertainty, "
-                "which the planted scatter causes{}",
-                fmt::join(planted, ", "), fmt::join(from_fit, ", "), robust);
+  return planted.empty()
+             ? fmt::format(
+                   "Tolerance: none was planted (Kt, Fs, chi, beta): twice the update's own "
+                   "one-sigma uncertainty{}",
+                   robust)
+             : fmt::format(
+                   "Tolerance: twice the planted one-sigma hit-to-hit scatter ({}); where "
+                   "none was planted ({}), twice the update's own one-sigma uncertainty, "
+                   "which the planted scatter causes{}",
+                   fmt::join(planted, ", "), fmt::join(from_fit, ", "), robust);
+}
+
+}  // namespace
+
+// The "Known parameters" table and paragraph: per quantity the updated and the known value,
+// the difference, the tolerance (twice the planted one-sigma scatter where scatter was planted,
+// else twice the update's own one-sigma uncertainty) and whether
+// the update recovers it. Parameters the data cannot identify are said to be so.
+void compare_with_known(const KnownComparison& k, const std::string& truth_name, ReportSection& s) {
+  const model::IwanParameters& t = k.truth.iwan;
+  const model::IwanParameters& u = k.updated;
+  KnownTable j;
+  j.tb = {"Updated versus known (" + truth_name + ")",
+          {"quantity", "updated", "known", "difference", "tolerance", "recovered"},
+          {}};
+  if (k.kt_updated) j.judge_planted("Kt [N/m]", u.Kt, t.Kt, k.truth.scatter_kt, k.kt_std);
+  std::string micro;
+  if (k.iwan_ran) {
+    j.judge("chi", u.chi, t.chi, 2 * k.iwan.relative_std(2), own_sigma(k.curves));
+    if (k.iwan.microslip_only())
+      micro = judge_microslip(k, j);
+    else
+      judge_macroslip(k, j);
+  } else {
+    j.unidentified = {"Fs", "chi", "beta"};
+    micro =
+        " Fs, chi and beta are not identified (update.iwan is off): their starting values stand.";
+  }
+  s.tables.push_back(j.tb);
+  const std::string verdict = verdict_of(j);
+  if (k.iwan_ran && k.cost_known > 0)
+    micro += fmt::format(
+        " The backbone cost is {:.4g} at the known parameters and {:.4g} at the updated ones{}.",
+        k.cost_known, k.iwan.final_cost,
+        k.iwan.final_cost <= k.cost_known ? " (the optimiser reaches at least the known fit)"
+                                          : " (the optimiser stopped short of the known fit)");
   s.paragraphs.push_back(
-      fmt::format("Known parameters ({}): {}. {}.{}", truth_name, verdict, tolerance, micro));
+      fmt::format("Known parameters ({}): {}. {}.{}", truth_name, verdict, tolerance_of(k), micro));
 }
 
 }  // namespace jointlab::campaign
