@@ -17,16 +17,229 @@ namespace jointlab::correlate {
 
 using iwan_detail::stated_sigma;
 
+namespace {
+
+// The median of x (the upper middle one of an even count); 0 for none.
+double median(std::vector<double> x) {
+  if (x.empty()) return 0.0;
+  const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
+  std::nth_element(x.begin(), mid, x.end());
+  return *mid;
+}
+
+// The scatter between the curves of every target with two or more, gathered target by target:
+// each curve's mean normalised residual (frequency and damping apart) against its target's mean,
+// each one's mean relative offset, and the curve lying farthest apart (MisfitEvidence).
+struct CurveScatter {
+  double total = 0, between = 0;
+  int between_curves = 0;
+  double apart_t = 0;
+  std::string apart_name;
+  Eigen::Vector2d apart_offset = Eigen::Vector2d::Zero(), apart_others = Eigen::Vector2d::Zero();
+  bool apart_damping = false;
+  int apart_points = 0;
+  Eigen::Vector2d apart_amplitude = Eigen::Vector2d::Zero();
+  Eigen::Vector2d f_range = Eigen::Vector2d(INFINITY, -INFINITY);
+  Eigen::Vector2d z_range = Eigen::Vector2d(INFINITY, -INFINITY);
+};
+
+// One target's curves: each one's point count, mean normalised residual, mean relative offset
+// from the model and relative noise of that mean, and the target's means over every point.
+struct CurveMeans {
+  std::vector<Eigen::Vector2d> mean_r, mean_rel, noise_rel;
+  std::vector<double> count;
+  Eigen::Vector2d mr, mrel;
+};
+
+// CurveMeans of target t, whose residuals r and model values v start at index k.
+CurveMeans curve_means(const IwanTarget& t, const std::vector<double>& r,
+                       const std::vector<double>& v, int k, double f_floor, double z_floor) {
+  const size_t nc = t.curves.size();
+  std::vector<Eigen::Vector2d> mean_r(nc), mean_rel(nc), noise_rel(nc);
+  std::vector<double> count(nc);
+  Eigen::Vector2d sum_r = Eigen::Vector2d::Zero(), sum_rel = Eigen::Vector2d::Zero();
+  double n_all = 0;
+  int i = k;
+  for (size_t c = 0; c < nc; ++c) {
+    const MeasuredBackbone& b = t.curves[c];
+    const Eigen::Index n = b.amplitude.size();
+    Eigen::Vector2d rr = Eigen::Vector2d::Zero(), rel = Eigen::Vector2d::Zero(),
+                    var = Eigen::Vector2d::Zero();
+    for (Eigen::Index j = 0; j < n; ++j, i += 2) {
+      rr += Eigen::Vector2d(r[static_cast<size_t>(i)], r[static_cast<size_t>(i + 1)]);
+      const double fm = v[static_cast<size_t>(i)], zm = v[static_cast<size_t>(i + 1)];
+      rel += Eigen::Vector2d(fm > 0 ? b.frequency_hz(j) / fm - 1 : 0,
+                             zm > 0 ? b.damping_ratio(j) / zm - 1 : 0);
+      const Eigen::Vector2d stated = stated_sigma(b, j);
+      const double sf = std::max(stated(0), f_floor * b.frequency_hz(j));
+      const double sz = std::max(stated(1), z_floor * std::abs(b.damping_ratio(j)));
+      var += Eigen::Vector2d(fm > 0 ? std::pow(sf / fm, 2) : 0, zm > 0 ? std::pow(sz / zm, 2) : 0);
+    }
+    count[c] = static_cast<double>(n);
+    mean_r[c] = rr / std::max(1.0, count[c]);
+    mean_rel[c] = rel / std::max(1.0, count[c]);
+    noise_rel[c] = var.cwiseSqrt() / std::max(1.0, count[c]);
+    sum_r += rr, sum_rel += rel, n_all += count[c];
+  }
+  const Eigen::Vector2d mr = sum_r / n_all, mrel = sum_rel / n_all;
+  return {mean_r, mean_rel, noise_rel, count, mr, mrel};
+}
+
+// Adds a target's curves to the scatter between curves: their share of the squared residuals
+// and the range of their offsets.
+void add_between(const CurveMeans& means, CurveScatter& scatter) {
+  const size_t nc = means.count.size();
+  for (size_t c = 0; c < nc; ++c) {
+    scatter.between += means.count[c] * (means.mean_r[c] - means.mr).squaredNorm();
+    const Eigen::Vector2d d = means.mean_rel[c] - means.mrel;
+    scatter.f_range =
+        Eigen::Vector2d(std::min(scatter.f_range(0), d(0)), std::max(scatter.f_range(1), d(0)));
+    scatter.z_range =
+        Eigen::Vector2d(std::min(scatter.z_range(0), d(1)), std::max(scatter.z_range(1), d(1)));
+  }
+  scatter.between_curves += static_cast<int>(nc);
+}
+
+// A curve unlike the others: its offset against the mean of the target's others, in their
+// spread (sample standard deviation s, nc - 2 degrees of freedom) and its own noise. Were
+// the offsets random scatter between hits, (x - mean) / (s sqrt(1 + 1 / (nc - 1))) is
+// Student's t with nc - 2 degrees of freedom; a chance below 1 % over the 2 nc tries
+// (Bonferroni) sets the curve apart. The case of the two joint sets (a bolt pair at each
+// end and rivets at mid-span, three levels struck at mid-span in pairs of hits and one
+// struck at x = 0.375 m where mode 2 slips the same joints): that hit's damping +94 %
+// about the fitted curve against the others' -3.5 to +2.3 % (t 27 at 5 degrees of
+// freedom, where the 1 % point is 7.4); the cluster covariance read it as scatter and
+// stated K_T +/- 0.24 % at z +7.1 and F_S at beta 1 +/- 5.8 % at z -10.
+void find_apart_curve(const IwanTarget& t, const CurveMeans& means, CurveScatter& scatter) {
+  const size_t nc = t.curves.size();
+  const boost::math::students_t dist(static_cast<double>(nc) - 2);
+  for (size_t c = 0; c < nc; ++c) {
+    for (int q = 0; q < 2; ++q) {
+      double m = 0, ss = 0;
+      for (size_t o = 0; o < nc; ++o)
+        if (o != c) m += means.mean_rel[o](q);
+      m /= static_cast<double>(nc - 1);
+      Eigen::Vector2d others(INFINITY, -INFINITY);
+      for (size_t o = 0; o < nc; ++o) {
+        if (o == c) continue;
+        ss += std::pow(means.mean_rel[o](q) - m, 2);
+        others = Eigen::Vector2d(std::min(others(0), means.mean_rel[o](q)),
+                                 std::max(others(1), means.mean_rel[o](q)));
+      }
+      const double sd = std::sqrt(ss / static_cast<double>(nc - 2));
+      const double scale = std::sqrt(sd * sd * (1 + 1.0 / static_cast<double>(nc - 1)) +
+                                     std::pow(means.noise_rel[c](q), 2));
+      if (!(scale > 0)) continue;
+      const double tc = std::abs(means.mean_rel[c](q) - m) / scale;
+      const double chance = 2 * boost::math::cdf(boost::math::complement(dist, tc));
+      if (chance * 2 * static_cast<double>(nc) < 0.01 && tc > scatter.apart_t) {
+        const MeasuredBackbone& b = t.curves[c];
+        scatter.apart_t = tc;
+        scatter.apart_name = !b.source.empty() ? b.source : fmt::format("curve {}", c + 1);
+        scatter.apart_offset = means.mean_rel[c] - means.mrel;
+        scatter.apart_others = others - Eigen::Vector2d::Constant(means.mrel(q));
+        scatter.apart_damping = q == 1;
+        scatter.apart_points = static_cast<int>(b.amplitude.size());
+        scatter.apart_amplitude = Eigen::Vector2d(b.amplitude.minCoeff(), b.amplitude.maxCoeff());
+      }
+    }
+  }
+}
+
+// The low-amplitude end of target t, whose model values v start at index k (advanced past its
+// points): each curve's lowest tenth of its points by amplitude (at least 3, at most all), where
+// the model is at its linear limit, K_T and the linear part, and its softening share; every
+// point's measured over model damping and the largest measured damping are gathered.
+MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double f_floor, int& k,
+                       std::vector<double>& damping_ratios, double& damping_max) {
+  std::vector<double> f_lo, error, noise, z_lo, z_model_lo, all_z, f_share;
+  for (const MeasuredBackbone& c : t.curves) {
+    const Eigen::Index n = c.amplitude.size();
+    std::vector<Eigen::Index> by_amplitude(static_cast<size_t>(n));
+    for (Eigen::Index j = 0; j < n; ++j) by_amplitude[static_cast<size_t>(j)] = j;
+    std::sort(by_amplitude.begin(), by_amplitude.end(),
+              [&](Eigen::Index a, Eigen::Index b) { return c.amplitude(a) < c.amplitude(b); });
+    const Eigen::Index low = std::min<Eigen::Index>(n, std::max<Eigen::Index>(3, n / 10));
+    for (Eigen::Index i = 0; i < low; ++i) {
+      const Eigen::Index j = by_amplitude[static_cast<size_t>(i)];
+      const double f = c.frequency_hz(j);
+      f_lo.push_back(f);
+      error.push_back(v[static_cast<size_t>(k + 2 * j)] / f - 1);
+      noise.push_back(std::max(stated_sigma(c, j)(0), f_floor * f) / f);
+      z_lo.push_back(c.damping_ratio(j));
+      z_model_lo.push_back(v[static_cast<size_t>(k + 2 * j + 1)]);
+    }
+    // The measured frequency's drop from the lowest fifth of the points by amplitude to the
+    // second fifth, over its drop from the lowest fifth to the highest (medians of each): the
+    // share of the curve's softening that happens at its low end.
+    if (const Eigen::Index fifth = n / 5; fifth >= 2) {
+      const auto band = [&](Eigen::Index from) {
+        std::vector<double> f;
+        for (Eigen::Index i = from; i < from + fifth; ++i)
+          f.push_back(c.frequency_hz(by_amplitude[static_cast<size_t>(i)]));
+        return median(f);
+      };
+      const double f1 = band(0), f2 = band(fifth), f5 = band(n - fifth);
+      if (f1 > f5) f_share.push_back((f1 - f2) / (f1 - f5));
+    }
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double model_z = v[static_cast<size_t>(k + 2 * j + 1)];
+      if (model_z > 0) damping_ratios.push_back(c.damping_ratio(j) / model_z);
+      damping_max = std::max(damping_max, c.damping_ratio(j));
+      all_z.push_back(c.damping_ratio(j));
+    }
+    k += 2 * static_cast<int>(n);
+  }
+  MisfitEvidence e;
+  e.mode = t.mode;
+  e.low_frequency_hz = median(f_lo);
+  e.low_frequency_error = median(error);
+  e.low_frequency_noise = median(noise);
+  e.low_damping = median(z_lo);
+  e.low_model_damping = median(z_model_lo);
+  e.median_damping = median(all_z);
+  e.low_softening_share = f_share.empty() ? NAN : median(f_share);
+  return e;
+}
+
+// Mode R's linear frequency in the model as given (`modes`), and another elastic mode whose
+// linear frequency lies within a third of mode R's distance from the measured one: the backbone
+// may be that mode's.
+void set_nearer_mode(const model::LinearModes& modes, int mode, MisfitEvidence& e) {
+  const int col = modes.rigid_count + mode - 1;
+  if (col < modes.size()) e.mode_hz = modes.frequency_hz(col);
+  double best = std::abs(e.mode_hz / e.low_frequency_hz - 1) / 3;
+  for (int i = modes.rigid_count; i < modes.size() && e.mode_hz > 0; ++i) {
+    const double d = std::abs(modes.frequency_hz(i) / e.low_frequency_hz - 1);
+    if (i != col && d < best) {
+      best = d;
+      e.nearer_mode = i - modes.rigid_count + 1;
+      e.nearer_mode_hz = modes.frequency_hz(i);
+    }
+  }
+}
+
+// The scatter between curves in the evidence.
+void set_scatter(const CurveScatter& scatter, MisfitEvidence& out) {
+  out.between_curves_share = scatter.between / scatter.total;
+  out.curves = scatter.between_curves;
+  out.frequency_offsets = scatter.f_range;
+  out.damping_offsets = scatter.z_range;
+  out.apart_curve = scatter.apart_name;
+  out.apart_t = scatter.apart_t;
+  out.apart_offset = scatter.apart_offset;
+  out.apart_others = scatter.apart_others;
+  out.apart_in_damping = scatter.apart_damping;
+  out.apart_points = scatter.apart_points;
+  out.apart_amplitude = scatter.apart_amplitude;
+}
+
+}  // namespace
+
 std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanParameters& p,
                                                              double z) const {
   std::vector<double> r(residual_count_), v(residual_count_);
   if (!evaluate(p, r.data(), nullptr, false, &z, nullptr, v.data())) return std::nullopt;
-  const auto median = [](std::vector<double> x) {
-    if (x.empty()) return 0.0;
-    const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
-    std::nth_element(x.begin(), mid, x.end());
-    return *mid;
-  };
   // The model as given (its linear part, K_T at the start): what --mode names. At the result
   // K_T may have run to a bound trying to reach another mode's frequency.
   std::optional<model::LinearModes> modes;
@@ -49,165 +262,18 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
   double damping_max = 0;
   // Scatter between curves: per target, each curve's mean normalised residual (frequency and
   // damping apart) against the target's mean; and each curve's mean relative offset.
-  double total = 0, between = 0;
-  int between_curves = 0;
-  double apart_t = 0;
-  std::string apart_name;
-  Eigen::Vector2d apart_offset = Eigen::Vector2d::Zero(), apart_others = Eigen::Vector2d::Zero();
-  bool apart_damping = false;
-  int apart_points = 0;
-  Eigen::Vector2d apart_amplitude = Eigen::Vector2d::Zero();
-  Eigen::Vector2d f_range(INFINITY, -INFINITY), z_range(INFINITY, -INFINITY);
-  for (double x : r) total += x * x;
+  CurveScatter scatter;
+  for (double x : r) scatter.total += x * x;
   int k = 0;
   for (const IwanTarget& t : targets_) {
     if (t.curves.size() >= 2) {
-      const size_t nc = t.curves.size();
-      std::vector<Eigen::Vector2d> mean_r(nc), mean_rel(nc), noise_rel(nc);
-      std::vector<double> count(nc);
-      Eigen::Vector2d sum_r = Eigen::Vector2d::Zero(), sum_rel = Eigen::Vector2d::Zero();
-      double n_all = 0;
-      int i = k;
-      for (size_t c = 0; c < nc; ++c) {
-        const MeasuredBackbone& b = t.curves[c];
-        const Eigen::Index n = b.amplitude.size();
-        Eigen::Vector2d rr = Eigen::Vector2d::Zero(), rel = Eigen::Vector2d::Zero(),
-                        var = Eigen::Vector2d::Zero();
-        for (Eigen::Index j = 0; j < n; ++j, i += 2) {
-          rr += Eigen::Vector2d(r[static_cast<size_t>(i)], r[static_cast<size_t>(i + 1)]);
-          const double fm = v[static_cast<size_t>(i)], zm = v[static_cast<size_t>(i + 1)];
-          rel += Eigen::Vector2d(fm > 0 ? b.frequency_hz(j) / fm - 1 : 0,
-                                 zm > 0 ? b.damping_ratio(j) / zm - 1 : 0);
-          const Eigen::Vector2d stated = stated_sigma(b, j);
-          const double sf = std::max(stated(0), f_floor_ * b.frequency_hz(j));
-          const double sz = std::max(stated(1), z_floor_ * std::abs(b.damping_ratio(j)));
-          var +=
-              Eigen::Vector2d(fm > 0 ? std::pow(sf / fm, 2) : 0, zm > 0 ? std::pow(sz / zm, 2) : 0);
-        }
-        count[c] = static_cast<double>(n);
-        mean_r[c] = rr / std::max(1.0, count[c]);
-        mean_rel[c] = rel / std::max(1.0, count[c]);
-        noise_rel[c] = var.cwiseSqrt() / std::max(1.0, count[c]);
-        sum_r += rr, sum_rel += rel, n_all += count[c];
-      }
-      const Eigen::Vector2d mr = sum_r / n_all, mrel = sum_rel / n_all;
-      for (size_t c = 0; c < nc; ++c) {
-        between += count[c] * (mean_r[c] - mr).squaredNorm();
-        const Eigen::Vector2d d = mean_rel[c] - mrel;
-        f_range = Eigen::Vector2d(std::min(f_range(0), d(0)), std::max(f_range(1), d(0)));
-        z_range = Eigen::Vector2d(std::min(z_range(0), d(1)), std::max(z_range(1), d(1)));
-      }
-      between_curves += static_cast<int>(nc);
-      // A curve unlike the others: its offset against the mean of the target's others, in their
-      // spread (sample standard deviation s, nc - 2 degrees of freedom) and its own noise. Were
-      // the offsets random scatter between hits, (x - mean) / (s sqrt(1 + 1 / (nc - 1))) is
-      // Student's t with nc - 2 degrees of freedom; a chance below 1 % over the 2 nc tries
-      // (Bonferroni) sets the curve apart. The case of the two joint sets (a bolt pair at each
-      // end and rivets at mid-span, three levels struck at mid-span in pairs of hits and one
-      // struck at x = 0.375 m where mode 2 slips the same joints): that hit's damping +94 %
-      // about the fitted curve against the others' -3.5 to +2.3 % (t 27 at 5 degrees of
-      // freedom, where the 1 % point is 7.4); the cluster covariance read it as scatter and
-      // stated K_T +/- 0.24 % at z +7.1 and F_S at beta 1 +/- 5.8 % at z -10.
-      if (nc >= 4) {
-        const boost::math::students_t dist(static_cast<double>(nc) - 2);
-        for (size_t c = 0; c < nc; ++c) {
-          for (int q = 0; q < 2; ++q) {
-            double m = 0, ss = 0;
-            for (size_t o = 0; o < nc; ++o)
-              if (o != c) m += mean_rel[o](q);
-            m /= static_cast<double>(nc - 1);
-            Eigen::Vector2d others(INFINITY, -INFINITY);
-            for (size_t o = 0; o < nc; ++o) {
-              if (o == c) continue;
-              ss += std::pow(mean_rel[o](q) - m, 2);
-              others = Eigen::Vector2d(std::min(others(0), mean_rel[o](q)),
-                                       std::max(others(1), mean_rel[o](q)));
-            }
-            const double sd = std::sqrt(ss / static_cast<double>(nc - 2));
-            const double scale = std::sqrt(sd * sd * (1 + 1.0 / static_cast<double>(nc - 1)) +
-                                           std::pow(noise_rel[c](q), 2));
-            if (!(scale > 0)) continue;
-            const double tc = std::abs(mean_rel[c](q) - m) / scale;
-            const double chance = 2 * boost::math::cdf(boost::math::complement(dist, tc));
-            if (chance * 2 * static_cast<double>(nc) < 0.01 && tc > apart_t) {
-              const MeasuredBackbone& b = t.curves[c];
-              apart_t = tc;
-              apart_name = !b.source.empty() ? b.source : fmt::format("curve {}", c + 1);
-              apart_offset = mean_rel[c] - mrel;
-              apart_others = others - Eigen::Vector2d::Constant(mrel(q));
-              apart_damping = q == 1;
-              apart_points = static_cast<int>(b.amplitude.size());
-              apart_amplitude = Eigen::Vector2d(b.amplitude.minCoeff(), b.amplitude.maxCoeff());
-            }
-          }
-        }
-      }
+      const CurveMeans means = curve_means(t, r, v, k, f_floor_, z_floor_);
+      add_between(means, scatter);
+      if (t.curves.size() >= 4) find_apart_curve(t, means, scatter);
     }
-    // Each curve's lowest tenth of its points by amplitude (at least 3, at most all): where the
-    // model is at its linear limit, K_T and the linear part.
-    std::vector<double> f_lo, error, noise, z_lo, z_model_lo, all_z, f_share;
-    for (const MeasuredBackbone& c : t.curves) {
-      const Eigen::Index n = c.amplitude.size();
-      std::vector<Eigen::Index> by_amplitude(static_cast<size_t>(n));
-      for (Eigen::Index j = 0; j < n; ++j) by_amplitude[static_cast<size_t>(j)] = j;
-      std::sort(by_amplitude.begin(), by_amplitude.end(),
-                [&](Eigen::Index a, Eigen::Index b) { return c.amplitude(a) < c.amplitude(b); });
-      const Eigen::Index low = std::min<Eigen::Index>(n, std::max<Eigen::Index>(3, n / 10));
-      for (Eigen::Index i = 0; i < low; ++i) {
-        const Eigen::Index j = by_amplitude[static_cast<size_t>(i)];
-        const double f = c.frequency_hz(j);
-        f_lo.push_back(f);
-        error.push_back(v[static_cast<size_t>(k + 2 * j)] / f - 1);
-        noise.push_back(std::max(stated_sigma(c, j)(0), f_floor_ * f) / f);
-        z_lo.push_back(c.damping_ratio(j));
-        z_model_lo.push_back(v[static_cast<size_t>(k + 2 * j + 1)]);
-      }
-      // The measured frequency's drop from the lowest fifth of the points by amplitude to the
-      // second fifth, over its drop from the lowest fifth to the highest (medians of each): the
-      // share of the curve's softening that happens at its low end.
-      if (const Eigen::Index fifth = n / 5; fifth >= 2) {
-        const auto band = [&](Eigen::Index from) {
-          std::vector<double> f;
-          for (Eigen::Index i = from; i < from + fifth; ++i)
-            f.push_back(c.frequency_hz(by_amplitude[static_cast<size_t>(i)]));
-          return median(f);
-        };
-        const double f1 = band(0), f2 = band(fifth), f5 = band(n - fifth);
-        if (f1 > f5) f_share.push_back((f1 - f2) / (f1 - f5));
-      }
-      for (Eigen::Index j = 0; j < n; ++j) {
-        const double model_z = v[static_cast<size_t>(k + 2 * j + 1)];
-        if (model_z > 0) damping_ratios.push_back(c.damping_ratio(j) / model_z);
-        damping_max = std::max(damping_max, c.damping_ratio(j));
-        all_z.push_back(c.damping_ratio(j));
-      }
-      k += 2 * static_cast<int>(n);
-    }
-    MisfitEvidence e;
-    e.mode = t.mode;
-    e.low_frequency_hz = median(f_lo);
-    e.low_frequency_error = median(error);
-    e.low_frequency_noise = median(noise);
-    e.low_damping = median(z_lo);
-    e.low_model_damping = median(z_model_lo);
-    e.median_damping = median(all_z);
-    e.low_softening_share = f_share.empty() ? NAN : median(f_share);
+    MisfitEvidence e = low_end(t, v, f_floor_, k, damping_ratios, damping_max);
     e.targets = static_cast<int>(targets_.size());
-    if (modes && e.low_frequency_hz > 0) {
-      // Another elastic mode whose linear frequency lies within a third of mode R's distance
-      // from the measured one: the backbone may be that mode's.
-      const int col = modes->rigid_count + t.mode - 1;
-      if (col < modes->size()) e.mode_hz = modes->frequency_hz(col);
-      double best = std::abs(e.mode_hz / e.low_frequency_hz - 1) / 3;
-      for (int i = modes->rigid_count; i < modes->size() && e.mode_hz > 0; ++i) {
-        const double d = std::abs(modes->frequency_hz(i) / e.low_frequency_hz - 1);
-        if (i != col && d < best) {
-          best = d;
-          e.nearer_mode = i - modes->rigid_count + 1;
-          e.nearer_mode_hz = modes->frequency_hz(i);
-        }
-      }
-    }
+    if (modes && e.low_frequency_hz > 0) set_nearer_mode(*modes, t.mode, e);
     if (fitted_modes) {
       const int col = fitted_modes->rigid_count + t.mode - 1;
       if (col < fitted_modes->size()) e.linear_hz = fitted_modes->frequency_hz(col);
@@ -217,19 +283,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
   if (out) {
     out->damping_factor = median(damping_ratios);
     out->damping_max = damping_max;
-    if (between_curves > 0 && total > 0) {
-      out->between_curves_share = between / total;
-      out->curves = between_curves;
-      out->frequency_offsets = f_range;
-      out->damping_offsets = z_range;
-      out->apart_curve = apart_name;
-      out->apart_t = apart_t;
-      out->apart_offset = apart_offset;
-      out->apart_others = apart_others;
-      out->apart_in_damping = apart_damping;
-      out->apart_points = apart_points;
-      out->apart_amplitude = apart_amplitude;
-    }
+    if (scatter.between_curves > 0 && scatter.total > 0) set_scatter(scatter, *out);
   }
   return out;
 }
