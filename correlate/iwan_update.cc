@@ -129,13 +129,9 @@ void set_slips(const IwanObjective& objective, IwanUpdateSummary& s) {
   s.phi_max = model::Iwan(s.best).phi_max();
 }
 
-}  // namespace
-
-model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
-                                  IwanUpdateSummary* summary) {
-  if (const std::string e = options.error(); !e.empty()) throw InputError("update-iwan: " + e);
-  IwanUpdateSummary local;
-  IwanUpdateSummary& s = summary ? *summary : local;
+// The summary's fields known before the search: the start, what is held, the floors.
+void start_summary(const IwanObjective& objective, const IwanUpdateOptions& options,
+                   IwanUpdateSummary& s) {
   s = IwanUpdateSummary{};
   s.optimizer = options.optimizer;
   s.start = objective.initial();
@@ -149,8 +145,13 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   s.reference_stiffness = objective.reference_stiffness();
   s.linear_known = std::any_of(objective.targets().begin(), objective.targets().end(),
                                [](const IwanTarget& t) { return t.linear_frequency_hz > 0; });
-  Tracker tr{objective, options, s, objective.evaluations()};
-  s.initial_cost = objective.try_cost(s.start).value_or(INFINITY);
+}
+
+// The search the options name, from the constant-backbone candidate where Z is fitted.
+void search(Tracker& tr) {
+  const IwanObjective& objective = tr.objective;
+  const IwanUpdateOptions& options = tr.options;
+  IwanUpdateSummary& s = tr.summary;
   std::mt19937 rng(options.seed);
   std::optional<std::pair<double, Vec4>> constant;
   if (objective.fits_linear_damping()) {
@@ -168,21 +169,24 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
       global_local(tr, rng, constant ? &*constant : nullptr);
       break;
   }
-  s.evaluations = tr.used();
-  // The start with the held parameters at their held values: K_T = gamma K_s as asked.
-  model::IwanParameters start = s.start;
+}
+
+// The start with the held parameters at their held values: K_T = gamma K_s as asked.
+model::IwanParameters held_start(const IwanObjective& objective, const IwanUpdateOptions& options,
+                                 const model::IwanParameters& given) {
+  model::IwanParameters start = given;
   if (options.fixed_gamma > 0) start.Kt = options.fixed_gamma * objective.reference_stiffness();
   if (options.fixed_beta) start.beta = *options.fixed_beta;
-  if (!std::isfinite(tr.best)) {
-    s.status = IwanUpdateStatus::kNoValidPoint;
-    s.improved = false;
-    s.best = start;
-    s.final_cost = objective.try_cost(start).value_or(INFINITY);
-    s.modal_ratio = objective.linear_damping(start).value_or(s.modal_ratio_start);
-    return start;
-  }
-  // The start is a candidate too when it lies in the search box (held parameters at their
-  // values): never hand back parameters that fit worse, nor any outside the given ranges.
+  return start;
+}
+
+// The summary's best, final cost and whether the search improved on the start, and the best in
+// search coordinates. The start is a candidate too when it lies in the search box (held
+// parameters at their values): never hand back parameters that fit worse, nor any outside the
+// given ranges.
+Vec4 choose_best(const Tracker& tr, const model::IwanParameters& start, IwanUpdateSummary& s) {
+  const IwanObjective& objective = tr.objective;
+  const IwanUpdateOptions& options = tr.options;
   const Box box = initial_box(options);
   const double Ks = objective.reference_stiffness();
   const Vec4 start_v(start.Fs, start.Kt / Ks, start.chi, start.beta);
@@ -209,6 +213,13 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     s.best = to_params(best_v, Ks);
     s.final_cost = tr.best;
   }
+  return best_v;
+}
+
+// What the result is besides its parameters: Z, the bounds reached, the linear error, the slips
+// and the RMS errors.
+void describe_result(const IwanObjective& objective, const IwanUpdateOptions& options,
+                     const Vec4& best_v, IwanUpdateSummary& s) {
   s.modal_ratio = objective.linear_damping(s.best).value_or(s.modal_ratio_start);
   s.at_bounds = bounds_reached(
       options, best_v, s.modal_ratio_fitted ? std::optional<double>(s.modal_ratio) : std::nullopt,
@@ -218,11 +229,23 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   set_slips(objective, s);
   if (const auto e = objective.rms_errors(s.best, s.modal_ratio)) s.rms_errors = *e;
   s.constant_rms_errors = objective.constant_rms_errors();
+}
+
+// The parameters the covariance is over: (F_S, gamma, chi, beta) not held (0-3), and Z (4) where
+// fitted.
+std::vector<int> free_parameters(const IwanUpdateSummary& s) {
   std::vector<int> free;
   for (int k = 0; k < 4; ++k)
     if (!s.held[k]) free.push_back(k);
   if (s.modal_ratio_fitted) free.push_back(4);
-  SerialNoise noise;
+  return free;
+}
+
+// The covariance at the result over `free` (beta dropped from it where the data fix F_S and beta
+// only together), and the residuals' noise behind it.
+Eigen::MatrixXd parameter_covariance(const IwanObjective& objective, const Vec4& best_v,
+                                     std::vector<int>& free, SerialNoise& noise,
+                                     IwanUpdateSummary& s) {
   Eigen::MatrixXd cov =
       covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2, &noise, &s.fixed_at_kink);
   // Too few effective points is no flat direction: holding beta would not make it a sigma.
@@ -238,22 +261,24 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2, &noise,
                      &s.fixed_at_kink);
   }
-  s.effective_points = noise.effective_points;
-  s.sigma_degrees_of_freedom =
-      t_degrees_of_freedom(noise.effective_points, static_cast<int>(free.size()));
-  s.noise_correlation = noise.rho;
-  s.amplitude_share = noise.amplitude_share;
-  // Only a misfit has a cause to name (an eigensolution of the model as given, so not always).
-  if (s.misfit()) s.evidence = objective.misfit_evidence(s.best, s.modal_ratio);
-  // Where scatter between the curves explains the misfit the sigmas rest on the cluster
-  // covariance, whose variance has the curves less 1 degrees of freedom: Student's t with the
-  // fewer of those and the points' (the seven curves of the two joint sets: 6 against 160).
+  return cov;
+}
+
+// Where scatter between the curves explains the misfit the sigmas rest on the cluster
+// covariance, whose variance has the curves less 1 degrees of freedom: Student's t with the
+// fewer of those and the points' (the seven curves of the two joint sets: 6 against 160).
+void widen_for_scatter(const IwanUpdateSummary& s, Eigen::MatrixXd& cov) {
   if (s.scatter_explains_misfit() && cov.size() > 0) {
     const double nu = static_cast<double>(s.evidence->curves - 1);
     const std::optional<double> wide = student_t_variance(nu),
                                 narrow = student_t_variance(s.sigma_degrees_of_freedom);
     if (wide && narrow && nu < s.sigma_degrees_of_freedom) cov *= *wide / *narrow;
   }
+}
+
+// The summary's covariance, relative sigmas and Z's sigma from cov over `free`, none where the
+// data fix F_S only with beta or the fit did not converge.
+void set_sigmas(const std::vector<int>& free, const Eigen::MatrixXd& cov, IwanUpdateSummary& s) {
   if (cov.size() > 0) {
     for (size_t i = 0; i < free.size(); ++i) {
       for (size_t j = 0; j < free.size(); ++j) {
@@ -278,6 +303,43 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
     s.covariance.setZero();
     s.modal_ratio_std = 0;
   }
+}
+
+}  // namespace
+
+model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpdateOptions& options,
+                                  IwanUpdateSummary* summary) {
+  if (const std::string e = options.error(); !e.empty()) throw InputError("update-iwan: " + e);
+  IwanUpdateSummary local;
+  IwanUpdateSummary& s = summary ? *summary : local;
+  start_summary(objective, options, s);
+  Tracker tr{objective, options, s, objective.evaluations()};
+  s.initial_cost = objective.try_cost(s.start).value_or(INFINITY);
+  search(tr);
+  s.evaluations = tr.used();
+  const model::IwanParameters start = held_start(objective, options, s.start);
+  if (!std::isfinite(tr.best)) {
+    s.status = IwanUpdateStatus::kNoValidPoint;
+    s.improved = false;
+    s.best = start;
+    s.final_cost = objective.try_cost(start).value_or(INFINITY);
+    s.modal_ratio = objective.linear_damping(start).value_or(s.modal_ratio_start);
+    return start;
+  }
+  const Vec4 best_v = choose_best(tr, start, s);
+  describe_result(objective, options, best_v, s);
+  std::vector<int> free = free_parameters(s);
+  SerialNoise noise;
+  Eigen::MatrixXd cov = parameter_covariance(objective, best_v, free, noise, s);
+  s.effective_points = noise.effective_points;
+  s.sigma_degrees_of_freedom =
+      t_degrees_of_freedom(noise.effective_points, static_cast<int>(free.size()));
+  s.noise_correlation = noise.rho;
+  s.amplitude_share = noise.amplitude_share;
+  // Only a misfit has a cause to name (an eigensolution of the model as given, so not always).
+  if (s.misfit()) s.evidence = objective.misfit_evidence(s.best, s.modal_ratio);
+  widen_for_scatter(s, cov);
+  set_sigmas(free, cov, s);
   // How far an error of the rest of the model moves the parameters, which no residual shows
   // where K_T takes it up (a converged fit's minimum only: elsewhere the gradient is not 0).
   if (s.status == IwanUpdateStatus::kConverged && s.improved)
