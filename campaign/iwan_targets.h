@@ -49,6 +49,8 @@ struct ModeBackbones {
   /// without a coverage_factor column: 1); no entry: 1. The fit weighs by std / k.
   std::vector<double> coverage;
   ScatterSummary scatter;  ///< the scatter summary of `curves`
+  /// Backbone tables: which of them give no amplitude unit (SI assumed), for the report; "" none.
+  std::string amplitude_note;
 };
 
 /// Settings of iwan_targets().

@@ -898,17 +898,20 @@ std::string amplitude_reading(int mode, const std::string& quantity, bool defaul
         "scaled by the mode's shape value at that sensor",
         mode, defaulted ? ", the default" : "");
   }
+  const std::string assumed = unitless_amplitudes(unitless, quantity);
   return fmt::format(
       "amplitudes read as the {} at model DOF {} (--amplitude {} --dof {}), zero to peak{}",
-      quantity, dof_name, quantity, dof,
-      unitless.empty()
-          ? ""
-          : fmt::format(
-                "; {} give{} no unit in the amplitude header, so {} is assumed (a table in "
-                "g or mm read so scales F_S by its factor: give the unit, e.g. "
-                "'amplitude [g]')",
-                fmt::join(unitless, ", "), unitless.size() == 1 ? "s" : "",
-                parse_quantity(quantity) ? si_unit(*parse_quantity(quantity)) : std::string("SI")));
+      quantity, dof_name, quantity, dof, assumed.empty() ? "" : "; " + assumed);
+}
+
+std::string unitless_amplitudes(const std::vector<std::string>& unitless,
+                                const std::string& quantity) {
+  if (unitless.empty()) return "";
+  return fmt::format(
+      "{} give{} no unit in the amplitude header, so {} is assumed (a table in g or mm read so "
+      "scales F_S by its factor: give the unit, e.g. 'amplitude [g]')",
+      fmt::join(unitless, ", "), unitless.size() == 1 ? "s" : "",
+      parse_quantity(quantity) ? si_unit(*parse_quantity(quantity)) : std::string("SI"));
 }
 
 }  // namespace jointlab::correlate

@@ -215,4 +215,10 @@ std::string amplitude_reading(int mode, const std::string& quantity, bool defaul
                               const std::string& dof_name, const std::string& dof,
                               const std::vector<std::string>& unitless = {});
 
+/// The tables among `unitless` (files whose amplitude header gives no unit) read in the SI unit
+/// of `quantity` ("velocity": m/s): "a.csv, b.csv give no unit in the amplitude header, so m/s
+/// is assumed (...)", as update-iwan's and run's reports say it; "" for none.
+std::string unitless_amplitudes(const std::vector<std::string>& unitless,
+                                const std::string& quantity);
+
 }  // namespace jointlab::correlate

@@ -128,8 +128,11 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     tables.model_mode = c.modes[k].model_mode;
     tables.fitted = c.iwan_update.fits(c.modes[k].name);
     tables.linear_frequency_hz = modes[k].linear_frequency_hz;
+    std::vector<std::string> unitless;  // read in SI, said in the report as update-iwan says it
     for (const std::filesystem::path& f : c.modes[k].backbones) {
       const data::BackboneTable t = data::read_backbone_table(f, c.amplitude);
+      if (t.amplitude_unit.empty() && !t.written_by_jointlab)
+        unitless.push_back(f.filename().string());
       Curve cv;
       cv.id = "table " + f.filename().string();  // never a hit's id: no slip screen across
       cv.amplitude = t.amplitude;
@@ -143,6 +146,11 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
       tables.sensors.push_back(m.reference[k]);
     }
     tables.scatter = summarize_scatter(tables.curves, ScatterOptions{});
+    if (const std::string assumed =
+            correlate::unitless_amplitudes(unitless, quantity_name(c.amplitude));
+        !assumed.empty()) {
+      tables.amplitude_note = tables.name + ": " + assumed;
+    }
     modes.push_back(std::move(tables));
   }
   return modes;
@@ -255,6 +263,8 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
   // starts from: what misfits is their held values, not this set.
   step.warnings = set_share_warnings(base, step.set, sensors, targets.fitted, io.amplitude,
                                      "sets = [\"{}\"] in [update.iwan], its [[mode]]s in modes");
+  for (const ModeBackbones& mb : backbones)
+    if (!mb.amplitude_note.empty()) step.warnings.push_back("note: " + mb.amplitude_note);
   for (const std::string& w : step.warnings) say("update: " + w);
   return step;
 }

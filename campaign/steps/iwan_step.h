@@ -65,7 +65,8 @@ struct IwanStep {
   double cost_known = 0;                 ///< cost at the known parameters (0: none given)
   model::Model updated;                  ///< the updated model (when it ran)
   /// What the report says beside the fit's own report: each fitted mode whose joint dissipation
-  /// other Iwan sets carry (campaign::set_share_warnings).
+  /// other Iwan sets carry (campaign::set_share_warnings), then each mode's backbone tables read
+  /// without an amplitude unit (ModeBackbones::amplitude_note, as "note: ...").
   std::vector<std::string> warnings;
 };
 

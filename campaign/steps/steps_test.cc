@@ -546,7 +546,9 @@ TEST_F(Steps, IwanUpdateFromTheTruth) {
 // update-iwan --linear-damping fit; anything else is refused at its line by name.
 // [[mode]] backbones = [...]: each table becomes one more curve of the mode's model mode at
 // its reference channel, with its own uncertainties (here one hit's backbone written as a table,
-// rows reversed: the reader sorts them).
+// rows reversed: the reader sorts them). A table whose amplitude header gives no unit is read in
+// SI, as update-iwan reads it, and the run's report says so as update-iwan's does: before, `run`
+// read a table in mm/s without its unit as m/s without a word (F_S scales by the factor).
 TEST_F(Steps, ModeBackboneTablesJoinTheIwanTargets) {
   const Curve& hit = measured_->curves[0].front();
   const fs::path table = testing::scratch_path("campaign_steps_tables", "table.csv");
@@ -566,6 +568,20 @@ TEST_F(Steps, ModeBackboneTablesJoinTheIwanTargets) {
   ASSERT_EQ(t.curves[0].amplitude.size(), hit.amplitude.size());
   EXPECT_EQ(t.curves[0].amplitude.minCoeff(), hit.amplitude.minCoeff());
   EXPECT_EQ(t.curves[0].amplitude(0), hit.amplitude.minCoeff());  // sorted
+  EXPECT_NE(t.amplitude_note.find(fmt::format(
+                "{}: table.csv gives no unit in the amplitude header, so m/s is assumed (a "
+                "table in g or mm read so scales F_S by its factor: give the unit, e.g. "
+                "'amplitude [g]')",
+                t.name)),
+            std::string::npos)
+      << t.amplitude_note;
+  // With its unit, nothing to say.
+  const fs::path with_unit = testing::scratch_path("campaign_steps_tables", "with_unit.csv");
+  testing::write_text(with_unit.string(), "amplitude [mm/s]" + text.substr(text.find(',')));
+  c.modes[0].backbones = {with_unit};
+  const ModeBackbones u = campaign_backbones(c, *measured_).back();
+  EXPECT_EQ(u.amplitude_note, "");
+  EXPECT_EQ(u.curves[0].amplitude.minCoeff(), 1e-3 * hit.amplitude.minCoeff());
 }
 
 TEST_F(Steps, IwanLinearDampingSetting) {
