@@ -323,6 +323,121 @@ std::optional<Eigen::MatrixXd> sandwich(const IwanObjective& objective, const Se
   return cov;
 }
 
+// The residuals at the result and what every sandwich() over them shares (covariance()).
+struct Residuals {
+  const IwanObjective& objective;
+  const SerialOrder& order;
+  const Eigen::VectorXd& r;
+  double n_points, reduced_chi2, tau;
+};
+
+// The central covariance with each variance raised to a one-sided estimate's (slopes Jf, Jb).
+// At a kink of the model (a measured amplitude at phi_max, where the cost's minimum likes to
+// sit) the one-sided slopes differ and the central one overstates what the data say: each
+// variance is the largest of the central and the two one-sided estimates (7 of 40 three-hit
+// fits had phi_max within 2.5e-5 of a measured amplitude in ln q and stated beta's sigma
+// 3-4 times too small). Elsewhere the three agree to O(h).
+Eigen::MatrixXd widen_at_one_sided(const Residuals& res, const Eigen::MatrixXd& central,
+                                   const Eigen::MatrixXd& Jf, const Eigen::MatrixXd& Jb,
+                                   const SerialNoise& without_floor) {
+  const int nf = static_cast<int>(central.cols());
+  Eigen::MatrixXd cov = central;
+  for (const Eigen::MatrixXd* one_sided : {&Jf, &Jb}) {
+    const std::optional<Eigen::MatrixXd> c =
+        sandwich(res.objective, res.order, *one_sided, res.r, res.n_points, res.reduced_chi2,
+                 res.tau, without_floor);
+    if (!c) continue;
+    // Only where a sigma differs by more than 10 %: elsewhere the O(h) differences of the
+    // one-sided slopes are no kink and leave the result as it was.
+    Eigen::VectorXd d = Eigen::VectorXd::Ones(nf);
+    for (int k = 0; k < nf; ++k)
+      if (cov(k, k) > 0 && (*c)(k, k) > 1.21 * cov(k, k)) d(k) = std::sqrt((*c)(k, k) / cov(k, k));
+    cov = d.asDiagonal() * cov * d.asDiagonal();
+  }
+  return cov;
+}
+
+// Marks the residuals (at_kink) whose secants two stated sigmas (`total`) each way along a free
+// Iwan parameter show a kink on one side (covariance()); true when it marked any.
+bool mark_kink_rows(const IwanObjective& objective, const std::vector<int>& free, const Vec4& v,
+                    double z, const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                    const Eigen::MatrixXd& total, std::vector<bool>& at_kink) {
+  const int m = static_cast<int>(J.rows()), nf = static_cast<int>(J.cols());
+  const double Ks = objective.reference_stiffness();
+  const Vec4 x0 = to_x(v);
+  std::vector<double> rp(m), rm(m);
+  bool more = false;
+  for (int j = 0; j < nf; ++j) {
+    if (free[j] == 4) continue;  // Z enters linearly: no kink
+    // Only a sigma up to 15 % is probed: a wider one is no pin, and over steps past 30 % in
+    // ln (F_S, gamma, beta) or 0.3 in chi the secants of smooth residuals part too (the lap
+    // joint's mode 2, whose joint barely moves, stated 26-95 % and was then called fixed at a
+    // kink). The six-point table's kink showed at beta's step, 12 %.
+    const double h = 2 * std::sqrt(std::max(total(j, j), 0.0));
+    if (!(h > 1e-3) || h > 0.3) continue;
+    Vec4 xp = x0, xm = x0;
+    xp(free[j]) += h;
+    xm(free[j]) -= h;
+    if (!objective.residuals_at(to_params(to_v(xp.data()), Ks), z, rp.data()) ||
+        !objective.residuals_at(to_params(to_v(xm.data()), Ks), z, rm.data())) {
+      continue;
+    }
+    const double scale = J.col(j).cwiseAbs().maxCoeff();
+    for (int i = 0; i < m; ++i) {
+      const double forward = (rp[i] - r(i)) / h, backward = (r(i) - rm[i]) / h;
+      const double larger = std::max(std::abs(forward), std::abs(backward));
+      // A kink on one side: that side's secant leaves the slope at the result while the other
+      // keeps it; a smooth residual's curvature moves both about equally, one up, one down
+      // (chi of a barely slipping one-mode joint, stepped 0.12, was taken for a kink).
+      const double off_f = std::abs(forward - J(i, j)), off_b = std::abs(backward - J(i, j));
+      const bool one_sided = std::min(off_f, off_b) < 0.3 * std::max(off_f, off_b);
+      if (!at_kink[i] && larger > 0.05 * scale && std::abs(forward - backward) > 0.5 * larger &&
+          one_sided) {
+        at_kink[i] = true;
+        more = true;
+      }
+    }
+  }
+  return more;
+}
+
+// The covariance without the rows at a kink (J's rows where at_kink) raises each variance of cov
+// where larger; the parameters along a direction only those rows fix have no sigma
+// (fixed_at_kink). False where that covariance cannot be formed.
+bool widen_without_kink_rows(const Residuals& res, const Eigen::MatrixXd& J,
+                             const std::vector<bool>& at_kink, const SerialNoise& without_floor,
+                             const std::vector<int>& free, Eigen::MatrixXd& cov,
+                             std::array<bool, 4>* fixed_at_kink) {
+  const int m = static_cast<int>(J.rows()), nf = static_cast<int>(J.cols());
+  Eigen::MatrixXd Jk = J;
+  for (int i = 0; i < m; ++i)
+    if (at_kink[i]) Jk.row(i).setZero();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Jk.transpose() * Jk);
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(nf, nf);
+  std::vector<bool> undetermined(static_cast<size_t>(nf), false);
+  for (int e = 0; e < nf; ++e) {
+    const Eigen::VectorXd u = eig.eigenvectors().col(e);
+    if (lambda(e) > 1e-10 * lambda(nf - 1)) {
+      pinv += u * u.transpose() / lambda(e);
+    } else {
+      for (int k = 0; k < nf; ++k) undetermined[k] = undetermined[k] || std::abs(u(k)) > 0.05;
+    }
+  }
+  const std::optional<Eigen::MatrixXd> c =
+      sandwich(res.objective, res.order, Jk, res.r, res.n_points, res.reduced_chi2, res.tau,
+               without_floor, &pinv);
+  if (!c || !c->allFinite()) return false;
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(nf);
+  for (int k = 0; k < nf; ++k) {
+    if (undetermined[k] && free[k] < 4) (*fixed_at_kink)[free[k]] = true;
+    if (!undetermined[k] && cov(k, k) > 0 && (*c)(k, k) > cov(k, k))
+      d(k) = std::sqrt((*c)(k, k) / cov(k, k));
+  }
+  cov = d.asDiagonal() * cov * d.asDiagonal();
+  return true;
+}
+
 }  // namespace
 
 Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int>& free,
@@ -354,26 +469,11 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
   // one-sided one could stop that widening and leave a sigma 9 % below what it was without it.
   SerialNoise without_floor = *noise;
   without_floor.variance = 0;
+  const Residuals res{objective, order, r, n_points, *reduced_chi2, tau};
   const std::optional<Eigen::MatrixXd> central =
       sandwich(objective, order, J, r, n_points, *reduced_chi2, tau, without_floor);
   if (!central) return {};
-  // At a kink of the model (a measured amplitude at phi_max, where the cost's minimum likes to
-  // sit) the one-sided slopes differ and the central one overstates what the data say: each
-  // variance is the largest of the central and the two one-sided estimates (7 of 40 three-hit
-  // fits had phi_max within 2.5e-5 of a measured amplitude in ln q and stated beta's sigma
-  // 3-4 times too small). Elsewhere the three agree to O(h).
-  Eigen::MatrixXd cov = *central;
-  for (const Eigen::MatrixXd* one_sided : {&Jf, &Jb}) {
-    const std::optional<Eigen::MatrixXd> c =
-        sandwich(objective, order, *one_sided, r, n_points, *reduced_chi2, tau, without_floor);
-    if (!c) continue;
-    // Only where a sigma differs by more than 10 %: elsewhere the O(h) differences of the
-    // one-sided slopes are no kink and leave the result as it was.
-    Eigen::VectorXd d = Eigen::VectorXd::Ones(nf);
-    for (int k = 0; k < nf; ++k)
-      if (cov(k, k) > 0 && (*c)(k, k) > 1.21 * cov(k, k)) d(k) = std::sqrt((*c)(k, k) / cov(k, k));
-    cov = d.asDiagonal() * cov * d.asDiagonal();
-  }
+  Eigen::MatrixXd cov = widen_at_one_sided(res, *central, Jf, Jb, without_floor);
   const std::optional<double> t =
       student_t_variance(t_degrees_of_freedom(noise->effective_points, nf));
   if (!t) return {};
@@ -403,69 +503,12 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
   // a direction (J^T J without them singular), the parameters along it have no sigma
   // (fixed_at_kink) and the others theirs from the pseudo-inverse, which leaves that direction out.
   std::vector<bool> at_kink(static_cast<size_t>(m), false);
-  const Vec4 x0 = to_x(v);
-  std::vector<double> rp(m), rm(m);
   for (int pass = 0; pass < 3; ++pass) {
     const Eigen::MatrixXd total = stated(cov);
     if (!total.allFinite()) return {};
-    bool more = false;
-    for (int j = 0; j < nf; ++j) {
-      if (free[j] == 4) continue;  // Z enters linearly: no kink
-      // Only a sigma up to 15 % is probed: a wider one is no pin, and over steps past 30 % in
-      // ln (F_S, gamma, beta) or 0.3 in chi the secants of smooth residuals part too (the lap
-      // joint's mode 2, whose joint barely moves, stated 26-95 % and was then called fixed at a
-      // kink). The six-point table's kink showed at beta's step, 12 %.
-      const double h = 2 * std::sqrt(std::max(total(j, j), 0.0));
-      if (!(h > 1e-3) || h > 0.3) continue;
-      Vec4 xp = x0, xm = x0;
-      xp(free[j]) += h;
-      xm(free[j]) -= h;
-      if (!objective.residuals_at(to_params(to_v(xp.data()), Ks), z, rp.data()) ||
-          !objective.residuals_at(to_params(to_v(xm.data()), Ks), z, rm.data())) {
-        continue;
-      }
-      const double scale = J.col(j).cwiseAbs().maxCoeff();
-      for (int i = 0; i < m; ++i) {
-        const double forward = (rp[i] - r(i)) / h, backward = (r(i) - rm[i]) / h;
-        const double larger = std::max(std::abs(forward), std::abs(backward));
-        // A kink on one side: that side's secant leaves the slope at the result while the other
-        // keeps it; a smooth residual's curvature moves both about equally, one up, one down
-        // (chi of a barely slipping one-mode joint, stepped 0.12, was taken for a kink).
-        const double off_f = std::abs(forward - J(i, j)), off_b = std::abs(backward - J(i, j));
-        const bool one_sided = std::min(off_f, off_b) < 0.3 * std::max(off_f, off_b);
-        if (!at_kink[i] && larger > 0.05 * scale && std::abs(forward - backward) > 0.5 * larger &&
-            one_sided) {
-          at_kink[i] = true;
-          more = true;
-        }
-      }
-    }
-    if (!more) break;
-    Eigen::MatrixXd Jk = J;
-    for (int i = 0; i < m; ++i)
-      if (at_kink[i]) Jk.row(i).setZero();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Jk.transpose() * Jk);
-    const Eigen::VectorXd& lambda = eig.eigenvalues();
-    Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(nf, nf);
-    std::vector<bool> undetermined(static_cast<size_t>(nf), false);
-    for (int e = 0; e < nf; ++e) {
-      const Eigen::VectorXd u = eig.eigenvectors().col(e);
-      if (lambda(e) > 1e-10 * lambda(nf - 1)) {
-        pinv += u * u.transpose() / lambda(e);
-      } else {
-        for (int k = 0; k < nf; ++k) undetermined[k] = undetermined[k] || std::abs(u(k)) > 0.05;
-      }
-    }
-    const std::optional<Eigen::MatrixXd> c =
-        sandwich(objective, order, Jk, r, n_points, *reduced_chi2, tau, without_floor, &pinv);
-    if (!c || !c->allFinite()) return {};
-    Eigen::VectorXd d = Eigen::VectorXd::Ones(nf);
-    for (int k = 0; k < nf; ++k) {
-      if (undetermined[k] && free[k] < 4) (*fixed_at_kink)[free[k]] = true;
-      if (!undetermined[k] && cov(k, k) > 0 && (*c)(k, k) > cov(k, k))
-        d(k) = std::sqrt((*c)(k, k) / cov(k, k));
-    }
-    cov = d.asDiagonal() * cov * d.asDiagonal();
+    if (!mark_kink_rows(objective, free, v, z, J, r, total, at_kink)) break;
+    if (!widen_without_kink_rows(res, J, at_kink, without_floor, free, cov, fixed_at_kink))
+      return {};
   }
   cov = stated(cov);
   if (!cov.allFinite()) return {};
