@@ -17,13 +17,101 @@
 #include "jointlab/model/qsma.h"
 
 namespace jointlab::correlate {
+
+using iwan_detail::stated_sigma;
+
 namespace {
 
 constexpr double kPenalty = 1e6;  // cost() of a parameter set the model cannot evaluate
 
-}  // namespace
+// Every point of a target's curves by the DOF it is read at (-1: modal), each as (amplitude,
+// (curve, point)).
+using PointsByDof =
+    std::map<Eigen::Index, std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>>>;
 
-using iwan_detail::stated_sigma;
+// Every point of every curve of target t read at one DOF on one QSMA curve; false where mode R
+// (column col of the modes) leaves a sensor still.
+bool points_by_dof(const IwanTarget& t, const model::LinearModes& modes, int col, bool modal,
+                   const std::vector<Sensor>& sensors, PointsByDof& by_dof) {
+  for (size_t ci = 0; ci < t.curves.size(); ++ci) {
+    const MeasuredBackbone& c = t.curves[ci];
+    const Eigen::Index dof = modal ? -1 : sensors[c.sensor].dof;
+    // A mode that leaves the sensor still (to rounding: 1e-8 of its largest motion) is
+    // not the one measured there.
+    const double ph = modal ? 1.0 : std::abs(modes.shapes(dof, col));
+    if (!(ph > 1e-8 * modes.shapes.col(col).cwiseAbs().maxCoeff())) return false;
+    for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
+      by_dof[dof].push_back({c.amplitude(j), {ci, j}});
+  }
+  return true;
+}
+
+// The model at every point of target t (model_at[curve][point], pointing into `curves`): one QSMA
+// curve per DOF over its sorted amplitudes (qsma_at.h), the slips at its ends gathered in
+// slip_range (may be null); false where a curve does not reach every amplitude.
+bool model_points(const model::JointCondensation& jc, const IwanTarget& t, int pw, bool matched,
+                  bool from_scratch, PointsByDof& by_dof, Eigen::Vector2d* slip_range,
+                  std::vector<std::vector<QsmaAtPoint>>& curves,
+                  std::vector<std::vector<const model::QsmaPoint*>>& model_at) {
+  curves.reserve(by_dof.size());
+  model_at.resize(t.curves.size());
+  for (size_t ci = 0; ci < t.curves.size(); ++ci)
+    model_at[ci].resize(static_cast<size_t>(t.curves[ci].amplitude.size()));
+  for (auto& [dof, order] : by_dof) {
+    std::sort(order.begin(), order.end());
+    std::vector<double> s(order.size());
+    for (size_t i = 0; i < order.size(); ++i) s[i] = order[i].first;
+    curves.push_back(
+        qsma_at(jc, t.mode, pw, s,
+                matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant,
+                from_scratch ? QsmaAtSolver::kBracketing : QsmaAtSolver::kNewton,
+                dof < 0 ? std::nullopt : std::optional<Eigen::Index>(dof)));
+    const std::vector<QsmaAtPoint>& at = curves.back();
+    if (at.size() != s.size()) return false;
+    if (slip_range) {
+      (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);
+      (*slip_range)(1) = std::max((*slip_range)(1), at.back().point.max_slip);
+    }
+    for (size_t i = 0; i < order.size(); ++i)
+      model_at[order[i].second.first][static_cast<size_t>(order[i].second.second)] = &at[i].point;
+  }
+  return true;
+}
+
+// Target t's residuals from index k on (k advanced past them), weighted by the measured scatter
+// (floored), the model's values (may be null) beside them; the damping residuals' positions and
+// scales in z_index and z_scale (the structure's own damping is added after).
+void target_residuals(const IwanTarget& t,
+                      const std::vector<std::vector<const model::QsmaPoint*>>& model_at,
+                      bool matched, double f_floor, double z_floor, double n_total, double* r,
+                      double* values, int& k, std::vector<int>& z_index,
+                      std::vector<double>& z_scale) {
+  for (size_t ci = 0; ci < t.curves.size(); ++ci) {
+    const MeasuredBackbone& c = t.curves[ci];
+    for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
+      const model::QsmaPoint& q = *model_at[ci][static_cast<size_t>(j)];
+      const double f = matched ? q.ringdown_frequency_hz : q.frequency_hz;
+      const double z = !matched                               ? q.damping_ratio
+                       : c.kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
+                                                              : q.ringdown_damping_ratio;
+      const Eigen::Vector2d stated = stated_sigma(c, j);
+      const double sf = std::max(stated(0), f_floor * c.frequency_hz(j));
+      const double sz = std::max(stated(1), z_floor * std::abs(c.damping_ratio(j)));
+      if (values) {
+        values[k] = f;
+        values[k + 1] = z;
+      }
+      r[k++] = (f - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
+      if (sz > 0) {
+        z_index.push_back(k);
+        z_scale.push_back(1 / (sz * std::sqrt(n_total)));
+      }
+      r[k++] = sz > 0 ? (z - c.damping_ratio(j)) / (sz * std::sqrt(n_total)) : 0.0;
+    }
+  }
+}
+
+}  // namespace
 
 int amplitude_power(AmplitudeQuantity q) {
   return q == AmplitudeQuantity::kDisplacement ? 0 : q == AmplitudeQuantity::kVelocity ? 1 : 2;
@@ -282,68 +370,15 @@ bool IwanObjective::evaluate(const model::IwanParameters& p, double* r, Eigen::V
       // shape leaves the linear mode's, qsma_at.h).
       const bool modal = t.curves.front().modal;
       const int pw = modal ? 0 : amplitude_power(amplitude_);
-      // Every point of every curve of this target read at one DOF on one QSMA curve.
-      std::map<Eigen::Index, std::vector<std::pair<double, std::pair<size_t, Eigen::Index>>>>
-          by_dof;  // DOF (-1: modal) -> (s, (curve, point))
-      for (size_t ci = 0; ci < t.curves.size(); ++ci) {
-        const MeasuredBackbone& c = t.curves[ci];
-        const Eigen::Index dof = modal ? -1 : sensors_[c.sensor].dof;
-        // A mode that leaves the sensor still (to rounding: 1e-8 of its largest motion) is
-        // not the one measured there.
-        const double ph = modal ? 1.0 : std::abs(modes.shapes(dof, col));
-        if (!(ph > 1e-8 * modes.shapes.col(col).cwiseAbs().maxCoeff())) return false;
-        for (Eigen::Index j = 0; j < c.amplitude.size(); ++j)
-          by_dof[dof].push_back({c.amplitude(j), {ci, j}});
-      }
+      PointsByDof by_dof;
+      if (!points_by_dof(t, modes, col, modal, sensors_, by_dof)) return false;
       const bool matched = comparison_ == IwanComparison::kMatched;
       std::vector<std::vector<QsmaAtPoint>> curves;  // kept: model_at points into them
-      curves.reserve(by_dof.size());
-      // Residuals in the order of the curves and their points.
-      std::vector<std::vector<const model::QsmaPoint*>> model_at(t.curves.size());
-      for (size_t ci = 0; ci < t.curves.size(); ++ci)
-        model_at[ci].resize(static_cast<size_t>(t.curves[ci].amplitude.size()));
-      for (auto& [dof, order] : by_dof) {
-        std::sort(order.begin(), order.end());
-        std::vector<double> s(order.size());
-        for (size_t i = 0; i < order.size(); ++i) s[i] = order[i].first;
-        curves.push_back(
-            qsma_at(jc, t.mode, pw, s,
-                    matched ? AmplitudeFrequency::kFirstHarmonic : AmplitudeFrequency::kSecant,
-                    from_scratch ? QsmaAtSolver::kBracketing : QsmaAtSolver::kNewton,
-                    dof < 0 ? std::nullopt : std::optional<Eigen::Index>(dof)));
-        const std::vector<QsmaAtPoint>& at = curves.back();
-        if (at.size() != s.size()) return false;
-        if (slip_range) {
-          (*slip_range)(0) = std::min((*slip_range)(0), at.front().point.max_slip);
-          (*slip_range)(1) = std::max((*slip_range)(1), at.back().point.max_slip);
-        }
-        for (size_t i = 0; i < order.size(); ++i)
-          model_at[order[i].second.first][static_cast<size_t>(order[i].second.second)] =
-              &at[i].point;
-      }
-      for (size_t ci = 0; ci < t.curves.size(); ++ci) {
-        const MeasuredBackbone& c = t.curves[ci];
-        for (Eigen::Index j = 0; j < c.amplitude.size(); ++j) {
-          const model::QsmaPoint& q = *model_at[ci][static_cast<size_t>(j)];
-          const double f = matched ? q.ringdown_frequency_hz : q.frequency_hz;
-          const double z = !matched                               ? q.damping_ratio
-                           : c.kind == BackboneKind::kSteppedSine ? q.harmonic_damping_ratio
-                                                                  : q.ringdown_damping_ratio;
-          const Eigen::Vector2d stated = stated_sigma(c, j);
-          const double sf = std::max(stated(0), f_floor_ * c.frequency_hz(j));
-          const double sz = std::max(stated(1), z_floor_ * std::abs(c.damping_ratio(j)));
-          if (values) {
-            values[k] = f;
-            values[k + 1] = z;
-          }
-          r[k++] = (f - c.frequency_hz(j)) / (sf * std::sqrt(n_total));
-          if (sz > 0) {
-            z_index.push_back(k);
-            z_scale.push_back(1 / (sz * std::sqrt(n_total)));
-          }
-          r[k++] = sz > 0 ? (z - c.damping_ratio(j)) / (sz * std::sqrt(n_total)) : 0.0;
-        }
-      }
+      std::vector<std::vector<const model::QsmaPoint*>> model_at;
+      if (!model_points(jc, t, pw, matched, from_scratch, by_dof, slip_range, curves, model_at))
+        return false;
+      target_residuals(t, model_at, matched, f_floor_, z_floor_, n_total, r, values, k, z_index,
+                       z_scale);
     }
   } catch (const InputError&) {
     return false;
