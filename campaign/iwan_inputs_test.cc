@@ -154,5 +154,29 @@ TEST(IwanInputs, ALinearPartMatchingTheMeasuredFrequenciesCountsAsUpdated) {
   EXPECT_FALSE(linear_part_matches(m, {t}));
 }
 
+// update-iwan --backbone (and compare, and the Python module, which read through here): a table
+// given twice is refused, not counted as two hits (data::read_backbone_tables).
+TEST(IwanInputs, ABackboneTableGivenTwiceIsRefused) {
+  const model::Model m = correlate::two_chain_structure({.iwan = true});
+  const std::string a =
+      testing::scratch_file("iwan_inputs_twice", "a.csv",
+                            "amplitude,frequency_hz,damping_ratio\n1e-5,20,0.01\n2e-5,19.9,0.02\n")
+          .string();
+  const std::string b =
+      testing::scratch_file("iwan_inputs_twice", "b.csv",
+                            "amplitude,frequency_hz,damping_ratio\n1e-5,20.1,0.01\n2e-5,20,0.02\n")
+          .string();
+  IwanInputArgs args;
+  args.model = "two_chain";
+  args.modes = {"1"};
+  args.backbones = {a, b};
+  EXPECT_EQ(read_iwan_inputs(m, args, "update-iwan").targets.front().curves.size(), 2u);
+  args.backbones = {a, b, a};
+  EXPECT_NE(testing::input_error_of([&] {
+              read_iwan_inputs(m, args, "update-iwan");
+            }).find(a + ": given twice"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace jointlab::campaign

@@ -865,9 +865,13 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
 BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
                                     std::optional<Quantity> quantity, int sensor) {
   BackboneCurves out;
-  for (const std::string& file : files) {
-    const data::BackboneTable table = data::read_backbone_table(file, quantity);
-    if (table.amplitude_unit.empty() && !table.written_by_jointlab) out.unitless.push_back(file);
+  // One hit given twice would count as two: refused (read_backbone_tables).
+  const std::vector<data::BackboneTable> tables =
+      data::read_backbone_tables({files.begin(), files.end()}, quantity);
+  for (size_t i = 0; i < files.size(); ++i) {
+    const data::BackboneTable& table = tables[i];
+    if (table.amplitude_unit.empty() && !table.written_by_jointlab)
+      out.unitless.push_back(files[i]);
     out.curves.push_back(measured_backbone(table, sensor));
   }
   return out;

@@ -150,7 +150,8 @@ struct BackboneCurves {
   std::vector<MeasuredBackbone> curves;  ///< one per file, in order
   std::vector<std::string> unitless;     ///< files read without an amplitude unit
 };
-/// Reads each file with data::read_backbone_table (amplitudes of `quantity`; nullopt: modal).
+/// Reads each file with data::read_backbone_tables (amplitudes of `quantity`; nullopt: modal):
+/// InputError where a table is given twice.
 BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
                                     std::optional<Quantity> quantity, int sensor);
 

@@ -704,4 +704,40 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   return sorted_table(rows, columns, file);
 }
 
+namespace {
+
+// Whether two tables hold the same points: as many, each amplitude, frequency and damping equal
+// to 1e-9 relative (a copy re-saved with fewer digits), in amplitude order.
+bool same_points(const BackboneTable& a, const BackboneTable& b) {
+  const auto close = [](const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+    return ((x - y).array().abs() <= 1e-9 * x.array().abs().max(y.array().abs())).all();
+  };
+  return a.size() == b.size() && close(a.amplitude, b.amplitude) &&
+         close(a.frequency_hz, b.frequency_hz) && close(a.damping_ratio, b.damping_ratio);
+}
+
+}  // namespace
+
+std::vector<BackboneTable> read_backbone_tables(const std::vector<fs::path>& paths,
+                                                std::optional<Quantity> quantity) {
+  std::vector<BackboneTable> out;
+  for (const fs::path& path : paths) {
+    BackboneTable t = read_backbone_table(path, quantity);
+    for (size_t i = 0; i < out.size(); ++i) {
+      if (!same_points(out[i], t)) continue;
+      const bool again = paths[i].lexically_normal() == path.lexically_normal();
+      throw InputError(where(
+          t.source, 0,
+          fmt::format("{}: a hit's table given twice counts as two hits, its points weighed "
+                      "twice and the stated sigmas shrunk by up to sqrt(2); give each hit once",
+                      again ? "given twice"
+                            : fmt::format("holds the same {} points as {} (every amplitude, "
+                                          "frequency and damping equal)",
+                                          t.size(), out[i].source))));
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
 }  // namespace jointlab::data

@@ -129,8 +129,12 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     tables.fitted = c.iwan_update.fits(c.modes[k].name);
     tables.linear_frequency_hz = modes[k].linear_frequency_hz;
     std::vector<std::string> unitless;  // read in SI, said in the report as update-iwan says it
-    for (const std::filesystem::path& f : c.modes[k].backbones) {
-      const data::BackboneTable t = data::read_backbone_table(f, c.amplitude);
+    // One hit given twice would count as two: refused (read_backbone_tables).
+    const std::vector<data::BackboneTable> read =
+        data::read_backbone_tables(c.modes[k].backbones, c.amplitude);
+    for (size_t i = 0; i < read.size(); ++i) {
+      const std::filesystem::path& f = c.modes[k].backbones[i];
+      const data::BackboneTable& t = read[i];
       if (t.amplitude_unit.empty() && !t.written_by_jointlab)
         unitless.push_back(f.filename().string());
       Curve cv;

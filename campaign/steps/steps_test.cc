@@ -582,6 +582,12 @@ TEST_F(Steps, ModeBackboneTablesJoinTheIwanTargets) {
   const ModeBackbones u = campaign_backbones(c, *measured_).back();
   EXPECT_EQ(u.amplitude_note, "");
   EXPECT_EQ(u.curves[0].amplitude.minCoeff(), 1e-3 * hit.amplitude.minCoeff());
+  // The same hit's table twice would count as two hits: refused (data::read_backbone_tables).
+  c.modes[0].backbones = {table, with_unit, table};
+  EXPECT_NE(testing::input_error_of([&] {
+              campaign_backbones(c, *measured_);
+            }).find(table.string() + ": given twice"),
+            std::string::npos);
 }
 
 TEST_F(Steps, IwanLinearDampingSetting) {
