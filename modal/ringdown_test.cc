@@ -767,6 +767,61 @@ TEST(RingdownBandGain, AWeakerNeighbourJustBelowTheBandLeavesTheModeItsPoints) {
   EXPECT_GE(decades_146[decades_146.size() / 2], 0.45);
 }
 
+// The LMS twin beside a heavily damped neighbour just below its authors' band: a linear mode
+// of 1 % damping at 146 or 147 Hz (2-3 Hz below the band's lower edge), 0.1, 0.3 or 1 times
+// the mode's 350 m/s^2 at the impact, at 5120 Hz as above. Its half-power width is 3 Hz: on
+// the mode's skirt it is a shoulder, no peak, and it has died before the noise floor's fits see
+// it, so the band followed the mode over it (139.4:169.4 Hz) and its beat with the mode moved
+// the first one or two kept points' damping 9-57 % high, at 3.4-25 times their stated
+// uncertainty (seed 1: 146 Hz at 0.3 times 29 % at 8.1 times, 147 Hz at 0.1 and 0.3 times 20 %
+// and 57 % at 8.8 and 19 times). Now the beat is fitted over the decay's start (edge_beat)
+// and what it moves each point by joins the point's uncertainty. Measured (seed 1): every
+// unmarked point within 1.04 times its stated uncertainty; 146 Hz at 0.1 and 0.3 times 1.18 and
+// 1.02 decades kept (1.27 each before, their first points wrong), 147 Hz 1.10 and 0.75 (1.68
+// and 1.56); at 1 times, held back from the neighbour's peak as before, 0.37 and 0.09 (unmarked
+// points). Left as it was: at 147 Hz and 1 times the band held at 147.24 Hz passes the
+// neighbour's decaying start through its edge, and 9 points up to 1.31 s are marked as an
+// energy exchange (`exchange` 1, their damping apparent), whose frequencies read up to
+// 0.18 Hz low at 11 times their stated uncertainty; they are counted apart here.
+// Required: every unmarked point's damping and frequency within 3 times its stated
+// uncertainty (a stated one-sigma; three leaves room for the noise, where the worst now reads
+// 1.04 and the wrong ones read 3.4-25), at least 0.5 decades kept where the band was moved
+// over the neighbour, and the summary naming the second mode there.
+TEST(RingdownBandGain, AHeavilyDampedNeighbourTheBandMovedOverIsReadWithItsBeat) {
+  const double fs = 5120, noise = 4.0 * std::sqrt(fs / 51200);
+  for (const double hz : {146.0, 147.0}) {
+    for (const double share : {0.1, 0.3, 1.0}) {
+      const LmsTwin t = lms_twin(1, hz, noise, 0, 350 * share, 0.01, fs);
+      const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+      char where[80];
+      std::snprintf(where, sizeof where, "neighbour %g Hz, %g x, damping 1 %%", hz, share);
+      ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << where << ": " << r.summary.message;
+      double worst = 0;
+      int marked = 0;
+      for (Eigen::Index i = 0; i < r.backbone.size(); ++i) {
+        if (r.backbone.exchange(i)) {
+          ++marked;
+          continue;
+        }
+        const double a = r.backbone.displacement(i);
+        const double f = t.m1.omega_n(a) / (2 * std::numbers::pi);
+        worst = std::max(
+            {worst, std::abs(r.backbone.damping(i) - t.m1.zeta(a)) / r.backbone.damping_std(i),
+             std::abs(r.backbone.frequency_hz(i) - f) / r.backbone.frequency_std_hz(i)});
+      }
+      std::printf("LMS twin + %s: %.2f decades, worst error / stated %.2f (%d points marked)\n",
+                  where, r.summary.amplitude_decades, worst, marked);
+      EXPECT_LE(worst, 3.0) << where << ": " << r.summary.message;
+      if (share < 1) {  // the band moved over it
+        EXPECT_EQ(marked, 0) << where;
+        EXPECT_GE(r.summary.amplitude_decades, 0.5) << where << ": " << r.summary.message;
+        EXPECT_NE(r.summary.message.find("takes in a second mode about"), std::string::npos)
+            << where << ": " << r.summary.message;
+      }
+    }
+  }
+}
+
 // A second mode inside the typed band, 154 Hz beside the LMS twin's drifting mode (149.9 to
 // 151.7 Hz, read in 148.9:158.9 Hz): the band is moved to follow the mode, onto the neighbour,
 // and no span meets the damping limit. The refusal said only "the band (10 Hz wide) is narrower
