@@ -662,6 +662,147 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
   return out;
 }
 
+namespace {
+
+// The shape columns of a modes table from its header `cells` (line n of `name`), after the
+// mode,frequency_hz that must begin it: each a sensor channel (or its real or imaginary part),
+// none twice, every part beside its other part.
+std::vector<TableColumn> modes_table_columns(const std::string& name,
+                                             const std::vector<Sensor>& sensors,
+                                             const std::vector<std::string>& cells, long n) {
+  std::vector<TableColumn> columns;
+  if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
+    // What was found, as written: 'Mode,Frequency_Hz' or 'frequency_hz [Hz]' differ only in
+    // case or a unit, and a newcomer cannot see which from the rule alone.
+    std::string found;
+    for (size_t c = 0; c < std::min<size_t>(cells.size(), 2); ++c)
+      found += (c ? "," : "") + cells[c];
+    throw InputError(where(name, n,
+                           fmt::format("the header must begin with mode,frequency_hz (lower "
+                                       "case, no unit: frequencies in Hz); it begins '{}'",
+                                       found)));
+  }
+  for (size_t c = 2; c < cells.size(); ++c) {
+    const TableColumn col = table_column(sensors, cells[c]);
+    if (col.row < 0) {
+      throw InputError(where(
+          name, n,
+          col.part == kMagnitudeOrPhase
+              ? fmt::format("column '{}': magnitude or phase columns are not read; give the "
+                            "real and imaginary parts ({}_re, {}_im) or complex cells (0.1+0.2i)",
+                            cells[c], col.base, col.base)
+              : fmt::format("column '{}' is not a sensor channel", cells[c])));
+    }
+    for (const TableColumn& other : columns) {
+      if (other.row == col.row &&
+          (other.part == col.part || other.part == kWhole || col.part == kWhole)) {
+        throw InputError(where(name, n,
+                               fmt::format("column '{}': sensor channel {} twice", cells[c],
+                                           sensors[static_cast<size_t>(col.row)].channel)));
+      }
+    }
+    columns.push_back(col);
+  }
+  for (const TableColumn& col : columns) {
+    if (col.part != kRealPart && col.part != kImaginaryPart) continue;
+    const bool paired = std::any_of(columns.begin(), columns.end(), [&](const TableColumn& o) {
+      return o.row == col.row && o.part == kRealPart + kImaginaryPart - col.part;
+    });
+    if (!paired) {
+      throw InputError(where(name, n,
+                             fmt::format("column '{}' has no {} part beside it ({}_{})", col.header,
+                                         col.part == kRealPart ? "imaginary" : "real", col.base,
+                                         col.part == kRealPart ? "im" : "re")));
+    }
+  }
+  return columns;
+}
+
+// The shape of one modes-table row (`cells`, line n of `name`) at the sensors, complex, 0 where
+// a sensor has no entry; a sensor with one part of two given is refused. `number` reads cell c.
+template <class Number>
+Eigen::VectorXcd row_shape(const std::string& name, const std::vector<Sensor>& sensors,
+                           const std::vector<TableColumn>& columns,
+                           const std::vector<std::string>& cells, long n, const Number& number) {
+  const auto n_s = static_cast<Eigen::Index>(sensors.size());
+  Eigen::VectorXcd v = Eigen::VectorXcd::Zero(n_s);
+  std::vector<char> given(sensors.size(), 0);  // per sensor: parts given (1 real, 2 imaginary)
+  for (size_t c = 2; c < cells.size(); ++c) {
+    const TableColumn& col = columns[c - 2];
+    const std::string& cell = cells[c];
+    if (cell.empty()) continue;
+    if (col.part == kWhole) {
+      const std::optional<std::complex<double>> z = complex_cell(cell);
+      if (!z) {
+        throw InputError(
+            where(name, n,
+                  fmt::format("shape entry '{}' of column '{}' is not a number (real, or complex "
+                              "as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
+                              cell, col.header)));
+      }
+      v(col.row) = *z;
+      given[static_cast<size_t>(col.row)] = 3;
+      continue;
+    }
+    const double x = number(c, "shape entry");
+    if (col.part == kRealPart)
+      v(col.row).real(x);
+    else
+      v(col.row).imag(x);
+    given[static_cast<size_t>(col.row)] |= static_cast<char>(col.part);
+  }
+  for (const TableColumn& col : columns) {
+    const char g = given[static_cast<size_t>(col.row)];
+    if (col.part != kWhole && g != 0 && g != 3) {
+      throw InputError(
+          where(name, n,
+                fmt::format("sensor {}: its {} part is given and its {} part empty: give both or "
+                            "neither (neither: not measured)",
+                            sensors[static_cast<size_t>(col.row)].channel,
+                            g == kRealPart ? "real" : "imaginary",
+                            g == kRealPart ? "imaginary" : "real")));
+    }
+  }
+  return v;
+}
+
+// Shape v of `mode` (line n of `name`) as the real shape nearest it: refused below kMpcRefused,
+// a warning into `warnings` below kMpcPoor. Parts given as 0 and 0 are an entry of 0, which
+// reads as not measured (mac.h).
+Eigen::VectorXd real_shape(const std::string& name, long n, int mode, const Eigen::VectorXcd& v,
+                           std::vector<std::string>& warnings) {
+  Eigen::VectorXd real = v.real();
+  if (v.imag().squaredNorm() > 0) {
+    const RealisedShape r = realise(v);
+    const std::string what = fmt::format(
+        "mode {}'s shape is complex: its modal phase collinearity MPC is {:.3f} (1 for a "
+        "real normal mode), and the imaginary part left out at the phase that makes it "
+        "most nearly real holds {:.1f} % of it",
+        mode, r.mpc, 100 * r.imaginary_share);
+    if (r.mpc < kMpcRefused) {
+      throw InputError(
+          where(name, n,
+                fmt::format("{}: a real normal-mode model cannot match a shape so complex (MPC "
+                            "below {}); check the export (real and imaginary parts, not magnitude "
+                            "and phase), or leave its shape cells empty to pair it by frequency "
+                            "alone, or leave the mode out",
+                            what, kMpcRefused)));
+    }
+    if (r.mpc < kMpcPoor) {
+      warnings.push_back(
+          where(name, n,
+                fmt::format("{}: it is paired and fitted as that real part, which a real "
+                            "normal-mode model matches only in part (MPC below {}): its MAC "
+                            "reads that part alone",
+                            what, kMpcPoor)));
+    }
+    real = r.shape;
+  }
+  return real;
+}
+
+}  // namespace
+
 MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& sensors,
                                std::vector<int>* modes) {
   const std::string name = path.string();
@@ -671,50 +812,7 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
   std::vector<Eigen::VectorXd> shape;
   std::vector<std::string> warnings;
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
-    if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
-      // What was found, as written: 'Mode,Frequency_Hz' or 'frequency_hz [Hz]' differ only in
-      // case or a unit, and a newcomer cannot see which from the rule alone.
-      std::string found;
-      for (size_t c = 0; c < std::min<size_t>(cells.size(), 2); ++c)
-        found += (c ? "," : "") + cells[c];
-      throw InputError(where(name, n,
-                             fmt::format("the header must begin with mode,frequency_hz (lower "
-                                         "case, no unit: frequencies in Hz); it begins '{}'",
-                                         found)));
-    }
-    for (size_t c = 2; c < cells.size(); ++c) {
-      const TableColumn col = table_column(sensors, cells[c]);
-      if (col.row < 0) {
-        throw InputError(where(
-            name, n,
-            col.part == kMagnitudeOrPhase
-                ? fmt::format("column '{}': magnitude or phase columns are not read; give the "
-                              "real and imaginary parts ({}_re, {}_im) or complex cells (0.1+0.2i)",
-                              cells[c], col.base, col.base)
-                : fmt::format("column '{}' is not a sensor channel", cells[c])));
-      }
-      for (const TableColumn& other : columns) {
-        if (other.row == col.row &&
-            (other.part == col.part || other.part == kWhole || col.part == kWhole)) {
-          throw InputError(where(name, n,
-                                 fmt::format("column '{}': sensor channel {} twice", cells[c],
-                                             sensors[static_cast<size_t>(col.row)].channel)));
-        }
-      }
-      columns.push_back(col);
-    }
-    for (const TableColumn& col : columns) {
-      if (col.part != kRealPart && col.part != kImaginaryPart) continue;
-      const bool paired = std::any_of(columns.begin(), columns.end(), [&](const TableColumn& o) {
-        return o.row == col.row && o.part == kRealPart + kImaginaryPart - col.part;
-      });
-      if (!paired) {
-        throw InputError(where(name, n,
-                               fmt::format("column '{}' has no {} part beside it ({}_{})",
-                                           col.header, col.part == kRealPart ? "imaginary" : "real",
-                                           col.base, col.part == kRealPart ? "im" : "re")));
-      }
-    }
+    columns = modes_table_columns(name, sensors, cells, n);
   };
   const auto on_row = [&](const std::vector<std::string>& cells, long n) {
     auto number = [&](size_t c, const char* what) {
@@ -735,73 +833,8 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
     }
     const double f = number(1, "frequency_hz");
     if (!(f > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
-    const auto n_s = static_cast<Eigen::Index>(sensors.size());
-    Eigen::VectorXcd v = Eigen::VectorXcd::Zero(n_s);
-    std::vector<char> given(sensors.size(), 0);  // per sensor: parts given (1 real, 2 imaginary)
-    for (size_t c = 2; c < cells.size(); ++c) {
-      const TableColumn& col = columns[c - 2];
-      const std::string& cell = cells[c];
-      if (cell.empty()) continue;
-      if (col.part == kWhole) {
-        const std::optional<std::complex<double>> z = complex_cell(cell);
-        if (!z) {
-          throw InputError(
-              where(name, n,
-                    fmt::format("shape entry '{}' of column '{}' is not a number (real, or complex "
-                                "as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
-                                cell, col.header)));
-        }
-        v(col.row) = *z;
-        given[static_cast<size_t>(col.row)] = 3;
-        continue;
-      }
-      const double x = number(c, "shape entry");
-      if (col.part == kRealPart)
-        v(col.row).real(x);
-      else
-        v(col.row).imag(x);
-      given[static_cast<size_t>(col.row)] |= static_cast<char>(col.part);
-    }
-    for (const TableColumn& col : columns) {
-      const char g = given[static_cast<size_t>(col.row)];
-      if (col.part != kWhole && g != 0 && g != 3) {
-        throw InputError(
-            where(name, n,
-                  fmt::format("sensor {}: its {} part is given and its {} part empty: give both or "
-                              "neither (neither: not measured)",
-                              sensors[static_cast<size_t>(col.row)].channel,
-                              g == kRealPart ? "real" : "imaginary",
-                              g == kRealPart ? "imaginary" : "real")));
-      }
-    }
-    // Parts given as 0 and 0 are an entry of 0, which reads as not measured (mac.h).
-    Eigen::VectorXd real = v.real();
-    if (v.imag().squaredNorm() > 0) {
-      const RealisedShape r = realise(v);
-      const std::string what = fmt::format(
-          "mode {}'s shape is complex: its modal phase collinearity MPC is {:.3f} (1 for a "
-          "real normal mode), and the imaginary part left out at the phase that makes it "
-          "most nearly real holds {:.1f} % of it",
-          static_cast<int>(mode), r.mpc, 100 * r.imaginary_share);
-      if (r.mpc < kMpcRefused) {
-        throw InputError(where(
-            name, n,
-            fmt::format("{}: a real normal-mode model cannot match a shape so complex (MPC "
-                        "below {}); check the export (real and imaginary parts, not magnitude "
-                        "and phase), or leave its shape cells empty to pair it by frequency "
-                        "alone, or leave the mode out",
-                        what, kMpcRefused)));
-      }
-      if (r.mpc < kMpcPoor) {
-        warnings.push_back(
-            where(name, n,
-                  fmt::format("{}: it is paired and fitted as that real part, which a real "
-                              "normal-mode model matches only in part (MPC below {}): its MAC "
-                              "reads that part alone",
-                              what, kMpcPoor)));
-      }
-      real = r.shape;
-    }
+    const Eigen::VectorXcd v = row_shape(name, sensors, columns, cells, n, number);
+    Eigen::VectorXd real = real_shape(name, n, static_cast<int>(mode), v, warnings);
     numbers.push_back(static_cast<int>(mode));
     freq.push_back(f);
     shape.push_back(std::move(real));
