@@ -21,8 +21,9 @@
 // read as points nor as separators), while the two uncertainties are not both read, a column
 // that looks like one (std, sigma, err, ...): ignored, the fit would use its floors unseen, and
 // several hits in one file, told apart by a label column ('hit', 'test', 'run_id', ...) two of
-// whose values hold two rows or more each: read as one curve, the scatter between the hits would
-// pass for the model's misfit.
+// whose values hold two rows or more each, or by their order (each hit's rows running through its
+// amplitudes one way, the next starting again at the other end): read as one curve, the scatter
+// between the hits would pass for the model's misfit.
 #pragma once
 
 #include <filesystem>

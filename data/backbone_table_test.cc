@@ -1,11 +1,14 @@
 #include "jointlab/data/backbone_table.h"
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "jointlab/tests/test_util.h"
@@ -535,6 +538,57 @@ TEST(BackboneTable, RefusesAHitGivenTwice) {
                 .find(copy.string() + ": holds the same 2 points as " + a.string() +
                       " (every amplitude, frequency and damping equal): a hit's table given twice"),
             std::string::npos);
+}
+
+// A long file without a label column: hits one under another, each in time order (amplitude
+// falling), the amplitude jumping back up where the next begins. Read as one curve, six such hits
+// of a beam stated no sigma and named the structure's own damping as the cause (their scatter in
+// K_T and F_S of 2 % and 3 %), where one file per hit named the scatter and stated a sigma.
+// Refused at the first jump. The same rows in any other order (shuffled, sorted, a stepped sine
+// up and down) are one curve, read; a few rows after a curve (fewer than four) are read too.
+TEST(BackboneTable, RefusesHitsOneUnderAnotherWithoutALabel) {
+  std::vector<std::string> rows;
+  for (int hit = 0; hit < 3; ++hit) {
+    for (int i = 0; i < 6; ++i) {
+      rows.push_back(fmt::format("{:.6g},{:.6g},{:.6g}", 1e-4 * std::pow(0.5, i) * (1 + 0.05 * hit),
+                                 93.0 + 0.1 * i + 0.01 * hit, 1e-3 * (1 - 0.1 * i)));
+    }
+  }
+  const auto text = [&](const std::vector<size_t>& order) {
+    std::string t = "amplitude,frequency_hz,damping_ratio\n";
+    for (const size_t i : order) t += rows[i] + "\n";
+    return t;
+  };
+  std::vector<size_t> order(rows.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  expect_refusal("hits.csv", text(order), std::nullopt,
+                 {"hits.csv:8: the amplitude jumps back up here, from 3.125e-06 (line 7) to "
+                  "0.000105, and the rows before and after run down in amplitude (3 runs of 6 "
+                  "rows or more): several hits one under another? A backbone table is one curve",
+                  "write each hit's rows to a file of its own; if the rows are one curve, sort "
+                  "them by amplitude"});
+  // Shuffled (a fixed permutation), sorted, and up then down: one curve each.
+  std::vector<size_t> shuffled = order;
+  for (size_t i = 0; i < shuffled.size(); ++i) std::swap(shuffled[i], shuffled[(7 * i + 3) % 18]);
+  EXPECT_EQ(read_backbone_table(table("shuffled.csv", text(shuffled)), std::nullopt).size(), 18);
+  std::vector<size_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end(),
+            [&](size_t a, size_t b) { return std::stod(rows[a]) > std::stod(rows[b]); });
+  EXPECT_EQ(read_backbone_table(table("sorted.csv", text(sorted)), std::nullopt).size(), 18);
+  std::vector<size_t> up_down;
+  for (int i = 5; i >= 0; --i) up_down.push_back(static_cast<size_t>(i));
+  for (int i = 0; i < 6; ++i) up_down.push_back(static_cast<size_t>(6 + i));
+  EXPECT_EQ(read_backbone_table(table("up_down.csv", text(up_down)), std::nullopt).size(), 12);
+  std::vector<size_t> appended(order.begin(), order.begin() + 9);  // one hit and three rows
+  EXPECT_EQ(read_backbone_table(table("appended.csv", text(appended)), std::nullopt).size(), 9);
+  // Hits at three force levels, each sorted up in amplitude, their ranges overlapping.
+  std::string levels = "amplitude,frequency_hz,damping_ratio\n";
+  for (int hit = 0; hit < 3; ++hit)
+    for (int i = 0; i < 6; ++i)
+      levels += fmt::format("{:.6g},93,0.001\n", 1e-6 * std::pow(3.0, hit) * std::pow(2.0, i));
+  expect_refusal("levels.csv", levels, std::nullopt,
+                 {"levels.csv:8: the amplitude jumps back down here, from 3.2e-05 (line 7) to "
+                  "3e-06, and the rows before and after run up in amplitude (3 runs of 6 rows"});
 }
 
 }  // namespace
