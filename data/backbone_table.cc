@@ -67,6 +67,13 @@ std::string amplitude_kind_mismatch(const std::string& unit, const Unit& u,
                      shorten(unit), of, with_article(name), name, si_unit(*quantity), fits);
 }
 
+// Whether a unit is an angular frequency's (rad/s): omega = 2 pi f.
+bool is_angular_unit(std::string_view unit) {
+  std::string u = lower(unit);
+  std::erase(u, ' ');
+  return u == "rad/s" || u == "rad/sec" || u == "rads^-1" || u == "rad*s^-1";
+}
+
 // The factor a value of column k (amplitude, frequency_hz, damping_ratio, frequency_std_hz,
 // damping_std) in `unit` takes to the table's units; InputError naming the file, the column and
 // the unit when the column does not take it: a unit is converted or refused, never ignored.
@@ -78,8 +85,13 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
   };
   if (k == 1 || k == 3) {  // frequencies
     if (lower(unit) == "hz") return 1.0;
-    throw refuse(
-        fmt::format("unit '{}' refused: {} is in Hz ([Hz] or no unit)", shorten(unit), kNames[k]));
+    throw refuse(fmt::format(
+        "unit '{}' refused: {} is in Hz ([Hz] or no unit){}", shorten(unit), kNames[k],
+        is_angular_unit(unit)
+            ? fmt::format("; a frequency in rad/s is 2 pi times the one in Hz: divide its values "
+                          "by 2 pi (6.2832) and write '{} [Hz]'",
+                          kNames[k])
+            : ""));
   }
   if (k == 2 || k == 4) {  // damping ratios
     if (unit == "1" || unit == "-") return 1.0;
@@ -140,6 +152,7 @@ struct Guess {
   bool uncertainty = false;    // a std, sigma, error ... (of `column` when that is 3 or 4)
   bool loss_factor = false;    // eta = 2 zeta, not a damping ratio
   bool relative = false;       // "rel", "relative": a std divided by its value
+  bool angular = false;        // omega = 2 pi f (rad/s): a frequency, divided by 2 pi
   std::string unit;            // the unit it gives, in [] or (); "" if none
   bool parenthesised = false;  // the unit in round brackets
   bool unit_taken = false;     // `unit` is one the guessed column takes
@@ -181,9 +194,13 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
     return (w.starts_with("damp") && w != "damped") || w.starts_with("zeta") || w == "ζ" ||
            w == "xi";
   });
-  const bool frequency = any([](const std::string& w) {
-    return w.starts_with("freq") || w == "f" || w == "fn" || w == "f0" || w == "hz";
-  });
+  g.angular = is_angular_unit(g.unit) || any([](const std::string& w) {
+                return w == "omega" || w == "ω" || w == "angular" || w == "wn" || w == "w0";
+              });
+  const bool frequency =
+      g.angular || any([](const std::string& w) {
+        return w.starts_with("freq") || w == "f" || w == "fn" || w == "f0" || w == "hz";
+      });
   const bool amplitude = any([](const std::string& w) {
     return w.starts_with("amp") || w.starts_with("acc") || w.starts_with("vel") ||
            w.starts_with("disp") || w == "a" || w == "q";
@@ -255,6 +272,12 @@ std::string rename_hint(size_t i, const std::string& field, const Guess& g) {
                        g.unit_measures == Quantity::kForce
                            ? std::string()
                            : fmt::format(" and the header '{} [{}]'", name, g.unit));
+  }
+  if (g.angular && (g.column == 1 || g.column == 3)) {
+    return fmt::format(
+        "column {} '{}': an angular frequency: divide its values by 2 pi (6.2832) and name the "
+        "column '{}'",
+        i + 1, shorten(field), name);
   }
   if (g.parenthesised && g.unit_taken && lower(base) == name) {
     fix = fmt::format("write the unit in square brackets, '{}'", to);

@@ -591,5 +591,25 @@ TEST(BackboneTable, RefusesHitsOneUnderAnotherWithoutALabel) {
                   "3e-06, and the rows before and after run up in amplitude (3 runs of 6 rows"});
 }
 
+// A frequency in rad/s (an angular frequency, omega = 2 pi f): the fix is to divide by 2 pi.
+// Before, 'frequency [rad/s]' was told to be renamed 'frequency_hz', which read its values, 2 pi
+// times too high, as Hz; 'omega [rad/s]' was told only that no column 'frequency_hz' was found.
+TEST(BackboneTable, AFrequencyInRadPerSecondIsToldToBeDividedByTwoPi) {
+  const std::string rows = "\n1,940,0.01\n2,930,0.02\n";
+  const std::string fix =
+      "an angular frequency: divide its values by 2 pi (6.2832) and name the "
+      "column 'frequency_hz'";
+  expect_refusal("w1.csv", "amplitude,omega [rad/s],damping_ratio" + rows, std::nullopt,
+                 {"w1.csv:1: column 2 'omega [rad/s]': " + fix});
+  expect_refusal("w2.csv", "amplitude,frequency [rad/s],damping_ratio" + rows, std::nullopt,
+                 {"w2.csv:1: column 2 'frequency [rad/s]': " + fix});
+  expect_refusal("w3.csv", "amplitude,Angular frequency (rad/s),damping_ratio" + rows, std::nullopt,
+                 {"w3.csv:1: column 2 'Angular frequency (rad/s)': " + fix});
+  expect_refusal("w4.csv", "amplitude,frequency_hz [rad/s],damping_ratio" + rows, std::nullopt,
+                 {"w4.csv:1: column 'frequency_hz [rad/s]': unit 'rad/s' refused: frequency_hz "
+                  "is in Hz ([Hz] or no unit); a frequency in rad/s is 2 pi times the one in Hz: "
+                  "divide its values by 2 pi (6.2832) and write 'frequency_hz [Hz]'"});
+}
+
 }  // namespace
 }  // namespace jointlab::data
