@@ -9,8 +9,8 @@
 #include <boost/math/distributions/students_t.hpp>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/iwan_objective.h"
 #include "jointlab/correlate/iwan_objective_detail.h"
-#include "jointlab/correlate/iwan_update.h"
 #include "jointlab/model/linear_modes.h"
 
 namespace jointlab::correlate {

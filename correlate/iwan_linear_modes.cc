@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
-#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/correlate/iwan_objective.h"
 #include "jointlab/correlate/mode_tracking.h"
 #include "jointlab/model/linear_modes.h"
 

@@ -1,5 +1,7 @@
 // The Iwan objective: QSMA of the set at given parameters against the measured backbones, its
 // residuals, costs and model curves.
+#include "jointlab/correlate/iwan_objective.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -10,7 +12,6 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
 #include "jointlab/correlate/iwan_objective_detail.h"
-#include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/qsma_at.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/linear_modes.h"

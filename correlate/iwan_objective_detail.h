@@ -4,7 +4,7 @@
 
 #include <Eigen/Core>
 
-#include "jointlab/correlate/iwan_update.h"
+#include "jointlab/correlate/iwan_backbone.h"
 
 namespace jointlab::correlate::iwan_detail {
 
