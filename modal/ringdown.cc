@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <Eigen/Dense>
 
+#include "jointlab/modal/ringdown_detail.h"
 #include "jointlab/signal/extend.h"
 #include "jointlab/signal/local_poly.h"
 #include "jointlab/signal/spectrum.h"
@@ -22,33 +23,9 @@
 
 namespace jointlab::modal {
 
-namespace {
+using namespace ringdown_detail;  // the steps the band extraction's files share
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
-
-// One local estimate of the envelope's decay and the phase's rate.
-struct Estimate {
-  double t = 0;            // centre [s from record start]
-  double log_amp = 0;      // ln A at the centre
-  double sigma = 0;        // decay rate [1/s]
-  double sigma_std = 0;    // one-sigma of sigma
-  double omega_d = 0;      // damped angular frequency [rad/s]
-  double omega_d_std = 0;  // one-sigma of omega_d
-  double misfit = 0;       // RMS of the signal about the fit [m]
-  double log_amp_std = 0;  // one-sigma of ln A
-  double window = 0;       // window length [s]
-  double centre = 0;       // window centre [s from record start]
-  // Hilbert: the window the next point's search starts from (hilbert_point) [s].
-  double next_search = 0;
-};
-
-// An estimate's local window on a grid of step dt and `grid` samples: its half width, the
-// estimate's place in it (-1 at its start to 1 at its end), the stride that samples it about
-// 48 times, and the samples [j0, j1] it covers.
-struct WindowOnGrid {
-  double half = 0, offset = 0;
-  Eigen::Index stride = 1, j0 = 0, j1 = 0;
-};
+namespace ringdown_detail {
 
 WindowOnGrid window_on_grid(const Estimate& e, double dt, Eigen::Index grid) {
   WindowOnGrid w;
@@ -60,6 +37,10 @@ WindowOnGrid window_on_grid(const Estimate& e, double dt, Eigen::Index grid) {
       std::clamp<Eigen::Index>(static_cast<Eigen::Index>((e.centre + w.half) / dt), w.j0, grid - 1);
   return w;
 }
+
+}  // namespace ringdown_detail
+
+namespace {
 
 // |z| as sqrt(re^2 + im^2) where that cannot overflow or underflow, else std::abs (a
 // hypot, which guards every sample at four times the cost; the estimates' uncertainties,
@@ -136,6 +117,10 @@ Estimate estimate_peaks(const Eigen::VectorXd& log_peak, const Eigen::VectorXd& 
   return e;
 }
 
+}  // namespace
+
+namespace ringdown_detail {
+
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
@@ -143,7 +128,7 @@ double quantile(std::vector<double> v, double q) {
   return v[k];
 }
 
-}  // namespace
+}  // namespace ringdown_detail
 
 std::string RingdownOptions::check() const {
   if (!(taper > 0 && taper < 0.5)) return "taper must be in (0, 0.5)";
@@ -397,12 +382,6 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
 
 namespace {
 
-// Envelope, its logarithm and the unwrapped phase (carrier restored) of a band
-// signal z(t_j) = baseband_j exp(2 pi i carrier t_j).
-struct EnvelopePhase {
-  Eigen::VectorXd amp, log_amp, theta;
-};
-
 // Whether the unwrapping may step between two samples: two whose imaginary parts share a sign
 // lie in one closed half plane, where the difference of their arguments is within pi (their
 // arguments are then not needed).
@@ -456,25 +435,6 @@ std::pair<double, double> phases_at(const Eigen::VectorXcd& baseband, double car
   }
   return {at_a, phase_at(b)};
 }
-
-// What the steps of one band's extraction share.
-struct BandSetting {
-  BandSetting(const ChannelSpectrum& c, const signal::Band& b, const RingdownOptions& o)
-      : channel(c), band(b), options(o) {}
-  const ChannelSpectrum& channel;
-  const signal::Band& band;
-  const RingdownOptions& options;
-  double dt = 0;           // coarse grid step [s]
-  double begin = 0;        // first measured sample used [s from channel.t0]
-  double start = 0;        // first usable time [s from channel.t0]
-  double stop = 0;         // last usable time [s from channel.t0]
-  double edge = 0;         // band edge width [Hz]
-  double f_guess = 0;      // carrier frequency from the phase [Hz]
-  double period = 0;       // 1 / f_guess [s]
-  double w_min = 0;        // shortest fit window [s]
-  double correlation = 0;  // coarse samples per independent noise sample
-  double noise_bandwidth_hz = 0;
-};
 
 // The band's effect on the mode, divided out: z_band(t) = r(t) z_mode(t). A mode
 // whose frequency and decay rate change slowly passes the band multiplied by the
@@ -751,11 +711,19 @@ std::vector<Estimate> peak_estimates(const Eigen::VectorXd& y, const BandSetting
   return est;
 }
 
+}  // namespace
+
+namespace ringdown_detail {
+
 // Whether an estimate is usable: finite, decaying, above the noise threshold.
 bool usable(const Estimate& e, double noise, double snr_min) {
   return std::isfinite(e.sigma) && std::isfinite(e.omega_d) && e.omega_d > 0 && e.sigma > 0 &&
          std::isfinite(e.sigma_std) && std::exp(e.log_amp) >= snr_min * noise;
 }
+
+}  // namespace ringdown_detail
+
+namespace {
 
 // The band gain along the first pass's usable estimates (see GainCorrection).
 // Inactive where ln G varies by less than 1e-9 over them (the mode in the flat part).
@@ -1251,6 +1219,10 @@ Eigen::VectorXcd measured_spectrum(const ChannelSpectrum& channel, Eigen::Index 
   return buffer;
 }
 
+}  // namespace
+
+namespace ringdown_detail {
+
 // Full half-power width [Hz] of the spectral peak nearest `fp` in the measured part of the
 // record alone (measured_spectrum), the crossings interpolated linearly between bins: 2 zeta f
 // for a decaying mode. (The continuation runs the decay backwards too; its spectrum read
@@ -1283,6 +1255,10 @@ double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCa
   return (cross(kr, kr - 1) - cross(kl, kl + 1)) * df;
 }
 
+}  // namespace ringdown_detail
+
+namespace {
+
 // Bins first..last of a spectrum, compared by magnitude as std::abs gives it: from the
 // squared magnitudes where they differ by far more than their rounding (1e-12 against
 // 1e-15), else from std::abs itself, so the comparisons are those of std::abs but cost a
@@ -1313,11 +1289,6 @@ class SpectrumMagnitudes {
   Eigen::Index first_;
   Eigen::VectorXd squared_;
 };
-
-// The narrowest band a mode is read well through, in half-power widths of the mode. Measured
-// on 80 Hz modes of 0.3-3 % damping: narrower bands mostly gave no span or under one decade,
-// bands of 12 half-power widths two (ringdown_test.cc, RingdownAdvice).
-constexpr double kBandWidths = 12.0;
 
 // The highest local maximum of the measured samples' spectrum over bins [k0, k1] (k0 >= 0; a
 // rising or falling edge of the range is not a peak), or -1 where it has none.
@@ -2055,10 +2026,6 @@ bool partner_holds_energy(const Exchange& x, const BandSetting& s, Quantity meas
   return true;
 }
 
-bool beats_with_second_mode(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
-                            const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
-                            double noise);
-
 // Local estimates along the span and the band-gain correction they carry.
 struct CorrectedEstimates {
   std::vector<Estimate> est;       ///< the last pass's estimates
@@ -2264,483 +2231,6 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
                          "known to the damping limit (the mode on the band's steep edge)",
                          limited);
   return {std::move(valid), std::move(above), std::move(exchange), weak_note, gain_note};
-}
-
-// Two modes in one band. A second mode the band passes beside the one it names adds to the
-// band signal: z = z1 (1 + rho), rho = z2 / z1 = c exp(i dw t), dw = 2 pi (f2 - f1). Then
-// ln A + i theta carries ln(1 + rho), whose part at dw is rho itself (exactly, for c < 1):
-// the envelope's decay rate and the frequency both oscillate at the difference frequency, by
-// c dw. Local fits shorter than the beat follow that oscillation and state their own noise
-// alone: on a 50 Hz mode with a 52 Hz one at a fifth of its size in 40:60 Hz, the damping read
-// 0.0089 +- 0.00026 against a true 0.005, none of the points within its uncertainty; with a
-// 51 Hz one at 5 %, it swung between 0.00205 and 0.00398 (true 0.003) at +-0.7 %.
-// The second mode is found in the measured samples' spectrum (a resolved peak) and confirmed in
-// the time domain (the part of ln A + i theta at the difference frequency, over four beats at a
-// time); what the beat then moves each point's decay rate and frequency by, fitted over the
-// point's own window as the signal is, is added to its uncertainty, so that a point the beat
-// moves by more than the damping limit drops out (ringdown_test.cc, RingdownTwoModes).
-
-// Spectral peaks of modes other than the strongest in `band`: local maxima of the measured
-// samples' spectrum (ChannelSpectrum::measured) times the band's gain, at least two bins from
-// the strongest and kAbove times above the spectrum's lower decile around the band (the
-// ripple of the noise floor is no peak), highest first, at most `count`. Each is (frequency
-// [Hz], its height over the strongest one's); `main_hz` is the strongest one's frequency. The
-// frequencies are refined by a parabola through ln |X| at the three bins around each.
-struct BandPeaks {
-  double main_hz = 0;
-  std::vector<std::pair<double, double>> others;
-};
-
-BandPeaks band_peaks(const ChannelSpectrum& channel, const signal::Band& band, double taper,
-                     size_t count) {
-  // A power 10 times the lower decile, as neighbour_peak asks.
-  const double kAbove = std::sqrt(10.0);
-  BandPeaks out;
-  if (channel.measured.size() < 8) return out;
-  const double df = channel.measured_df();
-  const Eigen::Index last = channel.measured.size() - 2;
-  const auto bin = [&](double f) { return channel.measured_bin(f, 1, last); };
-  const Eigen::Index k0 = bin(band.lo), k1 = bin(band.hi);
-  if (k1 < k0 + 6) return out;
-  const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
-  Eigen::VectorXd weighted(k1 - k0 + 3);  // bins k0 - 1 .. k1 + 1
-  for (Eigen::Index k = k0 - 1; k <= k1 + 1; ++k) {
-    weighted(k - k0 + 1) = mag(k) * signal::band_gain(band, taper, static_cast<double>(k) * df);
-  }
-  const auto wt = [&](Eigen::Index k) { return weighted(k - k0 + 1); };
-  Eigen::Index main = k0;
-  for (Eigen::Index k = k0; k <= k1; ++k) {
-    if (wt(k) > wt(main)) main = k;
-  }
-  if (!(wt(main) > 0) || !std::isfinite(wt(main))) return out;
-  const double width = band.hi - band.lo;
-  std::vector<double> around;
-  for (Eigen::Index k = bin(band.lo - width); k <= bin(band.hi + width); ++k) {
-    around.push_back(mag(k));
-  }
-  const double low = quantile(around, 0.1);
-  const auto refined = [&](Eigen::Index k) {
-    const double a = std::log(std::max(mag(k - 1), 1e-300)), b = std::log(std::max(mag(k), 1e-300)),
-                 c = std::log(std::max(mag(k + 1), 1e-300));
-    const double den = a - 2 * b + c;
-    const double d = den < 0 ? std::clamp(0.5 * (a - c) / den, -0.5, 0.5) : 0.0;
-    return (static_cast<double>(k) + d) * df;
-  };
-  out.main_hz = refined(main);
-  std::vector<std::pair<double, Eigen::Index>> found;
-  for (Eigen::Index k = k0; k <= k1; ++k) {
-    if (std::abs(k - main) < 2 || !(wt(k) > wt(k - 1)) || !(wt(k) >= wt(k + 1)) ||
-        !(wt(k) >= kAbove * low)) {
-      continue;
-    }
-    found.emplace_back(wt(k), k);
-  }
-  std::sort(found.begin(), found.end(),
-            [](const auto& a, const auto& b) { return a.first > b.first; });
-  for (size_t i = 0; i < found.size() && i < count; ++i) {
-    out.others.emplace_back(refined(found[i].second), found[i].first / wt(main));
-  }
-  return out;
-}
-
-// The beat of the band's mode with a second mode `dw` [rad/s] away, from ln A + i theta: over
-// blocks of kBeats beats, every beat, a least-squares fit of a complex quadratic (the mode's own
-// slowly changing decay and phase), exp(+-i dw t) and the same times t (a beat whose size
-// changes along the block); the larger of the two exponentials' magnitudes at the block's
-// centre is c (exp(-i dw t) where the second mode is the larger, c then its inverse). A
-// block's c counts where it is kClear times what the noise alone gives a fit of its samples
-// (blocks below the noise threshold are not fitted) and kBeside times the largest part of the
-// same fit at a cycle fewer and a cycle more in the block (3/4 and 5/4 of dw), where a beat at
-// dw has little: what the quadratic leaves of a mode whose frequency drifts fast spreads over
-// all of them. A drifting single mode's spectrum ripples with peaks of its own, and without
-// this check the LMS twin (ringdown_test.cc) was read as beating with a "mode" at 151.5 Hz,
-// 2 % of its size, and lost its backbone; so did the stress and acceptance records (34 tests
-// failed). In blocks of two beats a cycle fewer is one cycle, which the quadratic absorbs in
-// part: the check then failed on the twins of two modes as well. c is interpolated between the
-// centres of the blocks that count and held beyond them: a beat the noise hides at low
-// amplitude is still there (two linear modes keep the ratio of their amplitudes changing
-// exponentially). A beat slower than a quarter of the usable span is not looked for.
-// The returned series on the grid are ln|1 + c e^{i psi}| and arg(1 + c e^{i psi}) for
-// psi = dw t and dw t + pi / 2: the beat's effect on ln A and theta in two phases, so that a
-// fit of both over a window gives the amplitude of what it moves a slope by.
-struct Beat {
-  double dw = 0;       // [rad/s]
-  double c_max = 0;    // the largest c over the span
-  double c_first = 0;  // c at the first block that shows it
-  Eigen::VectorXd u0, u1, v0, v1;
-  // 1 on the grid within a block where the second mode is the larger: the band follows
-  // that mode there, not the one it names.
-  Eigen::VectorXi other;
-  bool found() const { return c_max > 0; }
-};
-
-// The beat's series at grid node j (time t [s], size c < 1): ln|1 + c e^{i psi}| and
-// arg(1 + c e^{i psi}) for psi = dw t and dw t + pi / 2.
-void set_beat_at(Beat& beat, Eigen::Index j, double t, double c) {
-  const std::complex<double> a = 1.0 + std::polar(c, beat.dw * t),
-                             b = 1.0 + std::polar(c, beat.dw * t + 0.5 * std::numbers::pi);
-  beat.u0(j) = std::log(std::abs(a));
-  beat.u1(j) = std::log(std::abs(b));
-  beat.v0(j) = std::arg(a);
-  beat.v1(j) = std::arg(b);
-}
-
-Beat beat_of(const EnvelopePhase& ep, const BandSetting& s, double noise, double dw) {
-  constexpr double kClear = 4.0, kBeside = 3.0, kBeats = 4.0;
-  Beat beat;
-  beat.dw = dw;
-  const Eigen::Index grid = ep.log_amp.size();
-  const double period = kTwoPi / std::abs(dw);
-  const auto block = static_cast<Eigen::Index>(std::round(kBeats * period / s.dt));
-  const auto hop = std::max<Eigen::Index>(1, block / static_cast<Eigen::Index>(kBeats));
-  const auto j_start =
-      std::max<Eigen::Index>(0, static_cast<Eigen::Index>(std::ceil(s.start / s.dt)));
-  const auto j_stop = std::min<Eigen::Index>(grid - 1, static_cast<Eigen::Index>(s.stop / s.dt));
-  if (block < 24 || j_stop - j_start + 1 < block) return beat;
-  std::vector<double> centres, cs;
-  std::vector<std::pair<Eigen::Index, Eigen::Index>> others;  // blocks [first, last] of it
-  // Columns: the quadratic; exp(+-i dw tau), then times tau (a beat whose size changes along
-  // the block); exp(+-i f dw tau) at the checks' f, a cycle fewer and a cycle more in the block.
-  Eigen::MatrixXcd design(block, 11);
-  for (Eigen::Index i = 0; i < block; ++i) {
-    const double tau = (static_cast<double>(i) - 0.5 * static_cast<double>(block - 1)) * s.dt;
-    const double x = tau / (kBeats * period);
-    design(i, 0) = 1.0;
-    design(i, 1) = x;
-    design(i, 2) = x * x;
-    design(i, 3) = std::polar(1.0, dw * tau);
-    design(i, 4) = std::polar(1.0, -dw * tau);
-    design(i, 5) = x * design(i, 3);
-    design(i, 6) = x * design(i, 4);
-    for (int h = 0; h < 2; ++h) {
-      const double f = 1 + (h == 0 ? -1.0 : 1.0) / kBeats;
-      design(i, 7 + 2 * h) = std::polar(1.0, f * dw * tau);
-      design(i, 8 + 2 * h) = std::polar(1.0, -f * dw * tau);
-    }
-  }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXcd> qr(design);
-  // Independent noise samples in a block, for what noise alone gives |coefficient|.
-  const double independent =
-      std::max(1.0, static_cast<double>(block) / std::max(1.0, s.correlation));
-  Eigen::VectorXcd y(block);
-  for (Eigen::Index j = j_start; j + block - 1 <= j_stop; j += hop) {
-    double weakest = std::numeric_limits<double>::infinity();
-    for (Eigen::Index i = 0; i < block; ++i) {
-      y(i) = {ep.log_amp(j + i), ep.theta(j + i)};
-      weakest = std::min(weakest, ep.amp(j + i));
-    }
-    if (!(weakest >= s.options.snr_min * noise)) continue;  // the noise's ln A is no beat
-    const Eigen::VectorXcd coef = qr.solve(y);
-    const double c = std::max(std::abs(coef(3)), std::abs(coef(4)));
-    const double by_noise = noise / weakest / std::sqrt(independent);
-    const double beside =
-        std::max({std::abs(coef(7)), std::abs(coef(8)), std::abs(coef(9)), std::abs(coef(10))});
-    if (!(std::isfinite(c) && c > kClear * by_noise && c > kBeside * beside)) continue;
-    centres.push_back((static_cast<double>(j) + 0.5 * static_cast<double>(block - 1)) * s.dt);
-    cs.push_back(c);
-    if (std::abs(coef(4)) > std::abs(coef(3))) others.emplace_back(j, j + block - 1);
-  }
-  if (cs.empty()) return beat;
-  beat.c_max = *std::max_element(cs.begin(), cs.end());
-  beat.c_first = cs.front();
-  beat.u0.resize(grid);
-  beat.u1.resize(grid);
-  beat.v0.resize(grid);
-  beat.v1.resize(grid);
-  beat.other = Eigen::VectorXi::Zero(grid);
-  for (const auto& [first, last] : others) beat.other.segment(first, last - first + 1).setOnes();
-  size_t k = 0;
-  for (Eigen::Index j = 0; j < grid; ++j) {
-    const double t = static_cast<double>(j) * s.dt;
-    while (k + 1 < centres.size() && centres[k + 1] <= t) ++k;
-    double c = cs[k];
-    if (t > centres[k] && k + 1 < centres.size()) {
-      const double w = (t - centres[k]) / (centres[k + 1] - centres[k]);
-      c = (1 - w) * cs[k] + w * cs[k + 1];
-    }
-    c = std::min(c, 0.99);  // past 1 the other exponential is the beat (c its inverse)
-    set_beat_at(beat, j, t, c);
-  }
-  return beat;
-}
-
-// What the beat moves each estimate's decay rate and angular frequency by (amplitudes over
-// the beat's phase), fitted over its window as the signal is; infinite where the window
-// reaches where the second mode is the larger (Beat::other).
-std::vector<std::pair<double, double>> beat_errors(const std::vector<Estimate>& est,
-                                                   const Beat& beat, double dt, int degree) {
-  std::vector<std::pair<double, double>> out(est.size(), {0.0, 0.0});
-  const Eigen::Index grid = beat.u0.size();
-  for (size_t i = 0; i < est.size(); ++i) {
-    const Estimate& e = est[i];
-    if (!(e.window > 0) || !std::isfinite(e.window)) continue;
-    if (static_cast<Eigen::Index>(e.window / dt) < degree + 4 || grid < degree + 4) continue;
-    const auto [half, offset, stride, j0, j1] = window_on_grid(e, dt, grid);
-    if (beat.other.segment(j0, j1 - j0 + 1).maxCoeff() > 0) {
-      constexpr double kInf = std::numeric_limits<double>::infinity();
-      out[i] = {kInf, kInf};
-      continue;
-    }
-    const auto [a0, a1, p0, p1] =
-        signal::fit_local_quad({&beat.u0, &beat.u1, &beat.v0, &beat.v1}, 0.0, dt, e.centre, half,
-                               degree, 1.0, stride, offset);
-    out[i] = {std::hypot(a0.slope, a1.slope), std::hypot(p0.slope, p1.slope)};
-  }
-  return out;
-}
-
-// The second mode whose beat matters in the band read: of the band's other spectral peaks
-// (band_peaks, the three highest), the one whose beat (beat_of) moves the most usable
-// estimates' decay rates by more than their own one-sigma uncertainty; none where it moves
-// none so (a beat below the uncertainty is left as it is: the records of single modes are
-// then read as before). `errors` holds, per estimate, what it moves the decay rate and the
-// angular frequency by.
-struct TwoModes {
-  double f1 = 0;       // the band's mode's spectral peak [Hz]
-  double f2 = 0;       // the second mode's spectral peak [Hz]
-  double ratio = 0;    // its height over the band's mode's
-  double beat_hz = 0;  // |f2 - f1|
-  double c_first = 0;  // its amplitude over the band's mode's where first seen in the signal
-  size_t moved = 0;    // usable estimates moved by more than their uncertainty
-  std::vector<std::pair<double, double>> errors;
-  bool found() const { return moved > 0; }
-};
-
-// A "second mode" f2 whose distance from the band's mode f1 is the frequency of a spectral
-// peak below the band that is stronger than f2's is a sideband: the band's mode
-// amplitude-modulated by that mode (the Brake-Reuss beam's 1527 Hz mode shows peaks at 1447
-// and 1607 Hz, the 80.5 Hz mode's frequency either side), not a mode of its own. The
-// modulating peak is looked for within 3 bins (or 1 % of the spacing) of |f2 - f1|.
-bool is_sideband(const ChannelSpectrum& channel, const signal::Band& read, double f1, double f2) {
-  const double fm = std::abs(f2 - f1);
-  const double df = channel.measured_df();
-  const Eigen::Index n = channel.measured.size();
-  if (n < 8 || !(df > 0)) return false;
-  const auto mag = [&](Eigen::Index k) { return std::abs(channel.measured(k)); };
-  const auto bin = [&](double f) { return channel.measured_bin(f, 1, n - 2); };
-  const Eigen::Index k2 = bin(f2);
-  // A stronger local maximum within 3 bins (or 1 % of f) of f.
-  const auto stronger_peak_at = [&](double f) {
-    const auto reach = std::max<Eigen::Index>(3, static_cast<Eigen::Index>(0.01 * f / df));
-    const Eigen::Index km = bin(f);
-    for (Eigen::Index k = std::max<Eigen::Index>(1, km - reach);
-         k <= std::min<Eigen::Index>(n - 2, km + reach); ++k) {
-      if (mag(k) > mag(k - 1) && mag(k) >= mag(k + 1) && mag(k) > mag(k2)) return true;
-    }
-    return false;
-  };
-  if (fm < read.lo && stronger_peak_at(fm)) return true;
-  // A harmonic (2 to 6 times) of a stronger peak below the band is no mode either.
-  for (int h = 2; h <= 6; ++h) {
-    if (f2 / h < read.lo && f2 / h > 3 * df && stronger_peak_at(f2 / h)) return true;
-  }
-  return false;
-}
-
-TwoModes two_modes(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
-                   const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
-                   double noise) {
-  TwoModes best;
-  if (est.empty()) return best;
-  const BandPeaks peaks = band_peaks(channel, read, s.options.taper, 3);
-  for (const auto& [f2, ratio] : peaks.others) {
-    const double dw = kTwoPi * (f2 - peaks.main_hz);
-    if (!(std::abs(dw) > 0) || is_sideband(channel, read, peaks.main_hz, f2)) continue;
-    const Beat beat = beat_of(ep, s, noise, dw);
-    if (!beat.found()) continue;
-    std::vector<std::pair<double, double>> errors = beat_errors(est, beat, s.dt, s.options.degree);
-    size_t moved = 0;
-    for (size_t i = 0; i < est.size(); ++i) {
-      moved += usable(est[i], noise, s.options.snr_min) && !(errors[i].first <= est[i].sigma_std);
-    }
-    if (moved > best.moved) {
-      best = {peaks.main_hz,    f2, ratio, std::abs(f2 - peaks.main_hz), beat.c_first, moved,
-              std::move(errors)};
-    }
-  }
-  return best;
-}
-
-bool beats_with_second_mode(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
-                            const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
-                            double noise) {
-  return two_modes(est, channel, read, ep, s, noise).found();
-}
-
-// The summary's note on a second mode in the band (two_modes), with a band that would
-// leave it out: its edge on the second mode's side a half-power width short of that mode's
-// peak (the gain at the edge is 2 %, two of the edge's standard deviations past half gain) and
-// as wide as lets the mode, with
-// three half-power half-widths either side, lie in its flat part. The half-width is read from
-// the measured spectrum's peak (half_power_width), not from the estimates: the beat moves
-// their decay rates.
-// Where no such band exists the note says the two are too close for a band to part them.
-std::string beat_message(const TwoModes& two, const ChannelSpectrum& channel,
-                         const signal::Band& read, const RingdownOptions& options, size_t left,
-                         signal::FftCache& cache) {
-  std::string note = fmt::format(
-      "the band {:.2f}:{:.2f} Hz holds a second mode at {:.2f} Hz ({:.0f} % of this one's "
-      "spectral peak, about {:.2g} % of its amplitude where first seen): its beat with this mode "
-      "makes "
-      "the decay rate and the frequency oscillate at {:.2f} Hz, so points it moves by more than "
-      "the {:.1f} % damping limit are left out ({} of those that met it)",
-      read.lo, read.hi, two.f2, 100 * two.ratio, 100 * two.c_first, two.beat_hz,
-      100 * options.max_damping_rel_std, left);
-  const double f1 = two.f1;
-  const double hp = half_power_width(channel, f1, cache);
-  const double m = 1.5 * hp;
-  // The edge a half-power width short of the second mode's peak, so that the peak lies beyond
-  // the typed band, where a band following the mode stops short of it (follow_mode).
-  const double room = std::abs(two.f2 - f1) - m - hp;
-  const double width = room / options.taper;  // the widest band whose flat part ends there
-  if (!(room > 0) || !(width >= kBandWidths * hp)) {
-    return note + fmt::format(
-                      "; the two are too close for a band to read this mode without the other "
-                      "({:.2f} Hz apart: a band that leaves it out would be narrower than {:g} "
-                      "half-power widths of this mode, {:.3g} Hz)",
-                      two.beat_hz, kBandWidths, kBandWidths * hp);
-  }
-  const double edge = two.f2 > f1 ? two.f2 - hp : two.f2 + hp;
-  const double lo = two.f2 > f1 ? edge - width : edge;
-  const double hi = two.f2 > f1 ? edge : edge + width;
-  return note + fmt::format("; a band of {:.2f}:{:.2f} Hz would leave it out", lo, hi);
-}
-
-// A second mode in the part of a moved band beyond the typed band's edge. The band follows the
-// mode past the edge the user typed (follow_mode) and is held back only from a neighbour the
-// spectrum shows; a heavily damped one is a shoulder of the mode's skirt, no peak, and dies
-// before the noise floor's fits see it (hidden_content), but beats with the mode at the start
-// of the decay: the LMS twin with a mode of 1 % damping at 146 or 147 Hz, 0.1-0.3 times its
-// size at the impact, read the first one or two points' damping 9-57 % high, 3.4-25 times
-// their stated uncertainty. Its part of ln A + i theta is c e^{(i dw - dsigma) t} (Beat), dw =
-// 2 pi (f2 - f1): it turns toward the neighbour's side alone, where what a quadratic leaves of
-// a single drifting mode, and the noise, turn both ways. Over kBeats beats from the span's
-// start, ln A + i theta is fitted with a complex quadratic and e^{(+-i dw - dsigma) tau}, for
-// f2 from the typed edge to the moved band's half-gain point beyond it (steps of kStep of a
-// block's resolution) and relative decay rates dsigma (kRates); of the fits, the one that
-// leaves the smallest share of what the quadratic alone leaves. Its c at the block's start
-// counts where it is kClear times what the noise gives, kMirror times the mirror term's (the
-// other turn) and the fit leaves at most kExplained of the quadratic's residual. On the LMS
-// twins the neighbours of 1 % damping gave c = 0.06-0.21, the mirror c / 17 to c / 46, and
-// left 0.5-1.1 %; without a second mode, or beside one of 0.1-0.3 % damping held outside the
-// band, no fit with c above the noise's left under 25 % (mirror at least c / 3.4). A real
-// jointed beam's drifting modes leave a one-sided rest of their own: the Brake-Reuss beam's
-// 80.5 and 297.7 Hz modes typed with an edge 0.2-4.5 Hz beside them (71 channel-bands above
-// the noise) left 1.3 % and more, with a mirror of at least c / 6.2 where under 5 % (c / 9.7
-// at most anywhere); with a cubic for the mode's part they reached c / 66, left 0.55 %. Then
-// c(t) = c e^{-dsigma (t - t0)} stands for the beat along the span (held at 0.99 before,
-// marking where it exceeds 1 as the other mode's, Beat::other) and what it moves each point by
-// joins the point's uncertainty as a second mode's inside the band does (two_modes).
-struct EdgeBeat {
-  Beat beat;
-  double f1 = 0;      // the mode's frequency at the block's start [Hz]
-  double f2 = 0;      // the second mode's [Hz]
-  double t0 = 0;      // the block's start [s from the channel's t0]
-  double dsigma = 0;  // its decay rate less the mode's [1/s]
-  size_t moved = 0;   // usable estimates moved by more than their uncertainty
-  std::vector<std::pair<double, double>> errors;  // beat_errors
-  bool found() const { return moved > 0; }
-};
-
-EdgeBeat edge_beat(const std::vector<Estimate>& est, const EnvelopePhase& ep, const BandSetting& s,
-                   double noise, const signal::Band& typed, const signal::Band& read) {
-  constexpr double kBeats = 2.0, kStep = 1.0 / 8, kClear = 4.0, kMirror = 10.0, kExplained = 0.05;
-  constexpr std::array<double, 7> kRates = {0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0};  // [1/s]
-  EdgeBeat out;
-  const Eigen::Index grid = ep.log_amp.size();
-  const auto j0 = std::max<Eigen::Index>(0, static_cast<Eigen::Index>(std::ceil(s.start / s.dt)));
-  const auto j_stop = std::min<Eigen::Index>(grid - 1, static_cast<Eigen::Index>(s.stop / s.dt));
-  if (j0 >= grid) return out;
-  // The mode's frequency where the span starts: its first usable estimate's.
-  double f1 = 0;
-  for (const Estimate& e : est) {
-    if (usable(e, noise, s.options.snr_min)) {
-      f1 = e.omega_d / kTwoPi;
-      break;
-    }
-  }
-  if (!(f1 > 0)) return out;
-  const double w = s.options.taper * (read.hi - read.lo);
-  double best = kExplained, c0 = 0, best_dw = 0, best_ds = 0, best_f2 = 0;
-  std::complex<double> best_mirror = 0;
-  for (const int dir : {-1, 1}) {
-    const double near = dir < 0 ? typed.lo : typed.hi;
-    const double far = dir < 0 ? read.lo + w / 2 : read.hi - w / 2;
-    if (!(dir * (far - near) > 0) || !(dir * (near - f1) > 0)) continue;
-    for (double f2 = near; dir * (far - f2) >= 0; f2 += dir * kStep * std::abs(f2 - f1) / kBeats) {
-      const double dw = kTwoPi * (f2 - f1);
-      const auto n = static_cast<Eigen::Index>(std::round(kBeats / std::abs(f2 - f1) / s.dt));
-      if (n < 24 || j0 + n - 1 > j_stop) continue;
-      if (!(ep.amp.segment(j0, n).minCoeff() >= s.options.snr_min * noise)) continue;
-      // What the quadratic leaves (its basis orthonormal: q), and the beat's columns less
-      // their part in it.
-      Eigen::MatrixXd poly(n, 3);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const double x = static_cast<double>(i) / static_cast<double>(n - 1) - 0.5;
-        poly(i, 0) = 1.0;
-        poly(i, 1) = x;
-        poly(i, 2) = x * x;
-      }
-      const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(poly).householderQ() *
-                                Eigen::MatrixXd::Identity(n, 3);
-      Eigen::VectorXcd r(n);
-      for (Eigen::Index i = 0; i < n; ++i) r(i) = {ep.log_amp(j0 + i), ep.theta(j0 + i)};
-      r -= q * (q.transpose() * r);
-      const double left = r.squaredNorm();
-      if (!(left > 0)) continue;
-      for (const double ds : kRates) {
-        Eigen::MatrixXcd e(n, 2);
-        for (Eigen::Index i = 0; i < n; ++i) {
-          const double tau = static_cast<double>(i) * s.dt;
-          e(i, 0) = std::exp(std::complex<double>(-ds * tau, dw * tau));
-          e(i, 1) = std::exp(std::complex<double>(-ds * tau, -dw * tau));
-        }
-        e -= q * (q.transpose() * e);
-        const Eigen::Matrix2cd gram = e.adjoint() * e;
-        const Eigen::Vector2cd rhs = e.adjoint() * r;
-        const Eigen::Vector2cd ab = gram.fullPivLu().solve(rhs);
-        const double share = (left - rhs.dot(ab).real()) / left;  // what the fit leaves
-        if (!ab.allFinite() || !(share < best)) continue;
-        best = share, c0 = std::abs(ab(0)), best_mirror = ab(1);
-        best_dw = dw, best_ds = ds, best_f2 = f2;
-      }
-    }
-  }
-  if (!(c0 > 0)) return out;
-  // What noise alone gives c: the noise over the envelope at the block's start, over the
-  // independent samples the decaying column holds.
-  double held = 0;
-  const auto n = static_cast<Eigen::Index>(std::round(kBeats * kTwoPi / std::abs(best_dw) / s.dt));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    held += std::exp(-2 * best_ds * static_cast<double>(i) * s.dt);
-  }
-  const double by_noise = noise / ep.amp(j0) / std::sqrt(std::max(1.0, held / s.correlation));
-  if (!(c0 > kClear * by_noise && c0 > kMirror * std::abs(best_mirror))) return out;
-  out.f1 = f1;
-  out.f2 = best_f2;
-  out.t0 = static_cast<double>(j0) * s.dt;
-  out.dsigma = best_ds;
-  Beat& beat = out.beat;
-  beat.dw = best_dw;
-  beat.c_first = c0;
-  beat.u0.resize(grid);
-  beat.u1.resize(grid);
-  beat.v0.resize(grid);
-  beat.v1.resize(grid);
-  beat.other = Eigen::VectorXi::Zero(grid);
-  for (Eigen::Index j = 0; j < grid; ++j) {
-    const double t = static_cast<double>(j) * s.dt;
-    const double c = c0 * std::exp(-best_ds * (t - out.t0));
-    if (c >= 1) beat.other(j) = 1;
-    beat.c_max = std::max(beat.c_max, std::min(c, 0.99));
-    set_beat_at(beat, j, t, std::min(c, 0.99));
-  }
-  out.errors = beat_errors(est, beat, s.dt, s.options.degree);
-  for (size_t i = 0; i < est.size(); ++i) {
-    out.moved +=
-        usable(est[i], noise, s.options.snr_min) && !(out.errors[i].first <= est[i].sigma_std);
-  }
-  return out;
 }
 
 // The mode's track through a band: the lowest and highest frequency it runs through above

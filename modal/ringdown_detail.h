@@ -1,0 +1,159 @@
+// What the steps of a band's ring-down extraction share across their files (internal to
+// modal/ringdown*.cc): a local estimate of the envelope's decay rate sigma and the phase's rate
+// omega_d (ln A + i theta fitted over a window), the band signal's envelope and phase, the set-up
+// of one band, and the beat of a second mode, ln(1 + c e^{i dw t}) on ln A + i theta, that
+// ringdown_beat.cc finds and extract_backbone adds to the points' uncertainty.
+#pragma once
+
+#include <cstddef>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "jointlab/modal/ringdown.h"
+#include "jointlab/signal/band_analytic.h"
+
+namespace jointlab::modal::ringdown_detail {
+
+/// 2 pi.
+inline constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+/// One local estimate of the envelope's decay and the phase's rate.
+struct Estimate {
+  double t = 0;            // centre [s from record start]
+  double log_amp = 0;      // ln A at the centre
+  double sigma = 0;        // decay rate [1/s]
+  double sigma_std = 0;    // one-sigma of sigma
+  double omega_d = 0;      // damped angular frequency [rad/s]
+  double omega_d_std = 0;  // one-sigma of omega_d
+  double misfit = 0;       // RMS of the signal about the fit [m]
+  double log_amp_std = 0;  // one-sigma of ln A
+  double window = 0;       // window length [s]
+  double centre = 0;       // window centre [s from record start]
+  // Hilbert: the window the next point's search starts from (hilbert_point) [s].
+  double next_search = 0;
+};
+
+/// An estimate's local window on a grid of step dt and `grid` samples: its half width, the
+/// estimate's place in it (-1 at its start to 1 at its end), the stride that samples it about
+/// 48 times, and the samples [j0, j1] it covers.
+struct WindowOnGrid {
+  double half = 0, offset = 0;
+  Eigen::Index stride = 1, j0 = 0, j1 = 0;
+};
+
+/// The window of estimate `e` on a grid of step dt [s] and `grid` samples.
+WindowOnGrid window_on_grid(const Estimate& e, double dt, Eigen::Index grid);
+
+/// The q-quantile of v (its element of rank floor(q n), 0 for none).
+double quantile(std::vector<double> v, double q);
+
+/// Envelope, its logarithm and the unwrapped phase (carrier restored) of a band
+/// signal z(t_j) = baseband_j exp(2 pi i carrier t_j).
+struct EnvelopePhase {
+  Eigen::VectorXd amp, log_amp, theta;
+};
+
+/// What the steps of one band's extraction share.
+struct BandSetting {
+  BandSetting(const ChannelSpectrum& c, const signal::Band& b, const RingdownOptions& o)
+      : channel(c), band(b), options(o) {}
+  const ChannelSpectrum& channel;
+  const signal::Band& band;
+  const RingdownOptions& options;
+  double dt = 0;           // coarse grid step [s]
+  double begin = 0;        // first measured sample used [s from channel.t0]
+  double start = 0;        // first usable time [s from channel.t0]
+  double stop = 0;         // last usable time [s from channel.t0]
+  double edge = 0;         // band edge width [Hz]
+  double f_guess = 0;      // carrier frequency from the phase [Hz]
+  double period = 0;       // 1 / f_guess [s]
+  double w_min = 0;        // shortest fit window [s]
+  double correlation = 0;  // coarse samples per independent noise sample
+  double noise_bandwidth_hz = 0;
+};
+
+/// Whether an estimate is usable: finite, decaying, above snr_min times the noise floor.
+bool usable(const Estimate& e, double noise, double snr_min);
+
+/// Full half-power width [Hz] of the measured spectrum's peak nearest `fp` [Hz].
+double half_power_width(const ChannelSpectrum& channel, double fp, signal::FftCache& cache);
+
+/// The narrowest band a mode is read well through, in half-power widths of the mode. Measured
+/// on 80 Hz modes of 0.3-3 % damping: narrower bands mostly gave no span or under one decade,
+/// bands of 12 half-power widths two (ringdown_test.cc, RingdownAdvice).
+inline constexpr double kBandWidths = 12.0;
+
+/// Spectral peaks in a band other than its strongest (band_peaks): frequencies [Hz] and their
+/// heights over the strongest's.
+struct BandPeaks {
+  double main_hz = 0;
+  std::vector<std::pair<double, double>> others;
+};
+
+/// The strongest spectral peak in `band` and up to `count` others (ringdown_beat.cc).
+BandPeaks band_peaks(const ChannelSpectrum& channel, const signal::Band& band, double taper,
+                     size_t count);
+
+/// The beat of the band's mode with a second mode dw [rad/s] away, as what it adds to
+/// ln A + i theta on the coarse grid in two phases (beat_of, edge_beat).
+struct Beat {
+  double dw = 0;       // [rad/s]
+  double c_max = 0;    // the largest c over the span
+  double c_first = 0;  // c at the first block that shows it
+  Eigen::VectorXd u0, u1, v0, v1;
+  // 1 on the grid within a block where the second mode is the larger: the band follows
+  // that mode there, not the one it names.
+  Eigen::VectorXi other;
+  bool found() const { return c_max > 0; }
+};
+
+/// A second mode in the band read whose beat moves usable points by more than their
+/// uncertainty (two_modes).
+struct TwoModes {
+  double f1 = 0;       // the band's mode's spectral peak [Hz]
+  double f2 = 0;       // the second mode's spectral peak [Hz]
+  double ratio = 0;    // its height over the band's mode's
+  double beat_hz = 0;  // |f2 - f1|
+  double c_first = 0;  // its amplitude over the band's mode's where first seen in the signal
+  size_t moved = 0;    // usable estimates moved by more than their uncertainty
+  std::vector<std::pair<double, double>> errors;
+  bool found() const { return moved > 0; }
+};
+
+/// The second mode in the band read whose beat matters, if any (ringdown_beat.cc).
+TwoModes two_modes(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
+                   const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
+                   double noise);
+
+/// Whether two_modes finds a second mode.
+bool beats_with_second_mode(const std::vector<Estimate>& est, const ChannelSpectrum& channel,
+                            const signal::Band& read, const EnvelopePhase& ep, const BandSetting& s,
+                            double noise);
+
+/// The summary's note on a second mode in the band, with a band that would leave it out.
+std::string beat_message(const TwoModes& two, const ChannelSpectrum& channel,
+                         const signal::Band& read, const RingdownOptions& options, size_t left,
+                         signal::FftCache& cache);
+
+/// A second mode in the part of a moved band beyond the typed edge, seen by its beat alone
+/// (edge_beat).
+struct EdgeBeat {
+  Beat beat;
+  double f1 = 0;      // the mode's frequency at the block's start [Hz]
+  double f2 = 0;      // the second mode's [Hz]
+  double t0 = 0;      // the block's start [s from the channel's t0]
+  double dsigma = 0;  // its decay rate less the mode's [1/s]
+  size_t moved = 0;   // usable estimates moved by more than their uncertainty
+  std::vector<std::pair<double, double>> errors;  // beat_errors
+  bool found() const { return moved > 0; }
+};
+
+/// The beat of a second mode the band's move took in beyond the typed band, if any.
+EdgeBeat edge_beat(const std::vector<Estimate>& est, const EnvelopePhase& ep, const BandSetting& s,
+                   double noise, const signal::Band& typed, const signal::Band& read);
+
+}  // namespace jointlab::modal::ringdown_detail
