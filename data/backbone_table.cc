@@ -446,6 +446,7 @@ struct Columns {
   std::array<double, 5> scale;  // value in the file's unit -> the table's (SI, Hz, a fraction)
   std::vector<size_t> marks;    // columns of is_point_mark: their marked rows are skipped
   int coverage_col = -1;        // a `process` backbone's coverage_factor: k of the std columns
+  int displacement_col = -1;    // a `process` or `stepped-sine` backbone's displacement_m
   std::vector<size_t> labels;   // columns naming the hit or test a row is of (is_curve_label)
   std::string amplitude_unit;   // as the header gives it ("": none)
   bool ours = false;            // a `process` or `stepped-sine` backbone (BackboneTable)
@@ -470,6 +471,7 @@ Columns resolve_columns(const std::vector<std::string>& fields, std::optional<Qu
     const std::string lowered = lower(name);
     if (is_point_mark(lowered)) c.marks.push_back(i);
     if (lowered == "coverage_factor") c.coverage_col = static_cast<int>(i);
+    if (lowered == "displacement_m") c.displacement_col = static_cast<int>(i);
     if (lowered == "coverage_factor" || lowered == "response_controlled") c.ours = true;
     // Names are read case-blind ("Amplitude", "Frequency_Hz"), as a test file's "time" is.
     const auto k =
@@ -609,6 +611,8 @@ struct Rows {
   /// Per Columns::labels column, each row's cell (trimmed) and line.
   std::vector<std::vector<std::pair<std::string, long>>> labels;
   std::vector<long> lines;  ///< each row's line
+  /// Each row's displacement_m (NaN where none: no column, or no number).
+  std::vector<double> displacement;
 };
 
 // Reads every row after the header: rows that hold none and marked rows skipped, each other one
@@ -639,8 +643,54 @@ Rows read_rows(TextLines& lines, char delim, const Columns& c, const std::string
       rows.labels[j].emplace_back(i < cells.size() ? std::string(trim(cells[i])) : "", n);
     }
     rows.lines.push_back(n);
+    const auto d = static_cast<size_t>(c.displacement_col);
+    rows.displacement.push_back(
+        c.displacement_col >= 0 && d < cells.size() ? parse_double(cells[d]).value_or(NAN) : NAN);
   }
   return rows;
+}
+
+// Refuses a `process` or `stepped-sine` backbone read as another quantity than it was written
+// in: its displacement_m column gives amplitude = displacement_m (2 pi f)^p, p 0 for a
+// displacement, 1 a velocity, 2 an acceleration (to 5 %, the median over the rows). Its own
+// files are SI whatever the header says, so nothing else would say it: F_S came out scaled by
+// (2 pi f)^(p - p read), 921 at 146.7 Hz for a velocity read as a displacement.
+void refuse_another_quantity(const Rows& rows, std::optional<Quantity> quantity,
+                             const std::string& file) {
+  if (!quantity) return;
+  const std::array<Quantity, 3> kinds = {Quantity::kDisplacement, Quantity::kVelocity,
+                                         Quantity::kAcceleration};
+  const auto read = std::find(kinds.begin(), kinds.end(), *quantity);
+  if (read == kinds.end()) return;
+  std::array<double, 3> miss{};
+  for (int p = 0; p < 3; ++p) {
+    std::vector<double> e;
+    for (size_t i = 0; i < rows.displacement.size(); ++i) {
+      const double d = rows.displacement[i];
+      if (!(d > 0) || !std::isfinite(d)) continue;
+      const double w = 2 * M_PI * rows.values[1][i];
+      e.push_back(std::abs(std::log(rows.values[0][i] / d) - p * std::log(w)));
+    }
+    if (e.empty()) return;
+    std::nth_element(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2), e.end());
+    miss[static_cast<size_t>(p)] = e[e.size() / 2];
+  }
+  const auto written = static_cast<int>(std::min_element(miss.begin(), miss.end()) - miss.begin());
+  const int asked = static_cast<int>(read - kinds.begin());
+  if (miss[static_cast<size_t>(written)] > 0.05 || written == asked) return;
+  static constexpr std::array<const char*, 3> kRatio = {"1", "2 pi f", "(2 pi f)^2"};
+  static constexpr std::array<const char*, 5> kScale = {"1 / (2 pi f)^2", "1 / (2 pi f)", "1",
+                                                        "2 pi f", "(2 pi f)^2"};
+  const std::string name = quantity_name(kinds[static_cast<size_t>(written)]);
+  throw InputError(where(
+      file, 0,
+      fmt::format("its amplitude is {} (amplitude / displacement_m = {} on every row, as process "
+                  "and stepped-sine --amplitude {} write it), but it is read as {}: give "
+                  "--amplitude {} (F_S "
+                  "would come out scaled by {})",
+                  with_article(name), kRatio[static_cast<size_t>(written)], name,
+                  with_article(quantity_name(*quantity)), name,
+                  kScale[static_cast<size_t>(written - asked + 2)])));
 }
 
 // Spearman's rank correlation of x with its index (ties broken by order): +1 rising, -1 falling.
@@ -790,6 +840,7 @@ BackboneTable read_backbone_table(const fs::path& path, std::optional<Quantity> 
   const Rows rows = read_rows(lines, delim, columns, file);
   refuse_several_curves(rows, columns, fields, file);
   refuse_hits_one_under_another(rows, file);
+  refuse_another_quantity(rows, quantity, file);
   return sorted_table(rows, columns, file);
 }
 

@@ -611,5 +611,30 @@ TEST(BackboneTable, AFrequencyInRadPerSecondIsToldToBeDividedByTwoPi) {
                   "divide its values by 2 pi (6.2832) and write 'frequency_hz [Hz]'"});
 }
 
+// A `process` (or `stepped-sine`) backbone read with another amplitude quantity than it was
+// written in: its displacement_m column says which (amplitude = displacement_m (2 pi f)^p).
+// Before, a velocity backbone read with --amplitude displacement went to the fit unsaid (its own
+// files are in SI, so no unit note either); F_S scales by omega, 921 at 146.7 Hz.
+TEST(BackboneTable, AProcessBackboneReadAsAnotherQuantityIsRefused) {
+  std::string text = "time_s,amplitude,frequency_hz,damping_ratio,displacement_m\n";
+  for (int i = 0; i < 4; ++i) {
+    const double f = 146.65 + 0.5 * i, d = 2.8e-5 * std::pow(0.7, i);
+    text += fmt::format("{},{:.10g},{:.10g},0.001,{:.10g}\n", 0.1 * i, 2 * M_PI * f * d, f, d);
+  }
+  const auto p = table("hit.acc.band1.csv", text);
+  EXPECT_EQ(read_backbone_table(p, Quantity::kVelocity).size(), 4);
+  EXPECT_EQ(read_backbone_table(p, std::nullopt).size(), 4);  // modal: nothing to compare
+  EXPECT_EQ(input_error_of([&] { read_backbone_table(p, Quantity::kDisplacement); }),
+            p.string() +
+                ": its amplitude is a velocity (amplitude / displacement_m = 2 pi f on every row, "
+                "as process and stepped-sine --amplitude velocity write it), but it is read as a "
+                "displacement: "
+                "give --amplitude velocity (F_S would come out scaled by 2 pi f)");
+  EXPECT_NE(input_error_of([&] {
+              read_backbone_table(p, Quantity::kAcceleration);
+            }).find("its amplitude is a velocity"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace jointlab::data
