@@ -1,13 +1,14 @@
 // The Iwan update's cause line: where the model does not describe the data, what the residuals
 // at the result point at (a wrong mode, scatter between hits, the linear part, missing damping,
 // the damping column's units), in one sentence (IwanUpdateSummary::misfit_cause()).
+#include "jointlab/correlate/iwan_cause_detail.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
 
 #include <fmt/format.h>
 
-#include "jointlab/correlate/iwan_cause_detail.h"
 #include "jointlab/correlate/iwan_update.h"
 
 namespace jointlab::correlate {

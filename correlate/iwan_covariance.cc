@@ -1,6 +1,8 @@
 // The Iwan update's covariance of the parameters at the result: serial correlation along the
 // curves (HAC, AR(1) noise corrected for what the fit absorbs), clusters per curve, a kink's
 // one-sided slopes, and Student's t for the effective independent points.
+#include "jointlab/correlate/iwan_covariance_detail.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,7 +12,6 @@
 #include <Eigen/Dense>
 
 #include "jointlab/correlate/iwan_coordinates_detail.h"
-#include "jointlab/correlate/iwan_covariance_detail.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/noise_limits.h"
 

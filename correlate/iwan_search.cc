@@ -1,5 +1,7 @@
 // The Iwan update's searches: the paper's Monte Carlo, the global-local search (logarithmic
 // samples, then Ceres from the best) and the constant-backbone candidate.
+#include "jointlab/correlate/iwan_search_detail.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -9,7 +11,6 @@
 
 #include "jointlab/core/parallel.h"
 #include "jointlab/correlate/iwan_coordinates_detail.h"
-#include "jointlab/correlate/iwan_search_detail.h"
 #include "jointlab/correlate/iwan_update.h"
 
 namespace jointlab::correlate::iwan_detail {
@@ -19,6 +20,7 @@ constexpr int kBatch = 50;              // samples evaluated between two progres
 constexpr int kLocalIterations = 50;    // iterations of a local solve within its share
 constexpr int kPolishIterations = 200;  // iterations of the polish of the best point
 
+// A uniform sample of box b (F_S, gamma and beta on a log scale where log_scale).
 Vec4 sample(const Box& b, bool log_scale, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Vec4 v;

@@ -1,12 +1,13 @@
 // The Iwan update's linear-part sensitivity: dx/ds = -(J^T J)^-1 J^T dr/ds at the minimum, per
 // relative error of mode R's linear frequency.
+#include "jointlab/correlate/iwan_sensitivity_detail.h"
+
 #include <cmath>
 
 #include <Eigen/Dense>
 
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_coordinates_detail.h"
-#include "jointlab/correlate/iwan_sensitivity_detail.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/model/linear_modes.h"
 
