@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <regex>
 #include <vector>
 
 #include <fmt/format.h>
@@ -41,6 +42,14 @@ bool fit_linear_damping(const UpdateSettings& in, const std::string& key,
   if (v == "hold") return false;
   if (v == "fit") return true;
   in.fail(key, s, fmt::format("must be \"hold\" or \"fit\", not \"{}\"", v));
+}
+
+// The backbone reader's message with update-iwan's option named as the campaign's key: run takes
+// the amplitude quantity from [campaign] amplitude, and "a displacement amplitude needs
+// --amplitude displacement" sent the user after an option run does not have.
+std::string with_campaign_amplitude(const std::string& message) {
+  static const std::regex option(R"(--amplitude (\w+))");
+  return std::regex_replace(message, option, "amplitude = \"$1\" in [campaign]");
 }
 
 }  // namespace
@@ -130,8 +139,12 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     tables.linear_frequency_hz = modes[k].linear_frequency_hz;
     std::vector<std::string> unitless;  // read in SI, said in the report as update-iwan says it
     // One hit given twice would count as two: refused (read_backbone_tables).
-    const std::vector<data::BackboneTable> read =
-        data::read_backbone_tables(c.modes[k].backbones, c.amplitude);
+    std::vector<data::BackboneTable> read;
+    try {
+      read = data::read_backbone_tables(c.modes[k].backbones, c.amplitude);
+    } catch (const InputError& e) {
+      throw InputError(with_campaign_amplitude(e.what()));
+    }
     for (size_t i = 0; i < read.size(); ++i) {
       const std::filesystem::path& f = c.modes[k].backbones[i];
       const data::BackboneTable& t = read[i];

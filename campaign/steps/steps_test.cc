@@ -588,6 +588,18 @@ TEST_F(Steps, ModeBackboneTablesJoinTheIwanTargets) {
               campaign_backbones(c, *measured_);
             }).find(table.string() + ": given twice"),
             std::string::npos);
+  // A unit of another quantity is refused naming the campaign's key, not update-iwan's option:
+  // before, "a displacement amplitude needs --amplitude displacement", which run has not.
+  const fs::path in_mm = testing::scratch_path("campaign_steps_tables", "in_mm.csv");
+  testing::write_text(in_mm.string(), "amplitude [mm]" + text.substr(text.find(',')));
+  c.modes[0].backbones = {in_mm};
+  const std::string m = testing::input_error_of([&] { campaign_backbones(c, *measured_); });
+  EXPECT_NE(m.find("unit 'mm' measures displacement, the amplitude is a velocity (amplitude = "
+                   "\"velocity\" in [campaign], SI unit m/s); a displacement amplitude needs "
+                   "amplitude = \"displacement\" in [campaign]"),
+            std::string::npos)
+      << m;
+  EXPECT_EQ(m.find("--amplitude"), std::string::npos) << m;
 }
 
 TEST_F(Steps, IwanLinearDampingSetting) {
