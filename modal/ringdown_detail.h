@@ -2,7 +2,8 @@
 // modal/ringdown*.cc): a local estimate of the envelope's decay rate sigma and the phase's rate
 // omega_d (ln A + i theta fitted over a window), the band signal's envelope and phase, the set-up
 // of one band, and the beat of a second mode, ln(1 + c e^{i dw t}) on ln A + i theta, that
-// ringdown_beat.cc finds and extract_backbone adds to the points' uncertainty.
+// ringdown_beat.cc finds and extract_backbone adds to the points' uncertainty, and the band
+// that follows the mode past a typed edge (ringdown_follow.cc).
 #pragma once
 
 #include <cstddef>
@@ -75,6 +76,25 @@ struct BandSetting {
   double correlation = 0;  // coarse samples per independent noise sample
   double noise_bandwidth_hz = 0;
 };
+
+/// Hilbert estimate at `at` [s] from ln A and theta on the grid t_j = j dt, fitted over a
+/// window of length `window` centred at `centre`, its noise `noise` (ringdown.cc).
+Estimate estimate_hilbert(const Eigen::VectorXd& log_amp, const Eigen::VectorXd& theta, double dt,
+                          double at, double centre, double window, double correlation, double noise,
+                          int degree);
+
+/// The envelope, ln A and unwrapped phase of a band's baseband signal (carrier restored).
+EnvelopePhase envelope_phase(const Eigen::VectorXcd& baseband, double carrier_hz, double dt);
+
+/// The set-up of one band read from its signal `bs`: grid, usable span, windows.
+BandSetting band_setting(const ChannelSpectrum& channel, const signal::Band& band,
+                         const RingdownOptions& options, const signal::BandSignal& bs);
+
+/// The band's noise floor (RMS of the complex noise) from fits over ln A and theta.
+double noise_floor(const EnvelopePhase& ep, const BandSetting& s);
+
+/// The highest local maximum of the measured spectrum over bins [k0, k1], or -1.
+Eigen::Index strongest_peak(const ChannelSpectrum& channel, Eigen::Index k0, Eigen::Index k1);
 
 /// Whether an estimate is usable: finite, decaying, above snr_min times the noise floor.
 bool usable(const Estimate& e, double noise, double snr_min);
@@ -155,5 +175,29 @@ struct EdgeBeat {
 /// The beat of a second mode the band's move took in beyond the typed band, if any.
 EdgeBeat edge_beat(const std::vector<Estimate>& est, const EnvelopePhase& ep, const BandSetting& s,
                    double noise, const signal::Band& typed, const signal::Band& read);
+
+/// The mode's track through a band: its lowest and highest frequency and largest decay rate
+/// (track_mode).
+struct ModeTrack {
+  double f_lo = 0, f_hi = 0, sigma = 0;  // [Hz], [Hz], [1/s]
+  int points = 0;
+};
+
+/// The mode's track through the band read (ringdown_follow.cc).
+ModeTrack track_mode(const EnvelopePhase& ep, double noise, const BandSetting& s);
+
+/// The band a mode is read through, what was moved and why, and its signal (follow_mode).
+struct FollowedBand {
+  signal::Band band;
+  std::string note;           // what was moved and why; "" when the typed band is read
+  signal::BandSignal signal;  // the moved band's signal (empty when not moved)
+};
+
+/// The band the mode is read through: the typed one, or one that follows the mode past its
+/// edge (ringdown_follow.cc).
+FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
+                         const signal::Band& typed, const RingdownOptions& options,
+                         const signal::BandSignal& typed_signal, const EnvelopePhase& typed_ep,
+                         double typed_noise, signal::FftCache& cache);
 
 }  // namespace jointlab::modal::ringdown_detail
