@@ -3,10 +3,12 @@
 // omega_d (ln A + i theta fitted over a window), the band signal's envelope and phase, the set-up
 // of one band, and the beat of a second mode, ln(1 + c e^{i dw t}) on ln A + i theta, that
 // ringdown_beat.cc finds and extract_backbone adds to the points' uncertainty, and the band
-// that follows the mode past a typed edge (ringdown_follow.cc).
+// that follows the mode past a typed edge (ringdown_follow.cc), and an energy exchange with a
+// mode in internal resonance (ringdown_exchange.cc).
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -199,5 +201,35 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
                          const signal::Band& typed, const RingdownOptions& options,
                          const signal::BandSignal& typed_signal, const EnvelopePhase& typed_ep,
                          double typed_noise, signal::FftCache& cache);
+
+/// True when the measured spectrum's largest magnitude over `sub` lies strictly inside it.
+bool has_interior_peak(const ChannelSpectrum& channel, const signal::Band& sub);
+
+/// A turn of the envelope's decay rate: the estimate where it peaks (or bottoms out).
+struct Turn {
+  const Estimate* at = nullptr;  // valid while the estimates it was found in live
+  bool peak = false;
+};
+
+/// An energy exchange between the band's mode and another (ringdown.h, step 5), read from the
+/// envelope's decay rate along the estimates.
+struct Exchange {
+  double end_t = -std::numeric_limits<double>::infinity();  ///< last turn or growth, relaxed [s]
+  bool grows = false;                                       ///< the envelope grows somewhere
+  double partner = 0;       ///< n or 1/n: the band, times the band's, of the mode taking energy
+  std::vector<Turn> turns;  ///< the turns of the decay rate, in time order
+  bool one_way = false;     ///< the rate only falls from the start while the partner grows
+  bool fed_dip = false;     ///< the one turn is a dip below the settled rate (fed_at_a_dip)
+  bool found() const { return partner > 0 && (!turns.empty() || grows || one_way); }
+};
+
+/// Whether an exchange's partner band holds energy (above its noise) at every turn.
+bool partner_holds_energy(const Exchange& x, const BandSetting& s, Quantity measured,
+                          signal::FftCache& cache);
+
+/// An energy exchange of the band's mode with another, read from the estimates, if any
+/// (ringdown_exchange.cc).
+Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandSetting& s,
+                     Quantity measured, signal::FftCache& cache);
 
 }  // namespace jointlab::modal::ringdown_detail
