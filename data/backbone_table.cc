@@ -767,7 +767,9 @@ void refuse_several_curves(const Rows& rows, const Columns& c,
   for (size_t j = 0; j < c.labels.size(); ++j) {
     const auto& cells = rows.labels[j];
     std::vector<std::pair<std::string, size_t>> counts;  // value, rows
-    for (const auto& [value, line] : cells) {
+    for (const auto& cell : cells) {
+      // Not a structured binding: clang (the fuzz build) refuses to capture one in a lambda.
+      const std::string& value = cell.first;
       auto it = std::find_if(counts.begin(), counts.end(),
                              [&](const auto& v) { return v.first == value; });
       if (it == counts.end()) {
