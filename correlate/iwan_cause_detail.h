@@ -16,4 +16,8 @@ bool model_as_given_matches(const MisfitEvidence& e);
 /// on the side the bound kept K_T from (below the data at the upper bound, above at the lower).
 bool kt_stopped_short(const IwanUpdateSummary& s);
 
+/// F_S free at its upper bound and the fitted joint still slipping at the lowest measured
+/// amplitudes, where the data lie above it: amplitudes larger than the quantity they are read as.
+bool amplitudes_read_too_large(const IwanUpdateSummary& s);
+
 }  // namespace jointlab::correlate::iwan_detail

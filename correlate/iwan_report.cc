@@ -16,6 +16,7 @@
 namespace jointlab::correlate {
 namespace {
 
+using iwan_detail::amplitudes_read_too_large;
 using iwan_detail::kt_stopped_short;
 using iwan_detail::model_as_given_matches;
 
@@ -293,6 +294,12 @@ std::string bound_lines(const IwanUpdateSummary& s, const std::string& cause, bo
           "linear limit Kt reaches in its range (below); a wider range would let Kt take up {} "
           "rather than fit the joint\n",
           b, s.evidence->nearer_mode > 0 ? "another mode's frequency" : "the linear part's error");
+    } else if (b.rfind("Fs", 0) == 0 && !cause.empty() && amplitudes_read_too_large(s)) {
+      // A wider range does cure it, with Fs then scaled by the amplitudes' factor.
+      out += fmt::format(
+          "  WARNING: {}: the amplitudes pressed it there (below); a wider range would let Fs "
+          "take up their factor, no joint's slip force where they were read as another quantity\n",
+          b);
     } else if (!cause.empty() && !kt) {
       out += fmt::format(
           "  WARNING: {}: the misfit below pressed it there; a wider range would not cure that\n",
@@ -433,11 +440,17 @@ std::string rms_line(const IwanUpdateSummary& s) {
   return out;
 }
 
+// Below this serial correlation the residuals are read as independent, the points as few rather
+// than waves: n (1 - rho) / (1 + rho) keeps over 80 % of them.
+constexpr double kSerialCorrelation = 0.1;
+
 // Residuals that run in waves along a curve leave few independent points: too few, and no
 // sigma is stated rather than a wrong one (a 200-point curve with AR(1) noise of rho 0.98 has
 // about 2 per sequence); few, and the sigmas allow for it but rest on them.
 // Too few points even if every residual were independent: said as such, not as waves (a
-// correlation read off 3 points sent the user after waves).
+// correlation read off 3 points sent the user after waves). Below kSerialCorrelation the
+// residuals are independent and the points merely few, said as such (a 6-point curve was told
+// "serially correlated (0 from one point to the next)").
 std::string serial_lines(const IwanUpdateSummary& s) {
   std::string out;
   const double fitted = std::round(s.effective_points - s.sigma_degrees_of_freedom);
@@ -449,6 +462,15 @@ std::string serial_lines(const IwanUpdateSummary& s) {
         "curves, would give one\n",
         s.residuals / 2, s.residuals, std::max(0.0, static_cast<double>(s.residuals) - fitted),
         fitted);
+  } else if (s.improved && s.effective_points > 0 && !(s.sigma_degrees_of_freedom > 2) &&
+             s.noise_correlation < kSerialCorrelation) {
+    out += fmt::format(
+        "  WARNING: the {} residuals ({} points), each independent of the next (serial "
+        "correlation {:.2g}, corrected for what the fit absorbs), amount to {:.2g} independent "
+        "points, too few to state a sigma (more than {:.0f}, 2 beyond the parameters fitted, "
+        "needed); more points, or more curves, would give one\n",
+        s.residuals, s.residuals / 2, s.noise_correlation, s.effective_points,
+        s.effective_points - s.sigma_degrees_of_freedom + 2);
   } else if (s.improved && s.effective_points > 0 && !(s.sigma_degrees_of_freedom > 2)) {
     out += fmt::format(
         "  WARNING: the residuals run in long waves along the curves (serial correlation {:.3g} "
@@ -459,6 +481,15 @@ std::string serial_lines(const IwanUpdateSummary& s) {
         s.effective_points - s.sigma_degrees_of_freedom + 2,
         s.misfit() ? "with the model not describing the data (below), the waves are its misfit"
                    : "more curves (hits), or longer ones, would give one");
+  } else if (s.improved && s.effective_points > 0 && s.effective_points < 30 &&
+             s.noise_correlation < kSerialCorrelation) {
+    out += fmt::format(
+        "  note: the {} residuals ({} points) are few, each independent of the next (serial "
+        "correlation {:.2g}, corrected for what the fit absorbs): they amount to {:.3g} "
+        "independent points; the sigmas allow for it (Student's t, {:.3g} degrees of freedom) but "
+        "rest on these few\n",
+        s.residuals, s.residuals / 2, s.noise_correlation, s.effective_points,
+        s.sigma_degrees_of_freedom);
   } else if (s.improved && s.effective_points > 0 && s.effective_points < 30) {
     out += fmt::format(
         "  note: the residuals are serially correlated along the curves ({:.3g} from one point "

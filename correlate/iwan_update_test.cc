@@ -2522,5 +2522,179 @@ TEST(IwanUpdate, TheLowEndLeansButDoesNotDecideBetweenOwnDampingAndAnotherModesS
   EXPECT_EQ(r.find("update-linear first"), std::string::npos) << r;
 }
 
+// Velocity tables read as the modal amplitude (the default; the riveted beam's three 40-point
+// hits, truth F_S 30 N): F_S ran to its upper bound 1500 N and the fitted joint still slipped at
+// the lowest measured amplitude (0.21 phi_max), its curve there 8.8 % below its own linear limit
+// and 15.3 % below the data. A factor on the amplitudes is one on F_S, so the cause is the
+// amplitudes' quantity or unit; before, "the structure's own damping" was named and, with it
+// fitted, "no slip in these data ... do not change with amplitude" (the gain over the constant
+// backbone, 6.389e6 against 6.41e6, divided by a reduced chi-square of 3.25e6). The numbers are
+// the command's; each check is on words, none on a tolerance.
+TEST(IwanUpdateReport, AmplitudesReadAsTheWrongQuantityNameTheirUnitNotNoSlip) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 4854, 240, 3.23e6);
+  s.best = {1500, 9.08345e6, -0.949783, 1};
+  s.at_bounds = {"Fs at its upper bound 1500 N"};
+  s.bound_side[0] = 1;
+  s.noise_correlation = 0.999;
+  s.effective_points = 6.08;
+  s.sigma_degrees_of_freedom = 3.08;
+  s.amplitude_share = 0.475;
+  s.bottom_slip = 6.64e-5;
+  s.top_slip = 0.0118;
+  s.phi_max = 3.15e-4;
+  MisfitEvidence e = mode_one_evidence(149.668, 1e-4, 0, 0.2, 0.116);
+  e.targets = 1;
+  e.low_frequency_error = -0.153246;
+  e.linear_hz = 138.921;
+  e.low_damping = 6.77e-4;
+  e.low_model_damping = 3.82e-3;
+  e.median_damping = 3.38e-3;
+  e.low_softening_share = 0.054;
+  s.evidence = e;
+  const std::string quantity = "these amplitudes are larger than the quantity they are read as";
+  std::string r = s.report();
+  EXPECT_NE(r.find("Fs ran to its upper bound 1500 N and still the fitted joint slips at the "
+                   "lowest measured amplitudes (0.21 phi_max there, 37 phi_max at the highest)"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find(quantity), std::string::npos) << r;
+  EXPECT_NE(r.find("Fs at its upper bound 1500 N: the amplitudes pressed it there (below); a "
+                   "wider range would let Fs take up their factor"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find("the structure's own damping"), std::string::npos) << r;
+  // With Z fitted, no better than the constant backbone: the misfit runs in waves, so the gain
+  // scaled by the reduced chi-square tests nothing, and no "no slip" is said.
+  s.modal_ratio_fitted = true;
+  s.final_cost = 6.389e6;
+  s.constant_cost = 6.41e6;
+  s.reduced_chi2 = 3.25e6;
+  EXPECT_FALSE(s.no_slip_seen());
+  r = s.report();
+  EXPECT_EQ(r.find("no slip"), std::string::npos) << r;
+  EXPECT_NE(r.find(quantity), std::string::npos) << r;
+  // The same gain with residuals like noise (white, even over the amplitudes), or with offsets
+  // between the curves that the constant shares, is still read as no slip.
+  IwanUpdateSummary white = s;
+  white.noise_correlation = 0.05;
+  white.amplitude_share = 0.34;
+  EXPECT_TRUE(white.no_slip_seen()) << white.report();
+  IwanUpdateSummary offsets = s;
+  offsets.evidence->between_curves_share = 0.6;
+  offsets.evidence->curves = 3;
+  EXPECT_TRUE(offsets.no_slip_seen()) << offsets.report();
+  // Fs inside its range, or the fitted curve at its own linear limit at the lowest amplitudes
+  // (the joint stuck there): not the amplitudes.
+  s.modal_ratio_fitted = false;
+  s.bound_side[0] = 0;
+  s.at_bounds.clear();
+  EXPECT_EQ(s.report().find(quantity), std::string::npos) << s.report();
+  s.bound_side[0] = 1;
+  s.at_bounds = {"Fs at its upper bound 1500 N"};
+  s.evidence->linear_hz = 149.668 * (1 - 0.153246);
+  EXPECT_EQ(s.report().find(quantity), std::string::npos) << s.report();
+}
+
+// Damping columns in another unit, named beside the cause the residuals point at, as the fit
+// cannot tell them apart (the riveted beam's three hits, the command's numbers): a per-cent
+// column without a unit over the microslip range, 0.0636 at the lowest amplitudes against the
+// model's 0.00143 (44 times, every value below 1), and a loss factor over 2.5 decades, the
+// measured damping a median 1.69 times the fitted model's with K_T raised toward it. Before,
+// both were told only "the structure's own damping" (or another mode's slip).
+TEST(IwanUpdateReport, DampingInAnotherUnitIsNamedBesideTheMissingDamping) {
+  const std::string own = "That is the structure's own damping";
+  const std::string per_cent = "a damping column in per cent read as a fraction";
+  const std::string loss = "a loss factor (eta = 2 zeta) given as the damping ratio";
+  // Per cent: the damping flat at the low end, the joint hardly moved at the fit.
+  IwanUpdateSummary p = reported_fit(IwanUpdateStatus::kConverged, 2939, 84, 1260);
+  p.best = {1500, 1.62068e7, -0.8125, 1};
+  p.top_slip = 1.28e-7;
+  p.phi_max = 1.6e-4;
+  MisfitEvidence e = mode_one_evidence(149.684, 1e-4, 0, 62.6, 0.184);
+  e.targets = 1;
+  e.low_frequency_error = 5.05e-4;
+  e.low_damping = 0.0636;
+  e.low_model_damping = 0.00143;
+  e.median_damping = 0.104;
+  e.low_softening_share = 0.058;
+  p.evidence = e;
+  std::string r = p.report();
+  EXPECT_NE(r.find(own), std::string::npos) << r;
+  EXPECT_NE(r.find("Or, every measured damping lying below 1 and 44.5 times the model's at the "
+                   "lowest amplitudes, " +
+                   per_cent),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("(damping_ratio [%])"), std::string::npos) << r;
+  // A value of 1 or more is no per cent; 3.7 times (the flat 0.3 % table's) is the own damping's.
+  p.evidence->damping_max = 1.2;
+  EXPECT_EQ(p.report().find(per_cent), std::string::npos) << p.report();
+  p.evidence->damping_max = 0.184;
+  p.evidence->low_damping = 3.7 * 0.00143;
+  p.evidence->median_damping = 0.006;
+  EXPECT_EQ(p.report().find(per_cent), std::string::npos) << p.report();
+  // Loss factor: K_T raised toward the damping at the low end, the linear limit 0.139 % off.
+  IwanUpdateSummary l = reported_fit(IwanUpdateStatus::kConverged, 2352, 240, 263);
+  MisfitEvidence le = mode_one_evidence(149.668, 1e-4, 0, 1.69, 0.233);
+  le.targets = 1;
+  le.low_frequency_error = 1.389e-3;
+  le.linear_hz = 150.359;
+  le.low_damping = 0.00135;
+  le.low_model_damping = 0.000984;
+  le.median_damping = 0.00675;
+  le.low_softening_share = 0.054;
+  l.evidence = le;
+  r = l.report();
+  EXPECT_NE(r.find(own), std::string::npos) << r;
+  EXPECT_NE(
+      r.find("Or, the measured damping lying a median 1.69 times the fitted model's, " + loss),
+      std::string::npos)
+      << r;
+  // A median factor near 1 (the fit took the damping up) or far above 2: no loss factor.
+  for (const double factor : {1.2, 3.0}) {
+    l.evidence->damping_factor = factor;
+    EXPECT_EQ(l.report().find(loss), std::string::npos) << factor << ": " << l.report();
+  }
+}
+
+// A 6-point curve fitted with its residuals independent (serial correlation 0): the note said
+// "serially correlated along the curves (0 from one point to the next)". The points are few,
+// not waves; at a correlation of 0.1 or more the waves are still named.
+TEST(IwanUpdateReport, FewIndependentPointsAreNotCalledSeriallyCorrelated) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 2419, 12, 7.01);
+  s.effective_points = 12;
+  s.sigma_degrees_of_freedom = 8;
+  s.amplitude_share = 0.6;
+  s.relative_std = Eigen::Vector4d::Constant(0.01);
+  std::string r = s.report();
+  EXPECT_NE(r.find("note: the 12 residuals (6 points) are few, each independent of the next "
+                   "(serial correlation 0, corrected for what the fit absorbs): they amount to "
+                   "12 independent points"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find("serially correlated"), std::string::npos) << r;
+  // Too few for a sigma, nearly independent (8 residuals at 0.09 amount to 6.68, 5 parameters
+  // fitted): no "long waves".
+  s.residuals = 8;
+  s.noise_correlation = 0.09;
+  s.effective_points = 6.68;
+  s.sigma_degrees_of_freedom = 1.68;
+  r = s.report();
+  EXPECT_EQ(r.find("long waves"), std::string::npos) << r;
+  EXPECT_NE(r.find("WARNING: the 8 residuals (4 points), each independent of the next (serial "
+                   "correlation 0.09, corrected for what the fit absorbs), amount to 6.7 "
+                   "independent points, too few to state a sigma"),
+            std::string::npos)
+      << r;
+  // Correlated: the waves.
+  s.effective_points = 12;
+  s.sigma_degrees_of_freedom = 8;
+  s.residuals = 36;
+  s.noise_correlation = 0.5;
+  EXPECT_NE(s.report().find("serially correlated along the curves (0.5 from one point"),
+            std::string::npos)
+      << s.report();
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
