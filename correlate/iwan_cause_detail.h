@@ -20,4 +20,8 @@ bool kt_stopped_short(const IwanUpdateSummary& s);
 /// amplitudes, where the data lie above it: amplitudes larger than the quantity they are read as.
 bool amplitudes_read_too_large(const IwanUpdateSummary& s);
 
+/// F_S free at its lower bound and the fitted curve above the data at the highest measured
+/// amplitudes, the data falling more over them than it: amplitudes smaller than they are read as.
+bool amplitudes_read_too_small(const IwanUpdateSummary& s);
+
 }  // namespace jointlab::correlate::iwan_detail

@@ -148,11 +148,13 @@ void find_apart_curve(const IwanTarget& t, const CurveMeans& means, CurveScatter
 
 // The low-amplitude end of target t, whose model values v start at index k (advanced past its
 // points): each curve's lowest tenth of its points by amplitude (at least 3, at most all), where
-// the model is at its linear limit, K_T and the linear part, and its softening share; every
+// the model is at its linear limit, K_T and the linear part, and its softening share; its
+// highest tenth, where the joint slips most; every
 // point's measured over model damping and the largest measured damping are gathered.
 MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double f_floor, int& k,
                        std::vector<double>& damping_ratios, double& damping_max) {
-  std::vector<double> f_lo, error, noise, z_lo, z_model_lo, all_z, f_share;
+  std::vector<double> f_lo, error, noise, z_lo, z_model_lo, all_z, f_share, f_hi, error_hi,
+      noise_hi;
   for (const MeasuredBackbone& c : t.curves) {
     const Eigen::Index n = c.amplitude.size();
     std::vector<Eigen::Index> by_amplitude(static_cast<size_t>(n));
@@ -168,6 +170,14 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
       noise.push_back(std::max(stated_sigma(c, j)(0), f_floor * f) / f);
       z_lo.push_back(c.damping_ratio(j));
       z_model_lo.push_back(v[static_cast<size_t>(k + 2 * j + 1)]);
+    }
+    // The highest amplitudes alike: where the joint slips most.
+    for (Eigen::Index i = n - low; i < n; ++i) {
+      const Eigen::Index j = by_amplitude[static_cast<size_t>(i)];
+      const double f = c.frequency_hz(j);
+      f_hi.push_back(f);
+      error_hi.push_back(v[static_cast<size_t>(k + 2 * j)] / f - 1);
+      noise_hi.push_back(std::max(stated_sigma(c, j)(0), f_floor * f) / f);
     }
     // The measured frequency's drop from the lowest fifth of the points by amplitude to the
     // second fifth, over its drop from the lowest fifth to the highest (medians of each): the
@@ -199,6 +209,9 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
   e.low_model_damping = median(z_model_lo);
   e.median_damping = median(all_z);
   e.low_softening_share = f_share.empty() ? NAN : median(f_share);
+  e.high_frequency_hz = median(f_hi);
+  e.high_frequency_error = median(error_hi);
+  e.high_frequency_noise = median(noise_hi);
   return e;
 }
 

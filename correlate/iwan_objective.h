@@ -52,6 +52,9 @@ struct MisfitEvidence {
   /// mode is flat there (-0.002 to 0.017). It only leans between the two: a joint nearly linear in
   /// amplitude (chi -0.05: 0.005) reads flat, data that start near the other mode's slip soften.
   double low_softening_share = NAN;
+  /// Median measured frequency at each curve's highest amplitudes (its highest tenth of points,
+  /// at least 3), and the median (f_model - f) / f and relative one-sigma (floored) there.
+  double high_frequency_hz = 0, high_frequency_error = 0, high_frequency_noise = 0;
   int targets = 0;  ///< the objective's targets (modes): one K_T sets every linear limit
   /// Curves that disagree with one another (scatter between hits): over every target with two
   /// or more curves, the share of the sum of squared residuals that one offset per curve from

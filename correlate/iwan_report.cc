@@ -17,6 +17,7 @@ namespace jointlab::correlate {
 namespace {
 
 using iwan_detail::amplitudes_read_too_large;
+using iwan_detail::amplitudes_read_too_small;
 using iwan_detail::kt_stopped_short;
 using iwan_detail::model_as_given_matches;
 
@@ -294,12 +295,25 @@ std::string bound_lines(const IwanUpdateSummary& s, const std::string& cause, bo
           "linear limit Kt reaches in its range (below); a wider range would let Kt take up {} "
           "rather than fit the joint\n",
           b, s.evidence->nearer_mode > 0 ? "another mode's frequency" : "the linear part's error");
-    } else if (b.rfind("Fs", 0) == 0 && !cause.empty() && amplitudes_read_too_large(s)) {
+    } else if (b.rfind("Fs", 0) == 0 && !cause.empty() &&
+               (amplitudes_read_too_large(s) || amplitudes_read_too_small(s))) {
       // A wider range does cure it, with Fs then scaled by the amplitudes' factor.
       out += fmt::format(
           "  WARNING: {}: the amplitudes pressed it there (below); a wider range would let Fs "
           "take up their factor, no joint's slip force where they were read as another quantity\n",
           b);
+    } else if (b.rfind("Fs", 0) == 0 && !cause.empty() && !s.held[0] && s.bound_side[0] > 0 &&
+               s.joint_hardly_moved()) {
+      // F_S at its upper bound with the fitted joint hardly slipping: the misfit set the joint
+      // aside, and F_S drifts where nothing holds it. A per-cent damping column on microslip
+      // tables (F_S 1500 N, the joint at 8e-4 phi_max) was told "a wider range would not cure
+      // that"; --fs-range 1:1e7 moved F_S to 23751 N at cost 2430 -> 2423 (0.3 %).
+      out += fmt::format(
+          "  WARNING: {}: there the fitted joint hardly slips ({:.2g} phi_max at the highest "
+          "amplitude): the misfit below set the joint aside, so nothing in these data holds Fs; a "
+          "wider range moves it, not the fit, and Fs is no slip force of the joint until the "
+          "cause below is mended\n",
+          b, s.top_slip / s.phi_max);
     } else if (!cause.empty() && !kt) {
       out += fmt::format(
           "  WARNING: {}: the misfit below pressed it there; a wider range would not cure that\n",
@@ -322,18 +336,24 @@ std::string bound_lines(const IwanUpdateSummary& s, const std::string& cause, bo
 // The fit with beta freed lost to the one with it held at its start: beta is then no result
 // of the data, which reach macroslip where it is identified (before: "beta ... (held)", as if
 // asked, and held 1 in parameters.csv).
-std::string free_beta_line(const IwanUpdateSummary& s) {
+std::string free_beta_line(const IwanUpdateSummary& s, const std::string& cause) {
   std::string out;
   if (s.held[3] && s.beta_hold == IwanBetaHold::kFreeFitNoBetter) {
     out += fmt::format(
         "  WARNING: the data reach macroslip, where beta is identified, but the fit with beta "
         "free ended at cost {:.4g}, above this fit's {:.4g} with beta held at its start {:.4g}: "
-        "beta is not fitted and has no sigma, and the other parameters{} hold at that beta; run "
-        "again with a larger --evaluations (e.g. {}), or hold beta at a known value with "
-        "--beta\n",
+        "beta is not fitted and has no sigma, and the other parameters{} hold at that beta; {}\n",
         s.free_fit_cost, s.final_cost, s.best.beta,
         (s.relative_std.array() > 0).any() ? " and their sigmas" : "",
-        4 * std::max(s.evaluations, 1500));
+        // With the model not describing the data (a cause named), beta from a longer search
+        // would be fitted to that misfit (the velocity tables read as the modal amplitude: beta
+        // free 6.426e6 against held 6.389e6, and "a larger --evaluations (e.g. 19416)").
+        cause.empty() ? fmt::format("run again with a larger --evaluations (e.g. {}), or hold "
+                                    "beta at a known value with --beta",
+                                    4 * std::max(s.evaluations, 1500))
+                      : std::string("mend the cause named above first (a longer search would fit "
+                                    "beta to that misfit, not to the joint), or hold beta at a "
+                                    "known value with --beta"));
   }
   return out;
 }
@@ -454,6 +474,16 @@ constexpr double kSerialCorrelation = 0.1;
 std::string serial_lines(const IwanUpdateSummary& s) {
   std::string out;
   const double fitted = std::round(s.effective_points - s.sigma_degrees_of_freedom);
+  // Where no sigma is stated (the misfit sets the error, or none is identified) there is none
+  // to allow for the few points: the velocity tables read as the modal amplitude were told
+  // "the sigmas allow for it (Student's t, 3.08 degrees of freedom)" above "no sigma is stated".
+  const std::string allowance =
+      (s.relative_std.array() > 0).any()
+          ? fmt::format(
+                "the sigmas allow for it (Student's t, {:.3g} degrees of freedom) but rest "
+                "on these few",
+                s.sigma_degrees_of_freedom)
+          : std::string("no sigma is stated, so none rests on these few");
   if (s.improved && s.effective_points > 0 && !(s.sigma_degrees_of_freedom > 2) &&
       static_cast<double>(s.residuals) - fitted <= 2) {
     out += fmt::format(
@@ -486,17 +516,14 @@ std::string serial_lines(const IwanUpdateSummary& s) {
     out += fmt::format(
         "  note: the {} residuals ({} points) are few, each independent of the next (serial "
         "correlation {:.2g}, corrected for what the fit absorbs): they amount to {:.3g} "
-        "independent points; the sigmas allow for it (Student's t, {:.3g} degrees of freedom) but "
-        "rest on these few\n",
-        s.residuals, s.residuals / 2, s.noise_correlation, s.effective_points,
-        s.sigma_degrees_of_freedom);
+        "independent points; {}\n",
+        s.residuals, s.residuals / 2, s.noise_correlation, s.effective_points, allowance);
   } else if (s.improved && s.effective_points > 0 && s.effective_points < 30) {
     out += fmt::format(
         "  note: the residuals are serially correlated along the curves ({:.3g} from one point "
         "to the next, corrected for what the fit absorbs): the {} residuals amount to {:.3g} "
-        "independent points; the sigmas allow for it (Student's t, {:.3g} degrees of freedom) "
-        "but rest on these few\n",
-        s.noise_correlation, s.residuals, s.effective_points, s.sigma_degrees_of_freedom);
+        "independent points; {}\n",
+        s.noise_correlation, s.residuals, s.effective_points, allowance);
   }
   return out;
 }
@@ -680,7 +707,7 @@ std::string IwanUpdateSummary::report() const {
         "or the model rather than the search: {}\n",
         cause);
   }
-  out += free_beta_line(*this);
+  out += free_beta_line(*this, cause);
   out += kt_moved_line(*this, cause);
   out += not_converged_line(*this, cause, kt_range);
   out += stopped_at_bound_line(*this, cause, kt_range);

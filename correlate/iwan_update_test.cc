@@ -2696,5 +2696,171 @@ TEST(IwanUpdateReport, FewIndependentPointsAreNotCalledSeriallyCorrelated) {
       << s.report();
 }
 
+// Displacement tables of the riveted beam (truth F_S 30 N) 1000 times too small (m given the
+// unit mm, say): F_S ran to its lower bound 1.67 N, the fitted joint reached 0.018 phi_max at the
+// highest amplitude, the fitted curve there 4.15 % above the data (415 times their noise) and
+// 0.88 % below them at the lowest. A factor on the amplitudes is one on F_S, so the amplitudes'
+// scale is named; before, "the structure's own damping" or another mode's slip, and F_S's bound
+// "a wider range would not cure that" (--fs-range 1e-4:100 fits F_S 0.02999 N at a reduced
+// chi-square of 1.11). The numbers are the command's; each check is on words.
+TEST(IwanUpdateReport, AmplitudesReadTooSmallNameTheirScale) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 2172, 240, 1.4e4);
+  s.best = {1.66667, 1.55912e7, -0.8387, 1};
+  s.held[3] = true;  // by the fit: microslip only
+  s.beta_hold = IwanBetaHold::kMicroslip;
+  s.at_bounds = {"Fs at its lower bound 1.66667 N"};
+  s.bound_side[0] = -1;
+  s.noise_correlation = 0.837;
+  s.effective_points = 24.8;
+  s.sigma_degrees_of_freedom = 21.8;
+  s.amplitude_share = 0.78;
+  s.bottom_slip = 2.68e-11;
+  s.top_slip = 3.44e-9;
+  s.phi_max = 1.88e-7;
+  MisfitEvidence e = mode_one_evidence(149.666, 1e-4, 0, 1.35, 0.03);
+  e.targets = 1;
+  e.low_frequency_error = -0.00879;
+  e.linear_hz = 150.805;
+  e.high_frequency_hz = 141.188;
+  e.high_frequency_error = 0.041456;
+  e.high_frequency_noise = 1e-4;
+  e.low_damping = 6.81e-4;
+  e.low_model_damping = 1.67e-3;
+  e.median_damping = 3e-3;
+  e.low_softening_share = 0.054;
+  s.evidence = e;
+  const std::string smaller = "these amplitudes are smaller than the quantity they are read as";
+  std::string r = s.report();
+  EXPECT_NE(r.find("Fs ran to its lower bound 1.667 N and still the fitted curve at the highest "
+                   "measured amplitudes lies +4.15 % off the measured frequency 141.188 Hz there "
+                   "(415 times its noise), while at the lowest it lies -0.879 % off"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find(smaller), std::string::npos) << r;
+  EXPECT_NE(r.find("Fs at its lower bound 1.66667 N: the amplitudes pressed it there (below); a "
+                   "wider range would let Fs take up their factor"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find("the structure's own damping"), std::string::npos) << r;
+  EXPECT_EQ(r.find("would not cure that"), std::string::npos) << r;
+  // The fitted curve within ten times the noise of the data at the top (1e-3 here), or above
+  // them by as much at both ends (a linear part too stiff), or F_S inside its range or held:
+  // not the amplitudes.
+  IwanUpdateSummary c = s;
+  c.evidence->high_frequency_error = 9e-4;
+  EXPECT_EQ(c.report().find(smaller), std::string::npos) << c.report();
+  c = s;
+  c.evidence->low_frequency_error = 0.0410;
+  EXPECT_EQ(c.report().find(smaller), std::string::npos) << c.report();
+  c = s;
+  c.bound_side[0] = 0;
+  c.at_bounds.clear();
+  EXPECT_EQ(c.report().find(smaller), std::string::npos) << c.report();
+  c = s;
+  c.held[0] = true;
+  EXPECT_EQ(c.report().find(smaller), std::string::npos) << c.report();
+  // At the upper bound the larger-amplitude rule alone applies (the curve above the data at the
+  // top says nothing of amplitudes read too large).
+  c = s;
+  c.bound_side[0] = 1;
+  c.at_bounds = {"Fs at its upper bound 1500 N"};
+  EXPECT_EQ(c.report().find(smaller), std::string::npos) << c.report();
+}
+
+// Velocity tables read as the modal amplitude (the riveted beam, the command's numbers; Z held and
+// fitted): beta freed lost to beta held (6.426e6 against 6.389e6) and the report said "run again
+// with a larger --evaluations (e.g. 19416)", which cannot help while the amplitudes are read as
+// another quantity; and the note on the serially correlated residuals said "the sigmas allow for
+// it (Student's t, 3.08 degrees of freedom)" above "no sigma is stated".
+TEST(IwanUpdateReport, ANamedCauseComesBeforeALongerSearchForBetaAndNoSigmaIsAllowedFor) {
+  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 4854, 240, 3.23e6);
+  s.best = {1500, 9.08345e6, -0.949783, 1};
+  s.held[3] = true;
+  s.beta_hold = IwanBetaHold::kFreeFitNoBetter;
+  s.free_fit_cost = 6.426e6;
+  s.final_cost = 6.389e6;
+  s.at_bounds = {"Fs at its upper bound 1500 N"};
+  s.bound_side[0] = 1;
+  s.noise_correlation = 0.999;
+  s.effective_points = 6.08;
+  s.sigma_degrees_of_freedom = 3.08;
+  s.amplitude_share = 0.475;
+  s.bottom_slip = 6.64e-5;
+  s.top_slip = 0.0118;
+  s.phi_max = 3.15e-4;
+  MisfitEvidence e = mode_one_evidence(149.668, 1e-4, 0, 0.2, 0.116);
+  e.targets = 1;
+  e.low_frequency_error = -0.153246;
+  e.linear_hz = 138.921;
+  e.low_softening_share = 0.054;
+  s.evidence = e;
+  const std::string longer = "larger --evaluations";
+  const std::string allow = "the sigmas allow for it (Student's t";
+  std::string r = s.report();
+  EXPECT_NE(r.find("these amplitudes are larger than the quantity they are read as"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("with beta held at its start 1: beta is not fitted and has no sigma, and the "
+                   "other parameters hold at that beta; mend the cause named above first"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find(longer), std::string::npos) << r;
+  EXPECT_NE(r.find("the 240 residuals amount to 6.08 independent points; no sigma is stated, so "
+                   "none rests on these few"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find(allow), std::string::npos) << r;
+  // No cause named (no evidence): the search is the suspect, and the longer search is advised;
+  // with sigmas stated they allow for the few points.
+  s.evidence.reset();
+  s.relative_std = Eigen::Vector4d::Constant(0.01);
+  r = s.report();
+  EXPECT_NE(r.find("run again with a larger --evaluations (e.g. 19416)"), std::string::npos) << r;
+  EXPECT_NE(r.find(allow + ", 3.08 degrees of freedom) but rest on these few"), std::string::npos)
+      << r;
+}
+
+// A per-cent damping column on the riveted beam's microslip tables (the command's numbers): F_S
+// ran to its upper bound 1500 N, where the fitted joint slips 8e-4 phi_max at the highest
+// amplitude. The cause line said "this mode hardly moves the joint", which the bound, not the
+// mode's shape, made so, and F_S's bound "a wider range would not cure that", where nothing holds
+// F_S (--fs-range 1:1e7 moved it to 23751 N at cost 2430 -> 2423).
+TEST(IwanUpdateReport, AJointSetAsideAtTheSlipForcesBoundIsNotAModeThatHardlyMovesIt) {
+  IwanUpdateSummary p = reported_fit(IwanUpdateStatus::kConverged, 2939, 84, 1260);
+  p.best = {1500, 1.62068e7, -0.8125, 1};
+  p.held[3] = true;  // by the fit: microslip only
+  p.beta_hold = IwanBetaHold::kMicroslip;
+  p.bottom_slip = 2.6e-8;
+  p.top_slip = 1.28e-7;
+  p.phi_max = 1.6e-4;
+  p.final_cost = 2430;
+  MisfitEvidence e = mode_one_evidence(149.684, 1e-4, 0, 62.6, 0.184);
+  e.targets = 1;
+  e.low_frequency_error = 5.05e-4;
+  e.linear_hz = 151.640;
+  e.low_damping = 0.0636;
+  e.low_model_damping = 0.00143;
+  e.median_damping = 0.104;
+  e.low_softening_share = 0.058;
+  p.evidence = e;
+  const std::string hardly = "this mode hardly moves the joint";
+  // F_S inside its range: the mode's shape leaves the joint still, as before.
+  ASSERT_NE(p.report().find(hardly), std::string::npos) << p.report();
+  p.at_bounds = {"Fs at its upper bound 1500 N"};
+  p.bound_side[0] = 1;
+  const std::string r = p.report();
+  EXPECT_EQ(r.find(hardly), std::string::npos) << r;
+  EXPECT_NE(r.find("That is the structure's own damping (roughly constant in amplitude)"),
+            std::string::npos)
+      << r;
+  EXPECT_NE(r.find("a damping column in per cent read as a fraction"), std::string::npos) << r;
+  EXPECT_NE(r.find("Fs at its upper bound 1500 N: there the fitted joint hardly slips (0.0008 "
+                   "phi_max at the highest amplitude): the misfit below set the joint aside, so "
+                   "nothing in these data holds Fs; a wider range moves it, not the fit"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find("would not cure that"), std::string::npos) << r;
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
