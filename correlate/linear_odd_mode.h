@@ -1,5 +1,7 @@
 // One measured mode the model does not match (internal to update_linear()): where a fit leaves
-// scatter far beyond the noise, each paired mode left out in turn and the rest fitted again.
+// scatter far beyond the noise, each paired mode left out in turn and the rest fitted again;
+// where it leaves scatter beyond the noise, the same where one mode pulls a set further than
+// the standard deviations of the fits with and without it allow.
 #pragma once
 
 #include <string>
