@@ -146,13 +146,67 @@ void find_apart_curve(const IwanTarget& t, const CurveMeans& means, CurveScatter
   }
 }
 
+// The low end's damping rise against its frequency drop (MisfitEvidence::low_rise_ratio) over
+// target t's curves, gathered into (rise, drop, variance of rise - limit x drop, span). In
+// microslip an Iwan joint's first-harmonic stiffness loss is R A^(chi+1) G(chi) and its damping
+// 2 R A^(chi+1) / (pi (chi + 2) (chi + 3) K) (method.md), both of the slip amplitude A to the
+// same power, and at every joint of a mode alike: their increments between two amplitudes keep
+// the ratio 4 / (pi (chi + 2) (chi + 3) G(chi)), at most kIwanRiseLimit for chi <= 0, whatever
+// F_S, K_T, beta and the mode shape. The structure's own damping, constant, drops out of the
+// rise, and another mode's slip added to the joint's shifts A alike in both.
+struct LowRise {
+  double rise = 0, drop = 0, variance = 0, span = 0;
+  int curves = 0;
+};
+
+void add_low_rise(const MeasuredBackbone& c, const std::vector<Eigen::Index>& by_amplitude,
+                  double f_floor, double z_floor, LowRise& out) {
+  const Eigen::Index n = c.amplitude.size(), fifth = n / 5;
+  if (fifth < 2) return;
+  // The median of a band's frequencies or dampings and its variance (the mean's for 2 points; for
+  // more, pi / 2 times the mean's, the large-sample variance of a median, which over-covers few).
+  const auto band = [&](Eigen::Index from, int q) {
+    std::vector<double> x;
+    double var = 0;
+    for (Eigen::Index i = from; i < from + fifth; ++i) {
+      const Eigen::Index j = by_amplitude[static_cast<size_t>(i)];
+      const double value = q == 0 ? c.frequency_hz(j) : c.damping_ratio(j);
+      x.push_back(value);
+      const double sigma =
+          std::max(stated_sigma(c, j)(q), (q == 0 ? f_floor : z_floor) * std::abs(value));
+      var += sigma * sigma;
+    }
+    // The middle value, or the mean of the middle two: the upper middle one (median()) is a
+    // point further up for the rising damping than for the falling frequency, and on 40-point
+    // curves (1.23 times in amplitude from one point to the next) read chi 0's 0.424 as 0.521.
+    const double k = static_cast<double>(fifth);
+    std::sort(x.begin(), x.end());
+    const size_t mid = x.size() / 2;
+    const double middle = x.size() % 2 ? x[mid] : (x[mid - 1] + x[mid]) / 2;
+    return std::pair(middle, (fifth == 2 ? 1.0 : M_PI / 2) * var / (k * k));
+  };
+  const auto [f1, vf1] = band(0, 0);
+  const auto [f2, vf2] = band(fifth, 0);
+  const auto [z1, vz1] = band(0, 1);
+  const auto [z2, vz2] = band(fifth, 1);
+  if (!(f1 > 0)) return;
+  out.rise += z2 - z1;
+  out.drop += (f1 - f2) / f1;
+  out.variance += vz1 + vz2 + kIwanRiseLimit * kIwanRiseLimit * (vf1 + vf2) / (f1 * f1);
+  out.span = std::max(out.span, c.amplitude(by_amplitude[static_cast<size_t>(2 * fifth - 1)]) /
+                                    c.amplitude(by_amplitude[0]));
+  ++out.curves;
+}
+
 // The low-amplitude end of target t, whose model values v start at index k (advanced past its
 // points): each curve's lowest tenth of its points by amplitude (at least 3, at most all), where
 // the model is at its linear limit, K_T and the linear part, and its softening share; its
 // highest tenth, where the joint slips most; every
 // point's measured over model damping and the largest measured damping are gathered.
-MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double f_floor, int& k,
-                       std::vector<double>& damping_ratios, double& damping_max) {
+MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double f_floor,
+                       double z_floor, int& k, std::vector<double>& damping_ratios,
+                       double& damping_max) {
+  LowRise rise;
   std::vector<double> f_lo, error, noise, z_lo, z_model_lo, all_z, f_share, f_hi, error_hi,
       noise_hi;
   for (const MeasuredBackbone& c : t.curves) {
@@ -171,6 +225,7 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
       z_lo.push_back(c.damping_ratio(j));
       z_model_lo.push_back(v[static_cast<size_t>(k + 2 * j + 1)]);
     }
+    add_low_rise(c, by_amplitude, f_floor, z_floor, rise);
     // The highest amplitudes alike: where the joint slips most.
     for (Eigen::Index i = n - low; i < n; ++i) {
       const Eigen::Index j = by_amplitude[static_cast<size_t>(i)];
@@ -212,6 +267,11 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
   e.high_frequency_hz = median(f_hi);
   e.high_frequency_error = median(error_hi);
   e.high_frequency_noise = median(noise_hi);
+  if (rise.curves > 0 && rise.variance > 0) {
+    e.low_rise_ratio = rise.drop > 0 ? rise.rise / rise.drop : NAN;
+    e.low_rise_excess = (rise.rise - kIwanRiseLimit * rise.drop) / std::sqrt(rise.variance);
+    e.low_rise_span = rise.span;
+  }
   return e;
 }
 
@@ -284,7 +344,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
       add_between(means, scatter);
       if (t.curves.size() >= 4) find_apart_curve(t, means, scatter);
     }
-    MisfitEvidence e = low_end(t, v, f_floor_, k, damping_ratios, damping_max);
+    MisfitEvidence e = low_end(t, v, f_floor_, z_floor_, k, damping_ratios, damping_max);
     e.targets = static_cast<int>(targets_.size());
     if (modes && e.low_frequency_hz > 0) set_nearer_mode(*modes, t.mode, e);
     if (fitted_modes) {

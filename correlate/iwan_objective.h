@@ -30,6 +30,12 @@ namespace jointlab::correlate {
 /// What the model's misfit at a result shows of its likelier causes (IwanObjective::
 /// misfit_evidence()): a linear-limit frequency far off the measured one points at the linear
 /// model or the mode, a damping far above the model's at the units of the damping column.
+/// The most damping any Iwan joint of chi <= 0 adds per relative frequency drop in microslip, on
+/// the ring-down definitions (first-harmonic frequency, decay over stored energy) as on QSMA's
+/// secant ones: 4 (chi + 1) / (pi (chi + 3)) to first order for the secant, rising with chi to
+/// 4 / (3 pi) at chi = 0 for both (method.md's closed forms; at chi -0.3 0.330 and 0.326).
+inline constexpr double kIwanRiseLimit = 4 / (3 * M_PI);
+
 struct MisfitEvidence {
   int mode = 0;                    ///< the target (model mode R) these numbers are of
   double low_frequency_hz = 0;     ///< median measured frequency at each curve's lowest amplitudes
@@ -55,6 +61,12 @@ struct MisfitEvidence {
   /// Median measured frequency at each curve's highest amplitudes (its highest tenth of points,
   /// at least 3), and the median (f_model - f) / f and relative one-sigma (floored) there.
   double high_frequency_hz = 0, high_frequency_error = 0, high_frequency_noise = 0;
+  /// Between each curve's lowest fifth and second fifth of points by amplitude (medians of each,
+  /// curves of 10 points or more): the measured damping's rise over the measured frequency's
+  /// relative drop, each summed over the curves (NaN: unknown); by how many of its standard
+  /// deviations (the stated sigmas, floored) the rise exceeds kIwanRiseLimit times the drop; and
+  /// the largest ratio over the curves of the second fifth's highest amplitude to the lowest.
+  double low_rise_ratio = NAN, low_rise_excess = NAN, low_rise_span = 0;
   int targets = 0;  ///< the objective's targets (modes): one K_T sets every linear limit
   /// Curves that disagree with one another (scatter between hits): over every target with two
   /// or more curves, the share of the sum of squared residuals that one offset per curve from
