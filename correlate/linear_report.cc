@@ -57,8 +57,13 @@ std::string mode_rows(const LinearEvaluation& final) {
 }
 
 // The report's line on one set: start, value, sensitivity and what the frequencies say of it
-// (`t_widening` 0: no standard deviation stated).
-std::string parameter_line(const ParameterReport& p, double t_widening) {
+// (`t_widening` 0: no standard deviation stated). Where the pairs cannot be decided (`undecided`)
+// there is no value (the ambiguity line says why, and where the fits differ). Before, such a report
+// said "iwan.rivet: 1e+07 -> 0", a value no fit gave.
+std::string parameter_line(const ParameterReport& p, double t_widening, bool undecided) {
+  if (undecided)
+    return fmt::format("  {}: {:.6g} -> not decided (the pairs cannot be decided)\n", p.name,
+                       p.start);
   std::string what;
   if (p.flat)
     what = p.smallest_within_tolerance > 0 ? "  FLAT (not identified by the frequencies)"
@@ -144,7 +149,8 @@ std::string LinearUpdateSummary::report() const {
                           "deviations assume that noise{})",
                           noise, few_degrees_note(*this)));
   }
-  for (const ParameterReport& p : parameters) out += parameter_line(p, t_widening);
+  for (const ParameterReport& p : parameters)
+    out += parameter_line(p, t_widening, status == LinearUpdateStatus::kAmbiguous);
   for (const std::string& w : warnings) out += fmt::format("  WARNING: {}\n", w);
   return out;
 }

@@ -1137,6 +1137,30 @@ TEST(LinearUpdate, AModeThatAlonePullsASetBeyondItsStandardDeviationIsNamed) {
   }
 }
 
+// Where the pairs cannot be decided no fit is the result, and the report (which update-linear
+// prints before it stops) gives no value: one sensor per chain and a shape [1, 1] at 58.856 Hz,
+// between chain A's first mode and chain B's, which ka and kb each bring onto it exactly (as
+// UpdateCli.UndecidablePairsAndZeroShapesAreRefused). Before, its lines read "spring.ka: 500000
+// -> 0", a stiffness no fit gave.
+TEST(LinearUpdate, UndecidedPairsStateNoValue) {
+  const model::Model m = two_chain_structure();
+  const std::vector<Sensor> sensors = {{"a0", 0, 1.0}, {"b0", 6, 1.0}};
+  MeasuredModes meas;
+  meas.frequency_hz = Eigen::VectorXd::Constant(1, 58.856);
+  meas.shapes = Eigen::MatrixXcd::Ones(2, 1);
+  LinearUpdateOptions o;
+  o.mac_threshold = 0.4;
+  LinearUpdateSummary s;
+  update_linear(m, {"spring.ka", "spring.kb"}, sensors, meas, o, &s);
+  const std::string report = s.report();
+  ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << report;
+  EXPECT_NE(report.find("spring.ka: 500000 -> not decided (the pairs cannot be decided)\n"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("spring.kb: 300000 -> not decided"), std::string::npos) << report;
+  EXPECT_EQ(report.find("-> 0"), std::string::npos) << report;
+}
+
 // What reading the data found (a complex shape realised with a poor MPC, measured_data.h) is
 // in the update's report, first among its warnings.
 TEST(LinearUpdate, TheMeasuredDataWarningsComeFirstInTheReport) {
