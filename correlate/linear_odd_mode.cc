@@ -271,7 +271,7 @@ std::pair<double, std::string> pull_of(const Refit& f, const LinearUpdateSummary
   for (size_t k = 0; k < names.size() && k < s.parameters.size() && k < f.r.parameters.size();
        ++k) {
     const ParameterReport &a = s.parameters[k], &b = f.r.parameters[k];
-    if (a.held || b.held || !a.relative_std || !b.relative_std) continue;
+    if (a.held || b.held || !a.relative_std || !b.relative_std || !(a.value > 0)) continue;
     const double v = f.theta(static_cast<Eigen::Index>(k));
     const double z = std::abs(std::log(v / a.value)) / std::hypot(*a.relative_std, *b.relative_std);
     if (!(z > out.first)) continue;
