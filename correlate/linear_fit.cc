@@ -126,9 +126,11 @@ std::vector<Settled> settle_each_start(const LinearProblem& p,
 
 // The outcome of lowest cost among the starts'; `costs` receives each one's cost, `decided`
 // false where another that pairs otherwise fits within 9 chi-square units of it, each such in
-// `rivals`.
-size_t best_start(const std::vector<Settled>& outcomes, double sf2, std::vector<std::string>& costs,
-                  bool& decided, std::vector<const TrackedPoint*>& rivals) {
+// `rivals`, unless the shapes decide between those (shapes_decide(): that one is returned, and
+// `by_shapes` says so).
+size_t best_start(const LinearProblem& p, const std::vector<Settled>& outcomes, double sf2,
+                  std::vector<std::string>& costs, bool& decided,
+                  std::vector<const TrackedPoint*>& rivals, std::string& by_shapes) {
   size_t win = 0;
   for (size_t k = 1; k < outcomes.size(); ++k)
     if (outcomes[k].cost < outcomes[win].cost) win = k;
@@ -143,7 +145,23 @@ size_t best_start(const std::vector<Settled>& outcomes, double sf2, std::vector<
       rivals.push_back(&outcomes[k].point);
     }
   }
-  return win;
+  if (decided) return win;
+  // The frequencies cannot decide; the shapes may (a crosswise pair of nearly one frequency
+  // followed through a veering from one of the start's guesses).
+  std::vector<size_t> close{win};
+  for (size_t k = 0; k < outcomes.size(); ++k)
+    if (std::find(rivals.begin(), rivals.end(), &outcomes[k].point) != rivals.end())
+      close.push_back(k);
+  std::vector<const TrackedPoint*> points;
+  for (const size_t k : close) points.push_back(&outcomes[k].point);
+  const std::optional<size_t> w = shapes_decide(p, points);
+  if (!w) return win;
+  const size_t chosen = close[*w], other = chosen == win ? close[1] : win;
+  by_shapes = shapes_decided(p, outcomes[chosen].point, outcomes[chosen].cost,
+                             outcomes[other].point, outcomes[other].cost);
+  decided = true;
+  rivals.clear();
+  return chosen;
 }
 
 // The winning start's outcome `o` as the summary's fit so far.
@@ -353,9 +371,11 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   std::vector<std::string> start_costs;
   bool decided = true;
   std::vector<const TrackedPoint*> rivals;
-  const size_t win = best_start(outcomes, sf2, start_costs, decided, rivals);
+  std::string by_shapes;
+  const size_t win = best_start(p, outcomes, sf2, start_costs, decided, rivals, by_shapes);
   Settled& o = outcomes[win];
   take_outcome(o, s, weak_pairs);
+  if (!by_shapes.empty()) s.warnings.push_back(by_shapes);
   point = o.point;
   bool unconfirmed_refusal = false;
   if (o.ambiguity.empty()) {

@@ -1,10 +1,12 @@
 // Pairs decided by the data in update_linear() (internal): least squares with the pairs
 // followed by shape, the pairs made afresh by the rules at the result, each candidate pairing
 // fitted, and the lowest cost kept where it is lower by at least 9 in chi-square units
-// (2 (c_other - c_best) / sigma_f^2); otherwise the pairs cannot be decided.
+// (2 (c_other - c_best) / sigma_f^2); otherwise the shapes decide where they can
+// (shapes_decide), and the pairs cannot be decided where they cannot.
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +47,21 @@ struct Settled {
 /// combination of one candidate for each of the first `ties` ties; else `point`.
 std::vector<TrackedPoint> candidate_pairings(const TrackedPoint& point, const LinearEvaluation& at,
                                              size_t ties);
+
+/// Whether the shapes decide for result `a` over result `b` where the frequencies cannot: each
+/// measured mode the two pair otherwise has, at three sensors or more, a MAC of at least the
+/// threshold with its partner at `a` and below it, by 0.3 or more, at `b`.
+bool shapes_prefer(const LinearProblem& p, const TrackedPoint& a, const TrackedPoint& b);
+
+/// Which of `points` (results whose costs the frequencies cannot tell apart) the shapes prefer
+/// over every other that pairs some measured mode otherwise (shapes_prefer()), or none.
+std::optional<size_t> shapes_decide(const LinearProblem& p,
+                                    const std::vector<const TrackedPoint*>& points);
+
+/// The warning where the shapes decided for result `a` over `b`: each mode they pair otherwise,
+/// with its MAC at each, and both costs.
+std::string shapes_decided(const LinearProblem& p, const TrackedPoint& a, double cost_a,
+                           const TrackedPoint& b, double cost_b);
 
 /// Least squares with pairs followed by shape from `point`, the pairs at its result decided by
 /// the data.
