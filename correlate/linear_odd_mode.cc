@@ -301,14 +301,19 @@ std::string pulled_by_one_mode(const model::Model& model, const std::vector<std:
                                const LinearUpdateOptions& options, const LinearUpdateSummary& s) {
   constexpr double kPull = 3;
   const LinearEvaluation& e = s.final;
-  if (pulling_candidates(s, options.frequency_std, 2.0).empty()) return "";
+  // The modes that may pull, then those of largest error (the 8 at most; a mode that pulls
+  // meets its partner and may have the smallest error of all).
+  std::vector<int> order = pulling_candidates(s, options.frequency_std, 2.0);
+  if (order.empty()) return "";
+  for (const int i : largest_errors(e))
+    if (std::find(order.begin(), order.end(), i) == order.end()) order.push_back(i);
   LinearUpdateOptions o = options;
   o.progress = nullptr;
   std::vector<Refit> within;
   std::vector<std::string> pulls;
   double best = 0, best_pulled = 0;
   bool any_pulled = false;
-  for (const int i : largest_errors(e)) {
+  for (const int i : order) {
     Refit f{i, {}, {}};
     f.theta = fit_as_given(model, names, sensors, without_mode(measured, i), o, false, f.r);
     if (!within_noise(f, e)) continue;
@@ -323,8 +328,12 @@ std::string pulled_by_one_mode(const model::Model& model, const std::vector<std:
   // A pulling refit among those the data cannot tell from the best: the mode that pulls may be
   // the wrong one, or another whose leaving out fits as well.
   if (!any_pulled || best_pulled - best >= 9) return "";
+  std::vector<size_t> by_mode(within.size());
+  for (size_t q = 0; q < by_mode.size(); ++q) by_mode[q] = q;
+  std::sort(by_mode.begin(), by_mode.end(),
+            [&](size_t a, size_t b) { return within[a].mode < within[b].mode; });
   std::vector<std::string> ids, each;
-  for (size_t q = 0; q < within.size(); ++q) {
+  for (const size_t q : by_mode) {
     const Refit& f = within[q];
     if (f.r.reduced_chi2 * f.r.degrees_of_freedom - best >= 9) continue;
     ids.push_back(measured.id(f.mode));
