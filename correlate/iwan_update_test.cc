@@ -2522,15 +2522,9 @@ TEST(IwanUpdate, TheLowEndLeansButDoesNotDecideBetweenOwnDampingAndAnotherModesS
   EXPECT_EQ(r.find("update-linear first"), std::string::npos) << r;
 }
 
-// Velocity tables read as the modal amplitude (the default; the riveted beam's three 40-point
-// hits, truth F_S 30 N): F_S ran to its upper bound 1500 N and the fitted joint still slipped at
-// the lowest measured amplitude (0.21 phi_max), its curve there 8.8 % below its own linear limit
-// and 15.3 % below the data. A factor on the amplitudes is one on F_S, so the cause is the
-// amplitudes' quantity or unit; before, "the structure's own damping" was named and, with it
-// fitted, "no slip in these data ... do not change with amplitude" (the gain over the constant
-// backbone, 6.389e6 against 6.41e6, divided by a reduced chi-square of 3.25e6). The numbers are
-// the command's; each check is on words, none on a tolerance.
-TEST(IwanUpdateReport, AmplitudesReadAsTheWrongQuantityNameTheirUnitNotNoSlip) {
+// The fit of the riveted beam's three 40-point velocity hits read as the modal amplitude (the
+// command's numbers): F_S at its upper bound 1500 N, the residuals in long waves.
+IwanUpdateSummary velocity_read_as_modal() {
   IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 4854, 240, 3.23e6);
   s.best = {1500, 9.08345e6, -0.949783, 1};
   s.at_bounds = {"Fs at its upper bound 1500 N"};
@@ -2546,11 +2540,24 @@ TEST(IwanUpdateReport, AmplitudesReadAsTheWrongQuantityNameTheirUnitNotNoSlip) {
   e.targets = 1;
   e.low_frequency_error = -0.153246;
   e.linear_hz = 138.921;
-  e.low_damping = 6.77e-4;
-  e.low_model_damping = 3.82e-3;
-  e.median_damping = 3.38e-3;
   e.low_softening_share = 0.054;
   s.evidence = e;
+  return s;
+}
+
+// Velocity tables read as the modal amplitude (the default; the riveted beam's three 40-point
+// hits, truth F_S 30 N): F_S ran to its upper bound 1500 N and the fitted joint still slipped at
+// the lowest measured amplitude (0.21 phi_max), its curve there 8.8 % below its own linear limit
+// and 15.3 % below the data. A factor on the amplitudes is one on F_S, so the cause is the
+// amplitudes' quantity or unit; before, "the structure's own damping" was named and, with it
+// fitted, "no slip in these data ... do not change with amplitude" (the gain over the constant
+// backbone, 6.389e6 against 6.41e6, divided by a reduced chi-square of 3.25e6). The numbers are
+// the command's; each check is on words, none on a tolerance.
+TEST(IwanUpdateReport, AmplitudesReadAsTheWrongQuantityNameTheirUnitNotNoSlip) {
+  IwanUpdateSummary s = velocity_read_as_modal();
+  s.evidence->low_damping = 6.77e-4;
+  s.evidence->low_model_damping = 3.82e-3;
+  s.evidence->median_damping = 3.38e-3;
   const std::string quantity = "these amplitudes are larger than the quantity they are read as";
   std::string r = s.report();
   EXPECT_NE(r.find("Fs ran to its upper bound 1500 N and still the fitted joint slips at the "
@@ -2773,27 +2780,11 @@ TEST(IwanUpdateReport, AmplitudesReadTooSmallNameTheirScale) {
 // another quantity; and the note on the serially correlated residuals said "the sigmas allow for
 // it (Student's t, 3.08 degrees of freedom)" above "no sigma is stated".
 TEST(IwanUpdateReport, ANamedCauseComesBeforeALongerSearchForBetaAndNoSigmaIsAllowedFor) {
-  IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 4854, 240, 3.23e6);
-  s.best = {1500, 9.08345e6, -0.949783, 1};
+  IwanUpdateSummary s = velocity_read_as_modal();
   s.held[3] = true;
   s.beta_hold = IwanBetaHold::kFreeFitNoBetter;
   s.free_fit_cost = 6.426e6;
   s.final_cost = 6.389e6;
-  s.at_bounds = {"Fs at its upper bound 1500 N"};
-  s.bound_side[0] = 1;
-  s.noise_correlation = 0.999;
-  s.effective_points = 6.08;
-  s.sigma_degrees_of_freedom = 3.08;
-  s.amplitude_share = 0.475;
-  s.bottom_slip = 6.64e-5;
-  s.top_slip = 0.0118;
-  s.phi_max = 3.15e-4;
-  MisfitEvidence e = mode_one_evidence(149.668, 1e-4, 0, 0.2, 0.116);
-  e.targets = 1;
-  e.low_frequency_error = -0.153246;
-  e.linear_hz = 138.921;
-  e.low_softening_share = 0.054;
-  s.evidence = e;
   const std::string longer = "larger --evaluations";
   const std::string allow = "the sigmas allow for it (Student's t";
   std::string r = s.report();
