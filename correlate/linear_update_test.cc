@@ -21,6 +21,16 @@ namespace {
 
 const std::vector<std::string> kSets = {"spring.ka", "spring.kb", "spring.kflat"};
 
+// A linear spring of the set `element` between DOFs a and b (b may be model::kGround).
+model::Joint linear_joint(Eigen::Index a, Eigen::Index b, const std::string& element, double k) {
+  model::Joint j;
+  j.a = a;
+  j.b = b;
+  j.element = element;
+  j.stiffness = k;
+  return j;
+}
+
 std::vector<Sensor> chain_sensors(int n) {
   std::vector<Sensor> s;
   for (int c = 0; c < 2; ++c) {
@@ -518,12 +528,8 @@ TEST(LinearUpdate, TwoSetsOnOneJointActTogetherAndOnlyTheirSumIsDetermined) {
     TwoChainParameters tp;
     tp.ka = ka;
     model::Model m = two_chain_structure(tp);
-    model::Joint j;
-    j.a = 1;  // A1-A2, where spring.ka is
-    j.b = 2;
-    j.element = "spring.kd";
-    j.stiffness = kd;
-    m.joints.push_back(j);
+    // A1-A2, where spring.ka is.
+    m.joints.push_back(linear_joint(1, 2, "spring.kd", kd));
     model::validate_model(m, "two-chain structure with spring.kd");
     return m;
   };
@@ -592,12 +598,7 @@ TEST(LinearUpdate, ASetHeldFlatAfterTheFitDroveItAwayStillActsTogether) {
     const std::vector<Eigen::Triplet<double>> k = {{0, 0, 1e5}, {1, 1, 2e5}};
     m.stiffness.setFromTriplets(k.begin(), k.end());
     for (const auto& [element, value] : {std::pair{"spring.kj", kj}, std::pair{"spring.kd", kd}}) {
-      model::Joint j;
-      j.a = 0;
-      j.b = 1;
-      j.element = element;
-      j.stiffness = value;
-      m.joints.push_back(j);
+      m.joints.push_back(linear_joint(0, 1, element, value));
     }
     model::validate_model(m, "two masses");
     return m;
@@ -906,12 +907,8 @@ TEST(LinearUpdate, MoreGuessedPairingsThanTheStartFitsAreRefused) {
   m.mass.setFromTriplets(mass.begin(), mass.end());
   m.stiffness.resize(2 * kPairs, 2 * kPairs);
   m.stiffness.setFromTriplets(k.begin(), k.end());
-  model::Joint j;
-  j.a = 0;
-  j.b = model::kGround;
-  j.element = "spring.kj";
-  j.stiffness = 1.0;  // a joint that barely moves mode 1 (a 1e-6 share of its stiffness)
-  m.joints.push_back(j);
+  // A joint that barely moves mode 1 (a 1e-6 share of its stiffness).
+  m.joints.push_back(linear_joint(0, model::kGround, "spring.kj", 1.0));
   model::validate_model(m, "five close pairs");
   meas.shapes = Eigen::MatrixXcd::Ones(1, kPairs);
   const std::vector<Sensor> one{{"s0", 0, 1.0}};
@@ -937,12 +934,7 @@ TEST(LinearUpdate, NoDegreeOfFreedomLeftIsSaid) {
   m.mass.insert(0, 0) = 1.0;
   m.stiffness.resize(1, 1);
   m.stiffness.insert(0, 0) = 1e4;
-  model::Joint j;
-  j.a = 0;
-  j.b = model::kGround;
-  j.element = "spring.kj";
-  j.stiffness = 1e4;
-  m.joints.push_back(j);
+  m.joints.push_back(linear_joint(0, model::kGround, "spring.kj", 1e4));
   model::validate_model(m, "one mass");
   MeasuredModes meas;
   meas.frequency_hz = Eigen::VectorXd::Constant(1, std::sqrt(4e4) / (2 * std::numbers::pi));
@@ -1079,12 +1071,7 @@ model::Model chain_with_a_pulled_mode(double kg, double kt) {
   for (const auto& [a, element, k] :
        {std::tuple{0, "spring.kg", kg}, std::tuple{n - 1, "spring.kt", kt},
         std::tuple{n, "spring.kt", kt}}) {
-    model::Joint j;
-    j.a = a;
-    j.b = model::kGround;
-    j.element = element;
-    j.stiffness = k;
-    m.joints.push_back(j);
+    m.joints.push_back(linear_joint(a, model::kGround, element, k));
   }
   model::validate_model(m, "chain with a pulled mode");
   return m;
@@ -1263,12 +1250,7 @@ model::Model chain_and_rotor(double kg, double kt) {
   m.stiffness.setFromTriplets(kt_.begin(), kt_.end());
   for (const auto& [a, element, k] :
        {std::tuple{0, "spring.kg", kg}, std::tuple{3, "spring.kt", kt}}) {
-    model::Joint j;
-    j.a = a;
-    j.b = model::kGround;
-    j.element = element;
-    j.stiffness = k;
-    m.joints.push_back(j);
+    m.joints.push_back(linear_joint(a, model::kGround, element, k));
   }
   model::validate_model(m, "chain and rotor");
   return m;
