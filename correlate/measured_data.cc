@@ -903,8 +903,7 @@ BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
       data::read_backbone_tables({files.begin(), files.end()}, quantity);
   for (size_t i = 0; i < files.size(); ++i) {
     const data::BackboneTable& table = tables[i];
-    if (table.amplitude_unit.empty() && !table.written_by_jointlab)
-      out.unitless.push_back(files[i]);
+    if (table.amplitude_unit_assumed()) out.unitless.push_back(files[i]);
     out.curves.push_back(measured_backbone(table, sensor));
   }
   return out;

@@ -55,6 +55,9 @@ struct BackboneTable {
   bool written_by_jointlab = false;
   /// Number of points.
   Eigen::Index size() const { return amplitude.size(); }
+  /// Whether its amplitudes were read in SI without a unit saying so (none in the header, and
+  /// not a table jointlab wrote): a table in g or mm read so scales F_S by its factor.
+  bool amplitude_unit_assumed() const { return amplitude_unit.empty() && !written_by_jointlab; }
 };
 
 /// Whether a backbone column marks points that are not the mode's own: a `process` backbone's

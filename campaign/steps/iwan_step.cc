@@ -148,8 +148,7 @@ std::vector<ModeBackbones> campaign_backbones(const Campaign& c, const MeasuredS
     for (size_t i = 0; i < read.size(); ++i) {
       const std::filesystem::path& f = c.modes[k].backbones[i];
       const data::BackboneTable& t = read[i];
-      if (t.amplitude_unit.empty() && !t.written_by_jointlab)
-        unitless.push_back(f.filename().string());
+      if (t.amplitude_unit_assumed()) unitless.push_back(f.filename().string());
       Curve cv;
       cv.id = "table " + f.filename().string();  // never a hit's id: no slip screen across
       cv.amplitude = t.amplitude;
