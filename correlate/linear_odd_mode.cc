@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <utility>
 
 #include <fmt/format.h>
@@ -53,6 +54,40 @@ struct Refit {
   Eigen::VectorXd theta;
 };
 
+// The fits again without one measured mode each (fit_as_given from the start, no progress
+// lines), each made on first asking: the check of a large misfit and the pull check that follows
+// it where that finds nothing leave out the same modes, each refit a whole fit.
+class Refits {
+ public:
+  Refits(const model::Model& model, const std::vector<std::string>& names,
+         const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+         const LinearUpdateOptions& options)
+      : model_(model), names_(names), sensors_(sensors), measured_(measured), options_(options) {
+    options_.progress = nullptr;
+  }
+  Refits(const Refits&) = delete;
+  Refits& operator=(const Refits&) = delete;
+
+  /// The fit without measured mode i.
+  const Refit& without(int i) {
+    if (const auto it = done_.find(i); it != done_.end()) return it->second;
+    Refit f{i, {}, {}};
+    f.theta =
+        fit_as_given(model_, names_, sensors_, without_mode(measured_, i), options_, false, f.r);
+    return done_.emplace(i, std::move(f)).first->second;
+  }
+  /// The options the refits are made with.
+  const LinearUpdateOptions& options() const { return options_; }
+
+ private:
+  const model::Model& model_;
+  const std::vector<std::string>& names_;
+  const std::vector<Sensor>& sensors_;
+  const MeasuredModes& measured_;
+  LinearUpdateOptions options_;
+  std::map<int, Refit> done_;
+};
+
 // Whether refit `f` pairs every other mode of `e` and leaves scatter within the noise.
 bool within_noise(const Refit& f, const LinearEvaluation& e) {
   const LinearUpdateSummary& r = f.r;
@@ -92,26 +127,18 @@ void judge_refit(const Refit& f, const LinearEvaluation& e, double given,
 std::vector<Without> fits_without_each(const model::Model& model,
                                        const std::vector<std::string>& names,
                                        const std::vector<Sensor>& sensors,
-                                       const MeasuredModes& measured,
-                                       const LinearUpdateOptions& options,
+                                       const MeasuredModes& measured, Refits& cache,
                                        const LinearEvaluation& e, double given,
                                        const std::vector<int>& order) {
   std::vector<Without> fits;
-  LinearUpdateOptions o = options;
-  o.progress = nullptr;
-  std::vector<Refit> refits;
-  for (const int i : order) {
-    Refit f{i, {}, {}};
-    f.theta = fit_as_given(model, names, sensors, without_mode(measured, i), o, false, f.r);
-    refits.push_back(std::move(f));
-  }
-  for (const Refit& f : refits) judge_refit(f, e, given, names, fits);
+  for (const int i : order) judge_refit(cache.without(i), e, given, names, fits);
   if (fits.empty()) {
-    for (size_t q = 0; q < refits.size() && q < 3; ++q) {
-      Refit& f = refits[q];
+    for (size_t q = 0; q < order.size() && q < 3; ++q) {
+      Refit f = cache.without(order[q]);  // restarted here, as it is, in the cache
       const MeasuredModes without = without_mode(measured, f.mode);
       std::optional<TrackedPoint> end;
-      restart_if_misfit(model, names, sensors, without, o, f.r, f.theta, end, nullptr);
+      restart_if_misfit(model, names, sensors, without, cache.options(), f.r, f.theta, end,
+                        nullptr);
       judge_refit(f, e, given, names, fits);
     }
   }
@@ -296,9 +323,9 @@ std::pair<double, std::string> pull_of(const Refit& f, const LinearUpdateSummary
 // cannot tell them apart), or "" (no mode pulls so: the scatter is shared, and the widened
 // standard deviations stand). The two chains with noise five times the stated move no set by
 // more than 1.4 such standard deviations (200 seeds, none refused, their test's CPU the same).
-std::string pulled_by_one_mode(const model::Model& model, const std::vector<std::string>& names,
-                               const std::vector<Sensor>& sensors, const MeasuredModes& measured,
-                               const LinearUpdateOptions& options, const LinearUpdateSummary& s) {
+std::string pulled_by_one_mode(const std::vector<std::string>& names, const MeasuredModes& measured,
+                               const LinearUpdateOptions& options, const LinearUpdateSummary& s,
+                               Refits& cache) {
   constexpr double kPull = 3;
   const LinearEvaluation& e = s.final;
   // The modes that may pull, then those of largest error (the 8 at most; a mode that pulls
@@ -307,15 +334,12 @@ std::string pulled_by_one_mode(const model::Model& model, const std::vector<std:
   if (order.empty()) return "";
   for (const int i : largest_errors(e))
     if (std::find(order.begin(), order.end(), i) == order.end()) order.push_back(i);
-  LinearUpdateOptions o = options;
-  o.progress = nullptr;
   std::vector<Refit> within;
   std::vector<std::string> pulls;
   double best = 0, best_pulled = 0;
   bool any_pulled = false;
   for (const int i : order) {
-    Refit f{i, {}, {}};
-    f.theta = fit_as_given(model, names, sensors, without_mode(measured, i), o, false, f.r);
+    const Refit& f = cache.without(i);
     if (!within_noise(f, e)) continue;
     const double chi2 = f.r.reduced_chi2 * f.r.degrees_of_freedom;
     auto [z, text] = pull_of(f, s, names);
@@ -323,7 +347,7 @@ std::string pulled_by_one_mode(const model::Model& model, const std::vector<std:
     if (z >= kPull && (!any_pulled || chi2 < best_pulled)) best_pulled = chi2;
     any_pulled = any_pulled || z >= kPull;
     pulls.push_back(z >= kPull ? std::move(text) : "");
-    within.push_back(std::move(f));
+    within.push_back(f);
   }
   // A pulling refit among those the data cannot tell from the best: the mode that pulls may be
   // the wrong one, or another whose leaving out fits as well.
@@ -388,11 +412,12 @@ std::string misfit_of_one_mode(const model::Model& model, const std::vector<std:
   const double given = s.reduced_chi2;
   if (!fitted(s) || s.degrees_of_freedom < 2 || !(given > reduced_chi2_limit(s.degrees_of_freedom)))
     return "";
-  if (!(given > 100)) return pulled_by_one_mode(model, names, sensors, measured, options, s);
+  Refits cache(model, names, sensors, measured, options);
+  if (!(given > 100)) return pulled_by_one_mode(names, measured, options, s, cache);
   const LinearEvaluation& e = s.final;
   const std::vector<Without> fits =
-      fits_without_each(model, names, sensors, measured, options, e, given, largest_errors(e));
-  if (fits.empty()) return pulled_by_one_mode(model, names, sensors, measured, options, s);
+      fits_without_each(model, names, sensors, measured, cache, e, given, largest_errors(e));
+  if (fits.empty()) return pulled_by_one_mode(names, measured, options, s, cache);
   const std::string noise = stated_noise(options.frequency_std, s.mode_frequency_std,
                                          [&](Eigen::Index i) { return measured.id(i); });
   if (fits.size() == 1 || fits[1].chi2 - fits[0].chi2 >= 9)
