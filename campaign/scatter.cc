@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cassert>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -11,6 +10,7 @@
 #include <boost/math/distributions/students_t.hpp>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/median.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/json_writer.h"
 #include "jointlab/data/table_writer.h"
@@ -18,13 +18,6 @@
 namespace jointlab::campaign {
 
 namespace {
-
-double median(std::vector<double> v) {
-  assert(!v.empty());
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Robust z-scores (x - median) / max(1.4826 MAD, floor); all zero for fewer than 3 values.
 std::vector<double> robust_z(const std::vector<double>& x, double floor) {

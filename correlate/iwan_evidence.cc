@@ -9,6 +9,7 @@
 #include <boost/math/distributions/students_t.hpp>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/median.h"
 #include "jointlab/correlate/iwan_objective.h"
 #include "jointlab/correlate/iwan_objective_detail.h"
 #include "jointlab/model/linear_modes.h"
@@ -20,7 +21,7 @@ using iwan_detail::stated_sigma;
 namespace {
 
 // The median of x (the upper middle one of an even count); 0 for none.
-double median(std::vector<double> x) {
+double upper_median(std::vector<double> x) {
   if (x.empty()) return 0.0;
   const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
   std::nth_element(x.begin(), mid, x.end());
@@ -176,14 +177,11 @@ void add_low_rise(const MeasuredBackbone& c, const std::vector<Eigen::Index>& by
           std::max(stated_sigma(c, j)(q), (q == 0 ? f_floor : z_floor) * std::abs(value));
       var += sigma * sigma;
     }
-    // The middle value, or the mean of the middle two: the upper middle one (median()) is a
-    // point further up for the rising damping than for the falling frequency, and on 40-point
+    // The middle value, or the mean of the middle two: the upper middle one (upper_median()) is
+    // a point further up for the rising damping than for the falling frequency, and on 40-point
     // curves (1.23 times in amplitude from one point to the next) read chi 0's 0.424 as 0.521.
     const double k = static_cast<double>(fifth);
-    std::sort(x.begin(), x.end());
-    const size_t mid = x.size() / 2;
-    const double middle = x.size() % 2 ? x[mid] : (x[mid - 1] + x[mid]) / 2;
-    return std::pair(middle, (fifth == 2 ? 1.0 : M_PI / 2) * var / (k * k));
+    return std::pair(median(x), (fifth == 2 ? 1.0 : M_PI / 2) * var / (k * k));
   };
   const auto [f1, vf1] = band(0, 0);
   const auto [f2, vf2] = band(fifth, 0);
@@ -242,7 +240,7 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
         std::vector<double> f;
         for (Eigen::Index i = from; i < from + fifth; ++i)
           f.push_back(c.frequency_hz(by_amplitude[static_cast<size_t>(i)]));
-        return median(f);
+        return upper_median(f);
       };
       const double f1 = band(0), f2 = band(fifth), f5 = band(n - fifth);
       if (f1 > f5) f_share.push_back((f1 - f2) / (f1 - f5));
@@ -257,16 +255,16 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
   }
   MisfitEvidence e;
   e.mode = t.mode;
-  e.low_frequency_hz = median(f_lo);
-  e.low_frequency_error = median(error);
-  e.low_frequency_noise = median(noise);
-  e.low_damping = median(z_lo);
-  e.low_model_damping = median(z_model_lo);
-  e.median_damping = median(all_z);
-  e.low_softening_share = f_share.empty() ? NAN : median(f_share);
-  e.high_frequency_hz = median(f_hi);
-  e.high_frequency_error = median(error_hi);
-  e.high_frequency_noise = median(noise_hi);
+  e.low_frequency_hz = upper_median(f_lo);
+  e.low_frequency_error = upper_median(error);
+  e.low_frequency_noise = upper_median(noise);
+  e.low_damping = upper_median(z_lo);
+  e.low_model_damping = upper_median(z_model_lo);
+  e.median_damping = upper_median(all_z);
+  e.low_softening_share = f_share.empty() ? NAN : upper_median(f_share);
+  e.high_frequency_hz = upper_median(f_hi);
+  e.high_frequency_error = upper_median(error_hi);
+  e.high_frequency_noise = upper_median(noise_hi);
   if (rise.curves > 0 && rise.variance > 0) {
     e.low_rise_ratio = rise.drop > 0 ? rise.rise / rise.drop : NAN;
     e.low_rise_excess = (rise.rise - kIwanRiseLimit * rise.drop) / std::sqrt(rise.variance);
@@ -354,7 +352,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
     if (!out || std::abs(e.low_frequency_error) > std::abs(out->low_frequency_error)) out = e;
   }
   if (out) {
-    out->damping_factor = median(damping_ratios);
+    out->damping_factor = upper_median(damping_ratios);
     out->damping_max = damping_max;
     if (scatter.between_curves > 0 && scatter.total > 0) set_scatter(scatter, *out);
   }

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/median.h"
 
 namespace jointlab::modal {
 
@@ -213,13 +214,11 @@ ModalConstant response_modal_constant(const std::vector<SineBackbonePoint>& poin
     rel = std::max(rel, p.fit.modal_constant_rel_sigma);
   }
   if (q.empty()) return {};
-  std::sort(q.begin(), q.end());
-  const size_t n = q.size();
-  const double median = n % 2 ? q[n / 2] : 0.5 * (q[n / 2 - 1] + q[n / 2]);
+  const double middle = median(q);
   // The spread between levels is part of |Q|'s uncertainty.
   double spread = 0;
-  for (double v : q) spread = std::max(spread, std::abs(v / median - 1));
-  return {median, std::max(rel, n > 1 ? spread / 2 : 0.0)};
+  for (double v : q) spread = std::max(spread, std::abs(v / middle - 1));
+  return {middle, std::max(rel, q.size() > 1 ? spread / 2 : 0.0)};
 }
 
 SineBackbonePoint extract_backbone_point(const data::SteppedSineTable& t,
