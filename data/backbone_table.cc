@@ -13,6 +13,7 @@
 #include <fmt/ranges.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/rank_correlation.h"
 #include "jointlab/core/text.h"
 #include "jointlab/core/units.h"
 #include "jointlab/data/csv_lines.h"
@@ -691,21 +692,6 @@ void refuse_another_quantity(const Rows& rows, std::optional<Quantity> quantity,
                   with_article(name), kRatio[static_cast<size_t>(written)], name,
                   with_article(quantity_name(*quantity)), name,
                   kScale[static_cast<size_t>(written - asked + 2)])));
-}
-
-// Spearman's rank correlation of x with its index (ties broken by order): +1 rising, -1 falling.
-double rank_trend(const std::vector<double>& x) {
-  const size_t n = x.size();
-  std::vector<size_t> order(n);
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return x[a] < x[b]; });
-  double d2 = 0;
-  for (size_t r = 0; r < n; ++r) {
-    const double d = static_cast<double>(r) - static_cast<double>(order[r]);
-    d2 += d * d;
-  }
-  const double m = static_cast<double>(n);
-  return 1 - 6 * d2 / (m * (m * m - 1));
 }
 
 // Refuses hits one under another without a label column: each hit's rows run through its

@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "jointlab/core/rank_correlation.h"
 #include "jointlab/modal/ringdown_detail.h"
 #include "jointlab/signal/band_analytic.h"
 #include "jointlab/signal/local_poly.h"
@@ -57,35 +58,11 @@ constexpr double kAntiCorrelatedChanges = -0.6;
 constexpr double kAntiCorrelatedOneTurn = -0.6;
 constexpr std::ptrdiff_t kTurnApart = 2;
 
-// Ranks 0 .. n-1 of v (ties in the order given).
-std::vector<double> ranks(const std::vector<double>& v) {
-  std::vector<size_t> order(v.size());
-  for (size_t i = 0; i < v.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return v[a] < v[b]; });
-  std::vector<double> r(v.size());
-  for (size_t k = 0; k < order.size(); ++k) r[order[k]] = static_cast<double>(k);
-  return r;
-}
-
 // The median of |v|: a typical decay rate.
 double median_magnitude(const std::vector<double>& v) {
   std::vector<double> magnitudes(v.size());
   std::transform(v.begin(), v.end(), magnitudes.begin(), [](double x) { return std::abs(x); });
   return quantile(magnitudes, 0.5);
-}
-
-// Spearman's rank correlation of a and b (of equal size, at least 2).
-double rank_correlation(const std::vector<double>& a, const std::vector<double>& b) {
-  assert(a.size() == b.size() && a.size() >= 2);
-  const std::vector<double> r1 = ranks(a), r2 = ranks(b);
-  const double mean = 0.5 * static_cast<double>(a.size() - 1);
-  double s11 = 0, s22 = 0, s12 = 0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    s11 += (r1[i] - mean) * (r1[i] - mean);
-    s22 += (r2[i] - mean) * (r2[i] - mean);
-    s12 += (r1[i] - mean) * (r2[i] - mean);
-  }
-  return s12 / std::sqrt(s11 * s22);
 }
 
 // The rank correlation of the changes from one estimate to the next of two decay rates, over
