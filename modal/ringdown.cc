@@ -1921,6 +1921,249 @@ void place_end(CorrectedEstimates& corr, Screening& screened, Run& run, const si
   ++run.count;
 }
 
+// Whether the band setting `x` leaves too short a record: less than two shortest windows
+// between the filter's settling and the record's end.
+bool short_for(const BandSetting& x) { return x.stop - x.start < 2 * x.w_min; }
+
+// The refusal of a record too short for the band setting `x`, after what the spectrum shows of
+// the typed band first: a band too narrow for its mode is the usual cause.
+std::string too_short(const ChannelSpectrum& channel, const signal::Band& band,
+                      const RingdownOptions& options, const BandSetting& x,
+                      signal::FftCache& cache) {
+  const std::string advice = spectral_advice(channel, band, options.taper, cache);
+  return fmt::format(
+      "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
+      "time, {:.3f} s needed",
+      advice, advice.empty() ? "" : "; ", std::max(0.0, x.stop - x.start), 2 * x.w_min);
+}
+
+// The refusal of a record too short for the typed band's setting `s`, quickly ("" where it
+// is long enough, or where the band may still be followed: a band whose filter settles longer
+// than the record's continuation holds may be widened about its mode (follow_mode), which
+// settles sooner).
+std::string short_record_refusal(const ChannelSpectrum& channel, Quantity measured,
+                                 const signal::Band& band, const RingdownOptions& options,
+                                 const BandSetting& s, signal::FftCache& cache) {
+  if (short_for(s)) {
+    if (clipped_from_start(s)) {
+      return fmt::format("{}; {:.3f} s of the record usable after it, {:.3f} s needed",
+                         clipping_note(s, measured), std::max(0.0, s.stop - s.start), 2 * s.w_min);
+    }
+    if (!(channel.continued_begin_s < band_settling_s(band, options.taper))) {
+      return too_short(channel, band, options, s, cache);
+    }
+  }
+  return "";
+}
+
+// What a beat moves each point by joins its uncertainty; how many points that met the
+// damping limit it takes past it. Sets `beat`.
+size_t add_beat(CorrectedEstimates& corr, const std::vector<std::pair<double, double>>& errors,
+                double noise, const RingdownOptions& options, bool& beat) {
+  beat = true;
+  size_t left = 0;
+  for (size_t i = 0; i < corr.est.size(); ++i) {
+    Estimate& e = corr.est[i];
+    const double limit = options.max_damping_rel_std * e.sigma;
+    const bool met = usable(e, noise, options.snr_min) && e.sigma_std <= limit;
+    e.sigma_std = std::hypot(e.sigma_std, errors[i].first);
+    e.omega_d_std = std::hypot(e.omega_d_std, errors[i].second);
+    left += met && !(e.sigma_std <= limit);
+  }
+  return left;
+}
+
+// A second mode in the band read: what its beat moves each point by joins the point's
+// uncertainty, so the points it moves past the damping limit drop out (two_modes); or a second
+// mode the move took in beyond the typed edge, seen by its beat alone (edge_beat). Neither
+// beside an energy exchange with another mode, marked on its own: its rates swing too. The
+// note ("" for none); `beat` says whether either was found.
+std::string beat_note_of(CorrectedEstimates& corr, const ChannelSpectrum& channel,
+                         const signal::Band& band, const signal::Band& read,
+                         const RingdownOptions& options, const EnvelopePhase& ep,
+                         const BandSetting& sr, double noise, bool& beat, signal::FftCache& cache) {
+  std::string beat_note;
+  if (const TwoModes two =
+          corr.exchange.found() ? TwoModes{} : two_modes(corr.est, channel, read, ep, sr, noise);
+      two.found()) {
+    beat_note = beat_message(two, channel, read, options,
+                             add_beat(corr, two.errors, noise, options, beat), cache);
+  } else if (const EdgeBeat edge =
+                 corr.exchange.found() || (read.lo >= band.lo && read.hi <= band.hi)
+                     ? EdgeBeat{}
+                     : edge_beat(corr.est, ep, sr, noise, band, read);
+             edge.found()) {
+    const size_t left = add_beat(corr, edge.errors, noise, options, beat);
+    beat_note = fmt::format(
+        "the band moved past the typed edge takes in a second mode about {:.1f} Hz {} this one "
+        "(near {:.1f} Hz, no spectral peak; its beat at the decay's start, about {:.0f} % of "
+        "this mode's amplitude at {:.3f} s, {}): what the beat moves each point's decay rate "
+        "and frequency by is added to its uncertainty, and points it moves by more than the "
+        "{:.1f} % damping limit are left out ({} of those that met it)",
+        std::abs(edge.f2 - edge.f1), edge.f2 < edge.f1 ? "below" : "above", edge.f2,
+        100 * edge.beat.c_first, channel.t0 + edge.t0,
+        edge.dsigma > 0 ? fmt::format("dying {:g}/s faster", edge.dsigma)
+                        : std::string("dying as fast"),
+        100 * options.max_damping_rel_std, left);
+  }
+  return beat_note;
+}
+
+// A second spectral peak in a moved band read, which the typed band left out or could not
+// leave out (a peak beyond the mode's track by more than its half-power half-width; without a
+// track, beyond the spectral peak's half-power width): the LMS twin's drifting mode beside a
+// 10 % mode at 154 Hz, read through 139.7:169.7 Hz, was told only to widen the typed band;
+// widening leaves a mode inside it where it is. "" for none.
+std::string second_peak_note(const ChannelSpectrum& channel, const signal::Band& read,
+                             const RingdownOptions& options, const EnvelopePhase& ep, double noise,
+                             const BandSetting& sr, signal::FftCache& cache) {
+  std::string second;
+  const ModeTrack tr = track_mode(ep, noise, sr);
+  const BandPeaks peaks = band_peaks(channel, read, options.taper, 3);
+  double lo = peaks.main_hz, hi = peaks.main_hz, half = 0;
+  if (tr.points > 0) {
+    lo = tr.f_lo, hi = tr.f_hi, half = tr.sigma / kTwoPi;
+  } else {
+    half = half_power_width(channel, peaks.main_hz, cache);
+  }
+  for (const auto& [f2, ratio] : peaks.others) {
+    if (f2 > lo - half && f2 < hi + half) continue;
+    second = fmt::format(
+        "the band read ({:.2f}:{:.2f} Hz) holds a second spectral peak at {:.2f} Hz, {:.0f} % "
+        "of the mode's: a band that leaves it out may keep a span",
+        read.lo, read.hi, f2, 100 * ratio);
+    break;
+  }
+  return second;
+}
+
+// The message of a band where no span of two points or more meets the limits: the limits and
+// the envelope's peak and noise floor, then each note that applies, "; " between them (an
+// advice followed by the weak-gain note once ran together as "... 96.75 Hz20 points left out").
+std::string no_span_message(const ChannelSpectrum& channel, Quantity measured,
+                            const signal::Band& band, const signal::Band& read,
+                            const RingdownOptions& options, bool moved, const EnvelopePhase& ep,
+                            double noise, const BandSetting& sr, const std::string& beat_note,
+                            const Screening& screened, const std::string& followed_note,
+                            signal::FftCache& cache) {
+  // A moved band may hold a second mode the typed band left out (second_peak_note).
+  std::string second;
+  if (moved && beat_note.empty())
+    second = second_peak_note(channel, read, options, ep, noise, sr, cache);
+  // (A band read wider than the advice asks, or holding a second mode, is not told to widen.)
+  std::string advice =
+      spectral_advice(channel, band, options.taper, cache,
+                      second.empty() ? read.hi - read.lo : std::numeric_limits<double>::infinity());
+  if (!second.empty()) advice += (advice.empty() ? "" : "; ") + second;
+  std::string message = fmt::format(
+      "no span of the envelope stays above {} x the noise floor with a "
+      "decaying fit whose damping is known to {:g} % (peak envelope "
+      "{:.3e} m, noise floor {:.3e} m)",
+      options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
+      noise / channel.scale);
+  const std::string clipped = clipping_note(sr, measured);
+  for (const std::string* note :
+       std::initializer_list<const std::string*>{&beat_note, &clipped, &advice, &screened.gain_note,
+                                                 &screened.weak_note, &followed_note}) {
+    if (!note->empty()) message += "; " + *note;
+  }
+  return message;
+}
+
+// The band says which mode: one that lies outside it at every point is another band's, seen
+// through the filter's skirt and followed there (an LMS-like mode drifting from 148.4 to
+// 150.3 Hz, read with 140:148, was reported at 150.3 Hz). The refusal of such a backbone ("" for
+// one inside the typed band).
+std::string outside_band_refusal(const Backbone& bb, const signal::Band& band) {
+  if (const auto [f_min, f_max] =
+          std::pair{bb.damped_frequency_hz.minCoeff(), bb.damped_frequency_hz.maxCoeff()};
+      f_max < band.lo || f_min > band.hi) {
+    return fmt::format(
+        "no mode in the band: the mode its filter passes lies at {:.2f} to {:.2f} Hz, outside "
+        "the typed band {:g}:{:g} Hz; type a band around it",
+        f_min, f_max, band.lo, band.hi);
+  }
+  return "";
+}
+
+// Notes on the points left out inside the span (above the noise for their decay, or the few of
+// a short gap below it, each said apart) and on those after it whose envelope stays above the
+// noise threshold: why the span ends there. A 13 Hz mode of a strongly nonlinear joint, rung
+// down by `simulate`, kept 0.7-6.6 s and said nothing of its envelope above the threshold until
+// 15 s, where its damping was known to 2-7 %.
+void add_left_out_notes(std::vector<std::string>& notes, const std::vector<Estimate>& est,
+                        const Screening& screened, const Run& run, const ChannelSpectrum& channel,
+                        const RingdownOptions& options) {
+  const std::vector<char>& valid = screened.valid;
+  size_t left_above = 0, left_below = 0;
+  for (size_t k = run.begin; k < run.end; ++k) {
+    if (!valid[k]) ++(screened.above[k] ? left_above : left_below);
+  }
+  if (left_above > 0) {
+    notes.push_back(fmt::format(
+        "{} inside the span left out, above the noise: the envelope not decaying or its "
+        "damping not known to the {:.1f} % limit there",
+        points(left_above), 100 * options.max_damping_rel_std));
+  }
+  if (left_below > 0) {
+    notes.push_back(
+        fmt::format("{} inside the span left out below the noise threshold (at most 2 in a row)",
+                    points(left_below)));
+  }
+  size_t after_limit = 0, after_gap = 0, last_above = 0;
+  for (size_t k = run.end; k < est.size(); ++k) {
+    if (!screened.above[k]) continue;
+    ++(valid[k] ? after_gap : after_limit);
+    last_above = k;
+  }
+  if (after_limit + after_gap >= 2) {
+    const bool both = after_limit > 0 && after_gap > 0;
+    std::vector<std::string> why;
+    if (after_limit > 0) {
+      why.push_back(
+          fmt::format("{}the envelope not decaying or the damping not known to the {:.1f} % limit "
+                      "(--max-damping-std)",
+                      both ? fmt::format("{} with ", after_limit) : std::string(),
+                      100 * options.max_damping_rel_std));
+    }
+    if (after_gap > 0) {
+      why.push_back(fmt::format("{}beyond a gap of more than 2 such points",
+                                both ? fmt::format("{} ", after_gap) : std::string()));
+    }
+    notes.push_back(fmt::format(
+        "{} after the span, up to {:.4f} s, left out above the noise threshold: {}",
+        points(after_limit + after_gap), channel.t0 + est[last_above].t, fmt::join(why, ", ")));
+  }
+}
+
+// The summary of a kept span: its status, ends, decades of amplitude, superharmonic and
+// exchange points and linear values, and the notes, those on the band followed and a beat
+// first, then the span's, the points left out, and the gain's.
+void summarise_span(Ringdown& out, const BandSetting& sr, const std::vector<Estimate>& est,
+                    const Run& run, const CorrectedEstimates& corr, const Screening& screened,
+                    double noise, Quantity measured, const std::string& beat_note,
+                    const std::string& followed_note, const ChannelSpectrum& channel,
+                    const RingdownOptions& options) {
+  RingdownSummary& sum = out.summary;
+  const Backbone& bb = out.backbone;
+  const Eigen::Index n = bb.size();
+  sum.status = RingdownStatus::kOk;
+  sum.span_start_s = bb.time_s(0);
+  sum.span_end_s = bb.time_s(n - 1);
+  sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
+  sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
+  sum.exchange_points = static_cast<int>((bb.exchange.array() > 0).count());
+  set_linear_values(sum, bb, options);
+  std::vector<std::string> notes =
+      span_notes(sr, est, run, corr.previous, noise, sum, corr.exchange, measured);
+  add_left_out_notes(notes, est, screened, run, channel, options);
+  if (!beat_note.empty()) notes.insert(notes.begin(), beat_note);
+  if (!followed_note.empty()) notes.insert(notes.begin(), followed_note);
+  if (!screened.gain_note.empty()) notes.push_back(screened.gain_note);
+  if (!screened.weak_note.empty()) notes.push_back(screened.weak_note);
+  for (const std::string& note : notes) sum.message += (sum.message.empty() ? "" : "; ") + note;
+}
+
 }  // namespace
 
 signal::BandSignal band_signal(const ChannelSpectrum& channel, Quantity measured,
@@ -1951,29 +2194,8 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   // The envelope and phase only for a record long enough for the band (many short
   // channels are refused quickly).
   const BandSetting s = band_setting(channel, band, options, bs);
-  const auto short_for = [](const BandSetting& x) { return x.stop - x.start < 2 * x.w_min; };
-  // Say what the spectrum shows first: a band too narrow for its mode is the usual cause.
-  const auto too_short = [&](const BandSetting& x) {
-    const std::string advice = spectral_advice(channel, band, options.taper, cache);
-    sum.message = fmt::format(
-        "{}{}record too short for this band: {:.3f} s usable after the filter's settling "
-        "time, {:.3f} s needed",
-        advice, advice.empty() ? "" : "; ", std::max(0.0, x.stop - x.start), 2 * x.w_min);
-  };
-  if (short_for(s)) {
-    if (clipped_from_start(s)) {
-      sum.message =
-          fmt::format("{}; {:.3f} s of the record usable after it, {:.3f} s needed",
-                      clipping_note(s, measured), std::max(0.0, s.stop - s.start), 2 * s.w_min);
-      return out;
-    }
-    // A band whose filter settles longer than the record's continuation holds may be widened
-    // about its mode (follow_mode), which settles sooner; else refused here, quickly.
-    if (!(channel.continued_begin_s < band_settling_s(band, options.taper))) {
-      too_short(s);
-      return out;
-    }
-  }
+  sum.message = short_record_refusal(channel, measured, band, options, s, cache);
+  if (!sum.message.empty()) return out;
   // The mode is read through a band that follows it (follow_mode); out.band stays the typed
   // band's signal, which the shapes and the nodal test compare across channels.
   // The typed band's envelope, phase and noise floor serve the mode's track and, where the
@@ -1987,7 +2209,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
   const signal::BandSignal& zb = moved ? followed.signal : bs;
   const BandSetting sr = band_setting(channel, read, options, zb);
   if (short_for(sr)) {
-    too_short(sr);
+    sum.message = too_short(channel, band, options, sr, cache);
     return out;
   }
   const EnvelopePhase moved_ep =
@@ -2008,177 +2230,28 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
 
   CorrectedEstimates corr =
       corrected_estimates(channel, read, options, zb, ep, sr, noise, measured, cache);
-  // A second mode in the band read: what its beat moves each point by joins the point's
-  // uncertainty, so the points it moves past the damping limit drop out (two_modes).
-  std::string beat_note;
   bool beat = false;
-  // What a beat moves each point by joins its uncertainty; how many points that met the
-  // damping limit it takes past it.
-  const auto add_beat = [&](const std::vector<std::pair<double, double>>& errors) {
-    beat = true;
-    size_t left = 0;
-    for (size_t i = 0; i < corr.est.size(); ++i) {
-      Estimate& e = corr.est[i];
-      const double limit = options.max_damping_rel_std * e.sigma;
-      const bool met = usable(e, noise, options.snr_min) && e.sigma_std <= limit;
-      e.sigma_std = std::hypot(e.sigma_std, errors[i].first);
-      e.omega_d_std = std::hypot(e.omega_d_std, errors[i].second);
-      left += met && !(e.sigma_std <= limit);
-    }
-    return left;
-  };
-  // (Not beside an energy exchange with another mode, marked on its own: its rates swing too.)
-  if (const TwoModes two =
-          corr.exchange.found() ? TwoModes{} : two_modes(corr.est, channel, read, ep, sr, noise);
-      two.found()) {
-    beat_note = beat_message(two, channel, read, options, add_beat(two.errors), cache);
-  } else if (const EdgeBeat edge =
-                 corr.exchange.found() || (read.lo >= band.lo && read.hi <= band.hi)
-                     ? EdgeBeat{}
-                     : edge_beat(corr.est, ep, sr, noise, band, read);
-             edge.found()) {
-    // A second mode the move took in beyond the typed edge, seen by its beat alone.
-    const size_t left = add_beat(edge.errors);
-    beat_note = fmt::format(
-        "the band moved past the typed edge takes in a second mode about {:.1f} Hz {} this one "
-        "(near {:.1f} Hz, no spectral peak; its beat at the decay's start, about {:.0f} % of "
-        "this mode's amplitude at {:.3f} s, {}): what the beat moves each point's decay rate "
-        "and frequency by is added to its uncertainty, and points it moves by more than the "
-        "{:.1f} % damping limit are left out ({} of those that met it)",
-        std::abs(edge.f2 - edge.f1), edge.f2 < edge.f1 ? "below" : "above", edge.f2,
-        100 * edge.beat.c_first, channel.t0 + edge.t0,
-        edge.dsigma > 0 ? fmt::format("dying {:g}/s faster", edge.dsigma)
-                        : std::string("dying as fast"),
-        100 * options.max_damping_rel_std, left);
-  }
+  const std::string beat_note =
+      beat_note_of(corr, channel, band, read, options, ep, sr, noise, beat, cache);
   const std::vector<Estimate>& est = corr.est;
-  const GainCorrection& previous = corr.previous;
   Screening screened = screen_estimates(corr, sr, noise, options);
-  const std::vector<char>& valid = screened.valid;
-  const std::string& weak_note = screened.weak_note;
-  const std::string& gain_note = screened.gain_note;
-  Run run = longest_run(est, valid, screened.above);
+  Run run = longest_run(est, screened.valid, screened.above);
   if (run.count >= 2) place_end(corr, screened, run, zb, ep, sr, noise, beat);
   if (run.count < 2) {
-    // A moved band may hold a second mode the typed band left out, or the typed band one it
-    // could not leave out (a peak beyond the mode's track by more than its half-power
-    // half-width; without a track, beyond the spectral peak's half-power width): the LMS twin's
-    // drifting mode beside a 10 % mode at 154 Hz, read through 139.7:169.7 Hz, was told only to
-    // widen the typed band; widening leaves a mode inside it where it is.
-    std::string second;
-    if (moved && beat_note.empty()) {
-      const ModeTrack tr = track_mode(ep, noise, sr);
-      const BandPeaks peaks = band_peaks(channel, read, options.taper, 3);
-      double lo = peaks.main_hz, hi = peaks.main_hz, half = 0;
-      if (tr.points > 0) {
-        lo = tr.f_lo, hi = tr.f_hi, half = tr.sigma / kTwoPi;
-      } else {
-        half = half_power_width(channel, peaks.main_hz, cache);
-      }
-      for (const auto& [f2, ratio] : peaks.others) {
-        if (f2 > lo - half && f2 < hi + half) continue;
-        second = fmt::format(
-            "the band read ({:.2f}:{:.2f} Hz) holds a second spectral peak at {:.2f} Hz, {:.0f} % "
-            "of the mode's: a band that leaves it out may keep a span",
-            read.lo, read.hi, f2, 100 * ratio);
-        break;
-      }
-    }
-    // (A band read wider than the advice asks, or holding a second mode, is not told to widen.)
-    std::string advice = spectral_advice(
-        channel, band, options.taper, cache,
-        second.empty() ? read.hi - read.lo : std::numeric_limits<double>::infinity());
-    if (!second.empty()) advice += (advice.empty() ? "" : "; ") + second;
-    sum.message = fmt::format(
-        "no span of the envelope stays above {} x the noise floor with a "
-        "decaying fit whose damping is known to {:g} % (peak envelope "
-        "{:.3e} m, noise floor {:.3e} m)",
-        options.snr_min, 100 * options.max_damping_rel_std, ep.amp.maxCoeff() / channel.scale,
-        noise / channel.scale);
-    // Each note that applies, "; " between them (an advice followed by the weak-gain note once
-    // ran together as "... 96.75 Hz20 points left out").
-    const std::string clipped = clipping_note(sr, measured);
-    for (const std::string* note : std::initializer_list<const std::string*>{
-             &beat_note, &clipped, &advice, &gain_note, &weak_note, &followed.note}) {
-      if (!note->empty()) sum.message += "; " + *note;
-    }
+    sum.message = no_span_message(channel, measured, band, read, options, moved, ep, noise, sr,
+                                  beat_note, screened, followed.note, cache);
     return out;
   }
-  out.backbone = backbone_of(est, valid, screened.exchange, run, channel.t0, noise, options);
-  Backbone& bb = out.backbone;
-  // The band says which mode: one that lies outside it at every point is another band's,
-  // seen through the filter's skirt and followed there (an LMS-like mode drifting from 148.4
-  // to 150.3 Hz, read with 140:148, was reported at 150.3 Hz).
-  if (const auto [f_min, f_max] =
-          std::pair{bb.damped_frequency_hz.minCoeff(), bb.damped_frequency_hz.maxCoeff()};
-      f_max < band.lo || f_min > band.hi) {
+  out.backbone =
+      backbone_of(est, screened.valid, screened.exchange, run, channel.t0, noise, options);
+  if (std::string outside = outside_band_refusal(out.backbone, band); !outside.empty()) {
     out.backbone = Backbone{};
-    sum.message = fmt::format(
-        "no mode in the band: the mode its filter passes lies at {:.2f} to {:.2f} Hz, outside "
-        "the typed band {:g}:{:g} Hz; type a band around it",
-        f_min, f_max, band.lo, band.hi);
+    sum.message = outside;
     return out;
   }
-  mark_superharmonics(bb, channel, measured, read, options, cache);
-  const Eigen::Index n = bb.size();
-  sum.status = RingdownStatus::kOk;
-  sum.span_start_s = bb.time_s(0);
-  sum.span_end_s = bb.time_s(n - 1);
-  sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
-  sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
-  sum.exchange_points = static_cast<int>((bb.exchange.array() > 0).count());
-  set_linear_values(sum, bb, options);
-  std::vector<std::string> notes =
-      span_notes(sr, est, run, previous, noise, sum, corr.exchange, measured);
-  // Points inside the run that are not valid: those above the noise for their decay, the few
-  // of a short gap for the noise (each said apart).
-  size_t left_above = 0, left_below = 0;
-  for (size_t k = run.begin; k < run.end; ++k) {
-    if (!valid[k]) ++(screened.above[k] ? left_above : left_below);
-  }
-  if (left_above > 0) {
-    notes.push_back(fmt::format(
-        "{} inside the span left out, above the noise: the envelope not decaying or its "
-        "damping not known to the {:.1f} % limit there",
-        points(left_above), 100 * options.max_damping_rel_std));
-  }
-  if (left_below > 0) {
-    notes.push_back(
-        fmt::format("{} inside the span left out below the noise threshold (at most 2 in a row)",
-                    points(left_below)));
-  }
-  // Why the span ends where the envelope stays above the noise threshold beyond it: a 13 Hz mode
-  // of a strongly nonlinear joint, rung down by `simulate`, kept 0.7-6.6 s and said nothing of
-  // its envelope above the threshold until 15 s, where its damping was known to 2-7 %.
-  size_t after_limit = 0, after_gap = 0, last_above = 0;
-  for (size_t k = run.end; k < est.size(); ++k) {
-    if (!screened.above[k]) continue;
-    ++(valid[k] ? after_gap : after_limit);
-    last_above = k;
-  }
-  if (after_limit + after_gap >= 2) {
-    const bool both = after_limit > 0 && after_gap > 0;
-    std::vector<std::string> why;
-    if (after_limit > 0) {
-      why.push_back(
-          fmt::format("{}the envelope not decaying or the damping not known to the {:.1f} % limit "
-                      "(--max-damping-std)",
-                      both ? fmt::format("{} with ", after_limit) : std::string(),
-                      100 * options.max_damping_rel_std));
-    }
-    if (after_gap > 0) {
-      why.push_back(fmt::format("{}beyond a gap of more than 2 such points",
-                                both ? fmt::format("{} ", after_gap) : std::string()));
-    }
-    notes.push_back(fmt::format(
-        "{} after the span, up to {:.4f} s, left out above the noise threshold: {}",
-        points(after_limit + after_gap), channel.t0 + est[last_above].t, fmt::join(why, ", ")));
-  }
-  if (!beat_note.empty()) notes.insert(notes.begin(), beat_note);
-  if (!followed.note.empty()) notes.insert(notes.begin(), followed.note);
-  if (!gain_note.empty()) notes.push_back(gain_note);
-  if (!weak_note.empty()) notes.push_back(weak_note);
-  for (const std::string& note : notes) sum.message += (sum.message.empty() ? "" : "; ") + note;
+  mark_superharmonics(out.backbone, channel, measured, read, options, cache);
+  summarise_span(out, sr, est, run, corr, screened, noise, measured, beat_note, followed.note,
+                 channel, options);
   if (channel.scale != 1.0) unscale(out, channel.scale);
   return out;
 }
