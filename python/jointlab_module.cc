@@ -56,6 +56,44 @@
 namespace py = pybind11;
 
 namespace jointlab::python {
+
+/// The values of a repeatable option: a list (a tuple, a numpy array, any sequence) or one value
+/// alone, as the option given once ("a.csv" as ["a.csv"], (70, 90) as [(70, 90)]).
+template <typename T>
+struct OneOrMany {
+  std::vector<T> items;  ///< the values, in order
+};
+
+}  // namespace jointlab::python
+
+namespace pybind11::detail {
+// One value is tried first: a str, a path or a (lo, hi) pair never loads as a list of them, so a
+// list is never read as one value (a str was refused with pybind11's "incompatible function
+// arguments" and the whole signature).
+template <typename T>
+struct type_caster<jointlab::python::OneOrMany<T>> {
+  PYBIND11_TYPE_CASTER(jointlab::python::OneOrMany<T>, const_name("Union[") + make_caster<T>::name +
+                                                           const_name(", List[") +
+                                                           make_caster<T>::name + const_name("]]"));
+  bool load(handle src, bool convert) {
+    if (make_caster<T> one; one.load(src, convert)) {
+      value.items.clear();
+      value.items.push_back(cast_op<T&&>(std::move(one)));
+      return true;
+    }
+    make_caster<std::vector<T>> many;
+    if (!many.load(src, convert)) return false;
+    value.items = cast_op<std::vector<T>&&>(std::move(many));
+    return true;
+  }
+  static handle cast(const jointlab::python::OneOrMany<T>& v, return_value_policy policy,
+                     handle parent) {
+    return make_caster<std::vector<T>>::cast(v.items, policy, parent);
+  }
+};
+}  // namespace pybind11::detail
+
+namespace jointlab::python {
 namespace {
 
 // A numpy array over the vector's own storage: the vector moves into a capsule that numpy
@@ -127,6 +165,15 @@ void report(const py::object& progress, const std::string& line) {
   if (!progress.is_none()) progress(line);
 }
 
+// `progress` is None or a callable, said before any work (progress=5 raised "'int' object is not
+// callable" a file or an iteration in, naming no argument).
+void check_progress(const py::object& progress) {
+  if (!progress.is_none() && PyCallable_Check(progress.ptr()) == 0)
+    throw py::type_error(
+        fmt::format("progress: expected a callable taking one line of text, or None; got {}",
+                    Py_TYPE(progress.ptr())->tp_name));
+}
+
 // A pending Ctrl-C ends the work with KeyboardInterrupt; checked at most every 0.1 s, so that a
 // check at each of many short steps (QSMA evaluations) costs no GIL round trip each.
 class InterruptCheck {
@@ -171,19 +218,20 @@ bool is_process_output(const std::string& name) {
   return name == "summary.json" || std::regex_match(name, backbone);
 }
 
-py::list process(const std::vector<PathArg>& file_args,
-                 const std::optional<std::vector<std::pair<double, double>>>& bands, int modes,
-                 const std::optional<std::vector<std::string>>& channels,
+py::list process(const OneOrMany<PathArg>& file_args,
+                 const std::optional<OneOrMany<std::pair<double, double>>>& bands, int modes,
+                 const std::optional<OneOrMany<std::string>>& channels,
                  const std::optional<std::string>& quantity, const std::string& amplitude,
-                 const py::object& progress, unsigned threads, const std::string& method,
-                 double snr_min, double max_damping_std, double coverage_factor, double min_share,
+                 const py::object& progress, int threads, const std::string& method, double snr_min,
+                 double max_damping_std, double coverage_factor, double min_share,
                  const std::optional<PathArg>& out_arg) {
-  const std::vector<std::string> files = text(file_args);
+  check_progress(progress);
+  const std::vector<std::string> files = text(file_args.items);
   const std::optional<std::string> out = text(out_arg);
   modal::ProcessOptions opt;
-  opt.threads = threads;
-  if (threads > 1024)
+  if (threads < 0 || threads > 1024)
     throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
+  opt.threads = static_cast<unsigned>(threads);
   if (bands && modes != 0)
     throw InputError("process: give bands or modes=N, not both (--band excludes --modes)");
   // --method, --snr-min, --max-damping-std, --coverage-factor and --min-share, in the command's
@@ -204,16 +252,16 @@ py::list process(const std::vector<PathArg>& file_args,
   opt.ringdown.coverage_factor = coverage_factor;
   opt.min_share = min_share;
   if (bands) {
-    for (const auto& [lo, hi] : *bands) {
+    for (const auto& [lo, hi] : bands->items) {
       if (!(std::isfinite(lo) && std::isfinite(hi) && lo > 0 && hi > lo))
         throw InputError(fmt::format("--band {:g}:{:g}: need 0 < LO < HI (Hz)", lo, hi));
       opt.bands.push_back({lo, hi});
     }
   }
   opt.modes = modes;
-  if (channels && channels->empty())
+  if (channels && channels->items.empty())
     throw InputError("process: channels=[] names no channel (None: every non-force channel)");
-  if (channels) opt.channels = *channels;
+  if (channels) opt.channels = channels->items;
   if (quantity) opt.quantity = motion("--quantity", *quantity);
   opt.ringdown.amplitude = motion("--amplitude", amplitude);
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
@@ -445,19 +493,22 @@ std::string linear_status_name(correlate::LinearUpdateStatus status) {
 
 // update-linear: the same inputs, options and defaults as the command; the result as Python
 // values, and the updated model file written when `out` is given.
-py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>& sets,
+py::dict update_linear(const PathArg& model_arg, const OneOrMany<std::string>& sets_arg,
                        const PathArg& sensors_arg, const std::optional<PathArg>& measured_arg,
                        const std::optional<PathArg>& modes_table_arg, const std::string& rule,
                        const std::optional<std::string>& minimize, double tolerance,
                        double frequency_window, double mac_threshold, double frequency_std,
-                       const std::vector<std::string>& hold, const std::optional<PathArg>& out_arg,
-                       const py::object& progress, bool trust_signs,
+                       const OneOrMany<std::string>& hold_arg,
+                       const std::optional<PathArg>& out_arg, const py::object& progress,
+                       bool trust_signs,
                        const std::map<std::string, std::pair<double, double>>& bounds,
                        const std::optional<std::pair<double, double>>& bound_factors,
                        double alias_mac) {
+  check_progress(progress);
   const std::string model_path = text(model_arg), sensors_path = text(sensors_arg);
   const std::optional<std::string> measured = text(measured_arg),
                                    modes_table = text(modes_table_arg), out = text(out_arg);
+  const std::vector<std::string>&sets = sets_arg.items, &hold = hold_arg.items;
   if (sets.empty()) throw InputError("update-linear: give at least one set to update (--set)");
   correlate::LinearUpdateOptions o;
   o.alias_mac = alias_mac;
@@ -648,10 +699,11 @@ py::dict update_linear(const PathArg& model_arg, const std::vector<std::string>&
 // run: a whole campaign into `out`, as `jointlab run`; the summary as a dict. Hits that could
 // not be processed and modes without a backbone are listed, not raised (everything else is
 // written), as the library reports them.
-py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, unsigned threads,
+py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, int threads,
              const py::object& progress) {
+  check_progress(progress);
   const std::string campaign_file = text(campaign_arg), out = text(out_arg);
-  if (threads > 1024)
+  if (threads < 0 || threads > 1024)
     throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
   campaign::RunSummary s;
   {
@@ -660,7 +712,7 @@ py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, un
     campaign::RunOptions o;
     o.out = out;
     o.force = force;
-    o.threads = threads;
+    o.threads = static_cast<unsigned>(threads);
     o.progress = [&progress](const std::string& line) { report(progress, line); };
     s = campaign::run_campaign(c, o);
   }
@@ -767,10 +819,11 @@ py::dict update_iwan(
     o.linear_part_updated = campaign::linear_part_matches(m, in.targets);
     o.max_evaluations = evaluations;
     o.seed = seed;
-    // Ctrl-C is checked at every evaluation (a 400-evaluation fit of the example campaign ran
-    // its 8 s to the end), and a line goes to `progress` at the first evaluation at or past each
-    // multiple of 250: the local solves' count steps over some (a 423-evaluation fit of 400 said
-    // nothing). A second fit (beta freed) counts from 0 again.
+    // Ctrl-C is checked at every evaluation the library reports (a 400-evaluation fit of the
+    // example campaign ran its 8 s to the end; the global search reports in batches of 50), and a
+    // line goes to `progress` at the first evaluation at or past each multiple of 250: the local
+    // solves' count steps over some (a 423-evaluation fit of 400 said nothing). A second fit (beta
+    // freed) counts from 0 again.
     InterruptCheck interrupted;
     o.progress = campaign::progress_every(
         250,
@@ -894,14 +947,17 @@ py::dict update_iwan(
 
 // `jointlab compare` without the figure unless `out` names one: the measured curves and each
 // model's QSMA backbone over their range (campaign/model_comparison.h).
-py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
-                 const std::vector<PathArg>& backbone_args,
+py::dict compare(const OneOrMany<PathArg>& model_args, const py::object& mode,
+                 const OneOrMany<PathArg>& backbone_args,
                  const std::optional<std::string>& amplitude, const std::optional<std::string>& dof,
                  const std::optional<PathArg>& measured_arg,
                  const std::optional<PathArg>& sensors_arg,
-                 const std::vector<std::string>& channels, const std::vector<std::string>& labels,
-                 int points, const std::optional<PathArg>& out_arg) {
-  const std::vector<std::string> models = text(model_args), backbones = text(backbone_args);
+                 const OneOrMany<std::string>& channels_arg,
+                 const OneOrMany<std::string>& labels_arg, int points,
+                 const std::optional<PathArg>& out_arg) {
+  const std::vector<std::string> models = text(model_args.items),
+                                 backbones = text(backbone_args.items);
+  const std::vector<std::string>&channels = channels_arg.items, &labels = labels_arg.items;
   const std::optional<std::string> measured = text(measured_arg), sensors = text(sensors_arg),
                                    out = text(out_arg);
   if (points < 2 || points > 100000)
@@ -971,23 +1027,25 @@ py::dict compare(const std::vector<PathArg>& model_args, const py::object& mode,
 }
 
 // update_iwan with `mode` as Python gives it: an int, an 'R:BAND' string or a list of either.
-py::dict update_iwan_call(const PathArg& model, const std::string& set, const py::object& mode,
-                          const std::vector<PathArg>& backbones,
-                          const std::optional<std::string>& amplitude,
-                          const std::optional<std::string>& dof, const std::string& linear_damping,
-                          const std::optional<std::pair<double, double>>& fs_range,
-                          const std::pair<double, double>& gamma_range,
-                          const std::pair<double, double>& chi_range,
-                          const std::pair<double, double>& beta_range, int evaluations,
-                          unsigned seed, const std::optional<PathArg>& out,
-                          const py::object& progress, const std::optional<PathArg>& measured,
-                          const std::optional<PathArg>& sensors,
-                          const std::vector<std::string>& channels, std::optional<double> gamma,
-                          std::optional<double> beta, double linear_damping_max, int threads,
-                          const std::string& optimizer, const std::string& compare,
-                          const std::vector<PathArg>& stepped_sine,
-                          const std::optional<std::string>& stepped_sine_channel,
-                          int stepped_sine_mode, const std::vector<double>& pareto) {
+py::dict update_iwan_call(
+    const PathArg& model, const std::string& set, const py::object& mode,
+    const OneOrMany<PathArg>& backbones, const std::optional<std::string>& amplitude,
+    const std::optional<std::string>& dof, const std::string& linear_damping,
+    const std::optional<std::pair<double, double>>& fs_range,
+    const std::pair<double, double>& gamma_range, const std::pair<double, double>& chi_range,
+    const std::pair<double, double>& beta_range, int evaluations, long long seed,
+    const std::optional<PathArg>& out, const py::object& progress,
+    const std::optional<PathArg>& measured, const std::optional<PathArg>& sensors,
+    const OneOrMany<std::string>& channels, std::optional<double> gamma, std::optional<double> beta,
+    double linear_damping_max, int threads, const std::string& optimizer,
+    const std::string& compare, const OneOrMany<PathArg>& stepped_sine,
+    const std::optional<std::string>& stepped_sine_channel, int stepped_sine_mode,
+    const OneOrMany<double>& pareto_arg) {
+  check_progress(progress);
+  const std::vector<double>& pareto = pareto_arg.items;
+  // --seed, a UINT as the command reads it (-1 was pybind11's "incompatible function arguments").
+  if (seed < 0 || seed > 4294967295LL)
+    throw InputError(fmt::format("--seed {}: must be in [0, 4294967295]", seed));
   if (stepped_sine_mode < 0)
     throw InputError(
         fmt::format("--stepped-sine-mode {}: elastic modes count from 1 (0: the first mode)",
@@ -996,7 +1054,7 @@ py::dict update_iwan_call(const PathArg& model, const std::string& set, const py
     if (!(std::isfinite(g) && g > 0))
       throw InputError(fmt::format("--pareto {}: gamma values must be finite and > 0", g));
   }
-  const SteppedSineArgs sine{text(stepped_sine), stepped_sine_channel.value_or(""),
+  const SteppedSineArgs sine{text(stepped_sine.items), stepped_sine_channel.value_or(""),
                              stepped_sine_mode, pareto};
   // --gamma, --beta, --linear-damping-max and --threads, checked as the command checks them.
   correlate::IwanUpdateOptions asked;
@@ -1038,15 +1096,18 @@ py::dict update_iwan_call(const PathArg& model, const std::string& set, const py
     else
       throw InputError("mode: expected an int, 'R:BAND' or a list of them");
   };
-  if (py::isinstance<py::list>(mode) || py::isinstance<py::tuple>(mode)) {
+  // A list, a tuple or a numpy array of modes (np.array([1, 2]) was read as one integer).
+  if (py::isinstance<py::list>(mode) || py::isinstance<py::tuple>(mode) ||
+      (py::isinstance<py::array>(mode) && py::reinterpret_borrow<py::array>(mode).ndim() > 0)) {
     for (const py::handle h : mode) one(h);
   } else {
     one(mode);
   }
   if (modes.empty()) throw InputError("mode: give at least one mode");
-  return update_iwan(text(model), set, modes, text(backbones), amplitude, dof, linear_damping,
-                     fs_range, gamma_range, chi_range, beta_range, evaluations, seed, text(out),
-                     progress, text(measured), text(sensors), channels, asked, sine);
+  return update_iwan(text(model), set, modes, text(backbones.items), amplitude, dof, linear_damping,
+                     fs_range, gamma_range, chi_range, beta_range, evaluations,
+                     static_cast<unsigned>(seed), text(out), progress, text(measured),
+                     text(sensors), channels.items, asked, sine);
 }
 
 }  // namespace
@@ -1134,9 +1195,10 @@ callable is given.
         py::arg("out") = py::none(),
         R"(Impact ring-downs -> natural frequency and damping versus amplitude (`jointlab process`).
 
-files      list of test files (CSV, UFF 58, MATLAB .mat), one hit each
-bands      list of (lo, hi) in Hz, one per mode; or modes=N for the N strongest peaks
-channels   channel names to process (default: every non-force channel)
+files      test files (CSV, UFF 58, MATLAB .mat), one hit each: a list, or one path
+bands      (lo, hi) in Hz, one per mode: a list, or one pair; or modes=N for the N strongest
+           peaks
+channels   channel names to process, a list or one name (default: every non-force channel)
 quantity   'acceleration', 'velocity' or 'displacement' for channels without a unit
 amplitude  quantity of the amplitude column: 'velocity' (default), 'displacement' [m],
            'acceleration' [m/s^2]
@@ -1185,7 +1247,7 @@ written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy arra
       R"(Updates named joint stiffness sets to measured linear frequencies (`jointlab update-linear`).
 
 model          model file (TOML)
-sets           element names to update, e.g. ["iwan.rivet", "spring.rz"]
+sets           element names to update, e.g. ["iwan.rivet", "spring.rz"], or one name
 sensors        sensors file (channel,dof[,sign])
 measured       a `jointlab process` output folder, or modes_table: mode,frequency_hz[,<channel>...]
 rule           'least-squares' (default) or 'smallest' (with minimize=NAME, tolerance default 0.01)
@@ -1195,6 +1257,9 @@ bounds         {"NAME": (lo, hi)}: absolute stiffness bounds of sets (--bound NA
 bound_factors  (lo, hi): bounds of every other set as factors of its start (default 1e-3, 1e3)
 trust_signs    fit with the sensors file's signs even when one channel reads the model reversed
 out            write the updated model file here (its matrices beside it), or None
+progress       callable taking one line per optimiser iteration, or None. Ctrl-C ends the
+               call at the next iteration; the sweeps, chi-square profile and refits after the
+               last one are not interrupted (7 s of the example campaign's 7.7 s fit)
 
 Pairs are made by sensor MAC within the frequency window and followed by full shape (see
 docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final [N/m or N*m/rad],
@@ -1294,7 +1359,9 @@ Student's t: effective points less the parameters fitted; 2 or fewer state no si
 
 progress        callable taking one line, or None: the slip screen with several modes, and a
                 line at the first evaluation at or past each multiple of 250. Ctrl-C ends the
-                call with KeyboardInterrupt within an evaluation (0.1 s of checking).
+                call with KeyboardInterrupt within an evaluation of the local solves, and
+                after the batch of 50 samples of the global search (1 to 1.7 s on the
+                example campaign on two cores).
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]
@@ -1334,7 +1401,7 @@ where), 'slip_screen'.
 
 force     recompute even outputs that are up to date
 threads   workers for the hits (0: every core)
-progress  callable taking one line per step, or None
+progress  callable taking one line per step, or None (Ctrl-C: at the next step)
 
 Returns a dict: 'hits', 'hits_processed', 'hits_reused', 'failed_hits' (one line each),
 'flagged_hits', 'model_built' (built in this run), 'model_reused' (the built

@@ -219,6 +219,45 @@ def test_each_error_path_raises_input_error(tmp_path):
         jointlab.run(str(tmp_path / "campaign.toml"), str(tmp_path / "out"), threads=2000)
 
 
+def test_one_value_where_a_list_is_expected_is_a_list_of_one(tmp_path):
+    # A str or a pathlib.Path for the files, a (lo, hi) pair for the bands, a str for the
+    # channels, the sets or the holds: the command's repeatable option given once (each was
+    # pybind11's "incompatible function arguments" TypeError, the whole signature in it). The
+    # same computation, so the same numbers bit for bit.
+    listed = jointlab.process([str(RECORD)], bands=[(70, 90)], channels=["acc1"])
+    for one in (jointlab.process(RECORD, bands=(70, 90), channels="acc1"),
+                jointlab.process(str(RECORD), bands=np.array([[70.0, 90.0]]),
+                                 channels=("acc1",))):
+        assert [(b.file, b.channel, b.band) for b in one] == [(str(RECORD), "acc1", 1)]
+        assert np.array_equal(one[0].frequency_hz, listed[0].frequency_hz)
+        assert np.array_equal(one[0].damping_ratio, listed[0].damping_ratio)
+    table = two_mass_modes(tmp_path, 4e4)
+    model = two_mass_spring_model(tmp_path, 1.2e5)
+    sensors = tmp_path / "sensors.csv"
+    a = jointlab.update_linear(model, ["spring.kj"], sensors, modes_table=table)
+    b = jointlab.update_linear(model, "spring.kj", sensors, modes_table=table)
+    assert a["parameters"]["spring.kj"]["final"] == b["parameters"]["spring.kj"]["final"]
+    held = jointlab.update_linear(model, "spring.kj", sensors, modes_table=table,
+                                  hold="spring.kj=5e4")
+    # Held at the value given: to 1e-12, its round trip through the fit's log coordinate.
+    assert held["parameters"]["spring.kj"]["held_by_user"]
+    assert_close(held["parameters"]["spring.kj"]["final"], 5e4, rel=1e-12)
+    # The command's words for a negative thread count or seed (pybind11's TypeError before), and
+    # a progress that is not callable said before any work, naming the argument.
+    with pytest.raises(jointlab.InputError, match=r"^--threads -1: must be in \[0, 1024\]"):
+        jointlab.process(RECORD, bands=(70, 90), threads=-1)
+    with pytest.raises(jointlab.InputError, match=r"^--threads -1: must be in \[0, 1024\]"):
+        jointlab.run(tmp_path / "campaign.toml", tmp_path / "out", threads=-1)
+    with pytest.raises(jointlab.InputError, match=r"^--seed -1: must be in \[0, 4294967295\]$"):
+        jointlab.update_iwan(model, "j", 1, "none.csv", seed=-1)
+    with pytest.raises(TypeError, match="^progress: expected a callable .* got int$"):
+        jointlab.process(RECORD, bands=(70, 90), progress=5)
+    # Modes as a numpy array are a list of modes, here two where tables need one
+    # (np.array([1, 2]) was converted as one integer: a TypeError).
+    with pytest.raises(jointlab.InputError, match="with --backbone give one --mode R"):
+        jointlab.update_iwan(model, "j", np.array([1, 2]), "none.csv")
+
+
 def test_progress_is_silent_unless_asked(capfd, tmp_path):
     # Around 1527 Hz acc2 sees the mode at 6.9 % of acc1's amplitude, below --min-share: no
     # Backbone, and why is the command's stderr line, here a progress line (it was lost).
