@@ -456,8 +456,8 @@ EdgeBeat edge_beat(const std::vector<Estimate>& est, const EnvelopePhase& ep, co
   // times the one carried (|ratio - 1| 5.5-5.6). Of the best fits on the beam (360 bands
   // typed 0.5-5 Hz beside or inside its modes, three channels) and on the twins without a
   // neighbour, 91 are 1.1 or more off; the neighbours of 0.5-2 % damping 1.4-4.9 Hz below the
-  // LMS twin's band (59 caught, 5.12 and 51.2 kHz) stay within 0.30, and so do the beam's real
-  // second components (a spectral bump 21 Hz below its 1766 Hz mode, 3.6 % of its peak over
+  // LMS twin's band (259 caught, 5.12 and 51.2 kHz, eight seeds) stay within 0.36, as do the beam's
+  // real second components (a spectral bump 21 Hz below its 1766 Hz mode, 3.6 % of its peak over
   // the first 0.6 s on acc2; a peak 30 Hz below the 2015 Hz mode, 2 % on acc1), whose beat is
   // counted as before. A block beyond the span or below the noise threshold confirms nothing.
   for (const double beats : {0.25, 0.5}) {

@@ -320,9 +320,9 @@ TEST(BrakeReuss, SidebandsAndHarmonicsAreNoSecondModes) {
 // the rest left): 14 points that met the damping limit were left out, the span started at
 // 0.90 s and kept 1.20 decades, where the same band read without it starts at 0.115 s and
 // keeps 1.59. Fitted again a quarter and half a beat later the "beat" is 4.6-4.7 times what
-// the first fit carried there (a true neighbour's stays within 0.30 of it), so it no longer
-// counts. Required: no note of a second mode beyond the edge, and 1.4 decades (between the
-// 1.20 with the false beat and the 1.59 without it).
+// the first fit carried there (the 259 true neighbours caught on the LMS twins stay within 0.36 of
+// it), so it no longer counts. Required: no note of a second mode beyond the edge, and 1.4 decades
+// (between the 1.20 with the false beat and the 1.59 without it).
 TEST(BrakeReuss, ADriftingModesOwnRestIsNoBeatBeyondTheEdge) {
   const data::Record rec = data::read_record(testing::source_dir() +
                                              "/data/examples/brake-reuss-beam/hammer_impact.csv");
