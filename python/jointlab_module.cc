@@ -104,6 +104,16 @@ py::array_t<double> to_numpy(Eigen::VectorXd v) {
   return py::array_t<double>(owned->size(), owned->data(), free);
 }
 
+// A matrix as a 2-D numpy array over its own storage (column-major, as Eigen keeps it), nothing
+// copied.
+py::array_t<double> to_numpy(Eigen::MatrixXd m) {
+  auto* owned = new Eigen::MatrixXd(std::move(m));
+  py::capsule free(owned, [](void* p) { delete static_cast<Eigen::MatrixXd*>(p); });
+  const auto size = static_cast<py::ssize_t>(sizeof(double));
+  return py::array_t<double>({owned->rows(), owned->cols()}, {size, size * owned->rows()},
+                             owned->data(), free);
+}
+
 // A table's columns as a dict of numpy arrays, named as the CSV's header.
 py::dict to_dict(data::Table table) {
   py::dict out;
@@ -420,19 +430,23 @@ class Model {
   /// The damping ratio of every elastic mode ([damping] modal_ratio; 0 without one).
   double modal_ratio() const { return model_.modal_ratio; }
 
+  /// "node:component" per matrix index (the model's dof_labels), or empty.
+  const std::vector<std::string>& dof_labels() const { return model_.dof_labels; }
+  /// Number of matrix DOFs.
+  Eigen::Index dofs() const { return model_.size(); }
+
   py::array_t<double> modes(int count) const {
-    if (count < 1) throw InputError(fmt::format("--count {}: must be >= 1", count));
-    model::ModesOptions options;
-    options.count = count;
-    model::LinearModes modes;
-    {
-      py::gil_scoped_release release;
-      modes = model::linear_modes(model_, options);
-    }
+    const model::LinearModes modes = solve(count);
     Eigen::VectorXd f(modes.size() - modes.rigid_count);
     for (Eigen::Index i = 0; i < f.size(); ++i)
       f(i) = modes.frequency_hz(modes.rigid_count + static_cast<int>(i));
     return to_numpy(std::move(f));
+  }
+
+  // The elastic shapes of modes(count), mass-normalised, a column per mode.
+  py::array_t<double> shapes(int count) const {
+    const model::LinearModes modes = solve(count);
+    return to_numpy(Eigen::MatrixXd(modes.shapes.rightCols(modes.size() - modes.rigid_count)));
   }
 
   py::dict qsma(int mode, int points, std::optional<double> qmin,
@@ -466,6 +480,15 @@ class Model {
   }
 
  private:
+  // The lowest `count` modes, as `jointlab modes --count` solves them.
+  model::LinearModes solve(int count) const {
+    if (count < 1) throw InputError(fmt::format("--count {}: must be >= 1", count));
+    model::ModesOptions options;
+    options.count = count;
+    py::gil_scoped_release release;
+    return model::linear_modes(model_, options);
+  }
+
   std::string path_;
   model::Model model_;
 };
@@ -1417,11 +1440,17 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
 
     model = jointlab.Model("model.toml")
     model.modes(count=10)               # elastic natural frequencies [Hz]
+    model.shapes(count=10)              # their shapes: a row per DOF (model.dof_labels)
     curve = model.qsma(mode=1, points=60)
     curve["frequency_hz"], curve["damping_ratio"]
 )")
       .def(py::init<const PathArg&>(), py::arg("path"), py::call_guard<py::gil_scoped_release>())
-      .def_property_readonly("path", &Model::path)
+      .def_property_readonly("path", &Model::path, "The model file, as given.")
+      .def_property_readonly("dofs", &Model::dofs, "The number of matrix DOFs.")
+      .def_property_readonly("dof_labels", &Model::dof_labels,
+                             "'node:component' per matrix index (the file's "
+                             "[matrices] dof_labels), or [] where it names none: the rows of "
+                             "shapes().")
       .def_property_readonly("modal_ratio", &Model::modal_ratio,
                              "The damping ratio of every elastic mode: the model's [damping] "
                              "modal_ratio, 0 without one (as `jointlab modes` prints it).")
@@ -1430,6 +1459,13 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
           R"(The elastic natural frequencies [Hz] among the lowest `count` modes (as `jointlab modes
 --count`, rigid-body modes left out: a free-free model's six count, so count=5 gives none),
 every joint at its linear stiffness, ascending.)")
+      .def("shapes", &Model::shapes, py::arg("count") = 20,
+           R"(The elastic mode shapes of modes(count): a 2-D array, a row per matrix DOF (named
+by dof_labels), a column per elastic mode in the order of modes(count), mass-normalised
+(phi^T M phi = I, phi in m/sqrt(kg) for translations); each column's sign is the solver's.
+
+    f, phi = model.modes(10), model.shapes(10)
+    phi[model.dof_labels.index("9003:3"), 0]   # mode 1 at node 9003, z)")
       .def("qsma", &Model::qsma, py::arg("mode"), py::arg("points") = 50,
            py::arg("qmin") = py::none(), py::arg("qmax") = py::none(),
            R"(Quasi-Static Modal Analysis of elastic mode `mode` (from 1), as `jointlab qsma`.

@@ -166,6 +166,32 @@ def test_qsma_and_modes_equal_the_command_line(tmp_path):
     assert jointlab.Model(model).modal_ratio == 0.002
 
 
+def test_shapes_are_the_mass_normalised_eigenvectors(tmp_path):
+    # The two-mass Iwan model (K_lin = K + Kt at DOF 0, M = I) with dof_labels: the shapes
+    # against numpy's eigh of the same matrices, to 1e-9 (the dense solve's rounding is ~1e-15
+    # of the shapes' unit size), each column's sign as the solver's; phi^T M phi = I and the
+    # residual K_lin phi - w^2 M phi to 1e-9 of K_lin's largest term.
+    model = two_mass_model(tmp_path)
+    (tmp_path / "dofs.csv").write_text("node,component\n7,3\n8,3\n")
+    model.write_text(model.read_text().replace('stiffness = "K.mtx"\n',
+                                               'stiffness = "K.mtx"\ndof_labels = "dofs.csv"\n'))
+    m = jointlab.Model(model)
+    assert m.dofs == 2 and m.dof_labels == ["7:3", "8:3"]
+    k = np.array([[2e5 + 5e4, -1e5], [-1e5, 1e5]])
+    w2, expected = np.linalg.eigh(k)
+    phi = m.shapes()
+    assert phi.shape == (2, 2) and phi.dtype == np.float64
+    assert_close(2 * np.pi * m.modes(), np.sqrt(w2))
+    np.testing.assert_allclose(np.abs(phi), np.abs(expected), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(phi.T @ phi, np.eye(2), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(k @ phi - phi * w2, 0, rtol=0, atol=1e-9 * 2.5e5)
+    assert m.shapes(count=1).shape == (2, 1)  # the columns of modes(count)
+    (tmp_path / "plain").mkdir()
+    assert jointlab.Model(two_mass_model(tmp_path / "plain")).dof_labels == []  # none named
+    with pytest.raises(jointlab.InputError, match="^--count 0: must be >= 1$"):
+        m.shapes(count=0)
+
+
 def test_read_record_gives_channels_in_si(tmp_path):
     rec = jointlab.read_record(str(RECORD))
     assert rec["sample_rate_hz"] > 0
