@@ -2,11 +2,14 @@
 #include "jointlab/correlate/linear_signs.h"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include "jointlab/correlate/linear_fit.h"
+#include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/noise_limits.h"
 #include "jointlab/correlate/shape_checks.h"
 
@@ -28,6 +31,27 @@ std::string same_as_the_others(const std::vector<Sensor>& sensors, const Measure
   return fmt::format(
       " (or, as a shape's sign as a whole is arbitrary, the same: {} reversed instead)",
       fmt::join(others, ", "));
+}
+
+// Whether every measured mode, its frequency times `scale`, has a visible model mode at the
+// start within the frequency window `window` (|f_model / f - 1| <= window) that can be its
+// partner: of MAC >= 0.9 with it where it has entries at three sensors or more, any otherwise.
+bool every_mode_has_a_partner(const LinearEvaluation& start, const MeasuredModes& measured,
+                              double scale, double window) {
+  std::vector<char> visible(static_cast<size_t>(start.model_at_sensors.cols()), 1);
+  for (const int h : start.hidden)
+    if (h >= 0 && h < static_cast<int>(visible.size())) visible[static_cast<size_t>(h)] = 0;
+  for (Eigen::Index i = 0; i < measured.frequency_hz.size(); ++i) {
+    const double f = scale * measured.frequency_hz(i);
+    const bool shape = (measured.shapes.col(i).array().abs() > 0.0).count() >= 3;
+    bool found = false;
+    for (Eigen::Index j = 0; j < start.model_at_sensors.cols() && !found; ++j)
+      found = visible[static_cast<size_t>(j)] &&
+              std::abs(start.all_model_frequency_hz(j) / f - 1) <= window &&
+              (!shape || mac(measured.shapes.col(i), start.model_at_sensors.col(j)) >= 0.9);
+    if (!found) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -131,6 +155,43 @@ std::string misfit_of_signs(const model::Model& model, const std::vector<std::st
       fmt::join(which, " and "), again, 100 * r.final.max_error(), r.final.pairing.pairs.size(),
       measured.frequency_hz.size(), fmt::join(signs, " and "),
       same_as_the_others(sensors, measured, c.best), one ? " is" : "s are");
+}
+
+// Why a fit's misfit is frequencies in rad/s read as Hz, or "" (linear_signs.h).
+std::string misfit_of_units(const model::Model& model, const std::vector<std::string>& names,
+                            const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                            const LinearUpdateOptions& options, const LinearUpdateSummary& s) {
+  if (!fitted(s) || s.degrees_of_freedom < 1 ||
+      !(s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom)))
+    return "";
+  const double to_hz = 0.5 / std::numbers::pi;
+  const double window = options.frequency_window > 0 ? options.frequency_window : 0.5;
+  if (!every_mode_has_a_partner(s.start, measured, to_hz, window)) return "";
+  MeasuredModes hz = measured;
+  hz.frequency_hz *= to_hz;
+  LinearUpdateOptions o = options;
+  o.progress = nullptr;
+  LinearUpdateSummary r;
+  fit_as_given(model, names, sensors, hz, o, false, r);
+  if (!fitted(r) || r.degrees_of_freedom < 1 ||
+      r.final.pairing.pairs.size() < s.final.pairing.pairs.size() ||
+      !(r.reduced_chi2 <= std::max(reduced_chi2_limit(r.degrees_of_freedom), s.reduced_chi2 / 100)))
+    return "";
+  // The pair of largest error as given, to show the unit.
+  const LinearEvaluation& e = s.final;
+  Eigen::Index worst = e.pairing.pairs.front().measured;
+  for (const ModePair& p : e.pairing.pairs)
+    if (std::abs(e.residuals(p.measured)) > std::abs(e.residuals(worst))) worst = p.measured;
+  return fmt::format(
+      "the frequencies look like angular frequencies (rad/s) read as Hz: as given, the fit "
+      "leaves a reduced chi-square of {:.3g} over {} degrees of freedom (largest frequency error "
+      "{:.3g} %: test mode {} at {:.5g} paired with model mode {} at {:.5g} Hz); divided by 2 pi "
+      "they fit to {:.3g} over {} (largest error {:.3g} %), pairing {} of {} measured modes: "
+      "give frequency_hz in Hz (rad/s divided by 2 pi)",
+      s.reduced_chi2, s.degrees_of_freedom, 100 * e.max_error(), measured.id(worst),
+      measured.frequency_hz(worst), e.pairing.model_for(static_cast<int>(worst)) + 1,
+      e.model_frequency_hz(worst), r.reduced_chi2, r.degrees_of_freedom, 100 * r.final.max_error(),
+      r.final.pairing.pairs.size(), measured.frequency_hz.size());
 }
 
 }  // namespace jointlab::correlate::detail

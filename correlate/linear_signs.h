@@ -18,4 +18,13 @@ std::string misfit_of_signs(const model::Model& model, const std::vector<std::st
                             const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                             const LinearUpdateOptions& options, const LinearUpdateSummary& s);
 
+/// Why a fit's misfit is frequencies in rad/s read as Hz, or "": where a fit leaves scatter
+/// beyond the noise (reduced_chi2_limit) and, divided by 2 pi, every measured mode has a partner
+/// candidate at the start (within the frequency window, MAC >= 0.9 where it has entries at three
+/// sensors or more), the update is fitted again so; when that pairs as many modes and leaves
+/// scatter within the noise, or a hundredth of the given, the frequencies are named.
+std::string misfit_of_units(const model::Model& model, const std::vector<std::string>& names,
+                            const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                            const LinearUpdateOptions& options, const LinearUpdateSummary& s);
+
 }  // namespace jointlab::correlate::detail

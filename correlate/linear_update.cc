@@ -26,6 +26,7 @@ using detail::fitted;
 using detail::make_problem;
 using detail::misfit_of_one_mode;
 using detail::misfit_of_signs;
+using detail::misfit_of_units;
 using detail::PairWarning;
 using detail::restart_if_misfit;
 using detail::sweeps;
@@ -126,8 +127,12 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     const StiffnessSets sets(model, names);
     sweeps(make_problem(sets, model, names, sensors, measured, options), *end, s);
   }
-  if (std::string why = misfit_of_signs(model, names, sensors, measured, options, s);
+  if (std::string why = misfit_of_units(model, names, sensors, measured, options, s);
       !why.empty()) {
+    s.status = LinearUpdateStatus::kShapesRefused;
+    s.shape_problem = std::move(why);
+  } else if (std::string why = misfit_of_signs(model, names, sensors, measured, options, s);
+             !why.empty()) {
     s.status = LinearUpdateStatus::kShapesRefused;
     s.shape_problem = std::move(why);
   } else if (std::string one = misfit_of_one_mode(model, names, sensors, measured, options, s);

@@ -118,7 +118,10 @@ bool for_each_csv_row(const fs::path& path, const std::string& what, OnHeader on
 
 // What a shape column of a modes table holds: a whole entry (real or complex), or the real or
 // imaginary part of one; kMagnitudeOrPhase (row -1) names a sensor's magnitude or phase column.
-constexpr int kWhole = 0, kRealPart = 1, kImaginaryPart = 2, kMagnitudeOrPhase = 4;
+// kModalParameter (row -1) a column of what other tools export beside the shapes (damping,
+// MPC, MPD, modal mass), which the linear update does not use and which is left out.
+constexpr int kWhole = 0, kRealPart = 1, kImaginaryPart = 2, kMagnitudeOrPhase = 4,
+              kModalParameter = 8;
 struct TableColumn {
   int row = -1;        // sensor index, -1: none
   int part = kWhole;   // kWhole, kRealPart, kImaginaryPart or kMagnitudeOrPhase
@@ -128,11 +131,36 @@ struct TableColumn {
 
 // The column headed `header`: a sensor channel, or one with a suffix _re/_im (also _real/_imag,
 // any case, after '_', '.' or ' ').
+// Whether a modes-table column headed `header` (not a sensor channel) holds a modal parameter
+// other tools export beside the shapes: damping (a ratio or in %), zeta, MPC, MPD, MCF, MOV or
+// the modal mass, any case, a unit in brackets or after a blank or '_' allowed ("Damping [%]",
+// "damping_ratio", "MPC (%)", "Modal mass").
+bool modal_parameter_column(const std::string& header) {
+  std::string h;
+  for (const char ch : header) {
+    if (ch == '[' || ch == '(') break;
+    h += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  }
+  h = std::string(trim(h));
+  const auto begins = [&](std::string_view w) {
+    return h.rfind(w, 0) == 0 &&
+           (h.size() == w.size() || h[w.size()] == '_' || h[w.size()] == ' ' || h[w.size()] == '.');
+  };
+  for (const std::string_view w :
+       {"damping", "damping_ratio", "damping ratio", "zeta", "mpc", "mpd", "mcf", "mov"})
+    if (begins(w)) return true;
+  return h == "modal_mass" || h == "modal mass";
+}
+
 TableColumn table_column(const std::vector<Sensor>& sensors, const std::string& header) {
   TableColumn out;
   out.header = header;
   out.row = find_sensor(sensors, header);
   if (out.row >= 0) return out;
+  if (modal_parameter_column(header)) {
+    out.part = kModalParameter;
+    return out;
+  }
   const size_t cut = header.find_last_of("_. ");
   if (cut == std::string::npos || cut == 0) return out;
   std::string suffix = header.substr(cut + 1);
@@ -664,6 +692,15 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
 
 namespace {
 
+// The sensors' channels, for a message: "z1, z2, z3" (the first 8, then how many more).
+std::string sensor_channels(const std::vector<Sensor>& sensors) {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < sensors.size() && i < 8; ++i) names.push_back(sensors[i].channel);
+  if (sensors.size() > 8) names.push_back(fmt::format("and {} more", sensors.size() - 8));
+  return fmt::format("{} channel{}: {}", sensors.size(), sensors.size() == 1 ? "" : "s",
+                     fmt::join(names, ", "));
+}
+
 // The shape columns of a modes table from its header `cells` (line n of `name`), after the
 // mode,frequency_hz that must begin it: each a sensor channel (or its real or imaginary part),
 // none twice, every part beside its other part.
@@ -671,6 +708,18 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
                                              const std::vector<Sensor>& sensors,
                                              const std::vector<std::string>& cells, long n) {
   std::vector<TableColumn> columns;
+  if (cells.size() >= 2 && cells[0] == "mode" && cells[1] != "frequency_hz") {
+    // Frequencies in another unit: say which is read rather than only what the header must be.
+    std::string f;
+    for (const char ch : cells[1])
+      f += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (f.find("rad") != std::string::npos || f.find("omega") != std::string::npos)
+      throw InputError(where(
+          name, n,
+          fmt::format("column '{}': frequencies are read in Hz only, under frequency_hz: give "
+                      "them so (rad/s divided by 2 pi)",
+                      cells[1])));
+  }
   if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
     // What was found, as written: 'Mode,Frequency_Hz' or 'frequency_hz [Hz]' differ only in
     // case or a unit, and a newcomer cannot see which from the rule alone.
@@ -684,6 +733,10 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
   }
   for (size_t c = 2; c < cells.size(); ++c) {
     const TableColumn col = table_column(sensors, cells[c]);
+    if (col.part == kModalParameter) {
+      columns.push_back(col);
+      continue;
+    }
     if (col.row < 0) {
       throw InputError(where(
           name, n,
@@ -691,10 +744,14 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
               ? fmt::format("column '{}': magnitude or phase columns are not read; give the "
                             "real and imaginary parts ({}_re, {}_im) or complex cells (0.1+0.2i)",
                             cells[c], col.base, col.base)
-              : fmt::format("column '{}' is not a sensor channel", cells[c])));
+              : fmt::format("column '{}' is not a sensor channel (the sensors file has {}); a "
+                            "modes table's columns are mode, frequency_hz, one per channel (or "
+                            "its _re and _im parts), and damping, MPC, MPD or modal mass "
+                            "columns, which are left out: rename or remove it",
+                            cells[c], sensor_channels(sensors))));
     }
     for (const TableColumn& other : columns) {
-      if (other.row == col.row &&
+      if (other.part != kModalParameter && other.row == col.row &&
           (other.part == col.part || other.part == kWhole || col.part == kWhole)) {
         throw InputError(where(name, n,
                                fmt::format("column '{}': sensor channel {} twice", cells[c],
@@ -730,7 +787,7 @@ Eigen::VectorXcd row_shape(const std::string& name, const std::vector<Sensor>& s
   for (size_t c = 2; c < cells.size(); ++c) {
     const TableColumn& col = columns[c - 2];
     const std::string& cell = cells[c];
-    if (cell.empty()) continue;
+    if (cell.empty() || col.part == kModalParameter) continue;
     if (col.part == kWhole) {
       const std::optional<std::complex<double>> z = complex_cell(cell);
       if (!z) {
@@ -752,6 +809,7 @@ Eigen::VectorXcd row_shape(const std::string& name, const std::vector<Sensor>& s
     given[static_cast<size_t>(col.row)] |= static_cast<char>(col.part);
   }
   for (const TableColumn& col : columns) {
+    if (col.part == kModalParameter) continue;
     const char g = given[static_cast<size_t>(col.row)];
     if (col.part != kWhole && g != 0 && g != 3) {
       throw InputError(

@@ -178,8 +178,11 @@ inline constexpr double kMpcRefused = 0.5;
 /// `_real`/`_imag`, any case, after '_', '.' or ' '). A complex shape is realised (mac.h
 /// realise(): the real part at the phase that maximises it): with MPC below kMpcRefused the
 /// table is refused naming the mode, below kMpcPoor the MeasuredModes' warnings name it and its
-/// MPC. `modes` (if given) receives the mode numbers. A mode without any shape entry is paired
-/// by frequency alone (linear_update.h). InputError naming the file, line and cell.
+/// MPC. Columns of damping, MPC, MPD, MCF, MOV or modal mass (any case, a unit in brackets
+/// allowed) are left out; any other column that is not a sensor channel is refused naming the
+/// sensors' channels, and a frequency header naming rad/s says to give Hz. `modes` (if given)
+/// receives the mode numbers. A mode without any shape entry is paired by frequency alone
+/// (linear_update.h). InputError naming the file, line and cell.
 MeasuredModes read_modes_table(const std::filesystem::path& path,
                                const std::vector<Sensor>& sensors, std::vector<int>* modes);
 

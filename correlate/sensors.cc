@@ -1,6 +1,10 @@
 #include "jointlab/correlate/sensors.h"
 
+#include <algorithm>
+#include <cctype>
 #include <set>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -8,6 +12,33 @@
 #include "jointlab/data/csv_lines.h"
 
 namespace jointlab::correlate {
+namespace {
+
+// Where the component of label `d` ("node:component") is written as a direction, "z", "-z",
+// "+Y", "-3" or "rx", what to write instead: " (a component is a number, 1-6 for x, y, z, rx,
+// ry, rz, and a channel that reads against it has sign -1: give 9001:3 and sign -1)", the label
+// only where `labels` has it; else "".
+std::string direction_hint(const std::string& d, const std::vector<std::string>& labels) {
+  const size_t colon = d.rfind(':');
+  std::string c = d.substr(colon + 1);
+  for (char& ch : c) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  bool reversed = false;
+  if (!c.empty() && (c[0] == '-' || c[0] == '+')) reversed = c[0] == '-', c.erase(0, 1);
+  const std::vector<std::string> names = {"x", "y", "z", "rx", "ry", "rz"};
+  int k = 0;
+  for (int i = 0; i < 6; ++i)
+    if (c == names[static_cast<size_t>(i)] || c == std::to_string(i + 1)) k = i + 1;
+  if (k == 0 || (!reversed && c == std::to_string(k))) return "";
+  const std::string label = fmt::format("{}:{}", d.substr(0, colon), k);
+  const bool exists = std::find(labels.begin(), labels.end(), label) != labels.end();
+  return fmt::format(
+      " (a component is a number, 1-6 for x, y, z, rx, ry, rz, and a channel that reads against "
+      "it has sign -1{})",
+      exists ? fmt::format(": give {}{}", label, reversed ? " and sign -1" : "") : "");
+}
+
+}  // namespace
+
 std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
                                   const model::Model& model) {
   std::vector<Sensor> out;
@@ -41,9 +72,10 @@ std::vector<Sensor> parse_sensors(const std::string& text, const std::string& na
       }
       const auto it = std::find(model.dof_labels.begin(), model.dof_labels.end(), d);
       if (it == model.dof_labels.end()) {
-        throw InputError(where(name, n,
-                               fmt::format("dof '{}' is not a label of the model's dof_labels{}", d,
-                                           model::missing_label_hint(model, d))));
+        throw InputError(where(
+            name, n,
+            fmt::format("dof '{}' is not a label of the model's dof_labels{}{}", d,
+                        model::missing_label_hint(model, d), direction_hint(d, model.dof_labels))));
       }
       s.dof = it - model.dof_labels.begin();
     } else {

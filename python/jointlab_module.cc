@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <regex>
@@ -636,7 +637,54 @@ py::dict update_linear(const PathArg& model_arg, const OneOrMany<std::string>& s
     d["smallest_within_tolerance"] = p.smallest_within_tolerance > 0
                                          ? py::object(py::float_(p.smallest_within_tolerance))
                                          : py::object(py::none());
+    d["lower"] = p.lower;  // its bounds [N/m or N m/rad]
+    d["upper"] = p.upper;
+    // The one-at-a-time sweep around the result, as sweeps.csv's rows of this set: NaN where no
+    // pair is followed (rms_error) or the mode is unpaired or not followed by its shape (errors,
+    // a row per point, a column per measured mode in `modes` order).
+    const auto n = static_cast<Eigen::Index>(p.sweep_factor.size());
+    const Eigen::Index measured_count = s.final.measured_frequency_hz.size();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    Eigen::VectorXd factor(n), rms(n);
+    Eigen::MatrixXd errors = Eigen::MatrixXd::Constant(n, measured_count, nan);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const auto kk = static_cast<size_t>(k);
+      factor(k) = p.sweep_factor[kk];
+      rms(k) = p.sweep_rms[kk].value_or(nan);
+      for (Eigen::Index i = 0; i < measured_count; ++i) {
+        const auto c = static_cast<size_t>(i);
+        if (kk < p.sweep_errors.size() && c < p.sweep_errors[kk].size() && p.sweep_errors[kk][c])
+          errors(k, i) = *p.sweep_errors[kk][c];
+      }
+    }
+    py::dict sweep;
+    sweep["factor"] = to_numpy(Eigen::VectorXd(factor));
+    sweep["stiffness"] = to_numpy(Eigen::VectorXd(factor * p.value));
+    sweep["rms_error"] = to_numpy(std::move(rms));
+    sweep["errors"] = to_numpy(std::move(errors));
+    d["sweep"] = sweep;
     parameters[py::str(p.name)] = d;
+  }
+  // The objective and every set's stiffness after each iteration (the first: the start), as
+  // history.csv's columns.
+  py::dict history;
+  {
+    const auto n = static_cast<Eigen::Index>(s.history.size());
+    Eigen::VectorXd iteration(n), objective(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      iteration(i) = static_cast<double>(i);
+      objective(i) = s.history[static_cast<size_t>(i)];
+    }
+    history["iteration"] = to_numpy(std::move(iteration));
+    history["objective"] = to_numpy(std::move(objective));
+    for (size_t k = 0; k < s.parameters.size(); ++k) {
+      Eigen::VectorXd theta =
+          Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN());
+      for (Eigen::Index i = 0; i < n && static_cast<size_t>(i) < s.theta_history.size(); ++i)
+        if (static_cast<Eigen::Index>(k) < s.theta_history[static_cast<size_t>(i)].size())
+          theta(i) = s.theta_history[static_cast<size_t>(i)](static_cast<Eigen::Index>(k));
+      history[py::str(s.parameters[k].name)] = to_numpy(std::move(theta));
+    }
   }
   // Sets acting together, as the report's warning names them: the combination determined.
   py::list collinear;
@@ -683,6 +731,7 @@ py::dict update_linear(const PathArg& model_arg, const OneOrMany<std::string>& s
   py::dict result;
   result["parameters"] = parameters;
   result["modes"] = modes;
+  result["history"] = history;
   result["rule"] = s.rule;
   result["converged"] = s.status == correlate::LinearUpdateStatus::kConverged;
   result["status"] = linear_status_name(s.status);
@@ -1290,7 +1339,10 @@ relative_std (one sigma, relative) or None, slope_std (where relative_std is the
 profile's, wider: the local slope's, which the report says understates it; else None),
 sensitivity, flat, held, held_by_user (held by `hold`), at_bound, identifiable, acts_with,
 one_sided (+1 / -1: bound by the frequencies from below / above only), smallest_within_tolerance
-(None: not lowered)), 'modes' (measured, frequency_hz, model_mode, model_frequency_hz, error
+(None: not lowered), lower, upper (its bounds), sweep (the one-at-a-time sweep, as sweeps.csv:
+arrays factor, stiffness, rms_error, errors [point, measured mode]; NaN where no pair was
+followed)), 'history' (as history.csv: arrays iteration, objective and each set's stiffness),
+'modes' (measured, frequency_hz, model_mode, model_frequency_hz, error
 (relative), mac; None where unpaired; frequency_spread_std: the relative one-sigma spread of the
 files' linear frequencies where they disagree, the report's WARNING on the band, else None), 'rule',
 'converged' (False also where the shapes do not confirm the pairs at the result), 'status'

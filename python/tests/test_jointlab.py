@@ -394,6 +394,22 @@ def test_update_linear_equals_the_command_line(tmp_path):
     assert result["mac"].dtype == np.float64
     assert_close(result["mac"], np.array(mac, dtype=float))
     assert lines and lines[0].startswith("update-linear: iteration")
+    # history.csv and sweeps.csv as arrays (the command's only, before): the same numbers to the
+    # files' 10 digits, an empty cell as NaN.
+    history = read_csv(tmp_path / "cli" / "history.csv")
+    assert list(result["history"]) == list(history)
+    for name, values in history.items():
+        assert_close(result["history"][name], values)
+    with open(tmp_path / "cli" / "sweeps.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    sweeps = np.array([[float(c) if c else np.nan for c in row[1:]] for row in rows[1:]])
+    sweep = p["sweep"]
+    assert_close(sweep["factor"], sweeps[:, 0])
+    assert_close(sweep["stiffness"], sweeps[:, 1])
+    assert_close(sweep["rms_error"], sweeps[:, 2])
+    assert_close(sweep["errors"], sweeps[:, 3:])
+    assert sweep["errors"].shape == (9, 2)  # 9 points, both measured modes
+    assert p["lower"] == 1.2e5 * 1e-3 and p["upper"] == 1.2e5 * 1e3  # the default factors
     # Each mode keeps the table's own number, as modes.csv writes it.
     numbered = tmp_path / "numbered.csv"
     numbered.write_text(table.read_text().replace("\n1,", "\n3,").replace("\n2,", "\n5,"))
