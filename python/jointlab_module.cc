@@ -1248,6 +1248,40 @@ callable is given.
                     "Noise floor of the displacement envelope [m].")
       .def_readonly("linear_reason", &Backbone::linear_reason,
                     "Why the linear values are None (every point superharmonic, say), or ''.")
+      // Pickled (and so deep-copied, cached, sent to another process) with its arrays: it was
+      // "cannot pickle 'jointlab.Backbone' object".
+      .def(py::pickle(
+          [](const py::object& self) {
+            const Backbone& b = self.cast<const Backbone&>();
+            return py::make_tuple(b.file, b.channel, b.band, b.linear_frequency_hz,
+                                  b.linear_damping_ratio, b.linear_frequency_std_hz,
+                                  b.linear_damping_std, b.complex_amplitude, b.report, b.reference,
+                                  b.amplitude_quantity, b.amplitude_unit,
+                                  b.linear_fit_amplitude_min, b.linear_fit_amplitude_max,
+                                  b.linear_reason, b.noise_floor_m, self.attr("__dict__"));
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 17)
+              throw jointlab::InputError("Backbone: not a pickled jointlab.Backbone");
+            Backbone b;
+            b.file = t[0].cast<std::string>();
+            b.channel = t[1].cast<std::string>();
+            b.band = t[2].cast<int>();
+            b.linear_frequency_hz = t[3].cast<std::optional<double>>();
+            b.linear_damping_ratio = t[4].cast<std::optional<double>>();
+            b.linear_frequency_std_hz = t[5].cast<std::optional<double>>();
+            b.linear_damping_std = t[6].cast<std::optional<double>>();
+            b.complex_amplitude = t[7].cast<std::complex<double>>();
+            b.report = t[8].cast<std::string>();
+            b.reference = t[9].cast<bool>();
+            b.amplitude_quantity = t[10].cast<std::string>();
+            b.amplitude_unit = t[11].cast<std::string>();
+            b.linear_fit_amplitude_min = t[12].cast<std::optional<double>>();
+            b.linear_fit_amplitude_max = t[13].cast<std::optional<double>>();
+            b.linear_reason = t[14].cast<std::string>();
+            b.noise_floor_m = t[15].cast<double>();
+            return std::make_pair(std::move(b), t[16].cast<py::dict>());
+          }))
       .def("__repr__", [](const Backbone& b) {
         if (!b.linear_frequency_hz || !b.linear_damping_ratio)
           return fmt::format("<jointlab.Backbone {} {} band {}: no linear values>", b.file,

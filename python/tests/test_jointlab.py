@@ -284,6 +284,24 @@ def test_one_value_where_a_list_is_expected_is_a_list_of_one(tmp_path):
         jointlab.update_iwan(model, "j", np.array([1, 2]), "none.csv")
 
 
+def test_a_backbone_pickles_with_its_arrays():
+    # pickle, copy.deepcopy, joblib's cache and multiprocessing need it ("cannot pickle
+    # 'jointlab.Backbone' object" before): every attribute back, the arrays bit for bit.
+    import copy
+    import pickle
+    b = jointlab.process(RECORD, bands=(70, 90), channels="acc1")[0]
+    for c in (pickle.loads(pickle.dumps(b)), copy.deepcopy(b)):
+        assert type(c) is jointlab.Backbone and repr(c) == repr(b)
+        for name in dir(b):
+            if name.startswith("_"):
+                continue
+            a, z = getattr(b, name), getattr(c, name)
+            if isinstance(a, np.ndarray):
+                assert np.array_equal(a, z), name
+            else:
+                assert a == z, name
+
+
 def test_progress_is_silent_unless_asked(capfd, tmp_path):
     # Around 1527 Hz acc2 sees the mode at 6.9 % of acc1's amplitude, below --min-share: no
     # Backbone, and why is the command's stderr line, here a progress line (it was lost).
