@@ -246,10 +246,18 @@ std::string scatter_cause(const IwanUpdateSummary& s) {
                       ? fmt::format("the sigmas allow for it (one cluster per curve, Student's t "
                                     "with {} degrees of freedom)",
                                     e.curves - 1)
+                  : e.curves == 3
+                      ? std::string(
+                            "the sigmas allow for it (one cluster per curve, Student's t with 2 "
+                            "degrees of freedom, whose variance is infinite: each sigma is its "
+                            "95 % interval over 1.96, 2.2 times the scatter's standard error), "
+                            "taking the three offsets for random scatter of one joint, which "
+                            "three curves cannot tell from one hit unlike the others (four or "
+                            "more can)")
                       : fmt::format("with {} curves the sigmas do not allow for it (one cluster "
-                                    "per curve leaves {} degree{} of freedom; four or more "
+                                    "per curve leaves {} degree of freedom; three or more "
                                     "curves would give a sigma)",
-                                    e.curves, e.curves - 1, e.curves - 1 == 1 ? "" : "s")));
+                                    e.curves, e.curves - 1)));
   }
   return "";
 }

@@ -28,6 +28,18 @@ inline double t_degrees_of_freedom(double effective_points, int fitted) {
   return effective_points - fitted;
 }
 
+/// What one curve alone tells of each parameter (covariance()): per parameter (F_S, K_T, chi,
+/// beta) the largest share of its information that one curve carries, 1 - (J^T J)^-1_kk /
+/// (J^T J - J_c^T J_c)^-1_kk over the curves c (1 where the others leave it undetermined), and
+/// that curve (0-based; -1 with fewer than two curves, or for a parameter not free). Where one
+/// hit carries nearly all of a parameter's information the parameter is that hit's joint's, and
+/// no spread of the hits about one another (the cluster covariance) shows how far the joint
+/// scattered between hits.
+struct CurveShares {
+  std::array<double, 4> share{};               ///< the largest one-curve share, per parameter
+  std::array<int, 4> curve{{-1, -1, -1, -1}};  ///< the curve that carries it
+};
+
 /// Covariance of x = (ln F_S, ln gamma, chi, ln beta[, Z]) at v and the structure's own damping z
 /// (ln gamma and ln K_T differ by a constant), over the free parameters `free` (indices 0-3, and 4
 /// for a fitted Z); empty when unknown. The larger, variance by variance, of
@@ -53,6 +65,6 @@ inline double t_degrees_of_freedom(double effective_points, int fitted) {
 /// is infinite and the covariance is empty (the caller says so from noise->effective_points).
 Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int>& free,
                            const Vec4& v, double z, double* reduced_chi2, SerialNoise* noise,
-                           std::array<bool, 4>* fixed_at_kink);
+                           std::array<bool, 4>* fixed_at_kink, CurveShares* shares = nullptr);
 
 }  // namespace jointlab::correlate::iwan_detail

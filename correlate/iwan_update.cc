@@ -9,6 +9,7 @@
 #include <random>
 
 #include <fmt/format.h>
+#include <boost/math/distributions/students_t.hpp>
 
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/iwan_coordinates_detail.h"
@@ -208,8 +209,9 @@ std::vector<int> free_parameters(const IwanUpdateSummary& s) {
 Eigen::MatrixXd parameter_covariance(const IwanObjective& objective, const Vec4& best_v,
                                      std::vector<int>& free, SerialNoise& noise,
                                      IwanUpdateSummary& s) {
-  Eigen::MatrixXd cov =
-      covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2, &noise, &s.fixed_at_kink);
+  iwan_detail::CurveShares shares;
+  Eigen::MatrixXd cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2, &noise,
+                                   &s.fixed_at_kink, &shares);
   // Too few effective points is no flat direction: holding beta would not make it a sigma.
   const auto too_few = [&] {
     return noise.effective_points > 0 &&
@@ -221,9 +223,30 @@ Eigen::MatrixXd parameter_covariance(const IwanObjective& objective, const Vec4&
   if (beta != free.end() && ((cov.size() == 0 && !too_few()) || s.microslip_only())) {
     free.erase(beta);
     cov = covariance(objective, free, best_v, s.modal_ratio, &s.reduced_chi2, &noise,
-                     &s.fixed_at_kink);
+                     &s.fixed_at_kink, &shares);
   }
+  s.one_curve_share = shares.share;
+  s.one_curve = shares.curve;
+  std::vector<std::string> names;
+  for (const IwanTarget& t : objective.targets())
+    for (const MeasuredBackbone& c : t.curves)
+      names.push_back(!c.source.empty() ? c.source : fmt::format("curve {}", names.size() + 1));
+  s.curves = static_cast<int>(names.size());
+  for (size_t k = 0; k < 4; ++k)
+    if (s.one_curve[k] >= 0 && s.one_curve[k] < static_cast<int>(names.size()))
+      s.one_curve_name[k] = names[static_cast<size_t>(s.one_curve[k])];
   return cov;
+}
+
+// The variance factor of Student's t with nu degrees of freedom for the sigmas of scatter
+// between curves: nu / (nu - 2); with three curves (nu = 2, an infinite variance) the square of
+// t's 95 % quantile over the normal's, (4.303 / 1.960)^2 = 4.82, so that 1.96 sigma is t's 95 %
+// interval (IwanUpdateSummary::scatter_explains_misfit()).
+std::optional<double> scatter_t_variance(double nu) {
+  if (const std::optional<double> v = student_t_variance(nu)) return v;
+  if (nu != 2) return std::nullopt;
+  const double q = boost::math::quantile(boost::math::students_t(nu), 0.975);
+  return q * q / (1.959963984540054 * 1.959963984540054);
 }
 
 // Where scatter between the curves explains the misfit the sigmas rest on the cluster
@@ -232,7 +255,7 @@ Eigen::MatrixXd parameter_covariance(const IwanObjective& objective, const Vec4&
 void widen_for_scatter(const IwanUpdateSummary& s, Eigen::MatrixXd& cov) {
   if (s.scatter_explains_misfit() && cov.size() > 0) {
     const double nu = static_cast<double>(s.evidence->curves - 1);
-    const std::optional<double> wide = student_t_variance(nu),
+    const std::optional<double> wide = scatter_t_variance(nu),
                                 narrow = student_t_variance(s.sigma_degrees_of_freedom);
     if (wide && narrow && nu < s.sigma_degrees_of_freedom) cov *= *wide / *narrow;
   }

@@ -60,7 +60,9 @@ enum class IwanSigmaReason {
   kAtKink,        ///< fixed only by points at a kink (an element's phi_max), from one side
   kModelMisfit,   ///< the model does not describe the data and its residuals are no noise
                   ///< (IwanUpdateSummary::misfit_sets_the_error()): no sigma
-  kUnknown        ///< the covariance could not be formed at the result
+  kOneHit,  ///< one of several curves carries all its information (one_curve_share): that hit's
+            ///< joint's, whose scatter between hits no one hit shows: no sigma
+  kUnknown  ///< the covariance could not be formed at the result
 };
 
 /// The slip force that gives Iwan parameters p's microslip response (K_T, chi and R; F = K_T u -
@@ -170,6 +172,17 @@ struct IwanUpdateSummary {
   /// the model (a point whose secants two sigmas each way differ: an element's phi_max between)
   /// fix it; a slope there holds on one side only, so no sigma is stated.
   std::array<bool, 4> fixed_at_kink{};
+  /// Per parameter (F_S, K_T, chi, beta) with two or more curves: the largest share of its
+  /// information at the result that one curve alone carries (1 - its variance over its variance
+  /// without that curve; 1 where the others leave it undetermined), and which curve (0-based, -1
+  /// where not computed): near 1 the parameter is that one hit's.
+  std::array<double, 4> one_curve_share{};
+  std::array<int, 4> one_curve{{-1, -1, -1, -1}};  ///< the curve of one_curve_share
+  std::array<std::string, 4> one_curve_name;       ///< its source (file), or "curve N"
+  int curves = 0;                                  ///< measured curves fitted, over every mode
+  /// True where parameter k (F_S, K_T, chi, beta) rests on one of several curves alone
+  /// (one_curve_share above 0.99): the rest leave it next to undetermined.
+  bool rests_on_one_curve(int k) const;
   double reference_stiffness = 0;  ///< K_s: gamma = K_T / K_s [N/m]
   size_t residuals = 0;            ///< number of residuals (2 per measured point)
   /// IwanObjective::floored_points(), and the floors (relative frequency, relative damping)
