@@ -407,6 +407,10 @@ py::dict read_record(const PathArg& path_arg) {
   out["source"] = rec.source;
   out["sample_rate_hz"] = rec.fs;
   out["t0_s"] = rec.t0;
+  // The samples' times t0 + i / fs, as the library dates them: the x axis of a plot of `data`.
+  Eigen::VectorXd time(rec.size());
+  for (Eigen::Index i = 0; i < time.size(); ++i) time(i) = rec.t0 + static_cast<double>(i) / rec.fs;
+  out["time_s"] = to_numpy(std::move(time));
   py::list names, units, quantities;
   py::dict data;
   for (data::Channel& c : rec.channels) {
@@ -1333,12 +1337,13 @@ linear_damping_ratio).
   m.def("read_record", &read_record, py::arg("path"),
         R"(Reads a test file (CSV, UFF 58 ASCII or binary, MATLAB .mat) as the program does.
 
-Returns a dict: 'source', 'sample_rate_hz' [Hz], 't0_s' [s], 'channels' (names), 'units' (as
-written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy array, SI units),
+Returns a dict: 'source', 'sample_rate_hz' [Hz], 't0_s' [s], 'time_s' (the samples' times
+t0_s + i / sample_rate_hz [s], a numpy array), 'channels' (names), 'units' (as written), 'quantities' ('acceleration', ... or None), 'data' (name -> numpy array, SI units),
 'metadata' (the file's '# key: value' lines).
 
     rec = jointlab.read_record("hammer_impact.csv")
     acc1 = rec["data"]["acc1"]          # m/s^2
+    plt.plot(rec["time_s"], acc1)
 )");
 
   m.def(

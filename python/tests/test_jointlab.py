@@ -198,6 +198,13 @@ def test_read_record_gives_channels_in_si(tmp_path):
     assert "acc1" in rec["channels"]
     data = rec["data"]["acc1"]
     assert isinstance(data, np.ndarray) and data.dtype == np.float64 and data.size > 1000
+    # The samples' times, plot-ready: the file's time column to 2e-8 s, twice its 8 decimals'
+    # rounding (5e-9 s) and the sample rate read from them (12799.99998750 Hz, 1e-9 relative:
+    # 5e-9 s at 5.1 s); 1.0e-8 s at most here.
+    rows = [line for line in RECORD.read_text().splitlines() if not line.startswith("#")]
+    time = np.array([float(line.split(",")[0]) for line in rows[1:]])  # below the header
+    assert rec["time_s"].shape == data.shape
+    np.testing.assert_allclose(rec["time_s"], time, rtol=0, atol=2e-8)
 
 
 def test_a_malformed_file_raises_a_value_error_naming_it(tmp_path):
