@@ -439,6 +439,11 @@ class Model {
   const std::vector<std::string>& dof_labels() const { return model_.dof_labels; }
   /// Number of matrix DOFs.
   Eigen::Index dofs() const { return model_.size(); }
+  /// What the model is, in a line: its file, DOFs and joints.
+  std::string repr() const {
+    return fmt::format("<jointlab.Model {}: {} DOFs, {} joint elements ({} Iwan)>", path_,
+                       model_.size(), model_.joints.size(), model_.iwan_count());
+  }
 
   py::array_t<double> modes(int count) const {
     const model::LinearModes modes = solve(count);
@@ -1538,6 +1543,7 @@ update whose pairs the shapes do not confirm), 'report_html', 'report_markdown',
       .def(py::init<const PathArg&>(), py::arg("path"), py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("path", &Model::path, "The model file, as given.")
       .def_property_readonly("dofs", &Model::dofs, "The number of matrix DOFs.")
+      .def("__repr__", &Model::repr)
       .def_property_readonly("dof_labels", &Model::dof_labels,
                              "'node:component' per matrix index (the file's "
                              "[matrices] dof_labels), or [] where it names none: the rows of "

@@ -177,6 +177,7 @@ def test_shapes_are_the_mass_normalised_eigenvectors(tmp_path):
                                                'stiffness = "K.mtx"\ndof_labels = "dofs.csv"\n'))
     m = jointlab.Model(model)
     assert m.dofs == 2 and m.dof_labels == ["7:3", "8:3"]
+    assert repr(m) == f"<jointlab.Model {model}: 2 DOFs, 1 joint elements (1 Iwan)>"
     k = np.array([[2e5 + 5e4, -1e5], [-1e5, 1e5]])
     w2, expected = np.linalg.eigh(k)
     phi = m.shapes()
