@@ -388,7 +388,8 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   if (!decided && o.ambiguity.empty())
     o.ambiguity = fmt::format(
         "at the start, {}; fitting {} of the {} candidate pairings leaves costs {} that the "
-        "data cannot tell apart",
+        "data cannot tell apart: add sensors that see those model modes apart, hold a set at a "
+        "value known otherwise (--hold NAME=VALUE), or leave the mode out of the table",
         s.start.ambiguity, outcomes.size(), starts.size(), fmt::join(start_costs, ", "));
   // Flat sets are not identified by the frequencies: held (at their start) and the rest fitted
   // again. Where the pairs could not be decided between fits (not where they rest on sets only

@@ -11,6 +11,45 @@
 namespace jointlab::correlate::detail {
 namespace {
 
+// The model DOF where a sensor would best tell shapes `a` and `b` (full mass-normalised vectors)
+// apart: among the DOFs no sensor reads (translations, components 1-3, where the model labels its
+// DOFs; else every DOF), the one where their motions, each over its largest there, differ the
+// most. As "9003:3 (there model mode 13 moves 0.82 of its largest and model mode 15 0.04)", its
+// label or 0-based index; "" where none differs by 0.3 or more.
+std::string telling_sensor(const model::Model& model, const std::vector<Sensor>& sensors,
+                           const Eigen::Ref<const Eigen::VectorXd>& a, int mode_a,
+                           const Eigen::Ref<const Eigen::VectorXd>& b, int mode_b) {
+  std::vector<Eigen::Index> dofs;
+  for (Eigen::Index d = 0; d < a.size(); ++d) {
+    if (std::any_of(sensors.begin(), sensors.end(), [&](const Sensor& s) { return s.dof == d; }))
+      continue;
+    if (!model.dof_labels.empty()) {
+      const std::string& l = model.dof_labels[static_cast<size_t>(d)];
+      const size_t colon = l.find(':');
+      if (colon == std::string::npos || l.substr(0, colon) == "0") continue;  // modal coordinate
+      const std::string c = l.substr(colon + 1);
+      if (c != "1" && c != "2" && c != "3") continue;
+    }
+    dofs.push_back(d);
+  }
+  double top_a = 0, top_b = 0;
+  for (const Eigen::Index d : dofs) top_a = std::max(top_a, std::abs(a(d)));
+  for (const Eigen::Index d : dofs) top_b = std::max(top_b, std::abs(b(d)));
+  if (!(top_a > 0) || !(top_b > 0)) return "";
+  Eigen::Index best = -1;
+  double gap = 0.3;
+  for (const Eigen::Index d : dofs) {
+    const double g = std::abs(std::abs(a(d)) / top_a - std::abs(b(d)) / top_b);
+    if (g >= gap) gap = g, best = d;
+  }
+  if (best < 0) return "";
+  return fmt::format(
+      "{} (there model mode {} moves {:.2f} of its largest and model mode {} {:.2f})",
+      model.dof_labels.empty() ? fmt::format("DOF {}", best)
+                               : model.dof_labels[static_cast<size_t>(best)],
+      mode_a + 1, std::abs(a(best)) / top_a, mode_b + 1, std::abs(b(best)) / top_b);
+}
+
 // What differs between two fitted pairings that the data cannot tell apart: each measured mode
 // paired with another model mode (by shape), named with its partner at each result (its own
 // numbering there), the sets that differ between the results, and the costs.
@@ -25,6 +64,7 @@ std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, doubl
                        mac ? fmt::format(", MAC {:.3f}", *mac) : "");
   };
   std::vector<std::string> modes, sets_a, sets_b;
+  std::string sensor;  // where a sensor would tell the first such mode's two partners apart
   for (size_t i = 0; i < a.columns.size() && i < b.columns.size(); ++i) {
     if (same_partners(p.model.mass, a.modes, {a.columns[i]}, b.modes, {b.columns[i]})) continue;
     const int k = static_cast<int>(i);
@@ -33,6 +73,10 @@ std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, doubl
       const double c =
           a.modes.shapes.col(a.columns[i]).dot(p.model.mass * b.modes.shapes.col(b.columns[i]));
       between = fmt::format(" (mass-weighted MAC {:.2f} between the two)", c * c);
+      if (sensor.empty())
+        sensor = telling_sensor(p.model, p.sensors, a.modes.shapes.col(a.columns[i]),
+                                ea.pairing.model_for(k), b.modes.shapes.col(b.columns[i]),
+                                eb.pairing.model_for(k));
     }
     modes.push_back(fmt::format(
         "test mode {} ({:.5g} Hz) with {} at one and with {} at the other{}", p.measured.id(k),
@@ -43,14 +87,21 @@ std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, doubl
     sets_a.push_back(fmt::format("{} {:.4g}", p.names[static_cast<size_t>(k)], std::exp(a.x(k))));
     sets_b.push_back(fmt::format("{} {:.4g}", p.names[static_cast<size_t>(k)], std::exp(b.x(k))));
   }
+  std::vector<std::string> holds;
+  for (const std::string& x : sets_a) holds.push_back(x.substr(0, x.find(' ')) + "=VALUE");
   return fmt::format(
       "two results pair {}{}, and leave costs {:.4g} and {:.4g}, which the data cannot tell "
-      "apart (less than 9 apart in chi-square units of the stated frequency noise)",
+      "apart (less than 9 apart in chi-square units of the stated frequency noise): add a sensor "
+      "that sees the partners apart{}{}, or leave the mode out of the table",
       fmt::join(modes, "; "),
       sets_a.empty() ? std::string()
                      : fmt::format(" (the first at {}, the second at {})", fmt::join(sets_a, ", "),
                                    fmt::join(sets_b, ", ")),
-      cost_a, cost_b);
+      cost_a, cost_b, sensor.empty() ? "" : ", e.g. at " + sensor,
+      holds.empty() ? ""
+                    : fmt::format(", hold the sets that differ at values known otherwise (--hold "
+                                  "{})",
+                                  fmt::join(holds, " --hold ")));
 }
 
 // The pairs whose model partner changed its shape along the fit (mass-weighted MAC below 0.5

@@ -1146,6 +1146,13 @@ TEST(LinearUpdate, UndecidedPairsStateNoValue) {
       << report;
   EXPECT_NE(report.find("spring.kb: 300000 -> not decided"), std::string::npos) << report;
   EXPECT_EQ(report.find("-> 0"), std::string::npos) << report;
+  // The refusal says what to do (before, it ended at "that the data cannot tell apart").
+  const std::string why = linear_refusal(s, o, "");
+  EXPECT_NE(why.find("that the data cannot tell apart: add sensors that see those model modes "
+                     "apart, hold a set at a value known otherwise (--hold NAME=VALUE), or leave "
+                     "the mode out of the table"),
+            std::string::npos)
+      << why;
 }
 
 // What reading the data found (a complex shape realised with a poor MPC, measured_data.h) is

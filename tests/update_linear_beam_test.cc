@@ -267,6 +267,13 @@ y = -0.008
   EXPECT_NE(u.err.find(" at the other (mass-weighted MAC ", other), std::string::npos) << u.err;
   EXPECT_NE(u.err.find("(the first at spring.rxy ", other), std::string::npos) << u.err;
   EXPECT_NE(u.err.find("which the data cannot tell apart"), std::string::npos) << u.err;
+  // ... and says what to add: a sensor at a model DOF no sensor reads where the two partners'
+  // motions (each over its largest) differ by 0.3 or more, or the sets held (before, the line
+  // ended at "the stated frequency noise)").
+  EXPECT_NE(u.err.find("frequency noise): add a sensor that sees the partners apart, e.g. at "),
+            std::string::npos)
+      << u.err;
+  EXPECT_NE(u.err.find("--hold spring.rxy=VALUE"), std::string::npos) << u.err;
 }
 
 // A wide lap plate as a newcomer builds it: two 0.3 m x 0.112 m shell strips lapped over 0.1 m,
