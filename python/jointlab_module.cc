@@ -1022,6 +1022,30 @@ py::dict update_iwan(
     pareto.append(d);
   }
   result["pareto"] = pareto;
+  // Every evaluation the model could evaluate, as history.csv: its number, cost and the best so
+  // far, and whether beta was held (the file's stage, "beta held" or "beta free").
+  {
+    std::vector<const correlate::IwanHistoryEntry*> kept;
+    for (const correlate::IwanHistoryEntry& h : summary.history)
+      if (std::isfinite(h.cost)) kept.push_back(&h);
+    const auto n = static_cast<Eigen::Index>(kept.size());
+    Eigen::VectorXd evaluation(n), objective(n), best(n);
+    py::array_t<bool> beta_held(n);
+    auto held = beta_held.mutable_unchecked<1>();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const correlate::IwanHistoryEntry& h = *kept[static_cast<size_t>(i)];
+      evaluation(i) = h.evaluation;
+      objective(i) = h.cost;
+      best(i) = h.best;
+      held(i) = h.beta_held;
+    }
+    py::dict history;
+    history["evaluation"] = to_numpy(std::move(evaluation));
+    history["objective"] = to_numpy(std::move(objective));
+    history["best"] = to_numpy(std::move(best));
+    history["beta_held"] = beta_held;
+    result["history"] = history;
+  }
   result["report"] = text;
   return result;
 }
@@ -1474,7 +1498,9 @@ WARNING that the model does not describe the data within their stated noise),
 'amplitude_share' (the largest share of the chi-square one third of the points, by amplitude,
 holds: about 1/3 for noise; None where unknown), 'sigma_degrees_of_freedom' (the sigmas'
 Student's t: effective points less the parameters fitted; 2 or fewer state no sigma),
-'pareto' (with `pareto`: one dict per gamma, else []), 'report'.
+'pareto' (with `pareto`: one dict per gamma, else []), 'history' (as history.csv: arrays
+evaluation, objective, best so far, and beta_held for its stage; evaluations the model could
+not evaluate left out), 'report'.
 
 progress        callable taking one line, or None: the slip screen with several modes, and a
                 line at the first evaluation at or past each multiple of 250. Ctrl-C ends the

@@ -841,6 +841,15 @@ def test_update_iwan_equals_the_command_line(tmp_path, capfd):
     result = jointlab.update_iwan(str(d / "start.toml"), "iwan.j", 1, [str(d / "bb.csv")],
                                   evaluations=400, progress=lines.append)
     assert_iwan_parameters_as_file(result, cli)
+    # The search's history as arrays, as history.csv (stage "beta held" / "beta free").
+    with open(d / "cli" / "history.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    h = result["history"]
+    assert h["beta_held"].dtype == np.bool_
+    assert_close(h["evaluation"], [float(row["evaluation"]) for row in rows])
+    assert_close(h["objective"], [float(row["objective"]) for row in rows])
+    assert_close(h["best"], [float(row["best"]) for row in rows])
+    assert list(h["beta_held"]) == [row["stage"] == "beta held" for row in rows]
     # A progress line at the first evaluation at or past 250: the local solve's count steps over
     # 250 itself here (423 evaluations, and no line at all, as the command prints none).
     assert len(lines) == 1, lines
