@@ -33,6 +33,7 @@
 #include "jointlab/campaign/iwan_fit.h"
 #include "jointlab/campaign/iwan_inputs.h"
 #include "jointlab/campaign/model_comparison.h"
+#include "jointlab/campaign/steps/stamp.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/units.h"
 #include "jointlab/correlate/iwan_update.h"
@@ -1240,6 +1241,11 @@ callable is given.
     curve = model.qsma(mode=1, points=60)     # dict of numpy arrays
 )";
   py::register_exception<jointlab::InputError>(m, "InputError", PyExc_ValueError);
+  // The program's version ("jointlab 0.1.0" from `jointlab --version`), without the name.
+  {
+    const std::string version = jointlab::campaign::program_version();
+    m.attr("__version__") = version.substr(version.find(' ') + 1);
+  }
 
   py::class_<Backbone>(m, "Backbone", py::dynamic_attr(),
                        "One backbone of process(): .file, .channel, .band (1-based), "

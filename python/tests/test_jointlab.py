@@ -193,6 +193,11 @@ def test_shapes_are_the_mass_normalised_eigenvectors(tmp_path):
         m.shapes(count=0)
 
 
+def test_the_version_is_the_programs():
+    r = run("--version")
+    assert r.returncode == 0 and r.stdout.split() == ["jointlab", jointlab.__version__]
+
+
 def test_read_record_gives_channels_in_si(tmp_path):
     rec = jointlab.read_record(str(RECORD))
     assert rec["sample_rate_hz"] > 0
