@@ -1405,7 +1405,7 @@ trust_signs    fit with the sensors file's signs even when one channel reads the
 out            write the updated model file here (its matrices beside it), or None
 progress       callable taking one line per optimiser iteration, or None. Ctrl-C ends the
                call at the next iteration; the sweeps, chi-square profile and refits after the
-               last one are not interrupted (7 s of the example campaign's 7.7 s fit)
+               last one are not interrupted (2.4 s of the example campaign's 2.6 s fit)
 
 Pairs are made by sensor MAC within the frequency window and followed by full shape (see
 docs/update-linear.md). Returns a dict: 'parameters' (name -> initial, final [N/m or N*m/rad],
@@ -1511,8 +1511,8 @@ not evaluate left out), 'report'.
 progress        callable taking one line, or None: the slip screen with several modes, and a
                 line at the first evaluation at or past each multiple of 250. Ctrl-C ends the
                 call with KeyboardInterrupt within an evaluation of the local solves, and
-                after the batch of 50 samples of the global search (1 to 1.7 s on the
-                example campaign on two cores).
+                after the batch of 50 samples of the global search (up to 0.4 s on the
+                example campaign on two idle cores, 1.7 s on busy ones).
 
     r = jointlab.update_iwan("model.toml", "iwan.j", 1, ["bb.csv"], linear_damping="fit")
     r["parameters"]["chi"]["final"], r["parameters"]["modal_ratio"]["final"]
