@@ -232,10 +232,13 @@ std::vector<std::string> hold_flat_sets(const LinearProblem& p, const Eigen::Vec
     held_flat.push_back(names[k]);
     s.parameters[k].drifted_to = at;
     s.parameters[k].drifted_sensitivity = s.parameters[k].sensitivity;
+    // "(it had drifted to 1e+07)" of a set held at 1e+07 read as a move that was none.
+    const bool moved = std::abs(point.x(k) - x_held(k)) > 1e-6;
     s.warnings.push_back(fmt::format(
         "{} is flat (sensitivity {:.3g} < {:.3g}): the frequencies do not identify it; held "
-        "at {:.6g} (it had drifted to {:.6g}); hold it elsewhere with --hold {}=VALUE",
-        names[k], s.parameters[k].sensitivity, p.options.flat_sensitivity, std::exp(x_held(k)), at,
+        "at {:.6g} ({}); hold it elsewhere with --hold {}=VALUE",
+        names[k], s.parameters[k].sensitivity, p.options.flat_sensitivity, std::exp(x_held(k)),
+        moved ? fmt::format("it had drifted to {:.6g}", at) : std::string("the fit left it there"),
         names[k]));
   }
   if (!undecided.empty())

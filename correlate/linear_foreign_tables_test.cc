@@ -146,3 +146,29 @@ TEST(ModesTableFromAnotherTool, ASensorAlongMinusZNamesTheLabelAndSign) {
 
 }  // namespace
 }  // namespace jointlab::correlate
+
+namespace jointlab::correlate {
+namespace {
+
+// Modes that no set moves (y sensors on a stacked beam's in-plane modes; here the stiff
+// spring.kflat at 1e10, sensitivity far below 1e-3, alone): the flat set is held where the fit
+// left it. Before, the headline said only "converged" and the warning "(it had drifted to
+// 1e+07)" of a set held at 1e+07; now the headline says no set was fitted and the warning that
+// the fit left it there.
+TEST(ModesTableFromAnotherTool, ModesNoSetMovesSayNoSetWasFitted) {
+  const model::Model m = two_chain_structure();
+  const std::vector<Sensor> sensors = chain_sensors(6);
+  LinearUpdateSummary s;
+  update_linear(m, {"spring.kflat"}, sensors, chain_modes(m, sensors, 4), {}, &s);
+  const std::string report = s.report();
+  ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << report;
+  ASSERT_TRUE(s.parameters.at(0).held) << report;
+  EXPECT_NE(report.find("%; no set fitted: each is held (below), so these modes identify none "
+                        "of them\n"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("held at 1e+10 (the fit left it there)"), std::string::npos) << report;
+}
+
+}  // namespace
+}  // namespace jointlab::correlate

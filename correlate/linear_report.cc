@@ -112,11 +112,20 @@ std::string LinearUpdateSummary::report() const {
           ? names[static_cast<int>(status)]
           : fmt::format("{} (the fit {})", names[static_cast<int>(status)],
                         fit_converged ? "converged" : "reached its iteration limit");
+  // "converged" where every set ended held says nothing of the sets: a layout whose modes no
+  // set moves (y sensors on a stacked beam's in-plane modes) read "converged" with each set
+  // "1e+07 -> 1e+07".
+  const bool none_fitted =
+      !parameters.empty() && std::all_of(parameters.begin(), parameters.end(),
+                                         [](const ParameterReport& p) { return p.held; });
   std::string out = fmt::format(
       "linear update ({}): {}, {} iterations in {} round{}, cost {:.4g} -> {:.4g}, {} of {} "
-      "measured modes paired, largest frequency error {:.3g} %\n",
+      "measured modes paired, largest frequency error {:.3g} %{}\n",
       rule, how, iterations, rounds, rounds == 1 ? "" : "s", initial_cost, final_cost,
-      final.pairing.pairs.size(), final.residuals.size(), 100 * final.max_error());
+      final.pairing.pairs.size(), final.residuals.size(), 100 * final.max_error(),
+      none_fitted && status == LinearUpdateStatus::kConverged
+          ? "; no set fitted: each is held (below), so these modes identify none of them"
+          : "");
   if (!ambiguity.empty()) out += fmt::format("  {}\n", ambiguity);
   if (!restarts.empty()) out += fmt::format("  {}\n", restarts);
   if (!shape_problem.empty()) out += fmt::format("  {}\n", shape_problem);
