@@ -60,7 +60,8 @@ namespace py = pybind11;
 namespace jointlab::python {
 
 /// The values of a repeatable option: a list (a tuple, a numpy array, any sequence) or one value
-/// alone, as the option given once ("a.csv" as ["a.csv"], (70, 90) as [(70, 90)]).
+/// alone, as the option given once ("a.csv" as ["a.csv"], (70, 90) as [(70, 90)]); None as [],
+/// the option not given.
 template <typename T>
 struct OneOrMany {
   std::vector<T> items;  ///< the values, in order
@@ -78,6 +79,11 @@ struct type_caster<jointlab::python::OneOrMany<T>> {
                                                            const_name(", List[") +
                                                            make_caster<T>::name + const_name("]]"));
   bool load(handle src, bool convert) {
+    // None: not given (channels=None in update_iwan was a TypeError, where process takes it).
+    if (src.is_none()) {
+      value.items.clear();
+      return true;
+    }
     if (make_caster<T> one; one.load(src, convert)) {
       value.items.clear();
       value.items.push_back(cast_op<T&&>(std::move(one)));

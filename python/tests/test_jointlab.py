@@ -276,6 +276,12 @@ def test_one_value_where_a_list_is_expected_is_a_list_of_one(tmp_path):
     a = jointlab.update_linear(model, ["spring.kj"], sensors, modes_table=table)
     b = jointlab.update_linear(model, "spring.kj", sensors, modes_table=table)
     assert a["parameters"]["spring.kj"]["final"] == b["parameters"]["spring.kj"]["final"]
+    # None for a list not given, as process's channels=None (update_iwan's was a TypeError).
+    c = jointlab.update_linear(model, "spring.kj", sensors, modes_table=table, hold=None)
+    assert a["parameters"]["spring.kj"]["final"] == c["parameters"]["spring.kj"]["final"]
+    with pytest.raises(jointlab.InputError, match="^--seed -1"):  # past the conversion
+        jointlab.update_iwan(model, "j", 1, "none.csv", channels=None, stepped_sine=None,
+                             pareto=None, seed=-1)
     held = jointlab.update_linear(model, "spring.kj", sensors, modes_table=table,
                                   hold="spring.kj=5e4")
     # Held at the value given: to 1e-12, its round trip through the fit's log coordinate.
