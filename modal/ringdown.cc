@@ -1593,7 +1593,19 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
                     sum.superharmonic_points == 1 ? std::string("1 point follows")
                                                   : points(sum.superharmonic_points) + " follow"));
   }
-  if (exchange.found()) {
+  if (exchange.found() && exchange.leak_hz > 0) {
+    const double r = exchange.partner;
+    notes.push_back(fmt::format(
+        "up to {:.4f} s a neighbouring mode beyond the band's edge (its spectral peak at "
+        "{:.2f} Hz, outside the typed band) leaks through it, no energy exchange: the envelope's "
+        "decay rate falls from the start to the mode's own as the more damped neighbour dies "
+        "out, and no mode takes energy (the envelope in {} the band at most {:.1f} times its "
+        "noise floor): {} there marked (column exchange), their frequency and damping pulled by "
+        "the neighbour, left out of the linear values",
+        channel.t0 + exchange.end_t, exchange.leak_hz,
+        r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
+        exchange.partner_snr, points(sum.exchange_points)));
+  } else if (exchange.found()) {
     const double r = exchange.partner;
     const std::string turns =
         exchange.turns.size() == 1
@@ -2230,6 +2242,7 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
 
   CorrectedEstimates corr =
       corrected_estimates(channel, read, options, zb, ep, sr, noise, measured, cache);
+  neighbour_leak(corr.exchange, corr.est, followed.held_by, band, sr, measured, cache);
   bool beat = false;
   const std::string beat_note =
       beat_note_of(corr, channel, band, read, options, ep, sr, noise, beat, cache);

@@ -47,7 +47,9 @@
 //    %) and frequency (to the mode's half-power half-width) are well determined, and marked
 //    (Backbone::exchange): their damping is damping plus transfer, an apparent damping that may be
 //    negative. They are left out of the linear values and of the band-gain correction's model of
-//    the mode. Records without such an exchange are unchanged.
+//    the mode. Records without such an exchange are unchanged. A one-way fall beside a
+//    neighbour held beyond the band's edge, its partner band holding noise alone, is marked
+//    as that neighbour's leak through the edge, no exchange.
 // 6. Two modes in one band: a second resolved peak of the measured spectrum inside the band
 //    read, whose beat with the mode (ln A + i theta oscillating at the difference frequency)
 //    shows in the first estimates, has what it moves each point's decay rate and frequency by

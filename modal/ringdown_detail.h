@@ -193,6 +193,7 @@ struct FollowedBand {
   signal::Band band;
   std::string note;           // what was moved and why; "" when the typed band is read
   signal::BandSignal signal;  // the moved band's signal (empty when not moved)
+  double held_by = 0;         // a neighbouring mode's spectral peak that held it back [Hz]; 0: none
 };
 
 /// The band the mode is read through: the typed one, or one that follows the mode past its
@@ -220,12 +221,22 @@ struct Exchange {
   std::vector<Turn> turns;  ///< the turns of the decay rate, in time order
   bool one_way = false;     ///< the rate only falls from the start while the partner grows
   bool fed_dip = false;     ///< the one turn is a dip below the settled rate (fed_at_a_dip)
+  /// A neighbour's spectral peak beyond the band read whose leak through its edge the one-way
+  /// fall is, no exchange (neighbour_leak) [Hz]; 0: none.
+  double leak_hz = 0;
+  double partner_snr = 0;  ///< with leak_hz: the partner band's largest envelope / noise floor
   bool found() const { return partner > 0 && (!turns.empty() || grows || one_way); }
 };
 
 /// Whether an exchange's partner band holds energy (above its noise) at every turn.
 bool partner_holds_energy(const Exchange& x, const BandSetting& s, Quantity measured,
                           signal::FftCache& cache);
+
+/// Sets x.leak_hz where a one-way exchange is a neighbour held beyond the band read leaking
+/// through its edge (ringdown_exchange.cc).
+void neighbour_leak(Exchange& x, const std::vector<Estimate>& est, double held_by,
+                    const signal::Band& typed, const BandSetting& s, Quantity measured,
+                    signal::FftCache& cache);
 
 /// An energy exchange of the band's mode with another, read from the estimates, if any
 /// (ringdown_exchange.cc).

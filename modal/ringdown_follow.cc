@@ -480,6 +480,7 @@ FollowedBand follow_mode(const ChannelSpectrum& channel, Quantity measured,
                   "typed band it runs from {:.2f} to {:.2f} Hz, near its edge; the filter's gain "
                   "is divided out)",
                   out.band.lo, out.band.hi, f_lo, f_hi);
+    out.held_by = held_by;
     if (held_by > 0) {
       const bool hidden = held_by == hidden_lo || held_by == hidden_hi;
       out.note += fmt::format(
