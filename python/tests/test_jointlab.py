@@ -91,6 +91,8 @@ def test_process_equals_the_command_line(tmp_path):
     for b in backbones:
         assert b.band == 1
         csv_columns = read_csv(out / f"hammer_impact.{b.channel}.band1.csv")
+        # vars(b): the column arrays alone, in the CSV's order (a table for pandas.DataFrame).
+        assert list(vars(b)) == list(csv_columns)
         for name in ("time_s", "amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
                      "damping_std", "harmonic", "exchange"):
             assert_close(getattr(b, name), csv_columns[name])
