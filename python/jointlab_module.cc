@@ -16,7 +16,9 @@
 #include <optional>
 #include <regex>
 #include <string>
+#include <string_view>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -90,9 +92,27 @@ struct type_caster<jointlab::python::OneOrMany<T>> {
       return true;
     }
     make_caster<std::vector<T>> many;
-    if (!many.load(src, convert)) return false;
+    if (!many.load(src, convert)) {
+      if constexpr (std::is_same_v<T, std::filesystem::path>) refuse_backbones(src);
+      return false;
+    }
     value.items = cast_op<std::vector<T>&&>(std::move(many));
     return true;
+  }
+  // process()'s Backbones where files are asked for (update_iwan's or compare's backbones=):
+  // said with the way to pass them, not as pybind11's "incompatible function arguments".
+  static void refuse_backbones(handle src) {
+    const auto backbone = [](handle h) {
+      return std::string_view(Py_TYPE(h.ptr())->tp_name) == "jointlab.Backbone";
+    };
+    bool any = backbone(src);
+    if (!any && (PyList_Check(src.ptr()) != 0 || PyTuple_Check(src.ptr()) != 0))
+      for (const handle h : reinterpret_borrow<sequence>(src)) any = any || backbone(h);
+    if (any)
+      throw jointlab::InputError(
+          "a jointlab.Backbone where a file is expected: update_iwan and compare read process()'s "
+          "backbones from the folder process(..., out=DIR) writes (measured=DIR with "
+          "sensors=FILE); backbones= takes backbone tables (CSV files)");
   }
   static handle cast(const jointlab::python::OneOrMany<T>& v, return_value_policy policy,
                      handle parent) {

@@ -299,6 +299,13 @@ def test_one_value_where_a_list_is_expected_is_a_list_of_one(tmp_path):
         jointlab.update_iwan(model, "j", 1, "none.csv", seed=-1)
     with pytest.raises(TypeError, match="^progress: expected a callable .* got int$"):
         jointlab.process(RECORD, bands=(70, 90), progress=5)
+    # process()'s Backbones passed as backbones=: said with the way to pass them.
+    bb = jointlab.process(RECORD, bands=(70, 90), channels="acc1")
+    with pytest.raises(jointlab.InputError, match=r"^a jointlab.Backbone where a file is expected"
+                                                  r": .* process\(\.\.\., out=DIR\)"):
+        jointlab.update_iwan(model, "j", 1, bb)
+    with pytest.raises(jointlab.InputError, match="^a jointlab.Backbone where a file"):
+        jointlab.compare(model, 1, bb[0])
     # Modes as a numpy array are a list of modes, here two where tables need one
     # (np.array([1, 2]) was converted as one integer: a TypeError).
     with pytest.raises(jointlab.InputError, match="with --backbone give one --mode R"):
