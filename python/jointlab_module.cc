@@ -270,7 +270,7 @@ py::list process(const OneOrMany<PathArg>& file_args,
   if (threads < 0 || threads > 1024)
     throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
   opt.threads = static_cast<unsigned>(threads);
-  if (bands && modes != 0)
+  if (bands && !bands->items.empty() && modes != 0)  // bands=[] is none, as None
     throw InputError("process: give bands or modes=N, not both (--band excludes --modes)");
   // --method, --snr-min, --max-damping-std, --coverage-factor and --min-share, in the command's
   // ranges.

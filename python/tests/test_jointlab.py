@@ -289,6 +289,10 @@ def test_one_value_where_a_list_is_expected_is_a_list_of_one(tmp_path):
     # Held at the value given: to 1e-12, its round trip through the fit's log coordinate.
     assert held["parameters"]["spring.kj"]["held_by_user"]
     assert_close(held["parameters"]["spring.kj"]["final"], 5e4, rel=1e-12)
+    # bands=[] is no band, as None: modes=N alone (it was refused as "bands or modes=N, not both").
+    with pytest.raises(jointlab.InputError, match="^give --band LO:HI or --modes N$"):
+        jointlab.process(RECORD, bands=[])
+    assert len(jointlab.process(RECORD, bands=[], modes=1, channels="acc1")) == 1
     # The command's words for a negative thread count or seed (pybind11's TypeError before), and
     # a progress that is not callable said before any work, naming the argument.
     with pytest.raises(jointlab.InputError, match=r"^--threads -1: must be in \[0, 1024\]"):
