@@ -271,9 +271,22 @@ Eigen::Index measured_step(Eigen::Index n_fft, Eigen::Index kept, Eigen::Index e
 
 }  // namespace
 
-ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
-                                 const PrepareOptions& options, signal::FftCache& cache,
-                                 Eigen::Index impact, const Clipping* clipping) {
+namespace {
+
+// Where a channel's record is read and how it is continued (channel_spectrum): its n samples,
+// the measured ones (m from i_begin), the scale they are analysed at, the low-pass's stop
+// frequency, guard and lag, and the continuations' fit and lengths (`wanted` each side of the
+// `kept` samples they extend).
+struct RecordLayout {
+  Eigen::Index n = 0, i_begin = 0, m = 0, guard = 0, lag = 1, ext = 0, fit = 0, wanted = 0,
+               kept = 0;
+  double scale = 1.0, f_stop = 0;
+  bool lowpass = false;
+};
+
+// The layout of record x (sample rate fs) from its impact (impact_index where `impact` < 0).
+RecordLayout record_layout(const Eigen::Ref<const Eigen::VectorXd>& x, double fs,
+                           const PrepareOptions& options, Eigen::Index impact) {
   const Eigen::Index n = x.size();
   const Eigen::Index i_peak = impact >= 0 ? std::min(impact, n - 1) : impact_index(x);
   const Eigen::Index i_begin = std::min<Eigen::Index>(
@@ -298,24 +311,16 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   const Eigen::Index fit = static_cast<Eigen::Index>(std::round(options.ar_fit_s * fs));
   const Eigen::Index wanted = ext + guard;
   const Eigen::Index kept = m - 2 * guard;  // the samples the continuations extend
+  RecordLayout l;
+  l.n = n, l.i_begin = i_begin, l.m = m, l.guard = guard, l.lag = lag, l.ext = ext, l.fit = fit;
+  l.wanted = wanted, l.kept = kept, l.scale = scale, l.f_stop = f_stop, l.lowpass = lowpass;
+  return l;
+}
 
-  ChannelSpectrum c;
-  c.scale = scale;
-  c.fs = fs;
-  c.n_record = wanted + kept + wanted;
-  const Padding pad = padding(c.n_record, m, guard, fs, options);
-  c.n_fft = pad.n_fft;
-  // One buffer for the record, its low-pass and its spectrum, transformed in place: a long
-  // record's peak memory is its samples and this spectrum (1 double a sample), no copies.
-  const Eigen::Index n_lowpass = lowpass ? pad.n_lowpass : 0;
-  Eigen::VectorXcd buffer(std::max(c.n_fft, n_lowpass) / 2 + 1);
-  double* r = reinterpret_cast<double*>(buffer.data());
-  Eigen::Map<Eigen::VectorXd> y(r, m);
-  y = x.segment(i_begin, m) * scale;
-  y.array() -= y.mean();
-  if (lowpass) {
-    signal::lowpass_in_place(buffer.data(), m, n_lowpass, fs, options.lowpass_hz, f_stop, cache);
-  }
+// The continuations of the measured samples y (low-passed, if at all) before and after them.
+signal::Continuation continued_ends(const Eigen::Map<Eigen::VectorXd>& y, const RecordLayout& l,
+                                    const PrepareOptions& options) {
+  const Eigen::Index guard = l.guard, kept = l.kept, wanted = l.wanted, fit = l.fit, lag = l.lag;
   const auto extend = [&](int order, bool before, bool after) {
     return signal::continue_record(y.segment(guard, kept), before ? wanted : 0, after ? wanted : 0,
                                    order, fit, 1e3, lag);
@@ -337,15 +342,15 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
       e.after_valid = f.after_valid;
     }
   }
-  // The measured samples' spectrum is the continued record's less the continuations', at
-  // every step-th bin: the continuations folded modulo n_fft / step transform there exactly
-  // (a transform of a step-th of the size, in a buffer of its own, while the record waits
-  // in the main one). Both are kept only up to where the low-pass leaves nothing
-  // (stored_bins). (The measured samples transformed on their own in the main buffer, then
-  // the continuations, cost 14 % more time on the bench record; a copy of the whole
-  // measured spectrum doubled the memory of a 4e6-sample record.)
-  c.measured_step = measured_step(c.n_fft, kept, ext);
-  const Eigen::Index m_fold = c.n_fft / c.measured_step;
+  return e;
+}
+
+// The continuations' spectrum at every m_fold-th bin of the continued record's: e placed
+// before and after the kept samples, folded modulo m_fold (a run of whole stretches) and
+// transformed, in a buffer of its own.
+Eigen::VectorXcd continuations_spectrum(const signal::Continuation& e, const RecordLayout& l,
+                                        Eigen::Index m_fold, signal::FftCache& cache) {
+  const Eigen::Index wanted = l.wanted, kept = l.kept;
   Eigen::VectorXcd continuations = Eigen::VectorXcd::Zero(m_fold / 2 + 1);
   {
     double* f = reinterpret_cast<double*>(continuations.data());
@@ -361,6 +366,59 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
     fold(e.after, wanted + kept);
     cache.get(m_fold).forward_through_buffer(continuations.data());
   }
+  return continuations;
+}
+
+// The times and clipping of channel c, read from x at t0 [s] with layout l and continuations e.
+void set_times(ChannelSpectrum& c, const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
+               const RecordLayout& l, const signal::Continuation& e, const Clipping* clipping) {
+  const Eigen::Index n = l.n, i_begin = l.i_begin, wanted = l.wanted, guard = l.guard;
+  c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
+  c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
+  c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
+  c.clipping = clipping ? *clipping : find_clipping(x);
+  c.clipped_until_s = t0 + static_cast<double>(c.clipping.last) / fs;
+  c.continued_begin_s = static_cast<double>(e.before_valid) / fs;
+  c.continued_end_s = static_cast<double>(e.after_valid) / fs;
+}
+
+}  // namespace
+
+ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, double fs, double t0,
+                                 const PrepareOptions& options, signal::FftCache& cache,
+                                 Eigen::Index impact, const Clipping* clipping) {
+  const RecordLayout l = record_layout(x, fs, options, impact);
+  const Eigen::Index i_begin = l.i_begin, m = l.m, guard = l.guard, ext = l.ext, wanted = l.wanted,
+                     kept = l.kept;
+  const bool lowpass = l.lowpass;
+  ChannelSpectrum c;
+  c.scale = l.scale;
+  c.fs = fs;
+  c.n_record = wanted + kept + wanted;
+  const Padding pad = padding(c.n_record, m, guard, fs, options);
+  c.n_fft = pad.n_fft;
+  // One buffer for the record, its low-pass and its spectrum, transformed in place: a long
+  // record's peak memory is its samples and this spectrum (1 double a sample), no copies.
+  const Eigen::Index n_lowpass = lowpass ? pad.n_lowpass : 0;
+  Eigen::VectorXcd buffer(std::max(c.n_fft, n_lowpass) / 2 + 1);
+  double* r = reinterpret_cast<double*>(buffer.data());
+  Eigen::Map<Eigen::VectorXd> y(r, m);
+  y = x.segment(i_begin, m) * l.scale;
+  y.array() -= y.mean();
+  if (lowpass) {
+    signal::lowpass_in_place(buffer.data(), m, n_lowpass, fs, options.lowpass_hz, l.f_stop, cache);
+  }
+  const signal::Continuation e = continued_ends(y, l, options);
+  // The measured samples' spectrum is the continued record's less the continuations', at
+  // every step-th bin: the continuations folded modulo n_fft / step transform there exactly
+  // (a transform of a step-th of the size, in a buffer of its own, while the record waits
+  // in the main one). Both are kept only up to where the low-pass leaves nothing
+  // (stored_bins). (The measured samples transformed on their own in the main buffer, then
+  // the continuations, cost 14 % more time on the bench record; a copy of the whole
+  // measured spectrum doubled the memory of a 4e6-sample record.)
+  c.measured_step = measured_step(c.n_fft, kept, ext);
+  const Eigen::Index m_fold = c.n_fft / c.measured_step;
+  Eigen::VectorXcd continuations = continuations_spectrum(e, l, m_fold, cache);
   const Eigen::Index measured_bins =
       std::min(m_fold / 2 + 1, stored_bins(c, lowpass, options.lowpass_hz, c.measured_step));
   continuations.conservativeResize(measured_bins);
@@ -377,13 +435,7 @@ ChannelSpectrum channel_spectrum(const Eigen::Ref<const Eigen::VectorXd>& x, dou
   // Cut only where every reader takes the long record's way (ChannelSpectrum::padded_by_pad_s):
   // a record whose settling times reach past its own length is padded as a short one, whole.
   buffer.conservativeResize(stored_bins(c, c.padded_by_pad_s() && lowpass, options.lowpass_hz));
-  c.t0 = t0 + static_cast<double>(i_begin - wanted + guard) / fs;
-  c.data_begin_s = t0 + static_cast<double>(i_begin + guard) / fs;
-  c.data_end_s = t0 + static_cast<double>(n - 1 - guard) / fs;
-  c.clipping = clipping ? *clipping : find_clipping(x);
-  c.clipped_until_s = t0 + static_cast<double>(c.clipping.last) / fs;
-  c.continued_begin_s = static_cast<double>(e.before_valid) / fs;
-  c.continued_end_s = static_cast<double>(e.after_valid) / fs;
+  set_times(c, x, fs, t0, l, e, clipping);
   c.spectrum = std::move(buffer);
   return c;
 }
