@@ -809,89 +809,132 @@ bool usable(const Estimate& e, double noise, double snr_min) {
 
 namespace {
 
-// The band gain along the first pass's usable estimates (see GainCorrection).
-// Inactive where ln G varies by less than 1e-9 over them (the mode in the flat part).
-// Beyond the estimates the model's frequency and decay rate are held, or, with
-// `continued`, continued along the straight line through the end estimate and the one a
-// settling time inside, up to the impact and the record's end (see add_model_errors).
-// The model is made of the estimates after `model_from` [s] alone (those of an energy
-// exchange before it do not decay as the mode does; -infinity: all).
-GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetting& s, double noise,
-                               Eigen::Index grid, double carrier_hz, double model_from,
-                               signal::FftCache& cache, bool continued = false) {
-  GainCorrection g;
-  g.dt = s.dt;
+// The estimates the band-gain correction's model of the mode is made of (gain_correction): the
+// times [s], frequencies [Hz] and decay rates [1/s over 2 pi] of the usable ones after
+// `model_from` [s].
+struct ModelPoints {
   std::vector<double> t, f, d;
+};
+
+ModelPoints model_points(const std::vector<Estimate>& est, const BandSetting& s, double noise,
+                         double model_from) {
+  ModelPoints p;
+  std::vector<double>&t = p.t, &f = p.f, &d = p.d;
   for (const Estimate& e : est) {
     if (!usable(e, noise, s.options.snr_min) || !(e.t > model_from)) continue;
     t.push_back(e.t);
     f.push_back(e.omega_d / kTwoPi);
     d.push_back(e.sigma / kTwoPi);
   }
-  if (t.size() < 2 || grid < 4) return g;
-  // The model's frequency and decay rate: interpolated between the estimates, held
-  // beyond them for one settling time (all the filter reaches), then a steady tone.
-  const double reach = band_settling_s(s.band, s.options.taper);
-  const double data_end = s.channel.data_end_s - s.channel.t0;
+  return p;
+}
+
+// The model's frequency and decay rate along the grid (at(x), x only growing): interpolated
+// between the points (two or more), held beyond them or, `continued`, continued along the
+// straight line through the end point and the one a settling time inside, up to the impact and
+// the record's end.
+class GainModel {
+ public:
+  GainModel(const ModelPoints& p, const BandSetting& s, bool continued)
+      : t(p.t), f(p.f), d(p.d), continued_(continued) {
+    // The model's frequency and decay rate: interpolated between the estimates, held
+    // beyond them for one settling time (all the filter reaches), then a steady tone.
+    reach = band_settling_s(s.band, s.options.taper);
+    const double data_end = s.channel.data_end_s - s.channel.t0;
+    inside_first_ = inside_from(0);
+    inside_last_ = inside_from(t.size() - 1);
+    // Continued back to the impact and on to the record's end only: beyond them the band
+    // sees the record's continuation, which holds the mode as the end of the data has it.
+    continued_from_ = std::max(t.front() - reach, std::min(t.front(), s.begin));
+    continued_to_ = std::min(t.back() + reach, std::max(t.back(), data_end));
+  }
+
+  // The model's frequency and decay rate at x. Between the estimates, t[k - 1] <= x < t[k]:
+  // k walks along with the grid (x only grows), not searched anew at each point.
+  std::pair<double, double> at(double x) {
+    if (x <= t.front()) {
+      if (!continued_) return {f.front(), d.front()};
+      return {line_from(f, 0, x), line_from(d, 0, x)};
+    }
+    if (x >= t.back()) {
+      if (!continued_) return {f.back(), d.back()};
+      return {line_from(f, t.size() - 1, x), line_from(d, t.size() - 1, x)};
+    }
+    while (t[k_] <= x) ++k_;
+    const double w = (x - t[k_ - 1]) / (t[k_] - t[k_ - 1]);
+    return {(1 - w) * f[k_ - 1] + w * f[k_], (1 - w) * d[k_ - 1] + w * d[k_]};
+  }
+
+  const std::vector<double>&t, &f, &d;
+  double reach = 0;  ///< the band's settling time [s]
+
+ private:
   // The estimate a settling time inside the span from `end` (or the other end).
-  const auto inside_from = [&](size_t end) {
+  size_t inside_from(size_t end) const {
     const double inside = end == 0 ? t.front() + reach : t.back() - reach;
     size_t k = static_cast<size_t>(std::lower_bound(t.begin(), t.end(), inside) - t.begin());
     k = std::min(k, t.size() - 1);
     if (k == end) k = end == 0 ? t.size() - 1 : 0;
     return k;
-  };
-  const size_t inside_first = inside_from(0), inside_last = inside_from(t.size() - 1);
-  // Continued back to the impact and on to the record's end only: beyond them the band
-  // sees the record's continuation, which holds the mode as the end of the data has it.
-  const double continued_from = std::max(t.front() - reach, std::min(t.front(), s.begin)),
-               continued_to = std::min(t.back() + reach, std::max(t.back(), data_end));
-  const auto line_from = [&](const std::vector<double>& v, size_t end, double x) {
-    const size_t k = end == 0 ? inside_first : inside_last;
-    const double xe = std::clamp(x, continued_from, continued_to);
+  }
+  double line_from(const std::vector<double>& v, size_t end, double x) const {
+    const size_t k = end == 0 ? inside_first_ : inside_last_;
+    const double xe = std::clamp(x, continued_from_, continued_to_);
     return v[end] + (v[k] - v[end]) / (t[k] - t[end]) * (xe - t[end]);
-  };
-  // The model's frequency and decay rate at x. Between the estimates, t[k - 1] <= x < t[k]:
-  // k walks along with the grid (x only grows), not searched anew at each point.
-  size_t k = 1;
-  const auto model_at = [&](double x) -> std::pair<double, double> {
-    if (x <= t.front()) {
-      if (!continued) return {f.front(), d.front()};
-      return {line_from(f, 0, x), line_from(d, 0, x)};
-    }
-    if (x >= t.back()) {
-      if (!continued) return {f.back(), d.back()};
-      return {line_from(f, t.size() - 1, x), line_from(d, t.size() - 1, x)};
-    }
-    while (t[k] <= x) ++k;
-    const double w = (x - t[k - 1]) / (t[k] - t[k - 1]);
-    return {(1 - w) * f[k - 1] + w * f[k], (1 - w) * d[k - 1] + w * d[k]};
-  };
-  // Zero-padded by three settling times, where the band's kernel is down to exp(-100): the
-  // model's start, its largest part, then adds nothing to r where the model has decayed by
-  // decades (twice the grid where that is less; twice it always cost a twentieth of the time).
-  const Eigen::Index n =
-      std::min(signal::fast_size(2 * grid),
-               signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt))));
-  Eigen::VectorXd log_m(grid);  // m past the grid is zero padding
-  Eigen::VectorXd phase(grid);
+  }
+  bool continued_ = false;
+  size_t inside_first_ = 0, inside_last_ = 0;
+  double continued_from_ = 0, continued_to_ = 0;
+  size_t k_ = 1;
+};
+
+// The model m on the grid (t_j = j dt, `grid` nodes) as ln |m| and the phase of its baseband
+// (the carrier taken off); m decays only within a settling time of the points.
+struct ModelSignal {
+  Eigen::VectorXd log_m, phase;
+};
+
+ModelSignal model_signal(GainModel& model, Eigen::Index grid, const BandSetting& s,
+                         double carrier_hz) {
+  const std::vector<double>& t = model.t;
+  const double reach = model.reach;
+  ModelSignal out;
+  Eigen::VectorXd& log_m = out.log_m;  // m past the grid is zero padding
+  Eigen::VectorXd& phase = out.phase;
+  log_m.resize(grid);
+  phase.resize(grid);
   double la = 0, ph = 0;
   for (Eigen::Index j = 0; j < grid; ++j) {
     const double x = static_cast<double>(j) * s.dt;
     const bool near = x > t.front() - reach && x < t.back() + reach;
     log_m(j) = la;
     phase(j) = ph;
-    const auto [f_x, d_x] = model_at(x);
+    const auto [f_x, d_x] = model.at(x);
     la -= (near ? kTwoPi * std::max(0.0, d_x) : 0.0) * s.dt;
     ph += kTwoPi * (f_x - carrier_hz) * s.dt;
   }
+  return out;
+}
+
+// The model through the band: |m| (scaled to 1 at its largest), cos and sin of its phase, and
+// band(m) on the grid (transforms of n points).
+struct FilteredModel {
+  Eigen::ArrayXd mag, cos, sin;
+  Eigen::VectorXcd filtered;
+};
+
+FilteredModel filtered_model(const ModelSignal& ms, Eigen::Index grid, Eigen::Index n,
+                             const BandSetting& s, double carrier_hz, signal::FftCache& cache) {
+  const Eigen::VectorXd &log_m = ms.log_m, &phase = ms.phase;
   const double top = log_m.maxCoeff();
   // m = |m| u, u = e^{i phase}: r = band(m) / m = band(m) conj(u) / |m| needs no complex
   // division, and |r| no hypot (both a tenth of process's time together).
   // Forward transform from the inverse one: sum_j m_j e^{-2 pi i jk/n} = n conj(ifft(conj m)),
   // conj m written straight into the transform's input (m past the grid is zero padding).
   // |m|, cos and sin of its phase: one vector call each (signal/vector_math.h).
-  Eigen::ArrayXd mag(grid), cos(grid), sin(grid);
+  FilteredModel out;
+  Eigen::ArrayXd &mag = out.mag, &cos = out.cos, &sin = out.sin;
+  mag.resize(grid), cos.resize(grid), sin.resize(grid);
   signal::exp_array((log_m.array() - top).max(-700.0), mag);
   signal::sincos_array(phase.array(), sin, cos);
   signal::Fft& fft = cache.get(n);
@@ -911,7 +954,16 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
       });
   std::complex<double>* filter_in = fft.complex_input();
   for (Eigen::Index k = 0; k < n; ++k) filter_in[k] = spec(k) * gain(k);
-  const Eigen::VectorXcd filtered = fft.inverse_complex_head(grid);  // the padding dropped
+  out.filtered = fft.inverse_complex_head(grid);  // the padding dropped
+  return out;
+}
+
+// g.log_r = ln r, r = band(m) / m, its phase unwrapped; returns the range of ln |r| over the
+// span.
+double set_log_r(GainCorrection& g, const FilteredModel& fm, Eigen::Index grid,
+                 const BandSetting& s) {
+  const Eigen::ArrayXd &mag = fm.mag, &cos = fm.cos, &sin = fm.sin;
+  const Eigen::VectorXcd& filtered = fm.filtered;
   // r = band(m) conj(u) / |m|, then ln |r| + i arg r, the logarithms and arguments in one
   // vector call each (std::log of a complex near |r| = 1 takes a slow exact path, a tenth of
   // process's time once, for a precision far below what r is known to).
@@ -942,8 +994,36 @@ GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetti
       hi = std::max(hi, lr.real());
     }
   }
+  return hi - lo;
+}
+
+// The band gain along the first pass's usable estimates (see GainCorrection).
+// Inactive where ln G varies by less than 1e-9 over them (the mode in the flat part).
+// Beyond the estimates the model's frequency and decay rate are held, or, with
+// `continued`, continued along the straight line through the end estimate and the one a
+// settling time inside, up to the impact and the record's end (see add_model_errors).
+// The model is made of the estimates after `model_from` [s] alone (those of an energy
+// exchange before it do not decay as the mode does; -infinity: all).
+GainCorrection gain_correction(const std::vector<Estimate>& est, const BandSetting& s, double noise,
+                               Eigen::Index grid, double carrier_hz, double model_from,
+                               signal::FftCache& cache, bool continued = false) {
+  GainCorrection g;
+  g.dt = s.dt;
+  const ModelPoints points = model_points(est, s, noise, model_from);
+  if (points.t.size() < 2 || grid < 4) return g;
+  GainModel model(points, s, continued);
+  const double reach = model.reach;
+  // Zero-padded by three settling times, where the band's kernel is down to exp(-100): the
+  // model's start, its largest part, then adds nothing to r where the model has decayed by
+  // decades (twice the grid where that is less; twice it always cost a twentieth of the time).
+  const Eigen::Index n =
+      std::min(signal::fast_size(2 * grid),
+               signal::fast_size(grid + static_cast<Eigen::Index>(std::ceil(3 * reach / s.dt))));
+  const ModelSignal ms = model_signal(model, grid, s, carrier_hz);
+  const FilteredModel fm = filtered_model(ms, grid, n, s, carrier_hz, cache);
+  const double range = set_log_r(g, fm, grid, s);
   // Below 1e-4 over the span, r moves a decay rate by less than 1e-4 over a window.
-  g.active = continued || hi - lo > 1e-4;
+  g.active = continued || range > 1e-4;
   return g;
 }
 
