@@ -1670,6 +1670,48 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
 // "1 point" or "n points", for the notes.
 std::string points(size_t n) { return fmt::format("{} point{}", n, n == 1 ? "" : "s"); }
 
+// The summary's note on an exchange found: up to when, how it shows, against which band, and
+// how many points are marked; or, where it is a neighbour's leak (Exchange::leak_hz), that.
+std::string exchange_note(const Exchange& exchange, const RingdownSummary& sum,
+                          const ChannelSpectrum& channel) {
+  if (exchange.leak_hz > 0) {
+    const double r = exchange.partner;
+    return fmt::format(
+        "up to {:.4f} s a neighbouring mode beyond the band's edge (its spectral peak at "
+        "{:.2f} Hz, outside the typed band) leaks through it, no energy exchange: the envelope's "
+        "decay rate falls from the start to the mode's own as the more damped neighbour dies "
+        "out, and no mode takes energy (the envelope in {} the band at most {:.1f} times its "
+        "noise floor): {} there marked (column exchange), their frequency and damping pulled by "
+        "the neighbour, left out of the linear values",
+        channel.t0 + exchange.end_t, exchange.leak_hz,
+        r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
+        exchange.partner_snr, points(sum.exchange_points));
+  }
+  const double r = exchange.partner;
+  const std::string turns =
+      exchange.turns.size() == 1
+          ? std::string("the envelope's decay rate turns once")
+          : fmt::format("the envelope's decay rate turns {} times", exchange.turns.size());
+  const std::string how =
+      exchange.one_way ? std::string(
+                             "the envelope's decay rate falls from the start to the mode's own as "
+                             "the other's rises to its own")
+      : exchange.fed_dip
+          ? std::string(
+                "the envelope's decay rate dips below the rate it settles to, as the other's "
+                "rises")
+      : !exchange.turns.empty() && exchange.grows ? turns + " and the envelope grows"
+      : !exchange.turns.empty()                   ? turns
+                                                  : std::string("the envelope grows");
+  return fmt::format(
+      "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "
+      "of the envelope in {} the band): {} there marked (column exchange), their "
+      "damping apparent (damping plus transfer), left out of the linear values",
+      channel.t0 + exchange.end_t, how,
+      r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
+      points(sum.exchange_points));
+}
+
 // Notes for the summary: what was left out at the start and why, superharmonic and
 // exchange points.
 std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Estimate>& est,
@@ -1725,44 +1767,7 @@ std::vector<std::string> span_notes(const BandSetting& s, const std::vector<Esti
                     sum.superharmonic_points == 1 ? std::string("1 point follows")
                                                   : points(sum.superharmonic_points) + " follow"));
   }
-  if (exchange.found() && exchange.leak_hz > 0) {
-    const double r = exchange.partner;
-    notes.push_back(fmt::format(
-        "up to {:.4f} s a neighbouring mode beyond the band's edge (its spectral peak at "
-        "{:.2f} Hz, outside the typed band) leaks through it, no energy exchange: the envelope's "
-        "decay rate falls from the start to the mode's own as the more damped neighbour dies "
-        "out, and no mode takes energy (the envelope in {} the band at most {:.1f} times its "
-        "noise floor): {} there marked (column exchange), their frequency and damping pulled by "
-        "the neighbour, left out of the linear values",
-        channel.t0 + exchange.end_t, exchange.leak_hz,
-        r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
-        exchange.partner_snr, points(sum.exchange_points)));
-  } else if (exchange.found()) {
-    const double r = exchange.partner;
-    const std::string turns =
-        exchange.turns.size() == 1
-            ? std::string("the envelope's decay rate turns once")
-            : fmt::format("the envelope's decay rate turns {} times", exchange.turns.size());
-    const std::string how =
-        exchange.one_way
-            ? std::string(
-                  "the envelope's decay rate falls from the start to the mode's own as "
-                  "the other's rises to its own")
-        : exchange.fed_dip
-            ? std::string(
-                  "the envelope's decay rate dips below the rate it settles to, as the other's "
-                  "rises")
-        : !exchange.turns.empty() && exchange.grows ? turns + " and the envelope grows"
-        : !exchange.turns.empty()                   ? turns
-                                                    : std::string("the envelope grows");
-    notes.push_back(fmt::format(
-        "up to {:.4f} s the mode exchanges energy with another mode ({}, against the decay rate "
-        "of the envelope in {} the band): {} there marked (column exchange), their "
-        "damping apparent (damping plus transfer), left out of the linear values",
-        channel.t0 + exchange.end_t, how,
-        r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
-        points(sum.exchange_points)));
-  }
+  if (exchange.found()) notes.push_back(exchange_note(exchange, sum, s.channel));
   return notes;
 }
 
