@@ -73,11 +73,11 @@ ModelResults model_side(const Campaign& c, CampaignModelData data, const Measure
   ModelResults r;
   r.data = std::move(data);
   r.start = evaluate_model(c, r.data.model, r.data.dofs, "model, start", out / "qsma", "start");
-  r.linear = linear_update_step(c, r.data, measured.modes, o.progress, &measured);
+  r.linear = linear_update_step(c, r.data, measured.modes, o.progress, &measured, o.interrupt);
   if (!r.linear.note.empty()) summary.notes.push_back(r.linear.note);
   if (r.linear.refused) summary.refused.push_back("update.linear");
   // Not from a linear result that cannot carry it (pairs the shapes do not confirm): stopped.
-  r.iwan = iwan_update_after(c, r.data, r.linear, measured, o.progress);
+  r.iwan = iwan_update_after(c, r.data, r.linear, measured, o.progress, o.interrupt);
   if (!r.iwan.note.empty()) summary.notes.push_back(r.iwan.note);
   if (r.iwan.refused) summary.refused.push_back("update.iwan");
   if (r.iwan.stopped) summary.stopped.push_back(r.iwan.note);

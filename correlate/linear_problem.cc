@@ -117,6 +117,7 @@ PairingRules LinearProblem::rules() const {
 }
 
 TrackedPoint LinearProblem::fresh(const Eigen::VectorXd& x, LinearEvaluation& e) const {
+  if (options.interrupt) options.interrupt();
   const Eigen::VectorXd theta = x.array().exp();
   TrackedPoint p{x, elastic_modes(model.mass, sets.stiffness(theta)), {}};
   e = evaluate_by_rules(sets, sensors, measured, theta, p.modes, rules(), p.columns);
@@ -129,6 +130,7 @@ std::optional<TrackedPoint> LinearProblem::move(const TrackedPoint& from, const 
   if (x == from.x) return from;
   TrackingOptions t = tracking;
   t.substeps = substeps;
+  t.interrupt = options.interrupt;  // before each of its eigen-solves
   const Eigen::VectorXd dx = x - from.x;
   const auto path = [&](double s) -> Eigen::SparseMatrix<double> {
     return sets.stiffness((from.x + s * dx).array().exp());

@@ -217,6 +217,10 @@ struct LinearUpdateOptions {
   bool trust_signs = false;
   /// Called after each optimiser iteration with (iteration, cost, largest |r_i|).
   std::function<void(int, double, double)> progress;
+  /// Called before each model solve of the fit, its refits, profiles and sweeps, also on the
+  /// sweeps' worker threads (so it must be thread-safe); it may throw to stop the work (the Python
+  /// module's Ctrl-C). Refits keep it where they drop `progress`.
+  std::function<void()> interrupt;
   /// What is wrong with these options, or "".
   std::string error() const;
 };

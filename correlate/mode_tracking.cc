@@ -52,6 +52,7 @@ std::optional<FollowedModes> follow_path(
   double s = 0, h = base;
   while (s < 1.0) {
     const double next = std::min(1.0, s + h);
+    if (options.interrupt) options.interrupt();
     ElasticModes trial = elastic_modes(mass, stiffness(next));
     ++now.solves;
     std::vector<int> cols;

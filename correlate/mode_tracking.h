@@ -38,6 +38,8 @@ struct TrackingOptions {
   double margin = 0.3;    ///< and at least this above any other new mode's
   int substeps = 1;       ///< follow_path(): walk the path in at least this many equal steps
   int max_halvings = 10;  ///< a step is halved at most this many times before a mode is lost
+  /// follow_path(): called before each eigen-solve; it may throw to stop the work (Ctrl-C)
+  std::function<void()> interrupt;
 };
 
 /// For each entry of `tracked` (a column of `before`, or -1), the column of `after` it

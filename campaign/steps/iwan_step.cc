@@ -217,7 +217,7 @@ ModeBackbones stepped_sine_backbones(const Campaign& c, size_t k, int sensor) {
 IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors, const MeasuredSide& m,
                           const std::function<void(const std::string&)>& progress,
-                          bool linear_updated) {
+                          bool linear_updated, const std::function<void()>& interrupt) {
   const auto say = [&](const std::string& s) {
     if (progress) progress(s);
   };
@@ -247,10 +247,14 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
                   100 * to.max_slip_share));
   // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
-  if (progress) {
-    io.progress = progress_every(250, [&](int evaluations, double best) {
-      say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
-    });
+  // Between those lines, `interrupt` (where given) may stop the fit.
+  if (progress || interrupt) {
+    io.progress = progress_every(
+        250,
+        [&](int evaluations, double best) {
+          say(fmt::format("update: {} QSMA evaluations, best cost {:.6g}", evaluations, best));
+        },
+        interrupt);
   }
   // update-iwan's own fit, in its default box: frequencies no parameter set can reach, and a
   // box where no parameter set gives a curve over the amplitudes, are said with the numbers as
@@ -351,7 +355,8 @@ std::string iwan_stop_reason(const Campaign& c, const LinearStep& linear, const 
 
 IwanStep iwan_update_after(const Campaign& c, const CampaignModelData& m, const LinearStep& linear,
                            const MeasuredSide& measured,
-                           const std::function<void(const std::string&)>& progress) {
+                           const std::function<void(const std::string&)>& progress,
+                           const std::function<void()>& interrupt) {
   const model::Model& base = linear.ran ? linear.updated : m.model;
   if (c.iwan_update.enabled) {
     if (std::string why = iwan_stop_reason(c, linear, iwan_set(c, base)); !why.empty()) {
@@ -362,7 +367,7 @@ IwanStep iwan_update_after(const Campaign& c, const CampaignModelData& m, const 
       return step;
     }
   }
-  return iwan_update_step(c, base, m.sensors, measured, progress, linear.ran);
+  return iwan_update_step(c, base, m.sensors, measured, progress, linear.ran, interrupt);
 }
 
 }  // namespace jointlab::campaign

@@ -78,7 +78,7 @@ IwanStep iwan_update_step(const Campaign& campaign, const model::Model& base,
                           const std::vector<correlate::Sensor>& sensors,
                           const MeasuredSide& measured,
                           const std::function<void(const std::string&)>& progress,
-                          bool linear_updated = false);
+                          bool linear_updated = false, const std::function<void()>& interrupt = {});
 
 /// [update.iwan] accept_unconfirmed_pairs: run the Iwan update from a linear update whose pairs
 /// the shapes do not confirm at its result (default false); InputError naming the campaign file
@@ -100,6 +100,7 @@ std::string iwan_stop_reason(const Campaign& campaign, const LinearStep& linear,
 /// reason, not run (IwanStep::stopped, the reason in its note).
 IwanStep iwan_update_after(const Campaign& campaign, const CampaignModelData& model,
                            const LinearStep& linear, const MeasuredSide& measured,
-                           const std::function<void(const std::string&)>& progress);
+                           const std::function<void(const std::string&)>& progress,
+                           const std::function<void()>& interrupt = {});
 
 }  // namespace jointlab::campaign

@@ -105,14 +105,15 @@ std::vector<correlate::LinearReading> hit_readings(const Campaign& c, const Meas
 LinearStep linear_update_step(const Campaign& c, const CampaignModelData& m,
                               const correlate::MeasuredModes& measured,
                               const std::function<void(const std::string&)>& progress,
-                              const MeasuredSide* side) {
+                              const MeasuredSide* side, const std::function<void()>& interrupt) {
   LinearStep step;
   if (!c.linear_update.enabled) return step;
   if (c.linear_update.sets.empty()) {
     step.note = "update.linear: no 'sets' given; linear updating skipped";
     return step;
   }
-  const correlate::LinearUpdateOptions lo = linear_update_options(c);
+  correlate::LinearUpdateOptions lo = linear_update_options(c);
+  lo.interrupt = interrupt;
   if (progress)
     progress("update: linear updating of " +
              fmt::format("{}", fmt::join(c.linear_update.sets, ", ")));

@@ -47,6 +47,7 @@ struct LinearStep {
 LinearStep linear_update_step(const Campaign& campaign, const CampaignModelData& model,
                               const correlate::MeasuredModes& measured,
                               const std::function<void(const std::string&)>& progress,
-                              const MeasuredSide* side = nullptr);
+                              const MeasuredSide* side = nullptr,
+                              const std::function<void()>& interrupt = {});
 
 }  // namespace jointlab::campaign
