@@ -117,6 +117,30 @@ TEST(IwanCampaignShape, AParameterOnlyTheTopHitFixesRestsOnThatHitAndStatesNoSig
   }
 }
 
+// The same three hits with the top one read at two channels (two curves of "hit 3", the same
+// joint, each its own noise; two of its modes do the same): F_S and beta still rest on that hit
+// alone. Before, the one-hit share was taken curve by curve, each of the two carried about half
+// (F_S 0.48, beta 0.43), and F_S came out with a sigma of the top hit's noise, +/- 0.28 %, at
+// z +9.5 against the joint's mean; one channel of it stated none. Required: as with one channel,
+// F_S and beta state no sigma and name that hit, and the share is the hit's (over 0.99).
+TEST(IwanCampaignShape, TwoChannelsOfTheTopHitAreStillOneHit) {
+  IwanTarget target = campaign({{1e-3, 3e-2, 1.0, 1.0},
+                                {3e-2, 0.3, 0.99, 1.005},
+                                {0.3, 2.0, 1.03, 1.0},
+                                {0.3, 2.0, 1.03, 1.0}},
+                               40);
+  target.curves[3].source = "hit 3";  // the top hit's second channel
+  const IwanUpdateSummary s = fit(target);
+  SCOPED_TRACE(s.report());
+  ASSERT_EQ(s.status, IwanUpdateStatus::kConverged);
+  for (const int k : {0, 3}) {
+    EXPECT_EQ(s.sigma_reason(k), IwanSigmaReason::kOneHit) << k;
+    EXPECT_EQ(s.relative_std(k), 0.0) << k;
+    EXPECT_GT(s.one_curve_share[static_cast<size_t>(k)], 0.99) << k;
+    EXPECT_EQ(s.one_curve_name[static_cast<size_t>(k)], "hit 3") << k;
+  }
+}
+
 // Two hits (1e-3-0.1 and 0.1-2 phi_max), the low one's joint 1.5 % stiffer: K_T rests mostly on
 // it (0.91 of its information), whose residuals the fit has taken up along K_T, and the plain
 // cluster covariance needs three curves besides. Before, K_T came out +1.1 % +/- 0.22 % (z +5.1:

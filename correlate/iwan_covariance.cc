@@ -6,7 +6,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -490,7 +493,25 @@ bool widen_without_kink_rows(const Residuals& res, const Eigen::MatrixXd& J,
   return true;
 }
 
-// CurveShares of the Jacobian J over `free` (rows of curve objective.residual_curve()). The
+// The hit of each curve (objective.residual_curve()'s numbering) and the first curve of each
+// hit: curves of one source (one processed record or campaign hit: its channels, or its modes)
+// are one hit; a curve without a source is a hit of its own.
+std::pair<std::vector<int>, std::vector<int>> curve_hits(const IwanObjective& objective) {
+  std::vector<int> hit, first;
+  std::map<std::string, int> by_source;
+  for (const IwanTarget& t : objective.targets()) {
+    for (const MeasuredBackbone& c : t.curves) {
+      const int next = static_cast<int>(first.size());
+      const int h = c.source.empty() ? next : by_source.emplace(c.source, next).first->second;
+      if (h == next) first.push_back(static_cast<int>(hit.size()));
+      hit.push_back(h);
+    }
+  }
+  return {hit, first};
+}
+
+// CurveShares of the Jacobian J over `free` (rows of curve objective.residual_curve()), by hit
+// (curve_hits(): the top hit read at two channels carries F_S as one curve of it does). The
 // information matrices are scaled to a unit diagonal and inverted by their eigenvalues, so that
 // a flat direction of the rest (microslip hits alone fix F_S and beta only together) leaves
 // undetermined only the parameters along it, not K_T and chi beside them.
@@ -498,8 +519,9 @@ CurveShares curve_shares(const IwanObjective& objective, const std::vector<int>&
                          const Eigen::MatrixXd& J) {
   CurveShares out;
   const std::vector<int>& curve = objective.residual_curve();
-  const int n_curves = curve.empty() ? 0 : curve.back() + 1, nf = static_cast<int>(J.cols());
-  if (n_curves < 2) return out;
+  const auto [hit, first] = curve_hits(objective);
+  const int n_hits = static_cast<int>(first.size()), nf = static_cast<int>(J.cols());
+  if (n_hits < 2 || curve.empty() || curve.back() + 1 != static_cast<int>(hit.size())) return out;
   const Eigen::MatrixXd H0 = J.transpose() * J;
   if (!(H0.diagonal().minCoeff() > 0)) return out;
   const Eigen::VectorXd scale = H0.diagonal().cwiseSqrt().cwiseInverse();
@@ -521,10 +543,10 @@ CurveShares curve_shares(const IwanObjective& objective, const std::vector<int>&
     return v;
   };
   const Eigen::VectorXd whole = variances(H0);
-  for (int c = 0; c < n_curves; ++c) {
+  for (int h = 0; h < n_hits; ++h) {
     Eigen::MatrixXd Hc = Eigen::MatrixXd::Zero(nf, nf);
     for (int i = 0; i < static_cast<int>(J.rows()); ++i)
-      if (curve[i] == c) Hc += J.row(i).transpose() * J.row(i);
+      if (hit[static_cast<size_t>(curve[i])] == h) Hc += J.row(i).transpose() * J.row(i);
     const Eigen::VectorXd rest = variances(H0 - Hc);
     for (int k = 0; k < nf; ++k) {
       if (free[k] >= 4 || !std::isfinite(whole(k))) continue;
@@ -534,7 +556,7 @@ CurveShares curve_shares(const IwanObjective& objective, const std::vector<int>&
       const size_t p = static_cast<size_t>(free[k]);
       if (1 - kept > out.share[p]) {
         out.share[p] = 1 - kept;
-        out.curve[p] = c;
+        out.curve[p] = first[static_cast<size_t>(h)];
       }
     }
   }

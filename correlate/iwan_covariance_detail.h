@@ -28,10 +28,11 @@ inline double t_degrees_of_freedom(double effective_points, int fitted) {
   return effective_points - fitted;
 }
 
-/// What one curve alone tells of each parameter (covariance()): per parameter (F_S, K_T, chi,
-/// beta) the largest share of its information that one curve carries, 1 - (J^T J)^-1_kk /
-/// (J^T J - J_c^T J_c)^-1_kk over the curves c (1 where the others leave it undetermined), and
-/// that curve (0-based; -1 with fewer than two curves, or for a parameter not free). Where one
+/// What one hit alone tells of each parameter (covariance()): per parameter (F_S, K_T, chi,
+/// beta) the largest share of its information that one hit's curves carry, 1 - (J^T J)^-1_kk /
+/// (J^T J - J_c^T J_c)^-1_kk over the hits c (curves of one source, a hit's channels or modes,
+/// taken together; 1 where the others leave it undetermined), and that hit's first curve
+/// (0-based; -1 with fewer than two hits, or for a parameter not free). Where one
 /// hit carries nearly all of a parameter's information the parameter is that hit's joint's, and
 /// no spread of the hits about one another (the cluster covariance) shows how far the joint
 /// scattered between hits.

@@ -172,10 +172,11 @@ struct IwanUpdateSummary {
   /// the model (a point whose secants two sigmas each way differ: an element's phi_max between)
   /// fix it; a slope there holds on one side only, so no sigma is stated.
   std::array<bool, 4> fixed_at_kink{};
-  /// Per parameter (F_S, K_T, chi, beta) with two or more curves: the largest share of its
-  /// information at the result that one curve alone carries (1 - its variance over its variance
-  /// without that curve; 1 where the others leave it undetermined), and which curve (0-based, -1
-  /// where not computed): near 1 the parameter is that one hit's.
+  /// Per parameter (F_S, K_T, chi, beta) with curves of two or more hits: the largest share of
+  /// its information at the result that one hit's curves alone carry (curves of one source, its
+  /// channels or modes, together; 1 - its variance over its variance without them; 1 where the
+  /// others leave it undetermined), and that hit's first curve (0-based, -1 where not computed):
+  /// near 1 the parameter is that one hit's.
   std::array<double, 4> one_curve_share{};
   std::array<int, 4> one_curve{{-1, -1, -1, -1}};  ///< the curve of one_curve_share
   std::array<std::string, 4> one_curve_name;       ///< its source (file), or "curve N"
