@@ -215,9 +215,12 @@ std::string own_damping_or_other_slip(const IwanUpdateSummary& s) {
 // Curves that disagree with one another: offsets of each curve from the others explain most
 // of the chi-square. Scatter between hits (the trial's three curves, each with its own 0.2 %
 // frequency and 5 % damping offset: reduced chi-square 9.6, and the report asked for 4 times
-// the evaluations while the sigmas, one cluster per curve, were right); no search cures it.
+// the evaluations while the sigmas, one cluster per hit, were right); no search cures it.
 std::string scatter_cause(const IwanUpdateSummary& s) {
   const MisfitEvidence& e = *s.evidence;
+  // The clusters of the sigmas are the hits: curves of one hit (its channels or modes) share
+  // its joint (s.hits; 0 where not set: one hit per curve).
+  const int hits = s.hits > 0 ? std::min(e.curves, s.hits) : e.curves;
   if (e.curves >= 2 && e.between_curves_share >= 0.5) {
     return fmt::format(
         "the {} curves disagree with one another by more than their stated noise: an offset of "
@@ -232,7 +235,7 @@ std::string scatter_cause(const IwanUpdateSummary& s) {
                   "({} {:+.2g} % against their {:+.2g} to {:+.2g} %, {:.2g} times their spread: "
                   "random scatter between hits puts a curve there less than 1 time in 100): its "
                   "offset follows that hit (another strike point, another mode slipping the "
-                  "joint), no random scatter, so no sigma is stated (one cluster per curve would "
+                  "joint), no random scatter, so no sigma is stated (one cluster per hit would "
                   "read it as scatter and understate the error); fit that curve apart, or leave "
                   "it out",
                   e.apart_curve, e.apart_points, e.apart_amplitude(0), e.apart_amplitude(1),
@@ -242,22 +245,22 @@ std::string scatter_cause(const IwanUpdateSummary& s) {
             : fmt::format(
                   "That is scatter between the hits (each hit's joint a little different), which "
                   "neither a longer search nor a wider range cures; {}",
-                  e.curves >= 4
-                      ? fmt::format("the sigmas allow for it (one cluster per curve, Student's t "
+                  hits >= 4
+                      ? fmt::format("the sigmas allow for it (one cluster per hit, Student's t "
                                     "with {} degrees of freedom)",
-                                    e.curves - 1)
-                  : e.curves == 3
+                                    hits - 1)
+                  : hits == 3
                       ? std::string(
-                            "the sigmas allow for it (one cluster per curve, Student's t with 2 "
+                            "the sigmas allow for it (one cluster per hit, Student's t with 2 "
                             "degrees of freedom, whose variance is infinite: each sigma is its "
                             "95 % interval over 1.96, 2.2 times the scatter's standard error), "
                             "taking the three offsets for random scatter of one joint, which "
-                            "three curves cannot tell from one hit unlike the others (four or "
+                            "three hits cannot tell from one hit unlike the others (four or "
                             "more can)")
-                      : fmt::format("with {} curves the sigmas do not allow for it (one cluster "
-                                    "per curve leaves {} degree of freedom; three or more "
-                                    "curves would give a sigma)",
-                                    e.curves, e.curves - 1)));
+                      : fmt::format("with {} {} the sigmas do not allow for it (one cluster "
+                                    "per hit leaves {} degree of freedom; three or more "
+                                    "hits would give a sigma)",
+                                    hits, hits == 1 ? "hit" : "hits", hits - 1)));
   }
   return "";
 }

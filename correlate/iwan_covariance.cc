@@ -277,6 +277,8 @@ double amplitude_share(const SerialOrder& order, const Eigen::VectorXd& r) {
   return total > 0 ? std::max({third[0], third[1], third[2]}) / total : 0.0;
 }
 
+std::pair<std::vector<int>, std::vector<int>> curve_hits(const IwanObjective& objective);
+
 // The cluster-robust covariance with each curve's residuals corrected for what the fit takes of
 // them (CR2, Bell & McCaffrey 2002): H^-1 (sum_c a_c a_c^T) H^-1, a_c = J_c^T (I - P_cc)^(-1/2)
 // r_c, P_cc = J_c H^-1 J_c^T the curve's own leverage. A curve that carries most of a
@@ -287,16 +289,16 @@ double amplitude_share(const SerialOrder& order, const Eigen::VectorXd& r) {
 // hits at rising levels, no scatter, chi's z-scores' RMS 0.54 against 0.86). With J_c = U S
 // V^T (thin SVD) and M = S V^T H^-1 V S, a_c = V S (I - M)^(-1/2) U^T r_c; M's eigenvalues are
 // capped at 0.99 (a curve with all of a direction's information: that parameter rests on one
-// curve, CurveShares, and states no sigma).
-Eigen::MatrixXd curve_cr2(const IwanObjective& objective, const Eigen::MatrixXd& J,
+// curve, CurveShares, and states no sigma). The clusters are the hits (cluster: each residual's),
+// not the curves: two channels or modes of one hit share its joint.
+Eigen::MatrixXd curve_cr2(const std::vector<int>& cluster, int n_clusters, const Eigen::MatrixXd& J,
                           const Eigen::VectorXd& r, const Eigen::MatrixXd& Hi) {
-  const std::vector<int>& curve = objective.residual_curve();
-  const int n_curves = curve.empty() ? 0 : curve.back() + 1, nf = static_cast<int>(J.cols());
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(nf, n_curves);
-  for (int c = 0; c < n_curves; ++c) {
+  const int nf = static_cast<int>(J.cols());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(nf, n_clusters);
+  for (int c = 0; c < n_clusters; ++c) {
     std::vector<int> rows;
     for (int i = 0; i < static_cast<int>(J.rows()); ++i)
-      if (curve[i] == c) rows.push_back(i);
+      if (cluster[static_cast<size_t>(i)] == c) rows.push_back(i);
     Eigen::MatrixXd Jc(static_cast<Eigen::Index>(rows.size()), nf);
     Eigen::VectorXd rc(static_cast<Eigen::Index>(rows.size()));
     for (size_t i = 0; i < rows.size(); ++i) {
@@ -339,13 +341,25 @@ std::optional<Eigen::MatrixXd> sandwich(const IwanObjective& objective, const Se
   const Eigen::MatrixXd ar1 =
       noise.variance * Hi * (J.transpose() * ar1_times(order, J, noise.rho)) * Hi;
   Eigen::MatrixXd robust = Hi * hac_scores(order, J, r) * Hi;
+  // One cluster per hit (curve_hits()): the hits' joints, not the curves, are the independent
+  // samples. Three hits read at two channels each gave six curves and sigmas 2.3-2.7 times
+  // narrower (F_S +/- 1.95-2.27 % against 4.96-5.20 % from one channel of the same hits).
   const std::vector<int>& curve = objective.residual_curve();
   const int nf = static_cast<int>(J.cols()), m = static_cast<int>(J.rows());
-  const int n_curves = curve.empty() ? 0 : curve.back() + 1;
-  if (n_curves >= 3) {
-    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(nf, n_curves);
-    for (int i = 0; i < m; ++i) g.col(curve[i]) += J.row(i).transpose() * r(i);
-    const Eigen::MatrixXd cluster = Hi * (g * g.transpose() * (n_curves / (n_curves - 1.0))) * Hi;
+  std::vector<int> hit_of(curve.size());
+  int n_hits = 0;
+  if (!curve.empty()) {
+    const std::vector<int> hit = curve_hits(objective).first;
+    const bool matched = curve.back() + 1 == static_cast<int>(hit.size());
+    for (size_t i = 0; i < curve.size(); ++i)
+      hit_of[i] = matched ? hit[static_cast<size_t>(curve[i])] : curve[i];
+    n_hits = *std::max_element(hit_of.begin(), hit_of.end()) + 1;
+  }
+  if (n_hits >= 3) {
+    Eigen::MatrixXd g = Eigen::MatrixXd::Zero(nf, n_hits);
+    for (int i = 0; i < m; ++i)
+      g.col(hit_of[static_cast<size_t>(i)]) += J.row(i).transpose() * r(i);
+    const Eigen::MatrixXd cluster = Hi * (g * g.transpose() * (n_hits / (n_hits - 1.0))) * Hi;
     // Few curves estimate the scatter between them poorly (G - 1 degrees of freedom): the
     // cluster-robust correlations, each variance the larger of the two.
     Eigen::VectorXd d(nf);
@@ -356,10 +370,10 @@ std::optional<Eigen::MatrixXd> sandwich(const IwanObjective& objective, const Se
     }
     if (usable) robust = d.asDiagonal() * cluster * d.asDiagonal();
   }
-  if (n_curves >= 2) {
-    // Each hit's joint as the others read it: the cluster covariance with each curve's
+  if (n_hits >= 2) {
+    // Each hit's joint as the others read it: the cluster covariance with each hit's
     // residuals corrected for its own leverage (curve_cr2()).
-    const Eigen::MatrixXd cr2 = curve_cr2(objective, J, r, Hi);
+    const Eigen::MatrixXd cr2 = curve_cr2(hit_of, n_hits, J, r, Hi);
     for (int k = 0; k < nf; ++k) {
       if (!(robust(k, k) > 0) || !(cr2(k, k) > robust(k, k)) || !std::isfinite(cr2(k, k))) continue;
       const double f = std::sqrt(cr2(k, k) / robust(k, k));

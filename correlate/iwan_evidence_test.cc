@@ -91,7 +91,7 @@ TEST(IwanUpdate, CurvesThatDisagreeWithOneAnotherAreNamedAsScatterBetweenHits) {
   EXPECT_NEAR(s.evidence->damping_offsets(1) - s.evidence->damping_offsets(0), 0.1, 0.03);
   EXPECT_NE(r.find("the 4 curves disagree with one another by more than their stated noise"),
             std::string::npos);
-  EXPECT_NE(r.find("the sigmas allow for it (one cluster per curve, Student's t with 3 degrees "
+  EXPECT_NE(r.find("the sigmas allow for it (one cluster per hit, Student's t with 3 degrees "
                    "of freedom)"),
             std::string::npos);
   EXPECT_NE(r.find("(the scatter between the curves, above)"), std::string::npos);
@@ -116,7 +116,7 @@ TEST(IwanUpdate, CurvesThatDisagreeWithOneAnotherAreNamedAsScatterBetweenHits) {
 // A curve unlike the others is no scatter between hits. The case of two joint sets (a bolt pair
 // at each end, rivets at mid-span; pairs of hits at three levels at mid-span and one hit at
 // x = 0.375 m, where mode 2 slips the same joints): the off-span hit's damping stood +94 %
-// above the fitted curve, the others within -3.5 to +2.3 %, and one cluster per curve read that
+// above the fitted curve, the others within -3.5 to +2.3 %, and one cluster per hit read that
 // as random scatter: K_T +/- 0.24 % at z +7.1, F_S at beta 1 +/- 5.8 % at z -10. Here: six curves
 // of the one-mode truth, five with random-looking offsets (+/-0.1 %, +/-0.05 %, 0 in frequency;
 // +/-3 %, +/-1.5 %, 0 in damping) and the sixth's damping +60 % (another mode slipping the joint
@@ -164,7 +164,7 @@ TEST(IwanUpdate, ACurveApartFromTheOthersIsNoScatterAndStatesNoSigma) {
   EXPECT_EQ(s.relative_std(2), 0);
   EXPECT_NE(r.find("But hit 6 (30 points, amplitude"), std::string::npos);
   EXPECT_NE(r.find("lies apart from the others (damping +"), std::string::npos);
-  EXPECT_EQ(r.find("the sigmas allow for it (one cluster per curve"), std::string::npos);
+  EXPECT_EQ(r.find("the sigmas allow for it (one cluster per hit"), std::string::npos);
 }
 
 // misfit_evidence() on data the truth explains and on the same data misread. Two-chain truth,

@@ -630,7 +630,7 @@ TEST(IwanUpdateReport, FlatDampingAboveAModelWithoutItsOwnDampingNamesThatDampin
 // relative_std alike. Each sigma stays where the misfit is not the model's: white residuals
 // spread evenly (noise stated too small: the note says so; serial correlation 0.05, share 0.39,
 // below 1/3 + 3 sqrt((2/9) / 61) = 0.514); scatter between three curves explaining 70 % of the
-// chi-square (one cluster per curve); or a reduced chi-square of 1.35, a misfit by the count
+// chi-square (one cluster per hit); or a reduced chi-square of 1.35, a misfit by the count
 // (1 + 3 sqrt(2 / 240) = 1.27) but within what serially correlated noise of 124 effective points
 // reaches (1 + 3 sqrt(2 / 124) = 1.38).
 TEST(IwanUpdateReport, NoSigmaWhereTheMisfitNotTheNoiseSetsTheError) {

@@ -57,8 +57,9 @@ bool IwanUpdateSummary::scatter_explains_misfit() const {
   // variance, its 95 % interval stated as 1.96 sigma: scatter_t_variance()). Offsets that follow
   // a hit (apart_curve, tested with four curves or more) are no random scatter: the covariance
   // reads them as such and understates the error.
-  return evidence && evidence->curves >= 3 && evidence->between_curves_share >= 0.5 &&
-         evidence->apart_curve.empty();
+  // Curves of one hit (its channels or modes) share its joint: the hits count (hits 0: not set).
+  return evidence && evidence->curves >= 3 && (hits == 0 || hits >= 3) &&
+         evidence->between_curves_share >= 0.5 && evidence->apart_curve.empty();
 }
 
 bool IwanUpdateSummary::joint_hardly_moved() const {

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <optional>
 #include <random>
+#include <set>
+#include <string>
 
 #include <fmt/format.h>
 #include <boost/math/distributions/students_t.hpp>
@@ -232,6 +234,7 @@ Eigen::MatrixXd parameter_covariance(const IwanObjective& objective, const Vec4&
     for (const MeasuredBackbone& c : t.curves)
       names.push_back(!c.source.empty() ? c.source : fmt::format("curve {}", names.size() + 1));
   s.curves = static_cast<int>(names.size());
+  s.hits = static_cast<int>(std::set<std::string>(names.begin(), names.end()).size());
   for (size_t k = 0; k < 4; ++k)
     if (s.one_curve[k] >= 0 && s.one_curve[k] < static_cast<int>(names.size()))
       s.one_curve_name[k] = names[static_cast<size_t>(s.one_curve[k])];
@@ -250,11 +253,12 @@ std::optional<double> scatter_t_variance(double nu) {
 }
 
 // Where scatter between the curves explains the misfit the sigmas rest on the cluster
-// covariance, whose variance has the curves less 1 degrees of freedom: Student's t with the
-// fewer of those and the points' (the seven curves of the two joint sets: 6 against 160).
+// covariance, whose variance has the hits (the clusters) less 1 degrees of freedom: Student's t
+// with the fewer of those and the points' (the seven curves of the two joint sets: 6 against
+// 160). Curves of one hit share its joint: three hits at two channels each are three samples.
 void widen_for_scatter(const IwanUpdateSummary& s, Eigen::MatrixXd& cov) {
   if (s.scatter_explains_misfit() && cov.size() > 0) {
-    const double nu = static_cast<double>(s.evidence->curves - 1);
+    const double nu = static_cast<double>(std::min(s.evidence->curves, s.hits) - 1);
     const std::optional<double> wide = scatter_t_variance(nu),
                                 narrow = student_t_variance(s.sigma_degrees_of_freedom);
     if (wide && narrow && nu < s.sigma_degrees_of_freedom) cov *= *wide / *narrow;

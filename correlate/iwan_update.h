@@ -181,6 +181,8 @@ struct IwanUpdateSummary {
   std::array<int, 4> one_curve{{-1, -1, -1, -1}};  ///< the curve of one_curve_share
   std::array<std::string, 4> one_curve_name;       ///< its source (file), or "curve N"
   int curves = 0;                                  ///< measured curves fitted, over every mode
+  /// The hits behind them: curves of one source (a record's channels or modes) are one hit
+  int hits = 0;
   /// True where parameter k (F_S, K_T, chi, beta) rests on one of several curves alone
   /// (one_curve_share above 0.99): the rest leave it next to undetermined.
   bool rests_on_one_curve(int k) const;

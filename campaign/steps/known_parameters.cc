@@ -268,7 +268,7 @@ std::string tolerance_of(const KnownComparison& k) {
     from_fit.emplace_back("Fs");
   from_fit.emplace_back("chi");
   from_fit.emplace_back("beta");
-  // The update's covariance is at least the cluster-robust one (one cluster per curve) only
+  // The update's covariance is at least the cluster-robust one (one cluster per hit) only
   // with three curves or more (IwanObjective's covariance); with fewer it rests on the points.
   const std::string robust = k.curves >= 3 ? fmt::format(
                                                  " (at least what the scatter between the {} hits' "
