@@ -214,30 +214,16 @@ void check_progress(const py::object& progress) {
                     Py_TYPE(progress.ptr())->tp_name));
 }
 
-// A pending Ctrl-C ends the work with KeyboardInterrupt; checked at most every 0.1 s, so that a
-// check at each of many short steps (QSMA evaluations) costs no GIL round trip each.
-class InterruptCheck {
- public:
-  void operator()() {
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
-    py::gil_scoped_acquire gil;
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_{};
-};
-
 // A Ctrl-C seen on the calling thread, carried to the worker threads of the same call.
 struct Interrupted {};
 
-// InterruptCheck for work that calls it from worker threads as well (update_linear's sweeps):
-// Python takes signals on its main thread only, so that thread checks (at most every 0.1 s) and
-// the others stop at their next call once it has seen one; an Interrupted that reaches Python
-// is KeyboardInterrupt (registered in the module).
-class SharedInterruptCheck {
+// A pending Ctrl-C ends the work with KeyboardInterrupt; checked at most every 0.1 s, so that a
+// check at each of many short steps (QSMA evaluations, model solves) costs no GIL round trip
+// each. Work may call it from worker threads too (update_linear's sweeps): Python takes signals
+// on its main thread only, so the calling thread checks and the others stop at their next call
+// once it has seen one; an Interrupted that reaches Python is KeyboardInterrupt (registered in
+// the module).
+class InterruptCheck {
  public:
   void operator()() {
     if (stopped_.load()) throw Interrupted{};
@@ -657,7 +643,7 @@ py::dict update_linear(const PathArg& model_arg, const OneOrMany<std::string>& s
                                  "error {:.3g} %",
                                  iteration, cost, 100 * largest));
   };
-  SharedInterruptCheck interrupted;
+  InterruptCheck interrupted;
   o.interrupt = [&interrupted] { interrupted(); };
   correlate::LinearUpdateSummary s;
   Eigen::VectorXd theta;
@@ -846,7 +832,7 @@ py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, in
   if (threads < 0 || threads > 1024)
     throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
   campaign::RunSummary s;
-  SharedInterruptCheck interrupted;  // made on the calling thread, the one that checks
+  InterruptCheck interrupted;  // made on the calling thread, the one that checks
   {
     py::gil_scoped_release release;
     const campaign::Campaign c = campaign::read_campaign(campaign_file);
