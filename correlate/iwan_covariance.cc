@@ -277,8 +277,6 @@ double amplitude_share(const SerialOrder& order, const Eigen::VectorXd& r) {
   return total > 0 ? std::max({third[0], third[1], third[2]}) / total : 0.0;
 }
 
-std::pair<std::vector<int>, std::vector<int>> curve_hits(const IwanObjective& objective);
-
 // The cluster-robust covariance with each curve's residuals corrected for what the fit takes of
 // them (CR2, Bell & McCaffrey 2002): H^-1 (sum_c a_c a_c^T) H^-1, a_c = J_c^T (I - P_cc)^(-1/2)
 // r_c, P_cc = J_c H^-1 J_c^T the curve's own leverage. A curve that carries most of a
@@ -507,23 +505,6 @@ bool widen_without_kink_rows(const Residuals& res, const Eigen::MatrixXd& J,
   return true;
 }
 
-// The hit of each curve (objective.residual_curve()'s numbering) and the first curve of each
-// hit: curves of one source (one processed record or campaign hit: its channels, or its modes)
-// are one hit; a curve without a source is a hit of its own.
-std::pair<std::vector<int>, std::vector<int>> curve_hits(const IwanObjective& objective) {
-  std::vector<int> hit, first;
-  std::map<std::string, int> by_source;
-  for (const IwanTarget& t : objective.targets()) {
-    for (const MeasuredBackbone& c : t.curves) {
-      const int next = static_cast<int>(first.size());
-      const int h = c.source.empty() ? next : by_source.emplace(c.source, next).first->second;
-      if (h == next) first.push_back(static_cast<int>(hit.size()));
-      hit.push_back(h);
-    }
-  }
-  return {hit, first};
-}
-
 // CurveShares of the Jacobian J over `free` (rows of curve objective.residual_curve()), by hit
 // (curve_hits(): the top hit read at two channels carries F_S as one curve of it does). The
 // information matrices are scaled to a unit diagonal and inverted by their eigenvalues, so that
@@ -578,6 +559,20 @@ CurveShares curve_shares(const IwanObjective& objective, const std::vector<int>&
 }
 
 }  // namespace
+
+std::pair<std::vector<int>, std::vector<int>> curve_hits(const IwanObjective& objective) {
+  std::vector<int> hit, first;
+  std::map<std::string, int> by_source;
+  for (const IwanTarget& t : objective.targets()) {
+    for (const MeasuredBackbone& c : t.curves) {
+      const int next = static_cast<int>(first.size());
+      const int h = c.source.empty() ? next : by_source.emplace(c.source, next).first->second;
+      if (h == next) first.push_back(static_cast<int>(hit.size()));
+      hit.push_back(h);
+    }
+  }
+  return {hit, first};
+}
 
 Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int>& free,
                            const Vec4& v, double z, double* reduced_chi2, SerialNoise* noise,

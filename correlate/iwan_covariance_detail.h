@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -64,6 +65,11 @@ struct CurveShares {
 /// (Bayley & Hammersley 1946, J. R. Stat. Soc. Suppl. 8:184), p the parameters fitted to them: a
 /// sigma estimated from a few effective points is itself uncertain. Where nu <= 2 that variance
 /// is infinite and the covariance is empty (the caller says so from noise->effective_points).
+/// The hit of each curve (objective.residual_curve()'s numbering, hits from 0) and the first
+/// curve of each hit: curves of one source (one processed record or campaign hit: its channels,
+/// or its modes) are one hit; a curve without a source is a hit of its own.
+std::pair<std::vector<int>, std::vector<int>> curve_hits(const IwanObjective& objective);
+
 Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int>& free,
                            const Vec4& v, double z, double* reduced_chi2, SerialNoise* noise,
                            std::array<bool, 4>* fixed_at_kink, CurveShares* shares = nullptr);

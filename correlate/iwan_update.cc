@@ -7,7 +7,6 @@
 #include <cmath>
 #include <optional>
 #include <random>
-#include <set>
 #include <string>
 
 #include <fmt/format.h>
@@ -234,7 +233,7 @@ Eigen::MatrixXd parameter_covariance(const IwanObjective& objective, const Vec4&
     for (const MeasuredBackbone& c : t.curves)
       names.push_back(!c.source.empty() ? c.source : fmt::format("curve {}", names.size() + 1));
   s.curves = static_cast<int>(names.size());
-  s.hits = static_cast<int>(std::set<std::string>(names.begin(), names.end()).size());
+  s.hits = static_cast<int>(iwan_detail::curve_hits(objective).second.size());
   for (size_t k = 0; k < 4; ++k)
     if (s.one_curve[k] >= 0 && s.one_curve[k] < static_cast<int>(names.size()))
       s.one_curve_name[k] = names[static_cast<size_t>(s.one_curve[k])];
