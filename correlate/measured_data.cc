@@ -136,12 +136,7 @@ struct TableColumn {
 // the modal mass, any case, a unit in brackets or after a blank or '_' allowed ("Damping [%]",
 // "damping_ratio", "MPC (%)", "Modal mass").
 bool modal_parameter_column(const std::string& header) {
-  std::string h;
-  for (const char ch : header) {
-    if (ch == '[' || ch == '(') break;
-    h += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  }
-  h = std::string(trim(h));
+  const std::string h(trim(lower(header.substr(0, header.find_first_of("[(")))));
   const auto begins = [&](std::string_view w) {
     return h.rfind(w, 0) == 0 &&
            (h.size() == w.size() || h[w.size()] == '_' || h[w.size()] == ' ' || h[w.size()] == '.');
@@ -163,8 +158,7 @@ TableColumn table_column(const std::vector<Sensor>& sensors, const std::string& 
   }
   const size_t cut = header.find_last_of("_. ");
   if (cut == std::string::npos || cut == 0) return out;
-  std::string suffix = header.substr(cut + 1);
-  for (char& ch : suffix) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const std::string suffix = lower(header.substr(cut + 1));
   out.base = std::string(trim(std::string_view(header).substr(0, cut)));
   const int row = find_sensor(sensors, out.base);
   if (row < 0) return out;
@@ -710,9 +704,7 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
   std::vector<TableColumn> columns;
   if (cells.size() >= 2 && cells[0] == "mode" && cells[1] != "frequency_hz") {
     // Frequencies in another unit: say which is read rather than only what the header must be.
-    std::string f;
-    for (const char ch : cells[1])
-      f += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    const std::string f = lower(cells[1]);
     if (f.find("rad") != std::string::npos || f.find("omega") != std::string::npos)
       throw InputError(where(
           name, n,

@@ -1,7 +1,6 @@
 #include "jointlab/correlate/sensors.h"
 
 #include <algorithm>
-#include <cctype>
 #include <set>
 #include <string>
 #include <vector>
@@ -9,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/core/text.h"
 #include "jointlab/data/csv_lines.h"
 
 namespace jointlab::correlate {
@@ -20,8 +20,7 @@ namespace {
 // only where `labels` has it; else "".
 std::string direction_hint(const std::string& d, const std::vector<std::string>& labels) {
   const size_t colon = d.rfind(':');
-  std::string c = d.substr(colon + 1);
-  for (char& ch : c) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  std::string c = lower(d.substr(colon + 1));
   bool reversed = false;
   if (!c.empty() && (c[0] == '-' || c[0] == '+')) reversed = c[0] == '-', c.erase(0, 1);
   const std::vector<std::string> names = {"x", "y", "z", "rx", "ry", "rz"};
