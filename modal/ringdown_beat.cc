@@ -333,6 +333,187 @@ std::string beat_message(const TwoModes& two, const ChannelSpectrum& channel,
   return note + fmt::format("; a band of {:.2f}:{:.2f} Hz would leave it out", lo, hi);
 }
 
+namespace {
+
+// edge_beat's rule; see its comment.
+namespace edge {
+constexpr double kBeats = 2.0, kStep = 1.0 / 8, kClear = 4.0, kMirror = 10.0, kExplained = 0.05,
+                 kAgree = 0.5;
+constexpr std::array<double, 7> kRates = {0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0};  // [1/s]
+}  // namespace edge
+
+// What a complex quadratic over n samples from grid node j leaves of ln A + i theta (r), and
+// the quadratic's basis, orthonormal (q).
+struct QuadraticRest {
+  Eigen::MatrixXd q;
+  Eigen::VectorXcd r;
+};
+
+QuadraticRest quadratic_rest(const EnvelopePhase& ep, Eigen::Index j, Eigen::Index n) {
+  Eigen::MatrixXd poly(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double x = static_cast<double>(i) / static_cast<double>(n - 1) - 0.5;
+    poly(i, 0) = 1.0;
+    poly(i, 1) = x;
+    poly(i, 2) = x * x;
+  }
+  QuadraticRest out;
+  out.q =
+      Eigen::HouseholderQR<Eigen::MatrixXd>(poly).householderQ() * Eigen::MatrixXd::Identity(n, 3);
+  out.r.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) out.r(i) = {ep.log_amp(j + i), ep.theta(j + i)};
+  out.r -= out.q * (out.q.transpose() * out.r);
+  return out;
+}
+
+// The fit of a quadratic's rest with e^{(+-i dw - ds) tau}, tau from the block's start (dt
+// [s] apart), the two columns less their part in the quadratic: their coefficients (ab), and
+// the share of the rest the fit leaves.
+struct Turns {
+  Eigen::Vector2cd ab;
+  double share = 1;
+};
+
+Turns turns(const QuadraticRest& rest, double dw, double ds, double dt) {
+  const Eigen::Index n = rest.r.size();
+  Eigen::MatrixXcd e(n, 2);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double tau = static_cast<double>(i) * dt;
+    e(i, 0) = std::exp(std::complex<double>(-ds * tau, dw * tau));
+    e(i, 1) = std::exp(std::complex<double>(-ds * tau, -dw * tau));
+  }
+  e -= rest.q * (rest.q.transpose() * e);
+  const Eigen::Matrix2cd gram = e.adjoint() * e;
+  const Eigen::Vector2cd rhs = e.adjoint() * rest.r;
+  Turns out;
+  out.ab = gram.fullPivLu().solve(rhs);
+  const double left = rest.r.squaredNorm();
+  out.share = (left - rhs.dot(out.ab).real()) / left;
+  return out;
+}
+
+// The best of edge_beat's fits over f2 and dsigma: the one that leaves the smallest share of
+// the quadratic's rest, under kExplained.
+struct EdgeFit {
+  double share = edge::kExplained;
+  std::complex<double> a = 0;       // the turn toward f2 at the block's start
+  std::complex<double> mirror = 0;  // the other turn
+  double dw = 0;                    // 2 pi (f2 - f1) [rad/s]
+  double ds = 0;                    // dsigma [1/s]
+  double f2 = 0;                    // [Hz]
+};
+
+EdgeFit best_edge_fit(const EnvelopePhase& ep, const BandSetting& s, double noise,
+                      const signal::Band& typed, const signal::Band& read, double f1,
+                      Eigen::Index j0, Eigen::Index j_stop) {
+  EdgeFit best;
+  const double w = s.options.taper * (read.hi - read.lo);
+  for (const int dir : {-1, 1}) {
+    const double near = dir < 0 ? typed.lo : typed.hi;
+    const double far = dir < 0 ? read.lo + w / 2 : read.hi - w / 2;
+    if (!(dir * (far - near) > 0) || !(dir * (near - f1) > 0)) continue;
+    for (double f2 = near; dir * (far - f2) >= 0;
+         f2 += dir * edge::kStep * std::abs(f2 - f1) / edge::kBeats) {
+      const double dw = kTwoPi * (f2 - f1);
+      const auto n = static_cast<Eigen::Index>(std::round(edge::kBeats / std::abs(f2 - f1) / s.dt));
+      if (n < 24 || j0 + n - 1 > j_stop) continue;
+      if (!(ep.amp.segment(j0, n).minCoeff() >= s.options.snr_min * noise)) continue;
+      const QuadraticRest rest = quadratic_rest(ep, j0, n);
+      if (!(rest.r.squaredNorm() > 0)) continue;
+      for (const double ds : edge::kRates) {
+        const Turns fit = turns(rest, dw, ds, s.dt);
+        if (!fit.ab.allFinite() || !(fit.share < best.share)) continue;
+        best = {fit.share, fit.ab(0), fit.ab(1), dw, ds, f2};
+      }
+    }
+  }
+  return best;
+}
+
+// Whether the fit's c stands clear of what noise alone gives it (kClear times: the noise over
+// the envelope at the block's start, over the independent samples the decaying column of n
+// samples holds) and of the mirror term (kMirror times).
+bool clear_of_noise(const EdgeFit& fit, const EnvelopePhase& ep, const BandSetting& s, double noise,
+                    Eigen::Index j0, Eigen::Index n) {
+  double held = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    held += std::exp(-2 * fit.ds * static_cast<double>(i) * s.dt);
+  }
+  const double by_noise = noise / ep.amp(j0) / std::sqrt(std::max(1.0, held / s.correlation));
+  const double c0 = std::abs(fit.a);
+  return c0 > edge::kClear * by_noise && c0 > edge::kMirror * std::abs(fit.mirror);
+}
+
+// Whether the fit is one exponential along the decay, as a second mode's part is: fitted again
+// (same dw and dsigma) over blocks of n samples a quarter and half a beat later, its
+// coefficient must be the first one carried there, a e^{(i dw - dsigma) delta}, to within
+// kAgree of it (what the steps of f2 and dsigma allow). What a quadratic leaves of a drifting
+// mode's own phase turns one way over one block as well, but is no exponential: on the
+// Brake-Reuss beam (acc2, its 80.5 Hz mode 0.2-0.5 Hz inside a band typed 79.5:114.5 or 80:115
+// Hz) the fit passed clear_of_noise (c 0.18, the other turn c / 11.2-11.5, 2.8 % left) and took
+// 14 points, 0.06-0.84 s, off the span (1.20 decades kept, 1.59 now), but its coefficient half
+// a beat on is 4.6-4.7 times the one carried (|ratio - 1| 5.5-5.6). Of the best fits on the
+// beam (360 bands typed 0.5-5 Hz beside or inside its modes, three channels) and on the twins
+// without a neighbour, 91 are 1.1 or more off; the neighbours of 0.5-2 % damping 1.4-4.9 Hz
+// below the LMS twin's band (259 caught, 5.12 and 51.2 kHz, eight seeds) stay within 0.36, as
+// do the beam's real second components (a spectral bump 21 Hz below its 1766 Hz mode, 3.6 % of
+// its peak over the first 0.6 s on acc2; a peak 30 Hz below the 2015 Hz mode, 2 % on acc1),
+// whose beat is counted as before. A block beyond the span (j_stop) or below the noise
+// threshold confirms nothing.
+bool carried_along(const EdgeFit& fit, const EnvelopePhase& ep, const BandSetting& s, double noise,
+                   Eigen::Index j0, Eigen::Index j_stop, Eigen::Index n) {
+  for (const double beats : {0.25, 0.5}) {
+    const auto shift =
+        static_cast<Eigen::Index>(std::round(beats * static_cast<double>(n) / edge::kBeats));
+    const Eigen::Index j1 = j0 + shift;
+    if (j1 + n - 1 > j_stop || !(ep.amp.segment(j1, n).minCoeff() >= s.options.snr_min * noise)) {
+      return false;
+    }
+    const std::complex<double> a = turns(quadratic_rest(ep, j1, n), fit.dw, fit.ds, s.dt).ab(0);
+    const double delta = static_cast<double>(shift) * s.dt;
+    const std::complex<double> carried =
+        fit.a * std::exp(std::complex<double>(-fit.ds * delta, fit.dw * delta));
+    if (!(std::abs(a / carried - 1.0) <= edge::kAgree)) return false;
+  }
+  return true;
+}
+
+// The confirmed fit as a beat along the span: c(t) = c e^{-dsigma (t - t0)}, t0 the block's
+// start (grid node j0), held at 0.99 before and marking where it exceeds 1 as the other mode's
+// (Beat::other), and what it moves each estimate by (beat_errors).
+EdgeBeat confirmed_beat(const EdgeFit& fit, const std::vector<Estimate>& est, const BandSetting& s,
+                        double noise, Eigen::Index grid, double f1, Eigen::Index j0) {
+  EdgeBeat out;
+  out.f1 = f1;
+  out.f2 = fit.f2;
+  out.t0 = static_cast<double>(j0) * s.dt;
+  out.dsigma = fit.ds;
+  const double c0 = std::abs(fit.a);
+  Beat& beat = out.beat;
+  beat.dw = fit.dw;
+  beat.c_first = c0;
+  beat.u0.resize(grid);
+  beat.u1.resize(grid);
+  beat.v0.resize(grid);
+  beat.v1.resize(grid);
+  beat.other = Eigen::VectorXi::Zero(grid);
+  for (Eigen::Index j = 0; j < grid; ++j) {
+    const double t = static_cast<double>(j) * s.dt;
+    const double c = c0 * std::exp(-fit.ds * (t - out.t0));
+    if (c >= 1) beat.other(j) = 1;
+    beat.c_max = std::max(beat.c_max, std::min(c, 0.99));
+    set_beat_at(beat, j, t, std::min(c, 0.99));
+  }
+  out.errors = beat_errors(est, beat, s.dt, s.options.degree);
+  for (size_t i = 0; i < est.size(); ++i) {
+    out.moved +=
+        usable(est[i], noise, s.options.snr_min) && !(out.errors[i].first <= est[i].sigma_std);
+  }
+  return out;
+}
+
+}  // namespace
+
 // A second mode in the part of a moved band beyond the typed band's edge. The band follows the
 // mode past the edge the user typed (follow_mode) and is held back only from a neighbour the
 // spectrum shows; a heavily damped one is a shoulder of the mode's skirt, no peak, and dies
@@ -354,20 +535,17 @@ std::string beat_message(const TwoModes& two, const ChannelSpectrum& channel,
 // jointed beam's drifting modes leave a one-sided rest of their own: the Brake-Reuss beam's
 // 80.5 and 297.7 Hz modes typed with an edge 0.2-4.5 Hz beside them (71 channel-bands above
 // the noise) left 1.3 % and more, with a mirror of at least c / 6.2 where under 5 % (c / 9.7
-// at most anywhere); with a cubic for the mode's part they reached c / 66, left 0.55 %. Then
+// at most anywhere); with a cubic for the mode's part they reached c / 66, left 0.55 %. A fit
+// counts only where it is one exponential along the decay (carried_along). Then
 // c(t) = c e^{-dsigma (t - t0)} stands for the beat along the span (held at 0.99 before,
 // marking where it exceeds 1 as the other mode's, Beat::other) and what it moves each point by
 // joins the point's uncertainty as a second mode's inside the band does (two_modes).
 EdgeBeat edge_beat(const std::vector<Estimate>& est, const EnvelopePhase& ep, const BandSetting& s,
                    double noise, const signal::Band& typed, const signal::Band& read) {
-  constexpr double kBeats = 2.0, kStep = 1.0 / 8, kClear = 4.0, kMirror = 10.0, kExplained = 0.05,
-                   kAgree = 0.5;
-  constexpr std::array<double, 7> kRates = {0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0};  // [1/s]
-  EdgeBeat out;
   const Eigen::Index grid = ep.log_amp.size();
   const auto j0 = std::max<Eigen::Index>(0, static_cast<Eigen::Index>(std::ceil(s.start / s.dt)));
   const auto j_stop = std::min<Eigen::Index>(grid - 1, static_cast<Eigen::Index>(s.stop / s.dt));
-  if (j0 >= grid) return out;
+  if (j0 >= grid) return {};
   // The mode's frequency where the span starts: its first usable estimate's.
   double f1 = 0;
   for (const Estimate& e : est) {
@@ -376,129 +554,16 @@ EdgeBeat edge_beat(const std::vector<Estimate>& est, const EnvelopePhase& ep, co
       break;
     }
   }
-  if (!(f1 > 0)) return out;
-  const double w = s.options.taper * (read.hi - read.lo);
-  double best = kExplained, c0 = 0, best_dw = 0, best_ds = 0, best_f2 = 0;
-  std::complex<double> best_a = 0, best_mirror = 0;
-  // What a complex quadratic over n samples from grid node j leaves of ln A + i theta (r), and
-  // the quadratic's basis, orthonormal (q).
-  const auto quadratic_rest = [&](Eigen::Index j, Eigen::Index n) {
-    Eigen::MatrixXd poly(n, 3);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const double x = static_cast<double>(i) / static_cast<double>(n - 1) - 0.5;
-      poly(i, 0) = 1.0;
-      poly(i, 1) = x;
-      poly(i, 2) = x * x;
-    }
-    const Eigen::MatrixXd q = Eigen::HouseholderQR<Eigen::MatrixXd>(poly).householderQ() *
-                              Eigen::MatrixXd::Identity(n, 3);
-    Eigen::VectorXcd r(n);
-    for (Eigen::Index i = 0; i < n; ++i) r(i) = {ep.log_amp(j + i), ep.theta(j + i)};
-    r -= q * (q.transpose() * r);
-    return std::pair<Eigen::MatrixXd, Eigen::VectorXcd>(q, r);
-  };
-  // The fit of that rest with e^{(+-i dw - ds) tau}, tau from the block's start, the two
-  // columns less their part in the quadratic: their coefficients, and the share of the rest
-  // the fit leaves.
-  const auto turns = [&](const Eigen::MatrixXd& q, const Eigen::VectorXcd& r, double dw,
-                         double ds) {
-    const Eigen::Index n = r.size();
-    Eigen::MatrixXcd e(n, 2);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const double tau = static_cast<double>(i) * s.dt;
-      e(i, 0) = std::exp(std::complex<double>(-ds * tau, dw * tau));
-      e(i, 1) = std::exp(std::complex<double>(-ds * tau, -dw * tau));
-    }
-    e -= q * (q.transpose() * e);
-    const Eigen::Matrix2cd gram = e.adjoint() * e;
-    const Eigen::Vector2cd rhs = e.adjoint() * r;
-    const Eigen::Vector2cd ab = gram.fullPivLu().solve(rhs);
-    const double left = r.squaredNorm();
-    return std::pair<Eigen::Vector2cd, double>(ab, (left - rhs.dot(ab).real()) / left);
-  };
-  for (const int dir : {-1, 1}) {
-    const double near = dir < 0 ? typed.lo : typed.hi;
-    const double far = dir < 0 ? read.lo + w / 2 : read.hi - w / 2;
-    if (!(dir * (far - near) > 0) || !(dir * (near - f1) > 0)) continue;
-    for (double f2 = near; dir * (far - f2) >= 0; f2 += dir * kStep * std::abs(f2 - f1) / kBeats) {
-      const double dw = kTwoPi * (f2 - f1);
-      const auto n = static_cast<Eigen::Index>(std::round(kBeats / std::abs(f2 - f1) / s.dt));
-      if (n < 24 || j0 + n - 1 > j_stop) continue;
-      if (!(ep.amp.segment(j0, n).minCoeff() >= s.options.snr_min * noise)) continue;
-      const auto [q, r] = quadratic_rest(j0, n);
-      if (!(r.squaredNorm() > 0)) continue;
-      for (const double ds : kRates) {
-        const auto [ab, share] = turns(q, r, dw, ds);
-        if (!ab.allFinite() || !(share < best)) continue;
-        best = share, c0 = std::abs(ab(0)), best_a = ab(0), best_mirror = ab(1);
-        best_dw = dw, best_ds = ds, best_f2 = f2;
-      }
-    }
+  if (!(f1 > 0)) return {};
+  const EdgeFit fit = best_edge_fit(ep, s, noise, typed, read, f1, j0, j_stop);
+  if (!(std::abs(fit.a) > 0)) return {};
+  const auto n =
+      static_cast<Eigen::Index>(std::round(edge::kBeats * kTwoPi / std::abs(fit.dw) / s.dt));
+  if (!clear_of_noise(fit, ep, s, noise, j0, n) ||
+      !carried_along(fit, ep, s, noise, j0, j_stop, n)) {
+    return {};
   }
-  if (!(c0 > 0)) return out;
-  // What noise alone gives c: the noise over the envelope at the block's start, over the
-  // independent samples the decaying column holds.
-  double held = 0;
-  const auto n = static_cast<Eigen::Index>(std::round(kBeats * kTwoPi / std::abs(best_dw) / s.dt));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    held += std::exp(-2 * best_ds * static_cast<double>(i) * s.dt);
-  }
-  const double by_noise = noise / ep.amp(j0) / std::sqrt(std::max(1.0, held / s.correlation));
-  if (!(c0 > kClear * by_noise && c0 > kMirror * std::abs(best_mirror))) return out;
-  // A second mode's part is one exponential along the decay: fitted again (same dw and
-  // dsigma) over blocks a quarter and half a beat later, its coefficient must be the first one
-  // carried there, a e^{(i dw - dsigma) delta}, to within kAgree of it (what the steps of f2
-  // and dsigma allow). What a quadratic leaves of a drifting mode's own phase turns one way over
-  // one block as well, but is no exponential: on the Brake-Reuss beam (acc2, its 80.5 Hz mode
-  // 0.2-0.5 Hz inside a band typed 79.5:114.5 or 80:115 Hz) the fit passed the checks above
-  // (c 0.18, the other turn c / 11.2-11.5, 2.8 % left) and took 14 points, 0.06-0.84 s, off
-  // the span (1.20 decades kept, 1.59 now), but its coefficient half a beat on is 4.6-4.7
-  // times the one carried (|ratio - 1| 5.5-5.6). Of the best fits on the beam (360 bands
-  // typed 0.5-5 Hz beside or inside its modes, three channels) and on the twins without a
-  // neighbour, 91 are 1.1 or more off; the neighbours of 0.5-2 % damping 1.4-4.9 Hz below the
-  // LMS twin's band (259 caught, 5.12 and 51.2 kHz, eight seeds) stay within 0.36, as do the beam's
-  // real second components (a spectral bump 21 Hz below its 1766 Hz mode, 3.6 % of its peak over
-  // the first 0.6 s on acc2; a peak 30 Hz below the 2015 Hz mode, 2 % on acc1), whose beat is
-  // counted as before. A block beyond the span or below the noise threshold confirms nothing.
-  for (const double beats : {0.25, 0.5}) {
-    const auto shift =
-        static_cast<Eigen::Index>(std::round(beats * static_cast<double>(n) / kBeats));
-    const Eigen::Index j1 = j0 + shift;
-    if (j1 + n - 1 > j_stop || !(ep.amp.segment(j1, n).minCoeff() >= s.options.snr_min * noise)) {
-      return out;
-    }
-    const auto [q, r] = quadratic_rest(j1, n);
-    const std::complex<double> a = turns(q, r, best_dw, best_ds).first(0);
-    const double delta = static_cast<double>(shift) * s.dt;
-    const std::complex<double> carried =
-        best_a * std::exp(std::complex<double>(-best_ds * delta, best_dw * delta));
-    if (!(std::abs(a / carried - 1.0) <= kAgree)) return out;
-  }
-  out.f1 = f1;
-  out.f2 = best_f2;
-  out.t0 = static_cast<double>(j0) * s.dt;
-  out.dsigma = best_ds;
-  Beat& beat = out.beat;
-  beat.dw = best_dw;
-  beat.c_first = c0;
-  beat.u0.resize(grid);
-  beat.u1.resize(grid);
-  beat.v0.resize(grid);
-  beat.v1.resize(grid);
-  beat.other = Eigen::VectorXi::Zero(grid);
-  for (Eigen::Index j = 0; j < grid; ++j) {
-    const double t = static_cast<double>(j) * s.dt;
-    const double c = c0 * std::exp(-best_ds * (t - out.t0));
-    if (c >= 1) beat.other(j) = 1;
-    beat.c_max = std::max(beat.c_max, std::min(c, 0.99));
-    set_beat_at(beat, j, t, std::min(c, 0.99));
-  }
-  out.errors = beat_errors(est, beat, s.dt, s.options.degree);
-  for (size_t i = 0; i < est.size(); ++i) {
-    out.moved +=
-        usable(est[i], noise, s.options.snr_min) && !(out.errors[i].first <= est[i].sigma_std);
-  }
-  return out;
+  return confirmed_beat(fit, est, s, noise, grid, f1, j0);
 }
 
 }  // namespace jointlab::modal::ringdown_detail
