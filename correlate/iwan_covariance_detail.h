@@ -74,4 +74,9 @@ Eigen::MatrixXd covariance(const IwanObjective& objective, const std::vector<int
                            const Vec4& v, double z, double* reduced_chi2, SerialNoise* noise,
                            std::array<bool, 4>* fixed_at_kink, CurveShares* shares = nullptr);
 
+/// Widens cov (covariance()'s, Student's t over s.sigma_degrees_of_freedom already in it) to
+/// Student's t over the hits less 1 where scatter between hits explains the misfit
+/// (IwanUpdateSummary::scatter_explains_misfit()); never narrows it.
+void widen_for_scatter(const IwanUpdateSummary& s, Eigen::MatrixXd& cov);
+
 }  // namespace jointlab::correlate::iwan_detail

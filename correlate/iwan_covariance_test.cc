@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "jointlab/correlate/iwan_covariance_detail.h"
 #include "jointlab/correlate/iwan_update_test_fixtures.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/two_chain.h"
@@ -206,6 +207,34 @@ TEST(IwanUpdate, AFitThatDidNotConvergeStatesNoSigma) {
   EXPECT_NE(s.report().find("(no sigma: not converged)"), std::string::npos);
   EXPECT_NE(s.report().find("WARNING: the fit did not converge"), std::string::npos);
   EXPECT_NE(s.report().find("run again with a larger --evaluations (e.g. "), std::string::npos);
+}
+
+// Where scatter between three hits explains the misfit, the sigmas take Student's t over the hits
+// less 1 (2 degrees of freedom: the square of its 95 % quantile over the normal's, (4.303 /
+// 1.960)^2 = 4.82) in place of the points' nu / (nu - 2), which covariance() put in. That is a
+// widening only where the points have more degrees of freedom: between 2 and 2.52 of them their
+// own factor exceeds 4.82, and the swap narrowed the covariance, by 0.83 at 2.4 (a sigma 10 %
+// smaller) and toward 0 near 2. The stated covariance is never below the points' own (exact:
+// the factor is 1 there, so 1e-12 for rounding), and with many points it is 4.82 times theirs.
+TEST(IwanUpdate, WideningForScatterBetweenHitsNeverNarrows) {
+  IwanUpdateSummary s;
+  s.improved = true;
+  s.residuals = 180;
+  s.reduced_chi2 = 9;  // a misfit
+  s.hits = 3;
+  s.evidence = MisfitEvidence{};
+  s.evidence->curves = 3;
+  s.evidence->between_curves_share = 0.9;
+  ASSERT_TRUE(s.scatter_explains_misfit());
+  const double t2 = std::pow(4.302652729911275 / 1.959963984540054, 2);
+  for (const double nu : {2.05, 2.2, 2.4, 2.5, 2.52, 2.6, 3.0, 5.0, 50.0}) {
+    s.sigma_degrees_of_freedom = nu;
+    Eigen::MatrixXd cov = Eigen::MatrixXd::Identity(2, 2);
+    iwan_detail::widen_for_scatter(s, cov);
+    EXPECT_GE(cov(0, 0), 1 - 1e-12) << nu;
+    EXPECT_NEAR(cov(0, 0), std::max(1.0, t2 / (nu / (nu - 2))), 1e-9) << nu;
+    EXPECT_EQ(cov(0, 1), 0.0) << nu;
+  }
 }
 
 }  // namespace
