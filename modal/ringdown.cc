@@ -2145,10 +2145,10 @@ std::string beat_note_of(CorrectedEstimates& corr, const ChannelSpectrum& channe
     const size_t left = add_beat(corr, edge.errors, noise, options, beat);
     beat_note = fmt::format(
         "the band moved past the typed edge takes in a second mode about {:.1f} Hz {} this one "
-        "(near {:.1f} Hz, no spectral peak; its beat at the decay's start, about {:.0f} % of "
-        "this mode's amplitude at {:.3f} s, {}): what the beat moves each point's decay rate "
-        "and frequency by is added to its uncertainty, and points it moves by more than the "
-        "{:.1f} % damping limit are left out ({} of those that met it)",
+        "(near {:.1f} Hz, seen in the decay, not as a resolved spectral peak; its beat at the "
+        "decay's start, about {:.0f} % of this mode's amplitude at {:.3f} s, {}): what the beat "
+        "moves each point's decay rate and frequency by is added to its uncertainty, and points "
+        "it moves by more than the {:.1f} % damping limit are left out ({} of those that met it)",
         std::abs(edge.f2 - edge.f1), edge.f2 < edge.f1 ? "below" : "above", edge.f2,
         100 * edge.beat.c_first, channel.t0 + edge.t0,
         edge.dsigma > 0 ? fmt::format("dying {:g}/s faster", edge.dsigma)
