@@ -38,8 +38,9 @@ struct RunOptions {
   bool force = false;                                ///< recompute even up-to-date outputs
   unsigned threads = 0;                              ///< workers for the hits; 0: every core
   std::function<void(const std::string&)> progress;  ///< one line per step (may be empty)
-  /// Called often during the linear and Iwan updates, also from worker threads (so thread-safe);
-  /// it may throw to stop the run (the Python module's Ctrl-C). May be empty.
+  /// Called often during the model's build (each step of its fixed-interface eigen-solve) and
+  /// the linear and Iwan updates, also from worker threads (so thread-safe); it may throw to stop
+  /// the run (the Python module's Ctrl-C). May be empty.
   std::function<void()> interrupt;
 };
 

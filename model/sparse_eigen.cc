@@ -17,7 +17,8 @@ namespace {
 class ShiftInvertOp {
  public:
   using Scalar = double;
-  ShiftInvertOp(const SparseCholesky& factor, double shift) : factor_(factor), shift_(shift) {}
+  ShiftInvertOp(const SparseCholesky& factor, double shift, const std::function<void()>& interrupt)
+      : factor_(factor), shift_(shift), interrupt_(interrupt) {}
   Eigen::Index rows() const { return factor_.size(); }
   Eigen::Index cols() const { return factor_.size(); }
   void set_shift(double sigma) {
@@ -25,6 +26,7 @@ class ShiftInvertOp {
     (void)sigma;
   }
   void perform_op(const double* x_in, double* y_out) const {
+    if (interrupt_) interrupt_();
     const Eigen::MatrixXd x = Eigen::Map<const Eigen::VectorXd>(x_in, rows());
     Eigen::Map<Eigen::VectorXd>(y_out, rows()) = factor_.solve(x);
   }
@@ -32,6 +34,7 @@ class ShiftInvertOp {
  private:
   const SparseCholesky& factor_;
   double shift_;
+  const std::function<void()>& interrupt_;
 };
 
 EigenResult sorted(const Eigen::VectorXd& values, const Eigen::MatrixXd& vectors,
@@ -97,7 +100,7 @@ EigenResult lowest_modes(const SparseCholesky& factor, const Eigen::SparseMatrix
     r.summary.report = fmt::format("dense generalized eigen-solve of order {}", n);
     return r;
   }
-  ShiftInvertOp op(factor, options.shift);
+  ShiftInvertOp op(factor, options.shift, options.interrupt);
   Spectra::SparseSymMatProd<double> bop(mass);
   Spectra::SymGEigsShiftSolver<ShiftInvertOp, Spectra::SparseSymMatProd<double>,
                                Spectra::GEigsMode::ShiftInvert>

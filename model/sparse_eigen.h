@@ -7,6 +7,7 @@
 // M-normalised (φᵀMφ = 1) and returned in ascending λ.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <Eigen/Core>
@@ -23,6 +24,9 @@ struct EigenOptions {
   int subspace = 0;           ///< Lanczos basis size; 0 = max(2·count + 1, count + 20).
   double tolerance = 1e-10;   ///< Relative tolerance on the Ritz values.
   int max_iterations = 1000;  ///< Restarts allowed.
+  /// Called before each application of (K − σM)⁻¹ (one per Lanczos step, a few ms on the
+  /// riveted beam); it may throw to stop the solve (the Python module's Ctrl-C). May be empty.
+  std::function<void()> interrupt;
   /// Empty when the options are usable, otherwise what is wrong.
   std::string validate() const;
 };

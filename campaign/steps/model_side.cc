@@ -101,6 +101,7 @@ fs::path prepare_model(const Campaign& c, const fs::path& out, const RunOptions&
   if (c.model.fixed_interface_modes >= 0) d.fixed_interface_modes = c.model.fixed_interface_modes;
   model::fe::BuildOptions bo;
   bo.progress = [&](const std::string& s) { say("model: " + s); };
+  bo.interrupt = o.interrupt;
   const model::fe::ReducedModel rm = model::fe::build_reduced_model(d, bo);
   if (!rm.summary.ok)
     throw InputError(fmt::format("{}: the reduction failed: {}", c.model.description.string(),

@@ -83,6 +83,7 @@ HcbReduction reduce_hcb(const SpMat& k, const SpMat& m, const std::vector<int>& 
     eo.count = nm;
     eo.shift = 0;
     eo.tolerance = options.tolerance;
+    eo.interrupt = options.interrupt;
     const EigenResult er = lowest_modes(factor, m_ii, eo);
     eig_report = er.summary.report;
     if (!er.summary.ok()) {
@@ -96,6 +97,7 @@ HcbReduction reduce_hcb(const SpMat& k, const SpMat& m, const std::vector<int>& 
   out.summary.modes = nm;
 
   say(fmt::format("constraint modes: {} solves with the same factorisation", nb));
+  if (options.interrupt) options.interrupt();
   const Eigen::MatrixXd psi = -factor.solve(Eigen::MatrixXd(k_ib));
 
   say("projecting K and M");

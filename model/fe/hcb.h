@@ -27,6 +27,9 @@ struct HcbOptions {
   double tolerance = 1e-10;        ///< Eigen-solve tolerance.
   /// Called with a short message before each long step (may be empty).
   std::function<void(const std::string&)> progress;
+  /// Called at each step of the fixed-interface eigen-solve (EigenOptions::interrupt) and before
+  /// the constraint modes' solves; it may throw to stop the reduction. May be empty.
+  std::function<void()> interrupt;
   /// Empty when the options are usable, otherwise what is wrong.
   std::string validate() const;
 };

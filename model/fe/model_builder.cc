@@ -97,6 +97,7 @@ ReducedModel build_reduced_model(const RivetedBeamDescription& d, const BuildOpt
   HcbOptions ho;
   ho.fixed_interface_modes = d.fixed_interface_modes;
   ho.progress = options.progress;
+  ho.interrupt = options.interrupt;
   const HcbReduction r = reduce_hcb(a.stiffness, a.mass, boundary, ho);
   out.summary.seconds_reduction = seconds_since(t1);
   out.summary.boundary_dofs = static_cast<int>(boundary.size());

@@ -27,6 +27,9 @@ namespace jointlab::model::fe {
 struct BuildOptions {
   /// Called with a short message before each long step (may be empty).
   std::function<void(const std::string&)> progress;
+  /// Called often during the reduction (HcbOptions::interrupt); it may throw to stop the build
+  /// (the Python module's Ctrl-C). May be empty.
+  std::function<void()> interrupt;
 };
 
 /// A `node,component` label of one reduced DOF.
