@@ -71,9 +71,53 @@ struct OneOrMany {
   std::vector<T> items;  ///< the values, in order
 };
 
+/// A Python integer of any size (an int or a numpy integer) where an integer option is taken:
+/// its value where it fits, so that one beyond C's range (threads=10**10) is refused naming the
+/// option and its range, not with pybind11's "incompatible function arguments" and the whole
+/// signature.
+struct Integer {
+  std::string text;                                  ///< its decimal text
+  std::optional<long long> value;                    ///< its value, where it fits a long long
+  std::optional<unsigned long long> unsigned_value;  ///< its value, where it fits 64 bits >= 0
+};
+
 }  // namespace jointlab::python
 
 namespace pybind11::detail {
+// What pybind11's int caster takes (an int, a bool, anything with __index__; never a float),
+// of any size.
+template <>
+struct type_caster<jointlab::python::Integer> {
+  PYBIND11_TYPE_CASTER(jointlab::python::Integer, const_name("int"));
+  bool load(handle src, bool) {
+    if (PyFloat_Check(src.ptr()) != 0 || PyIndex_Check(src.ptr()) == 0) return false;
+    const object index = reinterpret_steal<object>(PyNumber_Index(src.ptr()));
+    if (!index) {
+      PyErr_Clear();
+      return false;
+    }
+    value.text = str(index).cast<std::string>();
+    int overflow = 0;
+    const long long v = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+    value.value.reset();
+    value.unsigned_value.reset();
+    if (overflow == 0) {
+      value.value = v;
+      if (v >= 0) value.unsigned_value = static_cast<unsigned long long>(v);
+    } else if (overflow > 0) {
+      const unsigned long long u = PyLong_AsUnsignedLongLong(index.ptr());
+      if (PyErr_Occurred() != nullptr)
+        PyErr_Clear();
+      else
+        value.unsigned_value = u;
+    }
+    return true;
+  }
+  static handle cast(const jointlab::python::Integer& v, return_value_policy, handle) {
+    return PyLong_FromString(v.text.c_str(), nullptr, 10);
+  }
+};
+
 // One value is tried first: a str, a path or a (lo, hi) pair never loads as a list of them, so a
 // list is never read as one value (a str was refused with pybind11's "incompatible function
 // arguments" and the whole signature).
@@ -175,6 +219,29 @@ std::string integer_text(const py::handle& h) {
   return py::str(py::int_(py::reinterpret_borrow<py::object>(h))).cast<std::string>();
 }
 
+// An integer option in [lo, hi]; InputError "OPTION V: must be in [LO, HI]NOTE" otherwise, as the
+// command says it.
+long long in_range(const Integer& v, std::string_view option, long long lo, long long hi,
+                   std::string_view note = "") {
+  if (!v.value || *v.value < lo || *v.value > hi)
+    throw InputError(fmt::format("{} {}: must be in [{}, {}]{}", option, v.text, lo, hi, note));
+  return *v.value;
+}
+
+// An integer option as an int where the library (or a check below) says what is wrong with a
+// value in C's range: beyond it, InputError with the range [lo, INT_MAX].
+int as_int(const Integer& v, std::string_view option, int lo) {
+  using limits = std::numeric_limits<int>;
+  if (v.value && *v.value >= limits::min() && *v.value <= limits::max())
+    return static_cast<int>(*v.value);
+  throw InputError(fmt::format("{} {}: must be in [{}, {}]", option, v.text, lo, limits::max()));
+}
+
+// --threads, as the commands take it.
+unsigned threads_option(const Integer& v) {
+  return static_cast<unsigned>(in_range(v, "--threads", 0, 1024, " (0: every core)"));
+}
+
 // The model file `path` (its matrices beside it), its folder created if missing as the commands
 // create their --out folders (a missing one was refused after the fit, naming a temporary file).
 void write_model(const std::string& path, const model::Model& m) {
@@ -273,19 +340,18 @@ bool is_process_output(const std::string& name) {
 }
 
 py::list process(const OneOrMany<PathArg>& file_args,
-                 const std::optional<OneOrMany<std::pair<double, double>>>& bands, int modes,
-                 const std::optional<OneOrMany<std::string>>& channels,
+                 const std::optional<OneOrMany<std::pair<double, double>>>& bands,
+                 const Integer& modes_arg, const std::optional<OneOrMany<std::string>>& channels,
                  const std::optional<std::string>& quantity, const std::string& amplitude,
-                 const py::object& progress, int threads, const std::string& method, double snr_min,
-                 double max_damping_std, double coverage_factor, double min_share,
+                 const py::object& progress, const Integer& threads, const std::string& method,
+                 double snr_min, double max_damping_std, double coverage_factor, double min_share,
                  const std::optional<PathArg>& out_arg) {
   check_progress(progress);
   const std::vector<std::string> files = text(file_args.items);
   const std::optional<std::string> out = text(out_arg);
   modal::ProcessOptions opt;
-  if (threads < 0 || threads > 1024)
-    throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
-  opt.threads = static_cast<unsigned>(threads);
+  opt.threads = threads_option(threads);
+  const int modes = as_int(modes_arg, "--modes", 0);
   if (bands && !bands->items.empty() && modes != 0)  // bands=[] is none, as None
     throw InputError("process: give bands or modes=N, not both (--band excludes --modes)");
   // --method, --snr-min, --max-damping-std, --coverage-factor and --min-share, in the command's
@@ -488,7 +554,7 @@ class Model {
                        model_.size(), model_.joints.size(), model_.iwan_count());
   }
 
-  py::array_t<double> modes(int count) const {
+  py::array_t<double> modes(const Integer& count) const {
     const model::LinearModes modes = solve(count);
     Eigen::VectorXd f(modes.size() - modes.rigid_count);
     for (Eigen::Index i = 0; i < f.size(); ++i)
@@ -497,17 +563,16 @@ class Model {
   }
 
   // The elastic shapes of modes(count), mass-normalised, a column per mode.
-  py::array_t<double> shapes(int count) const {
+  py::array_t<double> shapes(const Integer& count) const {
     const model::LinearModes modes = solve(count);
     return to_numpy(Eigen::MatrixXd(modes.shapes.rightCols(modes.size() - modes.rigid_count)));
   }
 
-  py::dict qsma(int mode, int points, std::optional<double> qmin,
+  py::dict qsma(const Integer& mode_arg, const Integer& points, std::optional<double> qmin,
                 std::optional<double> qmax) const {
     model::QsmaOptions options;
-    if (points < 2 || points > 100000)
-      throw InputError(fmt::format("--points {}: must be in [2, 100000]", points));
-    options.points = points;
+    options.points = static_cast<int>(in_range(points, "--points", 2, 100000));
+    const int mode = as_int(mode_arg, "--mode", 1);
     options.q_min = qmin.value_or(0.0);
     options.q_max = qmax.value_or(0.0);
     if (mode < 1) throw InputError(fmt::format("--mode {}: elastic modes count from 1", mode));
@@ -534,7 +599,8 @@ class Model {
 
  private:
   // The lowest `count` modes, as `jointlab modes --count` solves them.
-  model::LinearModes solve(int count) const {
+  model::LinearModes solve(const Integer& count_arg) const {
+    const int count = as_int(count_arg, "--count", 1);
     if (count < 1) throw InputError(fmt::format("--count {}: must be >= 1", count));
     model::ModesOptions options;
     options.count = count;
@@ -825,12 +891,11 @@ py::dict update_linear(const PathArg& model_arg, const OneOrMany<std::string>& s
 // run: a whole campaign into `out`, as `jointlab run`; the summary as a dict. Hits that could
 // not be processed and modes without a backbone are listed, not raised (everything else is
 // written), as the library reports them.
-py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, int threads,
-             const py::object& progress) {
+py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force,
+             const Integer& threads_arg, const py::object& progress) {
   check_progress(progress);
   const std::string campaign_file = text(campaign_arg), out = text(out_arg);
-  if (threads < 0 || threads > 1024)
-    throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
+  const unsigned threads = threads_option(threads_arg);
   campaign::RunSummary s;
   InterruptCheck interrupted;  // made on the calling thread, the one that checks
   {
@@ -839,7 +904,7 @@ py::dict run(const PathArg& campaign_arg, const PathArg& out_arg, bool force, in
     campaign::RunOptions o;
     o.out = out;
     o.force = force;
-    o.threads = static_cast<unsigned>(threads);
+    o.threads = threads;
     o.progress = [&progress](const std::string& line) { report(progress, line); };
     o.interrupt = [&interrupted] { interrupted(); };
     s = campaign::run_campaign(c, o);
@@ -1105,15 +1170,14 @@ py::dict compare(const OneOrMany<PathArg>& model_args, const py::object& mode,
                  const std::optional<PathArg>& measured_arg,
                  const std::optional<PathArg>& sensors_arg,
                  const OneOrMany<std::string>& channels_arg,
-                 const OneOrMany<std::string>& labels_arg, int points,
+                 const OneOrMany<std::string>& labels_arg, const Integer& points_arg,
                  const std::optional<PathArg>& out_arg) {
   const std::vector<std::string> models = text(model_args.items),
                                  backbones = text(backbone_args.items);
   const std::vector<std::string>&channels = channels_arg.items, &labels = labels_arg.items;
   const std::optional<std::string> measured = text(measured_arg), sensors = text(sensors_arg),
                                    out = text(out_arg);
-  if (points < 2 || points > 100000)
-    throw InputError(fmt::format("--points {}: must be in [2, 100000]", points));
+  const int points = static_cast<int>(in_range(points_arg, "--points", 2, 100000));
   if (out) {
     const std::string ext = std::filesystem::path(*out).extension().string();
     if (ext != ".png" && ext != ".svg" && ext != ".pdf")
@@ -1185,19 +1249,19 @@ py::dict update_iwan_call(
     const std::optional<std::string>& dof, const std::string& linear_damping,
     const std::optional<std::pair<double, double>>& fs_range,
     const std::pair<double, double>& gamma_range, const std::pair<double, double>& chi_range,
-    const std::pair<double, double>& beta_range, int evaluations, long long seed,
-    const std::optional<PathArg>& out, const py::object& progress,
+    const std::pair<double, double>& beta_range, const Integer& evaluations_arg,
+    const Integer& seed_arg, const std::optional<PathArg>& out, const py::object& progress,
     const std::optional<PathArg>& measured, const std::optional<PathArg>& sensors,
     const OneOrMany<std::string>& channels, std::optional<double> gamma, std::optional<double> beta,
-    double linear_damping_max, int threads, const std::string& optimizer,
+    double linear_damping_max, const Integer& threads, const std::string& optimizer,
     const std::string& compare, const OneOrMany<PathArg>& stepped_sine,
-    const std::optional<std::string>& stepped_sine_channel, int stepped_sine_mode,
+    const std::optional<std::string>& stepped_sine_channel, const Integer& stepped_sine_mode_arg,
     const OneOrMany<double>& pareto_arg) {
   check_progress(progress);
   const std::vector<double>& pareto = pareto_arg.items;
   // --seed, a UINT as the command reads it (-1 was pybind11's "incompatible function arguments").
-  if (seed < 0 || seed > 4294967295LL)
-    throw InputError(fmt::format("--seed {}: must be in [0, 4294967295]", seed));
+  const auto seed = static_cast<unsigned>(in_range(seed_arg, "--seed", 0, 4294967295LL));
+  const int stepped_sine_mode = as_int(stepped_sine_mode_arg, "--stepped-sine-mode", 0);
   if (stepped_sine_mode < 0)
     throw InputError(
         fmt::format("--stepped-sine-mode {}: elastic modes count from 1 (0: the first mode)",
@@ -1225,9 +1289,7 @@ py::dict update_iwan_call(
     throw InputError(
         fmt::format("--linear-damping-max {}: must be in [1e-09, 0.999]", linear_damping_max));
   asked.linear_damping_max = linear_damping_max;
-  if (threads < 0 || threads > 1024)
-    throw InputError(fmt::format("--threads {}: must be in [0, 1024] (0: every core)", threads));
-  asked.threads = threads;
+  asked.threads = static_cast<int>(threads_option(threads));
   // --optimizer and --compare.
   if (optimizer != "paper" && optimizer != "paper-log" && optimizer != "global-local")
     throw InputError(
@@ -1257,9 +1319,9 @@ py::dict update_iwan_call(
   }
   if (modes.empty()) throw InputError("mode: give at least one mode");
   return update_iwan(text(model), set, modes, text(backbones.items), amplitude, dof, linear_damping,
-                     fs_range, gamma_range, chi_range, beta_range, evaluations,
-                     static_cast<unsigned>(seed), text(out), progress, text(measured),
-                     text(sensors), channels.items, asked, sine);
+                     fs_range, gamma_range, chi_range, beta_range,
+                     as_int(evaluations_arg, "--evaluations", 1), seed, text(out), progress,
+                     text(measured), text(sensors), channels.items, asked, sine);
 }
 
 }  // namespace

@@ -260,6 +260,47 @@ def test_each_error_path_raises_input_error(tmp_path):
         jointlab.run(str(tmp_path / "campaign.toml"), str(tmp_path / "out"), threads=2000)
 
 
+def test_an_integer_beyond_c_is_refused_naming_the_option_and_its_range(tmp_path):
+    # An int argument given a Python int beyond C's int (threads=10**10) was pybind11's
+    # TypeError, "incompatible function arguments" and the whole signature: now the command's
+    # one-line message naming the option and its range, before any input is read. numpy
+    # integers are still taken, the same numbers as Python's (bit for bit).
+    model_file = two_mass_model(tmp_path)
+    model = jointlab.Model(model_file)
+    missing = tmp_path / "missing.csv"
+    cases = [
+        (lambda: jointlab.process(missing, bands=(70, 90), threads=10**10),
+         r"--threads 10000000000: must be in \[0, 1024\] \(0: every core\)"),
+        (lambda: jointlab.process(missing, modes=2**31), r"--modes 2147483648: must be in \[0, "),
+        (lambda: jointlab.run(tmp_path / "c.toml", tmp_path / "o", threads=-10**12),
+         r"--threads -1000000000000: must be in \[0, 1024\]"),
+        (lambda: model.modes(count=10**30),
+         r"--count 1000000000000000000000000000000: must be in \[1, 2147483647\]"),
+        (lambda: model.shapes(count=-2**63 - 1), r"--count -9223372036854775809: must be in \[1, "),
+        (lambda: model.qsma(mode=2**40), r"--mode 1099511627776: must be in \[1, 2147483647\]"),
+        (lambda: model.qsma(mode=1, points=2**64), r"--points 18446744073709551616: must be in "
+                                                   r"\[2, 100000\]"),
+        (lambda: jointlab.compare([model_file], 1, [missing], points=10**20),
+         r"--points 100000000000000000000: must be in \[2, 100000\]"),
+        (lambda: jointlab.update_iwan(model_file, "j", 1, [missing], seed=2**70),
+         r"--seed 1180591620717411303424: must be in \[0, 4294967295\]"),
+        (lambda: jointlab.update_iwan(model_file, "j", 1, [missing], evaluations=2**40),
+         r"--evaluations 1099511627776: must be in \[1, 2147483647\]"),
+        (lambda: jointlab.update_iwan(model_file, "j", 1, [missing], threads=np.int64(2**40)),
+         r"--threads 1099511627776: must be in \[0, 1024\]"),
+        (lambda: jointlab.update_iwan(model_file, "j", 1, [missing], stepped_sine_mode=2**33),
+         r"--stepped-sine-mode 8589934592: must be in \[0, 2147483647\]"),
+    ]
+    for call, message in cases:
+        with pytest.raises(jointlab.InputError, match="^" + message):
+            call()
+    assert np.array_equal(model.modes(count=np.int64(2)), model.modes(count=2))
+    assert np.array_equal(model.qsma(mode=np.int32(1), points=np.uint16(10))["frequency_hz"],
+                          model.qsma(mode=1, points=10)["frequency_hz"])
+    with pytest.raises(TypeError):  # a float is not an integer, as before
+        model.modes(count=2.0)
+
+
 def test_one_value_where_a_list_is_expected_is_a_list_of_one(tmp_path):
     # A str or a pathlib.Path for the files, a (lo, hi) pair for the bands, a str for the
     # channels, the sets or the holds: the command's repeatable option given once (each was
