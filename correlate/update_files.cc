@@ -151,16 +151,18 @@ std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
       row("beta", s.start.beta, s.best.beta, rel(3), s.held_as_asked(3), !micro, s.bound_side[3],
           s.parameter_note(3)),
   };
-  if (ks > 0) {
-    rows.push_back(row("gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held_as_asked(1), true,
-                       s.bound_side[1], s.parameter_note(1)));
-  }
   if (s.modal_ratio_fitted) {
     rows.push_back(row("modal_ratio", s.modal_ratio_start, s.modal_ratio,
                        s.improved && s.modal_ratio_std > 0 && s.modal_ratio > 0
                            ? s.modal_ratio_std / s.modal_ratio
                            : -1.0,
                        false, true, s.bound_side[4], s.parameter_note(4)));
+  }
+  // gamma = K_T / K_s, the paper's stiffness factor, is Kt again and no parameter of its own:
+  // last, after the rows the contract lists (Fs, Kt, chi, beta and, when fitted, modal_ratio).
+  if (ks > 0) {
+    rows.push_back(row("gamma", s.start.Kt / ks, s.best.Kt / ks, rel(1), s.held_as_asked(1), true,
+                       s.bound_side[1], s.parameter_note(1)));
   }
   return rows;
 }

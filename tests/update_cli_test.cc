@@ -708,6 +708,15 @@ TEST(UpdateCli, IwanFitsBackboneTablesWithTheStructuresOwnDamping) {
   EXPECT_NE(r.err.find("update-iwan: 250 QSMA evaluations, best cost"), std::string::npos) << r.err;
   const auto p = read_parameters(dir / "fit" / "parameters.csv");
   ASSERT_TRUE(p.count("modal_ratio"));
+  // The rows in the contract's order (Fs, Kt, chi, beta and, when fitted, modal_ratio), the
+  // paper's gamma = Kt / Ks after them.
+  {
+    std::ifstream in(dir / "fit" / "parameters.csv");
+    std::string line, names;
+    std::getline(in, line);
+    while (std::getline(in, line)) names += line.substr(0, line.find(',')) + " ";
+    EXPECT_EQ(names, "Fs Kt chi beta modal_ratio gamma ");
+  }
   EXPECT_TRUE(testing::Close(std::stod(p.at("modal_ratio").at(2)), z, 0.02));
   EXPECT_NE(p.at("modal_ratio").at(3), "");  // its sigma
   EXPECT_TRUE(testing::Close(std::stod(p.at("Fs").at(2)), truth.Fs, 0.02));
