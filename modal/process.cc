@@ -21,6 +21,7 @@
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
+#include "jointlab/core/text.h"
 #include "jointlab/signal/spectrum.h"
 
 namespace jointlab::modal {
@@ -771,12 +772,49 @@ RecordResult process_modes(const data::Record& record,
 
 }  // namespace
 
+namespace {
+
+// Whether a channel's name says it is the hammer's force: "Force", "hammer", "Impact 1",
+// "load_cell" (case-blind).
+bool named_as_force(const std::string& name) {
+  const std::string n = lower(name);
+  for (const char* word :
+       {"force", "hammer", "impact", "impulse", "load cell", "load_cell", "loadcell"}) {
+    if (n.find(word) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// A hammer's force channel exported without a unit ("Force" beside "Acc1") is read as the
+// --quantity's response and gives no ring-down: its refusals say how to mark it a force,
+// where they would otherwise leave a newcomer reading the hammer's noise floor.
+void name_unitless_forces(const data::Record& record, RecordResult& out) {
+  for (ChannelBand& r : out.results) {
+    const data::Channel* c = record.find(r.channel);
+    if (r.ringdown.summary.status == RingdownStatus::kOk || !c || !c->unit.empty() ||
+        !named_as_force(r.channel))
+      continue;
+    r.ringdown.summary.message += fmt::format(
+        "; the channel '{}' has no unit and was read as {}: if it is the hammer's force, give "
+        "its unit in the header ('{} [N]'), which leaves it out of the responses",
+        r.channel, quantity_name(r.measured), r.channel);
+  }
+}
+
+}  // namespace
+
 RecordResult process_record(const data::Record& record, const ProcessOptions& options,
                             signal::FftCache& cache) {
   const std::vector<const data::Channel*> chans = requested_channels(record, options);
-  if (options.modes > 0) return process_modes(record, chans, options, cache);
-  check_typed_bands(record, options.bands);
-  return process_bands(record, chans, options.bands, options, cache);
+  RecordResult out;
+  if (options.modes > 0) {
+    out = process_modes(record, chans, options, cache);
+  } else {
+    check_typed_bands(record, options.bands);
+    out = process_bands(record, chans, options.bands, options, cache);
+  }
+  name_unitless_forces(record, out);
+  return out;
 }
 
 }  // namespace jointlab::modal

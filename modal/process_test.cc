@@ -108,6 +108,59 @@ TEST(Process, AClippedChannelsShapeIsReadAfterItsRange) {
   }
 }
 
+// A hammer test exported with its force channel unlabelled ("time,Force,Acc1", --quantity
+// acceleration): the force, a 0.5 ms half-sine of 200 N and then the hammer's noise, is read as
+// an acceleration and gives no ring-down. Its refusal must say how to mark it a force, and only
+// there: the response beside it keeps its backbone without the note, and a unitless response
+// that gives none ("acc2", noise alone) gets no such note either.
+TEST(Process, AnUnlabelledForceChannelIsToldHowToMarkIt) {
+  constexpr double kFs = 5120, kF = 150;
+  const Eigen::Index n = static_cast<Eigen::Index>(2.0 * kFs);
+  testing::SlowFlowMode mode;
+  mode.omega_n = [](double) { return 2 * std::numbers::pi * kF; };
+  mode.zeta = [](double) { return 0.003; };
+  mode.a0 = 50 / std::pow(2 * std::numbers::pi * kF, 2);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  data::Record rec;
+  rec.fs = kFs;
+  rec.source = "hammer.csv";
+  rec.channels.resize(3);
+  rec.channels[0].name = "Force";
+  rec.channels[0].samples.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / kFs;
+    rec.channels[0].samples(k) =
+        (t < 5e-4 ? 200 * std::sin(std::numbers::pi * t / 5e-4) : 0.0) + 0.05 * noise(rng);
+  }
+  rec.channels[1].name = "Acc1";
+  rec.channels[1].samples = testing::slow_flow(mode, kFs, n).acceleration;
+  for (Eigen::Index k = 0; k < n; ++k) rec.channels[1].samples(k) += 0.01 * noise(rng);
+  rec.channels[2].name = "acc2";
+  rec.channels[2].samples.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) rec.channels[2].samples(k) = 0.01 * noise(rng);
+  ProcessOptions opt;
+  opt.bands = {{140, 160}};
+  opt.quantity = Quantity::kAcceleration;
+  opt.min_share = 0;
+  signal::FftCache cache;
+  const RecordResult res = process_record(rec, opt, cache);
+  ASSERT_EQ(res.results.size(), 3u);
+  const std::string hint = "if it is the hammer's force, give its unit in the header";
+  const RingdownSummary& force = res.results[0].ringdown.summary;
+  EXPECT_NE(force.status, RingdownStatus::kOk);
+  EXPECT_NE(force.message.find("the channel 'Force' has no unit and was read as acceleration"),
+            std::string::npos)
+      << force.message;
+  EXPECT_NE(force.message.find(hint + " ('Force [N]')"), std::string::npos) << force.message;
+  const RingdownSummary& acc = res.results[1].ringdown.summary;
+  EXPECT_EQ(acc.status, RingdownStatus::kOk) << acc.message;
+  EXPECT_EQ(acc.message.find(hint), std::string::npos) << acc.message;
+  const RingdownSummary& quiet = res.results[2].ringdown.summary;
+  EXPECT_NE(quiet.status, RingdownStatus::kOk);
+  EXPECT_EQ(quiet.message.find(hint), std::string::npos) << quiet.message;
+}
+
 using jointlab::testing::memory_now;
 
 // A record at 1 kHz of `channels` accelerations a0, a1, ... of `rows` samples each,
