@@ -38,12 +38,11 @@ int usable_points(const SteppedSineFileResult& result) {
                     [](const SineBackbonePoint& p) { return p.status == SineStatus::kOk; }));
 }
 
-void write_sine_backbone(const std::filesystem::path& dir, const SteppedSineFileResult& r) {
+data::Table sine_backbone_table(const SteppedSineFileResult& r) {
   std::vector<size_t> rows;
   for (size_t i = 0; i < r.points.size(); ++i) {
     if (r.points[i].status == SineStatus::kOk) rows.push_back(i);
   }
-  if (rows.empty()) return;
   std::stable_sort(rows.begin(), rows.end(), [&](size_t a, size_t b) {
     return r.points[a].amplitude < r.points[b].amplitude;
   });
@@ -69,7 +68,12 @@ void write_sine_backbone(const std::filesystem::path& dir, const SteppedSineFile
   t.add("displacement_m", column([&](size_t i) { return p[i].displacement_m; }));
   t.add("force_n", column([&](size_t i) { return p[i].force_n; }));
   t.add("damping_direct", column([&](size_t i) { return p[i].damping_direct ? 1.0 : 0.0; }));
-  data::write_table(dir / sine_backbone_file_name(r.source), t);
+  return t;
+}
+
+void write_sine_backbone(const std::filesystem::path& dir, const SteppedSineFileResult& r) {
+  if (usable_points(r) == 0) return;
+  data::write_table(dir / sine_backbone_file_name(r.source), sine_backbone_table(r));
 }
 
 namespace {

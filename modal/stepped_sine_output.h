@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "jointlab/data/stepped_sine.h"
+#include "jointlab/data/table_writer.h"
 #include "jointlab/modal/stepped_sine.h"
 
 namespace jointlab::modal {
@@ -38,7 +39,12 @@ std::string sine_backbone_file_name(const std::string& source);
 /// Number of usable points of a file.
 int usable_points(const SteppedSineFileResult& result);
 
-/// Writes DIR/<stem>.backbone.csv (nothing when no level gave a point).
+/// The rows of the file's backbone CSV: one per level that gave a point, amplitude increasing,
+/// in the columns above (no row when no level gave a point).
+data::Table sine_backbone_table(const SteppedSineFileResult& result);
+
+/// Writes DIR/<stem>.backbone.csv, sine_backbone_table's rows (nothing when no level gave a
+/// point).
 void write_sine_backbone(const std::filesystem::path& dir, const SteppedSineFileResult& result);
 
 /// Writes DIR/summary.json for all files.

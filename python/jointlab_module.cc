@@ -1,14 +1,15 @@
-// The `jointlab` Python module: the library's process, record reading, modes, QSMA, update-linear,
-// update-iwan, compare and run with numpy arrays in and out (docs/python.md), the same options and
-// defaults as the command line, and the command line's one-line messages as jointlab.InputError
-// (a ValueError). Argument conversion only: every number comes from the library the program uses
-// (style.md 13).
+// The `jointlab` Python module: the library's process, stepped-sine, record reading, build-model,
+// modes, QSMA, simulate, update-linear, update-iwan, compare and run with numpy arrays in and out
+// (docs/python.md), the same options and defaults as the command line, and the command line's
+// one-line messages as jointlab.InputError (a ValueError). Argument conversion only: every number
+// comes from the library the program uses (style.md 13).
 #include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -48,15 +49,21 @@
 #include "jointlab/data/names.h"
 #include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"
+#include "jointlab/data/record_writer.h"
 #include "jointlab/data/table_writer.h"
 #include "jointlab/modal/process.h"
 #include "jointlab/modal/process_output.h"
+#include "jointlab/modal/stepped_sine.h"
+#include "jointlab/modal/stepped_sine_output.h"
+#include "jointlab/model/fe/model_builder.h"
+#include "jointlab/model/fe/riveted_beam.h"
 #include "jointlab/model/joint_condensation.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
 #include "jointlab/model/model_file_writer.h"
 #include "jointlab/model/qsma.h"
 #include "jointlab/model/qsma_output.h"
+#include "jointlab/model/sim/ringdown_simulation.h"
 #include "jointlab/model/sim/simulated_record.h"
 
 namespace py = pybind11;
@@ -332,6 +339,20 @@ struct Backbone {
   double noise_floor_m = 0;                        // noise floor of the displacement envelope [m]
 };
 
+// InputError when two files share a stem, as the commands say it (apps/cli_args.cc): their
+// outputs carry it (data::file_name_part) and would collide.
+void check_distinct_stems(const std::vector<std::string>& files) {
+  for (size_t i = 0; i < files.size(); ++i) {
+    for (size_t k = 0; k < i; ++k) {
+      const std::string stem = std::filesystem::path(files[i]).stem().string();
+      if (data::file_name_part(stem) ==
+          data::file_name_part(std::filesystem::path(files[k]).stem().string()))
+        throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
+                                     files[k], files[i], stem));
+    }
+  }
+}
+
 // Names of the files `jointlab process` writes: summary.json and "<stem>.<channel>.band<k>.csv"
 // (apps/process_command.cc), replaced as a set in a folder an older run wrote.
 bool is_process_output(const std::string& name) {
@@ -386,18 +407,7 @@ py::list process(const OneOrMany<PathArg>& file_args,
   opt.ringdown.amplitude = motion("--amplitude", amplitude);
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
   if (files.empty()) throw InputError("process: no file given");
-  if (out) {
-    // Output names carry the stem (data::file_name_part): two files sharing it would collide.
-    for (size_t i = 0; i < files.size(); ++i) {
-      for (size_t k = 0; k < i; ++k) {
-        const std::string stem = std::filesystem::path(files[i]).stem().string();
-        if (data::file_name_part(stem) ==
-            data::file_name_part(std::filesystem::path(files[k]).stem().string()))
-          throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
-                                       files[k], files[i], stem));
-      }
-    }
-  }
+  if (out) check_distinct_stems(files);
   std::vector<modal::RecordResult> results;
   {
     py::gil_scoped_release release;
@@ -505,13 +515,8 @@ py::list process(const OneOrMany<PathArg>& file_args,
   return backbones;
 }
 
-py::dict read_record(const PathArg& path_arg) {
-  const std::string path = text(path_arg);
-  data::Record rec;
-  {
-    py::gil_scoped_release release;
-    rec = data::read_record(path);
-  }
+// A record as read_record() and simulate() return it: its channels as numpy arrays (SI).
+py::dict record_dict(data::Record rec) {
   py::dict out;
   out["source"] = rec.source;
   out["sample_rate_hz"] = rec.fs;
@@ -536,11 +541,23 @@ py::dict read_record(const PathArg& path_arg) {
   return out;
 }
 
+py::dict read_record(const PathArg& path_arg) {
+  const std::string path = text(path_arg);
+  data::Record rec;
+  {
+    py::gil_scoped_release release;
+    rec = data::read_record(path);
+  }
+  return record_dict(std::move(rec));
+}
+
 /// A model file, read once.
 class Model {
  public:
   explicit Model(const PathArg& path) : path_(text(path)), model_(model::read_model(path_)) {}
   const std::string& path() const { return path_; }
+  /// The model as the library reads it.
+  const model::Model& model() const { return model_; }
   /// The damping ratio of every elastic mode ([damping] modal_ratio; 0 without one).
   double modal_ratio() const { return model_.modal_ratio; }
 
@@ -1372,6 +1389,211 @@ py::dict update_iwan_call(
                      text(measured), text(sensors), channels.items, asked, sine);
 }
 
+// build-model: the description's reduced model written to `out` as the command writes it (M.mtx,
+// K.mtx, dofs.csv, model.toml), then read back as a Model.
+Model build_model(const PathArg& description_arg, const PathArg& out_arg,
+                  const std::optional<Integer>& modes, const py::object& progress) {
+  check_progress(progress);
+  const std::string description = text(description_arg), out = text(out_arg);
+  // --modes, non-negative as the command takes it.
+  const std::optional<int> interface_modes =
+      modes ? std::optional<int>(
+                  static_cast<int>(in_range(*modes, "--modes", 0, std::numeric_limits<int>::max())))
+            : std::nullopt;
+  InterruptCheck interrupted;
+  {
+    py::gil_scoped_release release;
+    model::fe::RivetedBeamDescription d = model::fe::read_riveted_beam_description(description);
+    if (interface_modes) d.fixed_interface_modes = *interface_modes;
+    model::fe::BuildOptions options;
+    options.progress = [&progress](const std::string& line) { report(progress, line); };
+    options.interrupt = [&interrupted] { interrupted(); };
+    const model::fe::ReducedModel m = model::fe::build_reduced_model(d, options);
+    if (!m.summary.ok)
+      throw InputError(fmt::format("{}: the reduction failed: {}", description, m.summary.report));
+    model::fe::write_model_directory(out, m);
+  }
+  return Model(std::filesystem::path(out) / "model.toml");
+}
+
+// A model DOF as the command's --impact and --sensors take it: an index (a Python or numpy
+// integer) or a "node:component" label.
+std::string dof_text(const py::handle& h, const std::string& option) {
+  if (py::isinstance<py::str>(h)) return h.cast<std::string>();
+  if (is_integer(h)) return integer_text(h);
+  throw InputError(fmt::format("{}: expected a DOF index (int) or a 'node:component' label, got {}",
+                               option, Py_TYPE(h.ptr())->tp_name));
+}
+
+// simulate: a virtual hammer test of the model, the record the command writes (to `out` too,
+// when given) as read_record() gives a file, and the energy report the command prints.
+py::dict simulate(const py::object& model_arg, const py::object& impact, double force,
+                  double duration, double fs, const py::object& sensors_arg, double pulse,
+                  double pulse_start, const Integer& substeps, std::optional<double> modal_damping,
+                  double rayleigh_mass, double rayleigh_stiffness, double cutoff, double noise,
+                  const Integer& seed, bool force_channel, const std::optional<PathArg>& out_arg,
+                  const py::object& progress) {
+  check_progress(progress);
+  const std::optional<std::string> out = text(out_arg);
+  // The model: a jointlab.Model (read already) or its file.
+  std::optional<model::Model> read;
+  const Model* given = py::isinstance<Model>(model_arg) ? &model_arg.cast<const Model&>() : nullptr;
+  std::string model_name;
+  if (given) {
+    model_name = given->path();
+  } else {
+    try {
+      model_name = text(model_arg.cast<PathArg>());
+    } catch (const py::cast_error&) {
+      throw py::type_error(
+          fmt::format("model: expected a model file (str or os.PathLike) or a jointlab.Model; "
+                      "got {}",
+                      Py_TYPE(model_arg.ptr())->tp_name));
+    }
+  }
+  // --impact and --sensors as text, as the command reads them (one DOF or a list of them).
+  const std::string impact_dof = dof_text(impact, "--impact");
+  std::vector<std::string> sensors;
+  if (py::isinstance<py::str>(sensors_arg) || is_integer(sensors_arg)) {
+    sensors.push_back(dof_text(sensors_arg, "--sensors"));
+  } else if (py::isinstance<py::iterable>(sensors_arg)) {
+    for (const py::handle h : sensors_arg) sensors.push_back(dof_text(h, "--sensors"));
+  } else if (!sensors_arg.is_none()) {
+    sensors.push_back(dof_text(sensors_arg, "--sensors"));  // says what is expected
+  }
+  model::SimulationOptions o;
+  o.pulse.force = force;
+  o.duration = duration;
+  o.fs = fs;
+  o.pulse.duration = pulse;
+  o.pulse.start = pulse_start;
+  o.substeps = static_cast<int>(in_range(substeps, "--substeps", 0, 100000));
+  o.rayleigh_mass = rayleigh_mass;
+  o.rayleigh_stiffness = rayleigh_stiffness;
+  o.output_cutoff_hz = cutoff;
+  model::RecordOptions record;
+  record.noise = noise;
+  if (!seed.unsigned_value)
+    throw InputError(fmt::format("--seed {}: must be in [0, {}]", seed.text,
+                                 std::numeric_limits<std::uint64_t>::max()));
+  record.seed = *seed.unsigned_value;
+  record.include_force = force_channel;
+  record.model_name = model_name;
+  if (const std::string e = record.error(); !e.empty()) throw InputError("simulate: --" + e);
+  data::Record rec;
+  std::string energy;
+  {
+    py::gil_scoped_release release;
+    if (!given) read = model::read_model(model_name);
+    const model::Model& m = given ? given->model() : *read;
+    // The model's own damping ([damping] modal_ratio) unless modal_damping says otherwise.
+    o.modal_damping = modal_damping.value_or(m.modal_ratio);
+    o.pulse.dof = model::resolve_dof(m, impact_dof, "--impact");
+    if (sensors.empty()) o.sensors.push_back(o.pulse.dof);
+    for (const std::string& s : sensors) o.sensors.push_back(model::resolve_dof(m, s, "--sensors"));
+    // Everything the record's writing could refuse, refused before the simulation's seconds.
+    model::check_sensors(m, o.sensors);
+    if (out) data::check_record_destination(*out);
+    o.progress = [&progress](const std::string& line) { report(progress, line); };
+    model::SimulationSummary summary;
+    const model::SimulatedResponse r = model::simulate_ringdown(m, o, &summary);
+    if (summary.status != model::SimulationStatus::kOk)
+      throw InputError(
+          fmt::format("simulate: {}: {}; no record is written (a smaller step, substeps, may help)",
+                      model_name, summary.message));
+    rec = model::make_simulated_record(m, o, r, summary, record);
+    if (out) data::write_record(*out, rec);
+    energy = summary.report();
+  }
+  py::dict d = record_dict(std::move(rec));
+  d["report"] = energy;
+  return d;
+}
+
+/// One backbone of stepped_sine(): a file's points, as its backbone CSV (set as attributes).
+struct SineBackbone {
+  std::string file;                  // the stepped-sine file
+  std::string amplitude_quantity;    // what .amplitude measures ("velocity", ...)
+  std::string amplitude_unit;        // its SI unit ("m/s")
+  std::vector<std::string> reports;  // one line per level: its point, or why it gave none
+};
+
+// stepped-sine: each file's levels fitted as the command fits them, a SineBackbone per file with
+// a usable point; the command's folder written to `out` when given (the `stepped_sine` folders
+// of update_iwan).
+py::list stepped_sine(const OneOrMany<PathArg>& file_args, const std::string& amplitude,
+                      const std::optional<std::string>& quantity_arg,
+                      const std::string& damping_model, const Integer& residual_terms,
+                      double coverage_factor, const std::optional<PathArg>& out_arg,
+                      const py::object& progress) {
+  check_progress(progress);
+  const std::vector<std::string> files = text(file_args.items);
+  const std::optional<std::string> out = text(out_arg);
+  if (files.empty()) throw InputError("stepped-sine: no file given");
+  modal::SteppedSineOptions opt;
+  opt.amplitude = motion("--amplitude", amplitude);
+  if (damping_model != "hysteretic" && damping_model != "viscous")
+    throw InputError(
+        fmt::format("--damping-model {}: expected hysteretic or viscous", damping_model));
+  opt.damping =
+      damping_model == "viscous" ? modal::SineDamping::kViscous : modal::SineDamping::kHysteretic;
+  opt.residual_terms = static_cast<int>(in_range(residual_terms, "--residual-terms", 0, 2));
+  if (!(coverage_factor >= 1 && coverage_factor <= 10))
+    throw InputError(fmt::format("--coverage-factor {}: must be in [1, 10]", coverage_factor));
+  opt.coverage_factor = coverage_factor;
+  if (const std::string why = opt.check(); !why.empty()) throw InputError(why);
+  std::optional<Quantity> quantity;
+  if (quantity_arg) quantity = motion("--quantity", *quantity_arg);
+  check_distinct_stems(files);
+  std::vector<modal::SteppedSineFileResult> results;
+  {
+    py::gil_scoped_release release;
+    for (const std::string& f : files) {
+      modal::SteppedSineFileResult r = modal::extract_stepped_sine_file(f, quantity, opt);
+      r.source = f;
+      for (size_t i = 0; i < r.tables.size(); ++i)
+        report(progress, fmt::format("{} {}: {}", f, r.tables[i].label, r.points[i].report()));
+      results.push_back(std::move(r));
+    }
+    if (out) {
+      const std::filesystem::path dir(*out);
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);
+      if (!std::filesystem::is_directory(dir))
+        throw InputError(where(*out, 0, "cannot create output directory"));
+      for (const modal::SteppedSineFileResult& r : results) modal::write_sine_backbone(dir, r);
+      modal::write_sine_summary(dir, results, opt);
+    }
+  }
+  py::list backbones;
+  for (const modal::SteppedSineFileResult& r : results) {
+    // A file no level of which gave a point: the command writes its levels' reasons to
+    // summary.json alone; here a warning says so (each level's reason is a progress line).
+    if (modal::usable_points(r) == 0) {
+      const std::string message = fmt::format(
+          "stepped-sine: {}: no level gave a usable point (of {})", r.source, r.tables.size());
+      if (PyErr_WarnEx(PyExc_UserWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+      continue;
+    }
+    SineBackbone b;
+    b.file = r.source;
+    b.amplitude_quantity = quantity_name(opt.amplitude);
+    b.amplitude_unit = si_unit(opt.amplitude);
+    for (size_t i = 0; i < r.tables.size(); ++i)
+      b.reports.push_back(fmt::format("{}: {}", r.tables[i].label, r.points[i].report()));
+    py::object o = py::cast(std::move(b));
+    for (auto item : to_dict(modal::sine_backbone_table(r))) o.attr(item.first) = item.second;
+    backbones.append(o);
+  }
+  // As the command: no backbone at all is an error (the levels' reasons went to `progress`).
+  if (backbones.empty())
+    throw InputError(fmt::format(
+        "stepped-sine: no backbone from any of the {} file(s): no point is usable (each level's "
+        "reason is a progress line{})",
+        results.size(), out ? fmt::format(" and in {}/summary.json", *out) : ""));
+  return backbones;
+}
+
 }  // namespace
 }  // namespace jointlab::python
 
@@ -1383,8 +1605,9 @@ PYBIND11_MODULE(jointlab, m) {
   FLAGS_minloglevel = google::GLOG_FATAL;
   m.doc() = R"(jointlab: amplitude-dependent frequency and damping of jointed structures.
 
-The same library as the `jointlab` program: ring-down processing, linear modes and
-Quasi-Static Modal Analysis of Iwan-jointed models. SI units everywhere; arrays are numpy
+The same library as the `jointlab` program: ring-down and stepped-sine processing, the
+riveted beam's reduced model, linear modes, Quasi-Static Modal Analysis and virtual hammer
+tests of Iwan-jointed models, and model updating. SI units everywhere; arrays are numpy
 arrays named as the program's CSV columns. A user's mistake raises jointlab.InputError (a
 ValueError) with the program's one-line message. Nothing is printed unless a progress
 callable is given.
@@ -1715,7 +1938,8 @@ where), 'slip_screen'.
 
 force     recompute even outputs that are up to date
 threads   workers for the hits (0: every core)
-progress  callable taking one line per step, or None (Ctrl-C: at the next step)
+progress  callable taking one line per step, or None (Ctrl-C: at the next step; building the
+          model, at the next step of its eigen-solve)
 
 Returns a dict: 'hits', 'hits_processed', 'hits_reused', 'failed_hits' (one line each),
 'flagged_hits', 'model_built' (built in this run), 'model_reused' (the built
@@ -1768,4 +1992,147 @@ qmin, qmax  modal amplitude range (default: microslip to macroslip or the limit 
 Returns a dict of numpy arrays named as the qsma CSV's columns: force_amplitude,
 modal_amplitude, frequency_hz [Hz], damping_ratio, max_slip [m], ringdown_frequency_hz,
 ringdown_damping_ratio, harmonic_damping_ratio; and 'message' (why the curve ends).)");
+
+  m.def("build_model", &build_model, py::arg("description"), py::arg("out"),
+        py::arg("modes") = py::none(), py::arg("progress") = py::none(),
+        R"(Builds the riveted beam's reduced model from a description (`jointlab build-model`).
+
+description  riveted beam description (TOML, SI units: docs/model-description.md)
+out          the model folder to write (created if missing): M.mtx, K.mtx, dofs.csv and
+             model.toml, as the command writes them
+modes        fixed-interface modes kept (--modes; default: the description's
+             reduction.fixed_interface_modes)
+progress     callable taking one line per step (generating, assembling, factorising, the
+             fixed-interface eigen-solve, ...), or None. Ctrl-C ends the call with
+             KeyboardInterrupt at the next step, within the eigen-solve at its next Lanczos
+             step (0.01 to 0.1 s on the example beam); `out` is then not written
+
+Returns the jointlab.Model of out/model.toml: K [N/m, N, N*m] and M [kg, kg*m, kg*m^2] of the
+structure on its boundary DOFs and fixed-interface modes, the rivets' joints at their starting
+values. The command's check of the reduced against the full model's frequencies (without
+--skip-check) is not made here: the program makes it.
+
+    model = jointlab.build_model("examples/riveted_beam/description.toml", "model")
+    model.modes(count=16)       # elastic frequencies [Hz], joints at their linear stiffness
+)");
+
+  m.def("simulate", &simulate, py::arg("model"), py::arg("impact"), py::arg("force"),
+        py::arg("duration"), py::arg("fs"), py::arg("sensors") = py::none(),
+        py::arg("pulse") = jointlab::model::HalfSinePulse{}.duration,
+        py::arg("pulse_start") = jointlab::model::HalfSinePulse{}.start, py::arg("substeps") = 0,
+        py::arg("modal_damping") = py::none(), py::arg("rayleigh_mass") = 0.0,
+        py::arg("rayleigh_stiffness") = 0.0, py::arg("cutoff") = 0.0, py::arg("noise") = 0.0,
+        py::arg("seed") = 1, py::arg("force_channel") = false, py::arg("out") = py::none(),
+        py::arg("progress") = py::none(),
+        R"(A virtual hammer test (`jointlab simulate`): the model struck at one DOF by a half-sine
+force pulse, its ring-down integrated (Newmark average acceleration, exact Iwan hysteresis) and
+the sensors' accelerations recorded.
+
+model          a model file (TOML) or a jointlab.Model
+impact         the struck DOF: a 0-based index or a 'node:component' label ('9001:3')
+force          peak force of the pulse [N]
+duration       record length [s]
+fs             sample rate of the record [Hz]
+sensors        recorded DOFs, one or a list (default: the impact DOF)
+pulse          pulse length [s] (default 0.0005)
+pulse_start    time the pulse starts (pre-trigger) [s] (default 0.01)
+substeps       integration steps per sample (0: automatic, the Newmark period error of the
+               first elastic mode below 1e-5, at least 4)
+modal_damping  damping ratio of every elastic mode (default: the model's [damping]
+               modal_ratio, 0 without one)
+rayleigh_mass, rayleigh_stiffness
+               alpha [1/s] and beta [s] of C = alpha M + beta K (default 0)
+cutoff         modes above this frequency are left out of the recorded signals [Hz]
+               (0: 0.45 fs)
+noise          white noise standard deviation as a fraction of each channel's peak (default 0)
+seed           noise seed (default 1)
+force_channel  also record the hammer force, channel 'hammer' [N]
+out            also write the record here (.csv, .uff, .mat) as the command writes it, or None
+progress       callable taking a line per 10 % of the run, or None (Ctrl-C: at the next line)
+
+Returns the record as read_record() returns a file: 'source', 'sample_rate_hz' [Hz], 't0_s' [s],
+'time_s' [s], 'channels' (acc_<node>_<component> or acc_<index>), 'units', 'quantities',
+'data' (name -> numpy array: m/s^2, and N for the hammer), 'metadata' (the file's '# key:
+value' lines but fs and t0: model, impact_dof, force_N, pulse_s, ..., energy_closure), and
+'report' (the
+run's termination, step and energy balance, as the command prints it). The same numbers as
+the command's file, bit for bit.
+
+    rec = jointlab.simulate("model.toml", "9001:3", force=200, duration=2, fs=4096,
+                            sensors=["9001:3", "9003:3"], out="hit.csv")
+    bb = jointlab.process("hit.csv", bands=(100, 145))
+)");
+
+  py::class_<SineBackbone>(
+      m, "SineBackbone", py::dynamic_attr(),
+      "One file's backbone of stepped_sine(): .file, .amplitude_quantity and .amplitude_unit "
+      "('velocity', 'm/s'), .reports (a line per level: its point, or why it gave none) and numpy "
+      "arrays named as the backbone CSV's columns, a row per level with a point, amplitude "
+      "increasing: .amplitude [SI of the amplitude quantity], .frequency_hz [Hz], "
+      ".damping_ratio, .frequency_std_hz [Hz], .damping_std (k sigma), .level, "
+      ".response_controlled (1: the sweep held the response; 0: the force, its damping from the "
+      "energy balance), .points (steps), .fit_rms, .displacement_m [m], .force_n [N], "
+      ".damping_direct (0: from the energy balance, less direct). vars(b) is the CSV's table.")
+      .def_readonly("file", &SineBackbone::file)
+      .def_readonly("amplitude_quantity", &SineBackbone::amplitude_quantity,
+                    "What .amplitude measures: 'velocity', 'displacement' or 'acceleration'.")
+      .def_readonly("amplitude_unit", &SineBackbone::amplitude_unit,
+                    "The SI unit of .amplitude: 'm/s', 'm' or 'm/s^2'.")
+      .def_readonly("reports", &SineBackbone::reports,
+                    "One line per level of the file: its point, or why it gave none.")
+      .def(py::pickle(
+          [](const py::object& self) {
+            const SineBackbone& b = self.cast<const SineBackbone&>();
+            return py::make_tuple(b.file, b.amplitude_quantity, b.amplitude_unit, b.reports,
+                                  self.attr("__dict__"));
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 5)
+              throw jointlab::InputError("SineBackbone: not a pickled jointlab.SineBackbone");
+            SineBackbone b;
+            b.file = t[0].cast<std::string>();
+            b.amplitude_quantity = t[1].cast<std::string>();
+            b.amplitude_unit = t[2].cast<std::string>();
+            b.reports = t[3].cast<std::vector<std::string>>();
+            return std::make_pair(std::move(b), t[4].cast<py::dict>());
+          }))
+      .def("__repr__", [](const py::object& self) {
+        const SineBackbone& b = self.cast<const SineBackbone&>();
+        return fmt::format("<jointlab.SineBackbone {}: {} points>", b.file,
+                           py::len(self.attr("amplitude")));
+      });
+
+  m.def("stepped_sine", &stepped_sine, py::arg("files"), py::arg("amplitude") = "velocity",
+        py::arg("quantity") = py::none(), py::arg("damping_model") = "hysteretic",
+        py::arg("residual_terms") = jointlab::modal::SteppedSineOptions{}.residual_terms,
+        py::arg("coverage_factor") = jointlab::modal::SteppedSineOptions{}.coverage_factor,
+        py::arg("out") = py::none(), py::arg("progress") = py::none(),
+        R"(Stepped-sine sweeps -> one backbone point per level (`jointlab stepped-sine`).
+
+files            stepped-sine files, a list or one path: CSV (docs/stepped-sine-table.md) or
+                 the .mat struct layout of the Brake-Reuss data
+amplitude        the amplitude column: 'velocity' (default) [m/s], 'displacement' [m] or
+                 'acceleration' [m/s^2], each at the natural frequency
+quantity         what a response column without a [unit] measures (SI assumed):
+                 'acceleration', 'velocity' or 'displacement'; None: such a column is an error
+damping_model    'hysteretic' (default) or 'viscous' (--damping-model)
+residual_terms   other modes' share in the band: 0 none, 1 a complex constant, 2 constant and
+                 slope (default)
+coverage_factor  k of the stated uncertainties k*sigma (default 3, as process; 1: one sigma)
+out              also write the command's folder here (<stem>.backbone.csv, summary.json):
+                 what update_iwan's stepped_sine= reads; or None
+progress         callable taking one line per level (its point, or why none), or None
+
+Response-controlled sweeps are fitted with a single-mode FRF (f_n, zeta and their
+uncertainties from the fit, at the response amplitude at f_n); force-controlled ones give their
+phase resonance and the energy balance's damping (docs/stepped-sine.md). Returns a list of
+jointlab.SineBackbone, one per file with a usable point, in the order of the files, each with
+numpy arrays named as its backbone CSV's columns (amplitude, frequency_hz, damping_ratio,
+frequency_std_hz, damping_std, level, response_controlled, ...). A file without a usable point
+gives a UserWarning; no point in any file, InputError. The figure (--figure, --ringdown) is the
+program's.
+
+    sine = jointlab.stepped_sine("forced_frequency_responses.mat", out="sine")
+    sine[0].amplitude, sine[0].frequency_hz, sine[0].damping_ratio
+)");
 }

@@ -8,6 +8,7 @@ import csv
 import json
 import os
 import pathlib
+import pickle
 import signal
 import subprocess
 import threading
@@ -1080,3 +1081,119 @@ def test_update_iwan_fits_stepped_sine_with_the_hits_as_the_command(tmp_path):
     with pytest.raises(jointlab.InputError, match="--stepped-sine-mode -1"):
         jointlab.update_iwan(d / "start.toml", "j", 1, measured=d / "p", sensors=d / "sensors.csv",
                              stepped_sine=[d / "sine"], stepped_sine_mode=-1)
+
+
+def test_build_model_writes_the_commands_folder_and_returns_its_model(tmp_path):
+    # A coarse beam-element riveted beam (156 DOFs, 0.06 s): the folder the call writes is the
+    # command's, byte for byte (the description given by the same path), and the Model returned
+    # is that folder's model.toml, its modes the same numbers as the command's folder's, bit for
+    # bit. modes= is --modes; progress gets the library's step lines.
+    description = tmp_path / "beam.toml"
+    description.write_text(
+        '[strips]\nlength = 0.2\nwidth = 0.02\nthickness = 0.002\n\n'
+        '[mesh]\nelement = "beam"\nsize = 0.02\n\n[rivets]\ncount = 2\n\n'
+        '[reduction]\nfixed_interface_modes = 8\n\n'
+        '[[sensor]]\nlabel = 9001\nstrip = 1\nx = 0.0\ny = 0.0\ncomponents = ["z"]\n')
+    r = run("build-model", description, "--out", tmp_path / "cli", "--modes", "6", "--quiet")
+    assert r.returncode == 0, r.stderr
+    lines = []
+    model = jointlab.build_model(description, tmp_path / "py", modes=6, progress=lines.append)
+    assert isinstance(model, jointlab.Model)
+    assert pathlib.Path(model.path) == tmp_path / "py" / "model.toml"
+    for name in ("M.mtx", "K.mtx", "dofs.csv", "model.toml"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    assert model.dofs == 25 + 6  # 2 rivets x 2 strips x 6 + the sensor's z, and 6 modes
+    assert "9001:3" in model.dof_labels
+    assert np.array_equal(model.modes(12), jointlab.Model(tmp_path / "cli" / "model.toml").modes(12))
+    assert any("fixed-interface modes: 6 lowest" in line for line in lines)
+    with pytest.raises(jointlab.InputError, match=r"^--modes -1: must be in \[0, "):
+        jointlab.build_model(description, tmp_path / "bad", modes=-1)
+    with pytest.raises(jointlab.InputError, match="missing.toml"):
+        jointlab.build_model(tmp_path / "missing.toml", tmp_path / "bad")
+    assert not (tmp_path / "bad").exists()
+    # Ctrl-C during the build (the signal taken at its first checkpoint after the first step's
+    # line): KeyboardInterrupt, and `out` is not written.
+    def interrupt(line):
+        if "generating" in line:
+            os.kill(os.getpid(), signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        jointlab.build_model(description, tmp_path / "stopped", progress=interrupt)
+    assert not (tmp_path / "stopped").exists()
+
+
+def test_simulate_returns_the_commands_record(tmp_path):
+    # The two-mass Iwan model struck at mass 1 (0.5 s at 2048 Hz, 10 substeps, 0.02 s): both
+    # masses, 1 % noise of seed 7 and the hammer channel. The record returned holds the numbers
+    # of the command's file bit for bit (its CSV prints each sample's shortest round-trip text, so
+    # no tolerance is needed; the brief asked for 1e-12), and `out` writes that file byte for
+    # byte. A jointlab.Model or its file, an int or a 'node:component' DOF: the same record.
+    model_file = two_mass_model(tmp_path)
+    args = ["--impact", "0", "--force", "50", "--duration", "0.5", "--fs", "2048", "--sensors",
+            "0", "--sensors", "1", "--noise", "0.01", "--seed", "7", "--force-channel"]
+    r = run("simulate", model_file, *args, "--out", tmp_path / "cli.csv", "--quiet")
+    assert r.returncode == 0, r.stderr
+    cli = jointlab.read_record(tmp_path / "cli.csv")
+    lines = []
+    rec = jointlab.simulate(model_file, 0, force=50, duration=0.5, fs=2048, sensors=[0, 1],
+                            noise=0.01, seed=7, force_channel=True, out=tmp_path / "py.csv",
+                            progress=lines.append)
+    assert (tmp_path / "py.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
+    assert rec["channels"] == ["acc_0", "acc_1", "hammer"] == cli["channels"]
+    assert rec["units"] == cli["units"]
+    # The record's own metadata: the file's, but for the fs and t0 the writer adds (and the case
+    # of force_N, which the reader lowers).
+    assert {k.lower(): v for k, v in rec["metadata"].items()} == {
+        k: v for k, v in cli["metadata"].items() if k not in ("fs", "t0")}
+    assert rec["sample_rate_hz"] == 2048 and rec["t0_s"] == 0
+    assert np.array_equal(rec["time_s"], cli["time_s"])
+    for name in rec["channels"]:
+        assert np.array_equal(rec["data"][name], cli["data"][name]), name
+    assert "energy" in rec["report"] and len(lines) >= 10
+    again = jointlab.simulate(jointlab.Model(model_file), "0", 50, 0.5, 2048, sensors=(0, "1"),
+                              noise=0.01, seed=np.uint64(7), force_channel=True)
+    for name in rec["channels"]:
+        assert np.array_equal(again["data"][name], rec["data"][name]), name
+    # The impact DOF alone by default, and the command's messages for bad input.
+    assert jointlab.simulate(model_file, 1, 50, 0.5, 2048)["channels"] == ["acc_1"]
+    with pytest.raises(jointlab.InputError, match="simulate: duration must be > 0"):
+        jointlab.simulate(model_file, 0, 50, -1.0, 2048)
+    with pytest.raises(jointlab.InputError, match="--impact"):
+        jointlab.simulate(model_file, 5, 50, 0.5, 2048)
+    with pytest.raises(jointlab.InputError, match=r"^--seed -1: must be in \[0, 18446744073709551615\]"):
+        jointlab.simulate(model_file, 0, 50, 0.5, 2048, noise=0.01, seed=-1)
+    with pytest.raises(TypeError, match="model: expected a model file"):
+        jointlab.simulate(3.5, 0, 50, 0.5, 2048)
+
+
+def test_stepped_sine_equals_the_command_line(tmp_path):
+    # The Brake-Reuss beam's twelve sweeps (.mat, 0.3 s): one SineBackbone, its arrays the
+    # command's CSV columns within 1e-9 (the CSV keeps 10 significant digits) in the CSV's order,
+    # and `out` the command's folder, byte for byte (the folder update_iwan's stepped_sine=
+    # reads). A line per level goes to progress, as the command's stderr.
+    sweeps = RECORD.parent / "forced_frequency_responses.mat"
+    r = run("stepped-sine", sweeps, "--damping-model", "viscous", "--out", tmp_path / "cli")
+    assert r.returncode == 0, r.stderr
+    lines = []
+    result = jointlab.stepped_sine(sweeps, damping_model="viscous", out=tmp_path / "py",
+                                   progress=lines.append)
+    assert len(result) == 1
+    b = result[0]
+    assert isinstance(b, jointlab.SineBackbone) and b.file == str(sweeps)
+    assert (b.amplitude_quantity, b.amplitude_unit) == ("velocity", "m/s")
+    for name in ("summary.json", "forced_frequency_responses.backbone.csv"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    csv_columns = read_csv(tmp_path / "cli" / "forced_frequency_responses.backbone.csv")
+    assert list(vars(b)) == list(csv_columns)
+    for name, column in csv_columns.items():
+        assert_close(getattr(b, name), column)
+    assert len(b.reports) == 12 and lines == [f"{sweeps} {report}" for report in b.reports]
+    assert lines == r.stderr.splitlines()
+    assert np.all(np.diff(b.amplitude) >= 0)
+    copy = pickle.loads(pickle.dumps(b))
+    assert copy.reports == b.reports and np.array_equal(copy.damping_ratio, b.damping_ratio)
+    with pytest.raises(jointlab.InputError, match="^--damping-model coulomb: expected hysteretic"):
+        jointlab.stepped_sine(sweeps, damping_model="coulomb")
+    with pytest.raises(jointlab.InputError, match=r"^--residual-terms 3: must be in \[0, 2\]"):
+        jointlab.stepped_sine(sweeps, residual_terms=3)
+    with pytest.raises(jointlab.InputError, match="share the name"):
+        jointlab.stepped_sine([sweeps, sweeps])
