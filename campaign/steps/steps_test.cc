@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -28,6 +29,7 @@
 #include "jointlab/campaign/steps/measured_side.h"
 #include "jointlab/campaign/steps/model_side.h"
 #include "jointlab/campaign/steps/numeric_table.h"
+#include "jointlab/campaign/steps/stamp.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/sensors.h"
@@ -207,6 +209,34 @@ TEST_F(Steps, AHitThatCannotBeReadIsLeftOut) {
   EXPECT_EQ(again.hits_reused, 1);
   EXPECT_EQ(again.hits_processed, 0);
   EXPECT_EQ(again.failed_hits.size(), 1u);
+}
+
+// A stamp takes in the build, not the version alone: a folder whose hits an earlier build of
+// the same version processed is processed again. (Stamps of the version, settings and file
+// alone, what every 0.1.0 build wrote, let a run on 2026-11-29 reuse hits processed before
+// e260cd2 and show their first points' damping_std up to 1.30x low.) The digest of the
+// version-only stamp is written out here as it was made; exact comparison of hex digests.
+TEST(Stamp, TakesInTheBuildNotTheVersionAlone) {
+  const fs::path file = fs::temp_directory_path() / fmt::format("stamp_test_{}.csv", getpid());
+  testing::write_text(file.string(), "time,acc [m/s^2]\n0,1\n");
+  const std::string settings = "bands 100:145";
+  std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a, 64 bit, as stamp.cc
+  const auto add = [&h](const std::string& s) {
+    for (const char c : s) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
+  };
+  add(program_version() + std::string(1, '\0') + settings + std::string(1, '\0') +
+      testing::read_file(file) + std::string(1, '\0'));
+  const std::string version_only = fmt::format("{:016x}", h);
+  const std::string stamp = input_stamp({file}, settings);
+  EXPECT_NE(stamp, version_only);
+  EXPECT_EQ(input_stamp({file}, settings), stamp);  // the same build: the same stamp
+  const std::string build = build_identity();
+  const std::string head = program_version() + " code ";
+  ASSERT_EQ(build.rfind(head, 0), 0u) << build;
+  const std::string digest = build.substr(head.size());
+  EXPECT_GE(digest.size(), 16u) << build;
+  EXPECT_EQ(digest.find_first_not_of("0123456789abcdef"), std::string::npos) << build;
+  fs::remove(file);
 }
 
 // The measured mode: the mean linear frequency of the kept hits, recomputed here, and an
