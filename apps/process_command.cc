@@ -23,6 +23,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
 #include "jointlab/core/text.h"
+#include "jointlab/data/names.h"
 #include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"
 #include "jointlab/modal/process.h"
@@ -93,7 +94,7 @@ void run_process(const ProcessArgs& args) {
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
 
   namespace fs = std::filesystem;
-  check_distinct_stems(args.files);
+  data::check_distinct_stems(args.files);
   // A channel named twice is one channel: processed once (its outputs would share a name).
   std::unordered_map<std::string, size_t> times;
   for (const std::string& c : args.channels) ++times[c];

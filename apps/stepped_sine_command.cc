@@ -12,6 +12,7 @@
 #include "jointlab/apps/stepped_sine_figure.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/measured_data.h"
+#include "jointlab/data/names.h"
 #include "jointlab/data/stepped_sine.h"
 #include "jointlab/modal/stepped_sine.h"
 #include "jointlab/modal/stepped_sine_output.h"
@@ -89,7 +90,7 @@ void run_stepped_sine(const SteppedSineArgs& args) {
   if (!args.quantity.empty()) quantity = motion_quantity("--quantity", args.quantity);
 
   namespace fs = std::filesystem;
-  check_distinct_stems(args.files);
+  data::check_distinct_stems(args.files);
   // Read and extract everything first: a bad file stops the run before any output exists.
   std::vector<correlate::MeasuredBackbone> ring;
   for (const std::string& f : args.ringdowns) ring.push_back(correlate::read_backbone_csv(f, 0));

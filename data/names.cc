@@ -1,5 +1,6 @@
 #include "jointlab/data/names.h"
 
+#include <filesystem>
 #include <map>
 
 #include <fmt/format.h>
@@ -69,6 +70,19 @@ void check_channel_names(const std::vector<std::string>& names, const std::strin
           fmt::format("channels '{}' and '{}' both make output file names with '{}' (bytes "
                       "that are not UTF-8, '/' and control characters become '_'); rename one",
                       printable(*it->second), printable(name), it->first)));
+    }
+  }
+}
+
+void check_distinct_stems(const std::vector<std::string>& files) {
+  namespace fs = std::filesystem;
+  for (size_t i = 0; i < files.size(); ++i) {
+    for (size_t k = 0; k < i; ++k) {
+      if (file_name_part(fs::path(files[i]).stem().string()) ==
+          file_name_part(fs::path(files[k]).stem().string())) {
+        throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
+                                     files[k], files[i], fs::path(files[i]).stem().string()));
+      }
     }
   }
 }

@@ -34,4 +34,8 @@ std::string file_name_part(std::string_view name);
 void check_channel_names(const std::vector<std::string>& names, const std::string& file,
                          long line = 0);
 
+/// Throws InputError naming both files if two of `files` have stems with the same
+/// file_name_part: outputs named after their stems (`process`, `stepped-sine`) would collide.
+void check_distinct_stems(const std::vector<std::string>& files);
+
 }  // namespace jointlab::data

@@ -133,6 +133,19 @@ TEST(ReadRecord, NamesGivingTheSameFileNameAreRefused) {
       << m;
 }
 
+TEST(ReadRecord, FilesWhoseStemsMakeTheSameOutputNameAreRefused) {
+  // process and stepped-sine name outputs after the stems: a/hit.csv and b/hit.uff, or stems
+  // that differ only in bytes file_name_part replaces, would write the same files.
+  EXPECT_NO_THROW(check_distinct_stems({"a/hit1.csv", "a/hit2.csv", "hit3.mat"}));
+  try {
+    check_distinct_stems({"a/hit.csv", "b/x.csv", "b/hit.uff"});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "a/hit.csv and b/hit.uff share the name 'hit': outputs would collide");
+  }
+  EXPECT_THROW(check_distinct_stems({"acc\xff.csv", "acc\xfe.csv"}), InputError);
+}
+
 TEST(ReadRecord, UnknownFormatIsOneLineNamingTheFile) {
   const fs::path f = scratch("notes.docx");
   std::ofstream(f) << "hello";

@@ -339,20 +339,6 @@ struct Backbone {
   double noise_floor_m = 0;                        // noise floor of the displacement envelope [m]
 };
 
-// InputError when two files share a stem, as the commands say it (apps/cli_args.cc): their
-// outputs carry it (data::file_name_part) and would collide.
-void check_distinct_stems(const std::vector<std::string>& files) {
-  for (size_t i = 0; i < files.size(); ++i) {
-    for (size_t k = 0; k < i; ++k) {
-      const std::string stem = std::filesystem::path(files[i]).stem().string();
-      if (data::file_name_part(stem) ==
-          data::file_name_part(std::filesystem::path(files[k]).stem().string()))
-        throw InputError(fmt::format("{} and {} share the name '{}': outputs would collide",
-                                     files[k], files[i], stem));
-    }
-  }
-}
-
 // Names of the files `jointlab process` writes: summary.json and "<stem>.<channel>.band<k>.csv"
 // (apps/process_command.cc), replaced as a set in a folder an older run wrote.
 bool is_process_output(const std::string& name) {
@@ -407,7 +393,7 @@ py::list process(const OneOrMany<PathArg>& file_args,
   opt.ringdown.amplitude = motion("--amplitude", amplitude);
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
   if (files.empty()) throw InputError("process: no file given");
-  if (out) check_distinct_stems(files);
+  if (out) data::check_distinct_stems(files);
   std::vector<modal::RecordResult> results;
   {
     py::gil_scoped_release release;
@@ -1544,7 +1530,7 @@ py::list stepped_sine(const OneOrMany<PathArg>& file_args, const std::string& am
   if (const std::string why = opt.check(); !why.empty()) throw InputError(why);
   std::optional<Quantity> quantity;
   if (quantity_arg) quantity = motion("--quantity", *quantity_arg);
-  check_distinct_stems(files);
+  data::check_distinct_stems(files);
   std::vector<modal::SteppedSineFileResult> results;
   {
     py::gil_scoped_release release;
