@@ -67,8 +67,9 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--measured", args->measured, "output directory of 'jointlab process'");
   cmd->add_option("--sensors", args->sensors, "sensors file: channel,dof[,sign] (with --measured)");
   cmd->add_option("--channel", args->channels,
-                  "channel whose backbones are drawn (repeatable; default: each file's reference "
-                  "channel of the band)");
+                  "channel whose backbones are drawn (repeatable; default: one channel for every "
+                  "file, the files' reference channel of the band, or where they differ the "
+                  "one with a backbone in the most files, said in the report)");
   cmd->add_option("--backbone", args->backbones,
                   "a measured backbone table (amplitude,frequency_hz,damping_ratio,...; "
                   "repeatable; instead of --measured)");

@@ -369,8 +369,9 @@ void add_update_commands(CLI::App& app) {
                  "elastic model mode of the stepped-sine backbones (default: the first --mode)")
       ->check(CLI::PositiveNumber);
   iw->add_option("--channel", ia->channels,
-                 "channel whose backbones are used (repeatable; default: each file's reference "
-                 "channel of the band)");
+                 "channel whose backbones are used (repeatable; default: one channel for every "
+                 "file, the files' reference channel of the band, or where they differ the "
+                 "one with a backbone in the most files, said in the report)");
   iw->add_option("--optimizer", ia->optimizer, "paper, paper-log or global-local (default)")
       ->check(CLI::IsMember({"paper", "paper-log", "global-local"}));
   iw->add_option(

@@ -138,6 +138,26 @@ std::string percent_range(double a, double b) {
   const std::string l = text(lo), h = text(hi);
   return l == h ? l + " %" : fmt::format("{} to {} %", l, h);
 }
+
+// Per mode, the channel its hits were read at where their reference channels differ, and each
+// hit the scatter summary flags and iwan_targets leaves out of the fit (a hit left out is named,
+// not only counted in "8 curves").
+std::vector<std::string> curve_notes(const std::vector<ModeBackbones>& modes) {
+  std::vector<std::string> notes;
+  for (const ModeBackbones& mb : modes) {
+    if (!mb.channel_note.empty()) notes.push_back(mb.name + ", " + mb.channel_note);
+    if (!mb.scatter.options.exclude_outliers) continue;
+    for (const HitDeviation& h : mb.scatter.hits) {
+      if (!h.outlier) continue;
+      notes.push_back(fmt::format(
+          "{}: {} is left out of the fit: its curve lies off the other hits' ({}; the scatter "
+          "summary flags a robust |z| over {:g})",
+          mb.name, h.id, h.reason, mb.scatter.options.outlier_threshold));
+    }
+  }
+  return notes;
+}
+
 }  // namespace
 
 IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
@@ -246,9 +266,10 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   IwanTargetOptions target_options;
   target_options.amplitude = run.amplitude;
   const IwanTargets built = iwan_targets(m, sensors, modes, target_options);
+  IwanInputs in;
+  in.curve_notes = curve_notes(modes);
   // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
   // say that rather than that nothing was measured.
-  IwanInputs in;
   if (modes.size() > 1) in.slip_screen = built.screen_report(modes);
   if (const std::string why = built.screened_out(modes, target_options.max_slip_share);
       !why.empty())
@@ -271,6 +292,7 @@ std::string update_iwan_report(const correlate::IwanUpdateSummary& s, const mode
                                const std::string& set_option, std::vector<std::string>* warnings) {
   std::string text = s.report();
   if (!in.amplitude_note.empty()) text += "  " + in.amplitude_note + "\n";
+  for (const std::string& note : in.curve_notes) text += "  note: " + note + "\n";
   std::vector<std::string> lines = band_shape_warnings(updated, in);
   // A set fitted against a mode whose joint dissipation other sets carry: what misfits is the
   // other sets' held values, not this set.

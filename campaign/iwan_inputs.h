@@ -49,6 +49,9 @@ struct IwanInputs {
   std::string amplitude_note;     ///< --backbone: what the amplitudes were read as, for the report
   std::vector<BandOfMode> bands;  ///< each process --mode's band
   std::string slip_screen;  ///< several process modes: per mode, the points the slip screen left
+  /// Which channel the hits were read at where their reference channels differ, and which hits
+  /// the scatter summary left out as outliers; for the report.
+  std::vector<std::string> curve_notes;
 };
 
 /// Reads the measured side named by `a` against model `m`; InputError prefixed by `command`.

@@ -202,16 +202,20 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
   }
   ModeBackbones mb;
   mb.name = fmt::format("band {}", band);
+  // Without a chosen channel, one for every hit (band_channel): the scatter summary below
+  // compares the hits' curves point by point, which curves read at two channels (one amplitude
+  // the mode shape's ratio times the other's) cannot be. The example campaign's low_hit1, its
+  // band 1 read at acc_9001_z where the other 8 hits named acc_9003_z, was flagged an outlier of
+  // them and left out of the fit without a word.
+  std::vector<std::string> read_at = channels;
+  if (read_at.empty()) {
+    correlate::BandChannel bc = correlate::band_channel(run, sensors, band);
+    if (!bc.channel.empty()) read_at.push_back(bc.channel);
+    mb.channel_note = std::move(bc.note);
+  }
   for (const correlate::ProcessOutput& o : run.outputs) {
     if (o.band != band || o.file.empty()) continue;
-    bool selected = false;
-    if (channels.empty()) {
-      for (const correlate::ProcessBand& b : run.bands)
-        selected = selected ||
-                   (b.source == o.source && b.band == band && b.reference_channel == o.channel);
-    } else {
-      selected = std::find(channels.begin(), channels.end(), o.channel) != channels.end();
-    }
+    const bool selected = std::find(read_at.begin(), read_at.end(), o.channel) != read_at.end();
     const int s = correlate::find_sensor(sensors, o.channel);
     if (!selected || s < 0) continue;
     BackboneFile bf = read_backbone_file(run.dir / o.file, fs::path(o.source).stem().string(), "");

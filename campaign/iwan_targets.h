@@ -51,6 +51,9 @@ struct ModeBackbones {
   ScatterSummary scatter;  ///< the scatter summary of `curves`
   /// Backbone tables: which of them give no amplitude unit (SI assumed), for the report; "" none.
   std::string amplitude_note;
+  /// process runs read at one channel where the hits' reference channels differ
+  /// (correlate::band_channel's note); "" otherwise.
+  std::string channel_note;
 };
 
 /// Settings of iwan_targets().

@@ -3,6 +3,14 @@
 #include "jointlab/campaign/iwan_targets.h"
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
 
 #include <gtest/gtest.h>
 
@@ -67,6 +75,64 @@ TEST(IwanTargets, WeightsFromTheScatterOrTheOwnUncertainty) {
   EXPECT_EQ(two.fitted[0].curves[1].frequency_std_hz(3), 0.0);
   mb.scatter.options.exclude_outliers = false;
   EXPECT_EQ(iwan_targets(m, sensors, {mb}, {}).fitted[0].curves.size(), 3u);
+}
+
+// Three hits of one mode read at two channels, b2 seeing it three times as strongly as a5; the
+// frequency falls 1 % per decade of amplitude. Hit 1 names a5 its reference channel, hits 2
+// and 3 name b2. Each hit read at its own reference channel put hit 1's curve 0.48 decades
+// down the amplitude axis, 0.48 % above the others in frequency: the scatter summary flagged it
+// (robust z far over 3.5) and the fit left it out without a word (the example campaign's
+// low_hit1 with update-iwan's default channels). Read at one channel (b2: backbones in all
+// three hits, named by two), the three curves are one and nothing is flagged; the note says
+// which channel was taken.
+TEST(IwanTargets, HitsWhoseReferenceChannelsDifferAreReadAtOneChannel) {
+  const std::filesystem::path d = testing::scratch_folder("iwan_targets_two_references");
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  std::string files;
+  for (int hit = 1; hit <= 3; ++hit) {
+    files += fmt::format(
+        R"({}{{"file": "hit{}.csv",
+     "bands": [{{"band": 1, "low_hz": 80, "high_hz": 120, "reference_channel": "{}",
+                "operating_shape": []}}],
+     "outputs": [{{"channel": "a5", "band": 1, "file": "hit{}.a5.band1.csv"}},
+                 {{"channel": "b2", "band": 1, "file": "hit{}.b2.band1.csv"}}]}})",
+        hit == 1 ? "" : ",\n", hit, hit == 1 ? "a5" : "b2", hit, hit);
+    for (const auto& [channel, scale] : {std::pair<std::string, double>{"a5", 1.0}, {"b2", 3.0}}) {
+      std::string text =
+          "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n";
+      for (int i = 0; i < 20; ++i) {
+        const double a = 1e-2 * std::pow(10.0, -i / 10.0);  // the a5 amplitude, 2 decades
+        text += fmt::format("{},{},{},0.002,0.001,1e-5\n", 0.1 * (i + 1), scale * a,
+                            100 * (1 - 0.01 * std::log10(scale * a / 1e-4)));
+      }
+      std::ofstream(d / fmt::format("hit{}.{}.band1.csv", hit, channel)) << text;
+    }
+  }
+  std::ofstream(d / "summary.json")
+      << R"({"program": "jointlab process", "amplitude_quantity": "velocity",
+  "amplitude_unit": "m/s", "files": [)"
+      << files << "]}";
+  const std::vector<correlate::Sensor> sensors{{"a5", 5, 1.0}, {"b2", 7, 1.0}};
+  const ModeBackbones mb =
+      process_run_backbones(correlate::read_process_run(d), sensors, 1, {}, ScatterOptions{});
+  ASSERT_EQ(mb.curves.size(), 3u);
+  EXPECT_EQ(mb.sensors, (std::vector<int>{1, 1, 1}));
+  for (const HitDeviation& h : mb.scatter.hits) EXPECT_FALSE(h.outlier) << h.id << " " << h.reason;
+  EXPECT_NE(mb.channel_note.find("(a5 in hit1; b2 in the other 2): every hit is read at b2"),
+            std::string::npos)
+      << mb.channel_note;
+  // Each hit at its own reference channel, as before: hit 1 is flagged.
+  std::vector<Curve> own;
+  for (const auto& [id, scale] :
+       {std::pair<std::string, double>{"hit1", 1.0}, {"hit2", 3.0}, {"hit3", 3.0}}) {
+    Curve c = mb.curves[0];
+    c.id = id;
+    c.amplitude *= scale / 3.0;  // mb's curves are b2's
+    own.push_back(c);
+  }
+  const ScatterSummary mixed = summarize_scatter(own, ScatterOptions{});
+  EXPECT_TRUE(mixed.hits[0].outlier) << mixed.hits[0].reason;
 }
 
 // The screen: another mode of the same model that slips the same joint, ringing in the same

@@ -36,6 +36,7 @@ ModelComparison compare_models(const std::vector<std::string>& models,
   const correlate::MeasuredBackbone& ref = target.curves.front();
   ModelComparison out;
   out.slip_screen = in.slip_screen;
+  out.notes = in.curve_notes;
   BackboneComparison& c = out.figure;
   c.title = fmt::format("mode {}: measured and {} model{}", target.mode, models.size(),
                         models.size() == 1 ? "" : "s");

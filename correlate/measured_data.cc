@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -652,26 +654,71 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
   return b;
 }
 
+BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& sensors, int band) {
+  // Per sensor: the hits (sources) with a backbone there, and the hits naming it reference.
+  std::vector<std::set<std::string>> with(sensors.size()), naming(sensors.size());
+  std::vector<std::string> hits;  // in the order first met
+  for (const ProcessBand& b : run.bands) {
+    if (b.band != band) continue;
+    if (std::find(hits.begin(), hits.end(), b.source) == hits.end()) hits.push_back(b.source);
+    if (const int s = find_sensor(sensors, b.reference_channel); s >= 0)
+      naming[static_cast<size_t>(s)].insert(b.source);
+  }
+  for (const ProcessOutput& o : run.outputs) {
+    if (o.band != band || o.file.empty()) continue;
+    if (const int s = find_sensor(sensors, o.channel); s >= 0)
+      with[static_cast<size_t>(s)].insert(o.source);
+  }
+  std::optional<size_t> best;
+  for (size_t s = 0; s < sensors.size(); ++s) {
+    if (naming[s].empty()) continue;
+    if (!best || with[s].size() > with[*best].size() ||
+        (with[s].size() == with[*best].size() && naming[s].size() > naming[*best].size()))
+      best = s;
+  }
+  BandChannel out;
+  if (!best) return out;
+  out.channel = sensors[*best].channel;
+  // Which hits name another reference channel, and which have no backbone at this one.
+  std::vector<std::string> others, missing;
+  for (const ProcessBand& b : run.bands) {
+    if (b.band != band) continue;
+    const std::string hit = fs::path(b.source).stem().string();
+    if (b.reference_channel != out.channel)
+      others.push_back(fmt::format("{} in {}", b.reference_channel, hit));
+    if (!with[*best].count(b.source)) missing.push_back(hit);
+  }
+  if (others.empty()) return out;
+  out.note = fmt::format(
+      "band {}: the hits' reference channels differ ({}; {} in the other {}): every hit is read "
+      "at {} (a backbone there in {} of {} hits), so that their curves share one amplitude "
+      "(--channel chooses another)",
+      band, fmt::join(others, ", "), out.channel, hits.size() - others.size(), out.channel,
+      with[*best].size(), hits.size());
+  if (!missing.empty())
+    out.note += fmt::format("; {} no backbone there and {} left out: {}",
+                            missing.size() == 1 ? "one hit has" : "some hits have",
+                            missing.size() == 1 ? "is" : "are", fmt::join(missing, ", "));
+  return out;
+}
+
 std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
-                                                 const std::vector<std::string>& channels) {
+                                                 const std::vector<std::string>& chosen) {
   const std::string summary = (run.dir / "summary.json").string();
-  for (const std::string& c : channels) {
+  for (const std::string& c : chosen) {
     if (find_sensor(sensors, c) < 0)
       throw InputError(fmt::format("channel '{}' is not in the sensors file", c));
+  }
+  std::vector<std::string> channels = chosen;
+  if (channels.empty()) {
+    if (BandChannel bc = band_channel(run, sensors, band); !bc.channel.empty())
+      channels.push_back(std::move(bc.channel));
   }
   std::vector<MeasuredBackbone> out;
   for (const ProcessOutput& o : run.outputs) {
     if (o.band != band || o.file.empty()) continue;
-    bool selected = false;
-    if (channels.empty()) {
-      for (const ProcessBand& b : run.bands) {
-        if (b.source == o.source && b.band == band && b.reference_channel == o.channel)
-          selected = true;
-      }
-    } else {
-      for (const std::string& c : channels) selected = selected || c == o.channel;
-    }
+    const bool selected = std::find(channels.begin(), channels.end(), o.channel) != channels.end();
     const int s = find_sensor(sensors, o.channel);
     if (!selected || s < 0) continue;
     out.push_back(read_backbone_csv(run.dir / o.file, s));
@@ -679,7 +726,7 @@ std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
   if (out.empty()) {
     throw InputError(fmt::format(
         "{}: no backbone of band {} on {}", summary, band,
-        channels.empty() ? "a reference channel that is a sensor" : "the selected channels"));
+        chosen.empty() ? "a reference channel that is a sensor" : "the selected channels"));
   }
   return out;
 }

@@ -155,9 +155,21 @@ struct BackboneCurves {
 BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
                                     std::optional<Quantity> quantity, int sensor);
 
-/// Every backbone of band `band` on the selected channels (empty: each file's reference
-/// channel), each at its sensor; InputError when a selected channel is not a sensor or no
-/// backbone is found.
+/// The channel a band's backbones are read at where none is chosen, and a note where the hits'
+/// reference channels differ.
+struct BandChannel {
+  std::string channel;  ///< "" when no hit's reference channel of the band is a sensor
+  std::string note;     ///< which channel was taken over which, and the hits it leaves out
+};
+
+/// Where no channel is chosen, every hit of band `band` is read at one channel, so that their
+/// curves share one amplitude (the hits' scatter summary compares them point by point): of the
+/// sensors that are some hit's reference channel, the one with a backbone in the most hits,
+/// then the one most hits name, then the first in the sensors file.
+BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& sensors, int band);
+
+/// Every backbone of band `band` on the selected channels (empty: band_channel's), each at its
+/// sensor; InputError when a selected channel is not a sensor or no backbone is found.
 std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
                                                  const std::vector<std::string>& channels);

@@ -74,16 +74,52 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
   // The shape of hit 2 (both sensors measured), in sensor order.
   EXPECT_EQ(m.shapes(0, 0), std::complex<double>(-1e-4, 0));
   EXPECT_EQ(m.shapes(1, 0), std::complex<double>(2e-3, 1e-4));
-  // Default: each hit's reference channel (hit1 a5, hit2 b2).
+  // Default: one channel for every hit, so that their curves share one amplitude. The hits'
+  // reference channels differ (hit1 a5, hit2 b2); a5 has a backbone in both hits, b2 in hit2
+  // alone, so both are read at a5 (each hit at its own reference channel mixed two amplitudes,
+  // b2's the mode shape's ratio times a5's, in the hits' scatter summary).
+  const BandChannel bc = band_channel(run, sensors, 1);
+  EXPECT_EQ(bc.channel, "a5");
+  EXPECT_EQ(bc.note,
+            "band 1: the hits' reference channels differ (b2 in hit2; a5 in the other 1): every "
+            "hit is read at a5 (a backbone there in 2 of 2 hits), so that their curves share one "
+            "amplitude (--channel chooses another)");
   const auto refs = measured_backbones(run, sensors, 1, {});
   ASSERT_EQ(refs.size(), 2u);
   EXPECT_EQ(refs[0].sensor, 1);
-  EXPECT_EQ(refs[1].sensor, 0);
+  EXPECT_EQ(refs[1].sensor, 1);
   EXPECT_EQ(refs[0].amplitude(1), 0.01);
   EXPECT_EQ(refs[0].damping_std(0), 0.0001);
   // Each curve says which backbone file (so which hit) it is: compare() returns them by it.
   EXPECT_TRUE(refs[0].source.ends_with("hit1.a5.band1.csv")) << refs[0].source;
-  EXPECT_TRUE(refs[1].source.ends_with("hit2.b2.band1.csv")) << refs[1].source;
+  EXPECT_TRUE(refs[1].source.ends_with("hit2.a5.band1.csv")) << refs[1].source;
+  // A third hit naming b2 with a backbone at b2 alone: a5 and b2 each have backbones in 2 of the
+  // 3 hits, b2 is named by 2: every hit is read at b2, and hit1, without one there, is named as
+  // left out.
+  {
+    const fs::path d3 = fresh("three");
+    std::string three = kSummary;
+    const std::string tail = "\n  ]\n}";
+    three.replace(three.rfind(tail), tail.size(), R"(,
+    {"file": "hit3.csv",
+     "bands": [{"band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "b2",
+                "operating_shape": [{"channel": "b2", "real_m": -1e-4, "imag_m": 0}]}],
+     "outputs": [{"channel": "b2", "band": 1, "file": "hit3.b2.band1.csv"}]}
+  ]
+})");
+    write(d3 / "summary.json", three);
+    for (const char* f :
+         {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv", "hit3.b2.band1.csv"})
+      write(d3 / f, kBackbone);
+    const BandChannel c3 = band_channel(read_process_run(d3), sensors, 1);
+    EXPECT_EQ(c3.channel, "b2");
+    EXPECT_NE(c3.note.find("every hit is read at b2 (a backbone there in 2 of 3 hits)"),
+              std::string::npos)
+        << c3.note;
+    EXPECT_NE(c3.note.find("; one hit has no backbone there and is left out: hit1"),
+              std::string::npos)
+        << c3.note;
+  }
   EXPECT_EQ(measured_backbones(run, sensors, 1, {"a5"}).size(), 2u);
   EXPECT_NE(testing::input_error_of([&] {
               measured_backbones(run, sensors, 2, {});
