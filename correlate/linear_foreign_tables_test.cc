@@ -12,11 +12,15 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/correlate/linear_signs.h"
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/mode_tracking.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/correlate/two_chain.h"
+#include "jointlab/model/fe/model_builder.h"
 #include "jointlab/model/linear_modes.h"
+#include "jointlab/model/model_file.h"
 #include "jointlab/tests/test_util.h"
 
 namespace jointlab::correlate {
@@ -76,6 +80,100 @@ TEST(ModesTableFromAnotherTool, AngularFrequenciesReadAsHzAreNamed) {
   LinearUpdateSummary given;
   update_linear(start, sets, sensors, hz, {}, &given);
   EXPECT_EQ(given.status, LinearUpdateStatus::kConverged) << given.report();
+}
+
+// A table of frequencies alone, in rad/s under frequency_hz: with no shape to pair by, the
+// twenty-mass chains' four lowest modes (ka started at twice the truth, ka and kb fitted) read
+// as Hz were refused "the pairs cannot be decided", the unit never named (the refit that names
+// it where the fit leaves scatter cannot confirm it here: the same table in Hz can be as
+// undecidable, as the example beam's six bending modes are with its four sets). Now the refusal
+// names rad/s first: divided by 2 pi each mode has a visible model mode of its own at the start,
+// and read as Hz the table's lowest lies above model modes it leaves unmeasured. No false alarm
+// on tables in Hz (each checked where the pairs were undecided): the chains' modes, those with a
+// mode missing or a 5 Hz fixture row, and the example beam's six bending modes (beam elements,
+// truth K_T 4e7 and rz 50; its table in rad/s is named). About 0.4 s, most of it the beam's build.
+TEST(ModesTableFromAnotherTool, FrequenciesAloneInRadPerSecondAreNamedWhereThePairsAreUndecided) {
+  TwoChainParameters truth;
+  truth.n = 10;
+  const model::Model m = two_chain_structure(truth);
+  const std::vector<Sensor> sensors = chain_sensors(truth.n);
+  MeasuredModes hz = chain_modes(m, sensors, 4);
+  hz.shapes.setZero();  // a table of `mode,frequency_hz` alone
+  TwoChainParameters begin = truth;
+  begin.ka *= 2;
+  const model::Model start = two_chain_structure(begin);
+  const std::vector<std::string> sets = {"spring.ka", "spring.kb"};
+  MeasuredModes rad = hz;
+  rad.frequency_hz *= 2 * std::numbers::pi;
+  LinearUpdateSummary s;
+  update_linear(start, sets, sensors, rad, {}, &s);
+  ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << s.report();
+  const std::string why = linear_refusal(s, {}, "modes.csv");
+  EXPECT_EQ(
+      why.find("modes.csv: the frequencies look like angular frequencies (rad/s) read as Hz: "
+               "divided by 2 pi, each measured mode has a model mode of its own at the start"),
+      0u)
+      << why;
+  EXPECT_NE(why.find("give frequency_hz in Hz (rad/s divided by 2 pi); were they in Hz, the pairs "
+                     "cannot be decided: "),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(why.find('\n'), std::string::npos) << why;
+
+  // Tables in Hz, judged as if their pairs were undecided at the start.
+  const auto named = [&](const model::Model& model, const std::vector<std::string>& names,
+                         const std::vector<Sensor>& at, const MeasuredModes& table) {
+    const StiffnessSets stiffness(model, names);
+    LinearUpdateSummary u;
+    u.status = LinearUpdateStatus::kAmbiguous;
+    u.start = evaluate_linear(stiffness, model, at, table, stiffness.initial(), 0.6, 0.5);
+    return detail::undecided_units(table, {}, u);
+  };
+  EXPECT_NE(named(start, sets, sensors, rad), "");
+  EXPECT_EQ(named(start, sets, sensors, hz), "");
+  EXPECT_EQ(named(start, sets, sensors, hz.columns({0, 2, 3})), "");
+  MeasuredModes fixture = hz;
+  fixture.frequency_hz.conservativeResize(5);
+  fixture.frequency_hz(4) = 5;
+  fixture.shapes.conservativeResize(Eigen::NoChange, 5);
+  fixture.shapes.col(4).setZero();
+  EXPECT_EQ(named(start, sets, sensors, fixture), "");
+
+  // The example beam with beam elements (0.3 s to build): its six bending modes in Hz, at the
+  // five z sensors, with their shapes and without.
+  model::fe::RivetedBeamDescription d = model::fe::read_riveted_beam_description(
+      fs::path(jointlab::testing::source_dir()) / "examples" / "riveted_beam" / "description.toml");
+  d.shell = false;
+  const fs::path dir = jointlab::testing::scratch_folder("jointlab_foreign_tables_beam");
+  model::fe::write_model_directory(dir, model::fe::build_reduced_model(d, {}));
+  const model::Model beam = model::read_model(dir / "model.toml");
+  const std::vector<Sensor> z = parse_sensors(
+      "channel,dof\nz1,9001:3\nz2,9002:3\nz3,9003:3\nz4,9004:3\nz5,9005:3\n", "sensors.csv", beam);
+  const std::vector<std::string> four = {"iwan.rivet", "spring.kz", "spring.rxy", "spring.rz"};
+  const StiffnessSets bs(beam, four);
+  Eigen::VectorXd at = bs.initial();
+  at(0) = 4e7;
+  at(3) = 50;
+  const ElasticModes bm = elastic_modes(beam.mass, bs.stiffness(at));
+  const Eigen::MatrixXd shapes = shapes_at_sensors(z, bm.shapes);
+  std::vector<Eigen::Index> bending;
+  for (Eigen::Index j = 0; j < shapes.cols() && bending.size() < 6; ++j)
+    if (shapes.col(j).squaredNorm() > 1) bending.push_back(j);
+  ASSERT_EQ(bending.size(), 6u);
+  MeasuredModes table;
+  table.frequency_hz.resize(6);
+  table.shapes.resize(5, 6);
+  for (int i = 0; i < 6; ++i) {
+    table.frequency_hz(i) = bm.frequency_hz(bending[static_cast<size_t>(i)]);
+    table.shapes.col(i) = shapes.col(bending[static_cast<size_t>(i)]).cast<std::complex<double>>();
+  }
+  EXPECT_EQ(named(beam, four, z, table), "");
+  MeasuredModes alone = table;
+  alone.shapes.setZero();
+  EXPECT_EQ(named(beam, four, z, alone), "");
+  EXPECT_EQ(named(beam, four, z, alone.columns({0, 1, 3, 4, 5})), "");
+  alone.frequency_hz *= 2 * std::numbers::pi;
+  EXPECT_NE(named(beam, four, z, alone), "");
 }
 
 // Columns other tools write beside the shapes (damping ratio, MPC, MPD, in any case and with a

@@ -166,6 +166,9 @@ std::string LinearUpdateSummary::report() const {
 
 std::string linear_refusal(const LinearUpdateSummary& summary, const LinearUpdateOptions& options,
                            const std::string& source) {
+  if (summary.status == LinearUpdateStatus::kAmbiguous && !summary.units.empty())
+    return fmt::format("{}{}; were they in Hz, the pairs cannot be decided: {}",
+                       source.empty() ? "" : source + ": ", summary.units, summary.ambiguity);
   if (summary.status == LinearUpdateStatus::kAmbiguous)
     return "the pairs cannot be decided: " + summary.ambiguity;
   if (summary.status == LinearUpdateStatus::kShapesRefused)

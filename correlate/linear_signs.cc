@@ -195,3 +195,112 @@ std::string misfit_of_units(const model::Model& model, const std::vector<std::st
 }
 
 }  // namespace jointlab::correlate::detail
+
+namespace jointlab::correlate::detail {
+namespace {
+
+// Kuhn's augmenting path from measured mode i over `candidates` (model columns, nearest first):
+// whether i gets a partner in `partner_of` (model column -> measured mode, -1 free).
+bool augment(int i, const std::vector<std::vector<int>>& candidates, std::vector<int>& partner_of,
+             std::vector<char>& seen) {
+  for (const int j : candidates[static_cast<size_t>(i)]) {
+    if (seen[static_cast<size_t>(j)]) continue;
+    seen[static_cast<size_t>(j)] = 1;
+    const int other = partner_of[static_cast<size_t>(j)];
+    if (other < 0 || augment(other, candidates, partner_of, seen)) {
+      partner_of[static_cast<size_t>(j)] = i;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+// Why undecided pairs look like frequencies in rad/s read as Hz, or "" (linear_signs.h). A true
+// Hz table cannot be named so unless its lowest mode is above 2 pi / (1 + w) times the model's
+// lowest visible mode (4.19 times it at w = 0.5; the example beam's 128 Hz, divided by 2 pi, is
+// 20 Hz, against its first elastic mode at 121 Hz).
+std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
+                            const LinearUpdateSummary& s) {
+  const LinearEvaluation& start = s.start;
+  const Eigen::Index n = measured.frequency_hz.size();
+  const Eigen::Index models =
+      std::min(start.all_model_frequency_hz.size(), start.model_at_sensors.cols());
+  if (s.status != LinearUpdateStatus::kAmbiguous || n == 0 || models == 0) return "";
+  const double to_hz = 0.5 / std::numbers::pi;
+  const double window =
+      options.frequency_window > 0 ? std::min(options.frequency_window, 0.5) : 0.5;
+  std::vector<char> visible(static_cast<size_t>(models), 1);
+  for (const int h : start.hidden)
+    if (h >= 0 && h < static_cast<int>(models)) visible[static_cast<size_t>(h)] = 0;
+  // Each mode's candidates divided by 2 pi, nearest in ln f first.
+  std::vector<std::vector<int>> candidates(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double f = to_hz * measured.frequency_hz(i);
+    const bool shape = (measured.shapes.col(i).array().abs() > 0.0).count() >= 3;
+    std::vector<int>& c = candidates[static_cast<size_t>(i)];
+    for (Eigen::Index j = 0; j < models; ++j)
+      if (visible[static_cast<size_t>(j)] &&
+          std::abs(start.all_model_frequency_hz(j) / f - 1) <= window &&
+          (!shape || mac(measured.shapes.col(i), start.model_at_sensors.col(j)) >= 0.9))
+        c.push_back(static_cast<int>(j));
+    std::sort(c.begin(), c.end(), [&](int a, int b) {
+      return std::abs(std::log(start.all_model_frequency_hz(a) / f)) <
+             std::abs(std::log(start.all_model_frequency_hz(b) / f));
+    });
+    if (c.empty()) return "";
+  }
+  std::vector<int> partner_of(static_cast<size_t>(models), -1);
+  for (int i = 0; i < static_cast<int>(n); ++i) {
+    std::vector<char> seen(static_cast<size_t>(models), 0);
+    if (!augment(i, candidates, partner_of, seen)) return "";
+  }
+  // Read as Hz, the visible model modes below the table's lowest mode by more than the window.
+  const double lowest = measured.frequency_hz.minCoeff();
+  int below = 0;
+  for (Eigen::Index j = 0; j < models; ++j)
+    below +=
+        visible[static_cast<size_t>(j)] && start.all_model_frequency_hz(j) < (1 - window) * lowest;
+  if (below == 0) return "";
+  std::vector<int> model_of(static_cast<size_t>(n), -1);
+  for (Eigen::Index j = 0; j < models; ++j)
+    if (partner_of[static_cast<size_t>(j)] >= 0)
+      model_of[static_cast<size_t>(partner_of[static_cast<size_t>(j)])] = static_cast<int>(j);
+  // Uncrossed where the windows allow (the Kuhn matching may pair two neighbours crosswise).
+  const auto allowed = [&](Eigen::Index i, int j) {
+    const std::vector<int>& c = candidates[static_cast<size_t>(i)];
+    return std::find(c.begin(), c.end(), j) != c.end();
+  };
+  for (bool swapped = true; swapped;) {
+    swapped = false;
+    for (Eigen::Index a = 0; a < n; ++a)
+      for (Eigen::Index b = 0; b < n; ++b) {
+        int& ja = model_of[static_cast<size_t>(a)];
+        int& jb = model_of[static_cast<size_t>(b)];
+        if (measured.frequency_hz(a) < measured.frequency_hz(b) && ja > jb && allowed(a, jb) &&
+            allowed(b, ja)) {
+          std::swap(ja, jb);
+          swapped = true;
+        }
+      }
+  }
+  std::vector<std::string> pairs;
+  double farthest = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int j = model_of[static_cast<size_t>(i)];
+    const double f = to_hz * measured.frequency_hz(i);
+    farthest = std::max(farthest, std::abs(start.all_model_frequency_hz(j) / f - 1));
+    pairs.push_back(fmt::format("{} ({:.5g} Hz) with model mode {} ({:.5g} Hz)", measured.id(i), f,
+                                j + 1, start.all_model_frequency_hz(j)));
+  }
+  return fmt::format(
+      "the frequencies look like angular frequencies (rad/s) read as Hz: divided by 2 pi, each "
+      "measured mode has a model mode of its own at the start within {:.3g} % (test mode {}), "
+      "while read as Hz the table's lowest mode ({:.5g} Hz) lies above {} visible model mode{} "
+      "by more than the frequency window ({:g} %), none of them measured: give frequency_hz in "
+      "Hz (rad/s divided by 2 pi)",
+      100 * farthest, fmt::join(pairs, ", "), lowest, below, below == 1 ? "" : "s", 100 * window);
+}
+
+}  // namespace jointlab::correlate::detail

@@ -32,6 +32,7 @@ using detail::restart_if_misfit;
 using detail::sweeps;
 using detail::TrackedPoint;
 using detail::unconfirmed_pairs;
+using detail::undecided_units;
 
 namespace {
 
@@ -140,6 +141,9 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
     s.status = LinearUpdateStatus::kShapesRefused;
     s.shape_problem = std::move(one);
   }
+  // Undecided pairs of frequencies in rad/s: no refit can confirm the unit where the same
+  // table in Hz is as undecidable (frequencies alone, four sets on the example beam).
+  if (s.status == LinearUpdateStatus::kAmbiguous) s.units = undecided_units(measured, options, s);
   if (fitted(s)) {
     if (std::string why = unconfirmed_pairs(measured, options, s); !why.empty()) {
       s.fit_converged = s.status == LinearUpdateStatus::kConverged;

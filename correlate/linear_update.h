@@ -302,6 +302,7 @@ struct LinearUpdateSummary {
   std::string rule;            ///< the rule that produced the result, for the headline
   bool tolerance_met = true;   ///< kSmallest: false when no stiffness meets the tolerance
   std::string ambiguity;       ///< kAmbiguous: which modes, and why
+  std::string units;           ///< kAmbiguous: why it looks like rad/s read as Hz, or ""
   std::string shape_problem;   ///< kShapesRefused: what is wrong with the shapes
   std::string unconfirmed;     ///< kPairsUnconfirmed: the pairs, why, and what to do
   bool fit_converged = false;  ///< kPairsUnconfirmed: the fit itself met its convergence test
