@@ -73,3 +73,74 @@ TEST(Sensors, AMissingLabelNamesTheNodesLabels) {
 
 }  // namespace
 }  // namespace jointlab::correlate
+
+namespace jointlab::correlate {
+namespace {
+
+// A DOF written as other tools write it names the label (and sign) to give, in one line:
+// before, '9001:+3', '9001:3+', '9001:z-', '9001: 3', '9001:3.0' and 'Tz' got only "node 9001
+// has only 9001:3", '9001 :3' "it has no node 9001 "; a header 'Channel,DOF' or one separated
+// by ';' or tabs (as the modes table may be) was refused without saying what it found, and a
+// sign '-1.0' or '-' was refused without the fix.
+TEST(Sensors, ADofWrittenAsOtherToolsWriteItSaysWhatToGive) {
+  model::Model m = two_chain_structure();
+  m.dof_labels.clear();
+  for (int i = 0; i < m.size(); ++i) m.dof_labels.push_back(std::to_string(9000 + i) + ":3");
+  const auto message = [&](const std::string& dof) {
+    return sensors_error("channel,dof\na," + dof + "\n", m);
+  };
+  const std::string named =
+      "(a component is a number, 1-6 for x, y, z, rx, ry, rz, and a channel "
+      "that reads against it has sign -1: give 9001:3";
+  const std::string signed_number =
+      "(a component is a number 1-6 without a sign, and a channel that reads against it has sign "
+      "-1: give 9001:3";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"9001:+3", signed_number + ")"},
+      {"9001:3+", signed_number + ")"},
+      {"9001:-3", signed_number + " and sign -1)"},
+      {"9001:3-", signed_number + " and sign -1)"},
+      {"9001:z", named + ")"},
+      {"9001:Z", named + ")"},
+      {"9001:+z", named + ")"},
+      {"9001:+Z", named + ")"},
+      {"9001:z+", named + ")"},
+      {"9001:-Z", named + " and sign -1)"},
+      {"9001:z-", named + " and sign -1)"},
+      {"9001:Tz", named + ")"},
+      {"9001: 3", "(a label has no blanks: give 9001:3)"},
+      {"9001 : -z", "(a label has no blanks, " + named.substr(1) + " and sign -1)"},
+      {"9001:3.0", "(a component is a whole number 1-6 as written in dof_labels: give 9001:3)"},
+  };
+  for (const auto& [dof, hint] : cases) {
+    const std::string e = message(dof);
+    EXPECT_EQ(e.find("s.csv:2: dof '" + dof +
+                     "' is not a label of the model's dof_labels: node "
+                     "9001 has only 9001:3 " +
+                     hint),
+              0u)
+        << dof << ": " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  }
+  // Not a slip of the form: no hint.
+  EXPECT_EQ(message("9001:1").find(" ("), std::string::npos) << message("9001:1");
+  EXPECT_EQ(message("9001:7").find(" ("), std::string::npos) << message("9001:7");
+
+  // Headers in any case, separated by ';' or tabs, and signs written as numbers, are read.
+  for (const std::string& text : {std::string("Channel,DOF,Sign\na,9001:3,-1.0\n"),
+                                  std::string("channel;dof;sign\na;9001:3;-1\n"),
+                                  std::string("channel\tdof\tsign\na\t9001:3\t-1\n")}) {
+    const std::vector<Sensor> s = parse_sensors(text, "s.csv", m);
+    ASSERT_EQ(s.size(), 1u) << text;
+    EXPECT_EQ(s[0].dof, 1) << text;
+    EXPECT_EQ(s[0].sign, -1.0) << text;
+  }
+  EXPECT_EQ(sensors_error("chan,dof\na,1\n", m),
+            "s.csv:1: expected the header 'channel,dof[,sign]' (',', ';' or tab between the "
+            "cells), found 'chan,dof'");
+  EXPECT_EQ(sensors_error("channel,dof,sign\na,9001:3,-\n", m),
+            "s.csv:2: sign '-' must be 1 or -1: give -1");
+}
+
+}  // namespace
+}  // namespace jointlab::correlate
