@@ -17,12 +17,12 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
 #include "jointlab/apps/print.h"
 #include "jointlab/core/error.h"
 #include "jointlab/core/parallel.h"
 #include "jointlab/core/text.h"
+#include "jointlab/core/units.h"
 #include "jointlab/data/names.h"
 #include "jointlab/data/output_stage.h"
 #include "jointlab/data/read_record.h"

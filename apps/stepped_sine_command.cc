@@ -6,11 +6,11 @@
 
 #include <fmt/format.h>
 
-#include "jointlab/apps/cli_args.h"
 #include "jointlab/apps/commands.h"
 #include "jointlab/apps/print.h"
 #include "jointlab/apps/stepped_sine_figure.h"
 #include "jointlab/core/error.h"
+#include "jointlab/core/units.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/data/names.h"
 #include "jointlab/data/stepped_sine.h"

@@ -143,6 +143,15 @@ std::optional<Quantity> parse_quantity(std::string_view text) {
   return std::nullopt;
 }
 
+Quantity motion_quantity(std::string_view option, std::string_view value) {
+  const std::optional<Quantity> q = parse_quantity(value);
+  if (!q || *q == Quantity::kForce) {
+    throw InputError(fmt::format("{} {}: expected displacement, velocity or acceleration", option,
+                                 value.empty() ? "''" : value));
+  }
+  return *q;
+}
+
 int derivative_order(Quantity q) {
   switch (q) {
     case Quantity::kDisplacement:

@@ -47,6 +47,11 @@ std::string quantity_name(Quantity q);
 /// Parses "displacement" | "velocity" | "acceleration" | "force"; nullopt otherwise.
 std::optional<Quantity> parse_quantity(std::string_view text);
 
+/// The motion quantity an option's `value` names (displacement, velocity or acceleration);
+/// InputError "OPTION VALUE: expected displacement, velocity or acceleration" for anything else,
+/// force included.
+Quantity motion_quantity(std::string_view option, std::string_view value);
+
 /// Order of time differentiation from displacement: 0, 1, 2 (force: not a motion, asserts).
 int derivative_order(Quantity q);
 

@@ -1,9 +1,12 @@
 #include "jointlab/core/units.h"
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "jointlab/core/error.h"
 
 namespace jointlab {
 namespace {
@@ -76,6 +79,24 @@ TEST(Units, QuantityNamesRoundTrip) {
   }
   EXPECT_FALSE(parse_quantity("jerk").has_value());
   EXPECT_EQ(derivative_order(Quantity::kAcceleration), 2);
+}
+
+// The commands' and the Python module's one reading of --quantity / --amplitude: a motion, never a
+// force, with a message naming the option and the value ('' where none was given).
+TEST(Units, MotionQuantitiesAreMotionsNamedByTheirOption) {
+  EXPECT_EQ(motion_quantity("--amplitude", "velocity"), Quantity::kVelocity);
+  const auto message = [](std::string_view value) {
+    try {
+      motion_quantity("--quantity", value);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message("force"), "--quantity force: expected displacement, velocity or acceleration");
+  EXPECT_EQ(message(""), "--quantity '': expected displacement, velocity or acceleration");
+  EXPECT_EQ(message("Velocity"),
+            "--quantity Velocity: expected displacement, velocity or acceleration");
 }
 
 }  // namespace

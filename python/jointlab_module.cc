@@ -262,15 +262,6 @@ void write_model(const std::string& path, const model::Model& m) {
 }
 
 // "acceleration", "velocity" or "displacement", as --quantity and --amplitude take them.
-// The command's message (apps/cli_args.cc): "--quantity force: expected displacement, ...".
-Quantity motion(const std::string& option, const std::string& text) {
-  const std::optional<Quantity> q = parse_quantity(text);
-  if (!q || *q == Quantity::kForce)
-    throw InputError(fmt::format("{} {}: expected displacement, velocity or acceleration", option,
-                                 text.empty() ? "''" : text));
-  return *q;
-}
-
 // Progress to a Python callable (or nowhere): the GIL is taken for the call only, and a pending
 // Ctrl-C ends the work with KeyboardInterrupt.
 void report(const py::object& progress, const std::string& line) {
@@ -389,8 +380,8 @@ py::list process(const OneOrMany<PathArg>& file_args,
   if (channels && channels->items.empty())
     throw InputError("process: channels=[] names no channel (None: every non-force channel)");
   if (channels) opt.channels = channels->items;
-  if (quantity) opt.quantity = motion("--quantity", *quantity);
-  opt.ringdown.amplitude = motion("--amplitude", amplitude);
+  if (quantity) opt.quantity = motion_quantity("--quantity", *quantity);
+  opt.ringdown.amplitude = motion_quantity("--amplitude", amplitude);
   if (std::string why = opt.check(); !why.empty()) throw InputError(why);
   if (files.empty()) throw InputError("process: no file given");
   if (out) data::check_distinct_stems(files);
@@ -1517,7 +1508,7 @@ py::list stepped_sine(const OneOrMany<PathArg>& file_args, const std::string& am
   const std::optional<std::string> out = text(out_arg);
   if (files.empty()) throw InputError("stepped-sine: no file given");
   modal::SteppedSineOptions opt;
-  opt.amplitude = motion("--amplitude", amplitude);
+  opt.amplitude = motion_quantity("--amplitude", amplitude);
   if (damping_model != "hysteretic" && damping_model != "viscous")
     throw InputError(
         fmt::format("--damping-model {}: expected hysteretic or viscous", damping_model));
@@ -1529,7 +1520,7 @@ py::list stepped_sine(const OneOrMany<PathArg>& file_args, const std::string& am
   opt.coverage_factor = coverage_factor;
   if (const std::string why = opt.check(); !why.empty()) throw InputError(why);
   std::optional<Quantity> quantity;
-  if (quantity_arg) quantity = motion("--quantity", *quantity_arg);
+  if (quantity_arg) quantity = motion_quantity("--quantity", *quantity_arg);
   data::check_distinct_stems(files);
   std::vector<modal::SteppedSineFileResult> results;
   {
