@@ -210,10 +210,74 @@ TEST(ModesTableFromAnotherTool, DampingAndMpcColumnsAreLeftOutAndTheRestNamed) {
   const std::string rad = jointlab::testing::input_error_of([&] {
     read_modes_table(write("rad.csv", "mode,frequency_rad_s,z1\n1,363.8,1\n"), sensors, nullptr);
   });
-  EXPECT_NE(rad.find("rad.csv:1: column 'frequency_rad_s': frequencies are read in Hz only, "
+  EXPECT_NE(rad.find("rad.csv:1: column 2 'frequency_rad_s': frequencies are read in Hz only, "
                      "under frequency_hz: give them so (rad/s divided by 2 pi)"),
             std::string::npos)
       << rad;
+}
+
+// Frequency headers as test-modal tools write them: 'Mode,Frequency [Hz],Damping [%]',
+// 'Freq (Hz)', 'f_Hz' and 'Frequency [kHz]' were refused ("the header must begin with
+// mode,frequency_hz"); the unit they name is explicit, so they are read, kHz times 1000 (exact:
+// the same doubles as the plain table, 0.0579 kHz to within one rounding). A frequency without
+// a unit, in a unit not read, in rad/s, after the mode column or beside a decimal comma is
+// refused in one line naming the file, the line and the column.
+TEST(ModesTableFromAnotherTool, FrequencyHeadersWithTheirUnitAreRead) {
+  const fs::path d = jointlab::testing::scratch_folder("jointlab_foreign_headers_test");
+  const std::vector<Sensor> sensors{{"z1", 1, 1.0}, {"z2", 2, 1.0}};
+  const auto read = [&](const std::string& header, const std::string& rows) {
+    std::ofstream(d / "t.csv") << header << "\n" << rows;
+    return read_modes_table(d / "t.csv", sensors, nullptr);
+  };
+  const std::string rows = "1,57.9,0.5,1\n2,120,1,-0.5\n";
+  const MeasuredModes plain = read("mode,frequency_hz,z1,z2", rows);
+  for (const std::string f : {"Frequency [Hz]", "Freq (Hz)", "f_Hz", "Frequency_Hz", "FREQ [hz]",
+                              "frequency_hz [Hz]", "Natural frequency (Hz)"}) {
+    const MeasuredModes m = read("Mode," + f + ",z1,z2", rows);
+    EXPECT_EQ(m.frequency_hz, plain.frequency_hz) << f;
+    EXPECT_EQ(m.shapes, plain.shapes) << f;
+  }
+  const MeasuredModes damping =
+      read("Mode,Frequency [Hz],Damping [%],z1,z2", "1,57.9,0.3,0.5,1\n2,120,0.2,1,-0.5\n");
+  EXPECT_EQ(damping.frequency_hz, plain.frequency_hz);
+  const MeasuredModes k = read("mode,Frequency [kHz],z1,z2", "1,0.0579,0.5,1\n2,0.12,1,-0.5\n");
+  EXPECT_TRUE(k.frequency_hz.isApprox(plain.frequency_hz, 1e-15)) << k.frequency_hz.transpose();
+  const auto error = [&](const std::string& header, const std::string& row) {
+    return jointlab::testing::input_error_of([&] { read(header, row); });
+  };
+  const std::string file = (d / "t.csv").string();
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"mode,Frequency",
+       "1: column 2 'Frequency': a frequency needs its unit: write "
+       "frequency_hz, or the unit in brackets ('Frequency [Hz]', 'Frequency "
+       "[kHz]')"},
+      {"mode,Frequency [cpm]",
+       "1: column 2 'Frequency [cpm]': unit 'cpm' is not read: give the frequencies in Hz "
+       "(frequency_hz) or kHz"},
+      {"mode,frequency_hz [kHz]",
+       "1: column 2 'frequency_hz [kHz]': unit 'kHz' refused: frequency_hz is in Hz ([Hz] or no "
+       "unit)"},
+      {"mode,Frequency (rad/s)",
+       "1: column 2 'Frequency (rad/s)': frequencies are read in Hz "
+       "only, under frequency_hz: give them so (rad/s divided by 2 pi)"},
+      {"frequency_hz,mode",
+       "1: the header must begin with mode,frequency_hz (or a frequency "
+       "with its unit, 'Frequency [Hz]'); it begins 'frequency_hz,mode': "
+       "put the mode column first"},
+      {"mode,z1,frequency_hz",
+       "1: the header must begin with mode,frequency_hz (or a frequency "
+       "with its unit, 'Frequency [Hz]'); it begins 'mode,z1', column 2 "
+       "'z1' names no frequency"},
+  };
+  for (const auto& [header, message] : refused)
+    EXPECT_EQ(error(header, "1,57.9\n"), file + ":" + message) << header;
+  // A European export: ';' between the cells is read, a decimal comma is named.
+  EXPECT_EQ(read("mode;frequency_hz;z1;z2", "1;57.9;0.5;1\n2;120;1;-0.5\n").frequency_hz,
+            plain.frequency_hz);
+  EXPECT_EQ(error("mode;frequency_hz", "1;57,9\n"),
+            file +
+                ":2: frequency_hz '57,9' is not a number (a decimal comma: write 57.9 with a "
+                "decimal point; ';' or tab may still separate the cells)");
 }
 
 // A sensor mounted upside down written as a direction (9001:-z, as test-modal tools label

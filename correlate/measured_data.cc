@@ -742,33 +742,91 @@ std::string sensor_channels(const std::vector<Sensor>& sensors) {
                      fmt::join(names, ", "));
 }
 
+// The factor to Hz of a modes table's frequency column `cell` (column 2 of line n of `name`):
+// `frequency_hz`, or a frequency named as test-modal tools write it (frequency, freq, f, fn,
+// natural frequency, eigenfrequency; any case) with its unit in Hz or kHz given in brackets
+// ([Hz], (kHz)) or after '_' (f_Hz, Frequency_kHz); 0 where the cell names no frequency. A
+// frequency without a unit, or in any other, is refused naming the column; rad/s says to give Hz.
+double frequency_column_scale(const std::string& name, long n, const std::string& cell) {
+  const std::string f = lower(cell);
+  const auto refuse = [&](const std::string& why) {
+    return InputError(where(name, n, fmt::format("column 2 '{}': {}", printable(cell), why)));
+  };
+  if (f.find("rad") != std::string::npos || f.find("omega") != std::string::npos)
+    throw refuse(
+        "frequencies are read in Hz only, under frequency_hz: give them so (rad/s "
+        "divided by 2 pi)");
+  std::string base = f, unit, written;  // written: the unit as the cell gives it
+  if (const size_t open = f.find_first_of("[("); open != std::string::npos) {
+    const char close = f[open] == '[' ? ']' : ')';
+    if (f.back() != close) return 0;
+    base = std::string(trim(f.substr(0, open)));
+    unit = std::string(trim(f.substr(open + 1, f.size() - open - 2)));
+    written = std::string(trim(std::string_view(cell).substr(open + 1, f.size() - open - 2)));
+  } else {
+    for (const char* u : {"hz", "khz"})
+      if (const std::string tail = std::string("_") + u; base.ends_with(tail)) {
+        base.erase(base.size() - tail.size());
+        unit = u;
+      }
+  }
+  if (base == "frequency_hz") {  // frequency_hz [Hz]; in another unit, not frequency_hz
+    if (unit == "hz") return 1;
+    throw refuse(fmt::format("unit '{}' refused: frequency_hz is in Hz ([Hz] or no unit)",
+                             printable(written)));
+  }
+  const std::vector<std::string> names = {"frequency",         "freq",          "f", "fn", "f_n",
+                                          "natural frequency", "eigenfrequency"};
+  if (std::find(names.begin(), names.end(), base) == names.end()) return 0;
+  if (unit == "hz") return 1;
+  if (unit == "khz") return 1e3;
+  if (unit.empty())
+    throw refuse(
+        "a frequency needs its unit: write frequency_hz, or the unit in brackets ('Frequency "
+        "[Hz]', 'Frequency [kHz]')");
+  throw refuse(
+      fmt::format("unit '{}' is not read: give the frequencies in Hz (frequency_hz) or kHz",
+                  printable(written)));
+}
+
 // The shape columns of a modes table from its header `cells` (line n of `name`), after the
-// mode,frequency_hz that must begin it: each a sensor channel (or its real or imaginary part),
-// none twice, every part beside its other part.
+// mode and frequency columns that must begin it (`to_hz` receives the frequency column's factor
+// to Hz): each a sensor channel (or its real or imaginary part), none twice, every part beside
+// its other part.
 std::vector<TableColumn> modes_table_columns(const std::string& name,
                                              const std::vector<Sensor>& sensors,
-                                             const std::vector<std::string>& cells, long n) {
+                                             const std::vector<std::string>& cells, long n,
+                                             double& to_hz) {
   std::vector<TableColumn> columns;
-  if (cells.size() >= 2 && cells[0] == "mode" && cells[1] != "frequency_hz") {
-    // Frequencies in another unit: say which is read rather than only what the header must be.
-    const std::string f = lower(cells[1]);
-    if (f.find("rad") != std::string::npos || f.find("omega") != std::string::npos)
-      throw InputError(where(
-          name, n,
-          fmt::format("column '{}': frequencies are read in Hz only, under frequency_hz: give "
-                      "them so (rad/s divided by 2 pi)",
-                      cells[1])));
-  }
-  if (cells.size() < 2 || cells[0] != "mode" || cells[1] != "frequency_hz") {
-    // What was found, as written: 'Mode,Frequency_Hz' or 'frequency_hz [Hz]' differ only in
-    // case or a unit, and a newcomer cannot see which from the rule alone.
+  to_hz = cells.size() >= 2 && lower(cells[0]) == "mode"
+              ? (cells[1] == "frequency_hz" ? 1 : frequency_column_scale(name, n, cells[1]))
+              : 0;
+  if (to_hz == 0) {
+    // What was found, as written, and where: a swapped pair says to swap it.
     std::string found;
-    for (size_t c = 0; c < std::min<size_t>(cells.size(), 2); ++c)
-      found += (c ? "," : "") + cells[c];
-    throw InputError(where(name, n,
-                           fmt::format("the header must begin with mode,frequency_hz (lower "
-                                       "case, no unit: frequencies in Hz); it begins '{}'",
-                                       found)));
+    for (size_t c = 0; c < std::min<size_t>(cells.size(), 2); ++c) {
+      if (c > 0) found += ',';
+      found += printable(cells[c]);
+    }
+    const bool swapped =
+        cells.size() >= 2 && lower(cells[1]) == "mode" && (cells[0] == "frequency_hz" || [&] {
+          try {
+            return frequency_column_scale(name, n, cells[0]) > 0;
+          } catch (const InputError&) {
+            return false;
+          }
+        }());
+    throw InputError(where(
+        name, n,
+        fmt::format("the header must begin with mode,frequency_hz (or a frequency with its unit, "
+                    "'Frequency [Hz]'); it begins '{}'{}",
+                    found,
+                    swapped ? ": put the mode column first"
+                    : cells.empty() || lower(cells[0]) != "mode"
+                        ? fmt::format(", column 1 '{}' is not 'mode'",
+                                      cells.empty() ? "" : printable(cells[0]))
+                        : fmt::format(", column 2 '{}' names no frequency",
+                                      cells.size() < 2 ? "" : printable(cells[1])))));
   }
   for (size_t c = 2; c < cells.size(); ++c) {
     const TableColumn col = table_column(sensors, cells[c]);
@@ -908,14 +966,25 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
   std::vector<double> freq;
   std::vector<Eigen::VectorXd> shape;
   std::vector<std::string> warnings;
+  double to_hz = 1;  // the frequency column's unit: Hz or kHz
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
-    columns = modes_table_columns(name, sensors, cells, n);
+    columns = modes_table_columns(name, sensors, cells, n, to_hz);
   };
   const auto on_row = [&](const std::vector<std::string>& cells, long n) {
     auto number = [&](size_t c, const char* what) {
       const std::optional<double> x = data::parse_double(cells[c]);
       if (!x || !std::isfinite(*x)) {
-        throw InputError(where(name, n, fmt::format("{} '{}' is not a number", what, cells[c])));
+        // A decimal comma (a European export): say so where a point would read.
+        std::string point = cells[c];
+        std::replace(point.begin(), point.end(), ',', '.');
+        const bool comma = point != cells[c] && data::parse_double(point).has_value();
+        throw InputError(where(
+            name, n,
+            fmt::format("{} '{}' is not a number{}", what, cells[c],
+                        comma ? fmt::format(" (a decimal comma: write {} with a decimal point; "
+                                            "';' or tab may still separate the cells)",
+                                            point)
+                              : "")));
       }
       return *x;
     };
@@ -928,7 +997,7 @@ MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& 
         throw InputError(where(name, n, fmt::format("mode {} twice", m)));
       }
     }
-    const double f = number(1, "frequency_hz");
+    const double f = to_hz * number(1, "frequency_hz");
     if (!(f > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
     const Eigen::VectorXcd v = row_shape(name, sensors, columns, cells, n, number);
     Eigen::VectorXd real = real_shape(name, n, static_cast<int>(mode), v, warnings);

@@ -194,6 +194,17 @@ std::string band_unprocessable(const data::Record& record, const signal::Band& b
   return {};
 }
 
+// Whether a channel's name says it is the hammer's force: "Force", "hammer", "Impact 1",
+// "load_cell" (case-blind).
+bool named_as_force(const std::string& name) {
+  const std::string n = lower(name);
+  for (const char* word :
+       {"force", "hammer", "impact", "impulse", "load cell", "load_cell", "loadcell"}) {
+    if (n.find(word) != std::string::npos) return true;
+  }
+  return false;
+}
+
 // Refuses, before anything is allocated, what cannot be processed: a continued record
 // too large for memory, a band whose filter cannot settle within the record, and a
 // requested channel whose quantity is unknown.
@@ -221,15 +232,24 @@ void check_processable(const data::Record& record, const std::vector<signal::Ban
     if (std::string why = band_unprocessable(record, b, options); !why.empty())
       throw InputError(where(record.source, 0, why));
   }
-  // A channel without a unit measures what the user says, or nothing can be assumed.
+  // A channel without a unit measures what the user says, or nothing can be assumed. One
+  // named as the hammer's force ("Force") is told first how to mark it a force: the response
+  // units alone ('Force [m/s^2]') would have it processed as a response.
   for (const data::Channel* c : chans) {
     if (c->quantity || options.quantity) continue;
+    const std::string force =
+        named_as_force(c->name)
+            ? fmt::format(
+                  "if it is the hammer's force, give its unit in the header ('{} [N]'), "
+                  "which leaves it out of the responses; if it is a response, ",
+                  c->name)
+            : std::string();
     throw InputError(where(
         record.source, 0,
-        fmt::format("channel '{}' has no unit and no --quantity was given: give its unit in the "
-                    "header (e.g. '{} [m/s^2]', '{} [m/s]') or --quantity "
+        fmt::format("channel '{}' has no unit and no --quantity was given: {}give its unit in "
+                    "the header (e.g. '{} [m/s^2]', '{} [m/s]') or --quantity "
                     "acceleration|velocity|displacement",
-                    c->name, c->name, c->name)));
+                    c->name, force, c->name, c->name)));
   }
 }
 
@@ -773,17 +793,6 @@ RecordResult process_modes(const data::Record& record,
 }  // namespace
 
 namespace {
-
-// Whether a channel's name says it is the hammer's force: "Force", "hammer", "Impact 1",
-// "load_cell" (case-blind).
-bool named_as_force(const std::string& name) {
-  const std::string n = lower(name);
-  for (const char* word :
-       {"force", "hammer", "impact", "impulse", "load cell", "load_cell", "loadcell"}) {
-    if (n.find(word) != std::string::npos) return true;
-  }
-  return false;
-}
 
 // A hammer's force channel exported without a unit ("Force" beside "Acc1") is read as the
 // --quantity's response and gives no ring-down: its refusals say how to mark it a force,

@@ -161,6 +161,41 @@ TEST(Process, AnUnlabelledForceChannelIsToldHowToMarkIt) {
   EXPECT_EQ(quiet.message.find(hint), std::string::npos) << quiet.message;
 }
 
+// The same export without --quantity ("time,Force,Acc1", no units): the refusal of the unitless
+// 'Force' must first say how to mark it a force ('Force [N]'); it used to offer only the response
+// units ('Force [m/s^2]'), which would have the hammer processed as a response. A unitless
+// response ('Acc1') keeps the plain refusal. Exact text: the messages are fixed strings.
+TEST(Process, AnUnlabelledForceChannelWithoutQuantityIsToldHowToMarkIt) {
+  data::Record rec;
+  rec.fs = 1000;
+  rec.source = "hammer.csv";
+  rec.channels.resize(2);
+  rec.channels[0].name = "Force";
+  rec.channels[1].name = "Acc1";
+  for (data::Channel& c : rec.channels) c.samples = Eigen::VectorXd::Zero(1000);
+  ProcessOptions opt;
+  opt.bands = {{100, 200}};
+  signal::FftCache cache;
+  const auto refusal = [&]() -> std::string {
+    try {
+      process_record(rec, opt, cache);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_EQ(refusal(),
+            "hammer.csv: channel 'Force' has no unit and no --quantity was given: if it is the "
+            "hammer's force, give its unit in the header ('Force [N]'), which leaves it out of "
+            "the responses; if it is a response, give its unit in the header (e.g. 'Force "
+            "[m/s^2]', 'Force [m/s]') or --quantity acceleration|velocity|displacement");
+  rec.channels[0].quantity = Quantity::kForce;  // 'Force [N]': left out of the responses
+  EXPECT_EQ(refusal(),
+            "hammer.csv: channel 'Acc1' has no unit and no --quantity was given: give its unit "
+            "in the header (e.g. 'Acc1 [m/s^2]', 'Acc1 [m/s]') or --quantity "
+            "acceleration|velocity|displacement");
+}
+
 using jointlab::testing::memory_now;
 
 // A record at 1 kHz of `channels` accelerations a0, a1, ... of `rows` samples each,
