@@ -51,8 +51,8 @@ struct ModeBackbones {
   ScatterSummary scatter;  ///< the scatter summary of `curves`
   /// Backbone tables: which of them give no amplitude unit (SI assumed), for the report; "" none.
   std::string amplitude_note;
-  /// process runs read at one channel where the hits' reference channels differ
-  /// (correlate::band_channel's note); "" otherwise.
+  /// process runs read at one channel where the hits' reference channels differ, or with a hit
+  /// without a backbone there (correlate::band_channel's note); "" otherwise.
   std::string channel_note;
 };
 

@@ -688,13 +688,20 @@ BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& senso
       others.push_back(fmt::format("{} in {}", b.reference_channel, hit));
     if (!with[*best].count(b.source)) missing.push_back(hit);
   }
-  if (others.empty()) return out;
-  out.note = fmt::format(
-      "band {}: the hits' reference channels differ ({}; {} in the other {}): every hit is read "
-      "at {} (a backbone there in {} of {} hits), so that their curves share one amplitude "
-      "(--channel chooses another)",
-      band, fmt::join(others, ", "), out.channel, hits.size() - others.size(), out.channel,
-      with[*best].size(), hits.size());
+  if (others.empty() && missing.empty()) return out;
+  // Where every hit names it, a hit without a backbone there (its ring-down failed at that
+  // channel) is left out all the same, and named.
+  out.note = others.empty()
+                 ? fmt::format(
+                       "band {}: every hit is read at its reference channel {} (a backbone there "
+                       "in {} of {} hits; --channel chooses another)",
+                       band, out.channel, with[*best].size(), hits.size())
+                 : fmt::format(
+                       "band {}: the hits' reference channels differ ({}; {} in the other {}): "
+                       "every hit is read at {} (a backbone there in {} of {} hits), so that "
+                       "their curves share one amplitude (--channel chooses another)",
+                       band, fmt::join(others, ", "), out.channel, hits.size() - others.size(),
+                       out.channel, with[*best].size(), hits.size());
   if (!missing.empty())
     out.note += fmt::format("; {} no backbone there and {} left out: {}",
                             missing.size() == 1 ? "one hit has" : "some hits have",

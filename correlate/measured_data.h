@@ -156,7 +156,7 @@ BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
                                     std::optional<Quantity> quantity, int sensor);
 
 /// The channel a band's backbones are read at where none is chosen, and a note where the hits'
-/// reference channels differ.
+/// reference channels differ or a hit has no backbone at that channel.
 struct BandChannel {
   std::string channel;  ///< "" when no hit's reference channel of the band is a sensor
   std::string note;     ///< which channel was taken over which, and the hits it leaves out

@@ -120,6 +120,26 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
               std::string::npos)
         << c3.note;
   }
+  // Both hits naming b2, where hit1 has no backbone (its ring-down there failed): hit1 is left
+  // out all the same, and named (the note was empty where the reference channels agreed).
+  {
+    const fs::path db = fresh("both_b2");
+    std::string both = kSummary;
+    const std::string ref = R"("band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "a5")";
+    both.replace(both.find(ref), ref.size(),
+                 R"("band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "b2")");
+    write(db / "summary.json", both);
+    for (const char* f : {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv"})
+      write(db / f, kBackbone);
+    const ProcessRun rb = read_process_run(db);
+    const BandChannel cb = band_channel(rb, sensors, 1);
+    EXPECT_EQ(cb.channel, "b2");
+    EXPECT_EQ(cb.note,
+              "band 1: every hit is read at its reference channel b2 (a backbone there in 1 of 2 "
+              "hits; --channel chooses another); one hit has no backbone there and is left out: "
+              "hit1");
+    EXPECT_EQ(measured_backbones(rb, sensors, 1, {}).size(), 1u);
+  }
   EXPECT_EQ(measured_backbones(run, sensors, 1, {"a5"}).size(), 2u);
   EXPECT_NE(testing::input_error_of([&] {
               measured_backbones(run, sensors, 2, {});
