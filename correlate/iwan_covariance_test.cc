@@ -213,7 +213,7 @@ TEST(IwanUpdate, AFitThatDidNotConvergeStatesNoSigma) {
 // less 1 (2 degrees of freedom: the square of its 95 % quantile over the normal's, (4.303 /
 // 1.960)^2 = 4.82) in place of the points' nu / (nu - 2), which covariance() put in. That is a
 // widening only where the points have more degrees of freedom: between 2 and 2.52 of them their
-// own factor exceeds 4.82, and the swap narrowed the covariance, by 0.83 at 2.4 (a sigma 10 %
+// own factor exceeds 4.82, and the swap narrowed the covariance, by 0.80 at 2.4 (a sigma 10 %
 // smaller) and toward 0 near 2. The stated covariance is never below the points' own (exact:
 // the factor is 1 there, so 1e-12 for rounding), and with many points it is 4.82 times theirs.
 TEST(IwanUpdate, WideningForScatterBetweenHitsNeverNarrows) {

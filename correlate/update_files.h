@@ -66,9 +66,9 @@ struct IwanParameterRow {
   std::string note;           ///< IwanUpdateSummary::parameter_note()
 };
 
-/// The rows of the Iwan update's parameters.csv: Fs, Kt, chi, beta, gamma (K_T / K_s, when
-/// known) and, when fitted, modal_ratio; a parameter is identifiable when its relative standard
-/// deviation is known and at most identifiable_std and, for Fs and beta, the data reach
+/// The rows of the Iwan update's parameters.csv: Fs, Kt, chi, beta, modal_ratio when fitted, then
+/// gamma (K_T / K_s, when known; last since 79f1138); a parameter is identifiable when its relative
+/// standard deviation is known and at most identifiable_std and, for Fs and beta, the data reach
 /// macroslip. The file and the Python module's result both read them.
 std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
                                                   double identifiable_std = 0.5);
