@@ -5,7 +5,10 @@
 #include <cmath>
 #include <optional>
 
+#include <Eigen/QR>
+
 #include <fmt/format.h>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
 #include "jointlab/core/error.h"
@@ -42,6 +45,10 @@ struct CurveScatter {
   Eigen::Vector2d apart_amplitude = Eigen::Vector2d::Zero();
   Eigen::Vector2d f_range = Eigen::Vector2d(INFINITY, -INFINITY);
   Eigen::Vector2d z_range = Eigen::Vector2d(INFINITY, -INFINITY);
+  // The chi-square the curves' own shapes gain beyond the common curve and the rank they add,
+  // and the common curve's own (add_hit_shapes()).
+  double hits_gain = 0, common_gain = 0;
+  int hits_dof = 0, common_dof = 0;
 };
 
 // One target's curves: each one's point count, mean normalised residual, mean relative offset
@@ -99,6 +106,67 @@ void add_between(const CurveMeans& means, CurveScatter& scatter) {
         Eigen::Vector2d(std::min(scatter.z_range(0), d(1)), std::max(scatter.z_range(1), d(1)));
   }
   scatter.between_curves += static_cast<int>(nc);
+}
+
+// The residual sum of squares of u after least squares on the columns of a, and a's rank.
+std::pair<double, int> least_squares_rest(const Eigen::MatrixXd& a, const Eigen::VectorXd& u) {
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
+  qr.setThreshold(1e-10);
+  const Eigen::VectorXd rest = u - a * qr.solve(u);
+  return {rest.squaredNorm(), static_cast<int>(qr.rank())};
+}
+
+// Adds target t's curves' own shapes to the scatter between curves (MisfitEvidence::
+// between_hits_share), its residuals r starting at index k, N = n_points: the normalised
+// residuals u = r sqrt(N) (unit variance under the stated noise) of each quantity against
+// x = ln amplitude, fitted first by a common piecewise-linear curve (hat functions on knots
+// spread evenly over the target's x, one per three points a curve, 2 to 30), then with each
+// curve's offset and slope (x less its mean) added; the chi-square that gains and the rank it
+// adds, and the common curve's own. Where two curves overlap in amplitude their own terms fit
+// what the common curve cannot: the data of one against the other's.
+void add_hit_shapes(const IwanTarget& t, const std::vector<double>& r, int k, double n_points,
+                    CurveScatter& scatter) {
+  const int nc = static_cast<int>(t.curves.size());
+  int n = 0;
+  for (const MeasuredBackbone& c : t.curves) n += static_cast<int>(c.amplitude.size());
+  Eigen::VectorXd x(n);
+  std::vector<int> curve(static_cast<size_t>(n));
+  for (int c = 0, i = 0; c < nc; ++c) {
+    const MeasuredBackbone& b = t.curves[static_cast<size_t>(c)];
+    for (Eigen::Index j = 0; j < b.amplitude.size(); ++j, ++i) {
+      x(i) = std::log(b.amplitude(j));
+      curve[static_cast<size_t>(i)] = c;
+    }
+  }
+  const double lo = x.minCoeff(), hi = x.maxCoeff();
+  if (!(hi > lo)) return;
+  const int knots = std::clamp(n / nc / 3 + 1, 2, 30);  // 30: a QR of n rows stays cheap
+  const double step = (hi - lo) / (knots - 1);
+  Eigen::MatrixXd both = Eigen::MatrixXd::Zero(n, knots + 2 * nc);
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(nc), count = Eigen::VectorXd::Zero(nc);
+  for (int i = 0; i < n; ++i) {
+    const double at = std::clamp((x(i) - lo) / step, 0.0, knots - 1.0);
+    const int left = std::min(static_cast<int>(at), knots - 2);
+    both(i, left) = 1 - (at - left);
+    both(i, left + 1) = at - left;
+    mean(curve[static_cast<size_t>(i)]) += x(i);
+    count(curve[static_cast<size_t>(i)]) += 1;
+  }
+  for (int i = 0; i < n; ++i) {
+    const int c = curve[static_cast<size_t>(i)];
+    both(i, knots + 2 * c) = 1;
+    both(i, knots + 2 * c + 1) = x(i) - mean(c) / count(c);
+  }
+  for (int q = 0; q < 2; ++q) {
+    Eigen::VectorXd u(n);
+    for (int i = 0; i < n; ++i) u(i) = r[static_cast<size_t>(k + 2 * i + q)] * std::sqrt(n_points);
+    const auto [rest_common, rank_common] = least_squares_rest(both.leftCols(knots), u);
+    const auto [rest_both, rank_both] = least_squares_rest(both, u);
+    scatter.hits_gain += std::max(0.0, rest_common - rest_both);
+    scatter.hits_dof += rank_both - rank_common;
+    scatter.common_gain += u.squaredNorm() - rest_common;
+    scatter.common_dof += rank_common;
+  }
 }
 
 // A curve unlike the others: its offset against the mean of the target's others, in their
@@ -291,8 +359,13 @@ void set_nearer_mode(const model::LinearModes& modes, int mode, MisfitEvidence& 
 }
 
 // The scatter between curves in the evidence.
-void set_scatter(const CurveScatter& scatter, MisfitEvidence& out) {
+void set_scatter(const CurveScatter& scatter, double n_points, MisfitEvidence& out) {
   out.between_curves_share = scatter.between / scatter.total;
+  out.between_hits_chi2 = scatter.hits_gain;
+  out.between_hits_dof = scatter.hits_dof;
+  out.common_chi2 = scatter.common_gain;
+  out.common_dof = scatter.common_dof;
+  out.between_hits_share = scatter.hits_gain / (scatter.total * n_points);
   out.curves = scatter.between_curves;
   out.frequency_offsets = scatter.f_range;
   out.damping_offsets = scatter.z_range;
@@ -306,6 +379,15 @@ void set_scatter(const CurveScatter& scatter, MisfitEvidence& out) {
 }
 
 }  // namespace
+
+bool MisfitEvidence::hits_differ_in_shape() const {
+  if (!(between_hits_dof > 0) || !(common_dof > 0) || !(between_hits_share >= 0.25)) return false;
+  const auto chance = [](int dof, double chi2) {
+    return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), chi2));
+  };
+  return chance(between_hits_dof, between_hits_chi2) < 1e-3 &&
+         chance(common_dof, common_chi2) >= 1e-3;
+}
 
 std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanParameters& p,
                                                              double z) const {
@@ -340,6 +422,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
     if (t.curves.size() >= 2) {
       const CurveMeans means = curve_means(t, r, v, k, f_floor_, z_floor_);
       add_between(means, scatter);
+      add_hit_shapes(t, r, k, static_cast<double>(residual_count_) / 2, scatter);
       if (t.curves.size() >= 4) find_apart_curve(t, means, scatter);
     }
     MisfitEvidence e = low_end(t, v, f_floor_, z_floor_, k, damping_ratios, damping_max);
@@ -354,7 +437,8 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(const model::IwanPa
   if (out) {
     out->damping_factor = upper_median(damping_ratios);
     out->damping_max = damping_max;
-    if (scatter.between_curves > 0 && scatter.total > 0) set_scatter(scatter, *out);
+    if (scatter.between_curves > 0 && scatter.total > 0)
+      set_scatter(scatter, static_cast<double>(residual_count_) / 2, *out);
   }
   return out;
 }

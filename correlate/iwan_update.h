@@ -230,9 +230,10 @@ struct IwanUpdateSummary {
   bool misfit_sets_the_error() const;
   /// True when random scatter between hits explains the misfit, so the cluster-robust covariance
   /// (one cluster per curve, Student's t with the curves less 1 degrees of freedom) states the
-  /// sigmas: offsets of each curve from the others explain half the chi-square or more, four or
-  /// more curves (more than 2 degrees of freedom), and no curve lies apart from the others
-  /// (MisfitEvidence::apart_curve: offsets that follow a hit are no random scatter).
+  /// sigmas: offsets of each curve from the others explain half the chi-square or more, or the
+  /// curves differ in shape where they overlap while the model describes what they share
+  /// (MisfitEvidence::hits_differ_in_shape()), three or more hits, and no curve lies apart from
+  /// the others (MisfitEvidence::apart_curve: offsets that follow a hit are no random scatter).
   bool scatter_explains_misfit() const;
   /// True when the largest joint slip at the highest measured amplitude (top_slip) stays below
   /// 1e-3 of phi_max: the fitted modes hardly move the joint, so the joint barely shapes them.
