@@ -278,6 +278,12 @@ TEST(ModesTableFromAnotherTool, FrequencyHeadersWithTheirUnitAreRead) {
             file +
                 ":2: frequency_hz '57,9' is not a number (a decimal comma: write 57.9 with a "
                 "decimal point; ';' or tab may still separate the cells)");
+  // Before, a shape entry with a decimal comma was named only "not a number (real, or complex
+  // as ...)", where the frequencies were whole numbers.
+  EXPECT_EQ(error("mode;frequency_hz;z1;z2", "1;58;0,5;1\n"),
+            file +
+                ":2: shape entry '0,5' of column 'z1' is not a number (a decimal comma: write "
+                "0.5 with a decimal point; ';' or tab may still separate the cells)");
 }
 
 // A sensor mounted upside down written as a direction (9001:-z, as test-modal tools label

@@ -895,11 +895,18 @@ Eigen::VectorXcd row_shape(const std::string& name, const std::vector<Sensor>& s
     if (col.part == kWhole) {
       const std::optional<std::complex<double>> z = complex_cell(cell);
       if (!z) {
+        std::string point = cell;  // a decimal comma (a European export) names itself
+        std::replace(point.begin(), point.end(), ',', '.');
+        const bool comma = point != cell && data::parse_double(point).has_value();
         throw InputError(
             where(name, n,
-                  fmt::format("shape entry '{}' of column '{}' is not a number (real, or complex "
-                              "as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
-                              cell, col.header)));
+                  comma ? fmt::format("shape entry '{}' of column '{}' is not a number (a decimal "
+                                      "comma: write {} with a decimal point; ';' or tab may still "
+                                      "separate the cells)",
+                                      cell, col.header, point)
+                        : fmt::format("shape entry '{}' of column '{}' is not a number (real, or "
+                                      "complex as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
+                                      cell, col.header)));
       }
       v(col.row) = *z;
       given[static_cast<size_t>(col.row)] = 3;
