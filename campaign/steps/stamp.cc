@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "jointlab/campaign/steps/stamp_detail.h"
 #include "jointlab/core/error.h"
 #include "jointlab/data/atomic_file.h"
 
@@ -38,10 +39,8 @@ struct Fnv {
   }
 };
 
-// The loaded object (the executable, or the Python module's library) that holds `address`,
-// and from it the GNU build ID its linker wrote (a digest of the linked code and data) or,
-// where it has none, a digest of its read-only segments (its code and constants, the same
-// bytes at any load address). dl_iterate_phdr's callback: 1 once the object is met.
+// The loaded object (the executable, or the Python module's library) that holds `address`, and
+// its code_digest. dl_iterate_phdr's callback: 1 once the object is met.
 struct CodeDigest {
   std::uintptr_t address = 0;
   std::string digest;
@@ -56,38 +55,64 @@ int digest_of_object(dl_phdr_info* info, size_t, void* data) {
     holds = ph.p_type == PT_LOAD && d.address >= start && d.address < start + ph.p_memsz;
   }
   if (!holds) return 0;
-  for (ElfW(Half) i = 0; i < info->dlpi_phnum; ++i) {
-    const ElfW(Phdr)& ph = info->dlpi_phdr[i];
-    if (ph.p_type != PT_NOTE) continue;
-    const char* p = reinterpret_cast<const char*>(info->dlpi_addr + ph.p_vaddr);
-    const char* const end = p + ph.p_memsz;
-    const auto align4 = [](ElfW(Word) n) { return (n + 3) & ~ElfW(Word){3}; };
-    while (p + sizeof(ElfW(Nhdr)) <= end) {
-      ElfW(Nhdr) note;
-      std::memcpy(&note, p, sizeof note);
-      const char* name = p + sizeof note;
-      const char* desc = name + align4(note.n_namesz);
-      if (desc + note.n_descsz > end) break;
-      if (note.n_type == NT_GNU_BUILD_ID && note.n_namesz == 4 &&
-          std::memcmp(name, "GNU", 4) == 0) {
-        for (ElfW(Word) k = 0; k < note.n_descsz; ++k)
-          d.digest += fmt::format("{:02x}", static_cast<unsigned char>(desc[k]));
-        return 1;
-      }
-      p = desc + align4(note.n_descsz);
-    }
-  }
-  Fnv f;
-  for (ElfW(Half) i = 0; i < info->dlpi_phnum; ++i) {
-    const ElfW(Phdr)& ph = info->dlpi_phdr[i];
-    if (ph.p_type == PT_LOAD && !(ph.p_flags & PF_W))
-      f.add(reinterpret_cast<const char*>(info->dlpi_addr + ph.p_vaddr), ph.p_filesz);
-  }
-  d.digest = fmt::format("{:016x}", f.h);
+  d.digest = detail::code_digest(info->dlpi_addr, info->dlpi_phdr, info->dlpi_phnum);
   return 1;
 }
 
+// The GNU build ID in one PT_NOTE segment of `size` bytes at `p`, aligned to `align`; "" none.
+// Offsets, not pointers, are compared with the size, so that no length read can run past it.
+std::string build_id_note(const char* p, std::size_t size, std::size_t align) {
+  const auto pad = [align](std::size_t n) { return (n + align - 1) & ~(align - 1); };
+  std::size_t off = 0;
+  while (off <= size && size - off >= sizeof(ElfW(Nhdr))) {
+    ElfW(Nhdr) note;
+    std::memcpy(&note, p + off, sizeof note);
+    const std::size_t name = off + sizeof note;
+    if (note.n_namesz > size - name) break;
+    const std::size_t desc = pad(name + note.n_namesz);
+    if (desc > size || note.n_descsz > size - desc) break;
+    if (note.n_type == NT_GNU_BUILD_ID && note.n_namesz == 4 && note.n_descsz > 0 &&
+        std::memcmp(p + name, "GNU", 4) == 0) {
+      std::string id;
+      for (std::size_t k = 0; k < note.n_descsz; ++k)
+        id += fmt::format("{:02x}", static_cast<unsigned char>(p[desc + k]));
+      return id;
+    }
+    off = pad(desc + note.n_descsz);
+  }
+  return "";
+}
+
 }  // namespace
+
+std::string detail::code_digest(std::uintptr_t base, const ElfW(Phdr) * phdr, std::size_t count) {
+  // A PT_NOTE outside every PT_LOAD is not in memory: objcopy --remove-section
+  // .note.gnu.build-id leaves one at address 0, which a non-PIE or static program would read
+  // at address 0 (before, a segmentation fault in build_identity()).
+  const auto loaded = [&](ElfW(Addr) at, std::size_t size) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const ElfW(Phdr)& ph = phdr[i];
+      if (ph.p_type == PT_LOAD && at >= ph.p_vaddr && size <= ph.p_filesz &&
+          at - ph.p_vaddr <= ph.p_filesz - size)
+        return true;
+    }
+    return false;
+  };
+  for (std::size_t i = 0; i < count; ++i) {
+    const ElfW(Phdr)& ph = phdr[i];
+    if (ph.p_type != PT_NOTE || !loaded(ph.p_vaddr, ph.p_memsz)) continue;
+    const std::string id = build_id_note(reinterpret_cast<const char*>(base + ph.p_vaddr),
+                                         ph.p_memsz, ph.p_align == 8 ? 8 : 4);
+    if (!id.empty()) return id;
+  }
+  Fnv f;
+  for (std::size_t i = 0; i < count; ++i) {
+    const ElfW(Phdr)& ph = phdr[i];
+    if (ph.p_type == PT_LOAD && !(ph.p_flags & PF_W))
+      f.add(reinterpret_cast<const char*>(base + ph.p_vaddr), ph.p_filesz);
+  }
+  return fmt::format("{:016x}", f.h);
+}
 
 std::string program_version() { return std::string("jointlab ") + JOINTLAB_VERSION; }
 

@@ -1,9 +1,11 @@
 // Tests of the named steps of a campaign run (campaign_run.h) on the small simulated campaign
 // (tests/small_campaign.h) and on hand-made data with known answers.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -30,6 +32,7 @@
 #include "jointlab/campaign/steps/model_side.h"
 #include "jointlab/campaign/steps/numeric_table.h"
 #include "jointlab/campaign/steps/stamp.h"
+#include "jointlab/campaign/steps/stamp_detail.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/mac.h"
 #include "jointlab/correlate/sensors.h"
@@ -237,6 +240,60 @@ TEST(Stamp, TakesInTheBuildNotTheVersionAlone) {
   EXPECT_GE(digest.size(), 16u) << build;
   EXPECT_EQ(digest.find_first_not_of("0123456789abcdef"), std::string::npos) << build;
   fs::remove(file);
+}
+
+// build_identity()'s reading of a loaded object, on made-up program headers over a 64-byte image:
+// (1) a build ID note in a 4-aligned PT_NOTE is read; (2) a PT_NOTE at address 0, outside every
+// PT_LOAD (what objcopy --remove-section .note.gnu.build-id leaves; a non-PIE or static program
+// is loaded at base 0), is skipped, not read (before: a segmentation fault); (3) in an 8-aligned
+// PT_NOTE a note whose descriptor is 4 bytes is followed by padding to 8 (before: read as 4, the
+// build ID after it was missed); (4) without a note, the digest of the read-only segments,
+// which a writable segment's bytes do not enter. Exact comparison of hex text.
+TEST(Stamp, TheCodeDigestReadsOnlyNotesInMemoryAtTheirAlignment) {
+  alignas(8) std::array<unsigned char, 64> image{};
+  const auto put = [&image](std::size_t at, std::uint32_t namesz, std::uint32_t descsz,
+                            std::uint32_t type, const char* name) {
+    const std::uint32_t h[3] = {namesz, descsz, type};
+    std::memcpy(image.data() + at, h, sizeof h);
+    std::memcpy(image.data() + at + 12, name, namesz);
+  };
+  const auto id_at = [&image](std::size_t at) {
+    const unsigned char id[4] = {0xde, 0xad, 0xbe, 0xef};
+    std::memcpy(image.data() + at, id, sizeof id);
+  };
+  const auto addr = reinterpret_cast<std::uintptr_t>(image.data());
+  const auto segment = [](ElfW(Word) type, std::uintptr_t vaddr, std::size_t size, ElfW(Word) flags,
+                          std::size_t align) {
+    ElfW(Phdr) ph{};
+    ph.p_type = type;
+    ph.p_vaddr = vaddr;
+    ph.p_filesz = ph.p_memsz = size;
+    ph.p_flags = flags;
+    ph.p_align = align;
+    return ph;
+  };
+  // (1) and (2): loaded at base 0, the image's own address its p_vaddr, as a non-PIE program.
+  put(0, 4, 4, NT_GNU_BUILD_ID, "GNU");
+  id_at(16);
+  const ElfW(Phdr) one[] = {segment(PT_LOAD, addr, 64, PF_R, 8), segment(PT_NOTE, 0, 32, PF_R, 4),
+                            segment(PT_NOTE, addr, 20, PF_R, 4)};
+  EXPECT_EQ(detail::code_digest(0, one, 3), "deadbeef");
+  // (3): a 4-byte property note (type 5) pads to 8, so the build ID note starts at 24.
+  image.fill(0);
+  put(0, 4, 4, 5, "GNU");
+  put(24, 4, 4, NT_GNU_BUILD_ID, "GNU");
+  id_at(40);
+  const ElfW(Phdr) eight[] = {segment(PT_LOAD, 0, 64, PF_R, 8), segment(PT_NOTE, 0, 44, PF_R, 8)};
+  EXPECT_EQ(detail::code_digest(addr, eight, 2), "deadbeef");
+  // (4): no build ID note; bytes 32-63 writable.
+  image.fill(7);
+  const ElfW(Phdr)
+      none[] = {segment(PT_LOAD, 0, 32, PF_R | PF_X, 8), segment(PT_LOAD, 32, 32, PF_R | PF_W, 8)};
+  std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a, 64 bit, of the first 32 bytes
+  for (std::size_t k = 0; k < 32; ++k) h = (h ^ image[k]) * 0x100000001b3ULL;
+  EXPECT_EQ(detail::code_digest(addr, none, 2), fmt::format("{:016x}", h));
+  image[40] = 1;
+  EXPECT_EQ(detail::code_digest(addr, none, 2), fmt::format("{:016x}", h));
 }
 
 // The measured mode: the mean linear frequency of the kept hits, recomputed here, and an
