@@ -120,6 +120,24 @@ TEST(ModesTableFromAnotherTool, FrequenciesAloneInRadPerSecondAreNamedWhereThePa
       << why;
   EXPECT_EQ(why.find('\n'), std::string::npos) << why;
 
+  // A fit beyond the noise that the refit divided by 2 pi does not better from the start (six
+  // chains of six masses, three sets): before, "converged" with 3 of 6 modes paired and a
+  // reduced chi-square of 453, the unit never named; now a warning names it.
+  TwoChainParameters six;
+  TwoChainParameters six_begin = six;
+  six_begin.ka *= 2;
+  const std::vector<Sensor> six_sensors = chain_sensors(six.n);
+  MeasuredModes six_rad = chain_modes(two_chain_structure(six), six_sensors, 6);
+  six_rad.shapes.setZero();
+  six_rad.frequency_hz *= 2 * std::numbers::pi;
+  LinearUpdateSummary f;
+  update_linear(two_chain_structure(six_begin), {"spring.ka", "spring.kb", "spring.kflat"},
+                six_sensors, six_rad, {}, &f);
+  const std::string said = f.report() + linear_refusal(f, {}, "modes.csv");
+  EXPECT_NE(said.find("the frequencies look like angular frequencies (rad/s) read as Hz"),
+            std::string::npos)
+      << said;
+
   // Tables in Hz, judged as if their pairs were undecided at the start.
   const auto named = [&](const model::Model& model, const std::vector<std::string>& names,
                          const std::vector<Sensor>& at, const MeasuredModes& table) {

@@ -227,7 +227,9 @@ std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOpt
   const Eigen::Index n = measured.frequency_hz.size();
   const Eigen::Index models =
       std::min(start.all_model_frequency_hz.size(), start.model_at_sensors.cols());
-  if (s.status != LinearUpdateStatus::kAmbiguous || n == 0 || models == 0) return "";
+  const bool misfit = fitted(s) && s.degrees_of_freedom >= 1 &&
+                      s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom);
+  if ((s.status != LinearUpdateStatus::kAmbiguous && !misfit) || n == 0 || models == 0) return "";
   const double to_hz = 0.5 / std::numbers::pi;
   const double window =
       options.frequency_window > 0 ? std::min(options.frequency_window, 0.5) : 0.5;

@@ -27,11 +27,12 @@ std::string misfit_of_units(const model::Model& model, const std::vector<std::st
                             const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                             const LinearUpdateOptions& options, const LinearUpdateSummary& s);
 
-/// Why the pairs an update could not decide (kAmbiguous) look like frequencies in rad/s read as
-/// Hz, or "": divided by 2 pi, each measured mode has a visible model mode of its own at the start
-/// within the frequency window (0.5 at most; MAC >= 0.9 where it has entries at three sensors or
-/// more), and read as Hz the table's lowest mode lies above one visible model mode or more by
-/// more than the window. No refit: a frequency-only table can be as undecidable in Hz.
+/// Why the pairs an update could not decide (kAmbiguous), or a fit that leaves scatter beyond the
+/// noise, look like frequencies in rad/s read as Hz, or "": divided by 2 pi, each measured mode
+/// has a visible model mode of its own at the start within the frequency window (0.5 at most;
+/// MAC >= 0.9 where it has entries at three sensors or more), and read as Hz the table's lowest
+/// mode lies above one visible model mode or more by more than the window. No refit: a
+/// frequency-only table can be as undecidable in Hz.
 std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
                             const LinearUpdateSummary& s);
 

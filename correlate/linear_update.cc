@@ -143,7 +143,14 @@ Eigen::VectorXd update_linear(const model::Model& model, const std::vector<std::
   }
   // Undecided pairs of frequencies in rad/s: no refit can confirm the unit where the same
   // table in Hz is as undecidable (frequencies alone, four sets on the example beam).
-  if (s.status == LinearUpdateStatus::kAmbiguous) s.units = undecided_units(measured, options, s);
+  if (s.status == LinearUpdateStatus::kAmbiguous) {
+    s.units = undecided_units(measured, options, s);
+  } else if (std::string why = undecided_units(measured, options, s); !why.empty()) {
+    // A fit beyond the noise whose refit divided by 2 pi (misfit_of_units) found no better
+    // minimum from the start: the two chains' six modes in rad/s, three sets, "converged" with
+    // 3 of 6 paired (reduced chi-square 453), the unit never named.
+    s.warnings.push_back(why + " (the fit above took them as Hz)");
+  }
   if (fitted(s)) {
     if (std::string why = unconfirmed_pairs(measured, options, s); !why.empty()) {
       s.fit_converged = s.status == LinearUpdateStatus::kConverged;
