@@ -28,8 +28,8 @@ struct IwanRanges {
   IwanRange chi = std::nullopt;    ///< --chi-range
   IwanRange beta = std::nullopt;   ///< --beta-range
 
-  /// InputError naming the option ("--chi-range 0.2:0.5: need LO < HI with both chi in
-  /// (-1, 0]") for a range outside its parameter's domain (model::iwan_parameter_domain), and for
+  /// InputError naming the option ("--chi-range -1:0.5: need LO < HI with both chi > -1") for
+  /// a range outside its parameter's domain (model::iwan_parameter_domain), and for
   /// a beta range that reaches 0 (beta is searched on a log scale).
   void check() const;
 

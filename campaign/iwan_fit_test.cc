@@ -43,9 +43,13 @@ std::string refusal(F f) {
 // and the Python module both say it; absent ranges leave the default box.
 TEST(IwanRanges, RefusesARangeOutsideItsDomainAndDefaultsTheRest) {
   EXPECT_EQ(refusal([] {
-              IwanRanges{.chi = {{0.1, 0.5}}}.check();
+              IwanRanges{.chi = {{-1, 0.5}}}.check();
             }),
-            "--chi-range 0.1:0.5: need LO < HI with both chi in (-1, 0]");
+            "--chi-range -1:0.5: need LO < HI with both chi > -1");
+  // chi above 0 is in the domain (method.md: -1 < chi): a range reaching past 0 is the user's.
+  EXPECT_EQ(refusal([] { IwanRanges{.chi = {{0.1, 0.5}}}.check(); }), "");
+  const IwanRanges wide{.chi = {{-0.9, 0.9}}};
+  EXPECT_EQ(wide.bounds({40, 1e6, 0.3, 1}).chi_max, 0.9);
   EXPECT_EQ(refusal([] {
               IwanRanges{.fs = {{2000, 1000}}}.check();
             }),

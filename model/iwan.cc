@@ -17,7 +17,9 @@ std::string ParameterDomain::text() const {
 ParameterDomain iwan_parameter_domain(const std::string& name) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   if (name == "Fs" || name == "Kt") return {0, inf, true, true};
-  if (name == "chi") return {-1, 0, true, false};
+  // Any chi > -1: the density R phi^chi is integrable at 0 and F'(phi_max) = K_T beta / (1 + beta)
+  // >= 0 whatever chi (method.md); chi > 0 puts more sliders at large slip displacements.
+  if (name == "chi") return {-1, inf, true, true};
   assert(name == "beta");
   return {0, inf, false, true};
 }

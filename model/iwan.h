@@ -45,15 +45,15 @@ struct ParameterDomain {
   bool contains(double x) const {
     return std::isfinite(x) && (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
   }
-  /// The domain as a phrase: "> 0", ">= 0", "in (-1, 0]".
+  /// The domain as a phrase: "> 0", ">= 0", "> -1", "in (-1, 0]".
   std::string text() const;
 };
 
 /// The domain of the Iwan parameter `name` ("Fs", "Kt", "chi" or "beta"): Fs > 0, Kt > 0,
-/// chi in (-1, 0], beta >= 0 (method.md); the one place every reader and updater checks.
+/// chi > -1, beta >= 0, each finite (method.md); the one place every reader and updater checks.
 ParameterDomain iwan_parameter_domain(const std::string& name);
 
-/// What is unphysical about a parameter set ("chi = 0.5 must be in (-1, 0]"), or "" if valid;
+/// What is unphysical about a parameter set ("chi = -1 must be > -1"), or "" if valid;
 /// the message starts with the field's name.
 std::string iwan_parameter_error(const IwanParameters& p);
 

@@ -19,7 +19,8 @@
 // so dE/dA = A F'(A) (F' the virgin tangent of iwan.h: the stiffness of the sliders not
 // slipping). J(1) depends on chi alone and is computed once; J(b < 1) (macroslip) by the
 // same quadrature: substituting s = sin^2(t/2), t = T u^3 makes the integrand a smooth
-// power u^(6 chi + 14) near 0, and 24-point Gauss-Legendre on u integrates it to rounding.
+// power u^(6 chi + 14) near 0, and Gauss-Legendre on u (24 nodes up to chi 3, up to 384 at
+// chi kIwanCycleChiMax) integrates it to rounding.
 // Units: A in m, k_1 in N/m, E in J.
 #pragma once
 
@@ -27,10 +28,14 @@
 
 namespace jointlab::model {
 
+/// The largest chi whose slip integral the quadrature is verified for (to 6e-11 against 2500
+/// nodes); JointCondensation refuses elements above it.
+inline constexpr double kIwanCycleChiMax = 2000;
+
 /// The steady-cycle properties of one Iwan element (J(1) precomputed).
 class IwanCycle {
  public:
-  /// Precomputes the microslip integral of `iwan`.
+  /// Precomputes the microslip integral of `iwan` (chi <= kIwanCycleChiMax).
   explicit IwanCycle(const Iwan& iwan);
 
   /// In-phase first-harmonic stiffness of the cycle of amplitude |A| [N/m]; K_T at A = 0.

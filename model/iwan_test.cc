@@ -144,22 +144,70 @@ TEST(Iwan, JetGivesExactDerivativesInDisplacementAndParameters) {
   }
 }
 
+// chi above 0 (method.md's domain, -1 < chi): at chi 0.5 and 2 the parameters are valid and the
+// element follows method.md's closed forms, written out here with c = (chi+1)/(chi+2):
+// phi_max = F_S (1+beta) / (K_T (beta+c)), F(u) = K_T u - R u^(chi+2) / ((chi+1)(chi+2)),
+// D(A) = 4 R A^(chi+3) / ((chi+2)(chi+3)), E_max = K_T phi_max^2/2 - R phi_max^(chi+3) /
+// ((chi+1)(chi+2)(chi+3)) (1e-12 relative: the same algebra, rounding only); and, by routes
+// that do not use them, F reaches F_S at phi_max with tangent K_T beta / (1+beta) there (1e-9:
+// one-sided difference 1e-10 phi_max below phi_max), E_max is the Simpson integral of F on
+// [0, phi_max] and D(A) the Masing area 8 int_0^A F - 4 A F(A) (2000 intervals on a C^2
+// integrand for chi >= 0: error ~h^4, 1e-9 relative allowed).
+TEST(Iwan, ChiAboveZeroFollowsTheClosedForms) {
+  for (const double chi : {0.5, 2.0}) {
+    const IwanParameters p{40.0, 2.0e6, chi, 1.5};
+    ASSERT_EQ(iwan_parameter_error(p), "") << chi;
+    const Iwan iwan(p);
+    const double c = (chi + 1) / (chi + 2);
+    const double pm = p.Fs * (1 + p.beta) / (p.Kt * (p.beta + c));
+    const double R = p.Fs * (chi + 1) / (std::pow(pm, chi + 2) * (p.beta + c));
+    EXPECT_TRUE(Close(iwan.phi_max(), pm, 1e-12)) << chi;
+    EXPECT_TRUE(Close(iwan.R(), R, 1e-12)) << chi;
+    for (const double frac : {0.01, 0.3, 0.9}) {
+      const double u = frac * pm;
+      EXPECT_TRUE(Close(iwan.force(u),
+                        p.Kt * u - R * std::pow(u, chi + 2) / ((chi + 1) * (chi + 2)), 1e-12))
+          << chi << " " << frac;
+      EXPECT_TRUE(
+          Close(iwan.dissipation(u), 4 * R * std::pow(u, chi + 3) / ((chi + 2) * (chi + 3)), 1e-12))
+          << chi << " " << frac;
+      if (frac < 0.1) continue;  // below, D is the small difference of 8 int F and 4 u F
+      const double masing =
+          8 * simpson([&](double x) { return iwan.force(x); }, 0, u, 2000) - 4 * u * iwan.force(u);
+      EXPECT_TRUE(Close(iwan.dissipation(u), masing, 1e-9)) << chi << " " << frac;
+    }
+    const double e_max =
+        p.Kt * pm * pm / 2 - R * std::pow(pm, chi + 3) / ((chi + 1) * (chi + 2) * (chi + 3));
+    EXPECT_TRUE(Close(iwan.energy(pm), e_max, 1e-12)) << chi;
+    EXPECT_TRUE(Close(e_max, simpson([&](double x) { return iwan.force(x); }, 0, pm, 2000), 1e-9))
+        << chi;
+    EXPECT_TRUE(Close(iwan.force(pm * (1 - 1e-12)), p.Fs, 1e-9)) << chi;
+    EXPECT_TRUE(Close(iwan.tangent(pm * (1 - 1e-10)), p.Kt * p.beta / (1 + p.beta), 1e-9)) << chi;
+  }
+}
+
 TEST(Iwan, ParameterErrorsNameTheField) {
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, 1}), "");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, 0}), "");
   EXPECT_EQ(iwan_parameter_error({0, 2e6, -0.5, 1}), "Fs = 0 must be > 0");
   EXPECT_EQ(iwan_parameter_error({40, -1, -0.5, 1}), "Kt = -1 must be > 0");
-  EXPECT_EQ(iwan_parameter_error({40, 2e6, -1, 1}), "chi = -1 must be in (-1, 0]");
-  // chi above 0 would make the slider density grow with slip displacement (method.md).
-  EXPECT_EQ(iwan_parameter_error({40, 2e6, 0.5, 1}), "chi = 0.5 must be in (-1, 0]");
-  EXPECT_EQ(iwan_parameter_error({40, 2e6, 1, 1}), "chi = 1 must be in (-1, 0]");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, -1, 1}), "chi = -1 must be > -1");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, -1.5, 1}), "chi = -1.5 must be > -1");
+  // chi above 0 is an element too (method.md: -1 < chi): more sliders at large slip
+  // displacements, F'(phi_max) = K_T beta / (1 + beta) >= 0 whatever chi.
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, 0.5, 1}), "");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, 2, 1}), "");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, 1e6, 1}), "");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, 0, 1}), "");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, INFINITY, 1}), "chi = inf must be a finite number > -1");
+  EXPECT_EQ(iwan_parameter_error({40, 2e6, NAN, 1}), "chi = nan must be a finite number > -1");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, INFINITY}),
             "beta = inf must be a finite number >= 0");
   EXPECT_EQ(iwan_parameter_error({40, INFINITY, -0.5, 1}), "Kt = inf must be a finite number > 0");
   EXPECT_EQ(iwan_parameter_error({NAN, 2e6, -0.5, 1}), "Fs = nan must be a finite number > 0");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -INFINITY, 1}),
-            "chi = -inf must be a finite number in (-1, 0]");
+            "chi = -inf must be a finite number > -1");
+  EXPECT_EQ(iwan_parameter_domain("chi").text(), "> -1");
   EXPECT_EQ(iwan_parameter_domain("Kt").text(), "> 0");
   EXPECT_EQ(iwan_parameter_error({40, 2e6, -0.5, -0.1}), "beta = -0.1 must be >= 0");
 }

@@ -67,8 +67,16 @@ void JointCondensation::set_coordinates(const std::vector<Joint>& joints) {
       const double chi1 = e.chi() + 1, R = e.R();
       // The solver works with forces, displacements and energies of the element's own
       // scale: refuse parameters whose products leave double precision. Slips down to 1e-6
-      // of phi_max raised to chi + 3 <= 3 stay clear of underflow when phi_max >= 1e-90 m
-      // (below it a cycle's dissipation rounds to zero and the damping with it).
+      // of phi_max raised to chi + 3 stay clear of underflow when phi_max >= 1e-90 m and
+      // chi <= 0 (below it a cycle's dissipation rounds to zero and the damping with it); a
+      // larger chi needs a larger phi_max for R = F_S (chi+1) / (phi_max^(chi+2) (beta + c)) to
+      // stay finite, which the test of R checks.
+      if (!(e.chi() <= kIwanCycleChiMax)) {
+        throw InputError(fmt::format(
+            "QSMA: the Iwan element between {} has chi = {:g}, above {:g}, the largest for which "
+            "its first-harmonic slip integral is verified",
+            joint_ends(coords_[j].a, coords_[j].b), e.chi(), kIwanCycleChiMax));
+      }
       const double work = e.slip_force() * e.phi_max();
       if (!(e.phi_max() >= 1e-90) || !std::isfinite(e.phi_max()) || !std::isfinite(R) || !(R > 0) ||
           !std::isfinite(e.S()) || !std::isfinite(work) || !(work > 0)) {

@@ -90,14 +90,15 @@ void write_pair(const std::string& stem, double m1, double m2, double k0) {
 // mass mu. The CSV carries 10 significant digits (rounding 5e-10); 1e-6 is the acceptance.
 // With `modal_ratio` Z the model's own damping adds Z to every damping column (method.md
 // section 2 point 4) and leaves the frequencies alone.
-void expect_closed_form_csv(const fs::path& csv, double k0, double mu, double modal_ratio = 0) {
+void expect_closed_form_csv(const fs::path& csv, double k0, double mu, double modal_ratio = 0,
+                            const IwanParameters& joint = kRivet) {
   std::string header;
   const auto rows = read_csv(csv, &header);
   EXPECT_EQ(header,
             "force_amplitude,modal_amplitude,frequency_hz,damping_ratio,max_slip,"
             "ringdown_frequency_hz,ringdown_damping_ratio,harmonic_damping_ratio");
   ASSERT_GE(rows.size(), 10u);
-  const Iwan iwan(kRivet);
+  const Iwan iwan(joint);
   for (size_t i = 0; i < rows.size(); ++i) {
     const double x = rows[i][4];
     const double force = k0 * x + iwan.force(x);
@@ -126,6 +127,33 @@ TEST(ModelCommands, QsmaOfMassOnSpringWithIwanToGround) {
   const Outcome r = run("qsma sdof.toml --mode 1 --points 40 --out sdof.csv");
   EXPECT_EQ(r.status, 0) << r.err;
   expect_closed_form_csv(dir() / "sdof.csv", k0, m);
+}
+
+// chi above 0 (method.md: -1 < chi), read from a model file: at chi 0.5 and 2 `modes` gives the
+// linear frequency sqrt((k0 + K_T) / m) / 2 pi (10 digits in the file: 1e-9) and `qsma` every
+// row of the one-mass closed form (1e-6, as above). Before, both refused the file ("chi = 0.5
+// must be in (-1, 0]", exit 2).
+TEST(ModelCommands, ModesAndQsmaTakeChiAboveZero) {
+  const double m = 0.5, k0 = 1.0e6;
+  write("sdofc_M.mtx", "%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 0.5\n");
+  write("sdofc_K.mtx", "%%MatrixMarket matrix coordinate real general\n1 1 1\n1 1 1.0e6\n");
+  for (const double chi : {0.5, 2.0}) {
+    const IwanParameters p{kRivet.Fs, kRivet.Kt, chi, kRivet.beta};
+    write("sdofc.toml", fmt::format("[matrices]\nmass = \"sdofc_M.mtx\"\nstiffness = "
+                                    "\"sdofc_K.mtx\"\n[iwan.rivet]\nFs = {}\nKt = {}\nchi = {}\n"
+                                    "beta = {}\n\n[[joint]]\na = 0\nb = \"ground\"\nelement = "
+                                    "\"iwan.rivet\"\n",
+                                    p.Fs, p.Kt, chi, p.beta));
+    const Outcome modes = run("modes sdofc.toml --out sdofc_modes.csv");
+    ASSERT_EQ(modes.status, 0) << chi << ": " << modes.err;
+    std::string header;
+    const auto rows = read_csv(dir() / "sdofc_modes.csv", &header);
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_TRUE(Close(rows[0][1], std::sqrt((k0 + p.Kt) / m) / kTwoPi, 1e-9)) << chi;
+    const Outcome r = run("qsma sdofc.toml --mode 1 --points 30 --out sdofc.csv");
+    ASSERT_EQ(r.status, 0) << chi << ": " << r.err;
+    expect_closed_form_csv(dir() / "sdofc.csv", k0, m, 0, p);
+  }
 }
 
 // [damping] modal_ratio: the closed form plus Z in both damping columns. Z = 3e-3 is of the
@@ -220,7 +248,7 @@ TEST(ModelCommands, InvalidModelsFailWithOneClearLine) {
        model(mass, stiff, kIwanTable, "\n[[joint]]\na = 0\nb = 1\nelement = \"iwan.bolt\"\n"),
        "joint 1: unknown element 'iwan.bolt'"},
       {"chi", model(mass, stiff, iwan_with("chi = -0.5", "chi = -1.0"), joint),
-       "iwan.rivet: chi = -1 must be in (-1, 0]"},
+       "iwan.rivet: chi = -1 must be > -1"},
       {"fs", model(mass, stiff, iwan_with("Fs = 40.0", "Fs = 0.0"), joint),
        "iwan.rivet: Fs = 0 must be > 0"},
       {"kt", model(mass, stiff, iwan_with("Kt = 2.0e6", "Kt = -5.0"), joint),

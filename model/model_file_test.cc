@@ -115,7 +115,7 @@ TEST(ModelFile, EveryDefectGetsOneLineNamingFileAndField) {
   const Case cases[] = {
       {"[matrices\n", "bad.toml:1: TOML syntax"},
       {"[spring]\nk = 1\n", "missing table [matrices]"},
-      {with_chi + joint, "bad.toml:9: iwan.rivet: chi = -1 must be in (-1, 0]"},
+      {with_chi + joint, "bad.toml:9: iwan.rivet: chi = -1 must be > -1"},
       {with_beta + joint, "bad.toml:10: iwan.rivet: beta = -0.5 must be >= 0"},
       {with_fs + joint, "bad.toml:7: iwan.rivet: Fs = 0 must be > 0"},
       {with_kt + joint, "bad.toml:8: iwan.rivet: Kt = -2000000 must be > 0"},

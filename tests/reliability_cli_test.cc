@@ -497,22 +497,36 @@ std::string write_model(const std::string& dir, const std::string& chi,
   return dir + "/model.toml";
 }
 
-TEST(ModelDomains, ChiAboveZeroIsRefusedByEveryReader) {
+// One domain, chi > -1 (method.md, contract.md; model::iwan_parameter_domain): chi above 0 is
+// read by every reader (it was refused, "chi = 0.5 must be in (-1, 0]"), chi at or below -1 and
+// no finite number are refused naming the field.
+TEST(ModelDomains, ChiAboveMinusOneIsReadByEveryReader) {
   const std::string dir = scratch_dir("rel_chi");
   for (const char* chi : {"0.5", "1.0", "5.0"}) {
     const std::string model = write_model(dir, chi);
-    expect_error(run_jointlab("modes " + model + " --out " + dir + "/modes.csv"),
-                 fmt::format("iwan.rivet: chi = {} must be in (-1, 0]", std::stod(chi)));
+    const CommandResult r = run_jointlab("modes " + model + " --out " + dir + "/modes.csv");
+    EXPECT_EQ(r.status, 0) << chi << ": " << r.err;
   }
-  write_text(dir + "/beam.toml", "[joints]\nchi = 0.5\n");
+  for (const char* chi : {"-1.0", "-3.0", "inf"}) {
+    const std::string model = write_model(dir, chi);
+    expect_error(run_jointlab("modes " + model + " --out " + dir + "/modes.csv"),
+                 fmt::format("iwan.rivet: chi = {} must be {}> -1", std::stod(chi),
+                             std::isfinite(std::stod(chi)) ? "" : "a finite number "));
+  }
+  write_text(dir + "/beam.toml", "[joints]\nchi = -1.0\n");
   expect_error(run_jointlab("build-model " + dir + "/beam.toml --out " + dir + "/m"),
-               "field 'joints.chi' = 0.5 must be in (-1, 0]");
+               "field 'joints.chi' = -1 must be > -1");
   const std::string model = write_model(dir, "-0.5");
   EXPECT_EQ(run_jointlab("modes " + model + " --out " + dir + "/modes.csv").status, 0);
   const std::string iwan = "update-iwan " + model + " --measured " + dir + " --sensors " + dir +
                            "/s.csv --mode 1 --out " + dir + "/u ";
-  expect_error(run_jointlab(iwan + "--set rivet --chi-range 0.1:0.5"),
-               "--chi-range 0.1:0.5: need LO < HI with both chi in (-1, 0]");
+  expect_error(run_jointlab(iwan + "--set rivet --chi-range -1:0.5"),
+               "--chi-range -1:0.5: need LO < HI with both chi > -1");
+  // A range past 0 passes the checks (the command then fails on the measured data that are not
+  // there).
+  const CommandResult above = run_jointlab(iwan + "--set rivet --chi-range 0.1:0.5");
+  EXPECT_EQ(above.status, 2) << above.err;
+  EXPECT_EQ(above.err.find("--chi-range"), std::string::npos) << above.err;
   expect_error(run_jointlab(iwan + "--set rivet --fs-range 0:10"),
                "--fs-range 0:10: need LO < HI with both Fs > 0");
   expect_error(run_jointlab(iwan + "--set spring.kz"), "--set spring.kz: update-iwan updates");

@@ -417,7 +417,7 @@ TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   std::string err = refused_before_hits(s, dir);
   EXPECT_NE(err.find("model_mode 9999"), std::string::npos) << err;
   // A channel's DOF outside the model (named with the campaign file), and a model file whose
-  // Iwan set is unphysical (chi = 5, named with the model file's line): before any hit.
+  // Iwan set is unphysical (chi = -1.5, named with the model file's line): before any hit.
   const fs::path dof_dir = testing::scratch_dir("run_cli_bad_dof");
   const testing::SmallCampaign d = testing::make_small_campaign(dof_dir, "", {10});
   replace_setting(d.campaign, "dof = \"", "dof = \"99999\"");
@@ -426,9 +426,9 @@ TEST(RunCli, CampaignErrorsComeBeforeProcessing) {
   EXPECT_NE(err.find("index outside the model's"), std::string::npos) << err;
   const fs::path chi_dir = testing::scratch_dir("run_cli_bad_model");
   const testing::SmallCampaign m = testing::make_small_campaign(chi_dir, "", {10});
-  replace_setting(m.model, "chi = ", "chi = 5.0");
+  replace_setting(m.model, "chi = ", "chi = -1.5");
   err = refused_before_hits(m, chi_dir);
-  EXPECT_NE(err.find("chi = 5 must be in (-1, 0]"), std::string::npos) << err;
+  EXPECT_NE(err.find("chi = -1.5 must be > -1"), std::string::npos) << err;
   // A truth file that does not parse and a stepped-sine file that is not one: read before
   // the hits (each once stopped a run after its minutes of processing), named with its line.
   const fs::path truth_dir = testing::scratch_dir("run_cli_bad_truth");

@@ -123,6 +123,10 @@ TEST(RivetedBeam, AJointSetGivesItsRivetsAnIwanSetOfTheirOwn) {
   EXPECT_EQ(bolt.Kt, 2e7);
   EXPECT_EQ(bolt.Fs, 60.0);
   EXPECT_EQ(bolt.chi, -0.5);  // [joints]'
+  // chi above 0 is in the domain (method.md: -1 < chi): a set of its own takes it.
+  const RivetedBeamDescription above = read_riveted_beam_description(
+      scratch("above.toml", head + "[[joint_set]]\nname = \"bolt\"\nrivets = [1, 4]\nchi = 0.5\n"));
+  EXPECT_EQ(joint_iwan(above, "iwan.bolt").chi, 0.5);
   EXPECT_EQ(rivet.Fs, 40.0);
   EXPECT_EQ(joint_stiffness(d, "iwan.bolt"), 2e7);
   const RivetedBeam b = build_riveted_beam(d);
@@ -144,7 +148,8 @@ TEST(RivetedBeam, AJointSetGivesItsRivetsAnIwanSetOfTheirOwn) {
   says("[[joint_set]]\nname = \"a\"\nrivets = [1]\n[[joint_set]]\nname = \"b\"\nrivets = [1]\n",
        "field 'joint_set[2].rivets': rivet 1 is in set 'a' already");
   says("[[joint_set]]\nname = \"rivet\"\nrivets = [1]\n", "'joint_set[1].name' = 'rivet' is taken");
-  says("[[joint_set]]\nname = \"bolt\"\nrivets = [1]\nchi = 0.5\n", "joint_set[1].chi");
+  says("[[joint_set]]\nname = \"bolt\"\nrivets = [1]\nchi = -1.0\n",
+       "field 'joint_set[1].chi' = -1 must be > -1");
   says("[[joint_set]]\nname = \"bolt\"\nrivets = [1]\nKs = 1.0\n", "joint_set[1].Ks");
   says("[[joint_set]]\nrivets = [1]\n", "'joint_set[1].name' is required");
 }

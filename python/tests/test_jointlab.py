@@ -169,6 +169,22 @@ def test_qsma_and_modes_equal_the_command_line(tmp_path):
     assert jointlab.Model(model).modal_ratio == 0.002
 
 
+def test_a_joint_with_chi_above_zero_is_read_as_by_the_command_line(tmp_path):
+    # chi > -1 is the Iwan element's domain (method.md): chi 0.5 was refused ("chi = 0.5 must be
+    # in (-1, 0]"); now the module reads it and its QSMA equals the command's, and chi -1 is
+    # still refused naming the field.
+    model = two_mass_model(tmp_path)
+    model.write_text(model.read_text().replace("chi = -0.5", "chi = 0.5"))
+    r = run("qsma", model, "--mode", "1", "--points", "10", "--out", tmp_path / "q.csv")
+    assert r.returncode == 0, r.stderr
+    curve = jointlab.Model(str(model)).qsma(mode=1, points=10)
+    for name, values in read_csv(tmp_path / "q.csv").items():
+        assert_close(curve[name], values)
+    model.write_text(model.read_text().replace("chi = 0.5", "chi = -1.0"))
+    with pytest.raises(jointlab.InputError, match=r"iwan.j: chi = -1 must be > -1"):
+        jointlab.Model(str(model))
+
+
 def test_shapes_are_the_mass_normalised_eigenvectors(tmp_path):
     # The two-mass Iwan model (K_lin = K + Kt at DOF 0, M = I) with dof_labels: the shapes
     # against numpy's eigh of the same matrices, to 1e-9 (the dense solve's rounding is ~1e-15
