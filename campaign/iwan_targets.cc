@@ -196,10 +196,6 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
                                     const std::vector<correlate::Sensor>& sensors, int band,
                                     const std::vector<std::string>& channels,
                                     const ScatterOptions& scatter) {
-  for (const std::string& c : channels) {
-    if (correlate::find_sensor(sensors, c) < 0)
-      throw InputError(fmt::format("channel '{}' is not in the sensors file", c));
-  }
   ModeBackbones mb;
   mb.name = fmt::format("band {}", band);
   // Without a chosen channel, one for every hit (band_channel): the scatter summary below
@@ -207,28 +203,15 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
   // the mode shape's ratio times the other's) cannot be. The example campaign's low_hit1, its
   // band 1 read at acc_9001_z where the other 8 hits named acc_9003_z, was flagged an outlier of
   // them and left out of the fit without a word.
-  std::vector<std::string> read_at = channels;
-  if (read_at.empty()) {
-    correlate::BandChannel bc = correlate::band_channel(run, sensors, band);
-    if (!bc.channel.empty()) read_at.push_back(bc.channel);
-    mb.channel_note = std::move(bc.note);
-  }
-  for (const correlate::ProcessOutput& o : run.outputs) {
-    if (o.band != band || o.file.empty()) continue;
-    const bool selected = std::find(read_at.begin(), read_at.end(), o.channel) != read_at.end();
-    const int s = correlate::find_sensor(sensors, o.channel);
-    if (!selected || s < 0) continue;
-    BackboneFile bf = read_backbone_file(run.dir / o.file, fs::path(o.source).stem().string(), "");
+  for (const correlate::BandOutput& b :
+       correlate::band_outputs(run, sensors, band, channels, &mb.channel_note)) {
+    BackboneFile bf = read_backbone_file(run.dir / b.output->file,
+                                         fs::path(b.output->source).stem().string(), "");
     mb.curves.push_back(std::move(bf.curve));
     mb.frequency_std_hz.push_back(std::move(bf.frequency_std_hz));
     mb.damping_std.push_back(std::move(bf.damping_std));
     mb.coverage.push_back(bf.coverage_factor);
-    mb.sensors.push_back(s);
-  }
-  if (mb.curves.empty()) {
-    throw InputError(fmt::format(
-        "{}: no backbone of band {} on {}", (run.dir / "summary.json").string(), band,
-        channels.empty() ? "a reference channel that is a sensor" : "the selected channels"));
+    mb.sensors.push_back(b.sensor);
   }
   mb.scatter = summarize_scatter(mb.curves, scatter);
   return mb;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
@@ -680,14 +681,28 @@ BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& senso
   if (!best) return out;
   out.channel = sensors[*best].channel;
   // Which hits name another reference channel, and which have no backbone at this one.
-  std::vector<std::string> others, missing;
+  // Other channels in the order first met, each with its hits: "a5 in hit1, hit4".
+  std::vector<std::pair<std::string, std::vector<std::string>>> named;
+  std::vector<std::string> missing;
+  size_t named_other = 0;
   for (const ProcessBand& b : run.bands) {
     if (b.band != band) continue;
     const std::string hit = fs::path(b.source).stem().string();
-    if (b.reference_channel != out.channel)
-      others.push_back(fmt::format("{} in {}", b.reference_channel, hit));
+    if (b.reference_channel != out.channel) {
+      auto it = std::find_if(named.begin(), named.end(),
+                             [&](const auto& n) { return n.first == b.reference_channel; });
+      if (it == named.end()) {
+        named.emplace_back(b.reference_channel, std::vector<std::string>{});
+        it = std::prev(named.end());
+      }
+      it->second.push_back(hit);
+      ++named_other;
+    }
     if (!with[*best].count(b.source)) missing.push_back(hit);
   }
+  std::vector<std::string> others;
+  for (const auto& [channel, in] : named)
+    others.push_back(fmt::format("{} in {}", channel, fmt::join(in, ", ")));
   if (others.empty() && missing.empty()) return out;
   // Where every hit names it, a hit without a backbone there (its ring-down failed at that
   // channel) is left out all the same, and named.
@@ -700,7 +715,7 @@ BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& senso
                        "band {}: the hits' reference channels differ ({}; {} in the other {}): "
                        "every hit is read at {} (a backbone there in {} of {} hits), so that "
                        "their curves share one amplitude (--channel chooses another)",
-                       band, fmt::join(others, ", "), out.channel, hits.size() - others.size(),
+                       band, fmt::join(others, "; "), out.channel, hits.size() - named_other,
                        out.channel, with[*best].size(), hits.size());
   if (!missing.empty())
     out.note += fmt::format("; {} no backbone there and {} left out: {}",
@@ -709,32 +724,40 @@ BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& senso
   return out;
 }
 
-std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
-                                                 const std::vector<Sensor>& sensors, int band,
-                                                 const std::vector<std::string>& chosen) {
-  const std::string summary = (run.dir / "summary.json").string();
+std::vector<BandOutput> band_outputs(const ProcessRun& run, const std::vector<Sensor>& sensors,
+                                     int band, const std::vector<std::string>& chosen,
+                                     std::string* note) {
   for (const std::string& c : chosen) {
     if (find_sensor(sensors, c) < 0)
       throw InputError(fmt::format("channel '{}' is not in the sensors file", c));
   }
   std::vector<std::string> channels = chosen;
   if (channels.empty()) {
-    if (BandChannel bc = band_channel(run, sensors, band); !bc.channel.empty())
-      channels.push_back(std::move(bc.channel));
+    BandChannel bc = band_channel(run, sensors, band);
+    if (!bc.channel.empty()) channels.push_back(std::move(bc.channel));
+    if (note) *note = std::move(bc.note);
   }
-  std::vector<MeasuredBackbone> out;
+  std::vector<BandOutput> out;
   for (const ProcessOutput& o : run.outputs) {
     if (o.band != band || o.file.empty()) continue;
     const bool selected = std::find(channels.begin(), channels.end(), o.channel) != channels.end();
     const int s = find_sensor(sensors, o.channel);
-    if (!selected || s < 0) continue;
-    out.push_back(read_backbone_csv(run.dir / o.file, s));
+    if (selected && s >= 0) out.push_back({&o, s});
   }
   if (out.empty()) {
     throw InputError(fmt::format(
-        "{}: no backbone of band {} on {}", summary, band,
+        "{}: no backbone of band {} on {}", (run.dir / "summary.json").string(), band,
         chosen.empty() ? "a reference channel that is a sensor" : "the selected channels"));
   }
+  return out;
+}
+
+std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
+                                                 const std::vector<Sensor>& sensors, int band,
+                                                 const std::vector<std::string>& chosen) {
+  std::vector<MeasuredBackbone> out;
+  for (const BandOutput& b : band_outputs(run, sensors, band, chosen))
+    out.push_back(read_backbone_csv(run.dir / b.output->file, b.sensor));
   return out;
 }
 

@@ -168,8 +168,20 @@ struct BandChannel {
 /// then the one most hits name, then the first in the sensors file.
 BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& sensors, int band);
 
-/// Every backbone of band `band` on the selected channels (empty: band_channel's), each at its
-/// sensor; InputError when a selected channel is not a sensor or no backbone is found.
+/// One backbone file of a process run, with the index of its channel's sensor.
+struct BandOutput {
+  const ProcessOutput* output = nullptr;  ///< the file (in the run it was taken from)
+  int sensor = -1;                        ///< its channel's sensor
+};
+
+/// The backbone files of band `band` on the selected channels (empty: band_channel's, its note
+/// in `note`), in the run's order; InputError when a selected channel is not a sensor or no
+/// backbone is found.
+std::vector<BandOutput> band_outputs(const ProcessRun& run, const std::vector<Sensor>& sensors,
+                                     int band, const std::vector<std::string>& channels,
+                                     std::string* note = nullptr);
+
+/// Every backbone of band_outputs(), each read at its sensor.
 std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
                                                  const std::vector<std::string>& channels);

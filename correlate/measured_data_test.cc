@@ -95,7 +95,8 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
   EXPECT_TRUE(refs[1].source.ends_with("hit2.a5.band1.csv")) << refs[1].source;
   // A third hit naming b2 with a backbone at b2 alone: a5 and b2 each have backbones in 2 of the
   // 3 hits, b2 is named by 2: every hit is read at b2, and hit1, without one there, is named as
-  // left out.
+  // left out. A fourth naming a5 with backbones at both: a tie (3 hits each, named by 2 each),
+  // b2 first in the sensors file; the note names a5's two hits once.
   {
     const fs::path d3 = fresh("three");
     std::string three = kSummary;
@@ -105,6 +106,15 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
      "bands": [{"band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "b2",
                 "operating_shape": [{"channel": "b2", "real_m": -1e-4, "imag_m": 0}]}],
      "outputs": [{"channel": "b2", "band": 1, "file": "hit3.b2.band1.csv"}]}
+  ]
+})");
+    std::string four = three;
+    four.replace(four.rfind(tail), tail.size(), R"(,
+    {"file": "hit4.csv",
+     "bands": [{"band": 1, "low_hz": 40, "high_hz": 70, "reference_channel": "a5",
+                "operating_shape": []}],
+     "outputs": [{"channel": "a5", "band": 1, "file": "hit4.a5.band1.csv"},
+                 {"channel": "b2", "band": 1, "file": "hit4.b2.band1.csv"}]}
   ]
 })");
     write(d3 / "summary.json", three);
@@ -119,6 +129,17 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
     EXPECT_NE(c3.note.find("; one hit has no backbone there and is left out: hit1"),
               std::string::npos)
         << c3.note;
+    const fs::path d4 = fresh("four");
+    write(d4 / "summary.json", four);
+    for (const char* f : {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv",
+                          "hit3.b2.band1.csv", "hit4.a5.band1.csv", "hit4.b2.band1.csv"})
+      write(d4 / f, kBackbone);
+    const BandChannel c4 = band_channel(read_process_run(d4), sensors, 1);
+    EXPECT_EQ(c4.note,
+              "band 1: the hits' reference channels differ (a5 in hit1, hit4; b2 in the other 2): "
+              "every hit is read at b2 (a backbone there in 3 of 4 hits), so that their curves "
+              "share one amplitude (--channel chooses another); one hit has no backbone there and "
+              "is left out: hit1");
   }
   // Both hits naming b2, where hit1 has no backbone (its ring-down there failed): hit1 is left
   // out all the same, and named (the note was empty where the reference channels agreed).
