@@ -5,6 +5,8 @@
 #include <fstream>
 #include <iterator>
 #include <random>
+#include <string>
+#include <string_view>
 
 #include <link.h>
 
@@ -39,11 +41,14 @@ struct Fnv {
   }
 };
 
-// The loaded object (the executable, or the Python module's library) that holds `address`, and
-// its code_digest. dl_iterate_phdr's callback: 1 once the object is met.
+// The code_digest of the loaded object (the executable, or the Python module's library) that
+// holds `address`, then those of jointlab's own shared libraries (libjointlab_*.so, loaded only
+// in a -DBUILD_SHARED_LIBS=ON build, where the process step's code is not in the object that
+// holds this function). dl_iterate_phdr's callback, over every loaded object.
 struct CodeDigest {
   std::uintptr_t address = 0;
   std::string digest;
+  std::string libraries;
 };
 
 int digest_of_object(dl_phdr_info* info, size_t, void* data) {
@@ -54,9 +59,14 @@ int digest_of_object(dl_phdr_info* info, size_t, void* data) {
     const std::uintptr_t start = info->dlpi_addr + ph.p_vaddr;
     holds = ph.p_type == PT_LOAD && d.address >= start && d.address < start + ph.p_memsz;
   }
-  if (!holds) return 0;
-  d.digest = detail::code_digest(info->dlpi_addr, info->dlpi_phdr, info->dlpi_phnum);
-  return 1;
+  const std::string_view name = info->dlpi_name ? info->dlpi_name : "";
+  const bool ours = name.find("libjointlab_") != std::string_view::npos;
+  if (!holds && !ours) return 0;
+  const std::string digest =
+      detail::code_digest(info->dlpi_addr, info->dlpi_phdr, info->dlpi_phnum);
+  if (holds) d.digest = digest;
+  if (ours && !holds) d.libraries += " " + digest;
+  return 0;
 }
 
 // The GNU build ID in one PT_NOTE segment of `size` bytes at `p`, aligned to `align`; "" none.
@@ -123,7 +133,7 @@ std::string build_identity() {
     dl_iterate_phdr(&digest_of_object, &d);
     // Code that cannot be found is taken as this process's own: its stamps match no other's.
     if (d.digest.empty()) d.digest = fmt::format("unknown {:016x}", std::random_device{}());
-    return program_version() + " code " + d.digest;
+    return program_version() + " code " + d.digest + d.libraries;
   }();
   return identity;
 }
