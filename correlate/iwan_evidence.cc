@@ -3,7 +3,9 @@
 // damping and softening, and the scatter between curves with a curve lying apart.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <optional>
+#include <tuple>
 
 #include <Eigen/QR>
 
@@ -116,26 +118,30 @@ std::pair<double, int> least_squares_rest(const Eigen::MatrixXd& a, const Eigen:
   return {rest.squaredNorm(), static_cast<int>(qr.rank())};
 }
 
-// Adds target t's curves' own shapes to the scatter between curves (MisfitEvidence::
-// between_hits_share), its residuals r starting at index k, N = n_points: the normalised
+// Adds the own shapes of target t's curves `group` (each starting at residual start[c]) to the
+// scatter between curves (MisfitEvidence::between_hits_share), N = n_points: the normalised
 // residuals u = r sqrt(N) (unit variance under the stated noise) of each quantity against
 // x = ln amplitude, fitted first by a common piecewise-linear curve (hat functions on knots
-// spread evenly over the target's x, one per three points a curve, 2 to 30), then with each
+// spread evenly over the group's x, one per three points a curve, 2 to 30), then with each
 // curve's offset and slope (x less its mean) added; the chi-square that gains and the rank it
 // adds, and the common curve's own. Where two curves overlap in amplitude their own terms fit
 // what the common curve cannot: the data of one against the other's.
-void add_hit_shapes(const IwanTarget& t, const std::vector<double>& r, int k, double n_points,
-                    CurveScatter& scatter) {
-  const int nc = static_cast<int>(t.curves.size());
+void add_group_shapes(const IwanTarget& t, const std::vector<int>& group,
+                      const std::vector<int>& start, const std::vector<double>& r, double n_points,
+                      CurveScatter& scatter) {
+  const int nc = static_cast<int>(group.size());
   int n = 0;
-  for (const MeasuredBackbone& c : t.curves) n += static_cast<int>(c.amplitude.size());
+  for (const int c : group)
+    n += static_cast<int>(t.curves[static_cast<size_t>(c)].amplitude.size());
   Eigen::VectorXd x(n);
-  std::vector<int> curve(static_cast<size_t>(n));
-  for (int c = 0, i = 0; c < nc; ++c) {
+  std::vector<int> curve(static_cast<size_t>(n)), index(static_cast<size_t>(n));
+  for (int g = 0, i = 0; g < nc; ++g) {
+    const int c = group[static_cast<size_t>(g)];
     const MeasuredBackbone& b = t.curves[static_cast<size_t>(c)];
     for (Eigen::Index j = 0; j < b.amplitude.size(); ++j, ++i) {
       x(i) = std::log(b.amplitude(j));
-      curve[static_cast<size_t>(i)] = c;
+      curve[static_cast<size_t>(i)] = g;
+      index[static_cast<size_t>(i)] = start[static_cast<size_t>(c)] + 2 * static_cast<int>(j);
     }
   }
   const double lo = x.minCoeff(), hi = x.maxCoeff();
@@ -153,20 +159,42 @@ void add_hit_shapes(const IwanTarget& t, const std::vector<double>& r, int k, do
     count(curve[static_cast<size_t>(i)]) += 1;
   }
   for (int i = 0; i < n; ++i) {
-    const int c = curve[static_cast<size_t>(i)];
-    both(i, knots + 2 * c) = 1;
-    both(i, knots + 2 * c + 1) = x(i) - mean(c) / count(c);
+    const int g = curve[static_cast<size_t>(i)];
+    both(i, knots + 2 * g) = 1;
+    both(i, knots + 2 * g + 1) = x(i) - mean(g) / count(g);
   }
   for (int q = 0; q < 2; ++q) {
     Eigen::VectorXd u(n);
-    for (int i = 0; i < n; ++i) u(i) = r[static_cast<size_t>(k + 2 * i + q)] * std::sqrt(n_points);
+    for (int i = 0; i < n; ++i)
+      u(i) = r[static_cast<size_t>(index[static_cast<size_t>(i)] + q)] * std::sqrt(n_points);
     const auto [rest_common, rank_common] = least_squares_rest(both.leftCols(knots), u);
     const auto [rest_both, rank_both] = least_squares_rest(both, u);
     scatter.hits_gain += std::max(0.0, rest_common - rest_both);
     scatter.hits_dof += rank_both - rank_common;
-    scatter.common_gain += u.squaredNorm() - rest_common;
+    scatter.common_gain += std::max(0.0, u.squaredNorm() - rest_common);  // >= 0 to rounding
     scatter.common_dof += rank_common;
   }
+}
+
+// add_group_shapes() over target t's curves (residuals from index k) of one amplitude scale
+// each: the same sensor, kind and modal flag. Curves read at another sensor or as another
+// quantity put the same modal amplitude elsewhere in x, where a model error would read as
+// their own shape.
+void add_hit_shapes(const IwanTarget& t, const std::vector<double>& r, int k, double n_points,
+                    CurveScatter& scatter) {
+  std::vector<int> start;
+  for (const MeasuredBackbone& c : t.curves) {
+    start.push_back(k);
+    k += 2 * static_cast<int>(c.amplitude.size());
+  }
+  std::map<std::tuple<int, int, bool>, std::vector<int>> groups;
+  for (size_t c = 0; c < t.curves.size(); ++c) {
+    const MeasuredBackbone& b = t.curves[c];
+    groups[{static_cast<int>(b.kind), b.modal ? -1 : b.sensor, b.modal}].push_back(
+        static_cast<int>(c));
+  }
+  for (const auto& [key, group] : groups)
+    if (group.size() >= 2) add_group_shapes(t, group, start, r, n_points, scatter);
 }
 
 // A curve unlike the others: its offset against the mean of the target's others, in their

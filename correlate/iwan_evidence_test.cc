@@ -677,5 +677,39 @@ TEST(IwanUpdate, TheLowEndsDampingRiseAgainstItsDropBoundsAJoints) {
   EXPECT_LT(other.low_rise_excess, 3);
 }
 
+// The curves' own shapes compare curves at the same amplitude: the same modal amplitude reads
+// larger at a sensor that moves more, so curves of two sensors would put one model error at
+// two places in ln amplitude, where it could read as their own shapes. Two-chain truth, one
+// hit read at a5 and at a3 (velocity, 30 points each, 5e-4 / 3 % noise), each sensor's curve
+// twice (another noise seed), evaluated at chi -0.3 (the truth's -0.5: a model error every hit
+// shares). Each sensor's pair is compared alone: 2 degrees of freedom per pair and quantity
+// (8), not the 12 of the four curves together, and the common curve is each pair's (44). Here
+// the common curve's chi-square (3.4e4) rules scatter out either way (the shapes' share 0.0003
+// by pairs, 0.0005 together); the grouping guards the case where it would not.
+TEST(IwanUpdate, CurvesOfTwoSensorsAreComparedEachWithItsOwn) {
+  Synthetic syn;
+  const std::vector<Sensor> sensors{{"a5", 5, -1.0}, {"a3", 3, -1.0}};
+  const model::Model m = two_chain_structure(syn.truth);
+  IwanTarget target;
+  target.mode = 1;
+  for (const int sensor : {0, 1, 0, 1})
+    target.curves.push_back(synthetic_backbone(m, 1, sensors, sensor, AmplitudeQuantity::kVelocity,
+                                               30, 2.0, 5e-4, 0.03,
+                                               static_cast<unsigned>(7 + target.curves.size())));
+  IwanUpdateOptions o;
+  o.bounds = box_around(syn.truth);
+  o.amplitude = AmplitudeQuantity::kVelocity;
+  const IwanObjective obj(m, "rivet", sensors, {target}, o);
+  model::IwanParameters wrong = obj.initial();
+  wrong.chi = -0.3;
+  const std::optional<MisfitEvidence> e = obj.misfit_evidence(wrong, 0);
+  ASSERT_TRUE(e);
+  RecordProperty("between_hits_share", std::to_string(e->between_hits_share));
+  EXPECT_EQ(e->between_hits_dof, 8);
+  EXPECT_EQ(e->common_dof, 44);
+  EXPECT_LT(e->between_hits_share, 0.05);
+  EXPECT_FALSE(e->hits_differ_in_shape());
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
