@@ -208,6 +208,128 @@ std::vector<std::string> curve_notes(const std::vector<ModeBackbones>& modes) {
 
 }  // namespace
 
+namespace {
+
+// A --mode R or R:BAND as given (band 0: none given).
+struct ModeSpec {
+  int mode = 0;
+  int band = 0;
+};
+
+ModeSpec mode_spec(const std::string& spec) {
+  ModeSpec out;
+  const size_t colon = spec.find(':');
+  try {
+    size_t used = 0;
+    out.mode = std::stoi(spec.substr(0, colon), &used);
+    if (used != spec.substr(0, colon).size()) throw std::invalid_argument(spec);
+    if (colon != std::string::npos) {
+      out.band = std::stoi(spec.substr(colon + 1), &used);
+      if (used != spec.size() - colon - 1) throw std::invalid_argument(spec);
+    }
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("--mode {}: expected R or R:BAND (integers from 1)", spec));
+  }
+  if (out.mode < 1 || (colon != std::string::npos && out.band < 1)) {
+    throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
+  }
+  return out;
+}
+
+// What read_iwan_inputs reads a process folder's --modes from.
+struct ProcessSide {
+  const IwanInputArgs& args;
+  const std::vector<correlate::Sensor>& sensors;
+  const correlate::ProcessRun& run;
+  const correlate::MeasuredModes& measured;
+  const std::vector<int>& bands;  // measured's column -> process band
+  const model::LinearModes& linear;
+};
+
+// The backbones of one --mode: its band (given, or the one MAC-paired with the model mode), read
+// as `run` reads them; `band_of_mode` gains the band where it has linear data.
+ModeBackbones mode_backbones(const std::string& spec, const ProcessSide& p,
+                             std::vector<BandOfMode>& band_of_mode) {
+  const ModeSpec ms = mode_spec(spec);
+  const int elastic = p.linear.size() - p.linear.rigid_count;
+  if (ms.mode > elastic) {
+    throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} (1 to {})",
+                                 spec, ms.mode, p.args.model, counted(elastic, "elastic mode"),
+                                 elastic));
+  }
+  if (ms.band > 0 &&
+      std::none_of(p.run.bands.begin(), p.run.bands.end(),
+                   [&](const correlate::ProcessBand& b) { return b.band == ms.band; })) {
+    std::set<int> numbers;
+    for (const correlate::ProcessBand& b : p.run.bands) numbers.insert(b.band);
+    std::string have;
+    for (int b : numbers) have += (have.empty() ? "" : ", ") + std::to_string(b);
+    throw InputError(fmt::format("--mode {}: {} has no band {} (bands: {})", spec, p.args.measured,
+                                 ms.band, have.empty() ? "none" : have));
+  }
+  int col = -1, band = ms.band;
+  if (band == 0) {
+    std::string why;
+    col = band_column_of(p.linear, p.sensors, p.measured, p.bands, ms.mode, why);
+    if (col < 0) {
+      throw InputError(fmt::format(
+          "--mode {}: {}; if one of these bands is this mode's, give R:BAND", spec, why));
+    }
+    band = p.bands[static_cast<size_t>(col)];
+  } else {
+    for (size_t i = 0; i < p.bands.size(); ++i) {
+      if (p.bands[i] == band) col = static_cast<int>(i);
+    }
+  }
+  // Every band's backbones with their scatter summary; targets built as `run` builds them.
+  ModeBackbones mb =
+      process_run_backbones(p.run, p.sensors, band, p.args.channels, ScatterOptions{});
+  mb.name = "mode " + spec;
+  mb.model_mode = ms.mode;
+  if (col >= 0) {
+    mb.linear_frequency_hz = p.measured.frequency_hz(col);
+    band_of_mode.push_back({spec, ms.mode, band, col});
+  }
+  return mb;
+}
+
+// Each --stepped-sine folder's backbones, one more mode each (--stepped-sine-mode, default
+// `first_mode`), measured at --stepped-sine-channel.
+std::vector<ModeBackbones> stepped_sine_modes(const ProcessSide& p, int first_mode) {
+  const IwanInputArgs& a = p.args;
+  std::vector<ModeBackbones> out;
+  if (a.stepped_sine.empty()) return out;
+  int sensor = 0;
+  if (!a.stepped_sine_channel.empty()) {
+    sensor = correlate::find_sensor(p.sensors, a.stepped_sine_channel);
+    if (sensor < 0) {
+      throw InputError(fmt::format("--stepped-sine-channel {}: not in the sensors file {}",
+                                   a.stepped_sine_channel, a.sensors));
+    }
+  } else if (p.sensors.size() != 1) {
+    throw InputError(
+        "--stepped-sine: give --stepped-sine-channel, the sensor the sweeps' response was "
+        "measured at");
+  }
+  const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : first_mode;
+  for (const std::string& dir : a.stepped_sine) {
+    const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
+    if (ss.amplitude != p.run.amplitude) {
+      throw InputError(
+          fmt::format("--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
+                      "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
+                      dir, a.measured));
+    }
+    ModeBackbones mb = stepped_sine_run_backbones(ss, sensor, ScatterOptions{});
+    mb.name = fmt::format("stepped sine {}", dir);
+    mb.model_mode = mode;
+    out.push_back(std::move(mb));
+  }
+  return out;
+}
+
+}  // namespace
+
 IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
                             const std::string& command) {
   if (!a.backbones.empty()) return table_inputs(m, a, command);
@@ -225,92 +347,12 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   std::vector<int> bands;
   const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
   const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
-  const int elastic = linear.size() - linear.rigid_count;
+  const ProcessSide side{a, sensors, run, measured, bands, linear};
   std::vector<ModeBackbones> modes;
   std::vector<BandOfMode> band_of_mode;
-  for (const std::string& spec : a.modes) {
-    correlate::IwanTarget t;
-    int band = 0;
-    const size_t colon = spec.find(':');
-    try {
-      size_t used = 0;
-      t.mode = std::stoi(spec.substr(0, colon), &used);
-      if (used != spec.substr(0, colon).size()) throw std::invalid_argument(spec);
-      if (colon != std::string::npos) {
-        band = std::stoi(spec.substr(colon + 1), &used);
-        if (used != spec.size() - colon - 1) throw std::invalid_argument(spec);
-      }
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("--mode {}: expected R or R:BAND (integers from 1)", spec));
-    }
-    if (t.mode < 1 || (colon != std::string::npos && band < 1)) {
-      throw InputError(fmt::format("--mode {}: mode and band count from 1", spec));
-    }
-    if (t.mode > elastic) {
-      throw InputError(fmt::format("--mode {}: model mode {} does not exist: {} has {} (1 to {})",
-                                   spec, t.mode, a.model, counted(elastic, "elastic mode"),
-                                   elastic));
-    }
-    if (colon != std::string::npos &&
-        std::none_of(run.bands.begin(), run.bands.end(),
-                     [&](const correlate::ProcessBand& b) { return b.band == band; })) {
-      std::set<int> numbers;
-      for (const correlate::ProcessBand& b : run.bands) numbers.insert(b.band);
-      std::string have;
-      for (int b : numbers) have += (have.empty() ? "" : ", ") + std::to_string(b);
-      throw InputError(fmt::format("--mode {}: {} has no band {} (bands: {})", spec, a.measured,
-                                   band, have.empty() ? "none" : have));
-    }
-    int col = -1;
-    if (colon == std::string::npos) {
-      std::string why;
-      col = band_column_of(linear, sensors, measured, bands, t.mode, why);
-      if (col < 0) {
-        throw InputError(fmt::format(
-            "--mode {}: {}; if one of these bands is this mode's, give R:BAND", spec, why));
-      }
-      band = bands[static_cast<size_t>(col)];
-    } else {
-      for (size_t i = 0; i < bands.size(); ++i) {
-        if (bands[i] == band) col = static_cast<int>(i);
-      }
-    }
-    // Every band's backbones with their scatter summary; targets built as `run` builds them.
-    ModeBackbones mb = process_run_backbones(run, sensors, band, a.channels, ScatterOptions{});
-    mb.name = "mode " + spec;
-    mb.model_mode = t.mode;
-    if (col >= 0) mb.linear_frequency_hz = measured.frequency_hz(col);
+  for (const std::string& spec : a.modes) modes.push_back(mode_backbones(spec, side, band_of_mode));
+  for (ModeBackbones& mb : stepped_sine_modes(side, modes.empty() ? 0 : modes.front().model_mode))
     modes.push_back(std::move(mb));
-    if (col >= 0) band_of_mode.push_back({spec, t.mode, band, col});
-  }
-  if (!a.stepped_sine.empty()) {
-    int sensor = 0;
-    if (!a.stepped_sine_channel.empty()) {
-      sensor = correlate::find_sensor(sensors, a.stepped_sine_channel);
-      if (sensor < 0) {
-        throw InputError(fmt::format("--stepped-sine-channel {}: not in the sensors file {}",
-                                     a.stepped_sine_channel, a.sensors));
-      }
-    } else if (sensors.size() != 1) {
-      throw InputError(
-          "--stepped-sine: give --stepped-sine-channel, the sensor the sweeps' response was "
-          "measured at");
-    }
-    const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : modes.front().model_mode;
-    for (const std::string& dir : a.stepped_sine) {
-      const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
-      if (ss.amplitude != run.amplitude) {
-        throw InputError(fmt::format(
-            "--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
-            "'jointlab stepped-sine' with the same --amplitude as 'jointlab process'",
-            dir, a.measured));
-      }
-      ModeBackbones mb = stepped_sine_run_backbones(ss, sensor, ScatterOptions{});
-      mb.name = fmt::format("stepped sine {}", dir);
-      mb.model_mode = mode;
-      modes.push_back(std::move(mb));
-    }
-  }
   IwanInputs in;
   in.curve_notes = curve_notes(modes);
   // The folder's other modes screen the fitted points as `run`'s other [[mode]]s do.
