@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "jointlab/correlate/iwan_update.h"
+#include "jointlab/model/iwan_cycle.h"
 
 namespace jointlab::correlate {
 namespace {
@@ -410,32 +411,65 @@ std::string loss_factor_possibility(const MisfitEvidence& e) {
 
 // A damping column in another unit, from the low end's damping rise against its frequency drop
 // (MisfitEvidence::low_rise_ratio), where the loss-factor rule's median factor does not show it:
-// no Iwan joint of chi <= 0 adds more damping per relative frequency drop in microslip than
-// kIwanRiseLimit, the structure's own damping, constant, adds none to the rise, and a unit
-// factor multiplies it. Checked where the fit puts the joint in microslip over those two fifths
-// (its slip at the lowest amplitude times their amplitude span below half phi_max: just past
-// phi_max the macroslip delta's dissipation rises ahead of its stiffness loss) with chi <= 0.
+// no Iwan joint of chi at or below chi_ref adds more damping per relative frequency drop in
+// microslip than iwan_rise_limit(chi_ref) (kIwanRiseLimit at chi_ref 0; chi_ref the fitted chi, 0
+// below it), the structure's own damping, constant, adds none to the rise, and a unit factor
+// multiplies it. Checked where the fit puts the joint in microslip over those two fifths (its
+// slip at the lowest amplitude times their amplitude span below half phi_max: just past phi_max
+// the macroslip delta's dissipation rises ahead of its stiffness loss).
 // The riveted beam's loss factor on 14-point microslip tables: the fit took the doubling up
 // almost whole (a median factor of 1.08, K_T raised, the linear limit +0.104 % off), and "the
 // structure's own damping" alone was named, where the rise reads 4.3 standard deviations above
 // the limit; its true tables (40 points) read 0.32-0.35 per curve, 12.5 below, and none of the
 // probe's 30 other cases reached 1.5.
+// A joint of chi above 0 rises more steeply (0.510 at chi 0.3): judged at the fitted chi, and
+// where chi ran to its upper bound (the default range stops at 0) a joint of chi above it is
+// named beside the unit, with the chi whose limit reaches the measured rise. FloorTruth's joint
+// at chi 0.3 on three 40-point microslip hits (1e-5 frequency and 0.5 % damping noise) read
+// 0.511, 5.9 standard deviations above 0.424, 0.03 above 0.510: a fit with chi stopped at 0 was
+// told "a damping column in another unit" alone.
 std::string damping_rise_possibility(const IwanUpdateSummary& s) {
   const MisfitEvidence& e = *s.evidence;
-  if (!(e.low_rise_excess > 3) || !(e.low_rise_ratio > 0) || !(s.best.chi <= 0) ||
-      !(s.phi_max > 0) || !(s.bottom_slip > 0) ||
+  const double chi_ref = std::max(0.0, s.best.chi);
+  if (!(chi_ref <= model::kIwanCycleChiMax)) return "";
+  const double limit = iwan_rise_limit(chi_ref);
+  // Evidence without the rise's pieces (built by hand) states its excess at kIwanRiseLimit alone.
+  const double excess = std::isfinite(e.low_rise) ? e.low_rise_excess_at(limit)
+                        : chi_ref == 0            ? e.low_rise_excess
+                                                  : NAN;
+  if (!(excess > 3) || !(e.low_rise_ratio > 0) || !(s.phi_max > 0) || !(s.bottom_slip > 0) ||
       !(s.bottom_slip * e.low_rise_span < 0.5 * s.phi_max))
     return "";
+  // chi at its upper bound: the data may call for a larger chi, whose joint rises more steeply.
+  std::string larger_chi, larger_chi_why;
+  if (!s.held[2] && s.bound_side[2] > 0) {
+    larger_chi = fmt::format("{} {:g}", iwan_detail::kLargerChiWords, s.best.chi);
+    double lo = chi_ref, hi = model::kIwanCycleChiMax;
+    if (iwan_rise_limit(hi) < e.low_rise_ratio) {
+      larger_chi_why = fmt::format(
+          "chi ran to its upper bound {:g}, but no joint of chi up to {:g} rises that steeply; ",
+          s.best.chi, hi);
+    } else {
+      for (int i = 0; i < 60 && hi - lo > 1e-3 * (1 + lo); ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (iwan_rise_limit(mid) < e.low_rise_ratio ? lo : hi) = mid;
+      }
+      larger_chi_why = fmt::format(
+          "chi ran to its upper bound {:g}, and a joint of chi {:.2g} or more rises that steeply "
+          "(widen --chi-range and see whether the fit takes such a chi); ",
+          s.best.chi, hi);
+    }
+  }
   return fmt::format(
-      ". Or a damping column in another unit: from the lowest to the second fifth of amplitudes "
+      ". Or a damping column in another unit{}: from the lowest to the second fifth of amplitudes "
       "the measured damping rises {:.2g} times the measured frequency's relative drop, {:.1f} "
-      "standard deviations above the {:.2f} that no Iwan joint with chi at or below 0 exceeds in "
-      "microslip (where the fitted joint is there, below {:.2g} phi_max), and the structure's "
-      "own damping, constant, adds nothing to that rise: a loss factor (eta = 2 zeta) given as "
+      "standard deviations above the {:.2f} that no Iwan joint with chi at or below {:g} exceeds "
+      "in microslip (where the fitted joint is there, below {:.2g} phi_max), and the structure's "
+      "own damping, constant, adds nothing to that rise: {}a loss factor (eta = 2 zeta) given as "
       "the damping ratio doubles it (if so, halve it), per cent read as a fraction is 100 times "
       "(if so, name the unit in its header, damping_ratio [%])",
-      e.low_rise_ratio, e.low_rise_excess, kIwanRiseLimit,
-      s.bottom_slip * e.low_rise_span / s.phi_max);
+      larger_chi, e.low_rise_ratio, excess, limit, chi_ref,
+      s.bottom_slip * e.low_rise_span / s.phi_max, larger_chi_why);
 }
 
 // A damping column in another unit beside the cause named: the loss-factor rule's median factor,

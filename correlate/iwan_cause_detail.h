@@ -24,4 +24,8 @@ bool amplitudes_read_too_large(const IwanUpdateSummary& s);
 /// amplitudes, the data falling more over them than it: amplitudes smaller than they are read as.
 bool amplitudes_read_too_small(const IwanUpdateSummary& s);
 
+/// The words by which the cause line names, beside a damping column in another unit, a joint of
+/// chi above chi's upper bound (the low end's damping rising more steeply than chi up to it gives).
+inline constexpr const char* kLargerChiWords = ", or a joint of chi above its upper bound";
+
 }  // namespace jointlab::correlate::iwan_detail

@@ -17,6 +17,7 @@
 #include "jointlab/core/median.h"
 #include "jointlab/correlate/iwan_objective.h"
 #include "jointlab/correlate/iwan_objective_detail.h"
+#include "jointlab/model/iwan_cycle.h"
 #include "jointlab/model/linear_modes.h"
 
 namespace jointlab::correlate {
@@ -244,15 +245,16 @@ void find_apart_curve(const IwanTarget& t, const CurveMeans& means, CurveScatter
 }
 
 // The low end's damping rise against its frequency drop (MisfitEvidence::low_rise_ratio) over
-// target t's curves, gathered into (rise, drop, variance of rise - limit x drop, span). In
+// target t's curves, gathered into (rise, drop, their variances, span). In
 // microslip an Iwan joint's first-harmonic stiffness loss is R A^(chi+1) G(chi) and its damping
 // 2 R A^(chi+1) / (pi (chi + 2) (chi + 3) K) (method.md), both of the slip amplitude A to the
 // same power, and at every joint of a mode alike: their increments between two amplitudes keep
-// the ratio 4 / (pi (chi + 2) (chi + 3) G(chi)), at most kIwanRiseLimit for chi <= 0, whatever
-// F_S, K_T, beta and the mode shape. The structure's own damping, constant, drops out of the
-// rise, and another mode's slip added to the joint's shifts A alike in both.
+// the ratio 4 / (pi (chi + 2) (chi + 3) G(chi)), at most kIwanRiseLimit for chi <= 0 and
+// iwan_rise_limit(chi) above, whatever F_S, K_T, beta and the mode shape. The structure's own
+// damping, constant, drops out of the rise, and another mode's slip added to the joint's shifts A
+// alike in both.
 struct LowRise {
-  double rise = 0, drop = 0, variance = 0, span = 0;
+  double rise = 0, drop = 0, rise_variance = 0, drop_variance = 0, span = 0;
   int curves = 0;
 };
 
@@ -286,7 +288,8 @@ void add_low_rise(const MeasuredBackbone& c, const std::vector<Eigen::Index>& by
   if (!(f1 > 0)) return;
   out.rise += z2 - z1;
   out.drop += (f1 - f2) / f1;
-  out.variance += vz1 + vz2 + kIwanRiseLimit * kIwanRiseLimit * (vf1 + vf2) / (f1 * f1);
+  out.rise_variance += vz1 + vz2;
+  out.drop_variance += (vf1 + vf2) / (f1 * f1);
   out.span = std::max(out.span, c.amplitude(by_amplitude[static_cast<size_t>(2 * fifth - 1)]) /
                                     c.amplitude(by_amplitude[0]));
   ++out.curves;
@@ -361,9 +364,13 @@ MisfitEvidence low_end(const IwanTarget& t, const std::vector<double>& v, double
   e.high_frequency_hz = upper_median(f_hi);
   e.high_frequency_error = upper_median(error_hi);
   e.high_frequency_noise = upper_median(noise_hi);
-  if (rise.curves > 0 && rise.variance > 0) {
+  if (rise.curves > 0 && rise.rise_variance + rise.drop_variance > 0) {
     e.low_rise_ratio = rise.drop > 0 ? rise.rise / rise.drop : NAN;
-    e.low_rise_excess = (rise.rise - kIwanRiseLimit * rise.drop) / std::sqrt(rise.variance);
+    e.low_rise = rise.rise;
+    e.low_drop = rise.drop;
+    e.low_rise_variance = rise.rise_variance;
+    e.low_drop_variance = rise.drop_variance;
+    e.low_rise_excess = e.low_rise_excess_at(kIwanRiseLimit);
     e.low_rise_span = rise.span;
   }
   return e;
@@ -407,6 +414,14 @@ void set_scatter(const CurveScatter& scatter, double n_points, MisfitEvidence& o
 }
 
 }  // namespace
+
+double iwan_rise_limit(double chi) {
+  const double j1 =
+      model::IwanCycle(model::Iwan(model::IwanParameters{1, 1, chi, 0})).microslip_integral();
+  const double secant = 4 * (chi + 1) / (M_PI * (chi + 3));
+  const double first_harmonic = 4 / (M_PI * (chi + 2) * (chi + 3) * (1 / (chi + 1) - j1));
+  return std::max(secant, first_harmonic);
+}
 
 bool MisfitEvidence::hits_differ_in_shape() const {
   if (!(between_hits_dof > 0) || !(common_dof > 0) || !(between_hits_share >= 0.25)) return false;

@@ -2,6 +2,9 @@
 // quantity or scale, and damping in another unit, named in the report.
 #include "jointlab/correlate/iwan_update.h"
 
+#include <cmath>
+#include <cstdio>
+#include <optional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -11,6 +14,8 @@
 namespace jointlab::correlate {
 namespace {
 
+using iwan_test::FloorTruth;
+using iwan_test::modal_backbone;
 using iwan_test::mode_one_evidence;
 using iwan_test::reported_fit;
 
@@ -310,11 +315,10 @@ TEST(IwanUpdateReport, AJointSetAsideAtTheSlipForcesBoundIsNotAModeThatHardlyMov
 // took the doubling up almost whole (a median factor of 1.08, K_T raised, the linear limit
 // +0.104 % off) and the report named only the structure's own damping or another mode's slip.
 // The damping rises 0.86 times the frequency's relative drop from the lowest to the second fifth,
-// 4.3 standard deviations above 4 / (3 pi), which no Iwan joint with chi <= 0 exceeds in microslip
-// and the constant own damping does not change: a damping column in another unit is named
-// beside. Not where the excess is within 3 standard deviations, the fitted chi above 0, the two
-// fifths not in microslip at the fit, or the median factor names the loss factor already.
-TEST(IwanUpdateReport, ADampingRiseNoJointGivesNamesTheDampingsUnit) {
+// 4.3 standard deviations above 4 / (3 pi), which no Iwan joint with chi <= 0 exceeds in
+// microslip and the constant own damping does not change. The rise and drop as 0.86 and 1 with
+// the variance that gives 4.31.
+IwanUpdateSummary riveted_loss_factor_fit() {
   IwanUpdateSummary s = reported_fit(IwanUpdateStatus::kConverged, 1078, 84, 48.6);
   s.best = {21.9948, 1.54205e7, -0.4729, 1};
   s.held[3] = true;  // by the fit: microslip only
@@ -336,8 +340,21 @@ TEST(IwanUpdateReport, ADampingRiseNoJointGivesNamesTheDampingsUnit) {
   e.low_softening_share = 0.0576;
   e.low_rise_ratio = 0.860;
   e.low_rise_excess = 4.31;
+  e.low_rise = 0.860;
+  e.low_drop = 1;
+  e.low_drop_variance = 0;
+  e.low_rise_variance = std::pow((0.860 - kIwanRiseLimit) / 4.31, 2);
   e.low_rise_span = 1.438;
   s.evidence = e;
+  return s;
+}
+
+// A damping column in another unit is named beside the structure's own damping. Not where the
+// excess is within 3 standard deviations, the two fifths not in microslip at the fit, or the
+// median factor names the loss factor already; judged at the fitted chi where it is above 0
+// (iwan_rise_limit(0.1) = 0.454, 4.0 standard deviations below 0.86; 0.873 at chi 2, above it).
+TEST(IwanUpdateReport, ADampingRiseNoJointGivesNamesTheDampingsUnit) {
+  const IwanUpdateSummary s = riveted_loss_factor_fit();
   const std::string unit = "Or a damping column in another unit";
   std::string r = s.report();
   EXPECT_NE(r.find("That is the structure's own damping"), std::string::npos) << r;
@@ -352,9 +369,18 @@ TEST(IwanUpdateReport, ADampingRiseNoJointGivesNamesTheDampingsUnit) {
       << r;
   IwanUpdateSummary c = s;
   c.evidence->low_rise_excess = 2.9;
+  c.evidence->low_rise_variance = std::pow((0.860 - kIwanRiseLimit) / 2.9, 2);
   EXPECT_EQ(c.report().find(unit), std::string::npos) << c.report();
   c = s;
   c.best.chi = 0.1;
+  EXPECT_NEAR(iwan_rise_limit(0.1), 0.454, 0.001);
+  EXPECT_NE(c.report().find(unit + ": from the lowest to the second fifth of amplitudes the "
+                                   "measured damping rises 0.86 times the measured frequency's "
+                                   "relative drop, 4.0 standard deviations above the 0.45 that no "
+                                   "Iwan joint with chi at or below 0.1 exceeds in microslip"),
+            std::string::npos)
+      << c.report();
+  c.best.chi = 2;
   EXPECT_EQ(c.report().find(unit), std::string::npos) << c.report();
   c = s;
   c.evidence->low_rise_span = 0.5 * 2.12e-6 / 2.59e-8;
@@ -365,6 +391,59 @@ TEST(IwanUpdateReport, ADampingRiseNoJointGivesNamesTheDampingsUnit) {
   EXPECT_NE(c.report().find("Or, the measured damping lying a median 1.69 times"),
             std::string::npos)
       << c.report();
+}
+
+// A joint of chi above 0 rises more steeply than any of chi <= 0 (iwan_rise_limit: 0.510 at chi
+// 0.3), and the default chi range stops at 0. FloorTruth's one-mode joint at chi 0.3, three
+// 40-point microslip hits (0.05 to 0.5 phi_max, 1e-5 frequency and 0.5 % damping noise, the
+// floors lowered to 1e-6 and 1e-3 to match): the rise reads 0.511, 5.9 standard deviations above
+// kIwanRiseLimit, where the rule fired on the fitted chi being at most 0 alone, and 0.03 at the
+// limit of chi 0.3 (tolerances: 0.03 on the ratio, the fifths' noise; 3, the rule's threshold,
+// on the excess). In the riveted fit's summary with these numbers:
+// fitted at chi 0.3 (a range reaching it), no unit is named; fitted at chi 0 where its range
+// stops it (the default), the larger chi is named beside the unit, with the chi whose limit
+// reaches the rise. Before: "a damping column in another unit" alone.
+TEST(IwanUpdateReport, AJointOfChiAboveZeroIsNoDampingInAnotherUnit) {
+  FloorTruth t;
+  t.iwan.chi = 0.3;
+  const model::Model truth = t.truth();
+  const double phi = model::Iwan(t.iwan).phi_max();
+  IwanTarget target;
+  for (int h = 0; h < 3; ++h)
+    target.curves.push_back(modal_backbone(truth, 40, 0.05 * phi, 0.5 * phi, 1e-5, 0.005, 100 + h));
+  IwanUpdateOptions o;
+  o.frequency_floor = 1e-6;
+  o.damping_floor = 1e-3;
+  const IwanObjective obj(truth, "j", {}, {target}, o);
+  const std::optional<MisfitEvidence> e = obj.misfit_evidence(t.iwan, t.z);
+  ASSERT_TRUE(e);
+  EXPECT_NEAR(e->low_rise_ratio, iwan_rise_limit(0.3), 0.03);
+  EXPECT_GT(e->low_rise_excess, 3);
+  EXPECT_LT(e->low_rise_excess_at(iwan_rise_limit(0.3)), 3);
+
+  IwanUpdateSummary s = riveted_loss_factor_fit();
+  for (double MisfitEvidence::*f :
+       {&MisfitEvidence::low_rise_ratio, &MisfitEvidence::low_rise_excess,
+        &MisfitEvidence::low_rise, &MisfitEvidence::low_drop, &MisfitEvidence::low_rise_variance,
+        &MisfitEvidence::low_drop_variance, &MisfitEvidence::low_rise_span})
+    s.evidence.value().*f = (*e).*f;
+  const std::string unit = "Or a damping column in another unit";
+  s.best.chi = 0.3;
+  EXPECT_EQ(s.report().find(unit), std::string::npos) << s.report();
+  s.best.chi = 0;
+  s.bound_side[2] = 1;
+  s.at_bounds = {"chi at its upper bound 0"};
+  const std::string r = s.report();
+  EXPECT_NE(r.find(unit + ", or a joint of chi above its upper bound 0: "), std::string::npos) << r;
+  EXPECT_NE(r.find("chi ran to its upper bound 0, and a joint of chi 0.3"), std::string::npos) << r;
+  // The bound line agrees: a wider range may cure it (before: "a wider range would not cure
+  // that").
+  EXPECT_NE(r.find("WARNING: chi at its upper bound 0: the low end's damping rises more steeply "
+                   "than a joint of chi up to it gives (below); a wider range lets the fit take a "
+                   "larger chi"),
+            std::string::npos)
+      << r;
+  EXPECT_EQ(r.find("would not cure"), std::string::npos) << r;
 }
 
 }  // namespace

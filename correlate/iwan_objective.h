@@ -33,8 +33,17 @@ namespace jointlab::correlate {
 /// The most damping any Iwan joint of chi <= 0 adds per relative frequency drop in microslip, on
 /// the ring-down definitions (first-harmonic frequency, decay over stored energy) as on QSMA's
 /// secant ones: 4 (chi + 1) / (pi (chi + 3)) to first order for the secant, rising with chi to
-/// 4 / (3 pi) at chi = 0 for both (method.md's closed forms; at chi -0.3 0.330 and 0.326).
+/// 4 / (3 pi) at chi = 0 for both (method.md's closed forms; at chi -0.3 0.330 and 0.326);
+/// iwan_rise_limit(0).
 inline constexpr double kIwanRiseLimit = 4 / (3 * M_PI);
+
+/// The most damping any Iwan joint of exponent chi or below adds per relative frequency drop in
+/// microslip, on either definition: the larger of the secant's 4 (chi + 1) / (pi (chi + 3)) and
+/// the first harmonic's 4 / (pi (chi + 2) (chi + 3) G(chi)), G = 1 / (chi + 1) - J(1)
+/// (model/iwan_cycle.h), both rising with chi (checked from -0.99 to 2000): kIwanRiseLimit at
+/// chi 0, 0.510 at 0.3, 0.873 at 2, 1.80 at 10, without bound as chi grows (the first harmonic's;
+/// the secant's tends to 4 / pi). chi <= model::kIwanCycleChiMax.
+double iwan_rise_limit(double chi);
 
 struct MisfitEvidence {
   int mode = 0;                    ///< the target (model mode R) these numbers are of
@@ -67,6 +76,15 @@ struct MisfitEvidence {
   /// deviations (the stated sigmas, floored) the rise exceeds kIwanRiseLimit times the drop; and
   /// the largest ratio over the curves of the second fifth's highest amplitude to the lowest.
   double low_rise_ratio = NAN, low_rise_excess = NAN, low_rise_span = 0;
+  /// The rise and the drop behind low_rise_ratio, and their variances (NaN: unknown), so that the
+  /// excess can be judged against the limit of the fitted chi (low_rise_excess_at()).
+  double low_rise = NAN, low_drop = NAN, low_rise_variance = NAN, low_drop_variance = NAN;
+  /// By how many standard deviations the rise exceeds `limit` times the drop (NaN: unknown):
+  /// (rise - limit drop) / sqrt(var rise + limit^2 var drop).
+  double low_rise_excess_at(double limit) const {
+    return (low_rise - limit * low_drop) /
+           std::sqrt(low_rise_variance + limit * limit * low_drop_variance);
+  }
   int targets = 0;  ///< the objective's targets (modes): one K_T sets every linear limit
   /// Curves that disagree with one another (scatter between hits): over every target with two
   /// or more curves, the share of the sum of squared residuals that one offset per curve from

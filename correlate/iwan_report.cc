@@ -316,6 +316,15 @@ std::string bound_lines(const IwanUpdateSummary& s, const std::string& cause, bo
           "wider range moves it, not the fit, and Fs is no slip force of the joint until the "
           "cause below is mended\n",
           b, s.top_slip / s.phi_max);
+    } else if (b.rfind("chi", 0) == 0 && s.bound_side[2] > 0 &&
+               cause.find(iwan_detail::kLargerChiWords) != std::string::npos) {
+      // The low end's damping rises more steeply than a joint of chi up to the bound gives: a
+      // wider range may cure it (FloorTruth's joint at chi 0.3 fitted with chi stopped at 0).
+      out += fmt::format(
+          "  WARNING: {}: the low end's damping rises more steeply than a joint of chi up to it "
+          "gives (below); a wider range lets the fit take a larger chi, if the damping column is "
+          "in its unit\n",
+          b);
     } else if (!cause.empty() && !kt) {
       out += fmt::format(
           "  WARNING: {}: the misfit below pressed it there; a wider range would not cure that\n",
