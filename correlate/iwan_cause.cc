@@ -150,17 +150,18 @@ constexpr double kLowSofteningShare = 0.025;
 // Damping at the low end beyond the fitted one-mode joint's: the structure's own damping, which
 // the model lacks, or another mode slipping the same joint in the hits, which keeps it slipping
 // there. The measured frequency's low end (low_softening_share) only leans between the two: a
-// joint softens from zero amplitude on, but one nearly linear in amplitude (chi near 0) hardly
-// does, and data that start near the other mode's slip soften there. On the one-mode truth (three
-// hits, 1e-4 / 2 % noise) the own damping 5e-4 of a chi -0.05 joint over 3.5 decades reads 0.5 %
-// (flat) and of a chi -0.2 joint with 10 points a curve over 2.5 decades 2.2 %, while another
-// mode adding 0.1 phi_max to a chi -0.5 or -0.9 joint over 2.5 decades reads 3.5 % and 5.0 %
-// (softening): each was named the other cause, alone. What decides is the refit with Z free: the
-// own damping then fits within the noise (reduced chi-square 1.09, chi -0.05 and -0.5), the
-// other mode's slip does not (7.6 and 9.0 for 0.1 and 0.3 phi_max on chi -0.5), except for a joint
-// nearly linear in amplitude, whose slip at a constant offset only shifts the frequency and adds
-// a nearly constant damping, as own damping does (1.3 for chi -0.05). With Z fitted already the
-// own damping is not what is missing.
+// joint softens from zero amplitude on, but one nearly linear in amplitude or steeper (chi near or
+// above 0: 1.1 % at chi 0.3 and 1, 5.8 % at -0.5, the one-mode truth's three 40-point hits from
+// 1e-8 read at the truth) hardly does, and data that start near the other mode's slip soften there.
+// On the one-mode truth (three hits, 1e-4 / 2 % noise) the own damping 5e-4 of a chi -0.05 joint
+// over 3.5 decades reads 0.5 % (flat) and of a chi -0.2 joint with 10 points a curve over 2.5
+// decades 2.2 %, while another mode adding 0.1 phi_max to a chi -0.5 or -0.9 joint over 2.5 decades
+// reads 3.5 % and 5.0 % (softening): each was named the other cause, alone. What decides is the
+// refit with Z free: the own damping then fits within the noise (reduced chi-square 1.09, chi -0.05
+// and -0.5), the other mode's slip does not (7.6 and 9.0 for 0.1 and 0.3 phi_max on chi -0.5),
+// except for a joint nearly linear in amplitude, whose slip at a constant offset only shifts the
+// frequency and adds a nearly constant damping, as own damping does (1.3 for chi -0.05). With Z
+// fitted already the own damping is not what is missing.
 std::string own_damping_or_other_slip(const IwanUpdateSummary& s) {
   const MisfitEvidence& e = *s.evidence;
   const std::string strike =
@@ -206,8 +207,9 @@ std::string own_damping_or_other_slip(const IwanUpdateSummary& s) {
   return fmt::format(
       "That is the structure's own damping (roughly constant in amplitude), which the model lacks "
       "(modal_ratio {:.3g}, held), or another mode slipping the same joint in these hits, which "
-      "keeps it slipping at the low end. {}: a joint nearly linear in amplitude (chi near 0) "
-      "hardly softens there, and data that start near the other mode's slip do. Refit with "
+      "keeps it slipping at the low end. {}: a joint nearly linear in amplitude or steeper (chi "
+      "near or above 0) hardly softens there, and data that start near the other mode's slip do. "
+      "Refit with "
       "--linear-damping fit (or set [damping] modal_ratio in the model): the structure's own "
       "damping then fits within the noise, and a misfit that stays is the other mode's slip ({})",
       s.modal_ratio, lean, strike);
