@@ -73,6 +73,12 @@ struct IwanTargets {
   Eigen::Index screened = 0;  ///< points left out where other modes slip the joints
   /// Per mode (the order of `modes`): points it had and points the slip screen left out.
   std::vector<std::pair<Eigen::Index, Eigen::Index>> points_screened;
+  /// Per mode (the order of `modes`): the hits whose backbone the slip screen left with fewer
+  /// than two points, so that the fit leaves them out.
+  std::vector<std::vector<std::string>> hits_screened_out;
+  /// "; every point but at most one of L5_hit1 and L5_hit2 ..., so those hits are left out of
+  /// the fit" for mode `k`, "" where the screen left every hit in.
+  std::string hits_screened_out_text(size_t k) const;
   /// One line per fitted mode with a screen: "mode 1:1: 12 of 480 points left out ...".
   std::string screen_report(const std::vector<ModeBackbones>& modes) const;
   /// Where no fitted target is left because the slip screen (at `max_slip_share`) left out every

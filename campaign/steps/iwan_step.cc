@@ -241,11 +241,16 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     return step;
   }
   const IwanObjective objective(base, step.set, sensors, targets.fitted, io);
+  std::string emptied;
+  for (size_t k = 0; k < backbones.size(); ++k) {
+    if (const std::string text = targets.hits_screened_out_text(k); !text.empty())
+      emptied += fmt::format("; {}: {}", backbones[k].name, text.substr(2));
+  }
   say(
       fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
-                  "left out where other modes carry over {:g} % of the joint slip)",
+                  "left out where other modes carry over {:g} % of the joint slip{})",
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
-                  100 * to.max_slip_share));
+                  100 * to.max_slip_share, emptied));
   // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
   // Between those lines, `interrupt` (where given) may stop the fit.
   if (progress || interrupt) {
