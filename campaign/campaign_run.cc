@@ -160,8 +160,9 @@ RunSummary run_staged(const Campaign& c, const RunOptions& o, const fs::path& ou
     if (measured.curves[k].empty()) {
       summary.no_backbone.push_back(c.modes[k].name);
       summary.notes.push_back(fmt::format(
-          "{}: no backbone in any hit; its steps are left out (the report's top says why)",
-          c.modes[k].name));
+          "{}: no backbone in any hit; its steps are left out (the report's top says why){}",
+          c.modes[k].name,
+          measured.reference_hint[k].empty() ? "" : "; " + measured.reference_hint[k]));
     }
   ModelResults model;
   if (!model_file.empty()) model = model_side(c, std::move(model_data), measured, out, o, summary);

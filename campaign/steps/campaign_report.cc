@@ -59,8 +59,12 @@ ReportSection no_backbone_section(const Campaign& c, const MeasuredSide& m) {
   for (size_t k = 0; k < c.modes.size(); ++k) {
     if (!m.curves[k].empty()) continue;
     s.paragraphs.push_back(fmt::format(
-        "{} ({:g} - {:g} Hz band, channel {}): no backbone in any hit; its results are left out.",
-        c.modes[k].name, c.modes[k].band.lo, c.modes[k].band.hi, c.modes[k].reference));
+        "{} ({:g} - {:g} Hz band, channel {}): no backbone in any hit; its results are left "
+        "out.{}",
+        c.modes[k].name, c.modes[k].band.lo, c.modes[k].band.hi, c.modes[k].reference,
+        k < m.reference_hint.size() && !m.reference_hint[k].empty()
+            ? " At the other channels: " + m.reference_hint[k] + "."
+            : ""));
     ReportTable t{fmt::format("{}: why each hit gave no backbone", c.modes[k].name),
                   {"hit", "group", "reason"},
                   {}};

@@ -36,6 +36,31 @@ correlate::MeasuredModes linear_modes(const Campaign& c, const std::vector<HitDa
 
 }  // namespace
 
+std::string reference_hint(const Campaign& c, const std::vector<HitData>& hits, size_t k) {
+  const size_t nc = c.channels.size();
+  std::vector<int> with(nc, 0);
+  for (const HitData& h : hits)
+    for (size_t i = 0; i < nc && k < h.curves.size() && i < h.curves[k].size(); ++i)
+      if (h.curves[k][i].amplitude.size() > 0) ++with[i];
+  std::vector<size_t> order;
+  for (size_t i = 0; i < nc; ++i) {
+    if (c.channels[i].name == c.modes[k].reference && with[i] > 0) return "";
+    if (with[i] > 0) order.push_back(i);
+  }
+  if (order.empty()) return "";
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return with[a] > with[b]; });
+  std::string others;
+  for (size_t j = 1; j < order.size(); ++j)
+    others +=
+        fmt::format("{}{} in {}", j == 1 ? " (" : ", ", c.channels[order[j]].name, with[order[j]]);
+  if (!others.empty()) others += ")";
+  return fmt::format(
+      "channel {} gives one in {} of {} hits{}: give reference = \"{}\" in [[mode]] (the "
+      "reference defaults to the first channel)",
+      c.channels[order[0]].name, with[order[0]], hits.size(), others, c.channels[order[0]].name);
+}
+
 MeasuredSide summarise_measured(const Campaign& c, const std::vector<HitData>& hits,
                                 const fs::path& dir,
                                 const std::function<void(const std::string&)>& progress) {
@@ -47,6 +72,7 @@ MeasuredSide summarise_measured(const Campaign& c, const std::vector<HitData>& h
   m.spans.resize(nm);
   m.scatter.resize(nm);
   m.flagged.assign(hits.size(), false);
+  m.reference_hint.resize(nm);
   fs::create_directories(dir);
   for (size_t k = 0; k < nm; ++k) {
     for (size_t i = 0; i < nc; ++i)
@@ -60,6 +86,7 @@ MeasuredSide summarise_measured(const Campaign& c, const std::vector<HitData>& h
       m.curves[k].push_back(cv);
       m.point_std[k].push_back(h.point_std[k][m.reference[k]]);
     }
+    if (m.curves[k].empty()) m.reference_hint[k] = reference_hint(c, hits, k);
     m.scatter[k] = summarize_scatter(m.curves[k], c.scatter);
     for (const HitDeviation& d : m.scatter[k].hits) {
       if (!d.outlier) continue;

@@ -38,7 +38,13 @@ struct MeasuredSide {
   std::vector<bool> flagged;                     ///< per hit: flagged in any mode
   int flagged_hits = 0;                          ///< hits flagged in any mode
   correlate::MeasuredModes modes;                ///< linear frequencies and shapes per mode
+  std::vector<std::string> reference_hint;       ///< per mode: reference_hint()'s
 };
+
+/// For mode `k` whose reference channel gave no backbone in any hit while other channels did:
+/// "channel acc_9003_z gives one in 9 of 9 hits: give reference = "acc_9003_z" in [[mode]]"
+/// (the channel with the most, then others with their counts); "" otherwise.
+std::string reference_hint(const Campaign& campaign, const std::vector<HitData>& hits, size_t k);
 
 /// The step: summarises every mode, writes the summaries into `dir` (created) and says one
 /// line per mode through `progress` (may be empty).

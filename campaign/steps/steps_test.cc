@@ -1149,3 +1149,41 @@ TEST(KnownParameters, WithoutPlantedScatterTheUpdatesOwnSigmaJudges) {
 
 }  // namespace
 }  // namespace jointlab::campaign
+
+namespace jointlab::campaign {
+namespace {
+
+// A mode whose reference channel (the first, by default) gave no backbone in any hit while
+// another channel gave one in every hit: the 0.4 m beam's mode 1 read at its end's channel
+// (acc_9001_z) said only "no backbone in any hit", where acc_9003_z had one in 9 of 9 hits and
+// update-iwan, choosing its channel itself, fitted them. The hint names the channel to give.
+TEST(MeasuredSide, AReferenceWithoutBackbonesNamesTheChannelThatHasThem) {
+  Campaign c;
+  for (const char* name : {"a1", "a2", "a3"}) {
+    CampaignChannel ch;
+    ch.name = name;
+    c.channels.push_back(ch);
+  }
+  CampaignMode mode;
+  mode.name = "mode 1";
+  mode.reference = "a1";
+  c.modes.push_back(mode);
+  Curve some;
+  some.amplitude = Eigen::VectorXd::Constant(3, 1e-3);
+  std::vector<HitData> hits(3);
+  for (size_t h = 0; h < hits.size(); ++h) {
+    hits[h].curves = {std::vector<Curve>(3)};
+    hits[h].curves[0][2] = some;              // a3 in every hit
+    if (h == 0) hits[h].curves[0][1] = some;  // a2 in one
+  }
+  EXPECT_EQ(reference_hint(c, hits, 0),
+            "channel a3 gives one in 3 of 3 hits (a2 in 1): give reference = \"a3\" in [[mode]] "
+            "(the reference defaults to the first channel)");
+  hits[1].curves[0][0] = some;  // the reference has one: no hint
+  EXPECT_EQ(reference_hint(c, hits, 0), "");
+  for (HitData& h : hits) h.curves[0] = std::vector<Curve>(3);  // none anywhere: no hint
+  EXPECT_EQ(reference_hint(c, hits, 0), "");
+}
+
+}  // namespace
+}  // namespace jointlab::campaign
