@@ -397,7 +397,8 @@ void add_update_commands(CLI::App& app) {
       ->check(in_range(0, 1024));
   range_option(iw, "--fs-range", ia->fs_range, "Fs bounds LO:HI [N] (default start/30:start*30)");
   range_option(iw, "--gamma-range", ia->gamma_range, "Kt/Ks bounds LO:HI (default 0.05:2)");
-  range_option(iw, "--chi-range", ia->chi_range, "chi bounds LO:HI (default -0.95:0)");
+  range_option(iw, "--chi-range", ia->chi_range,
+               "chi bounds LO:HI, any chi > -1 (default -0.95:0, a Coulomb interface's)");
   range_option(iw, "--beta-range", ia->beta_range, "beta bounds LO:HI (default 0.01:100)");
   iw->add_option("--out", ia->out, "output directory")->required();
   iw->callback([ia] { run_update_iwan(*ia); });

@@ -452,5 +452,45 @@ TEST(IwanUpdateReport, AJointOfChiAboveZeroIsNoDampingInAnotherUnit) {
       << r;
 }
 
+// chi free at its upper bound beside a cause named: an SDOF joint at chi 0.3 (three 40-point hits
+// to 1.0-1.5 phi_max, 1e-4 / 2 % noise; the command's run) fitted in the default range ended at
+// chi 0, reduced chi-square 1720, and the report named the structure's own damping or another
+// mode's slip alone, chi's bound line saying "a wider range would not cure that"; with
+// --chi-range -0.9:0.9 it fits at 1.08. Now a joint of larger chi is named beside, and the bound
+// line says a wider range tells. Not where chi is held, nor inside its range.
+TEST(IwanUpdateReport, ChiAtItsUpperBoundNamesALargerChiBesideTheCause) {
+  IwanUpdateSummary s = riveted_loss_factor_fit();
+  s.evidence->low_rise = NAN;  // no damping-rise line: the excess at 0.424 only
+  s.evidence->low_rise_excess = 1;
+  s.best.chi = 0;
+  s.bound_side[2] = 1;
+  s.at_bounds = {"chi at its upper bound 0"};
+  const std::string larger =
+      ". Or a joint of chi above its upper bound 0, which the range left out (any chi > -1 is an "
+      "Iwan element; the default range stops at 0, a Coulomb interface's): refit with a wider "
+      "--chi-range to tell";
+  const std::string bound =
+      "WARNING: chi at its upper bound 0: the misfit below pressed it there; a joint of larger "
+      "chi, which the range left out, may be what the data ask for: a wider --chi-range tells";
+  std::string r = s.report();
+  EXPECT_NE(r.find("That is the structure's own damping"), std::string::npos) << r;
+  EXPECT_NE(r.find(larger), std::string::npos) << r;
+  EXPECT_NE(r.find(bound), std::string::npos) << r;
+  EXPECT_EQ(r.find("would not cure"), std::string::npos) << r;
+  IwanUpdateSummary c = s;
+  c.held[2] = true;
+  c.bound_side[2] = 0;
+  c.at_bounds.clear();
+  r = c.report();
+  EXPECT_EQ(r.find("Or a joint of chi above"), std::string::npos) << r;
+  c = s;
+  c.bound_side[2] = 0;
+  c.at_bounds.clear();
+  c.best.chi = -0.2;
+  r = c.report();
+  EXPECT_EQ(r.find("Or a joint of chi above"), std::string::npos) << r;
+  EXPECT_NE(r.find("That is the structure's own damping"), std::string::npos) << r;
+}
+
 }  // namespace
 }  // namespace jointlab::correlate
