@@ -217,6 +217,13 @@ TEST(Campaign, ATruthFileGivesTheFittedSetsTableOfSeveral) {
             std::string::npos);
   EXPECT_NE(message(two, "iwan.nut").find("no [iwan.nut] for the fitted set iwan.nut"),
             std::string::npos);
+  // The known values lie in the Iwan element's domain, as a model file's: chi > -1, above 0
+  // too (before: any chi read, -1.5 as well).
+  const fs::path above = dir / "above.toml", below = dir / "below.toml";
+  std::ofstream(above) << "[iwan]\nKt = 1.2e7\nFs = 40.0\nchi = 0.3\nbeta = 0.8\n";
+  std::ofstream(below) << "[iwan]\nKt = 1.2e7\nFs = 40.0\nchi = -1.5\nbeta = 0.8\n";
+  EXPECT_EQ(read_truth(above).iwan.chi, 0.3);
+  EXPECT_EQ(message(below, ""), below.string() + ": iwan: chi = -1.5 must be > -1");
   fs::remove_all(dir);
 }
 

@@ -65,6 +65,9 @@ Truth read_truth(const fs::path& path, const std::string& set) {
   t.present = true;
   t.iwan = {get(iwan, table, "Fs", true), get(iwan, table, "Kt", true),
             get(iwan, table, "chi", true), get(iwan, table, "beta", true)};
+  // The one domain of model files (model::iwan_parameter_domain): chi > -1, above 0 too.
+  if (const std::string e = model::iwan_parameter_error(t.iwan); !e.empty())
+    throw InputError(where(path.string(), 0, fmt::format("{}: {}", table, e)));
   const toml::table* scatter = doc["scatter"].as_table();
   t.scatter_kt = get(scatter, "scatter", "Kt", false);
   t.scatter_fs = get(scatter, "scatter", "Fs", false);
