@@ -28,6 +28,10 @@ struct BackboneComparison {
 /// The x-axis label of a measured amplitude: modal, or the quantity named by `quantity`.
 std::string amplitude_axis_label(bool modal, correlate::AmplitudeQuantity quantity);
 
+/// The figure of the comparison: the measured curves as hits, none of them flagged (they are
+/// the curves the fit used, its scatter screen already applied), their mean over all of them.
+BackboneFigure comparison_figure(const BackboneComparison& comparison);
+
 /// Draws the comparison into `figure` (.png, .svg or .pdf) and, when `csv` is not empty, writes
 /// the model curves there; InputError when a file cannot be written.
 void plot_backbone_comparison(const BackboneComparison& comparison,

@@ -1,4 +1,5 @@
 #include "jointlab/campaign/figures.h"
+#include "jointlab/campaign/backbone_comparison.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -156,6 +157,40 @@ TEST(Figures, RejectsBadInput) {
   EXPECT_THROW(plot_frequency_errors({"1"}, {{"x", {1.0, 2.0}}}, "", dir / "e.png"), InputError);
   EXPECT_THROW(plot_frequency_errors({"1"}, {{"x", {1.0}}}, "", dir / "e.gif"), InputError);
   EXPECT_FALSE(fs::exists(dir / "m.png"));
+}
+
+// update-iwan's and compare's figure draws the curves the fit used: none of them is drawn as a
+// flagged hit, and the mean runs over all of them. Before, the figure summarised them once more
+// and flagged one the fit had used: six curves, one 0.5 % off in frequency (its robust z far
+// past 3.5), were drawn as "hits (5)" and "flagged hit (1)" with the mean over five.
+TEST(BackboneComparisonFigure, TheCurvesTheFitUsedAreNoneOfThemFlagged) {
+  BackboneComparison c;
+  for (int h = 0; h < 6; ++h) {
+    correlate::MeasuredBackbone b;
+    b.source = fmt::format("hit{}", h + 1);
+    b.amplitude = Eigen::VectorXd::LinSpaced(8, 1.9e-3, 1.0e-3);
+    b.frequency_hz = Eigen::VectorXd::Constant(8, (h == 5 ? 100.5 : 100.0) + 0.01 * h);
+    b.damping_ratio = Eigen::VectorXd::Constant(8, 1e-3 * (1 + 0.01 * h));
+    c.measured.push_back(b);
+  }
+  // The default screen flags the sixth: the case the figure met.
+  std::vector<Curve> curves;
+  for (const correlate::MeasuredBackbone& b : c.measured) {
+    Curve cv;
+    cv.id = b.source;
+    cv.amplitude = b.amplitude;
+    cv.frequency_hz = b.frequency_hz;
+    cv.damping = b.damping_ratio;
+    curves.push_back(cv);
+  }
+  int flagged_by_default = 0;
+  for (const HitDeviation& h : summarize_scatter(curves, {}).hits) flagged_by_default += h.outlier;
+  ASSERT_EQ(flagged_by_default, 1);
+  const BackboneFigure f = comparison_figure(c);
+  ASSERT_EQ(f.hits.size(), 6u);
+  for (const HitDeviation& h : f.summary.hits) EXPECT_FALSE(h.outlier) << h.id;
+  ASSERT_FALSE(f.summary.bins.empty());
+  for (const ScatterBin& b : f.summary.bins) EXPECT_EQ(b.curves, 6);
 }
 
 }  // namespace
