@@ -286,6 +286,13 @@ TEST(ModesTableFromAnotherTool, FrequencyHeadersWithTheirUnitAreRead) {
        "1: the header must begin with mode,frequency_hz (or a frequency "
        "with its unit, 'Frequency [Hz]'); it begins 'mode,z1', column 2 "
        "'z1' names no frequency"},
+      // update-linear's own output given back (it was told only "column 1 'measured' is not
+      // 'mode'").
+      {"measured,frequency_hz,model_mode,model_frequency_hz,error,mac",
+       "1: the header must begin with mode,frequency_hz (or a frequency with its unit, "
+       "'Frequency [Hz]'); it begins 'measured,frequency_hz': this is the modes.csv "
+       "update-linear writes (measured against model modes), not a modes table; give "
+       "--measured DIR or a table of mode, frequency_hz and one shape column per sensor"},
   };
   for (const auto& [header, message] : refused)
     EXPECT_EQ(error(header, "1,57.9\n"), file + ":" + message) << header;

@@ -846,12 +846,20 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
             return false;
           }
         }());
+    // update-linear's own modes.csv (measured,frequency_hz,model_mode,...) pairs the modes of a
+    // past update; it holds no shapes to pair a new one with.
+    const bool update_output =
+        cells.size() >= 3 && cells[0] == "measured" && cells[2] == "model_mode";
     throw InputError(where(
         name, n,
         fmt::format("the header must begin with mode,frequency_hz (or a frequency with its unit, "
                     "'Frequency [Hz]'); it begins '{}'{}",
                     found,
-                    swapped ? ": put the mode column first"
+                    update_output
+                        ? ": this is the modes.csv update-linear writes (measured against model "
+                          "modes), not a modes table; give --measured DIR or a table of mode, "
+                          "frequency_hz and one shape column per sensor"
+                    : swapped ? ": put the mode column first"
                     : cells.empty() || lower(cells[0]) != "mode"
                         ? fmt::format(", column 1 '{}' is not 'mode'",
                                       cells.empty() ? "" : printable(cells[0]))
