@@ -82,10 +82,11 @@ void JointCondensation::set_coordinates(const std::vector<Joint>& joints) {
           !std::isfinite(e.S()) || !std::isfinite(work) || !(work > 0)) {
         throw InputError(fmt::format(
             "QSMA: the Iwan element between {} (Fs = {:g}, Kt = {:g}, chi = {:g}) has phi_max "
-            "= {:.3g} m and Fs phi_max = {:.3g} J beyond double precision; state the model in "
-            "other units",
+            "= {:.3g} m, Fs phi_max = {:.3g} J and slider density R = {:.3g} (F_S (chi+1) / "
+            "(phi_max^(chi+2) (beta + c))) beyond double precision; state the model in other "
+            "units",
             joint_ends(coords_[j].a, coords_[j].b), e.slip_force(), e.stiffness(), e.chi(),
-            e.phi_max(), work));
+            e.phi_max(), work, R));
       }
       laws_[j].push_back({e.stiffness(), e.slip_force(), e.phi_max(), chi1, R / chi1,
                           R / (chi1 * (chi1 + 1)), R / (chi1 * (chi1 + 1) * (chi1 + 2)),

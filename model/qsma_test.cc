@@ -382,10 +382,24 @@ TEST(Qsma, ExtremeParametersFinishQuicklyOrAreRefusedWithAMessage) {
     const std::string m = testing::input_error_of([&] { JointCondensation{sdof(0.5, 1e6, p)}; });
     EXPECT_NE(m.find("double precision"), std::string::npos) << m;
   }
+  // chi = 150 (in the domain, chi > -1): phi_max 4e-5 m raised to chi + 2 underflows and R
+  // overflows, which the message names (before: phi_max and Fs phi_max alone, both ordinary);
+  // chi = 2500 lies above what the slip integral is verified for.
+  std::string m = testing::input_error_of([&] {
+    JointCondensation{sdof(0.5, 1e6, IwanParameters{40.0, 2.0e6, 150.0, 1.0})};
+  });
+  EXPECT_NE(m.find("slider density R = inf"), std::string::npos) << m;
+  m = testing::input_error_of([&] {
+    JointCondensation{sdof(0.5, 1e6, IwanParameters{40.0, 2.0e6, 2500.0, 1.0})};
+  });
+  EXPECT_NE(m.find("chi = 2500, above 2000, the largest for which its first-harmonic slip "
+                   "integral is verified"),
+            std::string::npos)
+      << m;
   // A structure of 1e200 N/m holds the joint 5e193 times more stiffly than its Kt: its slip
   // is rounding noise, refused with a message.
   const JointCondensation rigid(sdof(0.5, 1e200, kRivet));
-  const std::string m = testing::input_error_of([&] { qsma(rigid, 1, options, &summary); });
+  m = testing::input_error_of([&] { qsma(rigid, 1, options, &summary); });
   EXPECT_NE(m.find("below rounding"), std::string::npos) << m;
 }
 
