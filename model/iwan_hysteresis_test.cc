@@ -14,7 +14,9 @@ namespace {
 
 using testing::Close;
 
-const IwanParameters kSets[] = {{40.0, 2.0e6, -0.5, 1.0}, {10.0, 5.0e5, -0.8, 0.0}};
+// chi 2 too: any chi > -1 is an element, and the first-harmonic tests take this as reference.
+const IwanParameters kSets[] = {
+    {40.0, 2.0e6, -0.5, 1.0}, {10.0, 5.0e5, -0.8, 0.0}, {5.0, 1.0e5, 2.0, 0.5}};
 
 // The closed-form segment integrals differ from the closed-form virgin curve only by
 // rounding in pow: 1e-11 relative to F_S.
