@@ -506,6 +506,11 @@ TEST(ModelDomains, ChiAboveMinusOneIsReadByEveryReader) {
     const std::string model = write_model(dir, chi);
     const CommandResult r = run_jointlab("modes " + model + " --out " + dir + "/modes.csv");
     EXPECT_EQ(r.status, 0) << chi << ": " << r.err;
+    const CommandResult sim = run_jointlab("simulate " + model +
+                                           " --impact 0 --force 50 --duration 0.05 --fs 4000 "
+                                           "--quiet --out " +
+                                           dir + "/hit.csv");
+    EXPECT_EQ(sim.status, 0) << chi << ": " << sim.err;
   }
   for (const char* chi : {"-1.0", "-3.0", "inf"}) {
     const std::string model = write_model(dir, chi);
