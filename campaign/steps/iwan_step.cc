@@ -290,6 +290,13 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
                                      "sets = [\"{}\"] in [update.iwan], its [[mode]]s in modes");
   for (const ModeBackbones& mb : backbones)
     if (!mb.amplitude_note.empty()) step.warnings.push_back("note: " + mb.amplitude_note);
+  // The hits the slip screen emptied, named in the report too (the progress line above names
+  // them; the report said only how many curves were fitted).
+  for (size_t k = 0; k < backbones.size(); ++k) {
+    if (const std::string text = targets.hits_screened_out_text(k); !text.empty())
+      step.warnings.push_back(fmt::format("note: {}: other modes carry the joint slip at {}",
+                                          backbones[k].name, text.substr(2)));
+  }
   for (const std::string& w : step.warnings) say("update: " + w);
   return step;
 }
