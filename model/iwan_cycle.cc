@@ -38,13 +38,27 @@ struct GaussLegendre {
 };
 
 // The rule for exponent chi: 24 nodes up to chi 3, then 48, 96, 192, 384 (each built once).
+// Each is built on first use only: the 384-node rule's eigenproblem takes 46 ms, which every
+// QSMA run paid when the five were built together.
 const GaussLegendre& slip_rule(double chi) {
-  static const GaussLegendre r24(24), r48(48), r96(96), r192(192), r384(384);
-  const GaussLegendre* rules[kRules] = {&r24, &r48, &r96, &r192, &r384};
-  for (int k = 0; k + 1 < kRules; ++k) {
-    if (chi <= kRuleChiMax[k]) return *rules[k];
+  if (chi <= kRuleChiMax[0]) {
+    static const GaussLegendre r(24);
+    return r;
   }
-  return *rules[kRules - 1];
+  if (chi <= kRuleChiMax[1]) {
+    static const GaussLegendre r(48);
+    return r;
+  }
+  if (chi <= kRuleChiMax[2]) {
+    static const GaussLegendre r(96);
+    return r;
+  }
+  if (chi <= kRuleChiMax[3]) {
+    static const GaussLegendre r(192);
+    return r;
+  }
+  static const GaussLegendre r(384);
+  return r;
 }
 
 // g(s) with cos t = 1 - 2 s, as a function of t in [0, pi]. Below t = 0.05, t - sin(2t)/2 by
