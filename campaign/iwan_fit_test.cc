@@ -68,6 +68,15 @@ TEST(IwanRanges, RefusesARangeOutsideItsDomainAndDefaultsTheRest) {
   EXPECT_EQ(b.gamma_max, 1.5);
   EXPECT_EQ(b.chi_min, d.chi_min);
   EXPECT_EQ(b.beta_max, d.beta_max);
+  // The default chi range -0.95:0 holds the start: a model of chi 0.3 or -0.98 (chi > -1 is
+  // the element's domain) is searched from where it is (before: from a box that missed it).
+  EXPECT_EQ(d.chi_min, -0.95);
+  EXPECT_EQ(d.chi_max, 0.0);
+  EXPECT_EQ(correlate::default_iwan_bounds({20, 5e5, 0.3, 1}).chi_max, 0.3);
+  EXPECT_EQ(correlate::default_iwan_bounds({20, 5e5, 0.3, 1}).chi_min, -0.95);
+  EXPECT_EQ(correlate::default_iwan_bounds({20, 5e5, -0.98, 1}).chi_min, -0.98);
+  const IwanRanges given{.chi = {{-0.5, 0.1}}};  // a range given is taken as given
+  EXPECT_EQ(given.bounds({20, 5e5, 0.3, 1}).chi_max, 0.1);
 }
 
 // K_T held to a tenth of K_s at most: the measured 49.5 Hz is out of reach (K_T = K_s gives

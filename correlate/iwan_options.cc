@@ -1,6 +1,7 @@
 // The settings of the Iwan update: the default search box and what is wrong with a set of options.
 #include "jointlab/correlate/iwan_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -14,8 +15,10 @@ IwanBounds default_iwan_bounds(const model::IwanParameters& start) {
   b.Fs_max = start.Fs * 30;
   b.gamma_min = 0.05;
   b.gamma_max = 2;
-  b.chi_min = -0.95;
-  b.chi_max = 0;
+  // A start outside -0.95:0 (a model file may hold any chi > -1) widens the range to hold it,
+  // so that the search starts where the model is rather than from a box without its start.
+  b.chi_min = std::min(-0.95, start.chi);
+  b.chi_max = std::max(0.0, start.chi);
   b.beta_min = 0.01;
   b.beta_max = 100;
   return b;

@@ -28,7 +28,7 @@ struct IwanBounds {
 };
 
 /// The default search box of `update-iwan` and `run`: F_S within a factor 30 of the start's,
-/// gamma 0.05-2, chi -0.95-0, beta 0.01-100.
+/// gamma 0.05-2, chi -0.95-0 (widened to hold a start outside it), beta 0.01-100.
 IwanBounds default_iwan_bounds(const model::IwanParameters& start);
 
 /// Which optimiser update_iwan() runs.
