@@ -205,6 +205,14 @@ bool named_as_force(const std::string& name) {
   return false;
 }
 
+// How to mark channel `name` as the hammer's force (one phrase for both messages that give it).
+std::string force_unit_hint(const std::string& name) {
+  return fmt::format(
+      "if it is the hammer's force, give its unit in the header ('{} [N]'), which leaves it out "
+      "of the responses",
+      name);
+}
+
 // Refuses, before anything is allocated, what cannot be processed: a continued record
 // too large for memory, a band whose filter cannot settle within the record, and a
 // requested channel whose quantity is unknown.
@@ -238,12 +246,7 @@ void check_processable(const data::Record& record, const std::vector<signal::Ban
   for (const data::Channel* c : chans) {
     if (c->quantity || options.quantity) continue;
     const std::string force =
-        named_as_force(c->name)
-            ? fmt::format(
-                  "if it is the hammer's force, give its unit in the header ('{} [N]'), "
-                  "which leaves it out of the responses; if it is a response, ",
-                  c->name)
-            : std::string();
+        named_as_force(c->name) ? force_unit_hint(c->name) + "; if it is a response, " : "";
     throw InputError(where(
         record.source, 0,
         fmt::format("channel '{}' has no unit and no --quantity was given: {}give its unit in "
@@ -790,10 +793,6 @@ RecordResult process_modes(const data::Record& record,
   return out;
 }
 
-}  // namespace
-
-namespace {
-
 // A hammer's force channel exported without a unit ("Force" beside "Acc1") is read as the
 // --quantity's response and gives no ring-down: its refusals say how to mark it a force,
 // where they would otherwise leave a newcomer reading the hammer's noise floor.
@@ -803,10 +802,9 @@ void name_unitless_forces(const data::Record& record, RecordResult& out) {
     if (r.ringdown.summary.status == RingdownStatus::kOk || !c || !c->unit.empty() ||
         !named_as_force(r.channel))
       continue;
-    r.ringdown.summary.message += fmt::format(
-        "; the channel '{}' has no unit and was read as {}: if it is the hammer's force, give "
-        "its unit in the header ('{} [N]'), which leaves it out of the responses",
-        r.channel, quantity_name(r.measured), r.channel);
+    r.ringdown.summary.message +=
+        fmt::format("; the channel '{}' has no unit and was read as {}: {}", r.channel,
+                    quantity_name(r.measured), force_unit_hint(r.channel));
   }
 }
 
