@@ -4,6 +4,8 @@
 #include <cmath>
 #include <optional>
 #include <regex>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -241,16 +243,20 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     return step;
   }
   const IwanObjective objective(base, step.set, sensors, targets.fitted, io);
-  std::string emptied;
+  // Per mode whose hits the slip screen emptied: its name and "every point but at most one of
+  // ..., so those hits are left out of the fit", for the progress line and the report.
+  std::vector<std::pair<std::string, std::string>> emptied;
   for (size_t k = 0; k < backbones.size(); ++k) {
     if (const std::string text = targets.hits_screened_out_text(k); !text.empty())
-      emptied += fmt::format("; {}: {}", backbones[k].name, text.substr(2));
+      emptied.emplace_back(backbones[k].name, text.substr(2));
   }
+  std::string emptied_text;
+  for (const auto& [mode, text] : emptied) emptied_text += fmt::format("; {}: {}", mode, text);
   say(
       fmt::format("update: Iwan identification of {} ({} modes, {} curves; {} points "
                   "left out where other modes carry over {:g} % of the joint slip{})",
                   step.set, targets.fitted.size(), targets.curves(), targets.screened,
-                  100 * to.max_slip_share, emptied));
+                  100 * to.max_slip_share, emptied_text));
   // A fit of tens of seconds says how it goes: every 250 evaluations, the best cost so far.
   // Between those lines, `interrupt` (where given) may stop the fit.
   if (progress || interrupt) {
@@ -292,11 +298,9 @@ IwanStep iwan_update_step(const Campaign& c, const model::Model& base,
     if (!mb.amplitude_note.empty()) step.warnings.push_back("note: " + mb.amplitude_note);
   // The hits the slip screen emptied, named in the report too (the progress line above names
   // them; the report said only how many curves were fitted).
-  for (size_t k = 0; k < backbones.size(); ++k) {
-    if (const std::string text = targets.hits_screened_out_text(k); !text.empty())
-      step.warnings.push_back(fmt::format("note: {}: other modes carry the joint slip at {}",
-                                          backbones[k].name, text.substr(2)));
-  }
+  for (const auto& [mode, text] : emptied)
+    step.warnings.push_back(
+        fmt::format("note: {}: other modes carry the joint slip at {}", mode, text));
   for (const std::string& w : step.warnings) say("update: " + w);
   return step;
 }
