@@ -140,32 +140,39 @@ int band_column_of(const model::LinearModes& linear, const std::vector<correlate
   return -1;
 }
 
+// What read_iwan_inputs reads a process folder's --modes from.
+struct ProcessSide {
+  const IwanInputArgs& args;
+  const std::vector<correlate::Sensor>& sensors;
+  const correlate::ProcessRun& run;
+  const correlate::MeasuredModes& measured;
+  const std::vector<int>& bands;  // measured's column -> process band
+  const model::LinearModes& linear;
+};
+
 // The folder's other bands, each paired with a model mode (band_pairing) that no --mode names,
 // as modes the update does not fit: the slip screen reads the other modes' slip in each hit
 // from them, as `run` reads it from a campaign's other [[mode]]s. Without them a lone --mode
 // kept every point: a beam struck at its end, --mode 3 alone, fitted mode 3's damping that mode
 // 1 carried (chi -0.487 +/- 3.5 % against the truth's -0.35) where `run` left every point out.
 // A band without a backbone at any channel gives nothing to screen with and is skipped.
-std::vector<ModeBackbones> screen_only_modes(const model::LinearModes& linear,
-                                             const std::vector<correlate::Sensor>& sensors,
-                                             const correlate::ProcessRun& run,
-                                             const correlate::MeasuredModes& measured,
-                                             const std::vector<int>& bands,
+std::vector<ModeBackbones> screen_only_modes(const ProcessSide& side,
                                              const std::vector<ModeBackbones>& given,
                                              const std::vector<BandOfMode>& given_bands) {
   Eigen::MatrixXd mac;
   Eigen::VectorXd model_hz;
-  const correlate::RulePairing rp = band_pairing(linear, sensors, measured, mac, model_hz);
+  const correlate::RulePairing rp =
+      band_pairing(side.linear, side.sensors, side.measured, mac, model_hz);
   std::vector<ModeBackbones> out;
   for (const correlate::ModePair& p : rp.pairing.pairs) {
-    const int mode = p.model + 1, band = bands[static_cast<size_t>(p.measured)];
+    const int mode = p.model + 1, band = side.bands[static_cast<size_t>(p.measured)];
     if (std::any_of(given.begin(), given.end(),
                     [&](const ModeBackbones& g) { return g.model_mode == mode; }) ||
         std::any_of(given_bands.begin(), given_bands.end(),
                     [&](const BandOfMode& g) { return g.band == band; }))
       continue;
     try {
-      ModeBackbones mb = process_run_backbones(run, sensors, band, {}, ScatterOptions{});
+      ModeBackbones mb = process_run_backbones(side.run, side.sensors, band, {}, ScatterOptions{});
       mb.name = fmt::format("band {} (mode {}, screen only)", band, mode);
       mb.model_mode = mode;
       mb.fitted = false;
@@ -206,10 +213,6 @@ std::vector<std::string> curve_notes(const std::vector<ModeBackbones>& modes) {
   return notes;
 }
 
-}  // namespace
-
-namespace {
-
 // A --mode R or R:BAND as given (band 0: none given).
 struct ModeSpec {
   int mode = 0;
@@ -235,16 +238,6 @@ ModeSpec mode_spec(const std::string& spec) {
   }
   return out;
 }
-
-// What read_iwan_inputs reads a process folder's --modes from.
-struct ProcessSide {
-  const IwanInputArgs& args;
-  const std::vector<correlate::Sensor>& sensors;
-  const correlate::ProcessRun& run;
-  const correlate::MeasuredModes& measured;
-  const std::vector<int>& bands;  // measured's column -> process band
-  const model::LinearModes& linear;
-};
 
 // The backbones of one --mode: its band (given, or the one MAC-paired with the model mode), read
 // as `run` reads them; `band_of_mode` gains the band where it has linear data.
@@ -357,8 +350,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
   in.curve_notes = curve_notes(modes);
   // The folder's other modes screen the fitted points as `run`'s other [[mode]]s do.
   std::string screened_with;
-  for (ModeBackbones& mb :
-       screen_only_modes(linear, sensors, run, measured, bands, modes, band_of_mode)) {
+  for (ModeBackbones& mb : screen_only_modes(side, modes, band_of_mode)) {
     screened_with += (screened_with.empty() ? "" : ", ") + mb.name;
     modes.push_back(std::move(mb));
   }
