@@ -133,6 +133,30 @@ std::string dof_text(const py::handle& h, const std::string& option) {
                                option, Py_TYPE(h.ptr())->tp_name));
 }
 
+// simulate's `model` where it is no jointlab.Model: the model file's path.
+std::string model_file(const py::object& model_arg) {
+  try {
+    return text(model_arg.cast<PathArg>());
+  } catch (const py::cast_error&) {
+    throw py::type_error(
+        fmt::format("model: expected a model file (str or os.PathLike) or a jointlab.Model; got {}",
+                    Py_TYPE(model_arg.ptr())->tp_name));
+  }
+}
+
+// --sensors as text, as the command reads them: one DOF or a list of them (none: empty).
+std::vector<std::string> sensor_texts(const py::object& sensors_arg) {
+  std::vector<std::string> sensors;
+  if (py::isinstance<py::str>(sensors_arg) || is_integer(sensors_arg)) {
+    sensors.push_back(dof_text(sensors_arg, "--sensors"));
+  } else if (py::isinstance<py::iterable>(sensors_arg)) {
+    for (const py::handle h : sensors_arg) sensors.push_back(dof_text(h, "--sensors"));
+  } else if (!sensors_arg.is_none()) {
+    sensors.push_back(dof_text(sensors_arg, "--sensors"));  // says what is expected
+  }
+  return sensors;
+}
+
 // simulate: a virtual hammer test of the model, the record the command writes (to `out` too,
 // when given) as read_record() gives a file, and the energy report the command prints.
 py::dict simulate(const py::object& model_arg, const py::object& impact, double force,
@@ -146,29 +170,9 @@ py::dict simulate(const py::object& model_arg, const py::object& impact, double 
   // The model: a jointlab.Model (read already) or its file.
   std::optional<model::Model> read;
   const Model* given = py::isinstance<Model>(model_arg) ? &model_arg.cast<const Model&>() : nullptr;
-  std::string model_name;
-  if (given) {
-    model_name = given->path();
-  } else {
-    try {
-      model_name = text(model_arg.cast<PathArg>());
-    } catch (const py::cast_error&) {
-      throw py::type_error(
-          fmt::format("model: expected a model file (str or os.PathLike) or a jointlab.Model; "
-                      "got {}",
-                      Py_TYPE(model_arg.ptr())->tp_name));
-    }
-  }
-  // --impact and --sensors as text, as the command reads them (one DOF or a list of them).
+  const std::string model_name = given ? given->path() : model_file(model_arg);
   const std::string impact_dof = dof_text(impact, "--impact");
-  std::vector<std::string> sensors;
-  if (py::isinstance<py::str>(sensors_arg) || is_integer(sensors_arg)) {
-    sensors.push_back(dof_text(sensors_arg, "--sensors"));
-  } else if (py::isinstance<py::iterable>(sensors_arg)) {
-    for (const py::handle h : sensors_arg) sensors.push_back(dof_text(h, "--sensors"));
-  } else if (!sensors_arg.is_none()) {
-    sensors.push_back(dof_text(sensors_arg, "--sensors"));  // says what is expected
-  }
+  const std::vector<std::string> sensors = sensor_texts(sensors_arg);
   model::SimulationOptions o;
   o.pulse.force = force;
   o.duration = duration;
