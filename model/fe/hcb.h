@@ -28,7 +28,8 @@ struct HcbOptions {
   /// Called with a short message before each long step (may be empty).
   std::function<void(const std::string&)> progress;
   /// Called at each step of the fixed-interface eigen-solve (EigenOptions::interrupt) and before
-  /// the constraint modes' solves; it may throw to stop the reduction. May be empty.
+  /// the constraint modes' solve and the projection; it may throw to stop the reduction. May be
+  /// empty.
   std::function<void()> interrupt;
   /// Empty when the options are usable, otherwise what is wrong.
   std::string validate() const;
