@@ -549,6 +549,72 @@ TEST(RingdownBandGain, ModeWalkingAlongTheLowerEdgeBesideSlowContentKeepsItsSpan
   }
 }
 
+// The LMS twin with its mode placed by where it starts, `start_hz` above the typed band's lower
+// edge (148.9 Hz) at the impact (350 m/s^2), its frequency rising 1.2 % as it decays to
+// 3.6 m/s^2, and a constant damping of 0.14 % (the twin's value at low amplitude); the 412 Hz
+// mode and the noise (4 m/s^2) as in lms_twin.
+LmsTwin lms_twin_lightly_damped(double start_hz, unsigned seed) {
+  LmsTwin t;
+  const Eigen::Index n = static_cast<Eigen::Index>(2.55 * t.fs);
+  const Eigen::Index pre = static_cast<Eigen::Index>(0.1 * t.fs);
+  const double two_pi = 2 * std::numbers::pi;
+  const double f0 = 148.9 + start_hz, f1 = 1.012 * f0;
+  const double a_hi = 350 / std::pow(two_pi * f0, 2), a_lo = 3.6 / std::pow(two_pi * f1, 2);
+  const auto slip = [](double a) {
+    const double x = std::pow(a / 4e-5, 0.8);
+    return x / (1 + x);
+  };
+  const double s_hi = slip(a_hi), s_lo = slip(a_lo);
+  t.m1.omega_n = [=](double a) {
+    return two_pi * (f1 - (f1 - f0) * (slip(a) - s_lo) / (s_hi - s_lo));
+  };
+  t.m1.zeta = [](double) { return 0.0014; };
+  t.m1.a0 = a_hi;
+  t.m1.theta0 = 0.2;
+  testing::SlowFlowMode other;
+  other.omega_n = [=](double) { return two_pi * 412.0; };
+  other.zeta = [](double) { return 0.004; };
+  other.a0 = 150 / std::pow(two_pi * 412.0, 2);
+  other.theta0 = 1.1;
+  const Eigen::VectorXd ring = testing::slow_flow(t.m1, t.fs, n - pre).acceleration +
+                               testing::slow_flow(other, t.fs, n - pre).acceleration;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 4.0);
+  t.x.resize(n);
+  for (Eigen::Index k = 0; k < n; ++k) t.x(k) = (k < pre ? 0.0 : ring(k - pre)) + g(rng);
+  return t;
+}
+
+// A lightly damped mode's skirt is no neighbour. The mode's half-power half-width (0.2 Hz at
+// 0.14 %) is two bins of the continued record's spectrum, and smoothed over that alone the
+// ripple on the mode's skirt rose 3.5 times above its dips: a "neighbour" 5-9 Hz away held the
+// band, whose filter then settled in 1-1.2 s and lost the decay's start. Started 1 Hz inside
+// the band, seeds 2 and 19 of 20 kept 0.53 and 0.58 decades, the others 1.06-1.20; started 3 Hz
+// inside, 17 of 20 kept 0.37-0.57 ("the band was not widened about the mode: a neighbouring
+// mode's spectral peak at 159.47 Hz"), the others 1.10-1.16. Now all 40 keep 1.06-1.22 of the
+// 1.41-1.43 decades the record holds (the mode is still 35 times above the noise threshold at
+// its end). Required: 1.0 decade (the record less its first 0.15 s and last 0.3 s, which the
+// band's windows cannot reach), median errors within 5e-4 in frequency and 5 % in damping.
+TEST(RingdownBandGain, ALightlyDampedModesSkirtRippleIsNoNeighbour) {
+  struct Case {
+    double start_hz;
+    unsigned seed;
+  };
+  for (const Case c : {Case{1.0, 2}, Case{3.0, 1}}) {
+    const LmsTwin t = lms_twin_lightly_damped(c.start_hz, c.seed);
+    const Ringdown r = extract_band(t.x, t.fs, Quantity::kAcceleration, {148.9, 158.9});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const Medians e = medians(r.backbone, t.m1);
+    std::printf(
+        "LMS twin, damping 0.14 %%, from %g Hz inside, seed %u: %.2f decades, median f "
+        "err %.1e, median z err %.3f\n  %s\n",
+        c.start_hz, c.seed, r.summary.amplitude_decades, e.f, e.z, r.summary.message.c_str());
+    EXPECT_GE(r.summary.amplitude_decades, 1.0) << c.start_hz << " seed " << c.seed;
+    EXPECT_LE(e.f, 5e-4) << c.start_hz << " seed " << c.seed;
+    EXPECT_LE(e.z, 0.05) << c.start_hz << " seed " << c.seed;
+  }
+}
+
 // A band typed beside the mode rather than around it: the LMS twin's mode (149.6 to 151.7 Hz),
 // its noise 0.02 m/s^2 (80 dB below the start), read with 140:149.3, which it never enters.
 // Followed through the filter's skirt, its points read 149.8-151.8 Hz with their damping known
