@@ -11,6 +11,7 @@
 
 #include "jointlab/correlate/iwan_update_test_fixtures.h"
 #include "jointlab/correlate/measured_data.h"
+#include "jointlab/correlate/update_files.h"
 
 namespace jointlab::correlate {
 namespace {
@@ -739,6 +740,34 @@ TEST(IwanUpdateReport, FewIndependentPointsAreNotCalledSeriallyCorrelated) {
   EXPECT_NE(s.report().find("serially correlated along the curves (0.5 from one point"),
             std::string::npos)
       << s.report();
+}
+
+// parameters.csv's identifiable judges chi by the damping's slope 1 + chi it sets (D ~
+// A^(chi+3), method.md), not by its own relative sigma, which grows without bound as chi nears
+// 0: chi 0.0064 +/- 0.006 (93 % of chi, 0.6 % of the slope) was "not identifiable", chi -0.9
+// +/- 0.18 (20 % of chi; the slope 0.1 +/- 0.18, no slope told) was. The limit is the rows'
+// identifiable_std, 0.5, exactly at its edge: the sigmas below are 0.9 and 1.1 of it.
+TEST(IwanUpdateReport, ChiIsIdentifiableByTheDampingSlopeItSets) {
+  const auto chi_row = [](double chi, double relative_std) {
+    IwanUpdateSummary s;
+    s.status = IwanUpdateStatus::kConverged;
+    s.start = {30.0, 1e7, -0.5, 1.0};
+    s.best = {30.0, 1e7, chi, 1.0};
+    s.relative_std = Eigen::Vector4d(0.05, 0.01, relative_std, 0.2);
+    for (const IwanParameterRow& r : iwan_parameter_rows(s))
+      if (r.name == "chi") return r;
+    ADD_FAILURE() << "no chi row";
+    return IwanParameterRow{};
+  };
+  EXPECT_TRUE(chi_row(0.0064, 0.93).identifiable);
+  EXPECT_FALSE(chi_row(-0.9, 0.2).identifiable);
+  // At the limit: sigma 0.9 and 1.1 times 0.5 (1 + chi).
+  EXPECT_TRUE(chi_row(-0.5, 0.9 * 0.5 * 0.5 / 0.5).identifiable);
+  EXPECT_FALSE(chi_row(-0.5, 1.1 * 0.5 * 0.5 / 0.5).identifiable);
+  EXPECT_TRUE(chi_row(0.5, 0.9 * 0.5 * 1.5 / 0.5).identifiable);
+  EXPECT_FALSE(chi_row(0.5, 1.1 * 0.5 * 1.5 / 0.5).identifiable);
+  // Its relative_std column stays the sigma of |chi| (the contract's relative_std).
+  EXPECT_DOUBLE_EQ(chi_row(0.0064, 0.93).relative_std, 0.93);
 }
 
 }  // namespace

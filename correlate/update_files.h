@@ -8,7 +8,8 @@
 //   Iwan:   name,initial,final,relative_std,identifiable,held,at_bound  for Fs [N], Kt [N/m],
 //     chi, beta, gamma = K_T / K_s and, when fitted, modal_ratio (relative_std from the
 //     covariance of iwan_update.h, empty where held or unknown; identifiable 1 when
-//     0 < relative_std <= identifiable_std and, for Fs and beta, the data reach macroslip;
+//     0 < relative_std <= identifiable_std (for chi, its sigma <= identifiable_std (1 + chi), the
+//     damping's slope over ln amplitude) and, for Fs and beta, the data reach macroslip;
 //     held 1 for a parameter the options held; at_bound "lower" or "upper" for a parameter the
 //     fit left at a bound of its search range, else empty).
 // history.csv: linear  iteration,objective,<set>...  (iteration 0: the start; every set's
@@ -68,8 +69,9 @@ struct IwanParameterRow {
 
 /// The rows of the Iwan update's parameters.csv: Fs, Kt, chi, beta, modal_ratio when fitted, then
 /// gamma (K_T / K_s, when known; last since 79f1138); a parameter is identifiable when its relative
-/// standard deviation is known and at most identifiable_std and, for Fs and beta, the data reach
-/// macroslip. The file and the Python module's result both read them.
+/// standard deviation is known and at most identifiable_std (chi: its sigma at most
+/// identifiable_std times 1 + chi, the slope it gives the damping) and, for Fs and beta, the data
+/// reach macroslip. The file and the Python module's result both read them.
 std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
                                                   double identifiable_std = 0.5);
 
