@@ -105,8 +105,29 @@ TEST(ModesTableFromAnotherTool, FrequenciesAloneInRadPerSecondAreNamedWhereThePa
   const std::vector<std::string> sets = {"spring.ka", "spring.kb"};
   MeasuredModes rad = hz;
   rad.frequency_hz *= 2 * std::numbers::pi;
+  // Frequencies alone: named before any fit (no iteration), by the same rule.
+  LinearUpdateSummary before;
+  update_linear(start, sets, sensors, rad, {}, &before);
+  ASSERT_EQ(before.status, LinearUpdateStatus::kShapesRefused) << before.report();
+  EXPECT_EQ(before.iterations, 0);
+  EXPECT_TRUE(before.history.empty());
+  const std::string first = linear_refusal(before, {}, "modes.csv");
+  EXPECT_EQ(
+      first.find("modes.csv: the frequencies look like angular frequencies (rad/s) read as Hz: "
+                 "divided by 2 pi, each measured mode has a model mode of its own at the start"),
+      0u)
+      << first;
+  EXPECT_NE(first.find("give frequency_hz in Hz (rad/s divided by 2 pi); decided before any fit, "
+                       "as a table of frequencies alone (if they are in Hz, give each mode's "
+                       "entry at one sensor"),
+            std::string::npos)
+      << first;
+  // Each mode's entry at one sensor pairs by frequency alone as before and is fitted: its pairs
+  // undecided, the refusal names the unit after the fit.
+  MeasuredModes one = rad;
+  one.shapes.row(0).setConstant(1.0);
   LinearUpdateSummary s;
-  update_linear(start, sets, sensors, rad, {}, &s);
+  update_linear(start, sets, sensors, one, {}, &s);
   ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << s.report();
   const std::string why = linear_refusal(s, {}, "modes.csv");
   EXPECT_EQ(

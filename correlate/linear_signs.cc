@@ -223,13 +223,34 @@ bool augment(int i, const std::vector<std::vector<int>>& candidates, std::vector
 // 20 Hz, against its first elastic mode at 121 Hz).
 std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
                             const LinearUpdateSummary& s) {
-  const LinearEvaluation& start = s.start;
+  const bool misfit = fitted(s) && s.degrees_of_freedom >= 1 &&
+                      s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom);
+  if (s.status != LinearUpdateStatus::kAmbiguous && !misfit) return "";
+  return angular_units(measured, options, s.start);
+}
+
+// Why a table of frequencies alone looks like rad/s read as Hz before any fit, or ""
+// (linear_signs.h): angular_units() at the start.
+std::string units_before_fit(const model::Model& model, const std::vector<std::string>& names,
+                             const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                             const LinearUpdateOptions& options, LinearEvaluation& start) {
+  if (measured.frequency_hz.size() == 0 || (measured.shapes.array().abs() > 0.0).any()) return "";
+  const StiffnessSets sets(model, names);
+  const LinearProblem p = make_problem(sets, model, names, sensors, measured, options);
+  Eigen::VectorXd begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
+  for (const ParameterHold& h : options.holds)
+    if (h.value > 0) begin(set_index(names, h.name, "hold")) = h.value;
+  p.fresh(begin.array().log(), start);
+  return angular_units(measured, options, start);
+}
+
+// The rule of undecided_units() at the start `start`, whatever the fit gave.
+std::string angular_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
+                          const LinearEvaluation& start) {
   const Eigen::Index n = measured.frequency_hz.size();
   const Eigen::Index models =
       std::min(start.all_model_frequency_hz.size(), start.model_at_sensors.cols());
-  const bool misfit = fitted(s) && s.degrees_of_freedom >= 1 &&
-                      s.reduced_chi2 > reduced_chi2_limit(s.degrees_of_freedom);
-  if ((s.status != LinearUpdateStatus::kAmbiguous && !misfit) || n == 0 || models == 0) return "";
+  if (n == 0 || models == 0) return "";
   const double to_hz = 0.5 / std::numbers::pi;
   const double window =
       options.frequency_window > 0 ? std::min(options.frequency_window, 0.5) : 0.5;

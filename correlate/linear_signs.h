@@ -36,4 +36,17 @@ std::string misfit_of_units(const model::Model& model, const std::vector<std::st
 std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
                             const LinearUpdateSummary& s);
 
+/// The rule of undecided_units() against the model at the start `start`, whatever a fit gave.
+std::string angular_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
+                          const LinearEvaluation& start);
+
+/// Why a table of frequencies alone (every shape entry empty) looks like rad/s read as Hz before
+/// any fit, or "": angular_units() at the start (the sets at their start, or a hold's value),
+/// which `start` receives (nothing where the table has shapes). A fit of such a table can run
+/// for minutes before its pairs are found undecided (the example beam's six bending modes and
+/// four sets: 9 min of CPU).
+std::string units_before_fit(const model::Model& model, const std::vector<std::string>& names,
+                             const std::vector<Sensor>& sensors, const MeasuredModes& measured,
+                             const LinearUpdateOptions& options, LinearEvaluation& start);
+
 }  // namespace jointlab::correlate::detail
