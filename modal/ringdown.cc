@@ -1308,6 +1308,9 @@ Eigen::VectorXcd corrected(const Eigen::VectorXcd& z, double dt, const GainCorre
 struct Limit {
   double value = 0, std = 0;
   Eigen::Index lo = -1, hi = -1;  // lowest- and highest-amplitude points fitted
+  // Reduced chi-square of the fitted points about the line (about their mean where fewer than
+  // 3 are fitted) against their one-sigma, not inflated; infinite for a single point.
+  double chi2 = std::numeric_limits<double>::infinity();
 };
 
 Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Eigen::VectorXd& u,
@@ -1349,9 +1352,23 @@ Limit low_amplitude_limit(const Backbone& bb, const Eigen::VectorXd& y, const Ei
     const double c0 = (swaa * swy - swa * sway) / det, c1 = (sw * sway - swa * swy) / det;
     out.value = c0 + c1 * a0;
     out.std = std::sqrt((swaa - 2 * a0 * swa + a0 * a0 * sw) / det) * inflate;
+    double chi = 0;
+    for (size_t k = 0; k < used; ++k) {
+      const Eigen::Index i = order[k];
+      const double r = (y(i) - c0 - c1 * bb.displacement(i)) / std::max(1e-150, u(i));
+      chi += r * r;
+    }
+    out.chi2 = chi / static_cast<double>(used - 2);
   } else {
     out.value = swy / sw;
     out.std = std::sqrt(1.0 / sw) * inflate;
+    double chi = 0;
+    for (size_t k = 0; k < used; ++k) {
+      const Eigen::Index i = order[k];
+      const double r = (y(i) - out.value) / std::max(1e-150, u(i));
+      chi += r * r;
+    }
+    if (used >= 2) out.chi2 = chi / static_cast<double>(used - 1);
   }
   out.lo = order.front();
   out.hi = order[used - 1];
@@ -1559,14 +1576,17 @@ namespace {
 // points' stated uncertainty; an independent mode 1 Hz from 2 f1 stays well outside.
 // The widening is at most kMaxPull of the frequency (0.1 %, above the twin's 0.03 %): for a
 // heavily damped mode a tenth of its half-width would reach a separate mode a hertz away.
-// Uses this band and channel alone.
+// Uses this band and channel alone. Returns, per point, n times the stronger mode's frequency
+// where a stronger mode's n-th multiple was read over the point's window (the first n that
+// was), else 0: set_linear_values asks whether the band can tell its mode from it.
 constexpr double kPull = 0.1;
 constexpr double kMaxPull = 1e-3;
 
-void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity measured,
-                         const signal::Band& band, const RingdownOptions& options,
-                         signal::FftCache& cache) {
+std::vector<double> mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel,
+                                        Quantity measured, const signal::Band& band,
+                                        const RingdownOptions& options, signal::FftCache& cache) {
   bb.harmonic = Eigen::VectorXi::Zero(bb.size());
+  std::vector<double> multiple_hz(static_cast<size_t>(bb.size()), 0.0);
   const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
   for (int n = 2; n <= 3; ++n) {
     const signal::Band sub{band.lo / n, band.hi / n};
@@ -1601,6 +1621,9 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
       const bool stronger = std::exp(fa.value) > bb.displacement(i);
       const double off = std::abs(bb.damped_frequency_hz(i) - n * f_sub);
       if (stronger && off <= tol) bb.harmonic(i) = n;
+      if (stronger && multiple_hz[static_cast<size_t>(i)] == 0) {
+        multiple_hz[static_cast<size_t>(i)] = n * f_sub;
+      }
       near[static_cast<size_t>(i)] = stronger && off <= kMaxPull * bb.damped_frequency_hz(i);
     }
     // Points after the first marked one (between two marked ones, or after the last) that lie
@@ -1615,10 +1638,50 @@ void mark_superharmonics(Backbone& bb, const ChannelSpectrum& channel, Quantity 
     for (Eigen::Index j = first + 1; j < bb.size(); ++j)
       if (bb.harmonic(j) == 0 && near[static_cast<size_t>(j)]) bb.harmonic(j) = n;
   }
+  return multiple_hz;
+}
+
+// Whether the linear values' points could be a stronger mode's multiple as much as the band's
+// own mode; the reason if so, else empty. Two components df apart are told apart over a window
+// w only where df w >= 1 (the window's resolution 1/w: their correlation over it,
+// sin(pi df w) / (pi df w), is 0.64 at df w = 1/2 and first vanishes at 1). Where n times the
+// stronger mode's frequency lies within that resolution of the linear frequency at its
+// lowest-amplitude point, the window sees the band's mode and the multiple as one; a single
+// mode then still reads steadily, within its points' uncertainties, while the two beside each
+// other beat: the read frequency and decay rate swing as their shares change. So the linear
+// values are refused where, in addition, the fitted points scatter about their line by more
+// than kSteadyChi2 (reduced chi-square against their one-sigma: on average more than 3 sigma),
+// or where one point alone cannot show it. In twins of a double beam (mode 2 at 243, 244 or
+// 245.22 Hz beside mode 1's locked 2 f1, 244 Hz, struck as a hammer strikes), the linear
+// values read 243.26-244.62 Hz, 0.5-1.45 Hz off mode 2, with reduced chi-square 4-2834 in
+// frequency or damping (largest of the two at least 110), while mode 2 read in tune (244 Hz,
+// 2 f1 within 0.06 Hz) gave 243.97-244.01 Hz at 1.0 or less.
+constexpr double kSteadyChi2 = 10.0;
+
+std::string multiple_within_resolution(const Backbone& bb, const std::vector<double>& multiple_hz,
+                                       const Limit& lf, const Limit& lz, double frequency_hz) {
+  const auto lo = static_cast<size_t>(lf.lo);
+  if (multiple_hz.size() != static_cast<size_t>(bb.size()) || multiple_hz[lo] <= 0) return {};
+  const double resolution = 1.0 / bb.window_s(lf.lo);
+  if (std::abs(frequency_hz - multiple_hz[lo]) >= resolution) return {};
+  const double chi2 = std::max(lf.chi2, lz.chi2);
+  if (chi2 <= kSteadyChi2) return {};
+  return fmt::format(
+      "no linear values: the band cannot tell its mode from a multiple of a stronger mode's "
+      "frequency there: at its lowest-amplitude point the linear fit reads {:.3f} Hz, {:.3f} "
+      "Hz from {:.3f} Hz (that multiple), within the resolution of the point's window ({:.2f} "
+      "Hz), and {}",
+      frequency_hz, std::abs(frequency_hz - multiple_hz[lo]), multiple_hz[lo], resolution,
+      std::isfinite(chi2)
+          ? fmt::format("its points swing about their line as two components beside each other "
+                        "beat, not as one mode reads (reduced chi-square {:.3g}, above {:g})",
+                        chi2, kSteadyChi2)
+          : std::string("it rests on one point, which cannot show that it reads one mode"));
 }
 
 // Linear values: the straight-line fit of the backbone's lower half, at its lowest amplitude.
-void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownOptions& options) {
+void set_linear_values(RingdownSummary& sum, const Backbone& bb,
+                       const std::vector<double>& multiple_hz, const RingdownOptions& options) {
   const double k = options.coverage_factor;
   const double inflate = std::sqrt(options.points_per_window);
   const Limit lf = low_amplitude_limit(bb, bb.frequency_hz, bb.frequency_std_hz / k, inflate);
@@ -1659,6 +1722,8 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const RingdownO
         own, harmonic_below);
     return;
   }
+  sum.linear_reason = multiple_within_resolution(bb, multiple_hz, lf, lz, lf.value);
+  if (!sum.linear_reason.empty()) return;
   sum.linear_frequency_hz = lf.value;
   sum.linear_frequency_std_hz = k * lf.std;
   sum.linear_damping = lz.value;
@@ -2292,7 +2357,7 @@ void summarise_span(Ringdown& out, const BandSetting& sr, const std::vector<Esti
                     const Run& run, const CorrectedEstimates& corr, const Screening& screened,
                     double noise, Quantity measured, const std::string& beat_note,
                     const std::string& followed_note, const ChannelSpectrum& channel,
-                    const RingdownOptions& options) {
+                    const std::vector<double>& multiple_hz, const RingdownOptions& options) {
   RingdownSummary& sum = out.summary;
   const Backbone& bb = out.backbone;
   const Eigen::Index n = bb.size();
@@ -2302,7 +2367,7 @@ void summarise_span(Ringdown& out, const BandSetting& sr, const std::vector<Esti
   sum.amplitude_decades = std::log10(bb.displacement.maxCoeff() / bb.displacement.minCoeff());
   sum.superharmonic_points = static_cast<int>((bb.harmonic.array() > 0).count());
   sum.exchange_points = static_cast<int>((bb.exchange.array() > 0).count());
-  set_linear_values(sum, bb, options);
+  set_linear_values(sum, bb, multiple_hz, options);
   std::vector<std::string> notes =
       span_notes(sr, est, run, corr.previous, noise, sum, corr.exchange, measured);
   add_left_out_notes(notes, est, screened, run, channel, options);
@@ -2399,9 +2464,10 @@ Ringdown extract_backbone(const ChannelSpectrum& channel, Quantity measured,
     sum.message = outside;
     return out;
   }
-  mark_superharmonics(out.backbone, channel, measured, read, options, cache);
+  const std::vector<double> multiple_hz =
+      mark_superharmonics(out.backbone, channel, measured, read, options, cache);
   summarise_span(out, sr, est, run, corr, screened, noise, measured, beat_note, followed.note,
-                 channel, options);
+                 channel, multiple_hz, options);
   if (channel.scale != 1.0) unscale(out, channel.scale);
   return out;
 }
