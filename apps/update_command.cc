@@ -116,8 +116,8 @@ void run_update_linear(const LinearArgs& a) {
   const model::Model m = model::read_model(a.model);
   const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
   const correlate::MeasuredModes measured =
-      a.modes_table.empty() ? correlate::measured_modes(correlate::read_process_run(a.measured),
-                                                        sensors, nullptr, options.frequency_std)
+      a.modes_table.empty() ? correlate::measured_modes(data::read_process_run(a.measured), sensors,
+                                                        nullptr, options.frequency_std)
                             : correlate::read_modes_table(a.modes_table, sensors, nullptr);
   // Progress on stderr: a fit of the example beam takes 10-50 s.
   options.progress = [](int iteration, double cost, double largest) {

@@ -144,7 +144,7 @@ int band_column_of(const model::LinearModes& linear, const std::vector<correlate
 struct ProcessSide {
   const IwanInputArgs& args;
   const std::vector<correlate::Sensor>& sensors;
-  const correlate::ProcessRun& run;
+  const data::ProcessRun& run;
   const correlate::MeasuredModes& measured;
   const std::vector<int>& bands;  // measured's column -> process band
   const model::LinearModes& linear;
@@ -250,11 +250,10 @@ ModeBackbones mode_backbones(const std::string& spec, const ProcessSide& p,
                                  spec, ms.mode, p.args.model, counted(elastic, "elastic mode"),
                                  elastic));
   }
-  if (ms.band > 0 &&
-      std::none_of(p.run.bands.begin(), p.run.bands.end(),
-                   [&](const correlate::ProcessBand& b) { return b.band == ms.band; })) {
+  if (ms.band > 0 && std::none_of(p.run.bands.begin(), p.run.bands.end(),
+                                  [&](const data::ProcessBand& b) { return b.band == ms.band; })) {
     std::set<int> numbers;
-    for (const correlate::ProcessBand& b : p.run.bands) numbers.insert(b.band);
+    for (const data::ProcessBand& b : p.run.bands) numbers.insert(b.band);
     std::string have;
     for (int b : numbers) have += (have.empty() ? "" : ", ") + std::to_string(b);
     throw InputError(fmt::format("--mode {}: {} has no band {} (bands: {})", spec, p.args.measured,
@@ -306,7 +305,7 @@ std::vector<ModeBackbones> stepped_sine_modes(const ProcessSide& p, int first_mo
   }
   const int mode = a.stepped_sine_mode > 0 ? a.stepped_sine_mode : first_mode;
   for (const std::string& dir : a.stepped_sine) {
-    const correlate::SteppedSineRun ss = correlate::read_stepped_sine_run(dir);
+    const data::SteppedSineRun ss = data::read_stepped_sine_run(dir);
     if (ss.amplitude != p.run.amplitude) {
       throw InputError(
           fmt::format("--stepped-sine {}: its amplitude quantity differs from --measured {}'s; run "
@@ -336,7 +335,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
                      "records its own amplitude quantity and sensors");
   }
   const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
-  const correlate::ProcessRun run = correlate::read_process_run(a.measured);
+  const data::ProcessRun run = data::read_process_run(a.measured);
   std::vector<int> bands;
   const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);
   const model::LinearModes linear = model::linear_modes(m.mass, m.linear_stiffness());
@@ -355,7 +354,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
     modes.push_back(std::move(mb));
   }
   IwanTargetOptions target_options;
-  target_options.amplitude = run.amplitude;
+  target_options.amplitude = correlate::amplitude_quantity(run.amplitude);
   const IwanTargets built = iwan_targets(m, sensors, modes, target_options);
   // Say per mode how many points the slip screen leaves out; when it leaves no mode anything,
   // say that rather than that nothing was measured.
@@ -370,7 +369,7 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
     throw InputError(fmt::format("{}: no mode has a backbone of at least two points", command));
   in.sensors = sensors;
   in.targets = built.fitted;
-  in.amplitude = run.amplitude;
+  in.amplitude = correlate::amplitude_quantity(run.amplitude);
   in.measured = measured;
   in.data_name = a.measured;
   in.bands = std::move(band_of_mode);

@@ -208,7 +208,7 @@ IwanTargets iwan_targets(const model::Model& m, const std::vector<correlate::Sen
   return out;
 }
 
-ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
+ModeBackbones process_run_backbones(const data::ProcessRun& run,
                                     const std::vector<correlate::Sensor>& sensors, int band,
                                     const std::vector<std::string>& channels,
                                     const ScatterOptions& scatter) {
@@ -233,14 +233,14 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
   return mb;
 }
 
-ModeBackbones stepped_sine_run_backbones(const correlate::SteppedSineRun& run, int sensor,
+ModeBackbones stepped_sine_run_backbones(const data::SteppedSineRun& run, int sensor,
                                          const ScatterOptions& scatter) {
   ModeBackbones mb;
   mb.name = "stepped sine";
   const std::vector<correlate::MeasuredBackbone> backbones =
       correlate::stepped_sine_backbones(run, sensor);
   size_t i = 0;
-  for (const correlate::SteppedSineOutput& o : run.outputs) {
+  for (const data::SteppedSineOutput& o : run.outputs) {
     if (o.file.empty()) continue;
     const correlate::MeasuredBackbone& b = backbones[i++];
     Curve cv;

@@ -96,7 +96,7 @@ IwanTargets iwan_targets(const model::Model& model, const std::vector<correlate:
 /// each file's reference channel of the band), one curve per file and channel with its
 /// time, and their scatter summary with `scatter`; InputError when a selected channel is not a
 /// sensor or no backbone is found.
-ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
+ModeBackbones process_run_backbones(const data::ProcessRun& run,
                                     const std::vector<correlate::Sensor>& sensors, int band,
                                     const std::vector<std::string>& channels,
                                     const ScatterOptions& scatter);
@@ -104,7 +104,7 @@ ModeBackbones process_run_backbones(const correlate::ProcessRun& run,
 /// The backbones of a `stepped-sine` run (one curve per file, no time), all measured at sensor
 /// index `sensor`, of kind stepped sine, and their scatter summary with `scatter`; InputError
 /// when no file gave a backbone.
-ModeBackbones stepped_sine_run_backbones(const correlate::SteppedSineRun& run, int sensor,
+ModeBackbones stepped_sine_run_backbones(const data::SteppedSineRun& run, int sensor,
                                          const ScatterOptions& scatter);
 
 }  // namespace jointlab::campaign

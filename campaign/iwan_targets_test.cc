@@ -115,7 +115,7 @@ TEST(IwanTargets, HitsWhoseReferenceChannelsDifferAreReadAtOneChannel) {
       << files << "]}";
   const std::vector<correlate::Sensor> sensors{{"a5", 5, 1.0}, {"b2", 7, 1.0}};
   const ModeBackbones mb =
-      process_run_backbones(correlate::read_process_run(d), sensors, 1, {}, ScatterOptions{});
+      process_run_backbones(data::read_process_run(d), sensors, 1, {}, ScatterOptions{});
   ASSERT_EQ(mb.curves.size(), 3u);
   EXPECT_EQ(mb.sensors, (std::vector<int>{1, 1, 1}));
   for (const HitDeviation& h : mb.scatter.hits) EXPECT_FALSE(h.outlier) << h.id << " " << h.reason;

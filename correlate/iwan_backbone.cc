@@ -2,6 +2,7 @@
 // a model's backbone as a measured one would show it.
 #include "jointlab/correlate/iwan_backbone.h"
 
+#include <cassert>
 #include <cmath>
 #include <vector>
 
@@ -16,6 +17,13 @@ namespace jointlab::correlate {
 
 int amplitude_power(AmplitudeQuantity q) {
   return q == AmplitudeQuantity::kDisplacement ? 0 : q == AmplitudeQuantity::kVelocity ? 1 : 2;
+}
+
+AmplitudeQuantity amplitude_quantity(Quantity q) {
+  assert(q != Quantity::kForce);
+  return q == Quantity::kDisplacement ? AmplitudeQuantity::kDisplacement
+         : q == Quantity::kVelocity   ? AmplitudeQuantity::kVelocity
+                                      : AmplitudeQuantity::kAcceleration;
 }
 
 ModelBackbone model_backbone(const model::JointCondensation& jc, int mode,

@@ -22,6 +22,7 @@
 
 #include <Eigen/Core>
 
+#include "jointlab/core/units.h"
 #include "jointlab/model/joint_condensation.h"
 
 namespace jointlab::correlate {
@@ -31,6 +32,10 @@ enum class AmplitudeQuantity { kDisplacement, kVelocity, kAcceleration };
 
 /// Power of omega that turns a modal amplitude into this quantity's (0, 1 or 2).
 int amplitude_power(AmplitudeQuantity q);
+
+/// The amplitude quantity of a motion quantity, as a process or stepped-sine folder names it
+/// (data/process_folder.h); a force is no amplitude (programmer error).
+AmplitudeQuantity amplitude_quantity(Quantity q);
 
 /// How a backbone was measured, hence which model pair it is compared with.
 enum class BackboneKind {

@@ -32,40 +32,6 @@ namespace {
 namespace fs = std::filesystem;
 using data::JsonValue;
 
-// Typed access to summary.json with messages naming the file and the field path.
-struct Fields {
-  std::string file;
-  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
-    throw InputError(fmt::format("{}: {}: {}", file, path, what));
-  }
-  const JsonValue& get(const JsonValue& obj, const std::string& path, const char* key,
-                       JsonValue::Type type) const {
-    const JsonValue* v = obj.find(key);
-    if (!v) fail(path, fmt::format("missing \"{}\"", key));
-    if (v->type() != type) {
-      fail(path + "." + key, fmt::format("expected a {}, found a {}", JsonValue::type_name(type),
-                                         JsonValue::type_name(v->type())));
-    }
-    return *v;
-  }
-  double number(const JsonValue& obj, const std::string& path, const char* key) const {
-    return get(obj, path, key, JsonValue::Type::kNumber).number();
-  }
-  int band(const JsonValue& obj, const std::string& path) const {
-    const double b = number(obj, path, "band");
-    if (!(b >= 1) || b != std::floor(b) || b > 1e6) fail(path + ".band", "must be an integer >= 1");
-    return static_cast<int>(b);
-  }
-};
-
-AmplitudeQuantity quantity_of(const Fields& f, const std::string& name) {
-  if (name == "displacement") return AmplitudeQuantity::kDisplacement;
-  if (name == "velocity") return AmplitudeQuantity::kVelocity;
-  if (name == "acceleration") return AmplitudeQuantity::kAcceleration;
-  f.fail("amplitude_quantity",
-         fmt::format("\"{}\" is not displacement, velocity or acceleration", name));
-}
-
 // Calls on_header(cells, line) for the first non-empty, non-comment line of a small CSV file
 // and on_row(cells, line) for each later one, after checking it has the header's width;
 // returns whether a header was seen. InputError naming the file ("cannot open the <what>").
@@ -221,176 +187,7 @@ std::optional<std::complex<double>> complex_cell(const std::string& cell) {
   return std::complex<double>(*re, *im);
 }
 
-// The "program" that wrote a summary, or "" when it does not say.
-std::string program_of(const JsonValue& doc) {
-  const JsonValue* p = doc.find("program");
-  return p && p->is_string() ? p->string() : std::string();
-}
-
-// The summary.json of the `program` output directory `dir`, checked to be an object.
-JsonValue read_summary(const fs::path& dir, const std::string& program) {
-  const fs::path path = dir / "summary.json";
-  if (!fs::is_directory(dir)) {
-    throw InputError(
-        fmt::format("{}: not a directory (expected a '{}' output)", dir.string(), program));
-  }
-  if (!fs::exists(path)) {
-    throw InputError(
-        fmt::format("{}: missing (expected a '{}' output directory)", path.string(), program));
-  }
-  // A folder a killed commit left half old, half new is refused, never read as one run.
-  data::require_complete_outputs(dir);
-  JsonValue doc = data::read_json(path);
-  if (!doc.is_object()) Fields{path.string()}.fail("document", "expected an object");
-  return doc;
-}
-
-// The output file named by `key` of `obj`: a plain file name, or "" where it is null.
-std::string output_file(const Fields& f, const JsonValue& obj, const std::string& path,
-                        const char* key) {
-  const JsonValue* v = obj.find(key);
-  if (!v) f.fail(path, fmt::format("missing \"{}\"", key));
-  if (v->is_null()) return {};
-  if (!v->is_string()) f.fail(path + "." + key, "expected a string or null");
-  const std::string& name = v->string();
-  if (name.empty() || name.find('/') != std::string::npos)
-    f.fail(path + "." + key, fmt::format("\"{}\" is not a file name", name));
-  return name;
-}
-
-// The amplitude quantity the document's backbones are in. Their unit, when the document names
-// one ("amplitude_unit", written by process and stepped-sine), must be that quantity's SI unit:
-// the amplitudes are read as SI, so any other is refused, never ignored.
-AmplitudeQuantity amplitude_of(const Fields& f, const JsonValue& doc) {
-  const AmplitudeQuantity q = quantity_of(
-      f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
-  if (const JsonValue* unit = doc.find("amplitude_unit"); unit && !unit->is_null()) {
-    const std::string si = q == AmplitudeQuantity::kDisplacement ? "m"
-                           : q == AmplitudeQuantity::kVelocity   ? "m/s"
-                                                                 : "m/s^2";
-    if (!unit->is_string() || unit->string() != si) {
-      f.fail("amplitude_unit",
-             fmt::format("{}: the backbones' amplitudes are read as SI ({} for {}); no other "
-                         "unit is converted",
-                         unit->is_string() ? "\"" + unit->string() + "\"" : "not a string", si,
-                         doc.find("amplitude_quantity")->string()));
-    }
-  }
-  return q;
-}
-
-// Calls on_file(file, path) for each entry of the document's "files" array, checked to be an
-// object; path names it in messages ("files[i]").
-template <typename OnFile>
-void for_each_file(const Fields& f, const JsonValue& doc, OnFile on_file) {
-  const JsonValue& files = f.get(doc, "document", "files", JsonValue::Type::kArray);
-  for (size_t i = 0; i < files.items().size(); ++i) {
-    const JsonValue& file = files.items()[i];
-    const std::string fp = fmt::format("files[{}]", i);
-    if (!file.is_object()) f.fail(fp, "expected an object");
-    on_file(file, fp);
-  }
-}
-
 }  // namespace
-
-namespace {
-
-// summary.json's coverage_factor: k of its *_std values (absent: 1, one sigma).
-double coverage_factor_of(const Fields& f, const JsonValue& doc) {
-  const JsonValue* k = doc.find("coverage_factor");
-  if (!k || k->is_null()) return 1.0;
-  if (!k->is_number() || !(k->number() >= 1) || !std::isfinite(k->number()))
-    f.fail("coverage_factor", "not a finite number >= 1");
-  return k->number();
-}
-
-}  // namespace
-
-ProcessRun read_process_run(const fs::path& dir) {
-  const JsonValue doc = read_summary(dir, "jointlab process");
-  const Fields f{(dir / "summary.json").string()};
-  if (program_of(doc) == "jointlab stepped-sine") {
-    f.fail("program",
-           "a 'jointlab stepped-sine' output, not a 'jointlab process' output (give "
-           "it as stepped-sine data)");
-  }
-  ProcessRun run;
-  run.dir = dir;
-  run.amplitude = amplitude_of(f, doc);
-  run.coverage_factor = coverage_factor_of(f, doc);
-  for_each_file(f, doc, [&](const JsonValue& file, const std::string& fp) {
-    const std::string source = f.get(file, fp, "file", JsonValue::Type::kString).string();
-    const JsonValue& bands = f.get(file, fp, "bands", JsonValue::Type::kArray);
-    for (size_t b = 0; b < bands.items().size(); ++b) {
-      const JsonValue& band = bands.items()[b];
-      const std::string bp = fmt::format("{}.bands[{}]", fp, b);
-      if (!band.is_object()) f.fail(bp, "expected an object");
-      ProcessBand pb;
-      pb.source = source;
-      pb.band = f.band(band, bp);
-      pb.reference_channel =
-          f.get(band, bp, "reference_channel", JsonValue::Type::kString).string();
-      if (band.find("linear_frequency_hz")) {
-        pb.linear_frequency_hz = f.number(band, bp, "linear_frequency_hz");
-        if (!(pb.linear_frequency_hz > 0)) f.fail(bp + ".linear_frequency_hz", "must be > 0");
-        // Optional: what says whether the files agree and how their level moves them.
-        for (const auto& [key, value] :
-             {std::pair{"linear_frequency_std_hz", &pb.linear_frequency_std_hz},
-              std::pair{"linear_fit_amplitude_min", &pb.linear_fit_amplitude_min}}) {
-          const JsonValue* v = band.find(key);
-          if (!v || v->is_null()) continue;
-          *value = f.number(band, bp, key);
-          if (!(*value >= 0) || !std::isfinite(*value)) f.fail(bp + "." + key, "must be >= 0");
-        }
-      }
-      const JsonValue& shape = f.get(band, bp, "operating_shape", JsonValue::Type::kArray);
-      for (size_t c = 0; c < shape.items().size(); ++c) {
-        const JsonValue& entry = shape.items()[c];
-        const std::string cp = fmt::format("{}.operating_shape[{}]", bp, c);
-        if (!entry.is_object()) f.fail(cp, "expected an object");
-        pb.shape.emplace_back(
-            f.get(entry, cp, "channel", JsonValue::Type::kString).string(),
-            std::complex<double>(f.number(entry, cp, "real_m"), f.number(entry, cp, "imag_m")));
-      }
-      run.bands.push_back(std::move(pb));
-    }
-    const JsonValue& outputs = f.get(file, fp, "outputs", JsonValue::Type::kArray);
-    for (size_t o = 0; o < outputs.items().size(); ++o) {
-      const JsonValue& out = outputs.items()[o];
-      const std::string op = fmt::format("{}.outputs[{}]", fp, o);
-      if (!out.is_object()) f.fail(op, "expected an object");
-      ProcessOutput po;
-      po.source = source;
-      po.channel = f.get(out, op, "channel", JsonValue::Type::kString).string();
-      po.band = f.band(out, op);
-      po.file = output_file(f, out, op, "file");
-      run.outputs.push_back(std::move(po));
-    }
-  });
-  return run;
-}
-
-SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
-  const JsonValue doc = read_summary(dir, "jointlab stepped-sine");
-  const Fields f{(dir / "summary.json").string()};
-  if (program_of(doc) != "jointlab stepped-sine") {
-    f.fail("program",
-           "not a 'jointlab stepped-sine' output (a 'jointlab process' output is "
-           "given as ring-down data)");
-  }
-  SteppedSineRun run;
-  run.dir = dir;
-  run.amplitude = amplitude_of(f, doc);
-  run.coverage_factor = coverage_factor_of(f, doc);
-  for_each_file(f, doc, [&](const JsonValue& file, const std::string& fp) {
-    SteppedSineOutput o;
-    o.source = f.get(file, fp, "file", JsonValue::Type::kString).string();
-    o.file = output_file(f, file, fp, "output");
-    run.outputs.push_back(std::move(o));
-  });
-  return run;
-}
 
 MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points) {
   MeasuredBackbone b;
@@ -402,9 +199,9 @@ MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index poin
   return b;
 }
 
-std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor) {
+std::vector<MeasuredBackbone> stepped_sine_backbones(const data::SteppedSineRun& run, int sensor) {
   std::vector<MeasuredBackbone> out;
-  for (const SteppedSineOutput& o : run.outputs) {
+  for (const data::SteppedSineOutput& o : run.outputs) {
     if (o.file.empty()) continue;
     out.push_back(read_backbone_csv(run.dir / o.file, sensor));
     out.back().kind = BackboneKind::kSteppedSine;
@@ -530,11 +327,11 @@ LinearSpread linear_spread(const std::string& mode, const std::vector<LinearRead
   return out;
 }
 
-MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
+MeasuredModes measured_modes(const data::ProcessRun& run, const std::vector<Sensor>& sensors,
                              std::vector<int>* bands, double frequency_std) {
   const std::string summary = (run.dir / "summary.json").string();
-  std::map<int, std::vector<const ProcessBand*>> by_band;
-  for (const ProcessBand& b : run.bands) {
+  std::map<int, std::vector<const data::ProcessBand*>> by_band;
+  for (const data::ProcessBand& b : run.bands) {
     if (b.linear_frequency_hz > 0) by_band[b.band].push_back(&b);
   }
   if (by_band.empty()) throw InputError(fmt::format("{}: no band has a linear frequency", summary));
@@ -546,14 +343,14 @@ MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& s
   Eigen::Index col = 0;
   bool any_sensor = false;
   m.frequency_std = Eigen::VectorXd::Zero(m.frequency_hz.size());
-  const std::string unit = run.amplitude == AmplitudeQuantity::kDisplacement ? "m"
-                           : run.amplitude == AmplitudeQuantity::kVelocity   ? "m/s"
-                                                                             : "m/s^2";
+  const std::string unit = run.amplitude == Quantity::kDisplacement ? "m"
+                           : run.amplitude == Quantity::kVelocity   ? "m/s"
+                                                                    : "m/s^2";
   for (const auto& [k, list] : by_band) {
     std::vector<LinearReading> readings;
     int best_count = -1;
-    const ProcessBand* best = nullptr;
-    for (const ProcessBand* b : list) {
+    const data::ProcessBand* best = nullptr;
+    for (const data::ProcessBand* b : list) {
       // process states k sigma (coverage_factor, 3 by default): the test wants one sigma (read
       // as one, files 0.6 Hz apart at 0.08 Hz each were taken to agree, chi-square 3.1 not 28).
       readings.push_back({b->source, b->linear_frequency_hz,
@@ -655,17 +452,18 @@ MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
   return b;
 }
 
-BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& sensors, int band) {
+BandChannel band_channel(const data::ProcessRun& run, const std::vector<Sensor>& sensors,
+                         int band) {
   // Per sensor: the hits (sources) with a backbone there, and the hits naming it reference.
   std::vector<std::set<std::string>> with(sensors.size()), naming(sensors.size());
   std::vector<std::string> hits;  // in the order first met
-  for (const ProcessBand& b : run.bands) {
+  for (const data::ProcessBand& b : run.bands) {
     if (b.band != band) continue;
     if (std::find(hits.begin(), hits.end(), b.source) == hits.end()) hits.push_back(b.source);
     if (const int s = find_sensor(sensors, b.reference_channel); s >= 0)
       naming[static_cast<size_t>(s)].insert(b.source);
   }
-  for (const ProcessOutput& o : run.outputs) {
+  for (const data::ProcessOutput& o : run.outputs) {
     if (o.band != band || o.file.empty()) continue;
     if (const int s = find_sensor(sensors, o.channel); s >= 0)
       with[static_cast<size_t>(s)].insert(o.source);
@@ -685,7 +483,7 @@ BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& senso
   std::vector<std::pair<std::string, std::vector<std::string>>> named;
   std::vector<std::string> missing;
   size_t named_other = 0;
-  for (const ProcessBand& b : run.bands) {
+  for (const data::ProcessBand& b : run.bands) {
     if (b.band != band) continue;
     const std::string hit = fs::path(b.source).stem().string();
     if (b.reference_channel != out.channel) {
@@ -724,9 +522,9 @@ BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& senso
   return out;
 }
 
-std::vector<BandOutput> band_outputs(const ProcessRun& run, const std::vector<Sensor>& sensors,
-                                     int band, const std::vector<std::string>& chosen,
-                                     std::string* note) {
+std::vector<BandOutput> band_outputs(const data::ProcessRun& run,
+                                     const std::vector<Sensor>& sensors, int band,
+                                     const std::vector<std::string>& chosen, std::string* note) {
   for (const std::string& c : chosen) {
     if (find_sensor(sensors, c) < 0)
       throw InputError(fmt::format("channel '{}' is not in the sensors file", c));
@@ -738,7 +536,7 @@ std::vector<BandOutput> band_outputs(const ProcessRun& run, const std::vector<Se
     if (note) *note = std::move(bc.note);
   }
   std::vector<BandOutput> out;
-  for (const ProcessOutput& o : run.outputs) {
+  for (const data::ProcessOutput& o : run.outputs) {
     if (o.band != band || o.file.empty()) continue;
     const bool selected = std::find(channels.begin(), channels.end(), o.channel) != channels.end();
     const int s = find_sensor(sensors, o.channel);
@@ -752,7 +550,7 @@ std::vector<BandOutput> band_outputs(const ProcessRun& run, const std::vector<Se
   return out;
 }
 
-std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
+std::vector<MeasuredBackbone> measured_backbones(const data::ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
                                                  const std::vector<std::string>& chosen) {
   std::vector<MeasuredBackbone> out;

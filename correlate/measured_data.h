@@ -1,14 +1,12 @@
-// Measured data for updating, read from a `jointlab process` output directory.
-//
-// DIR/summary.json (modal/process_output.h) lists per file (hit) its bands k = 1, 2, ...
-// with the reference channel, the linear frequency [Hz] and the operating shape (complex
-// amplitude per channel, any scaling), and its outputs: one backbone CSV per channel and
-// band (columns time_s, amplitude, frequency_hz, damping_ratio, frequency_std_hz,
-// damping_std, ...; amplitude in the SI unit of summary.json's "amplitude_quantity").
-// Linear data: band k becomes one measured mode. Its frequency is the mean over the files
-// that report a linear frequency for k (where they disagree and fall with the hit's level,
-// the lowest-level files', with the uncertainty the spread shows: linear_spread()); its shape
-// at the sensors (sensors.h, sensor order) is the operating shape of the file that measured
+// Measured data for updating, from a `jointlab process` output directory as
+// data::read_process_run() reads its summary.json (data/process_folder.h): per file (hit) its
+// bands k = 1, 2, ... with the reference channel, the linear frequency [Hz] and the operating
+// shape, and one backbone CSV per channel and band (columns time_s, amplitude, frequency_hz,
+// damping_ratio, frequency_std_hz, damping_std, ...; amplitude in the SI unit of its
+// "amplitude_quantity"). Linear data: band k becomes one measured mode. Its frequency is the mean
+// over the files that report a linear frequency for k (where they disagree and fall with the hit's
+// level, the lowest-level files', with the uncertainty the spread shows: linear_spread()); its
+// shape at the sensors (sensors.h, sensor order) is the operating shape of the file that measured
 // most of the sensor channels (the first such file), 0 at sensors no file measured. A band
 // no file gives a linear frequency for is left out.
 //
@@ -28,66 +26,14 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/data/backbone_table.h"
+#include "jointlab/data/process_folder.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
 
-/// One band of one processed file, as summary.json describes it.
-struct ProcessBand {
-  std::string source;                  ///< the processed file
-  int band = 0;                        ///< k, from 1
-  std::string reference_channel;       ///< channel of the linear data
-  double linear_frequency_hz = 0;      ///< 0 when the summary gives none
-  double linear_frequency_std_hz = 0;  ///< its stated one-sigma uncertainty (0: none given)
-  /// The lowest amplitude its linear fit read (linear_fit_amplitude_min; 0: none given)
-  double linear_fit_amplitude_min = 0;
-  std::vector<std::pair<std::string, std::complex<double>>> shape;  ///< channel, amplitude
-};
-
-/// One output (channel and band of one file) as summary.json describes it.
-struct ProcessOutput {
-  std::string source;   ///< the processed file
-  std::string channel;  ///< channel name
-  int band = 0;         ///< k, from 1
-  std::string file;     ///< backbone CSV name in the directory; empty when none was written
-};
-
-/// The contents of a process output directory's summary.json.
-struct ProcessRun {
-  std::filesystem::path dir;                                   ///< the directory
-  AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< backbone amplitude quantity
-  std::vector<ProcessBand> bands;                              ///< every file's bands
-  std::vector<ProcessOutput> outputs;                          ///< every file's outputs
-  /// k of the *_std values (summary.json's coverage_factor: expanded, k sigma; absent: 1)
-  double coverage_factor = 1.0;
-};
-
-/// Reads DIR/summary.json; InputError naming the file and the field (or line and byte), and
-/// saying so when DIR is a `stepped-sine` output instead.
-ProcessRun read_process_run(const std::filesystem::path& dir);
-
-/// One file of a `jointlab stepped-sine` run and its backbone CSV.
-struct SteppedSineOutput {
-  std::string source;  ///< the stepped-sine file
-  std::string file;    ///< backbone CSV name in the directory; empty when no level gave a point
-};
-
-/// The contents of a `jointlab stepped-sine` output directory's summary.json
-/// (docs/stepped-sine.md): one backbone per file, one point per level.
-struct SteppedSineRun {
-  std::filesystem::path dir;                                   ///< the directory
-  AmplitudeQuantity amplitude = AmplitudeQuantity::kVelocity;  ///< backbone amplitude quantity
-  std::vector<SteppedSineOutput> outputs;                      ///< every file's backbone
-  double coverage_factor = 1.0;  ///< k of the backbones' std columns (summary.json; absent: 1)
-};
-
-/// Reads DIR/summary.json of `jointlab stepped-sine`; InputError naming the file and the field,
-/// and saying so when DIR is a `process` output instead.
-SteppedSineRun read_stepped_sine_run(const std::filesystem::path& dir);
-
 /// Every backbone of a stepped-sine run, measured at sensor index `sensor`, of kind
 /// BackboneKind::kSteppedSine; InputError when no file gave a backbone.
-std::vector<MeasuredBackbone> stepped_sine_backbones(const SteppedSineRun& run, int sensor);
+std::vector<MeasuredBackbone> stepped_sine_backbones(const data::SteppedSineRun& run, int sensor);
 
 /// One file's (hit's) linear frequency of a mode: the backbone's straight-line fit at the lowest
 /// amplitude it read, not an extrapolation to zero amplitude.
@@ -127,7 +73,7 @@ LinearSpread linear_spread(const std::string& mode, const std::vector<LinearRead
 /// the files that give one (against `frequency_std`, the update's); its note goes to the
 /// warnings. InputError when no band has a linear frequency or no sensor channel appears in
 /// any operating shape.
-MeasuredModes measured_modes(const ProcessRun& run, const std::vector<Sensor>& sensors,
+MeasuredModes measured_modes(const data::ProcessRun& run, const std::vector<Sensor>& sensors,
                              std::vector<int>* bands = nullptr,
                              double frequency_std = LinearUpdateOptions{}.frequency_std);
 
@@ -166,23 +112,24 @@ struct BandChannel {
 /// curves share one amplitude (the hits' scatter summary compares them point by point): of the
 /// sensors that are some hit's reference channel, the one with a backbone in the most hits,
 /// then the one most hits name, then the first in the sensors file.
-BandChannel band_channel(const ProcessRun& run, const std::vector<Sensor>& sensors, int band);
+BandChannel band_channel(const data::ProcessRun& run, const std::vector<Sensor>& sensors, int band);
 
 /// One backbone file of a process run, with the index of its channel's sensor.
 struct BandOutput {
-  const ProcessOutput* output = nullptr;  ///< the file (in the run it was taken from)
-  int sensor = -1;                        ///< its channel's sensor
+  const data::ProcessOutput* output = nullptr;  ///< the file (in the run it was taken from)
+  int sensor = -1;                              ///< its channel's sensor
 };
 
 /// The backbone files of band `band` on the selected channels (empty: band_channel's, its note
 /// in `note`), in the run's order; InputError when a selected channel is not a sensor or no
 /// backbone is found.
-std::vector<BandOutput> band_outputs(const ProcessRun& run, const std::vector<Sensor>& sensors,
-                                     int band, const std::vector<std::string>& channels,
+std::vector<BandOutput> band_outputs(const data::ProcessRun& run,
+                                     const std::vector<Sensor>& sensors, int band,
+                                     const std::vector<std::string>& channels,
                                      std::string* note = nullptr);
 
 /// Every backbone of band_outputs(), each read at its sensor.
-std::vector<MeasuredBackbone> measured_backbones(const ProcessRun& run,
+std::vector<MeasuredBackbone> measured_backbones(const data::ProcessRun& run,
                                                  const std::vector<Sensor>& sensors, int band,
                                                  const std::vector<std::string>& channels);
 

@@ -62,8 +62,8 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
   for (const char* f : {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv"})
     write(d / f, kBackbone);
   const std::vector<Sensor> sensors{{"b2", 7, 1.0}, {"a5", 5, -1.0}};
-  const ProcessRun run = read_process_run(d);
-  EXPECT_EQ(run.amplitude, AmplitudeQuantity::kVelocity);
+  const data::ProcessRun run = data::read_process_run(d);
+  EXPECT_EQ(run.amplitude, Quantity::kVelocity);
   ASSERT_EQ(run.bands.size(), 3u);
   ASSERT_EQ(run.outputs.size(), 4u);
   EXPECT_EQ(run.outputs[1].file, "");
@@ -121,7 +121,7 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
     for (const char* f :
          {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv", "hit3.b2.band1.csv"})
       write(d3 / f, kBackbone);
-    const BandChannel c3 = band_channel(read_process_run(d3), sensors, 1);
+    const BandChannel c3 = band_channel(data::read_process_run(d3), sensors, 1);
     EXPECT_EQ(c3.channel, "b2");
     EXPECT_NE(c3.note.find("every hit is read at b2 (a backbone there in 2 of 3 hits)"),
               std::string::npos)
@@ -134,7 +134,7 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
     for (const char* f : {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv",
                           "hit3.b2.band1.csv", "hit4.a5.band1.csv", "hit4.b2.band1.csv"})
       write(d4 / f, kBackbone);
-    const BandChannel c4 = band_channel(read_process_run(d4), sensors, 1);
+    const BandChannel c4 = band_channel(data::read_process_run(d4), sensors, 1);
     EXPECT_EQ(c4.note,
               "band 1: the hits' reference channels differ (a5 in hit1, hit4; b2 in the other 2): "
               "every hit is read at b2 (a backbone there in 3 of 4 hits), so that their curves "
@@ -152,7 +152,7 @@ TEST(MeasuredData, ReadsSummaryModesAndBackbones) {
     write(db / "summary.json", both);
     for (const char* f : {"hit1.a5.band1.csv", "hit2.a5.band1.csv", "hit2.b2.band1.csv"})
       write(db / f, kBackbone);
-    const ProcessRun rb = read_process_run(db);
+    const data::ProcessRun rb = data::read_process_run(db);
     const BandChannel cb = band_channel(rb, sensors, 1);
     EXPECT_EQ(cb.channel, "b2");
     EXPECT_EQ(cb.note,
@@ -264,7 +264,7 @@ TEST(MeasuredData, ABandThatFallsWithTheLevelWidensTheLinearUpdate) {
         fmt::format(R"({{"program": "jointlab process", "amplitude_quantity": "velocity",
                         "files": [{}]}})",
                     files));
-  const ProcessRun run = read_process_run(d);
+  const data::ProcessRun run = data::read_process_run(d);
   EXPECT_EQ(run.bands[4].linear_fit_amplitude_min, 5e-4);  // hit 2, band 1
   EXPECT_EQ(run.bands[4].linear_frequency_std_hz, 0.001);
   const MeasuredModes m = measured_modes(run, sensors);
@@ -304,18 +304,21 @@ TEST(MeasuredData, PairsTheBandWithTheModelModeByShape) {
 
 TEST(MeasuredData, DefectsNameFileAndField) {
   const fs::path d = fresh("bad");
-  EXPECT_NE(testing::input_error_of([&] { read_process_run(d / "none"); }).find("not a directory"),
-            std::string::npos);
-  EXPECT_NE(testing::input_error_of([&] { read_process_run(d); }).find("summary.json: missing"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::input_error_of([&] { data::read_process_run(d / "none"); }).find("not a directory"),
+      std::string::npos);
+  EXPECT_NE(
+      testing::input_error_of([&] { data::read_process_run(d); }).find("summary.json: missing"),
+      std::string::npos);
   write(d / "summary.json", "{\"amplitude_quantity\": \"velocity\", \"files\": [{\"file\": 3}]}");
   EXPECT_NE(testing::input_error_of([&] {
-              read_process_run(d);
+              data::read_process_run(d);
             }).find("summary.json: files[0].file: expected a string, found a number"),
             std::string::npos);
   write(d / "summary.json", "{\"amplitude_quantity\": \"velocity\", \"files\": [}");
-  EXPECT_NE(testing::input_error_of([&] { read_process_run(d); }).find("summary.json:1: column"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::input_error_of([&] { data::read_process_run(d); }).find("summary.json:1: column"),
+      std::string::npos);
   write(d / "b.csv", "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz\n");
   EXPECT_NE(testing::input_error_of([&] {
               read_backbone_csv(d / "b.csv", 0);
@@ -354,14 +357,14 @@ TEST(MeasuredData, AnAmplitudeUnitOtherThanSiIsRefused) {
   std::string summary = kSummary;
   summary.replace(summary.find("\"m/s\""), 5, "\"mm/s\"");
   write(d / "summary.json", summary);
-  const std::string m = testing::input_error_of([&] { read_process_run(d); });
+  const std::string m = testing::input_error_of([&] { data::read_process_run(d); });
   EXPECT_NE(m.find("summary.json: amplitude_unit: \"mm/s\": the backbones' amplitudes are read "
                    "as SI (m/s for velocity)"),
             std::string::npos)
       << m;
   summary = kSummary;  // the SI unit, or none: read
   write(d / "summary.json", summary);
-  EXPECT_EQ(read_process_run(d).amplitude, AmplitudeQuantity::kVelocity);
+  EXPECT_EQ(data::read_process_run(d).amplitude, Quantity::kVelocity);
 }
 
 // Rows of a process backbone marked as not the mode's own (harmonic n > 1, exchange 1, whose
@@ -579,7 +582,7 @@ TEST(MeasuredData, TheSpreadsTestsReadOneSigmaTheWeightedMeanAndStudentsT) {
           fmt::format(R"({{"program": "jointlab process", "amplitude_quantity": "velocity",
                           {}"files": [{}]}})",
                       coverage.empty() ? "" : "\"coverage_factor\": " + coverage + ", ", files));
-    return measured_modes(read_process_run(d), {{"a", 0, 1.0}}, nullptr, frequency_std);
+    return measured_modes(data::read_process_run(d), {{"a", 0, 1.0}}, nullptr, frequency_std);
   };
   EXPECT_EQ(modes_with("1").frequency_std(0), 0);  // 0.24 Hz as one sigma: they agree
   EXPECT_EQ(modes_with("").frequency_std(0), 0);   // no coverage_factor: one sigma

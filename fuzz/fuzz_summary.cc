@@ -9,12 +9,13 @@
 #include "fuzz_util.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/measured_data.h"
+#include "jointlab/data/process_folder.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto& dir = jointlab::fuzz::scratch();
   jointlab::fuzz::write_bytes(dir / "summary.json", data, size);
   try {
-    jointlab::correlate::read_process_run(dir);
+    jointlab::data::read_process_run(dir);
   } catch (const jointlab::InputError&) {
   }
   static const std::vector<jointlab::correlate::Sensor> sensors = {

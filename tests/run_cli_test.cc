@@ -608,7 +608,7 @@ TEST(RunCli, RunAndUpdateIwanBuildTheSameTargets) {
   const campaign::IwanTargets from_run =
       campaign::iwan_targets(start, sensors, campaign::campaign_backbones(c, measured), to);
   // update-iwan's side, from the process folder (--mode R:1 --channel acc_5).
-  const correlate::ProcessRun run = correlate::read_process_run(dir / "process");
+  const data::ProcessRun run = data::read_process_run(dir / "process");
   campaign::ModeBackbones mb =
       campaign::process_run_backbones(run, sensors, 1, {"acc_5"}, campaign::ScatterOptions{});
   mb.model_mode = s.model_mode;
