@@ -276,6 +276,14 @@ TEST(ModesTableFromAnotherTool, FrequencyHeadersWithTheirUnitAreRead) {
     EXPECT_EQ(m.frequency_hz, plain.frequency_hz) << f;
     EXPECT_EQ(m.shapes, plain.shapes) << f;
   }
+  // The mode column as test-modal tools head it (before, `Mode #` was refused: "column 1 'Mode
+  // #' is not 'mode'").
+  for (const std::string mode :
+       {"Mode #", "Mode#", "MODE NO.", "Mode No", "mode_nr", "Mode Number"}) {
+    const MeasuredModes m = read(mode + ",frequency_hz,z1,z2", rows);
+    EXPECT_EQ(m.frequency_hz, plain.frequency_hz) << mode;
+    EXPECT_EQ(m.shapes, plain.shapes) << mode;
+  }
   const MeasuredModes damping =
       read("Mode,Frequency [Hz],Damping [%],z1,z2", "1,57.9,0.3,0.5,1\n2,120,0.2,1,-0.5\n");
   EXPECT_EQ(damping.frequency_hz, plain.frequency_hz);

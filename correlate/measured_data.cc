@@ -617,6 +617,16 @@ double frequency_column_scale(const std::string& name, long n, const std::string
                   printable(written)));
 }
 
+// Whether a modes table's header cell names the mode column: `mode` in any case, or as test-modal
+// tools write it, `Mode #`, `Mode No.`, `Mode number`, `mode_nr` (blanks, `_` and `.` aside).
+// Before, `Mode #` was refused as "column 1 'Mode #' is not 'mode'".
+bool mode_column(const std::string& cell) {
+  std::string k;
+  for (const char c : lower(cell))
+    if (c != ' ' && c != '\t' && c != '_' && c != '.') k += c;
+  return k == "mode" || k == "mode#" || k == "modeno" || k == "modenr" || k == "modenumber";
+}
+
 // The shape columns of a modes table from its header `cells` (line n of `name`), after the
 // mode and frequency columns that must begin it (`to_hz` receives the frequency column's factor
 // to Hz): each a sensor channel (or its real or imaginary part), none twice, every part beside
@@ -626,7 +636,7 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
                                              const std::vector<std::string>& cells, long n,
                                              double& to_hz) {
   std::vector<TableColumn> columns;
-  to_hz = cells.size() >= 2 && lower(cells[0]) == "mode"
+  to_hz = cells.size() >= 2 && mode_column(cells[0])
               ? (cells[1] == "frequency_hz" ? 1 : frequency_column_scale(name, n, cells[1]))
               : 0;
   if (to_hz == 0) {
@@ -637,7 +647,7 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
       found += printable(cells[c]);
     }
     const bool swapped =
-        cells.size() >= 2 && lower(cells[1]) == "mode" && (cells[0] == "frequency_hz" || [&] {
+        cells.size() >= 2 && mode_column(cells[1]) && (cells[0] == "frequency_hz" || [&] {
           try {
             return frequency_column_scale(name, n, cells[0]) > 0;
           } catch (const InputError&) {
@@ -658,7 +668,7 @@ std::vector<TableColumn> modes_table_columns(const std::string& name,
                           "modes), not a modes table; give --measured DIR or a table of mode, "
                           "frequency_hz and one shape column per sensor"
                     : swapped ? ": put the mode column first"
-                    : cells.empty() || lower(cells[0]) != "mode"
+                    : cells.empty() || !mode_column(cells[0])
                         ? fmt::format(", column 1 '{}' is not 'mode'",
                                       cells.empty() ? "" : printable(cells[0]))
                         : fmt::format(", column 2 '{}' names no frequency",
