@@ -45,6 +45,24 @@ struct SteppedSineArgs {
   std::vector<double> pareto;        // gamma values of a Pareto front
 };
 
+// What the report says of the scatter between the hits' curves, where the model does not
+// describe the data within their noise (misfit; else None, as with fewer than two curves of one
+// mode): their count, the share of the chi-square each curve's own offset explains and
+// the share their own offsets and slopes over a common curve explain, a curve lying apart from
+// the others (None: none), and whether the sigmas rest on that scatter (one cluster per hit,
+// Student's t), as the report's "the sigmas allow for it".
+py::object iwan_scatter(const correlate::IwanUpdateSummary& summary) {
+  if (!summary.evidence || summary.evidence->curves < 2) return py::none();
+  const correlate::MisfitEvidence& e = *summary.evidence;
+  py::dict d;
+  d["curves"] = e.curves;
+  d["offsets_share"] = e.between_curves_share;
+  d["shapes_share"] = e.between_hits_share;
+  d["apart"] = e.apart_curve.empty() ? py::object(py::none()) : py::object(py::str(e.apart_curve));
+  d["sigmas_from_scatter"] = summary.scatter_explains_misfit();
+  return d;
+}
+
 // One dict per row of parameters.csv (Fs, Kt, chi, beta, gamma = Kt / Ks when known), from
 // the rows the file is written from; modal_ratio always, with its absolute std.
 py::dict iwan_parameters(const correlate::IwanUpdateSummary& summary) {
@@ -252,6 +270,7 @@ py::dict update_iwan(
                                   ? py::object(py::float_(summary.amplitude_share))
                                   : py::object(py::none());
   result["misfit"] = summary.misfit();
+  result["scatter_between_hits"] = iwan_scatter(summary);
   result["pareto"] = iwan_pareto(front);
   result["history"] = iwan_history(summary);
   result["report"] = text;

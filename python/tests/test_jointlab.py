@@ -913,6 +913,36 @@ def test_compare_gives_the_curves_the_command_draws(tmp_path):
         jointlab.compare(models, 1, [str(d / "bb.csv")], out=str(d / "bb.csv" / "c.png"))
 
 
+def test_update_iwan_says_when_the_sigmas_rest_on_scatter_between_hits(tmp_path):
+    # Three hits of the one-mode truth whose joints differ (its table read at amplitudes 0.85,
+    # 1 and 1.15 times, as F_S scattered 15 % between the hits), 1e-4 and 2 % noise stated and
+    # drawn: the curves disagree beyond their noise, the report names the scatter and its sigmas
+    # rest on it (one cluster per hit), and the result says so as the report does. One curve:
+    # nothing to say (None).
+    d = tmp_path
+    q = one_mode_iwan(d, points=30)
+    rng = np.random.default_rng(1)
+    files = []
+    for h, scale in enumerate((0.85, 1.0, 1.15)):
+        files.append(d / f"hit{h}.csv")
+        with open(files[-1], "w") as f:
+            f.write("amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std\n")
+            for a, fr, z in zip(q["modal_amplitude"], q["ringdown_frequency_hz"],
+                                q["ringdown_damping_ratio"]):
+                f.write(f"{a * scale!r},{fr * (1 + 1e-4 * rng.standard_normal())!r},"
+                        f"{z * (1 + 0.02 * rng.standard_normal())!r},{fr * 1e-4!r},{z * 0.02!r}\n")
+    result = jointlab.update_iwan(d / "start.toml", "iwan.j", 1, files, evaluations=400)
+    scatter = result["scatter_between_hits"]
+    assert result["misfit"] and scatter is not None
+    assert scatter["curves"] == 3 and scatter["apart"] is None
+    assert 0 < scatter["offsets_share"] <= 1 and 0 <= scatter["shapes_share"] <= 1
+    assert scatter["sigmas_from_scatter"]
+    assert "the sigmas allow for it (one cluster per hit" in result["report"]
+    assert result["parameters"]["Kt"]["relative_std"] is not None
+    one = jointlab.update_iwan(d / "start.toml", "iwan.j", 1, [d / "bb.csv"], evaluations=400)
+    assert one["scatter_between_hits"] is None
+
+
 def test_update_iwan_equals_the_command_line(tmp_path, capfd):
     # A one-mode model (unit mass, 3.3e5 N/m, an Iwan joint to ground) and its own ring-down
     # QSMA columns as a backbone table: the command and the call end at the same parameters.
