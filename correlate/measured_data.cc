@@ -585,12 +585,15 @@ double frequency_column_scale(const std::string& name, long n, const std::string
         "frequencies are read in Hz only, under frequency_hz: give them so (rad/s "
         "divided by 2 pi)");
   std::string base = f, unit, written;  // written: the unit as the cell gives it
-  if (const size_t open = f.find_first_of("[("); open != std::string::npos) {
-    const char close = f[open] == '[' ? ']' : ')';
-    if (f.back() != close) return 0;
-    base = std::string(trim(f.substr(0, open)));
-    unit = std::string(trim(f.substr(open + 1, f.size() - open - 2)));
-    written = std::string(trim(std::string_view(cell).substr(open + 1, f.size() - open - 2)));
+  if (cell.find_first_of("[(") != std::string::npos) {
+    // "Frequency [Hz]" or "Freq (Hz)" (data/csv_lines' splits); brackets that do not close the
+    // cell name no frequency.
+    const auto split = cell.find('[') != std::string::npos ? data::split_square_brackets(cell)
+                                                           : data::split_round_brackets(cell);
+    if (!split) return 0;
+    base = lower(split->first);
+    written = split->second;
+    unit = lower(written);
   } else {
     for (const char* u : {"hz", "khz"})
       if (const std::string tail = std::string("_") + u; base.ends_with(tail)) {

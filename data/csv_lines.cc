@@ -104,16 +104,20 @@ std::string_view read_preamble(
 std::pair<std::string, std::string> split_name_unit(std::string_view field, const std::string& file,
                                                     long line) {
   field = trim(field);
-  const auto open = field.find('[');
-  if (open == std::string_view::npos) return {std::string(field), ""};
-  const auto close = field.find(']', open);
-  if (close == std::string_view::npos || !trim(field.substr(close + 1)).empty()) {
-    throw InputError(
-        where(file, line,
-              fmt::format("header '{}': unit must be written as 'name [unit]'", shorten(field))));
-  }
-  return {std::string(trim(field.substr(0, open))),
-          std::string(trim(field.substr(open + 1, close - open - 1)))};
+  if (field.find('[') == std::string_view::npos) return {std::string(field), ""};
+  if (auto split = split_square_brackets(field)) return *std::move(split);
+  throw InputError(
+      where(file, line,
+            fmt::format("header '{}': unit must be written as 'name [unit]'", shorten(field))));
+}
+
+std::optional<std::pair<std::string, std::string>> split_square_brackets(std::string_view name) {
+  const auto open = name.find('[');
+  if (open == std::string_view::npos) return std::nullopt;
+  const auto close = name.find(']', open);
+  if (close == std::string_view::npos || !trim(name.substr(close + 1)).empty()) return std::nullopt;
+  return std::pair{std::string(trim(name.substr(0, open))),
+                   std::string(trim(name.substr(open + 1, close - open - 1)))};
 }
 
 std::optional<std::pair<std::string, std::string>> split_round_brackets(std::string_view name) {

@@ -75,6 +75,11 @@ std::string_view read_preamble(
 std::pair<std::string, std::string> split_name_unit(std::string_view field, const std::string& file,
                                                     long line);
 
+/// A name ending in square brackets, "acc1 [g]", as the trimmed name before the first '[' and the
+/// trimmed text inside ("acc1", "g"); none where it has no '[' or anything but blanks follows the
+/// ']' that closes it.
+std::optional<std::pair<std::string, std::string>> split_square_brackets(std::string_view name);
+
 /// A name ending in round brackets, "acc1 (g)", as the trimmed name before them and the trimmed
 /// text inside ("acc1", "g"); none where the name does not end so.
 std::optional<std::pair<std::string, std::string>> split_round_brackets(std::string_view name);

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/tests/process_memory.h"
 #include "jointlab/tests/test_util.h"
 
@@ -201,6 +202,25 @@ TEST(CsvReader, ReadingCostsAboutTheSamplesBinarySize) {
   // text in flight; the whole text in memory (44 MB) or columns grown by doubling would
   // break it.
   EXPECT_LT(peak, 2 * binary + 16e6) << "peak " << peak / 1e6 << " MB";
+}
+
+// A header's "name [unit]" and "name (unit)": the name before the bracket and the unit inside,
+// both trimmed; none where the bracket does not close the name (the modes table then reads the
+// cell as no frequency column, split_name_unit refuses it naming the file and line).
+TEST(CsvLines, SplitsANameFromTheUnitInItsBrackets) {
+  using Split = std::optional<std::pair<std::string, std::string>>;
+  EXPECT_EQ(split_square_brackets("Frequency [Hz]"), (Split{{"Frequency", "Hz"}}));
+  EXPECT_EQ(split_square_brackets("  f [ kHz ]  "), (Split{{"f", "kHz"}}));
+  EXPECT_EQ(split_square_brackets("Frequency [Hz"), std::nullopt);
+  EXPECT_EQ(split_square_brackets("Frequency [Hz] mean"), std::nullopt);
+  EXPECT_EQ(split_square_brackets("Frequency (Hz)"), std::nullopt);
+  EXPECT_EQ(split_round_brackets("Freq (Hz)"), (Split{{"Freq", "Hz"}}));
+  EXPECT_EQ(split_round_brackets("pt3 (Z+) (g)"), (Split{{"pt3 (Z+)", "g"}}));
+  EXPECT_EQ(split_round_brackets("Freq (Hz"), std::nullopt);
+  EXPECT_EQ(split_name_unit("acc1 [g]", "a.csv", 1),
+            (std::pair<std::string, std::string>{"acc1", "g"}));
+  EXPECT_EQ(split_name_unit("acc1", "a.csv", 1), (std::pair<std::string, std::string>{"acc1", ""}));
+  EXPECT_THROW(split_name_unit("acc1 [g", "a.csv", 1), InputError);
 }
 
 }  // namespace
