@@ -1758,9 +1758,15 @@ std::string exchange_note(const Exchange& exchange, const RingdownSummary& sum,
           ? std::string("the envelope's decay rate turns once")
           : fmt::format("the envelope's decay rate turns {} times", exchange.turns.size());
   const std::string how =
-      exchange.one_way ? std::string(
-                             "the envelope's decay rate falls from the start to the mode's own as "
-                             "the other's rises to its own")
+      exchange.quadrature
+          ? std::string(
+                "the envelope's decay rate falls from the start to the mode's own while the "
+                "other, locked a quarter period from the drive, takes the energy: the excess "
+                "rate follows the power it takes")
+      : exchange.one_way
+          ? std::string(
+                "the envelope's decay rate falls from the start to the mode's own as "
+                "the other's rises to its own")
       : exchange.fed_dip
           ? std::string(
                 "the envelope's decay rate dips below the rate it settles to, as the other's "

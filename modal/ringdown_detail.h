@@ -221,6 +221,7 @@ struct Exchange {
   std::vector<Turn> turns;  ///< the turns of the decay rate, in time order
   bool one_way = false;     ///< the rate only falls from the start while the partner grows
   bool fed_dip = false;     ///< the one turn is a dip below the settled rate (fed_at_a_dip)
+  bool quadrature = false;  ///< one way, the partner locked in quadrature takes the energy
   /// A neighbour's spectral peak beyond the band read whose leak through its edge the one-way
   /// fall is, no exchange (neighbour_leak) [Hz]; 0: none.
   double leak_hz = 0;
