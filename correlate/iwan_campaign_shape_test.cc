@@ -121,6 +121,12 @@ TEST(IwanCampaignShape, AParameterOnlyTheTopHitFixesRestsOnThatHitAndStatesNoSig
                    "how far the joint changes from hit to hit (settling, re-tightening) they "
                    "allow for only as far as the hits' curves disagree"),
             std::string::npos);
+  // Hits that agree by chance cannot be told from an unchanged joint: the note says so plainly
+  // rather than widening the sigma by a scatter no residual shows.
+  EXPECT_NE(r.find("hits whose joints happen to agree with one another show none of it: no "
+                   "statistic of these curves can tell them from hits of a joint that did not "
+                   "change"),
+            std::string::npos);
   // K_T and chi, shared by the hits, keep a sigma that covers the nominal truth.
   for (const int k : {1, 2}) {
     ASSERT_EQ(s.sigma_reason(k), IwanSigmaReason::kStated) << k;
