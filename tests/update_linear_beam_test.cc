@@ -426,5 +426,72 @@ components = ["y", "z"]
   EXPECT_TRUE(rivet);
 }
 
+// A table of frequencies alone in Hz, of higher modes only, is fitted, not refused as rad/s
+// before the fit: the 8-rivet beam above (rivets 2.0407623e7, bolts 2e10) and its own modes 5
+// and 7 (333.4035 and 512.6330 Hz). Divided by 2 pi (53.06, 81.59 Hz) each lies within 38 % of
+// a model mode of its own (73.0, 78.0 Hz), and two model modes lie below half the table's lowest,
+// so the rule of 24fbb1a refused it before any fit, though read as Hz the table pairs with the
+// model's own modes exactly (with an entry at one sensor, the fit ends at a reduced chi-square of
+// 5e-16). Now refused before the fit only where divided by 2 pi it pairs closer than as Hz: the
+// same two modes in rad/s still are. About 0.4 s.
+TEST(UpdateLinearBeam, HigherModesAloneInHzAreFittedNotNamedRadPerSecond) {
+  const fs::path dir = testing::scratch_dir("update_linear_higher_modes_in_hz");
+  std::ofstream(dir / "beam.toml") << R"([strips]
+length = 0.8
+width = 0.009
+thickness = 0.005
+[mesh]
+element = "beam"
+size = 0.02
+[rivets]
+count = 8
+row_offset = 0.0
+[joints]
+Kt = 2.0407622889791254e7
+[[joint_set]]
+name = "bolt"
+rivets = [1, 2, 7, 8]
+Kt = 2.0e10
+[reduction]
+fixed_interface_modes = 12
+[[sensor]]
+label = 9001
+x = 0.0
+components = ["y", "z"]
+[[sensor]]
+label = 9002
+x = 0.43
+components = ["z"]
+[[sensor]]
+label = 9003
+x = 0.8
+components = ["y", "z"]
+)";
+  std::ofstream(dir / "sensors.csv")
+      << "channel,dof\ny1,9001:2\nz1,9001:3\nz2,9002:3\ny3,9003:2\nz3,9003:3\n";
+  std::ofstream(dir / "hz.csv") << "mode,frequency_hz\n5,333.4035276\n7,512.6329503\n";
+  std::ofstream(dir / "rad.csv") << "mode,frequency_hz\n5,2094.836\n7,3220.968\n";
+  const testing::CommandResult b =
+      testing::run_jointlab(fmt::format("build-model {} --out {} --quiet --skip-check",
+                                        (dir / "beam.toml").string(), (dir / "model").string()));
+  ASSERT_EQ(b.status, 0) << b.err;
+  const auto update = [&](const char* table) {
+    return testing::run_jointlab(
+        fmt::format("update-linear {} --modes-table {} --sensors {} --set iwan.rivet --out {}",
+                    (dir / "model" / "model.toml").string(), (dir / table).string(),
+                    (dir / "sensors.csv").string(), (dir / "out").string()));
+  };
+  const testing::CommandResult hz = update("hz.csv");
+  EXPECT_EQ(hz.status, 0) << hz.out << hz.err;
+  EXPECT_EQ(hz.out.find("linear update (least squares): converged"), 0u) << hz.out << hz.err;
+  EXPECT_EQ((hz.out + hz.err).find("angular frequencies"), std::string::npos) << hz.out << hz.err;
+  const testing::CommandResult rad = update("rad.csv");
+  EXPECT_NE(rad.status, 0) << rad.out;
+  EXPECT_NE(rad.err.find("the frequencies look like angular frequencies (rad/s) read as Hz"),
+            std::string::npos)
+      << rad.err;
+  EXPECT_NE(rad.err.find("decided before any fit"), std::string::npos) << rad.err;
+}
+
 }  // namespace
 }  // namespace jointlab
