@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -216,41 +215,6 @@ bool augment(int i, const std::vector<std::vector<int>>& candidates, std::vector
   return false;
 }
 
-// The smallest relative distance t within which every frequency of `f` has a visible model mode
-// of its own at `start` (|f_model / f - 1| <= t, each model mode paired once): the bottleneck of
-// the best pairing by frequency alone; infinite where none within `window` pairs them all.
-double pairing_distance(const Eigen::VectorXd& f, const LinearEvaluation& start, double window) {
-  const Eigen::Index n = f.size();
-  const Eigen::Index models =
-      std::min(start.all_model_frequency_hz.size(), start.model_at_sensors.cols());
-  std::vector<char> visible(static_cast<size_t>(models), 1);
-  for (const int h : start.hidden)
-    if (h >= 0 && h < static_cast<int>(models)) visible[static_cast<size_t>(h)] = 0;
-  std::vector<double> steps;
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < models; ++j) {
-      const double d = std::abs(start.all_model_frequency_hz(j) / f(i) - 1);
-      if (visible[static_cast<size_t>(j)] && d <= window) steps.push_back(d);
-    }
-  std::sort(steps.begin(), steps.end());
-  for (const double t : steps) {
-    std::vector<std::vector<int>> candidates(static_cast<size_t>(n));
-    for (Eigen::Index i = 0; i < n; ++i)
-      for (Eigen::Index j = 0; j < models; ++j)
-        if (visible[static_cast<size_t>(j)] &&
-            std::abs(start.all_model_frequency_hz(j) / f(i) - 1) <= t)
-          candidates[static_cast<size_t>(i)].push_back(static_cast<int>(j));
-    std::vector<int> partner_of(static_cast<size_t>(models), -1);
-    bool all = true;
-    for (int i = 0; i < static_cast<int>(n) && all; ++i) {
-      std::vector<char> seen(static_cast<size_t>(models), 0);
-      all = augment(i, candidates, partner_of, seen);
-    }
-    if (all) return t;
-  }
-  return std::numeric_limits<double>::infinity();
-}
-
 }  // namespace
 
 // Why undecided pairs look like frequencies in rad/s read as Hz, or "" (linear_signs.h). A true
@@ -277,20 +241,7 @@ std::string units_before_fit(const model::Model& model, const std::vector<std::s
   for (const ParameterHold& h : options.holds)
     if (h.value > 0) begin(set_index(names, h.name, "hold")) = h.value;
   p.fresh(begin.array().log(), start);
-  std::string why = angular_units(measured, options, start);
-  // Before a fit, only where the table read as Hz pairs worse than divided by 2 pi: the rule's
-  // own test (a model mode below the table's lowest, none measured; each mode divided by 2 pi
-  // within the window of one) is met by a table in Hz of higher modes alone, which the fit
-  // matches (the 8-rivet beam's modes 5 and 7 at 333.40 and 512.63 Hz, the model's own, were
-  // refused here; with an entry at one sensor they fit to a reduced chi-square of 5e-16). After
-  // the fit the rule still runs where the pairs are undecided or the fit leaves a misfit.
-  if (why.empty() || measured.frequency_hz.size() == 0) return why;
-  const double window =
-      options.frequency_window > 0 ? std::min(options.frequency_window, 0.5) : 0.5;
-  const Eigen::VectorXd hz = measured.frequency_hz;
-  const Eigen::VectorXd rad = measured.frequency_hz / (2 * std::numbers::pi);
-  if (!(pairing_distance(rad, start, window) < pairing_distance(hz, start, window))) return "";
-  return why;
+  return angular_units(measured, options, start);
 }
 
 // The rule of undecided_units() at the start `start`, whatever the fit gave.

@@ -42,9 +42,7 @@ std::string angular_units(const MeasuredModes& measured, const LinearUpdateOptio
 
 /// Why a table of frequencies alone (every shape entry empty) looks like rad/s read as Hz before
 /// any fit, or "": angular_units() at the start (the sets at their start, or a hold's value),
-/// which `start` receives (nothing where the table has shapes), and only where divided by 2 pi
-/// the table pairs with visible model modes of their own closer than read as Hz (a table in Hz
-/// of higher modes alone meets angular_units()' test too). A fit of such a table can run
+/// which `start` receives (nothing where the table has shapes). A fit of such a table can run
 /// for minutes before its pairs are found undecided (the example beam's six bending modes and
 /// four sets: 9 min of CPU).
 std::string units_before_fit(const model::Model& model, const std::vector<std::string>& names,
