@@ -213,6 +213,12 @@ TEST(ModesTableFromAnotherTool, FrequenciesAloneInRadPerSecondAreNamedWhereThePa
   EXPECT_EQ(named(beam, four, z, alone.columns({0, 1, 3, 4, 5})), "");
   alone.frequency_hz *= 2 * std::numbers::pi;
   EXPECT_NE(named(beam, four, z, alone), "");
+  // Before any fit too, from the model's start (units_before_fit: the docs' case, refused in
+  // 0.05 s rather than after 9 min of fitting); the same table in Hz is not named there.
+  LinearEvaluation early;
+  EXPECT_NE(detail::units_before_fit(beam, four, z, alone, {}, early), "");
+  alone.frequency_hz /= 2 * std::numbers::pi;
+  EXPECT_EQ(detail::units_before_fit(beam, four, z, alone, {}, early), "");
 }
 
 // Columns other tools write beside the shapes (damping ratio, MPC, MPD, in any case and with a
