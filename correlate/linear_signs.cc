@@ -234,26 +234,26 @@ std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOpt
 std::string units_before_fit(const model::Model& model, const std::vector<std::string>& names,
                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                              const LinearUpdateOptions& options, LinearEvaluation& start) {
-  if (measured.frequency_hz.size() == 0 || (measured.shapes.array().abs() > 0.0).any()) return "";
+  if (measured.frequency_hz.size() < 3 || (measured.shapes.array().abs() > 0.0).any()) return "";
   const StiffnessSets sets(model, names);
   const LinearProblem p = make_problem(sets, model, names, sensors, measured, options);
   Eigen::VectorXd begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
   for (const ParameterHold& h : options.holds)
     if (h.value > 0) begin(set_index(names, h.name, "hold")) = h.value;
   p.fresh(begin.array().log(), start);
-  return angular_units(measured, options, start);
+  return angular_units(measured, options, start, 0.25);
 }
 
 // The rule of undecided_units() at the start `start`, whatever the fit gave.
 std::string angular_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
-                          const LinearEvaluation& start) {
+                          const LinearEvaluation& start, double max_window) {
   const Eigen::Index n = measured.frequency_hz.size();
   const Eigen::Index models =
       std::min(start.all_model_frequency_hz.size(), start.model_at_sensors.cols());
   if (n == 0 || models == 0) return "";
   const double to_hz = 0.5 / std::numbers::pi;
   const double window =
-      options.frequency_window > 0 ? std::min(options.frequency_window, 0.5) : 0.5;
+      std::min(options.frequency_window > 0 ? options.frequency_window : 0.5, max_window);
   std::vector<char> visible(static_cast<size_t>(models), 1);
   for (const int h : start.hidden)
     if (h >= 0 && h < static_cast<int>(models)) visible[static_cast<size_t>(h)] = 0;

@@ -36,15 +36,19 @@ std::string misfit_of_units(const model::Model& model, const std::vector<std::st
 std::string undecided_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
                             const LinearUpdateSummary& s);
 
-/// The rule of undecided_units() against the model at the start `start`, whatever a fit gave.
+/// The rule of undecided_units() against the model at the start `start`, whatever a fit gave,
+/// with the frequency window at most `max_window`.
 std::string angular_units(const MeasuredModes& measured, const LinearUpdateOptions& options,
-                          const LinearEvaluation& start);
+                          const LinearEvaluation& start, double max_window = 0.5);
 
 /// Why a table of frequencies alone (every shape entry empty) looks like rad/s read as Hz before
 /// any fit, or "": angular_units() at the start (the sets at their start, or a hold's value),
-/// which `start` receives (nothing where the table has shapes). A fit of such a table can run
-/// for minutes before its pairs are found undecided (the example beam's six bending modes and
-/// four sets: 9 min of CPU).
+/// which `start` receives (nothing where the table has shapes), for three modes or more and
+/// within a window of 25 %. A fit of such a table can run for minutes before its pairs are found
+/// undecided (the example beam's six bending modes and four sets: 9 min of CPU); without a fit
+/// the rule is a guess, which two modes (their ratio alone) or a pairing looser than 25 % made
+/// of true Hz tables of higher modes (the example beam's bending modes 4 and 6: within 17 %;
+/// 3 and 5: 41 %). Those are judged after the fit, by its misfit.
 std::string units_before_fit(const model::Model& model, const std::vector<std::string>& names,
                              const std::vector<Sensor>& sensors, const MeasuredModes& measured,
                              const LinearUpdateOptions& options, LinearEvaluation& start);
