@@ -361,7 +361,8 @@ Eigen::VectorXd finish_result(const LinearProblem& p, int minimised, const std::
 // held there by finish_result): fitted, bounded from one side only, with a warning and no
 // standard deviation.
 void one_sided_where_taken(const LinearProblem& p, const std::vector<int>& taken,
-                           const Eigen::VectorXd& theta, LinearUpdateSummary& s) {
+                           const Eigen::VectorXd& theta, const TrackedPoint& point,
+                           const std::vector<char>& held, LinearUpdateSummary& s) {
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[static_cast<size_t>(k)];
     if (taken[static_cast<size_t>(k)] == 0) continue;
@@ -370,13 +371,23 @@ void one_sided_where_taken(const LinearProblem& p, const std::vector<int>& taken
     r.one_sided = 1;
     r.relative_std.reset();
     r.slope_std.reset();
+    // How far down the frequencies allow it: the value written is the fit's, at most the range's
+    // bound, which says only "stiff"; the limit says how stiff (helper-79's review: the bolts
+    // written at 2e10, start x 1000, with no limit stated).
+    const std::optional<double> lowest = lower_limit(p, point, held, k, s);
     s.warnings.push_back(fmt::format(
         "{}: the frequencies bound it from below only: the fit took it up to {:.6g} (sensitivity "
         "{:.3g} there, below {:.3g}), where the frequencies no longer see it, from its start "
-        "{:.6g}, where they do; held back there it would fix the other sets at values the data "
-        "do not choose, so it is left where the fit took it, and no standard deviation is "
-        "stated: hold it at a value known otherwise (--hold {}=VALUE)",
-        r.name, theta(k), r.sensitivity, p.options.flat_sensitivity, r.start, r.name));
+        "{:.6g}, where they do; {}; held back at its start it would fix the other sets at values "
+        "the data do not choose, so it is left where the fit took it, and no standard deviation "
+        "is stated: hold it at a value known otherwise (--hold {}=VALUE)",
+        r.name, theta(k), r.sensitivity, p.options.flat_sensitivity, r.start,
+        lowest ? fmt::format("they allow it down to {:.3g} (where the chi-square, the other sets "
+                             "fitted again, rises by 9: 3 standard deviations), and any value "
+                             "above fits them alike",
+                             *lowest)
+               : std::string("they set no lower limit within its range that can be followed"),
+        r.name));
   }
 }
 
@@ -494,7 +505,7 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   }
   const Eigen::VectorXd theta =
       finish_result(p, minimised, held_at_result, held, fresh_end, with_sweeps, point, s, end);
-  one_sided_where_taken(p, still_taken, theta, s);
+  one_sided_where_taken(p, still_taken, theta, point, held, s);
   return theta;
 }
 

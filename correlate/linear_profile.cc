@@ -100,11 +100,15 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
 // 4 beyond 3 (to -4.84), each where the fit had come out low, where the slope is steep and the
 // side above flattens. Where the bound comes first the set is bounded from one side only: no
 // standard deviation, and the warning says how little the chi-square rose.
+// The variance the summary's standard deviations rest on: the stated one, or the scatter's.
+double profile_scale(const LinearProblem& p, const LinearUpdateSummary& s) {
+  const double sf = p.options.frequency_std;
+  return sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
+}
+
 void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const LinearEvaluation& at,
                       const std::vector<char>& held, LinearUpdateSummary& s) {
-  const double sf = p.options.frequency_std;
-  const double scale =
-      sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
+  const double scale = profile_scale(p, s);
   const double base = at.weighted_squared_norm();
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[k];
@@ -140,6 +144,17 @@ void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const L
       r.slope_std = local;
     }
   }
+}
+
+// Walked from a twentieth of the set's ln value out (first step 0.15, a factor 1.16), each step up
+// to 3 times the last (profile_side): a flat set's profile is far from a straight line.
+std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& point,
+                                  const std::vector<char>& held, int k,
+                                  const LinearUpdateSummary& s) {
+  const double base = p.evaluate(point).weighted_squared_norm();
+  const ProfileSide side = profile_side(p, point, k, -1, 0.05, held, base, profile_scale(p, s));
+  if (!side.checked || !side.bounded || side.lost) return std::nullopt;
+  return std::exp(point.x(k) - 3 * side.sigma);
 }
 
 }  // namespace jointlab::correlate::detail

@@ -3,6 +3,7 @@
 // from the result, the other fitted sets fitted again at each value, to where it rises by 9.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "jointlab/correlate/linear_problem.h"
@@ -13,5 +14,12 @@ namespace jointlab::correlate::detail {
 /// 9, else a third of the farther distance where wider than the local slope's.
 void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const LinearEvaluation& at,
                       const std::vector<char>& held, LinearUpdateSummary& s);
+
+/// How far below the result `point` set k may go: where its chi-square profile (the sets not
+/// `held` fitted again, in units of the variance the summary's sigmas rest on) rises by 9, three
+/// standard deviations; none where it does not within the set's range or its pairs are lost.
+std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& point,
+                                  const std::vector<char>& held, int k,
+                                  const LinearUpdateSummary& s);
 
 }  // namespace jointlab::correlate::detail

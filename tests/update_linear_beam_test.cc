@@ -411,6 +411,16 @@ components = ["y", "z"]
   EXPECT_NE(u.out.find("iwan.bolt: the frequencies bound it from below only: the fit took it up "
                        "to 2e+10"),
             std::string::npos);
+  // How stiff, not only "stiff": the value written is the fit's (the range's bound), and the
+  // warning states the lowest value the frequencies allow, 3 standard deviations down the
+  // profile (3.05e8): the truth (1e9) lies above it, and it lies above the start the
+  // frequencies see (2e7).
+  const std::string down = "they allow it down to ";
+  const size_t at = u.out.find(down);
+  ASSERT_NE(at, std::string::npos);
+  const double lowest = std::stod(u.out.substr(at + down.size()));
+  EXPECT_LE(lowest, 1e9);
+  EXPECT_GT(lowest, 2e7);
   bool rivet = false;
   for (const auto& row : read_rows(dir / "out" / "parameters.csv")) {
     ASSERT_GT(row.size(), 5u);
