@@ -26,7 +26,14 @@ void warn_bounds(const LinearProblem& p, const Eigen::VectorXd& theta, LinearUpd
     r.at_bound = 0;
     if (lx <= std::log(p.lower(k)) + 1e-6) r.at_bound = -1;
     if (lx >= std::log(p.upper(k)) - 1e-6) r.at_bound = 1;
-    if (r.at_bound != 0) {
+    if (r.at_bound > 0 && r.sensitivity < p.options.flat_sensitivity) {
+      // A stiffness the frequencies no longer see there: a wider range would move it, not the
+      // fit ("widen the bounds" sent the 8-rivet beam's bolts from 2e10 on to any value).
+      s.warnings.push_back(fmt::format(
+          "{} ends at its upper bound {:.6g}, where the frequencies no longer see it (sensitivity "
+          "{:.3g}): a wider range would move it, not the fit; hold it at a value known otherwise",
+          r.name, p.upper(k), r.sensitivity));
+    } else if (r.at_bound != 0) {
       s.warnings.push_back(fmt::format(
           "{} ends at its {} bound {:.6g}: widen the bounds or hold it", r.name,
           r.at_bound < 0 ? "lower" : "upper", r.at_bound < 0 ? p.lower(k) : p.upper(k)));

@@ -421,6 +421,13 @@ components = ["y", "z"]
   const double lowest = std::stod(u.out.substr(at + down.size()));
   EXPECT_LE(lowest, 1e9);
   EXPECT_GT(lowest, 2e7);
+  // At the range's bound the frequencies no longer see it: a wider range moves it, not the fit
+  // (it was told to widen the bounds).
+  EXPECT_NE(u.out.find("iwan.bolt ends at its upper bound 2e+10, where the frequencies no longer "
+                       "see it"),
+            std::string::npos);
+  EXPECT_EQ(u.out.find("iwan.bolt ends at its upper bound 2e+10: widen the bounds"),
+            std::string::npos);
   bool rivet = false;
   for (const auto& row : read_rows(dir / "out" / "parameters.csv")) {
     ASSERT_GT(row.size(), 5u);
