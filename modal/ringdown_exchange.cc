@@ -203,6 +203,14 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_tur
                      median_magnitude(other));
 }
 
+// The mode's own decay rate: the median over the later half of the rates `known` (in time order),
+// where a transfer has died away.
+double own_rate(const std::vector<const Estimate*>& known) {
+  std::vector<double> late;
+  for (size_t i = known.size() / 2; i < known.size(); ++i) late.push_back(known[i]->sigma);
+  return quantile(late, 0.5);
+}
+
 // Energy bookkeeping of a 1:n transfer, read from the phase of the two bands. Where the band's
 // mode drives a mode at n times its frequency (or is driven by one at 1/n), the power passed
 // is proportional to A_lo^n A_hi sin(psi), psi = arg z_hi - n arg z_lo, both analytic signals
@@ -211,19 +219,14 @@ bool takes_energy(const std::vector<const Estimate*>& at, double r, bool one_tur
 // resonance lags the drive by a quarter period. The band's decay rate above its own, the power
 // over the energy it holds (A_this^2), is then proportional to the drive
 // d = Im(z_hi conj(z_lo)^n) / |z_this|^2, averaged over each estimate's window. Returns the
-// window means of z_hi conj(z_lo)^n / |z_this|^2 (their imaginary part d) and of its modulus,
-// one each per estimate of `at` before the first that `keep` (given the two) refuses; none where
-// the partner band lies beyond the Nyquist frequency, settles longer than the record or shows no
-// peak inside.
-struct Drive {
-  std::vector<std::complex<double>> mean;
-  std::vector<double> modulus;
-};
-
-Drive quadrature_drive(const std::vector<const Estimate*>& at, double r, const BandSetting& s,
-                       Quantity measured, signal::FftCache& cache,
-                       const std::function<bool(std::complex<double>, double)>& keep) {
-  Drive out;
+// window means of z_hi conj(z_lo)^n / |z_this|^2 (their imaginary part d), one per estimate of
+// `at` before the first that `keep` (given it and the window mean of its modulus) refuses; none
+// where the partner band lies beyond the Nyquist frequency, settles longer than the record or
+// shows no peak inside.
+std::vector<std::complex<double>> quadrature_drive(
+    const std::vector<const Estimate*>& at, double r, const BandSetting& s, Quantity measured,
+    signal::FftCache& cache, const std::function<bool(std::complex<double>, double)>& keep) {
+  std::vector<std::complex<double>> out;
   const ChannelSpectrum& channel = s.channel;
   const signal::Band sub{s.band.lo * r, s.band.hi * r};
   const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
@@ -272,8 +275,7 @@ Drive quadrature_drive(const std::vector<const Estimate*>& at, double r, const B
     const std::complex<double> mean = count > 0 ? sum / static_cast<double>(count) : 0.0;
     const double mean_modulus = count > 0 ? modulus / count : 0.0;
     if (!keep(mean, mean_modulus)) break;
-    out.mean.push_back(mean);
-    out.modulus.push_back(mean_modulus);
+    out.push_back(mean);
   }
   return out;
 }
@@ -309,11 +311,12 @@ bool drained_in_quadrature(const std::vector<const Estimate*>& during, double ow
     sign = here;
     return true;
   };
-  const Drive d = quadrature_drive(during, r, s, measured, cache, locked);
-  if (d.mean.size() != during.size()) return false;
+  const std::vector<std::complex<double>> drive =
+      quadrature_drive(during, r, s, measured, cache, locked);
+  if (drive.size() != during.size()) return false;
   std::vector<double> lx, ly;
   for (size_t k = 0; k < during.size(); ++k) {
-    const std::complex<double> m = d.mean[k];
+    const std::complex<double> m = drive[k];
     const double excess = during[k]->sigma - own;
     if (excess > 0) lx.push_back(std::log(std::abs(m.imag()))), ly.push_back(std::log(excess));
   }
@@ -346,10 +349,7 @@ Exchange one_way_exchange(const std::vector<const Estimate*>& seen, double typic
   for (const Estimate* e : seen)
     if (e->sigma_std <= typical) known.push_back(e);
   if (known.size() < 6) return x;
-  // The mode's own rate: the median over the later half of the rates known.
-  std::vector<double> late;
-  for (size_t i = known.size() / 2; i < known.size(); ++i) late.push_back(known[i]->sigma);
-  const double own = quantile(late, 0.5);
+  const double own = own_rate(known);
   const auto apart = [&](const Estimate* e) {
     return e->sigma > own && rates_apart(e->sigma, e->sigma_std, own, 0.0, typical);
   };
@@ -497,9 +497,7 @@ void extend_through_drain(Exchange& x, const std::vector<const Estimate*>& seen,
   for (const Estimate* e : seen)
     if (e->t > x.end_t && e->sigma_std <= typical) known.push_back(e);
   if (known.size() < 6) return;
-  std::vector<double> late;
-  for (size_t i = known.size() / 2; i < known.size(); ++i) late.push_back(known[i]->sigma);
-  const double own = quantile(late, 0.5);
+  const double own = own_rate(known);
   std::vector<const Estimate*> during;
   for (const Estimate* e : known) {
     if (!(e->sigma > own && rates_apart(e->sigma, e->sigma_std, own, 0.0, typical))) break;
