@@ -73,12 +73,9 @@ void warn_aliased(const LinearProblem& p, const LinearEvaluation& at, LinearUpda
 void user_holds(const LinearProblem& p, int minimised, std::vector<char>& held,
                 Eigen::VectorXd& begin) {
   held.assign(static_cast<size_t>(p.size()), 0);
-  begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
-  for (const ParameterHold& h : p.options.holds) {
-    const int k = set_index(p.names, h.name, "hold");
-    held[static_cast<size_t>(k)] = 1;
-    if (h.value > 0) begin(k) = h.value;
-  }
+  begin = p.begin();
+  for (const ParameterHold& h : p.options.holds)
+    held[static_cast<size_t>(set_index(p.names, h.name, "hold"))] = 1;
   if (minimised >= 0 && held[static_cast<size_t>(minimised)])
     throw InputError(fmt::format("the smallest rule: '{}' is held", p.options.smallest_set));
 }

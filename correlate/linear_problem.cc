@@ -116,6 +116,13 @@ PairingRules LinearProblem::rules() const {
   return r;
 }
 
+Eigen::VectorXd LinearProblem::begin() const {
+  Eigen::VectorXd x = start.cwiseMax(lower).cwiseMin(upper);
+  for (const ParameterHold& h : options.holds)
+    if (h.value > 0) x(set_index(names, h.name, "hold")) = h.value;
+  return x;
+}
+
 TrackedPoint LinearProblem::fresh(const Eigen::VectorXd& x, LinearEvaluation& e) const {
   if (options.interrupt) options.interrupt();
   const Eigen::VectorXd theta = x.array().exp();

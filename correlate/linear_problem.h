@@ -41,6 +41,9 @@ struct LinearProblem {
 
   /// Number of sets.
   int size() const { return sets.size(); }
+  /// Where the update begins: each set's start within its bounds, or a hold's value where the
+  /// options give one (InputError for a hold naming no set).
+  Eigen::VectorXd begin() const;
   /// The pairing rules of the options.
   PairingRules rules() const;
   /// The point at x with its pairs made afresh by the rules; e receives the evaluation there.

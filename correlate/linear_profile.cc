@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "jointlab/correlate/linear_uncertainty.h"
+
 namespace jointlab::correlate::detail {
 namespace {
 
@@ -100,15 +102,9 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
 // 4 beyond 3 (to -4.84), each where the fit had come out low, where the slope is steep and the
 // side above flattens. Where the bound comes first the set is bounded from one side only: no
 // standard deviation, and the warning says how little the chi-square rose.
-// The variance the summary's standard deviations rest on: the stated one, or the scatter's.
-double profile_scale(const LinearProblem& p, const LinearUpdateSummary& s) {
-  const double sf = p.options.frequency_std;
-  return sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
-}
-
 void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const LinearEvaluation& at,
                       const std::vector<char>& held, LinearUpdateSummary& s) {
-  const double scale = profile_scale(p, s);
+  const double scale = sigma_variance(p, s);
   const double base = at.weighted_squared_norm();
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[k];
@@ -152,7 +148,7 @@ std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& po
                                   const std::vector<char>& held, int k,
                                   const LinearUpdateSummary& s) {
   const double base = p.evaluate(point).weighted_squared_norm();
-  const ProfileSide side = profile_side(p, point, k, -1, 0.05, held, base, profile_scale(p, s));
+  const ProfileSide side = profile_side(p, point, k, -1, 0.05, held, base, sigma_variance(p, s));
   if (!side.checked || !side.bounded || side.lost) return std::nullopt;
   return std::exp(point.x(k) - 3 * side.sigma);
 }

@@ -194,9 +194,6 @@ std::string misfit_of_units(const model::Model& model, const std::vector<std::st
       r.final.pairing.pairs.size(), measured.frequency_hz.size());
 }
 
-}  // namespace jointlab::correlate::detail
-
-namespace jointlab::correlate::detail {
 namespace {
 
 // Kuhn's augmenting path from measured mode i over `candidates` (model columns, nearest first):
@@ -237,10 +234,7 @@ std::string units_before_fit(const model::Model& model, const std::vector<std::s
   if (measured.frequency_hz.size() < 3 || (measured.shapes.array().abs() > 0.0).any()) return "";
   const StiffnessSets sets(model, names);
   const LinearProblem p = make_problem(sets, model, names, sensors, measured, options);
-  Eigen::VectorXd begin = p.start.cwiseMax(p.lower).cwiseMin(p.upper);
-  for (const ParameterHold& h : options.holds)
-    if (h.value > 0) begin(set_index(names, h.name, "hold")) = h.value;
-  p.fresh(begin.array().log(), start);
+  p.fresh(p.begin().array().log(), start);
   return angular_units(measured, options, start, 0.25);
 }
 

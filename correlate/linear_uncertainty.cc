@@ -43,6 +43,11 @@ double t_widening(double reduced_chi2, int degrees_of_freedom) {
 
 }  // namespace
 
+double sigma_variance(const LinearProblem& p, const LinearUpdateSummary& s) {
+  const double sf = p.options.frequency_std;
+  return sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
+}
+
 // What the standard deviations of a scatter-set scale are, for the report: "rest on the
 // scatter: widened by sqrt(2.21) and, as that scale is itself estimated from 3 degrees of
 // freedom (Student's t), by 1.73", or why none is stated.
@@ -124,9 +129,7 @@ void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
   }
   Eigen::MatrixXd cov;
   if (s.t_widening > 0) {
-    const double scale =
-        sf * sf * (s.sigma_from_scatter ? s.reduced_chi2 * s.t_widening * s.t_widening : 1.0);
-    cov = d.inverse * scale;
+    cov = d.inverse * sigma_variance(p, s);
     for (size_t c = 0; c < fitted.size(); ++c) {
       const double v = cov(c, c);
       if (v >= 0 && std::isfinite(v)) s.parameters[fitted[c]].relative_std = std::sqrt(v);

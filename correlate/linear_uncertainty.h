@@ -31,6 +31,10 @@ std::string stated_noise(double sf, const Eigen::VectorXd& sigma, const Id& id) 
 /// stated.
 std::string scatter_widening(const LinearUpdateSummary& s);
 
+/// The variance the standard deviations rest on: frequency_std^2, times the reduced chi-square
+/// and Student's widening squared where they rest on the frequencies' scatter.
+double sigma_variance(const LinearProblem& p, const LinearUpdateSummary& s);
+
 /// Standard deviations of the fitted sets at the result `at` (the least-squares fit `ls` sets
 /// the chi-square), the sets acting together named, the degrees of freedom counted.
 void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
