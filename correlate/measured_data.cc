@@ -343,9 +343,7 @@ MeasuredModes measured_modes(const data::ProcessRun& run, const std::vector<Sens
   Eigen::Index col = 0;
   bool any_sensor = false;
   m.frequency_std = Eigen::VectorXd::Zero(m.frequency_hz.size());
-  const std::string unit = run.amplitude == Quantity::kDisplacement ? "m"
-                           : run.amplitude == Quantity::kVelocity   ? "m/s"
-                                                                    : "m/s^2";
+  const std::string unit = si_unit(run.amplitude);
   for (const auto& [k, list] : by_band) {
     std::vector<LinearReading> readings;
     int best_count = -1;

@@ -1,6 +1,7 @@
 #include "jointlab/data/process_folder.h"
 
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -40,9 +41,8 @@ struct Fields {
 };
 
 Quantity quantity_of(const Fields& f, const std::string& name) {
-  if (name == "displacement") return Quantity::kDisplacement;
-  if (name == "velocity") return Quantity::kVelocity;
-  if (name == "acceleration") return Quantity::kAcceleration;
+  if (const std::optional<Quantity> q = parse_quantity(name); q && *q != Quantity::kForce)
+    return *q;
   f.fail("amplitude_quantity",
          fmt::format("\"{}\" is not displacement, velocity or acceleration", name));
 }
@@ -91,9 +91,7 @@ Quantity amplitude_of(const Fields& f, const JsonValue& doc) {
   const Quantity q = quantity_of(
       f, f.get(doc, "document", "amplitude_quantity", JsonValue::Type::kString).string());
   if (const JsonValue* unit = doc.find("amplitude_unit"); unit && !unit->is_null()) {
-    const std::string si = q == Quantity::kDisplacement ? "m"
-                           : q == Quantity::kVelocity   ? "m/s"
-                                                        : "m/s^2";
+    const std::string si = si_unit(q);
     if (!unit->is_string() || unit->string() != si) {
       f.fail("amplitude_unit",
              fmt::format("{}: the backbones' amplitudes are read as SI ({} for {}); no other "
