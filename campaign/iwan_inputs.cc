@@ -62,9 +62,7 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
           "--amplitude {}: give --dof NODE:COMP (or a 0-based index), where it was measured",
           quantity));
     }
-    amplitude = quantity == "displacement" ? correlate::AmplitudeQuantity::kDisplacement
-                : quantity == "velocity"   ? correlate::AmplitudeQuantity::kVelocity
-                                           : correlate::AmplitudeQuantity::kAcceleration;
+    amplitude = correlate::amplitude_quantity(motion_quantity("--amplitude", quantity));
     correlate::Sensor s;
     s.dof = model::resolve_dof(m, a.dof, "--dof");
     s.channel = model::dof_name(m, s.dof);

@@ -21,7 +21,6 @@
 
 namespace jointlab::campaign {
 
-using correlate::AmplitudeQuantity;
 using correlate::IwanObjective;
 using correlate::IwanUpdateOptions;
 using correlate::IwanUpdateSummary;
@@ -57,9 +56,8 @@ std::string with_campaign_amplitude(const std::string& message) {
 }  // namespace
 
 void iwan_update_options(const Campaign& c, IwanUpdateOptions& io, IwanTargetOptions& to) {
-  io.amplitude = c.amplitude == Quantity::kDisplacement   ? AmplitudeQuantity::kDisplacement
-                 : c.amplitude == Quantity::kAcceleration ? AmplitudeQuantity::kAcceleration
-                                                          : AmplitudeQuantity::kVelocity;
+  // A motion quantity: campaign.cc refuses a force amplitude.
+  io.amplitude = correlate::amplitude_quantity(c.amplitude);
   to.amplitude = io.amplitude;
   const UpdateSettings in(c, "update.iwan");
   for (const auto& [key, s] : c.iwan_update.settings) {
