@@ -489,20 +489,25 @@ double iwan_rise_limit(double chi) {
   return std::max(secant, first_harmonic);
 }
 
+namespace {
+
+// How often noise of `dof` degrees of freedom reaches a chi-square of `chi2` or more.
+double chi2_chance(int dof, double chi2) {
+  return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), chi2));
+}
+
+}  // namespace
+
 bool MisfitEvidence::hits_differ_in_shape() const {
   if (!(between_hits_dof > 0) || !(common_dof > 0) || !(between_hits_share >= 0.25)) return false;
-  const auto chance = [](int dof, double chi2) {
-    return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), chi2));
-  };
-  return chance(between_hits_dof, between_hits_chi2) < 1e-3 &&
-         chance(common_dof, common_chi2) >= 1e-3;
+  return chi2_chance(between_hits_dof, between_hits_chi2) < 1e-3 &&
+         chi2_chance(common_dof, common_chi2) >= 1e-3;
 }
 
 bool MisfitEvidence::model_misses_each_hit() const {
   if (!(each_hit_dof > 0) || !(shared_frequency_dof > 0) || !(shared_frequency_rest_dof > 0))
     return false;
-  const double each = boost::math::cdf(
-      boost::math::complement(boost::math::chi_squared(each_hit_dof), each_hit_chi2));
+  const double each = chi2_chance(each_hit_dof, each_hit_chi2);
   const double shared = boost::math::cdf(boost::math::complement(
       boost::math::fisher_f(shared_frequency_dof, shared_frequency_rest_dof),
       std::max(0.0, shared_frequency_f)));
