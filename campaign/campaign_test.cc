@@ -69,6 +69,12 @@ TEST(Campaign, RejectsDefectsNamingTheLine) {
   EXPECT_NE(message(head + "[[mode]]\nband = [1.0, 2.0]\n[update.iwan]\nmodes = [\"mode 2\"]\n")
                 .find("'mode 2' is not the name of a [[mode]]"),
             std::string::npos);
+  // A path the system cannot look up (a name longer than a file name may be) is no file, said
+  // with the field, not an uncaught filesystem_error (fuzz_campaign).
+  const std::string long_name(300, 'm');
+  EXPECT_NE(message(head + "[[mode]]\nband = [1.0, 2.0]\n[model]\nfile = \"" + long_name + "\"\n")
+                .find("model: no file"),
+            std::string::npos);
   // Two modes of one name: the second is refused at its line.
   EXPECT_NE(message(head + "[[mode]]\nname = \"m\"\nband = [1.0, 2.0]\n[[mode]]\nname = \"m\"\n"
                            "band = [3.0, 4.0]\n")
