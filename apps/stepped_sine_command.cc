@@ -13,6 +13,7 @@
 #include "jointlab/core/units.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/data/names.h"
+#include "jointlab/data/process_folder.h"
 #include "jointlab/data/stepped_sine.h"
 #include "jointlab/modal/stepped_sine.h"
 #include "jointlab/modal/stepped_sine_output.h"
@@ -93,7 +94,8 @@ void run_stepped_sine(const SteppedSineArgs& args) {
   data::check_distinct_stems(args.files);
   // Read and extract everything first: a bad file stops the run before any output exists.
   std::vector<correlate::MeasuredBackbone> ring;
-  for (const std::string& f : args.ringdowns) ring.push_back(correlate::read_backbone_csv(f, 0));
+  for (const std::string& f : args.ringdowns)
+    ring.push_back(correlate::measured_backbone(data::read_process_backbone(f), 0));
   if (!args.figure.empty()) {
     const std::string ext = fs::path(args.figure).extension().string();
     if (ext != ".png" && ext != ".svg" && ext != ".pdf") {

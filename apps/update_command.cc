@@ -114,11 +114,14 @@ void run_update_linear(const LinearArgs& a) {
     throw InputError("update-linear: give either --measured DIR or --modes-table FILE");
   }
   const model::Model m = model::read_model(a.model);
-  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
+  const std::vector<correlate::Sensor> sensors =
+      correlate::sensors_of(data::read_sensors_file(a.sensors), m);
   const correlate::MeasuredModes measured =
-      a.modes_table.empty() ? correlate::measured_modes(data::read_process_run(a.measured), sensors,
-                                                        nullptr, options.frequency_std)
-                            : correlate::read_modes_table(a.modes_table, sensors, nullptr);
+      a.modes_table.empty()
+          ? correlate::measured_modes(data::read_process_run(a.measured), sensors, nullptr,
+                                      options.frequency_std)
+          : correlate::measured_modes(
+                data::read_modes_table(a.modes_table, correlate::channels_of(sensors)), sensors);
   // Progress on stderr: a fit of the example beam takes 10-50 s.
   options.progress = [](int iteration, double cost, double largest) {
     say(stderr, "update-linear: iteration {}, cost {:.4g}, largest frequency error {:.3g} %\n",

@@ -332,7 +332,8 @@ IwanInputs read_iwan_inputs(const model::Model& m, const IwanInputArgs& a,
                      ": --amplitude and --dof describe --backbone tables; a --measured folder "
                      "records its own amplitude quantity and sensors");
   }
-  const std::vector<correlate::Sensor> sensors = correlate::read_sensors(a.sensors, m);
+  const std::vector<correlate::Sensor> sensors =
+      correlate::sensors_of(data::read_sensors_file(a.sensors), m);
   const data::ProcessRun run = data::read_process_run(a.measured);
   std::vector<int> bands;
   const correlate::MeasuredModes measured = correlate::measured_modes(run, sensors, &bands);

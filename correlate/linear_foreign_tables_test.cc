@@ -28,6 +28,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A sensors text read at the edge (data::parse_sensors_file) and resolved against `model`.
+std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
+                                  const model::Model& model) {
+  return sensors_of(data::parse_sensors_file(text, name), model);
+}
+
+// A modes table read at the edge (data::read_modes_table against the sensors' channels) and
+// realised (measured_modes), its mode numbers into `numbers` (if given).
+MeasuredModes read_table_modes(const fs::path& path, const std::vector<Sensor>& sensors,
+                               std::vector<int>* numbers) {
+  const data::ModesTable table = data::read_modes_table(path, channels_of(sensors));
+  if (numbers) *numbers = table.modes;
+  return measured_modes(table, sensors);
+}
+
 // The two chains' lowest `count` modes at four sensors per chain, noise-free, frequencies in Hz.
 MeasuredModes chain_modes(const model::Model& truth, const std::vector<Sensor>& sensors,
                           int count) {
@@ -241,10 +256,10 @@ TEST(ModesTableFromAnotherTool, DampingAndMpcColumnsAreLeftOutAndTheRestNamed) {
     std::ofstream(d / file) << text;
     return d / file;
   };
-  const MeasuredModes plain = read_modes_table(
+  const MeasuredModes plain = read_table_modes(
       write("plain.csv", "mode,frequency_hz,z1,z2,z3\n1,57.9,0.5,-0.25,1\n2,120,1,0.5,-0.75\n"),
       sensors, nullptr);
-  const MeasuredModes extra = read_modes_table(
+  const MeasuredModes extra = read_table_modes(
       write("extra.csv",
             "mode,frequency_hz,Damping [%],z1,z2,z3,damping_ratio,MPC,mpd (deg)\n"
             "1,57.9,0.12,0.5,-0.25,1,0.0012,0.998,1.5\n2,120,0.2,1,0.5,-0.75,0.002,0.97,4\n"),
@@ -254,7 +269,7 @@ TEST(ModesTableFromAnotherTool, DampingAndMpcColumnsAreLeftOutAndTheRestNamed) {
   EXPECT_EQ(extra.frequency_hz, plain.frequency_hz);
   EXPECT_EQ(extra.shapes, plain.shapes);
   const std::string unknown = jointlab::testing::input_error_of([&] {
-    read_modes_table(write("unknown.csv", "mode,frequency_hz,z1,acc4\n1,57.9,1,2\n"), sensors,
+    read_table_modes(write("unknown.csv", "mode,frequency_hz,z1,acc4\n1,57.9,1,2\n"), sensors,
                      nullptr);
   });
   EXPECT_NE(unknown.find("unknown.csv:1: column 'acc4' is not a sensor channel (the sensors file "
@@ -262,7 +277,7 @@ TEST(ModesTableFromAnotherTool, DampingAndMpcColumnsAreLeftOutAndTheRestNamed) {
             std::string::npos)
       << unknown;
   const std::string rad = jointlab::testing::input_error_of([&] {
-    read_modes_table(write("rad.csv", "mode,frequency_rad_s,z1\n1,363.8,1\n"), sensors, nullptr);
+    read_table_modes(write("rad.csv", "mode,frequency_rad_s,z1\n1,363.8,1\n"), sensors, nullptr);
   });
   EXPECT_NE(rad.find("rad.csv:1: column 2 'frequency_rad_s': frequencies are read in Hz only, "
                      "under frequency_hz: give them so (rad/s divided by 2 pi)"),
@@ -281,7 +296,7 @@ TEST(ModesTableFromAnotherTool, FrequencyHeadersWithTheirUnitAreRead) {
   const std::vector<Sensor> sensors{{"z1", 1, 1.0}, {"z2", 2, 1.0}};
   const auto read = [&](const std::string& header, const std::string& rows) {
     std::ofstream(d / "t.csv") << header << "\n" << rows;
-    return read_modes_table(d / "t.csv", sensors, nullptr);
+    return read_table_modes(d / "t.csv", sensors, nullptr);
   };
   const std::string rows = "1,57.9,0.5,1\n2,120,1,-0.5\n";
   const MeasuredModes plain = read("mode,frequency_hz,z1,z2", rows);

@@ -1,6 +1,7 @@
 #include "jointlab/correlate/measured_data.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -27,167 +28,7 @@
 #include "jointlab/model/linear_modes.h"
 
 namespace jointlab::correlate {
-namespace {
-
 namespace fs = std::filesystem;
-using data::JsonValue;
-
-// Calls on_header(cells, line) for the first non-empty, non-comment line of a small CSV file
-// and on_row(cells, line) for each later one, after checking it has the header's width;
-// returns whether a header was seen. InputError naming the file ("cannot open the <what>").
-// With `detect`, the cells are split at whichever of ',', ';' and tab the header holds most
-// (data::detect_delimiter), else at ','.
-template <typename OnHeader, typename OnRow>
-bool for_each_csv_row(const fs::path& path, const std::string& what, OnHeader on_header,
-                      OnRow on_row, bool detect = false) {
-  const std::string name = path.string();
-  const auto text = data::read_text_file(path);
-  if (!text) throw InputError(fmt::format("{}: cannot open the {}", name, what));
-  char delim = ',';
-  if (detect) {
-    data::TextLines lines(data::strip_bom(*text));
-    std::string_view line;
-    while (lines.next(line)) {
-      const std::string_view t = trim(line);
-      if (t.empty() || t.front() == '#') continue;
-      delim = data::detect_delimiter(t);
-      break;
-    }
-  }
-  bool header = false;
-  size_t width = 0;
-  data::for_each_csv_line(
-      *text,
-      [&](const std::vector<std::string>& cells, long n) {
-        if (!header) {
-          on_header(cells, n);
-          header = true;
-          width = cells.size();
-          return;
-        }
-        if (cells.size() != width) {
-          // "(0.1,0.2)" unquoted in a comma-separated file is split in two.
-          const bool split_pair =
-              delim == ',' && std::any_of(cells.begin(), cells.end(), [](const std::string& c) {
-                return !c.empty() && c.front() == '(' && c.back() != ')';
-              });
-          throw InputError(where(
-              name, n,
-              fmt::format("{} cells where the header has {}{}", cells.size(), width,
-                          split_pair ? " (a complex cell written (re,im) splits at its comma in "
-                                       "a comma-separated file: quote it, \"(0.1,0.2)\", or "
-                                       "write 0.1+0.2i)"
-                                     : "")));
-        }
-        on_row(cells, n);
-      },
-      delim);
-  return header;
-}
-
-// What a shape column of a modes table holds: a whole entry (real or complex), or the real or
-// imaginary part of one; kMagnitudeOrPhase (row -1) names a sensor's magnitude or phase column.
-// kModalParameter (row -1) a column of what other tools export beside the shapes (damping,
-// MPC, MPD, modal mass), which the linear update does not use and which is left out.
-constexpr int kWhole = 0, kRealPart = 1, kImaginaryPart = 2, kMagnitudeOrPhase = 4,
-              kModalParameter = 8;
-struct TableColumn {
-  int row = -1;        // sensor index, -1: none
-  int part = kWhole;   // kWhole, kRealPart, kImaginaryPart or kMagnitudeOrPhase
-  std::string header;  // as written
-  std::string base;    // the sensor channel, for parts
-};
-
-// The column headed `header`: a sensor channel, or one with a suffix _re/_im (also _real/_imag,
-// any case, after '_', '.' or ' ').
-// Whether a modes-table column headed `header` (not a sensor channel) holds a modal parameter
-// other tools export beside the shapes: damping (a ratio or in %), zeta, MPC, MPD, MCF, MOV or
-// the modal mass, any case, a unit in brackets or after a blank or '_' allowed ("Damping [%]",
-// "damping_ratio", "MPC (%)", "Modal mass").
-bool modal_parameter_column(const std::string& header) {
-  const std::string h(trim(lower(header.substr(0, header.find_first_of("[(")))));
-  const auto begins = [&](std::string_view w) {
-    return h.rfind(w, 0) == 0 &&
-           (h.size() == w.size() || h[w.size()] == '_' || h[w.size()] == ' ' || h[w.size()] == '.');
-  };
-  for (const std::string_view w :
-       {"damping", "damping_ratio", "damping ratio", "zeta", "mpc", "mpd", "mcf", "mov"})
-    if (begins(w)) return true;
-  return h == "modal_mass" || h == "modal mass";
-}
-
-TableColumn table_column(const std::vector<Sensor>& sensors, const std::string& header) {
-  TableColumn out;
-  out.header = header;
-  out.row = find_sensor(sensors, header);
-  if (out.row >= 0) return out;
-  if (modal_parameter_column(header)) {
-    out.part = kModalParameter;
-    return out;
-  }
-  const size_t cut = header.find_last_of("_. ");
-  if (cut == std::string::npos || cut == 0) return out;
-  const std::string suffix = lower(header.substr(cut + 1));
-  out.base = std::string(trim(std::string_view(header).substr(0, cut)));
-  const int row = find_sensor(sensors, out.base);
-  if (row < 0) return out;
-  if (suffix == "re" || suffix == "real") {
-    out.row = row, out.part = kRealPart;
-  } else if (suffix == "im" || suffix == "imag") {
-    out.row = row, out.part = kImaginaryPart;
-  } else if (suffix == "mag" || suffix == "abs" || suffix == "amp" || suffix == "phase" ||
-             suffix == "deg" || suffix == "arg") {
-    out.part = kMagnitudeOrPhase;
-  }
-  return out;
-}
-
-// A cell as a complex number: a real number, a+bi or a-bj (blanks allowed, i or j, optionally
-// in round brackets, "bi" alone imaginary), or (a,b); nothing else, and finite parts only.
-std::optional<std::complex<double>> complex_cell(const std::string& cell) {
-  std::string t;
-  for (const char ch : cell)
-    if (!std::isspace(static_cast<unsigned char>(ch))) t += ch;
-  if (t.size() >= 2 && t.front() == '(' && t.back() == ')') t = t.substr(1, t.size() - 2);
-  const auto real = [](std::string_view x) -> std::optional<double> {
-    const std::optional<double> v = data::parse_double(x);
-    if (!v || !std::isfinite(*v)) return std::nullopt;
-    return v;
-  };
-  if (const size_t comma = t.find(','); comma != std::string::npos) {
-    if (cell.find('(') == std::string::npos) return std::nullopt;  // "0,5": a decimal comma?
-    const auto re = real(std::string_view(t).substr(0, comma));
-    const auto im = real(std::string_view(t).substr(comma + 1));
-    if (!re || !im) return std::nullopt;
-    return std::complex<double>(*re, *im);
-  }
-  if (t.empty()) return std::nullopt;
-  const char last = static_cast<char>(std::tolower(static_cast<unsigned char>(t.back())));
-  if (last != 'i' && last != 'j') {
-    const auto re = real(t);
-    if (!re) return std::nullopt;
-    return std::complex<double>(*re, 0.0);
-  }
-  const std::string_view body = std::string_view(t).substr(0, t.size() - 1);
-  // The imaginary part starts at the last sign that is neither first nor an exponent's.
-  size_t split = std::string_view::npos;
-  for (size_t k = body.size(); k-- > 1;) {
-    if ((body[k] == '+' || body[k] == '-') && body[k - 1] != 'e' && body[k - 1] != 'E') {
-      split = k;
-      break;
-    }
-  }
-  const std::string_view re_text = split == std::string_view::npos ? "" : body.substr(0, split);
-  const std::string_view im_text = split == std::string_view::npos ? body : body.substr(split);
-  std::optional<double> re = re_text.empty() ? std::optional<double>(0.0) : real(re_text);
-  std::optional<double> im = im_text.empty() || im_text == "+" ? std::optional<double>(1.0)
-                             : im_text == "-"                  ? std::optional<double>(-1.0)
-                                                               : real(im_text);
-  if (!re || !im) return std::nullopt;
-  return std::complex<double>(*re, *im);
-}
-
-}  // namespace
 
 MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points) {
   MeasuredBackbone b;
@@ -203,7 +44,7 @@ std::vector<MeasuredBackbone> stepped_sine_backbones(const data::SteppedSineRun&
   std::vector<MeasuredBackbone> out;
   for (const data::SteppedSineOutput& o : run.outputs) {
     if (o.file.empty()) continue;
-    out.push_back(read_backbone_csv(run.dir / o.file, sensor));
+    out.push_back(measured_backbone(data::read_process_backbone(run.dir / o.file), sensor));
     out.back().kind = BackboneKind::kSteppedSine;
     out.back().coverage_factor = run.coverage_factor;
   }
@@ -379,77 +220,6 @@ MeasuredModes measured_modes(const data::ProcessRun& run, const std::vector<Sens
   return m;
 }
 
-MeasuredBackbone read_backbone_csv(const fs::path& path, int sensor) {
-  const std::string name = path.string();
-  const char* wanted[] = {"amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
-                          "damping_std"};
-  int column[5] = {-1, -1, -1, -1, -1};
-  std::vector<double> values[5];
-  std::vector<size_t> marks;  // columns of data::is_point_mark: their marked rows are skipped
-  int coverage_col = -1;      // process's coverage_factor: k of the std columns
-  double coverage = 0;        // its value (0: none read)
-  const auto on_header = [&](const std::vector<std::string>& cells, long n) {
-    for (size_t c = 0; c < cells.size(); ++c)
-      if (cells[c] == "coverage_factor") coverage_col = static_cast<int>(c);
-    for (int k = 0; k < 5; ++k) {
-      for (size_t c = 0; c < cells.size(); ++c) {
-        if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
-      }
-      if (column[k] < 0)
-        throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
-    }
-    for (size_t c = 0; c < cells.size(); ++c) {
-      if (data::is_point_mark(cells[c])) marks.push_back(c);
-    }
-  };
-  const auto on_row = [&](const std::vector<std::string>& cells, long n) {
-    for (const size_t c : marks) {
-      if (c < cells.size() && !cells[c].empty() && std::strtod(cells[c].c_str(), nullptr) != 0)
-        return;
-    }
-    if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
-      const std::string& cell = cells[static_cast<size_t>(coverage_col)];
-      coverage =
-          data::coverage_factor_of_row(std::strtod(cell.c_str(), nullptr), coverage, cell, name, n);
-    }
-    for (int k = 0; k < 5; ++k) {
-      const std::string& cell = cells[static_cast<size_t>(column[k])];
-      double x = 0;
-      size_t used = 0;
-      try {
-        x = std::stod(cell, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != cell.size() || cell.empty() || !std::isfinite(x)) {
-        throw InputError(
-            where(name, n, fmt::format("{} '{}' is not a finite number", wanted[k], cell)));
-      }
-      if (k == 0 && !(x > 0)) throw InputError(where(name, n, "amplitude must be > 0"));
-      if (k == 1 && !(x > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
-      if (k >= 3 && x < 0)
-        throw InputError(where(name, n, fmt::format("{} must be >= 0", wanted[k])));
-      values[k].push_back(x);
-    }
-  };
-  const bool header = for_each_csv_row(path, "backbone file", on_header, on_row);
-  if (!header) throw InputError(where(name, 0, "empty file, expected a backbone header"));
-  if (values[0].empty()) throw InputError(where(name, 0, "no backbone point"));
-  MeasuredBackbone b;
-  b.sensor = sensor;
-  b.source = name;  // for messages, and which hit a curve is where several are returned
-  auto vec = [](const std::vector<double>& v) {
-    return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
-  };
-  b.amplitude = vec(values[0]);
-  b.frequency_hz = vec(values[1]);
-  b.damping_ratio = vec(values[2]);
-  b.frequency_std_hz = vec(values[3]);
-  b.damping_std = vec(values[4]);
-  if (coverage > 0) b.coverage_factor = coverage;
-  return b;
-}
-
 BandChannel band_channel(const data::ProcessRun& run, const std::vector<Sensor>& sensors,
                          int band) {
   // Per sensor: the hits (sources) with a backbone there, and the hits naming it reference.
@@ -553,227 +323,12 @@ std::vector<MeasuredBackbone> measured_backbones(const data::ProcessRun& run,
                                                  const std::vector<std::string>& chosen) {
   std::vector<MeasuredBackbone> out;
   for (const BandOutput& b : band_outputs(run, sensors, band, chosen))
-    out.push_back(read_backbone_csv(run.dir / b.output->file, b.sensor));
+    out.push_back(
+        measured_backbone(data::read_process_backbone(run.dir / b.output->file), b.sensor));
   return out;
 }
 
 namespace {
-
-// The sensors' channels, for a message: "z1, z2, z3" (the first 8, then how many more).
-std::string sensor_channels(const std::vector<Sensor>& sensors) {
-  std::vector<std::string> names;
-  for (size_t i = 0; i < sensors.size() && i < 8; ++i) names.push_back(sensors[i].channel);
-  if (sensors.size() > 8) names.push_back(fmt::format("and {} more", sensors.size() - 8));
-  return fmt::format("{} channel{}: {}", sensors.size(), sensors.size() == 1 ? "" : "s",
-                     fmt::join(names, ", "));
-}
-
-// The factor to Hz of a modes table's frequency column `cell` (column 2 of line n of `name`):
-// `frequency_hz`, or a frequency named as test-modal tools write it (frequency, freq, f, fn,
-// natural frequency, eigenfrequency; any case) with its unit in Hz or kHz given in brackets
-// ([Hz], (kHz)) or after '_' (f_Hz, Frequency_kHz); 0 where the cell names no frequency. A
-// frequency without a unit, or in any other, is refused naming the column; rad/s says to give Hz.
-double frequency_column_scale(const std::string& name, long n, const std::string& cell) {
-  const std::string f = lower(cell);
-  const auto refuse = [&](const std::string& why) {
-    return InputError(where(name, n, fmt::format("column 2 '{}': {}", printable(cell), why)));
-  };
-  if (f.find("rad") != std::string::npos || f.find("omega") != std::string::npos)
-    throw refuse(
-        "frequencies are read in Hz only, under frequency_hz: give them so (rad/s "
-        "divided by 2 pi)");
-  std::string base = f, unit, written;  // written: the unit as the cell gives it
-  if (cell.find_first_of("[(") != std::string::npos) {
-    // "Frequency [Hz]" or "Freq (Hz)" (data/csv_lines' splits); brackets that do not close the
-    // cell name no frequency.
-    const auto split = cell.find('[') != std::string::npos ? data::split_square_brackets(cell)
-                                                           : data::split_round_brackets(cell);
-    if (!split) return 0;
-    base = lower(split->first);
-    written = split->second;
-    unit = lower(written);
-  } else {
-    for (const char* u : {"hz", "khz"})
-      if (const std::string tail = std::string("_") + u; base.ends_with(tail)) {
-        base.erase(base.size() - tail.size());
-        unit = u;
-      }
-  }
-  if (base == "frequency_hz") {  // frequency_hz [Hz]; in another unit, not frequency_hz
-    if (unit == "hz") return 1;
-    throw refuse(fmt::format("unit '{}' refused: frequency_hz is in Hz ([Hz] or no unit)",
-                             printable(written)));
-  }
-  const std::vector<std::string> names = {"frequency",         "freq",          "f", "fn", "f_n",
-                                          "natural frequency", "eigenfrequency"};
-  if (std::find(names.begin(), names.end(), base) == names.end()) return 0;
-  if (unit == "hz") return 1;
-  if (unit == "khz") return 1e3;
-  if (unit.empty())
-    throw refuse(
-        "a frequency needs its unit: write frequency_hz, or the unit in brackets ('Frequency "
-        "[Hz]', 'Frequency [kHz]')");
-  throw refuse(
-      fmt::format("unit '{}' is not read: give the frequencies in Hz (frequency_hz) or kHz",
-                  printable(written)));
-}
-
-// Whether a modes table's header cell names the mode column: `mode` in any case, or as test-modal
-// tools write it, `Mode #`, `Mode No.`, `Mode number`, `mode_nr` (blanks, `_` and `.` aside).
-// Before, `Mode #` was refused as "column 1 'Mode #' is not 'mode'".
-bool mode_column(const std::string& cell) {
-  std::string k;
-  for (const char c : lower(cell))
-    if (c != ' ' && c != '\t' && c != '_' && c != '.') k += c;
-  return k == "mode" || k == "mode#" || k == "modeno" || k == "modenr" || k == "modenumber";
-}
-
-// The shape columns of a modes table from its header `cells` (line n of `name`), after the
-// mode and frequency columns that must begin it (`to_hz` receives the frequency column's factor
-// to Hz): each a sensor channel (or its real or imaginary part), none twice, every part beside
-// its other part.
-std::vector<TableColumn> modes_table_columns(const std::string& name,
-                                             const std::vector<Sensor>& sensors,
-                                             const std::vector<std::string>& cells, long n,
-                                             double& to_hz) {
-  std::vector<TableColumn> columns;
-  to_hz = cells.size() >= 2 && mode_column(cells[0])
-              ? (cells[1] == "frequency_hz" ? 1 : frequency_column_scale(name, n, cells[1]))
-              : 0;
-  if (to_hz == 0) {
-    // What was found, as written, and where: a swapped pair says to swap it.
-    std::string found;
-    for (size_t c = 0; c < std::min<size_t>(cells.size(), 2); ++c) {
-      if (c > 0) found += ',';
-      found += printable(cells[c]);
-    }
-    const bool swapped =
-        cells.size() >= 2 && mode_column(cells[1]) && (cells[0] == "frequency_hz" || [&] {
-          try {
-            return frequency_column_scale(name, n, cells[0]) > 0;
-          } catch (const InputError&) {
-            return false;
-          }
-        }());
-    // update-linear's own modes.csv (measured,frequency_hz,model_mode,...) pairs the modes of a
-    // past update; it holds no shapes to pair a new one with.
-    const bool update_output =
-        cells.size() >= 3 && cells[0] == "measured" && cells[2] == "model_mode";
-    throw InputError(where(
-        name, n,
-        fmt::format("the header must begin with mode,frequency_hz (or a frequency with its unit, "
-                    "'Frequency [Hz]'); it begins '{}'{}",
-                    found,
-                    update_output
-                        ? ": this is the modes.csv update-linear writes (measured against model "
-                          "modes), not a modes table; give --measured DIR or a table of mode, "
-                          "frequency_hz and one shape column per sensor"
-                    : swapped ? ": put the mode column first"
-                    : cells.empty() || !mode_column(cells[0])
-                        ? fmt::format(", column 1 '{}' is not 'mode'",
-                                      cells.empty() ? "" : printable(cells[0]))
-                        : fmt::format(", column 2 '{}' names no frequency",
-                                      cells.size() < 2 ? "" : printable(cells[1])))));
-  }
-  for (size_t c = 2; c < cells.size(); ++c) {
-    const TableColumn col = table_column(sensors, cells[c]);
-    if (col.part == kModalParameter) {
-      columns.push_back(col);
-      continue;
-    }
-    if (col.row < 0) {
-      throw InputError(where(
-          name, n,
-          col.part == kMagnitudeOrPhase
-              ? fmt::format("column '{}': magnitude or phase columns are not read; give the "
-                            "real and imaginary parts ({}_re, {}_im) or complex cells (0.1+0.2i)",
-                            cells[c], col.base, col.base)
-              : fmt::format("column '{}' is not a sensor channel (the sensors file has {}); a "
-                            "modes table's columns are mode, frequency_hz, one per channel (or "
-                            "its _re and _im parts), and damping, MPC, MPD or modal mass "
-                            "columns, which are left out: rename or remove it",
-                            cells[c], sensor_channels(sensors))));
-    }
-    for (const TableColumn& other : columns) {
-      if (other.part != kModalParameter && other.row == col.row &&
-          (other.part == col.part || other.part == kWhole || col.part == kWhole)) {
-        throw InputError(where(name, n,
-                               fmt::format("column '{}': sensor channel {} twice", cells[c],
-                                           sensors[static_cast<size_t>(col.row)].channel)));
-      }
-    }
-    columns.push_back(col);
-  }
-  for (const TableColumn& col : columns) {
-    if (col.part != kRealPart && col.part != kImaginaryPart) continue;
-    const bool paired = std::any_of(columns.begin(), columns.end(), [&](const TableColumn& o) {
-      return o.row == col.row && o.part == kRealPart + kImaginaryPart - col.part;
-    });
-    if (!paired) {
-      throw InputError(where(name, n,
-                             fmt::format("column '{}' has no {} part beside it ({}_{})", col.header,
-                                         col.part == kRealPart ? "imaginary" : "real", col.base,
-                                         col.part == kRealPart ? "im" : "re")));
-    }
-  }
-  return columns;
-}
-
-// The shape of one modes-table row (`cells`, line n of `name`) at the sensors, complex, 0 where
-// a sensor has no entry; a sensor with one part of two given is refused. `number` reads cell c.
-template <class Number>
-Eigen::VectorXcd row_shape(const std::string& name, const std::vector<Sensor>& sensors,
-                           const std::vector<TableColumn>& columns,
-                           const std::vector<std::string>& cells, long n, const Number& number) {
-  const auto n_s = static_cast<Eigen::Index>(sensors.size());
-  Eigen::VectorXcd v = Eigen::VectorXcd::Zero(n_s);
-  std::vector<char> given(sensors.size(), 0);  // per sensor: parts given (1 real, 2 imaginary)
-  for (size_t c = 2; c < cells.size(); ++c) {
-    const TableColumn& col = columns[c - 2];
-    const std::string& cell = cells[c];
-    if (cell.empty() || col.part == kModalParameter) continue;
-    if (col.part == kWhole) {
-      const std::optional<std::complex<double>> z = complex_cell(cell);
-      if (!z) {
-        std::string point = cell;  // a decimal comma (a European export) names itself
-        std::replace(point.begin(), point.end(), ',', '.');
-        const bool comma = point != cell && data::parse_double(point).has_value();
-        throw InputError(
-            where(name, n,
-                  comma ? fmt::format("shape entry '{}' of column '{}' is not a number (a decimal "
-                                      "comma: write {} with a decimal point; ';' or tab may still "
-                                      "separate the cells)",
-                                      cell, col.header, point)
-                        : fmt::format("shape entry '{}' of column '{}' is not a number (real, or "
-                                      "complex as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
-                                      cell, col.header)));
-      }
-      v(col.row) = *z;
-      given[static_cast<size_t>(col.row)] = 3;
-      continue;
-    }
-    const double x = number(c, "shape entry");
-    if (col.part == kRealPart)
-      v(col.row).real(x);
-    else
-      v(col.row).imag(x);
-    given[static_cast<size_t>(col.row)] |= static_cast<char>(col.part);
-  }
-  for (const TableColumn& col : columns) {
-    if (col.part == kModalParameter) continue;
-    const char g = given[static_cast<size_t>(col.row)];
-    if (col.part != kWhole && g != 0 && g != 3) {
-      throw InputError(
-          where(name, n,
-                fmt::format("sensor {}: its {} part is given and its {} part empty: give both or "
-                            "neither (neither: not measured)",
-                            sensors[static_cast<size_t>(col.row)].channel,
-                            g == kRealPart ? "real" : "imaginary",
-                            g == kRealPart ? "imaginary" : "real")));
-    }
-  }
-  return v;
-}
 
 // Shape v of `mode` (line n of `name`) as the real shape nearest it: refused below kMpcRefused,
 // a warning into `warnings` below kMpcPoor. Parts given as 0 and 0 are an entry of 0, which
@@ -812,70 +367,29 @@ Eigen::VectorXd real_shape(const std::string& name, long n, int mode, const Eige
 
 }  // namespace
 
-MeasuredModes read_modes_table(const fs::path& path, const std::vector<Sensor>& sensors,
-                               std::vector<int>* modes) {
-  const std::string name = path.string();
-  std::vector<TableColumn> columns;  // what each shape column holds
-  std::vector<int> numbers;
-  std::vector<double> freq;
-  std::vector<Eigen::VectorXd> shape;
-  std::vector<std::string> warnings;
-  double to_hz = 1;  // the frequency column's unit: Hz or kHz
-  const auto on_header = [&](const std::vector<std::string>& cells, long n) {
-    columns = modes_table_columns(name, sensors, cells, n, to_hz);
-  };
-  const auto on_row = [&](const std::vector<std::string>& cells, long n) {
-    auto number = [&](size_t c, const char* what) {
-      const std::optional<double> x = data::parse_double(cells[c]);
-      if (!x || !std::isfinite(*x)) {
-        // A decimal comma (a European export): say so where a point would read.
-        std::string point = cells[c];
-        std::replace(point.begin(), point.end(), ',', '.');
-        const bool comma = point != cells[c] && data::parse_double(point).has_value();
-        throw InputError(where(
-            name, n,
-            fmt::format("{} '{}' is not a number{}", what, cells[c],
-                        comma ? fmt::format(" (a decimal comma: write {} with a decimal point; "
-                                            "';' or tab may still separate the cells)",
-                                            point)
-                              : "")));
-      }
-      return *x;
-    };
-    const double mode = number(0, "mode");
-    if (mode != std::floor(mode) || mode < 1) {
-      throw InputError(where(name, n, fmt::format("mode '{}' must be an integer >= 1", cells[0])));
-    }
-    for (int m : numbers) {
-      if (m == static_cast<int>(mode)) {
-        throw InputError(where(name, n, fmt::format("mode {} twice", m)));
-      }
-    }
-    const double f = to_hz * number(1, "frequency_hz");
-    if (!(f > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
-    const Eigen::VectorXcd v = row_shape(name, sensors, columns, cells, n, number);
-    Eigen::VectorXd real = real_shape(name, n, static_cast<int>(mode), v, warnings);
-    numbers.push_back(static_cast<int>(mode));
-    freq.push_back(f);
-    shape.push_back(std::move(real));
-  };
-  for_each_csv_row(path, "modes table", on_header, on_row, /*detect_delimiter=*/true);
-  if (freq.empty()) throw InputError(fmt::format("{}: no mode in the table", name));
-  MeasuredModes out;
-  const auto count = static_cast<Eigen::Index>(freq.size());
-  out.frequency_hz.resize(count);
-  out.shapes = Eigen::MatrixXcd::Zero(static_cast<Eigen::Index>(sensors.size()), count);
-  for (Eigen::Index i = 0; i < count; ++i) {
-    out.frequency_hz(i) = freq[static_cast<size_t>(i)];
-    out.shapes.col(i) = shape[static_cast<size_t>(i)].cast<std::complex<double>>();
-    out.labels.push_back(fmt::format("mode {}", numbers[static_cast<size_t>(i)]));
-    out.ids.push_back(std::to_string(numbers[static_cast<size_t>(i)]));
-  }
-  out.warnings = std::move(warnings);
-  if (modes) *modes = numbers;
+std::vector<std::string> channels_of(const std::vector<Sensor>& sensors) {
+  std::vector<std::string> out;
+  for (const Sensor& s : sensors) out.push_back(s.channel);
   return out;
 }
 
+MeasuredModes measured_modes(const data::ModesTable& table,
+                             [[maybe_unused]] const std::vector<Sensor>& sensors) {
+  assert(table.shapes.rows() == static_cast<Eigen::Index>(sensors.size()));
+  MeasuredModes out;
+  const auto count = table.frequency_hz.size();
+  out.frequency_hz = table.frequency_hz;
+  out.shapes = Eigen::MatrixXcd::Zero(table.shapes.rows(), count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const auto k = static_cast<size_t>(i);
+    out.shapes.col(i) =
+        real_shape(table.source, table.lines[k], table.modes[k], table.shapes.col(i), out.warnings)
+            .cast<std::complex<double>>();
+    out.labels.push_back(fmt::format("mode {}", table.modes[k]));
+    out.ids.push_back(std::to_string(table.modes[k]));
+  }
+  return out;
+}
 int measured_mode_of(const model::Model& model, const std::vector<Sensor>& sensors,
                      const MeasuredModes& measured, int mode, double mac_threshold) {
   const model::LinearModes modes = model::linear_modes(model.mass, model.linear_stiffness());

@@ -26,6 +26,7 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/sensors.h"
 #include "jointlab/data/backbone_table.h"
+#include "jointlab/data/modes_table.h"
 #include "jointlab/data/process_folder.h"
 #include "jointlab/model/model_file.h"
 
@@ -79,12 +80,6 @@ MeasuredModes measured_modes(const data::ProcessRun& run, const std::vector<Sens
 
 /// A backbone of `kind` measured at sensor index `sensor` with `points` points, all zero.
 MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index points);
-
-/// Reads one backbone CSV of `process` as a curve measured at sensor index `sensor`, leaving
-/// out rows marked in a `harmonic` or `exchange` column (not the mode's own frequency or
-/// damping), its std columns' k from its `coverage_factor` column (none: 1); InputError naming
-/// the file and line.
-MeasuredBackbone read_backbone_csv(const std::filesystem::path& path, int sensor);
 
 /// A backbone table (data/backbone_table.h, read at the edge) as a measured ring-down backbone:
 /// at sensor index `sensor`, or of the modal amplitude q when `sensor` is negative.
@@ -141,21 +136,16 @@ inline constexpr double kMpcPoor = 0.9;
 /// apart in phase, the imaginary part left out holding 15 % of the shape or more.
 inline constexpr double kMpcRefused = 0.5;
 
-/// Measured linear modes from a plain table: header `mode,frequency_hz[,<channel>...]`, one
-/// row per mode, optional shape entries per channel (every channel a sensor; empty cells and
-/// sensors without a column are 0), delimited by ',', ';' or tab (the header's most frequent).
-/// An entry is real or complex (`0.1+0.2i`, `0.1-0.2j`, `(0.1+0.2j)`, `(0.1,0.2)`), or a channel
-/// is given as two columns of its real and imaginary parts (`<channel>_re`, `<channel>_im`; also
-/// `_real`/`_imag`, any case, after '_', '.' or ' '). A complex shape is realised (mac.h
-/// realise(): the real part at the phase that maximises it): with MPC below kMpcRefused the
-/// table is refused naming the mode, below kMpcPoor the MeasuredModes' warnings name it and its
-/// MPC. Columns of damping, MPC, MPD, MCF, MOV or modal mass (any case, a unit in brackets
-/// allowed) are left out; any other column that is not a sensor channel is refused naming the
-/// sensors' channels, and a frequency header naming rad/s says to give Hz. `modes` (if given)
-/// receives the mode numbers. A mode without any shape entry is paired by frequency alone
-/// (linear_update.h). InputError naming the file, line and cell.
-MeasuredModes read_modes_table(const std::filesystem::path& path,
-                               const std::vector<Sensor>& sensors, std::vector<int>* modes);
+/// The channel names of `sensors`, in order: what data::read_modes_table() reads the shape
+/// columns against.
+std::vector<std::string> channels_of(const std::vector<Sensor>& sensors);
+
+/// Measured linear modes from a modes table (data/modes_table.h, read at the edge against
+/// channels_of(sensors)): each complex shape realised (mac.h realise(): the real part at the
+/// phase that maximises it): with MPC below kMpcRefused InputError "file:line:" naming the mode,
+/// below kMpcPoor the MeasuredModes' warnings name it and its MPC. A mode without any shape entry
+/// is paired by frequency alone (linear_update.h).
+MeasuredModes measured_modes(const data::ModesTable& table, const std::vector<Sensor>& sensors);
 
 /// The measured column MAC-paired (mac.h) with elastic mode `mode` of the model at its linear
 /// stiffness, or -1 when that mode pairs with none.

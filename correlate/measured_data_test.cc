@@ -19,6 +19,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A modes table read at the edge (data::read_modes_table against the sensors' channels) and
+// realised (measured_modes), its mode numbers into `numbers` (if given).
+MeasuredModes read_table_modes(const fs::path& path, const std::vector<Sensor>& sensors,
+                               std::vector<int>* numbers) {
+  const data::ModesTable table = data::read_modes_table(path, channels_of(sensors));
+  if (numbers) *numbers = table.modes;
+  return measured_modes(table, sensors);
+}
+
 fs::path fresh(const std::string& name) {
   const fs::path d = jointlab::testing::scratch_folder("jointlab_measured_data_test_" + name);
   fs::remove_all(d);
@@ -321,31 +330,32 @@ TEST(MeasuredData, DefectsNameFileAndField) {
       std::string::npos);
   write(d / "b.csv", "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_backbone_csv(d / "b.csv", 0);
+              data::read_process_backbone(d / "b.csv");
             }).find("b.csv:1: no column 'damping_std'"),
             std::string::npos);
   write(d / "b.csv", std::string(kBackbone) + "0.3,-1,57,0.003,0.01,0.0001,20\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_backbone_csv(d / "b.csv", 0);
+              data::read_process_backbone(d / "b.csv");
             }).find("b.csv:4: amplitude must be > 0"),
             std::string::npos);
   write(d / "b.csv", std::string(kBackbone) + "0.3,0.01,nan,0.003,0.01,0.0001,20\n");
-  EXPECT_NE(testing::input_error_of([&] { read_backbone_csv(d / "b.csv", 0); }).find("b.csv:4:"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::input_error_of([&] { data::read_process_backbone(d / "b.csv"); }).find("b.csv:4:"),
+      std::string::npos);
   // process's std columns are k sigma, k in its coverage_factor column: read with the curve
   // (none: 1), one number >= 1.
   write(d / "b.csv", kBackbone);
-  EXPECT_EQ(read_backbone_csv(d / "b.csv", 0).coverage_factor, 1.0);
+  EXPECT_EQ(data::read_process_backbone(d / "b.csv").coverage_factor, 1.0);
   const std::string head =
       "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,coverage_factor\n";
   write(d / "k.csv",
         head + "0.1,0.02,57.5,0.004,0.03,0.0003,3\n0.2,0.01,57.8,0.003,0.03,0.0003,3\n");
-  const MeasuredBackbone k = read_backbone_csv(d / "k.csv", 0);
+  const data::BackboneTable k = data::read_process_backbone(d / "k.csv");
   EXPECT_EQ(k.coverage_factor, 3.0);
   EXPECT_EQ(k.frequency_std_hz(0), 0.03);  // as written
   write(d / "k.csv", head + "0.1,0.02,57.5,0.004,0.03,0.0003,0.5\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_backbone_csv(d / "k.csv", 0);
+              data::read_process_backbone(d / "k.csv");
             }).find("k.csv:2: coverage_factor '0.5' must be a finite number >= 1"),
             std::string::npos);
 }
@@ -377,7 +387,7 @@ TEST(MeasuredData, SkipsBackboneRowsMarkedHarmonicOrExchange) {
         "0.1,0.03,57.1,-0.001,0.01,0.0001,0,1,3\n"
         "0.2,0.02,114.9,0.006,0.01,0.0001,2,0,3\n"
         "0.3,0.01,57.8,0.003,0.01,0.0001,0,0,3\n");
-  const MeasuredBackbone b = read_backbone_csv(d / "b.csv", 0);
+  const data::BackboneTable b = data::read_process_backbone(d / "b.csv");
   ASSERT_EQ(b.amplitude.size(), 1);
   EXPECT_EQ(b.amplitude(0), 0.01);
   EXPECT_EQ(b.damping_ratio(0), 0.003);
@@ -388,7 +398,7 @@ TEST(MeasuredData, ReadsAPlainModesTable) {
   const std::vector<Sensor> sensors{{"b2", 7, 1.0}, {"a5", 5, -1.0}, {"a1", 1, 1.0}};
   write(d / "modes.csv", "# two modes\nmode,frequency_hz,a5,b2\n1,57.9,0.5,-0.25\n3,120,,1\n");
   std::vector<int> numbers;
-  const MeasuredModes m = read_modes_table(d / "modes.csv", sensors, &numbers);
+  const MeasuredModes m = read_table_modes(d / "modes.csv", sensors, &numbers);
   ASSERT_EQ(m.frequency_hz.size(), 2);
   EXPECT_EQ(numbers, (std::vector<int>{1, 3}));
   EXPECT_EQ(m.frequency_hz(1), 120.0);
@@ -400,26 +410,26 @@ TEST(MeasuredData, ReadsAPlainModesTable) {
   EXPECT_EQ(m.shapes(1, 1), std::complex<double>(0, 0));
   write(d / "bad1.csv", "mode,f\n1,2\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_modes_table(d / "bad1.csv", sensors, nullptr);
+              read_table_modes(d / "bad1.csv", sensors, nullptr);
             }).find("bad1.csv:1"),
             std::string::npos);
   // A header that differs in case is read (Frequency_Hz names its unit);
   // ModesTableFromAnotherTool.FrequencyHeadersWithTheirUnitAreRead has the rest.
   write(d / "caps.csv", "Mode,Frequency_Hz\n1,2\n");
-  EXPECT_EQ(read_modes_table(d / "caps.csv", sensors, nullptr).frequency_hz(0), 2.0);
+  EXPECT_EQ(read_table_modes(d / "caps.csv", sensors, nullptr).frequency_hz(0), 2.0);
   write(d / "bad2.csv", "mode,frequency_hz,zz\n1,2,3\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_modes_table(d / "bad2.csv", sensors, nullptr);
+              read_table_modes(d / "bad2.csv", sensors, nullptr);
             }).find("'zz' is not a sensor channel"),
             std::string::npos);
   write(d / "bad3.csv", "mode,frequency_hz\n1,2\n1,3\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_modes_table(d / "bad3.csv", sensors, nullptr);
+              read_table_modes(d / "bad3.csv", sensors, nullptr);
             }).find("bad3.csv:3: mode 1 twice"),
             std::string::npos);
   write(d / "bad4.csv", "mode,frequency_hz\n1,-2\n");
   EXPECT_NE(testing::input_error_of([&] {
-              read_modes_table(d / "bad4.csv", sensors, nullptr);
+              read_table_modes(d / "bad4.csv", sensors, nullptr);
             }).find("bad4.csv:2"),
             std::string::npos);
 }
@@ -450,7 +460,7 @@ TEST(MeasuredData, ComplexShapeCellsAreRealisedAndTheirMpcJudged) {
   write(d / "cells.csv",
         fmt::format("mode,frequency_hz,s1,s2,s3\n1,50,{},{},\"{}\"\n2,80,({}),{},{}\n", ij(0, 'i'),
                     ij(1, 'j'), pair(2), ij(0, 'j'), ij(1, 'I'), ij(2, 'i')));
-  const MeasuredModes cells = read_modes_table(d / "cells.csv", sensors, nullptr);
+  const MeasuredModes cells = read_table_modes(d / "cells.csv", sensors, nullptr);
   expect_minus_y(cells, 0);
   expect_minus_y(cells, 1);
   EXPECT_TRUE(cells.warnings.empty());
@@ -459,14 +469,14 @@ TEST(MeasuredData, ComplexShapeCellsAreRealisedAndTheirMpcJudged) {
       fmt::format("mode\tfrequency_hz\ts1_re\ts1_im\ts2 Real\ts2 Imag\ts3\n1\t50\t{:.17g}\t{:.17g}"
                   "\t{:.17g}\t{:.17g}\t{}\n",
                   z(0).real(), z(0).imag(), z(1).real(), z(1).imag(), pair(2)));
-  expect_minus_y(read_modes_table(d / "parts.tsv", sensors, nullptr), 0);
+  expect_minus_y(read_table_modes(d / "parts.tsv", sensors, nullptr), 0);
   // MPC cos^2 alpha at two sensors, the third not measured (left out, still 0).
   const auto two = [&](double alpha) {
     const std::complex<double> w = std::polar(1.0, alpha);
     return fmt::format("mode,frequency_hz,s1,s2\n3,50,1,{:.17g}{:+.17g}i\n", w.real(), w.imag());
   };
   write(d / "poor.csv", two(std::atan(0.5)));  // cos^2 = 0.8
-  const MeasuredModes poor = read_modes_table(d / "poor.csv", sensors, nullptr);
+  const MeasuredModes poor = read_table_modes(d / "poor.csv", sensors, nullptr);
   ASSERT_EQ(poor.warnings.size(), 1u);
   EXPECT_NE(poor.warnings[0].find("poor.csv:2: mode 3's shape is complex: its modal phase "
                                   "collinearity MPC is 0.800"),
@@ -475,14 +485,14 @@ TEST(MeasuredData, ComplexShapeCellsAreRealisedAndTheirMpcJudged) {
   EXPECT_EQ(poor.shapes(2, 0), std::complex<double>(0.0));
   EXPECT_NEAR(poor.shapes(0, 0).real(), poor.shapes(1, 0).real(), 1e-12);  // cos(alpha/2) (1, 1)
   write(d / "bad.csv", two(std::numbers::pi / 3));                         // cos^2 = 0.25
-  EXPECT_NE(testing::input_error_of([&] { read_modes_table(d / "bad.csv", sensors, nullptr); })
+  EXPECT_NE(testing::input_error_of([&] { read_table_modes(d / "bad.csv", sensors, nullptr); })
                 .find("bad.csv:2: mode 3's shape is complex: its modal phase collinearity MPC is "
                       "0.250"),
             std::string::npos);
   // Defects name the column or cell.
   const auto error_of = [&](const std::string& file, const std::string& text) {
     write(d / file, text);
-    return testing::input_error_of([&] { read_modes_table(d / file, sensors, nullptr); });
+    return testing::input_error_of([&] { read_table_modes(d / file, sensors, nullptr); });
   };
   EXPECT_NE(error_of("lone.csv", "mode,frequency_hz,s1_re\n1,50,1\n")
                 .find("lone.csv:1: column 's1_re' has no imaginary part beside it (s1_im)"),

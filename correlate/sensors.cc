@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -69,107 +68,52 @@ std::string direction_hint(const std::string& d, const std::vector<std::string>&
 
 }  // namespace
 
-std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
-                                  const model::Model& model) {
+std::vector<Sensor> sensors_of(const data::SensorsFile& file, const model::Model& model) {
   std::vector<Sensor> out;
-  std::set<std::string> seen;
-  bool header = false;
-  // Delimited as the modes table is: ',', ';' or tab, the header's most frequent.
-  char delim = ',';
-  data::TextLines lines(data::strip_bom(text));
-  for (std::string_view line; lines.next(line);)
-    if (const std::string_view h = trim(line); !h.empty() && h.front() != '#') {
-      delim = data::detect_delimiter(h);
-      break;
+  const std::string& name = file.source;
+  for (const data::SensorRow& row : file.rows) {
+    const long n = row.line;
+    Sensor s;
+    s.channel = row.channel;
+    s.sign = row.sign;
+    const std::string& d = row.dof;
+    if (d.find(':') != std::string::npos) {
+      if (model.dof_labels.empty()) {
+        throw InputError(where(name, n,
+                               fmt::format("dof '{}': a \"node:component\" label needs the "
+                                           "model's matrices.dof_labels (or give a 0-based index)",
+                                           d)));
+      }
+      const auto it = std::find(model.dof_labels.begin(), model.dof_labels.end(), d);
+      if (it == model.dof_labels.end()) {
+        throw InputError(where(
+            name, n,
+            fmt::format(
+                "dof '{}' is not a label of the model's dof_labels{}{}", d,
+                model::missing_label_hint(
+                    model, std::string(trim(d.substr(0, d.find(':')))) + d.substr(d.find(':'))),
+                direction_hint(d, model.dof_labels))));
+      }
+      s.dof = it - model.dof_labels.begin();
+    } else {
+      size_t used = 0;
+      long v = -1;
+      try {
+        v = std::stol(d, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != d.size() || v < 0 || v >= model.size()) {
+        throw InputError(
+            where(name, n,
+                  fmt::format("dof '{}' must be an index 0..{} or a node:component label", d,
+                              model.size() - 1)));
+      }
+      s.dof = v;
     }
-  data::for_each_csv_line(
-      text,
-      [&](std::vector<std::string> cells, long n) {
-        if (cells.size() > 1 && cells.back().empty()) cells.pop_back();  // a trailing comma
-        if (!header) {
-          if (cells.size() < 2 || cells.size() > 3 || lower(cells[0]) != "channel" ||
-              lower(cells[1]) != "dof" || (cells.size() == 3 && lower(cells[2]) != "sign")) {
-            std::string seen_header;
-            for (size_t i = 0; i < cells.size(); ++i) {
-              if (i > 0) seen_header += ',';
-              seen_header += printable(cells[i]);
-            }
-            throw InputError(where(name, n,
-                                   fmt::format("expected the header 'channel,dof[,sign]' (',', "
-                                               "';' or tab between the cells), found '{}'",
-                                               shorten(seen_header))));
-          }
-          header = true;
-          return;
-        }
-        if (cells.size() < 2 || cells.size() > 3 || cells[0].empty() || cells[1].empty()) {
-          throw InputError(where(name, n, "expected 'channel,dof[,sign]'"));
-        }
-        Sensor s;
-        s.channel = cells[0];
-        if (!seen.insert(s.channel).second) {
-          throw InputError(where(name, n, fmt::format("channel '{}' appears twice", s.channel)));
-        }
-        const std::string& d = cells[1];
-        if (d.find(':') != std::string::npos) {
-          if (model.dof_labels.empty()) {
-            throw InputError(
-                where(name, n,
-                      fmt::format("dof '{}': a \"node:component\" label needs the "
-                                  "model's matrices.dof_labels (or give a 0-based index)",
-                                  d)));
-          }
-          const auto it = std::find(model.dof_labels.begin(), model.dof_labels.end(), d);
-          if (it == model.dof_labels.end()) {
-            throw InputError(where(
-                name, n,
-                fmt::format(
-                    "dof '{}' is not a label of the model's dof_labels{}{}", d,
-                    model::missing_label_hint(
-                        model, std::string(trim(d.substr(0, d.find(':')))) + d.substr(d.find(':'))),
-                    direction_hint(d, model.dof_labels))));
-          }
-          s.dof = it - model.dof_labels.begin();
-        } else {
-          size_t used = 0;
-          long v = -1;
-          try {
-            v = std::stol(d, &used);
-          } catch (const std::exception&) {
-            used = 0;
-          }
-          if (used != d.size() || v < 0 || v >= model.size()) {
-            throw InputError(
-                where(name, n,
-                      fmt::format("dof '{}' must be an index 0..{} or a node:component label", d,
-                                  model.size() - 1)));
-          }
-          s.dof = v;
-        }
-        if (cells.size() == 3 && !cells[2].empty()) {
-          const std::optional<double> v = data::parse_double(cells[2]);
-          if (v && (*v == 1 || *v == -1)) {
-            s.sign = *v;
-          } else {
-            throw InputError(where(name, n,
-                                   fmt::format("sign '{}' must be 1 or -1{}", printable(cells[2]),
-                                               cells[2] == "-"   ? ": give -1"
-                                               : cells[2] == "+" ? ": give 1"
-                                                                 : "")));
-          }
-        }
-        out.push_back(s);
-      },
-      delim);
-  if (!header) throw InputError(where(name, 0, "empty file, expected 'channel,dof[,sign]'"));
-  if (out.empty()) throw InputError(where(name, 0, "no sensors"));
+    out.push_back(s);
+  }
   return out;
-}
-
-std::vector<Sensor> read_sensors(const std::filesystem::path& path, const model::Model& model) {
-  const auto text = data::read_text_file(path);
-  if (!text) throw InputError(where(path.string(), 0, "cannot open the sensors file"));
-  return parse_sensors(*text, path.string(), model);
 }
 
 Eigen::MatrixXd shapes_at_sensors(const std::vector<Sensor>& sensors,

@@ -5,20 +5,16 @@
 // channel's positive direction is the DOF's positive direction and -1 when opposite.
 // The model shape of mode m at the sensors is therefore Phi_s(i, m) = s_i phi_m[d_i].
 //
-// File (CSV, comma separated, '#' comment lines allowed):
-//     channel,dof[,sign]
-//     acc1,1001:3,1
-//     acc2,57,-1
-// `dof` is a 0-based matrix index or a "node:component" label of the model's dof_labels;
-// `sign` is 1 or -1 (default 1). Channel names are unique.
+// The sensors file (channel,dof[,sign]) is read by data/sensors_file.h; sensors_of() resolves
+// its DOFs against a model.
 #pragma once
 
-#include <filesystem>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "jointlab/data/sensors_file.h"
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
@@ -30,13 +26,10 @@ struct Sensor {
   double sign = 1.0;     ///< +1 or -1: the channel reads sign * u[dof]
 };
 
-/// Reads a sensors file against a model (labels resolve through model.dof_labels);
-/// InputError naming the file and line.
-std::vector<Sensor> read_sensors(const std::filesystem::path& path, const model::Model& model);
-
-/// Parses sensors text as if read from a file named `name`.
-std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
-                                  const model::Model& model);
+/// The sensors of a sensors file (data/sensors_file.h, read at the edge) against a model: each
+/// row's dof resolved (labels through model.dof_labels, with the fix named where a label is
+/// written as other tools write it); InputError naming the file and line.
+std::vector<Sensor> sensors_of(const data::SensorsFile& file, const model::Model& model);
 
 /// Phi_s(i, m) = s_i shapes(d_i, m): model shapes (one column per mode) at the sensors.
 Eigen::MatrixXd shapes_at_sensors(const std::vector<Sensor>& sensors,

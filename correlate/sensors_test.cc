@@ -8,6 +8,12 @@
 namespace jointlab::correlate {
 namespace {
 
+// A sensors text read at the edge (data::parse_sensors_file) and resolved against `model`.
+std::vector<Sensor> parse_sensors(const std::string& text, const std::string& name,
+                                  const model::Model& model) {
+  return sensors_of(data::parse_sensors_file(text, name), model);
+}
+
 TEST(Sensors, ParsesIndicesLabelsAndSigns) {
   model::Model m = two_chain_structure();
   m.dof_labels.clear();

@@ -144,6 +144,56 @@ void for_each_csv_line(
   }
 }
 
+bool for_each_csv_row(
+    const std::filesystem::path& path, const std::string& what,
+    const std::function<void(const std::vector<std::string>& cells, long line)>& on_header,
+    const std::function<void(const std::vector<std::string>& cells, long line)>& on_row,
+    bool detect) {
+  const std::string name = path.string();
+  const auto text = read_text_file(path);
+  if (!text) throw InputError(fmt::format("{}: cannot open the {}", name, what));
+  char delim = ',';
+  if (detect) {
+    TextLines lines(strip_bom(*text));
+    std::string_view line;
+    while (lines.next(line)) {
+      const std::string_view t = trim(line);
+      if (t.empty() || t.front() == '#') continue;
+      delim = detect_delimiter(t);
+      break;
+    }
+  }
+  bool header = false;
+  size_t width = 0;
+  for_each_csv_line(
+      *text,
+      [&](const std::vector<std::string>& cells, long n) {
+        if (!header) {
+          on_header(cells, n);
+          header = true;
+          width = cells.size();
+          return;
+        }
+        if (cells.size() != width) {
+          // "(0.1,0.2)" unquoted in a comma-separated file is split in two.
+          const bool split_pair =
+              delim == ',' && std::any_of(cells.begin(), cells.end(), [](const std::string& c) {
+                return !c.empty() && c.front() == '(' && c.back() != ')';
+              });
+          throw InputError(where(
+              name, n,
+              fmt::format("{} cells where the header has {}{}", cells.size(), width,
+                          split_pair ? " (a complex cell written (re,im) splits at its comma in "
+                                       "a comma-separated file: quote it, \"(0.1,0.2)\", or "
+                                       "write 0.1+0.2i)"
+                                     : "")));
+        }
+        on_row(cells, n);
+      },
+      delim);
+  return header;
+}
+
 void require_regular_file(const std::filesystem::path& path) {
   namespace fs = std::filesystem;
   // Every reader comes here first: an output a killed commit may have left mixed is refused.

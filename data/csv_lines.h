@@ -91,6 +91,18 @@ void for_each_csv_line(
     const std::function<void(const std::vector<std::string>& cells, long line)>& on_line,
     char delim = ',');
 
+/// Reads the small CSV file `path` as a header and its rows: `on_header(cells, line)` for its
+/// first line that is neither blank nor a '#' comment, `on_row(cells, line)` for each later one,
+/// after checking it has the header's width; returns whether a header was seen. With `detect` the
+/// cells are split at whichever of ',', ';' and tab the header holds most (detect_delimiter), else
+/// at ','. InputError "FILE: cannot open the <what>", and "FILE:LINE: k cells where the header has
+/// n" (saying how to write a complex cell where an unquoted "(re,im)" split at its comma).
+bool for_each_csv_row(
+    const std::filesystem::path& path, const std::string& what,
+    const std::function<void(const std::vector<std::string>& cells, long line)>& on_header,
+    const std::function<void(const std::vector<std::string>& cells, long line)>& on_row,
+    bool detect = false);
+
 /// The whole content of a file; nullopt if it cannot be opened or read; InputError (as
 /// require_regular_file) for what is not a regular file.
 std::optional<std::string> read_text_file(const std::filesystem::path& path);

@@ -1,11 +1,13 @@
 #include "jointlab/data/process_folder.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <optional>
 
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
+#include "jointlab/data/csv_lines.h"
 #include "jointlab/data/json_reader.h"
 #include "jointlab/data/output_stage.h"
 
@@ -210,6 +212,77 @@ SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
     run.outputs.push_back(std::move(o));
   });
   return run;
+}
+
+BackboneTable read_process_backbone(const fs::path& path) {
+  const std::string name = path.string();
+  const char* wanted[] = {"amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
+                          "damping_std"};
+  int column[5] = {-1, -1, -1, -1, -1};
+  std::vector<double> values[5];
+  std::vector<size_t> marks;  // columns of is_point_mark: their marked rows are skipped
+  int coverage_col = -1;      // process's coverage_factor: k of the std columns
+  double coverage = 0;        // its value (0: none read)
+  const auto on_header = [&](const std::vector<std::string>& cells, long n) {
+    for (size_t c = 0; c < cells.size(); ++c)
+      if (cells[c] == "coverage_factor") coverage_col = static_cast<int>(c);
+    for (int k = 0; k < 5; ++k) {
+      for (size_t c = 0; c < cells.size(); ++c) {
+        if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
+      }
+      if (column[k] < 0)
+        throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
+    }
+    for (size_t c = 0; c < cells.size(); ++c) {
+      if (is_point_mark(cells[c])) marks.push_back(c);
+    }
+  };
+  const auto on_row = [&](const std::vector<std::string>& cells, long n) {
+    for (const size_t c : marks) {
+      if (c < cells.size() && !cells[c].empty() && std::strtod(cells[c].c_str(), nullptr) != 0)
+        return;
+    }
+    if (coverage_col >= 0 && static_cast<size_t>(coverage_col) < cells.size()) {
+      const std::string& cell = cells[static_cast<size_t>(coverage_col)];
+      coverage =
+          coverage_factor_of_row(std::strtod(cell.c_str(), nullptr), coverage, cell, name, n);
+    }
+    for (int k = 0; k < 5; ++k) {
+      const std::string& cell = cells[static_cast<size_t>(column[k])];
+      double x = 0;
+      size_t used = 0;
+      try {
+        x = std::stod(cell, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != cell.size() || cell.empty() || !std::isfinite(x)) {
+        throw InputError(
+            where(name, n, fmt::format("{} '{}' is not a finite number", wanted[k], cell)));
+      }
+      if (k == 0 && !(x > 0)) throw InputError(where(name, n, "amplitude must be > 0"));
+      if (k == 1 && !(x > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
+      if (k >= 3 && x < 0)
+        throw InputError(where(name, n, fmt::format("{} must be >= 0", wanted[k])));
+      values[k].push_back(x);
+    }
+  };
+  if (!for_each_csv_row(path, "backbone file", on_header, on_row))
+    throw InputError(where(name, 0, "empty file, expected a backbone header"));
+  if (values[0].empty()) throw InputError(where(name, 0, "no backbone point"));
+  BackboneTable t;
+  t.source = name;  // for messages, and which hit a curve is where several are returned
+  auto vec = [](const std::vector<double>& v) {
+    return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  };
+  t.amplitude = vec(values[0]);
+  t.frequency_hz = vec(values[1]);
+  t.damping_ratio = vec(values[2]);
+  t.frequency_std_hz = vec(values[3]);
+  t.damping_std = vec(values[4]);
+  if (coverage > 0) t.coverage_factor = coverage;
+  t.written_by_jointlab = true;
+  return t;
 }
 
 }  // namespace jointlab::data

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "jointlab/core/units.h"
+#include "jointlab/data/backbone_table.h"
 
 namespace jointlab::data {
 
@@ -53,6 +54,14 @@ struct ProcessRun {
 /// Reads DIR/summary.json; InputError naming the file and the field (or line and byte), and
 /// saying so when DIR is a `stepped-sine` output instead.
 ProcessRun read_process_run(const std::filesystem::path& dir);
+
+/// Reads one backbone CSV of `process` (columns amplitude, frequency_hz, damping_ratio,
+/// frequency_std_hz, damping_std by name; amplitudes in SI): rows in the file's (time) order,
+/// those marked in a `harmonic` or `exchange` column left out (not the mode's own frequency or
+/// damping), the std columns' k from its `coverage_factor` column (none: 1); InputError naming the
+/// file and line. A point's damping may be 0 or below (noise at the record's end), unlike a plain
+/// table's (read_backbone_table).
+BackboneTable read_process_backbone(const std::filesystem::path& path);
 
 /// One file of a `jointlab stepped-sine` run and its backbone CSV.
 struct SteppedSineOutput {

@@ -9,6 +9,7 @@
 #include "fuzz_util.h"
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/measured_data.h"
+#include "jointlab/data/modes_table.h"
 #include "jointlab/data/process_folder.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -22,8 +23,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       {"s1", 0, 1.0}, {"s2", 1, -1.0}, {"s3", 2, 1.0}};
   jointlab::fuzz::write_bytes(dir / "modes.csv", data, size);
   try {
-    std::vector<int> modes;
-    jointlab::correlate::read_modes_table(dir / "modes.csv", sensors, &modes);
+    jointlab::correlate::measured_modes(
+        jointlab::data::read_modes_table(dir / "modes.csv",
+                                         jointlab::correlate::channels_of(sensors)),
+        sensors);
   } catch (const jointlab::InputError&) {
   }
   return 0;

@@ -324,11 +324,14 @@ py::dict update_linear(const PathArg& model_arg, const OneOrMany<std::string>& s
   {
     py::gil_scoped_release release;
     const model::Model m = model::read_model(model_path);
-    const std::vector<correlate::Sensor> sensors = correlate::read_sensors(sensors_path, m);
+    const std::vector<correlate::Sensor> sensors =
+        correlate::sensors_of(data::read_sensors_file(sensors_path), m);
     const correlate::MeasuredModes meas =
-        measured ? correlate::measured_modes(data::read_process_run(*measured), sensors, nullptr,
-                                             o.frequency_std)
-                 : correlate::read_modes_table(*modes_table, sensors, nullptr);
+        measured
+            ? correlate::measured_modes(data::read_process_run(*measured), sensors, nullptr,
+                                        o.frequency_std)
+            : correlate::measured_modes(
+                  data::read_modes_table(*modes_table, correlate::channels_of(sensors)), sensors);
     for (Eigen::Index i = 0; i < meas.frequency_std.size(); ++i)
       if (meas.frequency_std(i) > 0) spread[meas.id(i)] = meas.frequency_std(i);
     const Eigen::VectorXd theta = correlate::update_linear(m, sets, sensors, meas, o, &s);

@@ -90,7 +90,7 @@ CampaignSide campaign_side(const testing::SmallCampaign& s, const fs::path& dir)
   const auto hits = campaign::process_hits(out.c, o.out, o, out.summary);
   out.measured = campaign::summarise_measured(out.c, hits, dir / "scatter", nullptr);
   out.start = model::read_model(s.model);
-  out.sensors = correlate::read_sensors(s.sensors, out.start);
+  out.sensors = correlate::sensors_of(data::read_sensors_file(s.sensors), out.start);
   return out;
 }
 

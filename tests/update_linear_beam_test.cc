@@ -100,7 +100,7 @@ Beam build_beam(const fs::path& dir) {
   std::string sensors_csv = "channel,dof\n";
   for (int i = 1; i <= 5; ++i) sensors_csv += fmt::format("z{},900{}:3\n", i, i);
   std::ofstream(dir / "sensors.csv") << sensors_csv;
-  beam.sensors = correlate::read_sensors(dir / "sensors.csv", beam.start);
+  beam.sensors = correlate::sensors_of(data::read_sensors_file(dir / "sensors.csv"), beam.start);
   return beam;
 }
 
