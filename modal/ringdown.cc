@@ -1753,6 +1753,16 @@ std::string exchange_note(const Exchange& exchange, const RingdownSummary& sum,
         exchange.partner_snr, points(sum.exchange_points));
   }
   const double r = exchange.partner;
+  if (exchange.swings) {
+    return fmt::format(
+        "up to {:.4f} s the mode exchanges energy with another mode (the envelope swings faster "
+        "than its fits follow, as the power the envelope in {} the band takes and gives: it "
+        "explains {:.0f} % of the swings): {} there marked (column exchange), their damping "
+        "apparent (damping plus transfer), left out of the linear values",
+        channel.t0 + exchange.end_t,
+        r >= 1 ? fmt::format("{:g} times", r) : fmt::format("1/{:g} of", std::round(1 / r)),
+        100 * exchange.explained, points(sum.exchange_points));
+  }
   const std::string turns =
       exchange.turns.size() == 1
           ? std::string("the envelope's decay rate turns once")
@@ -1922,6 +1932,7 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
         !beats_with_second_mode(centred, channel, band, ep, s, noise))
       exchange = std::move(swings);
   }
+  if (!exchange.found()) exchange = swinging_exchange(est, noise, s, measured, cache);
   GainCorrection previous;
   GainCorrection gain = correct(est);
   // Iterated until ln r changes by less than kConverged anywhere in the span (each
@@ -2196,18 +2207,31 @@ size_t add_beat(CorrectedEstimates& corr, const std::vector<std::pair<double, do
 // A second mode in the band read: what its beat moves each point by joins the point's
 // uncertainty, so the points it moves past the damping limit drop out (two_modes); or a second
 // mode the move took in beyond the typed edge, seen by its beat alone (edge_beat). Neither
-// beside an energy exchange with another mode, marked on its own: its rates swing too. The
-// note ("" for none); `beat` says whether either was found.
+// beside an energy exchange with another mode, marked on its own: its rates swing too; but
+// after an exchange whose swings no fit follows (Exchange::swings) the band still holds the
+// coupling's combination tone (the partner's frequency less the mode's), whose beat, the
+// exchange's last swings, moves the points after it as a second mode's would. The note (""
+// for none); `beat` says whether either was found.
 std::string beat_note_of(CorrectedEstimates& corr, const ChannelSpectrum& channel,
                          const signal::Band& band, const signal::Band& read,
                          const RingdownOptions& options, const EnvelopePhase& ep,
                          const BandSetting& sr, double noise, bool& beat, signal::FftCache& cache) {
   std::string beat_note;
-  if (const TwoModes two =
-          corr.exchange.found() ? TwoModes{} : two_modes(corr.est, channel, read, ep, sr, noise);
+  if (const TwoModes two = corr.exchange.found() && !corr.exchange.swings
+                               ? TwoModes{}
+                               : two_modes(corr.est, channel, read, ep, sr, noise);
       two.found()) {
-    beat_note = beat_message(two, channel, read, options,
-                             add_beat(corr, two.errors, noise, options, beat), cache);
+    const size_t left = add_beat(corr, two.errors, noise, options, beat);
+    beat_note =
+        corr.exchange.swings
+            ? fmt::format(
+                  "after the exchange the band holds a second spectral peak at {:.2f} Hz, {:.0f} "
+                  "% of the mode's (a 1:2 exchange's combination tone lies at the partner's "
+                  "frequency less this mode's): what their beat moves each point's "
+                  "decay rate and frequency by is added to its uncertainty, and points it moves "
+                  "by more than the {:.1f} % damping limit are left out ({} of those that met it)",
+                  two.f2, 100 * two.ratio, 100 * options.max_damping_rel_std, left)
+            : beat_message(two, channel, read, options, left, cache);
   } else if (const EdgeBeat edge =
                  corr.exchange.found() || (read.lo >= band.lo && read.hi <= band.hi)
                      ? EdgeBeat{}

@@ -49,7 +49,10 @@
 //    negative. They are left out of the linear values and of the band-gain correction's model of
 //    the mode. Records without such an exchange are unchanged. A one-way fall beside a
 //    neighbour held beyond the band's edge, its partner band holding noise alone, is marked
-//    as that neighbour's leak through the edge, no exchange.
+//    as that neighbour's leak through the edge, no exchange. Swings faster than the shortest
+//    window (a partner detuned by a few per cent) show no turn: where the first estimates miss
+//    max_damping_rel_std, the envelope's swings there are taken for an exchange where the
+//    power the partner takes and gives back explains them (ringdown_exchange.cc).
 // 6. Two modes in one band: a second resolved peak of the measured spectrum inside the band
 //    read, whose beat with the mode (ln A + i theta oscillating at the difference frequency)
 //    shows in the first estimates, has what it moves each point's decay rate and frequency by

@@ -226,7 +226,11 @@ struct Exchange {
   /// fall is, no exchange (neighbour_leak) [Hz]; 0: none.
   double leak_hz = 0;
   double partner_snr = 0;  ///< with leak_hz: the partner band's largest envelope / noise floor
-  bool found() const { return partner > 0 && (!turns.empty() || grows || one_way); }
+  /// The envelope swings faster than the fits follow, as the power the partner takes and gives
+  /// (swinging_exchange).
+  bool swings = false;
+  double explained = 0;  ///< with swings: the share of the swings of ln A that power explains
+  bool found() const { return partner > 0 && (!turns.empty() || grows || one_way || swings); }
 };
 
 /// Whether an exchange's partner band holds energy (above its noise) at every turn.
@@ -238,6 +242,11 @@ bool partner_holds_energy(const Exchange& x, const BandSetting& s, Quantity meas
 void neighbour_leak(Exchange& x, const std::vector<Estimate>& est, double held_by,
                     const signal::Band& typed, const BandSetting& s, Quantity measured,
                     signal::FftCache& cache);
+
+/// An exchange whose swings of the envelope are faster than the fits follow, read from the
+/// power the partner takes and gives, if any (ringdown_exchange.cc).
+Exchange swinging_exchange(const std::vector<Estimate>& est, double noise, const BandSetting& s,
+                           Quantity measured, signal::FftCache& cache);
 
 /// An energy exchange of the band's mode with another, read from the estimates, if any
 /// (ringdown_exchange.cc).
