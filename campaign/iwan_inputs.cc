@@ -71,8 +71,10 @@ IwanInputs table_inputs(const model::Model& m, const IwanInputArgs& a, const std
   // The amplitude column's unit, when given, must measure this quantity (none: modal).
   const std::optional<Quantity> measured =
       quantity == "modal" ? std::nullopt : parse_quantity(quantity);
-  correlate::BackboneCurves read =
-      correlate::read_backbone_curves(a.backbones, measured, sensors.empty() ? -1 : 0);
+  correlate::BackboneCurves read = correlate::backbone_curves(
+      // One hit given twice would count as two: refused (read_backbone_tables).
+      data::read_backbone_tables({a.backbones.begin(), a.backbones.end()}, measured),
+      sensors.empty() ? -1 : 0);
   t.curves = std::move(read.curves);
   IwanInputs in;
   for (const std::string& file : a.backbones)

@@ -237,12 +237,10 @@ ModeBackbones stepped_sine_run_backbones(const data::SteppedSineRun& run, int se
                                          const ScatterOptions& scatter) {
   ModeBackbones mb;
   mb.name = "stepped sine";
-  const std::vector<correlate::MeasuredBackbone> backbones =
-      correlate::stepped_sine_backbones(run, sensor);
-  size_t i = 0;
   for (const data::SteppedSineOutput& o : run.outputs) {
     if (o.file.empty()) continue;
-    const correlate::MeasuredBackbone& b = backbones[i++];
+    const data::BackboneTable b = data::read_process_backbone(run.dir / o.file);
+    if (b.size() == 0) throw InputError(where(b.source, 0, "no backbone point"));
     Curve cv;
     cv.id = fs::path(o.source).stem().string();
     cv.amplitude = b.amplitude;
@@ -251,9 +249,13 @@ ModeBackbones stepped_sine_run_backbones(const data::SteppedSineRun& run, int se
     mb.curves.push_back(std::move(cv));
     mb.frequency_std_hz.push_back(b.frequency_std_hz);
     mb.damping_std.push_back(b.damping_std);
-    mb.coverage.push_back(b.coverage_factor);
+    mb.coverage.push_back(run.coverage_factor);  // the run's k (its summary.json)
     mb.sensors.push_back(sensor);
     mb.kinds.push_back(correlate::BackboneKind::kSteppedSine);
+  }
+  if (mb.curves.empty()) {
+    throw InputError(fmt::format("{}: no file gave a stepped-sine backbone",
+                                 (run.dir / "summary.json").string()));
   }
   mb.scatter = summarize_scatter(mb.curves, scatter);
   return mb;

@@ -2,15 +2,10 @@
 
 #include <algorithm>
 #include <cassert>
-#include <cctype>
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
-#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -22,9 +17,6 @@
 #include "jointlab/correlate/noise_limits.h"
 #include "jointlab/correlate/shape_checks.h"
 #include "jointlab/data/backbone_table.h"
-#include "jointlab/data/csv_lines.h"
-#include "jointlab/data/json_reader.h"
-#include "jointlab/data/output_stage.h"
 #include "jointlab/model/linear_modes.h"
 
 namespace jointlab::correlate {
@@ -38,21 +30,6 @@ MeasuredBackbone sized_backbone(BackboneKind kind, int sensor, Eigen::Index poin
        {&b.amplitude, &b.frequency_hz, &b.damping_ratio, &b.frequency_std_hz, &b.damping_std})
     v->setZero(points);
   return b;
-}
-
-std::vector<MeasuredBackbone> stepped_sine_backbones(const data::SteppedSineRun& run, int sensor) {
-  std::vector<MeasuredBackbone> out;
-  for (const data::SteppedSineOutput& o : run.outputs) {
-    if (o.file.empty()) continue;
-    out.push_back(measured_backbone(data::read_process_backbone(run.dir / o.file), sensor));
-    out.back().kind = BackboneKind::kSteppedSine;
-    out.back().coverage_factor = run.coverage_factor;
-  }
-  if (out.empty()) {
-    throw InputError(fmt::format("{}: no file gave a stepped-sine backbone",
-                                 (run.dir / "summary.json").string()));
-  }
-  return out;
 }
 
 LinearSpread linear_spread(const std::string& mode, const std::vector<LinearReading>& readings,
@@ -318,16 +295,6 @@ std::vector<BandOutput> band_outputs(const data::ProcessRun& run,
   return out;
 }
 
-std::vector<MeasuredBackbone> measured_backbones(const data::ProcessRun& run,
-                                                 const std::vector<Sensor>& sensors, int band,
-                                                 const std::vector<std::string>& chosen) {
-  std::vector<MeasuredBackbone> out;
-  for (const BandOutput& b : band_outputs(run, sensors, band, chosen))
-    out.push_back(
-        measured_backbone(data::read_process_backbone(run.dir / b.output->file), b.sensor));
-  return out;
-}
-
 namespace {
 
 // Shape v of `mode` (line n of `name`) as the real shape nearest it: refused below kMpcRefused,
@@ -429,15 +396,10 @@ ModeShapeMatch mode_shape_match(const model::Model& model, const std::vector<Sen
   return out;
 }
 
-BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
-                                    std::optional<Quantity> quantity, int sensor) {
+BackboneCurves backbone_curves(const std::vector<data::BackboneTable>& tables, int sensor) {
   BackboneCurves out;
-  // One hit given twice would count as two: refused (read_backbone_tables).
-  const std::vector<data::BackboneTable> tables =
-      data::read_backbone_tables({files.begin(), files.end()}, quantity);
-  for (size_t i = 0; i < files.size(); ++i) {
-    const data::BackboneTable& table = tables[i];
-    if (table.amplitude_unit_assumed()) out.unitless.push_back(files[i]);
+  for (const data::BackboneTable& table : tables) {
+    if (table.amplitude_unit_assumed()) out.unitless.push_back(table.source);
     out.curves.push_back(measured_backbone(table, sensor));
   }
   return out;

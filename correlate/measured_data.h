@@ -10,9 +10,10 @@
 // most of the sensor channels (the first such file), 0 at sensors no file measured. A band
 // no file gives a linear frequency for is left out.
 //
-// Backbones: every output of band k whose channel is selected becomes one MeasuredBackbone
-// (several hits and channels give several curves). By default only each file's reference
-// channel of the band is selected (the channel its linear data come from).
+// Backbones: band_outputs() names the backbone files of band k on the selected channels (several
+// hits and channels give several curves; by default one channel for every hit, band_channel());
+// the caller reads each (data::read_process_backbone, at the edge) and makes it a curve
+// (measured_backbone). Nothing here opens a file (style.md 14).
 #pragma once
 
 #include <complex>
@@ -31,10 +32,6 @@
 #include "jointlab/model/model_file.h"
 
 namespace jointlab::correlate {
-
-/// Every backbone of a stepped-sine run, measured at sensor index `sensor`, of kind
-/// BackboneKind::kSteppedSine; InputError when no file gave a backbone.
-std::vector<MeasuredBackbone> stepped_sine_backbones(const data::SteppedSineRun& run, int sensor);
 
 /// One file's (hit's) linear frequency of a mode: the backbone's straight-line fit at the lowest
 /// amplitude it read, not an extrapolation to zero amplitude.
@@ -88,13 +85,11 @@ MeasuredBackbone measured_backbone(const data::BackboneTable& table, int sensor)
 /// Backbone tables as curves (measured_backbone at `sensor`), and the files among them whose
 /// amplitude header gives no unit (SI assumed; jointlab's own backbones, SI, are not named).
 struct BackboneCurves {
-  std::vector<MeasuredBackbone> curves;  ///< one per file, in order
-  std::vector<std::string> unitless;     ///< files read without an amplitude unit
+  std::vector<MeasuredBackbone> curves;  ///< one per table, in order
+  std::vector<std::string> unitless;     ///< tables read without an amplitude unit
 };
-/// Reads each file with data::read_backbone_tables (amplitudes of `quantity`; nullopt: modal):
-/// InputError where a table is given twice.
-BackboneCurves read_backbone_curves(const std::vector<std::string>& files,
-                                    std::optional<Quantity> quantity, int sensor);
+/// The tables (data::read_backbone_tables, read at the edge) as curves at `sensor`.
+BackboneCurves backbone_curves(const std::vector<data::BackboneTable>& tables, int sensor);
 
 /// The channel a band's backbones are read at where none is chosen, and a note where the hits'
 /// reference channels differ or a hit has no backbone at that channel.
@@ -122,11 +117,6 @@ std::vector<BandOutput> band_outputs(const data::ProcessRun& run,
                                      const std::vector<Sensor>& sensors, int band,
                                      const std::vector<std::string>& channels,
                                      std::string* note = nullptr);
-
-/// Every backbone of band_outputs(), each read at its sensor.
-std::vector<MeasuredBackbone> measured_backbones(const data::ProcessRun& run,
-                                                 const std::vector<Sensor>& sensors, int band,
-                                                 const std::vector<std::string>& channels);
 
 /// Below this MPC (mac.h) a complex shape of a modes table is realised with a warning: 0.9,
 /// the usual floor for a normal mode of a lightly damped structure (two equal entries 18 deg

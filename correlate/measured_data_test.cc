@@ -19,6 +19,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Every backbone of band_outputs(), read at the edge (data::read_process_backbone) and made a
+// curve at its sensor, as update-iwan's inputs read them.
+std::vector<MeasuredBackbone> measured_backbones(const data::ProcessRun& run,
+                                                 const std::vector<Sensor>& sensors, int band,
+                                                 const std::vector<std::string>& channels) {
+  std::vector<MeasuredBackbone> out;
+  for (const BandOutput& b : band_outputs(run, sensors, band, channels))
+    out.push_back(
+        measured_backbone(data::read_process_backbone(run.dir / b.output->file), b.sensor));
+  return out;
+}
+
 // A modes table read at the edge (data::read_modes_table against the sensors' channels) and
 // realised (measured_modes), its mode numbers into `numbers` (if given).
 MeasuredModes read_table_modes(const fs::path& path, const std::vector<Sensor>& sensors,
@@ -391,6 +403,15 @@ TEST(MeasuredData, SkipsBackboneRowsMarkedHarmonicOrExchange) {
   ASSERT_EQ(b.amplitude.size(), 1);
   EXPECT_EQ(b.amplitude(0), 0.01);
   EXPECT_EQ(b.damping_ratio(0), 0.003);
+  ASSERT_EQ(b.time_s.size(), 1);  // the campaign's curves keep each point's time
+  EXPECT_EQ(b.time_s(0), 0.3);
+  EXPECT_TRUE(b.has_uncertainty);
+  // Every point marked: a table of no point, the caller's to judge (a hit's curve is left empty,
+  // a stepped-sine backbone refused naming the file), not an error of the file.
+  write(d / "all.csv",
+        "time_s,amplitude,frequency_hz,damping_ratio,frequency_std_hz,damping_std,harmonic\n"
+        "0.1,0.03,114.2,0.004,0.01,0.0001,2\n");
+  EXPECT_EQ(data::read_process_backbone(d / "all.csv").size(), 0);
 }
 
 TEST(MeasuredData, ReadsAPlainModesTable) {

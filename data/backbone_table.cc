@@ -800,6 +800,7 @@ BackboneTable sorted_table(const Rows& rows, const Columns& c, const std::string
   t.amplitude_unit = c.amplitude_unit;
   t.written_by_jointlab = c.ours;
   if (rows.coverage > 0) t.coverage_factor = rows.coverage;
+  t.has_uncertainty = !rows.values[3].empty();
   Eigen::VectorXd* out[] = {&t.amplitude, &t.frequency_hz, &t.damping_ratio, &t.frequency_std_hz,
                             &t.damping_std};
   for (size_t k = 0; k < kNames.size(); ++k) {

@@ -48,6 +48,11 @@ struct BackboneTable {
   Eigen::VectorXd damping_std;       ///< k sigma_z,j >= 0 (all 0 without the column)
   /// k of the std columns: a `coverage_factor` column's value (a `process` backbone's), else 1.
   double coverage_factor = 1.0;
+  /// Whether the two std columns were read (else they are all 0: the caller's floors).
+  bool has_uncertainty = false;
+  /// A `process` backbone's time of each point after the record's start [s] (read_process_backbone;
+  /// empty where the file has no time_s column, and for a plain table).
+  Eigen::VectorXd time_s;
   /// The amplitude column's unit as its header gives it ("" where it gives none: SI).
   std::string amplitude_unit;
   /// A `process` backbone (its `coverage_factor` column) or a `stepped-sine` one

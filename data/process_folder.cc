@@ -216,26 +216,29 @@ SteppedSineRun read_stepped_sine_run(const fs::path& dir) {
 
 BackboneTable read_process_backbone(const fs::path& path) {
   const std::string name = path.string();
-  const char* wanted[] = {"amplitude", "frequency_hz", "damping_ratio", "frequency_std_hz",
-                          "damping_std"};
-  int column[5] = {-1, -1, -1, -1, -1};
-  std::vector<double> values[5];
+  // amplitude, frequency_hz and damping_ratio are required; time_s and the two std columns read
+  // where present (the std columns both or neither).
+  const char* wanted[] = {"amplitude",        "frequency_hz", "damping_ratio",
+                          "frequency_std_hz", "damping_std",  "time_s"};
+  constexpr int kWanted = 6, kRequired = 3;
+  int column[kWanted] = {-1, -1, -1, -1, -1, -1};
+  std::vector<double> values[kWanted];
   std::vector<size_t> marks;  // columns of is_point_mark: their marked rows are skipped
   int coverage_col = -1;      // process's coverage_factor: k of the std columns
   double coverage = 0;        // its value (0: none read)
   const auto on_header = [&](const std::vector<std::string>& cells, long n) {
-    for (size_t c = 0; c < cells.size(); ++c)
+    for (size_t c = 0; c < cells.size(); ++c) {
       if (cells[c] == "coverage_factor") coverage_col = static_cast<int>(c);
-    for (int k = 0; k < 5; ++k) {
-      for (size_t c = 0; c < cells.size(); ++c) {
+      if (is_point_mark(cells[c])) marks.push_back(c);
+      for (int k = 0; k < kWanted; ++k)
         if (cells[c] == wanted[k]) column[k] = static_cast<int>(c);
-      }
+    }
+    for (int k = 0; k < kRequired; ++k)
       if (column[k] < 0)
         throw InputError(where(name, n, fmt::format("no column '{}' in the header", wanted[k])));
-    }
-    for (size_t c = 0; c < cells.size(); ++c) {
-      if (is_point_mark(cells[c])) marks.push_back(c);
-    }
+    if ((column[3] < 0) != (column[4] < 0))
+      throw InputError(where(
+          name, n, fmt::format("no column '{}' in the header", wanted[column[3] < 0 ? 3 : 4])));
   };
   const auto on_row = [&](const std::vector<std::string>& cells, long n) {
     for (const size_t c : marks) {
@@ -247,7 +250,8 @@ BackboneTable read_process_backbone(const fs::path& path) {
       coverage =
           coverage_factor_of_row(std::strtod(cell.c_str(), nullptr), coverage, cell, name, n);
     }
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < kWanted; ++k) {
+      if (column[k] < 0) continue;
       const std::string& cell = cells[static_cast<size_t>(column[k])];
       double x = 0;
       size_t used = 0;
@@ -262,24 +266,29 @@ BackboneTable read_process_backbone(const fs::path& path) {
       }
       if (k == 0 && !(x > 0)) throw InputError(where(name, n, "amplitude must be > 0"));
       if (k == 1 && !(x > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
-      if (k >= 3 && x < 0)
+      if ((k == 3 || k == 4) && x < 0)
         throw InputError(where(name, n, fmt::format("{} must be >= 0", wanted[k])));
       values[k].push_back(x);
     }
   };
   if (!for_each_csv_row(path, "backbone file", on_header, on_row))
     throw InputError(where(name, 0, "empty file, expected a backbone header"));
-  if (values[0].empty()) throw InputError(where(name, 0, "no backbone point"));
   BackboneTable t;
   t.source = name;  // for messages, and which hit a curve is where several are returned
-  auto vec = [](const std::vector<double>& v) {
-    return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  auto vec = [&](int k) {
+    if (column[k] < 0)
+      return Eigen::VectorXd::Zero(static_cast<Eigen::Index>(values[0].size())).eval();
+    return Eigen::Map<const Eigen::VectorXd>(values[k].data(),
+                                             static_cast<Eigen::Index>(values[k].size()))
+        .eval();
   };
-  t.amplitude = vec(values[0]);
-  t.frequency_hz = vec(values[1]);
-  t.damping_ratio = vec(values[2]);
-  t.frequency_std_hz = vec(values[3]);
-  t.damping_std = vec(values[4]);
+  t.amplitude = vec(0);
+  t.frequency_hz = vec(1);
+  t.damping_ratio = vec(2);
+  t.frequency_std_hz = vec(3);
+  t.damping_std = vec(4);
+  t.has_uncertainty = column[3] >= 0;
+  if (column[5] >= 0) t.time_s = vec(5);
   if (coverage > 0) t.coverage_factor = coverage;
   t.written_by_jointlab = true;
   return t;

@@ -55,12 +55,13 @@ struct ProcessRun {
 /// saying so when DIR is a `stepped-sine` output instead.
 ProcessRun read_process_run(const std::filesystem::path& dir);
 
-/// Reads one backbone CSV of `process` (columns amplitude, frequency_hz, damping_ratio,
-/// frequency_std_hz, damping_std by name; amplitudes in SI): rows in the file's (time) order,
-/// those marked in a `harmonic` or `exchange` column left out (not the mode's own frequency or
-/// damping), the std columns' k from its `coverage_factor` column (none: 1); InputError naming the
-/// file and line. A point's damping may be 0 or below (noise at the record's end), unlike a plain
-/// table's (read_backbone_table).
+/// Reads one backbone CSV of `process` (columns by name: amplitude, frequency_hz,
+/// damping_ratio, and where present time_s and the two std columns, both or neither; amplitudes
+/// in SI): rows in the file's (time) order, those marked in a `harmonic` or `exchange` column
+/// left out (not the mode's own frequency or damping), so that the table may hold no point; the
+/// std columns' k from its `coverage_factor` column (none: 1). InputError naming the file and
+/// line. A point's damping may be 0 or below (noise at the record's end), unlike a plain table's
+/// (read_backbone_table).
 BackboneTable read_process_backbone(const std::filesystem::path& path);
 
 /// One file of a `jointlab stepped-sine` run and its backbone CSV.

@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 
 #include "jointlab/core/error.h"
-#include "jointlab/data/backbone_table.h"
 #include "jointlab/data/csv_lines.h"
+#include "jointlab/data/process_folder.h"
 
 namespace jointlab::campaign {
 
@@ -55,48 +55,24 @@ NumericTable read_numeric_table(const fs::path& path, bool allow_empty) {
 
 BackboneFile read_backbone_file(const fs::path& path, const std::string& id,
                                 const std::string& group) {
-  const NumericTable bt = read_numeric_table(path);
+  // The one reader of process's backbone CSVs (data/, as update-iwan's --measured reads them).
+  const data::BackboneTable t = data::read_process_backbone(path);
+  if (t.time_s.size() != t.size())
+    throw InputError(
+        fmt::format("{}: no column 'time_s' (delete the file to recompute it)", path.string()));
   BackboneFile file;
   correlate::Curve& cv = file.curve;
   cv.id = id;
   cv.group = group;
-  const auto has = [&](const char* name) {
-    return std::find(bt.names.begin(), bt.names.end(), name) != bt.names.end();
-  };
-  // The mode's own points: none marked in a column of data::is_point_mark.
-  std::vector<const std::vector<double>*> marks;
-  for (const std::string& name : bt.names) {
-    if (data::is_point_mark(name)) marks.push_back(&bt.column(name, path));
+  cv.time_s = t.time_s;
+  cv.amplitude = t.amplitude;
+  cv.frequency_hz = t.frequency_hz;
+  cv.damping = t.damping_ratio;
+  if (t.has_uncertainty) {
+    file.frequency_std_hz = t.frequency_std_hz;
+    file.damping_std = t.damping_std;
   }
-  std::vector<size_t> own;
-  const size_t rows = bt.column("time_s", path).size();
-  for (size_t i = 0; i < rows; ++i) {
-    if (std::none_of(marks.begin(), marks.end(),
-                     [&](const std::vector<double>* m) { return (*m)[i] != 0; }))
-      own.push_back(i);
-  }
-  const auto pick = [&](const char* name) {
-    const std::vector<double>& all = bt.column(name, path);
-    Eigen::VectorXd out(static_cast<Eigen::Index>(own.size()));
-    for (size_t k = 0; k < own.size(); ++k) out(static_cast<Eigen::Index>(k)) = all[own[k]];
-    return out;
-  };
-  cv.time_s = pick("time_s");
-  cv.amplitude = pick("amplitude");
-  cv.frequency_hz = pick("frequency_hz");
-  cv.damping = pick("damping_ratio");
-  if (has("frequency_std_hz") && has("damping_std")) {
-    file.frequency_std_hz = pick("frequency_std_hz");
-    file.damping_std = pick("damping_std");
-  }
-  if (has("coverage_factor") && !own.empty()) {
-    const std::vector<double>& k = bt.column("coverage_factor", path);
-    double before = 0;
-    for (const size_t i : own)
-      before =
-          data::coverage_factor_of_row(k[i], before, fmt::format("{:g}", k[i]), path.string(), 0);
-    file.coverage_factor = before;
-  }
+  file.coverage_factor = t.coverage_factor;
   return file;
 }
 

@@ -1,6 +1,6 @@
 // Reading back the numeric CSV tables a run writes (data/table_writer.h): a header of
-// column names, then rows of finite numbers. Used for the cached hits and for the backbone
-// files of `process`.
+// column names, then rows of finite numbers, for the cached hits; and a hit's backbone file of
+// `process` as a curve (read by data::read_process_backbone).
 #pragma once
 
 #include <filesystem>
@@ -35,9 +35,10 @@ struct BackboneFile {
   double coverage_factor = 1.0;      ///< k: the file's coverage_factor column (none: 1)
 };
 
-/// Reads a backbone CSV of `process` (time_s, amplitude, frequency_hz, damping_ratio and, when
-/// present, frequency_std_hz and damping_std) as a curve of hit `id` in `group`. Points marked
-/// in a `harmonic` or `exchange` column (not the mode's own frequency or damping) are left out.
+/// Reads a backbone CSV of `process` (data::read_process_backbone: time_s, amplitude,
+/// frequency_hz, damping_ratio and, when present, frequency_std_hz and damping_std) as a curve of
+/// hit `id` in `group`. Points marked in a `harmonic` or `exchange` column (not the mode's own
+/// frequency or damping) are left out.
 BackboneFile read_backbone_file(const std::filesystem::path& path, const std::string& id,
                                 const std::string& group);
 
