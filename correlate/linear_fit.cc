@@ -349,8 +349,10 @@ Eigen::VectorXd finish_result(const LinearProblem& p, int minimised, const std::
   report_uncertainty(p, theta, at, least_squares, held, s);
   // At the least-squares point only: a rule that moved on from it (tolerance, smallest) leaves a
   // cost the others' refit can lower whichever way a set moves.
-  if (options.rule == LinearRule::kLeastSquares && !(options.tolerance > 0))
+  if (options.rule == LinearRule::kLeastSquares && !(options.tolerance > 0)) {
     report_one_sided(p, point, at, profile_held, s);
+    check_combinations(p, point, at, profile_held, s);
+  }
   warn_bounds(p, theta, s);
   warn_aliased(p, at, s);
   if (with_sweeps) sweeps(p, point, s);

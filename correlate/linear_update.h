@@ -272,9 +272,15 @@ struct CollinearSets {
   double correlation = 0;  ///< two sets: |cos| of the angle between their sensitivity columns
   /// Two sets a, b: the combination w = theta_a + weight theta_b the frequencies determine, its
   /// value at the result and one-sigma relative uncertainty (none where none is stated); with
-  /// more sets, weight and value are 0.
+  /// more sets, weight and value are 0, and value is 0 (no relative_std) where w is not constant
+  /// along the frequencies' valley (valley_low < valley_high below).
   double weight = 0, value = 0;
   std::optional<double> relative_std;
+  /// Two sets: where w changes along the valley of equal fit (set a moved, the others fitted
+  /// again, the chi-square within 9 of the result's) by more than half its standard deviation
+  /// (a curved combination, such as two springs in series), the least and largest w there and
+  /// set a's range walked; all 0 where w holds along it.
+  double valley_low = 0, valley_high = 0, walked_low = 0, walked_high = 0;
 };
 
 /// Why update_linear() stopped.
