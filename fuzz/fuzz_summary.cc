@@ -1,9 +1,10 @@
 // libFuzzer target: the measured side of the updating commands on arbitrary bytes, read twice:
 // as summary.json of `jointlab process` (strict JSON, then the fields) and as an update-linear
 // modes table (mode,frequency_hz and shape cells, real or complex, ',' ';' or tab delimited)
-// against three sensors s1, s2 and s3.
+// against three sensors s1, s2 and s3; and as a sensors file (channel,dof[,sign]).
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "fuzz_util.h"
@@ -11,6 +12,7 @@
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/data/modes_table.h"
 #include "jointlab/data/process_folder.h"
+#include "jointlab/data/sensors_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto& dir = jointlab::fuzz::scratch();
@@ -27,6 +29,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         jointlab::data::read_modes_table(dir / "modes.csv",
                                          jointlab::correlate::channels_of(sensors)),
         sensors);
+  } catch (const jointlab::InputError&) {
+  }
+  try {
+    jointlab::data::parse_sensors_file(std::string(reinterpret_cast<const char*>(data), size),
+                                       "sensors.csv");
   } catch (const jointlab::InputError&) {
   }
   return 0;
