@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -251,18 +252,31 @@ std::string shape_evidence(const MisfitEvidence& e) {
 // named scatter and the cluster sigmas stated, F_S and K_T up to 5.5 (one range) and 8.5 (rising
 // levels) of them off the nominal joint.
 std::string model_beside_scatter(const MisfitEvidence& e) {
+  // The parameters each curve's own fit freed, and those it held as the fit did.
+  static const char* const names[] = {"F_S", "K_T", "chi", "beta"};
+  std::vector<std::string> own, held;
+  for (size_t k = 0; k < 4; ++k) (e.each_hit_held[k] ? held : own).push_back(names[k]);
+  const auto join = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (size_t i = 0; i < v.size(); ++i)
+      out += (i == 0 ? "" : i + 1 == v.size() ? " and " : ", ") + v[i];
+    return out;
+  };
+  const std::string freed =
+      fmt::format("its own {}{}", join(own),
+                  held.empty() ? "" : fmt::format(", {} held as in the fit", join(held)));
   return fmt::format(
       "That is scatter between the hits, but not all of the misfit: each curve fitted alone "
-      "(linearised about this result, its own F_S, K_T, chi and beta) still keeps a chi-square "
-      "of {:.0f} where the stated noise gives about {}, and what it keeps is shared: a common "
-      "curve of the frequency residuals in amplitude gains {:.3g} times the rest's own scatter "
-      "per degree of freedom ({} and {}; under 1 time in 100 by chance). A model error the hits "
-      "share (the linear part, chi or beta held, the structure's own damping, another mode "
+      "(linearised about this result, {}) still keeps a chi-square of {:.0f} where the stated "
+      "noise gives about {}, and what it keeps is shared: a common curve of the frequency "
+      "residuals in amplitude gains {:.3g} times the rest's own scatter per degree of freedom "
+      "({} and {}; under 1 time in 100 by chance). A model error the hits share (the linear "
+      "part, chi, K_T or beta held off the joint's, the structure's own damping, another mode "
       "slipping the joint) pulls every parameter further than the scatter between hits shows, "
       "so no sigma is stated (one cluster per hit would read the scatter alone: three hits "
       "scattered 5 % / 2 % with the linear part 0.4 % stiff stated F_S and K_T up to 8.5 of "
       "those sigmas off)",
-      e.each_hit_chi2, e.each_hit_dof, e.shared_frequency_f, e.shared_frequency_dof,
+      freed, e.each_hit_chi2, e.each_hit_dof, e.shared_frequency_f, e.shared_frequency_dof,
       e.shared_frequency_rest_dof);
 }
 

@@ -8,6 +8,7 @@
 // squared normalised error: about 2 when the model is within the scatter).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -124,12 +125,16 @@ struct MisfitEvidence {
   /// common curves 92-734.
   bool hits_differ_in_shape() const;
   /// Each curve of those targets fitted alone, linearised about the result: its residuals less
-  /// their least-squares projection on its own slopes in (ln F_S, ln K_T, chi, ln beta), which a
-  /// curve whose joint differs from the others' only in its parameters leaves at the noise. The
-  /// chi-square they keep (about each_hit_dof under the stated noise) and its degrees of freedom
-  /// (points less the slopes' rank, frequency and damping, summed over the curves).
+  /// their least-squares projection on its own slopes in those of (ln F_S, ln K_T, chi, ln beta)
+  /// the fit frees (each_hit_held), which a curve whose joint differs from the others' only in
+  /// those parameters leaves at the noise. The chi-square they keep (about each_hit_dof under the
+  /// stated noise) and its degrees of freedom (points less the slopes' rank, frequency and
+  /// damping, summed over the curves).
   double each_hit_chi2 = 0;
   int each_hit_dof = 0;  ///< degrees of freedom of each_hit_chi2
+  /// Which of (F_S, K_T, chi, beta) each curve's own fit held at the result, as the fit held
+  /// them (--gamma, --beta, or beta held by the fit).
+  std::array<bool, 4> each_hit_held{};
   /// What a common curve of the measured frequency's residuals in ln amplitude (as
   /// between_hits_share's) then gains beyond each curve's own fit, F against the rest's own
   /// scatter (so noise stated too small leaves it near 1): the misfit every hit shares at the
@@ -249,9 +254,11 @@ class IwanObjective {
   std::optional<Eigen::Vector2d> rms_errors(const model::IwanParameters& p, double z) const;
   /// The same for the best constants (the constant minimising each relative RMS).
   Eigen::Vector2d constant_rms_errors() const;
-  /// MisfitEvidence of the model at (p, z), of the target whose linear-limit offset is largest;
-  /// nullopt if p cannot be evaluated.
-  std::optional<MisfitEvidence> misfit_evidence(const model::IwanParameters& p, double z) const;
+  /// MisfitEvidence of the model at (p, z), of the target whose linear-limit offset is largest,
+  /// each curve's own fit holding the parameters (F_S, K_T, chi, beta) `held` holds, as the fit
+  /// did; nullopt if p cannot be evaluated.
+  std::optional<MisfitEvidence> misfit_evidence(const model::IwanParameters& p, double z,
+                                                const std::array<bool, 4>& held = {}) const;
   /// The targets (the measured backbones).
   const std::vector<IwanTarget>& targets() const { return targets_; }
   /// Residuals at (p, z), as residuals_at(), of the model with its structure's stiffness K (the

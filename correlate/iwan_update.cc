@@ -330,7 +330,7 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   s.noise_correlation = noise.rho;
   s.amplitude_share = noise.amplitude_share;
   // Only a misfit has a cause to name (an eigensolution of the model as given, so not always).
-  if (s.misfit()) s.evidence = objective.misfit_evidence(s.best, s.modal_ratio);
+  if (s.misfit()) s.evidence = objective.misfit_evidence(s.best, s.modal_ratio, s.held);
   widen_for_scatter(s, cov);
   set_sigmas(free, cov, s);
   // How far an error of the rest of the model moves the parameters, which no residual shows
