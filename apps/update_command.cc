@@ -2,9 +2,9 @@
 // `jointlab process` or, for update-iwan, backbone tables (docs/update-linear.md,
 // docs/update-iwan.md; update-iwan's measured side is read by campaign/iwan_inputs.h, shared
 // with `compare` and the Python module). Argument parsing only:
-// reading measured data (correlate/measured_data.h), the updates (linear_update.h,
-// iwan_update.h) and the files written (update_files.h, model/model_file_writer.h) are
-// library code.
+// reading measured data (data/ readers, correlate/measured_data.h), the updates (linear_update.h,
+// iwan_update.h) and the tables written (correlate/update_tables.h, written atomically;
+// model/model_file_writer.h) are library code.
 #include <algorithm>
 #include <filesystem>
 #include <memory>
@@ -29,7 +29,8 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
+#include "jointlab/data/atomic_file.h"
 #include "jointlab/model/iwan.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/model/model_file.h"
@@ -142,11 +143,11 @@ void run_update_linear(const LinearArgs& a) {
   make_out_dir(a.out);
   const fs::path out(a.out);
   model::write_model_file(out / "model.toml", updated);
-  correlate::write_linear_parameters(out / "parameters.csv", summary);
-  correlate::write_linear_history(out / "history.csv", summary);
-  correlate::write_linear_modes(out / "modes.csv", summary);
-  correlate::write_mac_matrix(out / "mac.csv", summary);
-  correlate::write_linear_sweeps(out / "sweeps.csv", summary);
+  data::write_file_atomically(out / "parameters.csv", correlate::linear_parameters_csv(summary));
+  data::write_file_atomically(out / "history.csv", correlate::linear_history_csv(summary));
+  data::write_file_atomically(out / "modes.csv", correlate::linear_modes_csv(summary));
+  data::write_file_atomically(out / "mac.csv", correlate::mac_matrix_csv(summary));
+  data::write_file_atomically(out / "sweeps.csv", correlate::linear_sweeps_csv(summary));
   campaign::write_linear_figures(summary, out);
   // The report carries every warning once.
   say(stdout, "{}", summary.report());
@@ -212,9 +213,12 @@ void fit_and_write(const IwanArgs& a, const model::Model& m, const campaign::Iwa
   make_out_dir(a.out);
   model::write_model_file(fs::path(a.out) / "model.toml",
                           objective.apply(best, summary.modal_ratio));
-  correlate::write_iwan_parameters(fs::path(a.out) / "parameters.csv", summary);
-  correlate::write_iwan_history(fs::path(a.out) / "history.csv", summary);
-  if (!front.empty()) correlate::write_pareto(fs::path(a.out) / "pareto.csv", front);
+  data::write_file_atomically(fs::path(a.out) / "parameters.csv",
+                              correlate::iwan_parameters_csv(summary));
+  data::write_file_atomically(fs::path(a.out) / "history.csv",
+                              correlate::iwan_history_csv(summary));
+  if (!front.empty())
+    data::write_file_atomically(fs::path(a.out) / "pareto.csv", correlate::pareto_csv(front));
   // backbones.png (one figure per mode: backbones_<k>.png past the first): the measured
   // backbones with the model at the start and at the result.
   const auto start = objective.model_curves(summary.start, summary.modal_ratio_start);

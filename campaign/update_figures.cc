@@ -7,14 +7,14 @@
 #include <fmt/format.h>
 
 #include "jointlab/campaign/figures.h"
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
 
 namespace jointlab::campaign {
 namespace {
 
 namespace fs = std::filesystem;
 
-// The MAC of one evaluation with its pairs framed; columns up to those update_files.h writes.
+// The MAC of one evaluation with its pairs framed; columns up to those update_tables.h writes.
 void mac_figure(const correlate::LinearEvaluation& e, int cols, const std::string& title,
                 const fs::path& file) {
   const Eigen::MatrixXd& mac = e.mac;

@@ -11,7 +11,7 @@
 
 #include "jointlab/correlate/iwan_update_test_fixtures.h"
 #include "jointlab/correlate/measured_data.h"
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
 
 namespace jointlab::correlate {
 namespace {

@@ -16,7 +16,7 @@
 #include "jointlab/core/error.h"
 #include "jointlab/correlate/mode_tracking.h"
 #include "jointlab/correlate/two_chain.h"
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
 #include "jointlab/model/linear_modes.h"
 #include "jointlab/tests/test_util.h"
 
@@ -556,9 +556,7 @@ TEST(LinearUpdate, TwoSetsOnOneJointActTogetherAndOnlyTheirSumIsDetermined) {
   EXPECT_NE(r.find("determine only their sum, spring.ka + spring.kd = "), std::string::npos) << r;
   EXPECT_NE(r.find("hold one of them"), std::string::npos) << r;
   EXPECT_NEAR((theta(0) + theta(1)) / 6e5, 1.0, 0.01) << r;
-  const std::filesystem::path csv = testing::scratch_path("linear_collinear", "parameters.csv");
-  write_linear_parameters(csv, s);
-  const std::string t = testing::read_file(csv);
+  const std::string t = linear_parameters_csv(s);
   for (const char* name : {"spring.ka", "spring.kd", "spring.kb"}) {
     const size_t at = t.find(std::string("\n") + name + ",");
     ASSERT_NE(at, std::string::npos) << t;

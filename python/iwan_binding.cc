@@ -11,7 +11,7 @@
 #include "jointlab/campaign/model_comparison.h"
 #include "jointlab/correlate/iwan_update.h"
 #include "jointlab/correlate/measured_data.h"
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
 
 namespace jointlab::python {
 namespace {

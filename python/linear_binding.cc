@@ -13,7 +13,7 @@
 #include "jointlab/correlate/linear_update.h"
 #include "jointlab/correlate/measured_data.h"
 #include "jointlab/correlate/sensors.h"
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
 
 namespace jointlab::python {
 namespace {

@@ -1,4 +1,4 @@
-#include "jointlab/correlate/update_files.h"
+#include "jointlab/correlate/update_tables.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,6 @@
 #include <vector>
 
 #include <fmt/format.h>
-
-#include "jointlab/data/atomic_file.h"
 
 namespace jointlab::correlate {
 namespace {
@@ -28,7 +26,7 @@ std::string cell(const std::string& s) {
 
 }  // namespace
 
-void write_linear_parameters(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+std::string linear_parameters_csv(const LinearUpdateSummary& s) {
   std::string t =
       "name,initial,final,relative_std,sensitivity,identifiable,smallest_within_tolerance,"
       "status\n";
@@ -43,10 +41,10 @@ void write_linear_parameters(const std::filesystem::path& path, const LinearUpda
                      : p.at_bound > 0 ? "at upper bound"
                                       : "fitted");
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
-void write_linear_history(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+std::string linear_history_csv(const LinearUpdateSummary& s) {
   std::string t = "iteration,objective";
   for (const ParameterReport& p : s.parameters) t += fmt::format(",{}", cell(p.name));
   t += "\n";
@@ -58,10 +56,10 @@ void write_linear_history(const std::filesystem::path& path, const LinearUpdateS
     }
     t += "\n";
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
-void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+std::string linear_modes_csv(const LinearUpdateSummary& s) {
   const LinearEvaluation& e = s.final;
   std::string t = "measured,frequency_hz,model_mode,model_frequency_hz,error,mac\n";
   for (Eigen::Index i = 0; i < e.measured_frequency_hz.size(); ++i) {
@@ -76,7 +74,7 @@ void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSum
                        mac ? num(*mac) : std::string());
     }
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
 int mac_columns(const LinearUpdateSummary& s) {
@@ -90,7 +88,7 @@ int mac_columns(const LinearUpdateSummary& s) {
   return std::min(cols, static_cast<int>(e.mac.cols()));
 }
 
-void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+std::string mac_matrix_csv(const LinearUpdateSummary& s) {
   const Eigen::MatrixXd& mac = s.final.mac;
   const int cols = mac_columns(s);
   std::string t = "measured";
@@ -101,10 +99,10 @@ void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSumma
     for (int j = 0; j < cols; ++j) t += fmt::format(",{}", num(mac(i, j)));
     t += "\n";
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
-void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSummary& s) {
+std::string linear_sweeps_csv(const LinearUpdateSummary& s) {
   const Eigen::Index m = s.final.measured_frequency_hz.size();
   std::string t = "set,factor,stiffness,rms_error";
   for (Eigen::Index i = 0; i < m; ++i) t += ",error" + s.final.measured_id(i);
@@ -124,7 +122,7 @@ void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSu
       t += "\n";
     }
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
 std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
@@ -176,8 +174,7 @@ std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
   return rows;
 }
 
-void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSummary& s,
-                           double identifiable_std) {
+std::string iwan_parameters_csv(const IwanUpdateSummary& s, double identifiable_std) {
   std::string t = "name,initial,final,relative_std,identifiable,held,at_bound,note\n";
   for (const IwanParameterRow& r : iwan_parameter_rows(s, identifiable_std)) {
     t += fmt::format("{},{},{},{},{},{},{},{}\n", r.name, num(r.initial), num(r.final),
@@ -188,10 +185,10 @@ void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSu
                                       : "",
                      cell(r.note));
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
-void write_iwan_history(const std::filesystem::path& path, const IwanUpdateSummary& s) {
+std::string iwan_history_csv(const IwanUpdateSummary& s) {
   std::string t = "evaluation,objective,best,stage\n";
   for (const IwanHistoryEntry& h : s.history) {
     // A parameter set the model could not evaluate has no objective value: left out (its
@@ -200,10 +197,10 @@ void write_iwan_history(const std::filesystem::path& path, const IwanUpdateSumma
     t += fmt::format("{},{},{},{}\n", h.evaluation, num(h.cost), num(h.best),
                      h.beta_held ? "beta held" : "beta free");
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
-void write_pareto(const std::filesystem::path& path, const std::vector<ParetoPoint>& front) {
+std::string pareto_csv(const std::vector<ParetoPoint>& front) {
   size_t modes = 0;
   for (const ParetoPoint& p : front) modes = std::max(modes, p.mode_errors.size());
   std::string t = "gamma,Fs,Kt,chi,beta,linear_error,backbone_cost,dominated";
@@ -219,7 +216,7 @@ void write_pareto(const std::filesystem::path& path, const std::vector<ParetoPoi
     }
     t += "\n";
   }
-  data::write_file_atomically(path, t);
+  return t;
 }
 
 }  // namespace jointlab::correlate

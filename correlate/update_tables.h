@@ -1,4 +1,5 @@
-// Result files of the updating commands (update-linear, update-iwan), written atomically.
+// Result tables of the updating commands (update-linear, update-iwan) as CSV text: values, which
+// the commands write (data::write_file_atomically, at the edge; correlate/ opens no file).
 //
 // parameters.csv, one row per parameter:
 //   linear: name,initial,final,relative_std,sensitivity,identifiable,smallest_within_tolerance
@@ -27,7 +28,6 @@
 // throws std::logic_error (never written as NaN).
 #pragma once
 
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -36,24 +36,24 @@
 
 namespace jointlab::correlate {
 
-/// Writes the linear update's parameters.csv.
-void write_linear_parameters(const std::filesystem::path& path, const LinearUpdateSummary& s);
+/// The linear update's parameters.csv.
+std::string linear_parameters_csv(const LinearUpdateSummary& s);
 
-/// Writes the linear update's history.csv.
-void write_linear_history(const std::filesystem::path& path, const LinearUpdateSummary& s);
+/// The linear update's history.csv.
+std::string linear_history_csv(const LinearUpdateSummary& s);
 
-/// Writes the linear update's modes.csv (per-mode frequency errors).
-void write_linear_modes(const std::filesystem::path& path, const LinearUpdateSummary& s);
+/// The linear update's modes.csv (per-mode frequency errors).
+std::string linear_modes_csv(const LinearUpdateSummary& s);
 
 /// Model columns mac.csv shows: two past the highest paired model mode, and every model mode up
 /// to 1.5 times the highest measured frequency.
 int mac_columns(const LinearUpdateSummary& s);
 
-/// Writes the linear update's mac.csv (the MAC matrix at the result).
-void write_mac_matrix(const std::filesystem::path& path, const LinearUpdateSummary& s);
+/// The linear update's mac.csv (the MAC matrix at the result).
+std::string mac_matrix_csv(const LinearUpdateSummary& s);
 
-/// Writes the linear update's sweeps.csv (one-at-a-time sweeps, every mode's error).
-void write_linear_sweeps(const std::filesystem::path& path, const LinearUpdateSummary& s);
+/// The linear update's sweeps.csv (one-at-a-time sweeps, every mode's error).
+std::string linear_sweeps_csv(const LinearUpdateSummary& s);
 
 /// One row of the Iwan update's parameters.csv.
 struct IwanParameterRow {
@@ -75,14 +75,13 @@ struct IwanParameterRow {
 std::vector<IwanParameterRow> iwan_parameter_rows(const IwanUpdateSummary& s,
                                                   double identifiable_std = 0.5);
 
-/// Writes the Iwan update's parameters.csv (iwan_parameter_rows()).
-void write_iwan_parameters(const std::filesystem::path& path, const IwanUpdateSummary& s,
-                           double identifiable_std = 0.5);
+/// The Iwan update's parameters.csv (iwan_parameter_rows()).
+std::string iwan_parameters_csv(const IwanUpdateSummary& s, double identifiable_std = 0.5);
 
-/// Writes the Iwan update's history.csv.
-void write_iwan_history(const std::filesystem::path& path, const IwanUpdateSummary& s);
+/// The Iwan update's history.csv.
+std::string iwan_history_csv(const IwanUpdateSummary& s);
 
-/// Writes the Pareto front as pareto.csv.
-void write_pareto(const std::filesystem::path& path, const std::vector<ParetoPoint>& front);
+/// The Pareto front as pareto.csv.
+std::string pareto_csv(const std::vector<ParetoPoint>& front);
 
 }  // namespace jointlab::correlate
