@@ -163,6 +163,10 @@ struct Guess {
   std::string kind_mismatch;
   std::optional<Quantity> unit_measures;
   std::string case_slip;  ///< the unit as written where `unit` is its spelling in another case
+  // How an amplitude's name says it was measured where not zero to peak: "peak-to-peak" or
+  // "RMS"; "" otherwise. Renamed plainly, such a column was read as zero to peak and scaled F_S
+  // by 2 or 0.707, which no fit can tell.
+  std::string measure;
 };
 
 Guess guess_column(const std::string& name, const std::string& bracket_unit,
@@ -207,6 +211,26 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
            w.starts_with("disp") || w == "a" || w == "q";
   });
   if (g.loss_factor) return g;
+  if (amplitude) {
+    // The measure in the name or in its brackets: amp_pp, amplitude_p2p, Amplitude
+    // (peak-to-peak), velocity_rms [mm/s].
+    const std::vector<std::string> all = words_of(name + " " + bracket_unit);
+    const auto word = [&](std::initializer_list<const char*> ws) {
+      return std::any_of(all.begin(), all.end(), [&](const std::string& w) {
+        return std::any_of(ws.begin(), ws.end(), [&](const char* x) { return w == x; });
+      });
+    };
+    std::string flat;  // the name's letters and digits alone: "peaktopeak"
+    for (const std::string& w : all) flat += w;
+    if (word({"pp", "p2p", "ptp", "pkpk", "peak2peak"}) || flat.find("peaktopeak") != flat.npos)
+      g.measure = "peak-to-peak";
+    else if (word({"rms"}))
+      g.measure = "RMS";
+    if (!g.measure.empty() && g.parenthesised && !parse_unit(g.unit)) {
+      g.unit.clear();  // "(peak-to-peak)", "(RMS)": the measure, not a unit
+      g.parenthesised = false;
+    }
+  }
   if (damping) {
     g.column = g.uncertainty ? 4 : 2;
   } else if (frequency) {
@@ -280,7 +304,19 @@ std::string rename_hint(size_t i, const std::string& field, const Guess& g) {
         "column '{}'",
         i + 1, shorten(field), name);
   }
-  if (g.parenthesised && g.unit_taken && lower(base) == name) {
+  if (g.column == 0 && !g.measure.empty()) {
+    // Renamed alone, it would be read as zero to peak: F_S x 2 (peak-to-peak) or x 0.707 (RMS).
+    fix = fmt::format(
+        "{}, then rename it '{}'",
+        g.measure == "RMS"
+            ? "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a "
+              "sine's RMS times sqrt(2); read as it is, F_S comes out 0.707 times the truth)"
+            : "halve its values (an amplitude is read zero to peak; peak-to-peak values read as "
+              "they are give F_S twice the truth)",
+        to);
+    if (!g.unit.empty() && !g.unit_taken)
+      notes.push_back(fmt::format("'{}' is no unit of {}", shorten(g.unit), name));
+  } else if (g.parenthesised && g.unit_taken && lower(base) == name) {
     fix = fmt::format("write the unit in square brackets, '{}'", to);
   } else {
     fix = fmt::format("rename it '{}'", to);

@@ -611,6 +611,34 @@ TEST(BackboneTable, AFrequencyInRadPerSecondIsToldToBeDividedByTwoPi) {
                   "divide its values by 2 pi (6.2832) and write 'frequency_hz [Hz]'"});
 }
 
+// An amplitude measured peak to peak or as RMS: renamed plainly ('amplitude_rms': "rename it
+// 'amplitude'"), as the message told, it was read zero to peak and F_S came out 0.707 (RMS) or 2
+// (peak to peak) times the truth, which no fit can tell. The fix names the factor first.
+TEST(BackboneTable, APeakToPeakOrRmsAmplitudeIsToldItsFactor) {
+  const std::string rows = "\n1,57.9,0.01\n2,57.8,0.02\n";
+  const std::string halve =
+      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
+      "give F_S twice the truth), then rename it ";
+  const std::string root2 =
+      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
+      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth), then rename it ";
+  expect_refusal("r1.csv", "amplitude_rms,frequency_hz,damping_ratio" + rows, std::nullopt,
+                 {"r1.csv:1: column 1 'amplitude_rms': " + root2 + "'amplitude'"});
+  expect_refusal("r2.csv", "velocity_rms [mm/s],frequency_hz,damping_ratio" + rows,
+                 Quantity::kVelocity,
+                 {"r2.csv:1: column 1 'velocity_rms [mm/s]': " + root2 + "'amplitude [mm/s]'"});
+  expect_refusal("p1.csv", "amp_pp [m/s],frequency_hz,damping_ratio" + rows, Quantity::kVelocity,
+                 {"p1.csv:1: column 1 'amp_pp [m/s]': " + halve + "'amplitude [m/s]'"});
+  expect_refusal("p2.csv", "Amplitude (peak-to-peak),frequency_hz,damping_ratio" + rows,
+                 std::nullopt,
+                 {"p2.csv:1: column 1 'Amplitude (peak-to-peak)': " + halve + "'amplitude'"});
+  expect_refusal("p3.csv", "amplitude_p2p,frequency_hz,damping_ratio" + rows, std::nullopt,
+                 {"p3.csv:1: column 1 'amplitude_p2p': " + halve + "'amplitude'"});
+  // Zero to peak said in so many words is no other measure: told to rename alone.
+  expect_refusal("z.csv", "amplitude_peak,frequency_hz,damping_ratio" + rows, std::nullopt,
+                 {"z.csv:1: column 1 'amplitude_peak': rename it 'amplitude'"});
+}
+
 // A `process` (or `stepped-sine`) backbone read with another amplitude quantity than it was
 // written in: its displacement_m column says which (amplitude = displacement_m (2 pi f)^p).
 // Before, a velocity backbone read with --amplitude displacement went to the fit unsaid (its own
