@@ -33,7 +33,9 @@ struct ProfileSide {
 // where it is first looked at (at 3 sigma, or the bound if nearer) is taken as the line's. A
 // step whose pairs cannot be followed or change counts as the end: the frequencies leave it.
 ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int k, int d,
-                         double local, const std::vector<char>& held, double base, double scale) {
+                         double local, const std::vector<char>& held, double base, double scale,
+                         double level) {
+  const double n_sigma = std::sqrt(level);
   ProfileSide side;
   const double x0 = point.x(k);
   const double room = d > 0 ? std::log(p.upper(k)) - x0 : x0 - std::log(p.lower(k));
@@ -44,7 +46,7 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
   const size_t pairs = p.evaluate(point).pairing.pairs.size();
   TrackedPoint from = point;
   double t_lo = 0, r_lo = 0;
-  double t = 3 * local;
+  double t = n_sigma * local;
   for (int step = 0; step < 8; ++step) {
     const bool last = t >= room;
     if (last) t = room;
@@ -65,11 +67,11 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
       return side;
     }
     const double rise = std::max(0.0, (e->weighted_squared_norm() - base) / scale);
-    if (rise >= 9) {
+    if (rise >= level) {
       const double t9 =
-          t_lo + (3 - std::sqrt(r_lo)) / (std::sqrt(rise) - std::sqrt(r_lo)) * (t - t_lo);
+          t_lo + (n_sigma - std::sqrt(r_lo)) / (std::sqrt(rise) - std::sqrt(r_lo)) * (t - t_lo);
       side.bounded = true;
-      side.sigma = std::max(local, t9 / 3);
+      side.sigma = std::max(local, t9 / n_sigma);
       return side;
     }
     if (step == 0 && std::sqrt(rise) >= 0.95 * t / local) {
@@ -84,7 +86,7 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
     t_lo = t;
     r_lo = rise;
     from = std::move(*q);
-    t *= std::clamp(1.1 * 3 / std::sqrt(std::max(rise, 0.09)), 1.25, 3.0);
+    t *= std::clamp(1.1 * n_sigma / std::sqrt(std::max(rise, 0.09)), 1.25, 3.0);
   }
   return side;
 }
@@ -123,13 +125,14 @@ void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const L
                       const std::vector<char>& held, LinearUpdateSummary& s) {
   const double scale = sigma_variance(p, s);
   const double base = at.weighted_squared_norm();
+  const double level = three_sigma_rise(s);
   for (int k = 0; k < p.size(); ++k) {
     ParameterReport& r = s.parameters[k];
     if (!r.relative_std || !(*r.relative_std > 0)) continue;
     const double local = *r.relative_std;
     double sigma = local;
     for (const int d : {1, -1}) {
-      const ProfileSide side = profile_side(p, point, k, d, local, held, base, scale);
+      const ProfileSide side = profile_side(p, point, k, d, local, held, base, scale, level);
       if (!side.checked) continue;
       if (side.bounded) {
         sigma = std::max(sigma, side.sigma);
@@ -140,15 +143,16 @@ void report_one_sided(const LinearProblem& p, const TrackedPoint& point, const L
       s.warnings.push_back(fmt::format(
           "{}: the frequencies bound it from {} only: moved {} to {:.6g} ({:.3g} standard "
           "deviations of the local slope{}), the other sets fitted again, the chi-square rises by "
-          "only {:.3g} where 9 marks 3 standard deviations{} (sensitivity {:.3g} at the result, "
+          "only {:.3g} where {:.3g} marks 3 standard deviations{} (sensitivity {:.3g} at the "
+          "result, "
           "{:.3g} there), so its +/- {:.3g} % would understate how far it may be, and none is "
           "stated; hold it at a value known otherwise (--hold {}=VALUE)",
           r.name, d > 0 ? "below" : "above", d > 0 ? "up" : "down", side.reached, moved,
           std::abs(std::log(side.reached) - std::log(d > 0 ? p.upper(k) : p.lower(k))) < 1e-9
               ? ", its bound"
               : "",
-          side.rise, side.lost ? ", and beyond it the pairs cannot be followed" : "", r.sensitivity,
-          side.sensitivity, 100 * local, r.name));
+          side.rise, level, side.lost ? ", and beyond it the pairs cannot be followed" : "",
+          r.sensitivity, side.sensitivity, 100 * local, r.name));
       r.relative_std.reset();
       break;
     }
@@ -165,7 +169,7 @@ std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& po
                                   const std::vector<char>& held, int k,
                                   const LinearUpdateSummary& s) {
   const double base = p.evaluate(point).weighted_squared_norm();
-  const ProfileSide side = profile_side(p, point, k, -1, 0.05, held, base, sigma_variance(p, s));
+  const ProfileSide side = profile_side(p, point, k, -1, 0.05, held, base, sigma_variance(p, s), 9);
   if (!side.checked || !side.bounded || side.lost) return std::nullopt;
   return std::exp(point.x(k) - 3 * side.sigma);
 }

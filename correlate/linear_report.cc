@@ -60,7 +60,8 @@ std::string mode_rows(const LinearEvaluation& final) {
 // (`t_widening` 0: no standard deviation stated). Where the pairs cannot be decided (`undecided`)
 // there is no value (the ambiguity line says why, and where the fits differ). Before, such a report
 // said "iwan.rivet: 1e+07 -> 0", a value no fit gave.
-std::string parameter_line(const ParameterReport& p, double t_widening, bool undecided) {
+std::string parameter_line(const ParameterReport& p, double t_widening, double level,
+                           bool undecided) {
   if (undecided)
     return fmt::format("  {}: {:.6g} -> not decided (the pairs cannot be decided)\n", p.name,
                        p.start);
@@ -78,9 +79,12 @@ std::string parameter_line(const ParameterReport& p, double t_widening, bool und
                        p.one_sided > 0 ? "below" : "above");
   else if (p.relative_std && p.slope_std)
     what = fmt::format(
-        "  +/- {:.3g} % (a third of where the chi-square's profile rises by 9; the local "
-        "slope's {:.3g} % understates it)",
-        100 * *p.relative_std, 100 * *p.slope_std);
+        "  +/- {:.3g} % ({}; the local slope's {:.3g} % understates it)", 100 * *p.relative_std,
+        level == 9 ? std::string("a third of where the chi-square's profile rises by 9")
+                   : fmt::format("a third of where the chi-square's profile reaches Student's t's "
+                                 "3 standard deviations, a rise of {:.3g}",
+                                 level),
+        100 * *p.slope_std);
   else if (p.relative_std)
     what = fmt::format("  +/- {:.3g} %", 100 * *p.relative_std);
   else if (t_widening == 0)
@@ -159,7 +163,8 @@ std::string LinearUpdateSummary::report() const {
                           noise, few_degrees_note(*this)));
   }
   for (const ParameterReport& p : parameters)
-    out += parameter_line(p, t_widening, status == LinearUpdateStatus::kAmbiguous);
+    out += parameter_line(p, t_widening, detail::three_sigma_rise(*this),
+                          status == LinearUpdateStatus::kAmbiguous);
   for (const std::string& w : warnings) out += fmt::format("  WARNING: {}\n", w);
   return out;
 }

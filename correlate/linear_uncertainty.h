@@ -35,6 +35,12 @@ std::string scatter_widening(const LinearUpdateSummary& s);
 /// and Student's widening squared where they rest on the frequencies' scatter.
 double sigma_variance(const LinearProblem& p, const LinearUpdateSummary& s);
 
+/// The chi-square rise, in units of sigma_variance(), that marks 3 standard deviations along a
+/// profile: 9 where the stated noise sets the scale; where the scale is the scatter's, the square
+/// of Student's t's one-sided 0.99865 point over the degrees of freedom divided by its widening
+/// (18.2 over 5), in the share the widening takes.
+double three_sigma_rise(const LinearUpdateSummary& s);
+
 /// Standard deviations of the fitted sets at the result `at` (the least-squares fit `ls` sets
 /// the chi-square), the sets acting together named, the degrees of freedom counted.
 void report_uncertainty(const LinearProblem& p, const Eigen::VectorXd& theta,
