@@ -53,16 +53,18 @@ IwanTarget campaign(const std::vector<Hit>& hits, unsigned seed,
 
 // The fit from the start a little off the truth (F_S x1.3, K_T x0.9, chi -0.4, beta 0.7), one
 // thread, the default budget; a model whose linear part is `stiffer` times the truth's, chi
-// held within 0.01 of `held_chi` where given (models that are wrong), and beta held at
-// `held_beta` as --beta holds it where given.
+// held within 0.01 of `held_chi` where given (models that are wrong), beta held at
+// `held_beta` as --beta holds it where given, and beta's range ending at `beta_max` where given.
 IwanUpdateSummary fit(const IwanTarget& target, double stiffer = 1,
                       std::optional<double> held_chi = std::nullopt,
-                      std::optional<double> held_beta = std::nullopt) {
+                      std::optional<double> held_beta = std::nullopt,
+                      std::optional<double> beta_max = std::nullopt) {
   const FloorTruth t;
   IwanUpdateOptions o;
   o.bounds = box_around(t.iwan);
   o.threads = 1;
   o.fixed_beta = held_beta;
+  if (beta_max) o.bounds.beta_max = *beta_max;
   model::IwanParameters near = t.near();
   if (held_chi) {
     near.chi = *held_chi;
@@ -371,6 +373,30 @@ TEST(IwanCampaignShape, EachCurveAloneKeepsAHeldBetaHeld) {
   EXPECT_NE(r.find("each curve fitted alone (linearised about this result, its own F_S, K_T and "
                    "chi, beta held as in the fit)"),
             std::string::npos);
+}
+
+// A parameter the fit pinned at a bound of its range is held there too: the campaign above with
+// beta free in 0.01 to 0.35 (--beta-range) ends at beta 0.35, its upper bound. Before, each
+// curve's own fit freed beta, took up the error every hit shares as --beta 0.35 did before
+// 05cc406 (a chi-square of 211 over 168, F 1.81: scatter named, F_S +/- 6.8 %, beta +/- 63 %
+// stated at its bound); now it keeps beta at the bound, as the fit did, and the evidence reads
+// as the held beta's above (the model misses every hit, no sigma). The thresholds are the
+// rule's (1 in 1000, 1 in 100), which the held case clears 3 and 2.7 times over.
+TEST(IwanCampaignShape, EachCurveAloneKeepsABetaAtItsBoundThere) {
+  const IwanTarget target = campaign(
+      {{1e-3, 2.0, 1.024, 0.974}, {1e-3, 2.0, 0.948, 0.990}, {1e-3, 2.0, 1.012, 1.022}}, 0);
+  const IwanUpdateSummary s = fit(target, 1, std::nullopt, std::nullopt, 0.35);
+  const std::string r = s.report();
+  SCOPED_TRACE(r);
+  ASSERT_EQ(s.bound_side[3], 1);
+  ASSERT_FALSE(s.held[3]);  // not held by the options or the fit: at its bound
+  ASSERT_TRUE(s.evidence);
+  const MisfitEvidence& e = *s.evidence;
+  EXPECT_TRUE(e.each_hit_held[3]);
+  EXPECT_FALSE(e.each_hit_held[0] || e.each_hit_held[1] || e.each_hit_held[2]);
+  EXPECT_TRUE(e.model_misses_each_hit());
+  EXPECT_FALSE(s.scatter_explains_misfit());
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(s.relative_std(k), 0.0) << k;
 }
 
 }  // namespace

@@ -133,7 +133,7 @@ struct MisfitEvidence {
   double each_hit_chi2 = 0;
   int each_hit_dof = 0;  ///< degrees of freedom of each_hit_chi2
   /// Which of (F_S, K_T, chi, beta) each curve's own fit held at the result, as the fit held
-  /// them (--gamma, --beta, or beta held by the fit).
+  /// them (--gamma, --beta, beta held by the fit, or at a bound of the search box).
   std::array<bool, 4> each_hit_held{};
   /// What a common curve of the measured frequency's residuals in ln amplitude (as
   /// between_hits_share's) then gains beyond each curve's own fit, F against the rest's own
