@@ -95,14 +95,14 @@ ProfileSide profile_side(const LinearProblem& p, const TrackedPoint& point, int 
 // its two sets alone (narrower than with the others fitted too): the yardstick where the
 // summary states none.
 double stated_combination_std(const LinearProblem& p, const LinearEvaluation& at,
-                              const Eigen::VectorXd& x, const CollinearSets& c) {
+                              const Eigen::VectorXd& x, const CollinearSets& c, double value) {
   const int a = c.sets[0], b = c.sets[1];
   const Eigen::MatrixXd jw = p.weighted_jacobian(at);
   Eigen::MatrixXd j(jw.rows(), 2);
   j << jw.col(a), jw.col(b);
   if (!(j.col(0).norm() > 0) || !(j.col(1).norm() > 0)) return 0;
   const SensitivityDirections d = sensitivity_directions(j);
-  const Eigen::Vector2d grad(std::exp(x(a)) / c.value, c.weight * std::exp(x(b)) / c.value);
+  const Eigen::Vector2d grad(std::exp(x(a)) / value, c.weight * std::exp(x(b)) / value);
   const double var = grad.dot(d.inverse * grad) * p.options.frequency_std * p.options.frequency_std;
   return var > 0 && std::isfinite(var) ? std::sqrt(var) : 0.0;
 }
@@ -187,7 +187,7 @@ std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& po
 // sets where none is stated), no value is stated and the warning says how far it runs.
 void check_combinations(const LinearProblem& p, const TrackedPoint& point,
                         const LinearEvaluation& at, const std::vector<char>& held,
-                        LinearUpdateSummary& s) {
+                        const Eigen::VectorXd& theta, LinearUpdateSummary& s) {
   const double sf = p.options.frequency_std;
   const double scale =
       s.t_widening > 0 ? sigma_variance(p, s) : sf * sf * std::max(1.0, s.reduced_chi2);
@@ -197,13 +197,16 @@ void check_combinations(const LinearProblem& p, const TrackedPoint& point,
     if (c.sets.size() != 2 || !(c.value > 0)) continue;
     const int a = c.sets[0], b = c.sets[1];
     if (held[static_cast<size_t>(a)] || held[static_cast<size_t>(b)]) continue;
-    const double sigma =
-        c.relative_std ? *c.relative_std : stated_combination_std(p, at, point.x, c);
-    if (!(sigma > 0)) continue;
     const auto combination = [&](const Eigen::VectorXd& x) {
       return std::exp(x(a)) + c.weight * std::exp(x(b));
     };
-    double low = c.value, high = c.value;
+    // Its value where the walk starts: the result's, or the least-squares point's where a rule
+    // moved on from it (the result is then off the valley floor, by the tolerance).
+    const double start = combination(point.x);
+    const double sigma =
+        c.relative_std ? *c.relative_std : stated_combination_std(p, at, point.x, c, start);
+    if (!(sigma > 0) || !(start > 0)) continue;
+    double low = start, high = start;
     double a_low = std::exp(point.x(a)), a_high = a_low;
     bool changes = false;
     std::vector<char> with_a = held;
@@ -229,7 +232,7 @@ void check_combinations(const LinearProblem& p, const TrackedPoint& point,
         high = std::max(high, w);
         a_low = std::min(a_low, std::exp(q->x(a)));
         a_high = std::max(a_high, std::exp(q->x(a)));
-        changes = std::abs(w / c.value - 1) > 0.5 * sigma;
+        changes = std::abs(w / start - 1) > 0.5 * sigma;
         done = step;
         from = std::move(*q);
       }
@@ -248,7 +251,7 @@ void check_combinations(const LinearProblem& p, const TrackedPoint& point,
         "do; the split {:.6g} and {:.6g} is where the fit stopped); hold one of them at a value "
         "known otherwise (--hold NAME=VALUE) and fit the other",
         head, c.correlation, na, c.weight, nb, c.value, na, a_low, a_high, low, high, 100 * sigma,
-        std::exp(point.x(a)), std::exp(point.x(b)));
+        theta(a), theta(b));
     for (std::string& w : s.warnings)
       if (w.rfind(head, 0) == 0) w = text;
     c.valley_low = low;

@@ -24,11 +24,12 @@ std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& po
 
 /// Each pair of fitted sets acting together (s.collinear) whose stated combination
 /// theta_a + weight theta_b does not hold along the valley of equal fit: set a walked each way
-/// from `point` to where the chi-square (the other sets not `held` fitted again) rises by 9 or
-/// the bound, the combination's value is withdrawn (0, no standard deviation) and the warning
-/// says why, where it changes there by more than half its standard deviation.
+/// from the least-squares `point` to where the chi-square (the other sets not `held` fitted
+/// again) rises by 9 or the bound, the combination's value is withdrawn (0, no standard
+/// deviation) and the warning says why, where it changes there by more than half its standard
+/// deviation from its value at `point`; `theta` is the result's stiffnesses (the rule's).
 void check_combinations(const LinearProblem& p, const TrackedPoint& point,
                         const LinearEvaluation& at, const std::vector<char>& held,
-                        LinearUpdateSummary& s);
+                        const Eigen::VectorXd& theta, LinearUpdateSummary& s);
 
 }  // namespace jointlab::correlate::detail
