@@ -78,6 +78,10 @@ bool is_angular_unit(std::string_view unit) {
 // The factor a value of column k (amplitude, frequency_hz, damping_ratio, frequency_std_hz,
 // damping_std) in `unit` takes to the table's units; InputError naming the file, the column and
 // the unit when the column does not take it: a unit is converted or refused, never ignored.
+std::vector<std::string> words_of(std::string_view name);
+std::string amplitude_measure(const std::vector<std::string>& words);
+std::string measure_fix(const std::string& measure);
+
 double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> quantity,
                   const std::string& file, long line) {
   const auto refuse = [&](const std::string& why) {
@@ -106,6 +110,30 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
     const std::string wrong_kind = amplitude_kind_mismatch(unit, *u, quantity);
     if (!wrong_kind.empty()) throw refuse(wrong_kind);
     return u->to_si;
+  }
+  // How it was measured written beside the unit ('mm/s pk-pk', 'm/s RMS'): the factor is named,
+  // not merely the unit refused (with the measure deleted alone, the values were read zero to
+  // peak and F_S came out 2 or 0.707 times the truth).
+  if (k == 0) {
+    std::string measure, measured_as, rest;
+    for (size_t at = 0; at < unit.size();) {
+      const size_t end = std::min(unit.find(' ', at), unit.size());
+      const std::string token = unit.substr(at, end - at);
+      at = end + 1;
+      if (token.empty()) continue;
+      if (const std::string m = amplitude_measure(words_of(token)); !m.empty()) {
+        measure = m;
+        measured_as = token;
+      } else {
+        rest += (rest.empty() ? "" : " ") + token;
+      }
+    }
+    if (!measure.empty()) {
+      throw refuse(
+          fmt::format("'{}' says how it was measured, not a unit: {}, then write 'amplitude{}'",
+                      shorten(measured_as), measure_fix(measure),
+                      parse_unit(rest) ? fmt::format(" [{}]", rest) : std::string()));
+    }
   }
   if (!quantity) {
     throw refuse(fmt::format(
@@ -145,6 +173,33 @@ std::vector<std::string> words_of(std::string_view name) {
   }
   if (out.back().empty()) out.pop_back();
   return out;
+}
+
+// How the words of an amplitude's name or unit say it was measured where not zero to peak:
+// "peak-to-peak" (pp, p2p, ptp, pkpk, pk-pk, pk_pk, peak to peak) or "RMS"; "" otherwise.
+std::string amplitude_measure(const std::vector<std::string>& words) {
+  const auto word = [&](std::initializer_list<const char*> ws) {
+    return std::any_of(words.begin(), words.end(), [&](const std::string& w) {
+      return std::any_of(ws.begin(), ws.end(), [&](const char* x) { return w == x; });
+    });
+  };
+  std::string flat;  // the letters and digits alone: "peaktopeak", "pkpk"
+  for (const std::string& w : words) flat += w;
+  if (word({"pp", "p2p", "ptp", "pkpk", "peak2peak"}) || flat.find("peaktopeak") != flat.npos ||
+      flat.find("pkpk") != flat.npos)
+    return "peak-to-peak";
+  if (word({"rms"})) return "RMS";
+  return {};
+}
+
+// The fix of an amplitude measured as `measure` (amplitude_measure()): read as it is, it is taken
+// for zero to peak and F_S comes out 2 (peak to peak) or 0.707 (RMS) times the truth.
+std::string measure_fix(const std::string& measure) {
+  return measure == "RMS"
+             ? "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a "
+               "sine's RMS times sqrt(2); read as it is, F_S comes out 0.707 times the truth)"
+             : "halve its values (an amplitude is read zero to peak; peak-to-peak values read as "
+               "they are give F_S twice the truth)";
 }
 
 // A header field that is not one of kNames, as the column it most likely means.
@@ -214,18 +269,7 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
   if (amplitude) {
     // The measure in the name or in its brackets: amp_pp, amplitude_p2p, Amplitude
     // (peak-to-peak), velocity_rms [mm/s].
-    const std::vector<std::string> all = words_of(name + " " + bracket_unit);
-    const auto word = [&](std::initializer_list<const char*> ws) {
-      return std::any_of(all.begin(), all.end(), [&](const std::string& w) {
-        return std::any_of(ws.begin(), ws.end(), [&](const char* x) { return w == x; });
-      });
-    };
-    std::string flat;  // the name's letters and digits alone: "peaktopeak"
-    for (const std::string& w : all) flat += w;
-    if (word({"pp", "p2p", "ptp", "pkpk", "peak2peak"}) || flat.find("peaktopeak") != flat.npos)
-      g.measure = "peak-to-peak";
-    else if (word({"rms"}))
-      g.measure = "RMS";
+    g.measure = amplitude_measure(words_of(name + " " + bracket_unit));
     if (!g.measure.empty() && g.parenthesised && !parse_unit(g.unit)) {
       g.unit.clear();  // "(peak-to-peak)", "(RMS)": the measure, not a unit
       g.parenthesised = false;
@@ -306,14 +350,7 @@ std::string rename_hint(size_t i, const std::string& field, const Guess& g) {
   }
   if (g.column == 0 && !g.measure.empty()) {
     // Renamed alone, it would be read as zero to peak: F_S x 2 (peak-to-peak) or x 0.707 (RMS).
-    fix = fmt::format(
-        "{}, then rename it '{}'",
-        g.measure == "RMS"
-            ? "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a "
-              "sine's RMS times sqrt(2); read as it is, F_S comes out 0.707 times the truth)"
-            : "halve its values (an amplitude is read zero to peak; peak-to-peak values read as "
-              "they are give F_S twice the truth)",
-        to);
+    fix = fmt::format("{}, then rename it '{}'", measure_fix(g.measure), to);
     if (!g.unit.empty() && !g.unit_taken)
       notes.push_back(fmt::format("'{}' is no unit of {}", shorten(g.unit), name));
   } else if (g.parenthesised && g.unit_taken && lower(base) == name) {

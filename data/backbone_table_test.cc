@@ -639,6 +639,35 @@ TEST(BackboneTable, APeakToPeakOrRmsAmplitudeIsToldItsFactor) {
                  {"z.csv:1: column 1 'amplitude_peak': rename it 'amplitude'"});
 }
 
+// Peak to peak as vibration meters write it (pk-pk, pk_pk), and a measure written beside the unit
+// ('[mm/s pk-pk]', '[m/s RMS]'). Before, 'amplitude_pk-pk [m/s]' was told "rename it 'amplitude
+// [m/s]'" and '[mm/s pk-pk]' only "unknown unit 'mm/s pk-pk'": followed, either was read zero to
+// peak (F_S twice the truth, or 0.707 times). Now each is told its factor.
+TEST(BackboneTable, PkPkAndAMeasureBesideTheUnitAreToldTheirFactor) {
+  const std::string rows = "\n1,57.9,0.01\n2,57.8,0.02\n";
+  const std::string halve =
+      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
+      "give F_S twice the truth), then ";
+  const std::string root2 =
+      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
+      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth), then ";
+  expect_refusal(
+      "k1.csv", "amplitude_pk-pk [m/s],frequency_hz,damping_ratio" + rows, Quantity::kVelocity,
+      {"k1.csv:1: column 1 'amplitude_pk-pk [m/s]': " + halve + "rename it 'amplitude [m/s]'"});
+  expect_refusal("k2.csv", "Amplitude pk_pk,frequency_hz,damping_ratio" + rows, std::nullopt,
+                 {"k2.csv:1: column 1 'Amplitude pk_pk': " + halve + "rename it 'amplitude'"});
+  expect_refusal("u1.csv", "amplitude [mm/s pk-pk],frequency_hz,damping_ratio" + rows,
+                 Quantity::kVelocity,
+                 {"u1.csv:1: column 'amplitude [mm/s pk-pk]': 'pk-pk' says how it was measured, "
+                  "not a unit: " +
+                  halve + "write 'amplitude [mm/s]'"});
+  expect_refusal("u2.csv", "amplitude [m/s RMS],frequency_hz,damping_ratio" + rows,
+                 Quantity::kVelocity,
+                 {"u2.csv:1: column 'amplitude [m/s RMS]': 'RMS' says how it was measured, not a "
+                  "unit: " +
+                  root2 + "write 'amplitude [m/s]'"});
+}
+
 // A `process` (or `stepped-sine`) backbone read with another amplitude quantity than it was
 // written in: its displacement_m column says which (amplitude = displacement_m (2 pi f)^p).
 // Before, a velocity backbone read with --amplitude displacement went to the fit unsaid (its own
