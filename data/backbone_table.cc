@@ -540,6 +540,25 @@ Columns resolve_columns(const std::vector<std::string>& fields, std::optional<Qu
   c.fields = fields.size();
   guesses.assign(fields.size(), Guess{});
   for (size_t i = 0; i < fields.size(); ++i) {
+    // An amplitude's measure after its unit ('amplitude [m/s] (rms)'): split_name_unit would
+    // say only that the unit goes in square brackets, and with the measure deleted alone the
+    // values were read zero to peak (F_S 0.707 or 2 times the truth); its factor is named.
+    if (const size_t close = fields[i].rfind(']'); close != std::string::npos) {
+      const std::string after = fields[i].substr(close + 1);
+      const size_t open = fields[i].find('[');
+      const std::string measure = amplitude_measure(words_of(after));
+      if (!measure.empty() && open < close) {
+        const std::string name(trim(std::string_view(fields[i]).substr(0, open)));
+        const std::string unit(
+            trim(std::string_view(fields[i]).substr(open + 1, close - open - 1)));
+        if (lower(name) == "amplitude" || guess_column(name, unit, quantity).column == 0) {
+          throw InputError(
+              where(file, header_line,
+                    fmt::format("column {} '{}': {}, then write 'amplitude [{}]'", i + 1,
+                                shorten(fields[i]), measure_fix(measure), shorten(unit))));
+        }
+      }
+    }
     const auto [name, unit] = split_name_unit(fields[i], file, header_line);
     // Case-blind as the read columns are: a re-cased `process` output keeps its marks and k.
     const std::string lowered = lower(name);

@@ -666,6 +666,13 @@ TEST(BackboneTable, PkPkAndAMeasureBesideTheUnitAreToldTheirFactor) {
                  {"u2.csv:1: column 'amplitude [m/s RMS]': 'RMS' says how it was measured, not a "
                   "unit: " +
                   root2 + "write 'amplitude [m/s]'"});
+  // After the unit: before, only "unit must be written as 'name [unit]'".
+  expect_refusal(
+      "a1.csv", "amplitude [m/s] (rms),frequency_hz,damping_ratio" + rows, Quantity::kVelocity,
+      {"a1.csv:1: column 1 'amplitude [m/s] (rms)': " + root2 + "write 'amplitude [m/s]'"});
+  expect_refusal(
+      "a2.csv", "Velocity [mm/s] pk-pk,frequency_hz,damping_ratio" + rows, Quantity::kVelocity,
+      {"a2.csv:1: column 1 'Velocity [mm/s] pk-pk': " + halve + "write 'amplitude [mm/s]'"});
 }
 
 // A `process` (or `stepped-sine`) backbone read with another amplitude quantity than it was
