@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -211,6 +212,51 @@ double own_rate(const std::vector<const Estimate*>& known) {
   return quantile(late, 0.5);
 }
 
+// The two bands of a 1:n bookkeeping (r = n or 1/n, the partner's band r times the band's):
+// the band's signal and the partner's, which of them is the higher, n, and the beat of
+// z_hi conj(z_lo)^n's carriers, carrier_hi - n carrier_lo.
+struct DriveBands {
+  signal::BandSignal partner, own;
+  bool upper = false;  ///< the partner is the mode at n times the band's
+  int n = 1;
+  double beat_hz = 0;
+  /// The band at n times the other's.
+  const signal::BandSignal& hi() const { return upper ? partner : own; }
+  /// The band at 1/n times the other's.
+  const signal::BandSignal& lo() const { return upper ? own : partner; }
+};
+
+// The bands of the 1:n bookkeeping; none where the partner band lies beyond the Nyquist
+// frequency, settles longer than the record or shows no peak inside.
+std::optional<DriveBands> drive_bands(double r, const BandSetting& s, Quantity measured,
+                                      signal::FftCache& cache) {
+  const ChannelSpectrum& channel = s.channel;
+  const signal::Band sub{s.band.lo * r, s.band.hi * r};
+  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
+  if (sub.hi >= channel.fs / 2 || band_settling_s(sub, s.options.taper) > duration ||
+      !has_interior_peak(channel, sub))
+    return std::nullopt;
+  DriveBands b;
+  b.partner = band_signal(channel, measured, sub, s.options, cache);
+  b.own = band_signal(channel, measured, s.band, s.options, cache);
+  b.upper = r > 1;
+  b.n = static_cast<int>(std::lround(b.upper ? r : 1 / r));
+  b.beat_hz = b.hi().carrier_hz - b.n * b.lo().carrier_hz;
+  return b;
+}
+
+// z(t) = baseband(t) exp(2 pi i carrier t), the baseband interpolated linearly (it changes over
+// the band's width, far slower than the grid's 8 samples a width); z_hi conj(z_lo)^n is then
+// b_hi conj(b_lo)^n exp(2 pi i (carrier_hi - n carrier_lo) t): one phasor, turned, and
+// conj(b_lo)^n by products (std::pow of a complex goes through its logarithm). Written with a
+// phasor per band and std::pow, the drive took 15 % of `process` on the bench record.
+std::complex<double> interpolated(const signal::BandSignal& z, double t) {
+  const double x = t / z.dt;
+  const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(x), 0, z.baseband.size() - 2);
+  const double w = std::clamp(x - static_cast<double>(j), 0.0, 1.0);
+  return (1 - w) * z.baseband(j) + w * z.baseband(j + 1);
+}
+
 // Energy bookkeeping of a 1:n transfer, read from the phase of the two bands. Where the band's
 // mode drives a mode at n times its frequency (or is driven by one at 1/n), the power passed
 // is proportional to A_lo^n A_hi sin(psi), psi = arg z_hi - n arg z_lo, both analytic signals
@@ -227,30 +273,12 @@ std::vector<std::complex<double>> quadrature_drive(
     const std::vector<const Estimate*>& at, double r, const BandSetting& s, Quantity measured,
     signal::FftCache& cache, const std::function<bool(std::complex<double>, double)>& keep) {
   std::vector<std::complex<double>> out;
-  const ChannelSpectrum& channel = s.channel;
-  const signal::Band sub{s.band.lo * r, s.band.hi * r};
-  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
-  if (sub.hi >= channel.fs / 2 || band_settling_s(sub, s.options.taper) > duration ||
-      !has_interior_peak(channel, sub))
-    return out;
-  const signal::BandSignal zp = band_signal(channel, measured, sub, s.options, cache);
-  const signal::BandSignal zb = band_signal(channel, measured, s.band, s.options, cache);
-  const bool upper = r > 1;  // the partner is the mode at n times the band's
-  const signal::BandSignal& hi = upper ? zp : zb;
-  const signal::BandSignal& lo = upper ? zb : zp;
-  const int n = static_cast<int>(std::lround(upper ? r : 1 / r));
-  // z(t) = baseband(t) exp(2 pi i carrier t), the baseband interpolated linearly (it changes
-  // over the band's width, far slower than the grid's 8 samples a width); z_hi conj(z_lo)^n is
-  // then b_hi conj(b_lo)^n exp(2 pi i (carrier_hi - n carrier_lo) t): one phasor, turned, and
-  // conj(b_lo)^n by products (std::pow of a complex goes through its logarithm). Written with a
-  // phasor per band and std::pow, this drive took 15 % of `process` on the bench record.
-  const auto baseband = [](const signal::BandSignal& z, double t) {
-    const double x = t / z.dt;
-    const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(x), 0, z.baseband.size() - 2);
-    const double w = std::clamp(x - static_cast<double>(j), 0.0, 1.0);
-    return (1 - w) * z.baseband(j) + w * z.baseband(j + 1);
-  };
-  const double beat_hz = hi.carrier_hz - n * lo.carrier_hz;
+  const std::optional<DriveBands> bands = drive_bands(r, s, measured, cache);
+  if (!bands) return out;
+  const signal::BandSignal &hi = bands->hi(), &lo = bands->lo();
+  const bool upper = bands->upper;
+  const int n = bands->n;
+  const double beat_hz = bands->beat_hz;
   const double span = static_cast<double>(hi.baseband.size() - 1) * hi.dt;
   for (const Estimate* e : at) {
     const double w = std::min(e->window, span);
@@ -263,7 +291,7 @@ std::vector<std::complex<double>> quadrature_drive(
     std::complex<double> phasor = std::polar(1.0, 2 * std::numbers::pi * beat_hz * (c - w / 2));
     const std::complex<double> turn = std::polar(1.0, 2 * std::numbers::pi * beat_hz * hi.dt);
     for (double t = c - w / 2; t <= c + w / 2; t += hi.dt, ++count, phasor *= turn) {
-      const std::complex<double> h = baseband(hi, t), l = baseband(lo, t);
+      const std::complex<double> h = interpolated(hi, t), l = interpolated(lo, t);
       const double own = std::norm(upper ? l : h);
       if (!(own > 0)) continue;
       std::complex<double> l_n = std::conj(l);
@@ -537,25 +565,12 @@ constexpr Eigen::Index kMinSwingSamples = 16;
 // integral of the 1:n drive (r = n or 1/n) explains; 0 where the partner band cannot be read.
 double swings_explained(double from, double to, double r, const BandSetting& s, Quantity measured,
                         signal::FftCache& cache) {
-  const ChannelSpectrum& channel = s.channel;
-  const signal::Band sub{s.band.lo * r, s.band.hi * r};
-  const double duration = static_cast<double>(channel.n_record - 1) / channel.fs;
-  if (sub.hi >= channel.fs / 2 || band_settling_s(sub, s.options.taper) > duration ||
-      !has_interior_peak(channel, sub))
-    return 0.0;
-  const signal::BandSignal zp = band_signal(channel, measured, sub, s.options, cache);
-  const signal::BandSignal zb = band_signal(channel, measured, s.band, s.options, cache);
-  const bool upper = r > 1;
-  const signal::BandSignal& hi = upper ? zp : zb;
-  const signal::BandSignal& lo = upper ? zb : zp;
-  const int n = static_cast<int>(std::lround(upper ? r : 1 / r));
-  const auto baseband = [](const signal::BandSignal& z, double t) {
-    const double x = t / z.dt;
-    const auto j = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(x), 0, z.baseband.size() - 2);
-    const double w = std::clamp(x - static_cast<double>(j), 0.0, 1.0);
-    return (1 - w) * z.baseband(j) + w * z.baseband(j + 1);
-  };
-  const double beat_hz = hi.carrier_hz - n * lo.carrier_hz;
+  const std::optional<DriveBands> bands = drive_bands(r, s, measured, cache);
+  if (!bands) return 0.0;
+  const signal::BandSignal &hi = bands->hi(), &lo = bands->lo(), &zb = bands->own;
+  const bool upper = bands->upper;
+  const int n = bands->n;
+  const double beat_hz = bands->beat_hz;
   const auto j0 = std::max<Eigen::Index>(0, static_cast<Eigen::Index>(std::ceil(from / zb.dt)));
   const auto j1 = std::min<Eigen::Index>(zb.baseband.size() - 1,
                                          static_cast<Eigen::Index>(std::floor(to / zb.dt)));
@@ -568,7 +583,7 @@ double swings_explained(double from, double to, double r, const BandSetting& s, 
   double integral = 0, previous = 0, gives = 0, takes = 0;
   for (Eigen::Index k = 0; k < m; ++k) {
     const double t = static_cast<double>(j0 + k) * zb.dt;
-    const std::complex<double> h = baseband(hi, t), l = baseband(lo, t);
+    const std::complex<double> h = interpolated(hi, t), l = interpolated(lo, t);
     const double own = std::norm(upper ? l : h);
     if (!(own > 0)) return 0.0;
     std::complex<double> l_n = std::conj(l);
