@@ -50,11 +50,13 @@ std::string telling_sensor(const model::Model& model, const std::vector<Sensor>&
       mode_a + 1, std::abs(a(best)) / top_a, mode_b + 1, std::abs(b(best)) / top_b);
 }
 
-// What differs between two fitted pairings that the data cannot tell apart: each measured mode
-// paired with another model mode (by shape), named with its partner at each result (its own
-// numbering there), the sets that differ between the results, and the costs.
+}  // namespace
+
+// What differs between two fitted pairings that the data cannot tell apart (`why`): each
+// measured mode paired with another model mode (by shape), named with its partner at each result
+// (its own numbering there), the sets that differ between the results, and the costs.
 std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, double cost_a,
-                            const TrackedPoint& b, double cost_b) {
+                            const TrackedPoint& b, double cost_b, const std::string& why) {
   const LinearEvaluation ea = p.evaluate(a), eb = p.evaluate(b);
   const auto partner = [&](const LinearEvaluation& e, int i) {
     const int j = e.pairing.model_for(i);
@@ -91,18 +93,20 @@ std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, doubl
   for (const std::string& x : sets_a) holds.push_back(x.substr(0, x.find(' ')) + "=VALUE");
   return fmt::format(
       "two results pair {}{}, and leave costs {:.4g} and {:.4g}, which the data cannot tell "
-      "apart (less than 9 apart in chi-square units of the stated frequency noise): add a sensor "
-      "that sees the partners apart{}{}, or leave the mode out of the table",
+      "apart ({}): add a sensor that sees the partners apart{}{}, or leave the mode out of the "
+      "table",
       fmt::join(modes, "; "),
       sets_a.empty() ? std::string()
                      : fmt::format(" (the first at {}, the second at {})", fmt::join(sets_a, ", "),
                                    fmt::join(sets_b, ", ")),
-      cost_a, cost_b, sensor.empty() ? "" : ", e.g. at " + sensor,
+      cost_a, cost_b, why, sensor.empty() ? "" : ", e.g. at " + sensor,
       holds.empty() ? ""
                     : fmt::format(", hold the sets that differ at values known otherwise (--hold "
                                   "{})",
                                   fmt::join(holds, " --hold ")));
 }
+
+namespace {
 
 // The pairs whose model partner changed its shape along the fit (mass-weighted MAC below 0.5
 // between the start's partner and the result's: another mode took its place, through a
@@ -371,7 +375,8 @@ Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<cha
         out.ambiguity = fmt::format(
             "{}{}", fresh_end.ambiguity.empty() ? "" : fresh_end.ambiguity + "; fitted each way, ",
             differing_pairs(p, results[best].point, results[best].cost, results[*runner].point,
-                            results[*runner].cost));
+                            results[*runner].cost,
+                            "less than 9 apart in chi-square units of the stated frequency noise"));
         for (const size_t k : close)
           if (k != best) out.rivals.push_back(results[k].point);
         if (best > 0) point = std::move(results[best].point);

@@ -63,6 +63,12 @@ std::optional<size_t> shapes_decide(const LinearProblem& p,
 std::string shapes_decided(const LinearProblem& p, const TrackedPoint& a, double cost_a,
                            const TrackedPoint& b, double cost_b);
 
+/// Why the update stops where results `a` and `b` (costs `cost_a`, `cost_b`) pair some measured
+/// mode otherwise and the data cannot tell them apart (`why`, in brackets): each such mode with
+/// its partner at each, the sets that differ, the costs, and what to do.
+std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, double cost_a,
+                            const TrackedPoint& b, double cost_b, const std::string& why);
+
 /// Least squares with pairs followed by shape from `point`, the pairs at its result decided by
 /// the data.
 Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<char>& held);
