@@ -378,10 +378,11 @@ TEST(IwanCampaignShape, EachCurveAloneKeepsAHeldBetaHeld) {
 // A parameter the fit pinned at a bound of its range is held there too: the campaign above with
 // beta free in 0.01 to 0.35 (--beta-range) ends at beta 0.35, its upper bound. Before, each
 // curve's own fit freed beta, took up the error every hit shares as --beta 0.35 did before
-// 05cc406 (a chi-square of 211 over 168, F 1.81: scatter named, F_S +/- 6.8 %, beta +/- 63 %
-// stated at its bound); now it keeps beta at the bound, as the fit did, and the evidence reads
-// as the held beta's above (the model misses every hit, no sigma). The thresholds are the
-// rule's (1 in 1000, 1 in 100), which the held case clears 3 and 2.7 times over.
+// 05cc406 (a chi-square of 206 over 168, F 1.64: scatter named and sigmas stated; with the
+// range 0.1 to 0.35, 211 over 168, F 1.81, F_S +/- 6.8 % and beta +/- 63 % at its bound); now it
+// keeps beta at the bound, as the fit did: 718 over 171, F 6.57, the model misses every hit, no
+// sigma. The thresholds are the rule's (1 in 1000, 1 in 100), which that clears 3 and 2.7 times
+// over.
 TEST(IwanCampaignShape, EachCurveAloneKeepsABetaAtItsBoundThere) {
   const IwanTarget target = campaign(
       {{1e-3, 2.0, 1.024, 0.974}, {1e-3, 2.0, 0.948, 0.990}, {1e-3, 2.0, 1.012, 1.022}}, 0);
