@@ -248,6 +248,13 @@ void neighbour_leak(Exchange& x, const std::vector<Estimate>& est, double held_b
 Exchange swinging_exchange(const std::vector<Estimate>& est, double noise, const BandSetting& s,
                            Quantity measured, signal::FftCache& cache);
 
+/// The decay rate the partner of an exchange found still takes, as its 1:n bookkeeping over the
+/// exchange predicts, read by each estimate's own fit after the exchange's end [1/s]; 0 before
+/// it and where that bookkeeping does not explain the exchange (ringdown_exchange.cc).
+std::vector<double> transfer_after(const Exchange& x, const std::vector<Estimate>& est,
+                                   const BandSetting& s, Quantity measured,
+                                   signal::FftCache& cache);
+
 /// An energy exchange of the band's mode with another, read from the estimates, if any
 /// (ringdown_exchange.cc).
 Exchange exchange_of(const std::vector<Estimate>& est, double noise, const BandSetting& s,

@@ -1384,6 +1384,48 @@ TEST(RingdownInternalResonance, FastSwingsOfADetunedExchangeAreMarked) {
   }
 }
 
+// After an exchange the partner still takes energy while it rings, and the band's decay rate
+// relaxes to mode 1's own (tests/synthetic.h's twin, band 110:135). Mode 2 at 247.66 Hz (1.5 %
+// above 2 f1), damped 0.6 %, alpha 2e9, seed 1: 4 points marked, and the unmarked ones after
+// them read damping up to 10.9 % above mode 1's 0.003, 7 beyond their stated uncertainty (k = 3;
+// 3 beyond 3 times it), the span 0.907 of the envelope. The exchange's bookkeeping predicts that
+// transfer (transfer_after; up to 9.4 % of the decay rate here), which now joins each point's
+// uncertainty: 7 points pass the 1 % damping limit and are left out inside the span, the worst
+// kept 1.2 % off, the span unchanged. Mode 2 in tune at 244 Hz, damped 0.2 %, alpha 1e9: the
+// transfer stays above every later point's one-sigma until the noise (they read up to 20 %
+// above mode 1's damping, 7 beyond their uncertainty); joined, no point would meet the limit
+// and no span be kept, so they stay as read and the note says by how much they read high.
+// Required: the first, every unmarked damping within its stated uncertainty of 0.003 (the k = 3
+// interval; noise alone leaves it at 0.3 % of points) and 0.8 of the envelope kept; the second,
+// a span and that note. About 0.05 s.
+TEST(RingdownInternalResonance, RelaxationAfterAnExchangeCarriesItsTransfer) {
+  {
+    const testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+        2e9, 6.5e-5, 0.006, 1e-5, 1, 4.0, 0.0, 0.0, 0.0, 244.0 * 1.015);
+    const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+    ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+    const double threshold = RingdownOptions{}.snr_min * r.summary.noise_floor_m;
+    EXPECT_GE(r.summary.amplitude_decades, 0.8 * std::log10(rec.amplitude1.maxCoeff() / threshold));
+    const Backbone& b = r.backbone;
+    int unmarked = 0;
+    for (Eigen::Index i = 0; i < b.size(); ++i) {
+      if (b.exchange(i) != 0) continue;
+      ++unmarked;
+      EXPECT_LE(std::abs(b.damping(i) - rec.zeta1), b.damping_std(i))
+          << b.time_s(i) << " s: " << b.damping(i) << " +- " << b.damping_std(i);
+    }
+    EXPECT_GT(unmarked, 10);
+  }
+  // Mode 2 in tune, damped 0.2 %: no point after the exchange would meet the damping limit with
+  // the transfer joined; the points stay as read, the note saying by how much they read high.
+  const testing::InternalResonanceRecord rec =
+      testing::internal_resonance_record(1e9, 6.5e-5, 0.002, 1e-5, 1, 4.0, 0.0, 0.0, 0.0, 244.0);
+  const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
+  ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+  EXPECT_NE(r.summary.message.find("their damping reads high by up to"), std::string::npos)
+      << r.summary.message;
+}
+
 // The riveted campaign's 500 Hz mode (high_hit1, acc_9003_z, band 440:570 Hz), whose first three
 // estimates (30 ms) miss the damping limit beside a drive at 1/2 of the band (where the joints
 // make twice the 122 Hz mode's frequency): that drive explains 0.98 of what a cubic leaves of ln A
