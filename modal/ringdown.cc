@@ -2292,6 +2292,10 @@ std::string add_transfer(CorrectedEstimates& corr, const BandSetting& s, double 
   const std::vector<double> transfer = transfer_after(corr.exchange, corr.est, s, measured, cache);
   std::vector<double> joined_std(corr.est.size());
   size_t joined = 0, left = 0, kept = 0;
+  // The transfer of largest magnitude over the decay rate, signed: > 0 the partner takes energy
+  // and the damping reads high, < 0 it gives energy back and the damping reads low (the 1:2
+  // twin with mode 2 in tune at 0.2 %, alpha 3e9, seed 1: -13.7 %, its points read 12 % low,
+  // where the note had said "reads high by up to 13.7 %").
   double most = 0;
   for (size_t i = 0; i < corr.est.size(); ++i) {
     const Estimate& e = corr.est[i];
@@ -2303,22 +2307,24 @@ std::string add_transfer(CorrectedEstimates& corr, const BandSetting& s, double 
     if (!over) continue;
     left += e.sigma_std <= limit && !(joined_std[i] <= limit);
     ++joined;
-    most = std::max(most, std::abs(transfer[i] / e.sigma));
+    if (std::abs(transfer[i] / e.sigma) > std::abs(most)) most = transfer[i] / e.sigma;
   }
   if (joined == 0) return "";
   if (kept < kKeptAfterTransfer) {
     return fmt::format(
-        "after the exchange the mode at {:g} times the band still takes energy until the noise, "
-        "more than the points' damping uncertainty: their damping reads high by up to {:.1f} % "
+        "after the exchange the mode at {:g} times the band still {} energy until the noise, "
+        "more than the points' damping uncertainty: their damping reads {} by up to {:.1f} % "
         "of the decay rate (as the exchange's bookkeeping predicts)",
-        corr.exchange.partner, 100 * most);
+        corr.exchange.partner, most < 0 ? "gives back" : "takes", most < 0 ? "low" : "high",
+        100 * std::abs(most));
   }
   for (size_t i = 0; i < corr.est.size(); ++i) corr.est[i].sigma_std = joined_std[i];
   return fmt::format(
-      "after the exchange the mode at {:g} times the band still takes energy: the transfer its "
+      "after the exchange the mode at {:g} times the band still {} energy: the transfer its "
       "bookkeeping predicts (up to {:.1f} % of the decay rate) joins the damping uncertainty of "
       "{}, {} of them past the {:.1f} % limit",
-      corr.exchange.partner, 100 * most, points(joined), left, 100 * options.max_damping_rel_std);
+      corr.exchange.partner, most < 0 ? "gives back" : "takes", 100 * std::abs(most),
+      points(joined), left, 100 * options.max_damping_rel_std);
 }
 
 // A second mode in the band read: what its beat moves each point by joins the point's
