@@ -33,6 +33,14 @@ char detect_delimiter(std::string_view header) {
   return best;
 }
 
+char header_delimiter(std::string_view text) {
+  TextLines lines(strip_bom(text));
+  for (std::string_view line; lines.next(line);)
+    if (const std::string_view t = trim(line); !t.empty() && t.front() != '#')
+      return detect_delimiter(t);
+  return ',';
+}
+
 std::string_view strip_bom(std::string_view text) {
   if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   return text;
@@ -152,17 +160,7 @@ bool for_each_csv_row(
   const std::string name = path.string();
   const auto text = read_text_file(path);
   if (!text) throw InputError(fmt::format("{}: cannot open the {}", name, what));
-  char delim = ',';
-  if (detect) {
-    TextLines lines(strip_bom(*text));
-    std::string_view line;
-    while (lines.next(line)) {
-      const std::string_view t = trim(line);
-      if (t.empty() || t.front() == '#') continue;
-      delim = detect_delimiter(t);
-      break;
-    }
-  }
+  const char delim = detect ? header_delimiter(*text) : ',';
   bool header = false;
   size_t width = 0;
   for_each_csv_line(

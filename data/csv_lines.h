@@ -20,6 +20,10 @@ std::optional<double> parse_double(std::string_view field);
 /// The delimiter of a header row: whichever of ',', ';' and tab occurs most (',' if none).
 char detect_delimiter(std::string_view header);
 
+/// The delimiter of a text's header row, its first line neither blank nor a '#' comment
+/// (detect_delimiter; ',' if there is none).
+char header_delimiter(std::string_view text);
+
 /// `text` without a leading UTF-8 byte-order mark.
 std::string_view strip_bom(std::string_view text);
 

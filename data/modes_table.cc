@@ -80,6 +80,15 @@ TableColumn table_column(const std::vector<std::string>& channels, const std::st
   return out;
 }
 
+// `cell` with its commas written as decimal points, where that reads as a number (a decimal
+// comma of a European export names itself in the message); none otherwise.
+std::optional<std::string> with_decimal_point(const std::string& cell) {
+  std::string point = cell;
+  std::replace(point.begin(), point.end(), ',', '.');
+  if (point == cell || !parse_double(point)) return std::nullopt;
+  return point;
+}
+
 // A cell as a complex number: a real number, a+bi or a-bj (blanks allowed, i or j, optionally
 // in round brackets, "bi" alone imaginary), or (a,b); nothing else, and finite parts only.
 std::optional<std::complex<double>> complex_cell(const std::string& cell) {
@@ -301,15 +310,13 @@ Eigen::VectorXcd row_shape(const std::string& name, const std::vector<std::strin
     if (col.part == kWhole) {
       const std::optional<std::complex<double>> z = complex_cell(cell);
       if (!z) {
-        std::string point = cell;  // a decimal comma (a European export) names itself
-        std::replace(point.begin(), point.end(), ',', '.');
-        const bool comma = point != cell && parse_double(point).has_value();
+        const std::optional<std::string> point = with_decimal_point(cell);
         throw InputError(
             where(name, n,
-                  comma ? fmt::format("shape entry '{}' of column '{}' is not a number (a decimal "
+                  point ? fmt::format("shape entry '{}' of column '{}' is not a number (a decimal "
                                       "comma: write {} with a decimal point; ';' or tab may still "
                                       "separate the cells)",
-                                      cell, col.header, point)
+                                      cell, col.header, *point)
                         : fmt::format("shape entry '{}' of column '{}' is not a number (real, or "
                                       "complex as 0.1+0.2i, 0.1-0.2j or (0.1,0.2))",
                                       cell, col.header)));
@@ -359,15 +366,13 @@ ModesTable read_modes_table(const std::filesystem::path& path,
       const std::optional<double> x = parse_double(cells[c]);
       if (!x || !std::isfinite(*x)) {
         // A decimal comma (a European export): say so where a point would read.
-        std::string point = cells[c];
-        std::replace(point.begin(), point.end(), ',', '.');
-        const bool comma = point != cells[c] && parse_double(point).has_value();
+        const std::optional<std::string> point = with_decimal_point(cells[c]);
         throw InputError(where(
             name, n,
             fmt::format("{} '{}' is not a number{}", what, cells[c],
-                        comma ? fmt::format(" (a decimal comma: write {} with a decimal point; "
+                        point ? fmt::format(" (a decimal comma: write {} with a decimal point; "
                                             "';' or tab may still separate the cells)",
-                                            point)
+                                            *point)
                               : "")));
       }
       return *x;

@@ -253,17 +253,12 @@ BackboneTable read_process_backbone(const fs::path& path) {
     for (int k = 0; k < kWanted; ++k) {
       if (column[k] < 0) continue;
       const std::string& cell = cells[static_cast<size_t>(column[k])];
-      double x = 0;
-      size_t used = 0;
-      try {
-        x = std::stod(cell, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != cell.size() || cell.empty() || !std::isfinite(x)) {
+      const std::optional<double> v = parse_double(cell);
+      if (!v || !std::isfinite(*v)) {
         throw InputError(
             where(name, n, fmt::format("{} '{}' is not a finite number", wanted[k], cell)));
       }
+      const double x = *v;
       if (k == 0 && !(x > 0)) throw InputError(where(name, n, "amplitude must be > 0"));
       if (k == 1 && !(x > 0)) throw InputError(where(name, n, "frequency_hz must be > 0"));
       if ((k == 3 || k == 4) && x < 0)

@@ -2,7 +2,6 @@
 
 #include <optional>
 #include <set>
-#include <string_view>
 
 #include <fmt/format.h>
 
@@ -18,13 +17,7 @@ SensorsFile parse_sensors_file(const std::string& text, const std::string& name)
   std::set<std::string> seen;
   bool header = false;
   // Delimited as the modes table is: ',', ';' or tab, the header's most frequent.
-  char delim = ',';
-  TextLines lines(strip_bom(text));
-  for (std::string_view line; lines.next(line);)
-    if (const std::string_view h = trim(line); !h.empty() && h.front() != '#') {
-      delim = detect_delimiter(h);
-      break;
-    }
+  const char delim = header_delimiter(text);
   for_each_csv_line(
       text,
       [&](std::vector<std::string> cells, long n) {
