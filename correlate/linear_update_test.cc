@@ -1638,6 +1638,25 @@ TEST(LinearUpdate, RestartsOfASetFlatThereAndAtTheStartAreNotFitted) {
   for (int k = 0; k < 2; ++k) EXPECT_NEAR(theta(k) / by_user(k), 1.0, 1e-9) << r << h.report();
 }
 
+// The two chains (truth kflat 3e7) measured at one sensor, chain A's tip (DOF 5), five modes with
+// 0.3 % noise (seed `seed`), every shape one entry (chain B's modes are zero there): frequency
+// alone pairs them; the start ka 3e5, kb 5e5, kflat 1e7.
+struct OneSensorChains {
+  TwoChainParameters truth, start;
+  std::vector<Sensor> sensors{{"a", 5, 1.0}};
+  MeasuredModes measured;
+};
+OneSensorChains one_sensor_chains(unsigned seed) {
+  OneSensorChains c;
+  c.truth.kflat = 3e7;
+  c.start.ka = 3e5;
+  c.start.kb = 5e5;
+  c.start.kflat = 1e7;
+  c.measured = synthetic_measurement(two_chain_structure(c.truth), c.sensors, 5, 3e-3, seed);
+  c.measured.shapes.setOnes();
+  return c;
+}
+
 // A restart that pairs some mode otherwise wins only where the data tell the two fits apart
 // without the stated noise. The two chains (ka 5e5, kb 3e5, kflat 3e7) seen at one sensor on
 // chain A's tip (chain B's modes do not move it: each mode pairs by frequency alone), five modes
@@ -1653,15 +1672,10 @@ TEST(LinearUpdate, RestartsOfASetFlatThereAndAtTheStartAreNotFitted) {
 // ln of the truth (the crosswise fit is 0.29 and 0.14 off; 0.1 is 3.5 of ka's standard
 // deviations at that noise, 2.8 %). About 0.05 s.
 TEST(LinearUpdate, ARestartPairingOtherwiseMustWinWithoutTheStatedNoise) {
-  TwoChainParameters tp;
-  tp.kflat = 3e7;
-  TwoChainParameters sp;
-  sp.ka = 3e5;
-  sp.kb = 5e5;
-  sp.kflat = 1e7;
-  const std::vector<Sensor> sensors = {{"a", 5, 1.0}};
-  MeasuredModes meas = synthetic_measurement(two_chain_structure(tp), sensors, 5, 3e-3, 40);
-  meas.shapes.setOnes();  // chain B's modes are zero at DOF 5: one entry each, frequency alone
+  const OneSensorChains c = one_sensor_chains(40);
+  const TwoChainParameters &tp = c.truth, &sp = c.start;
+  const std::vector<Sensor>& sensors = c.sensors;
+  const MeasuredModes& meas = c.measured;
   LinearUpdateOptions o;
   o.frequency_std = 1e-3;
   LinearUpdateSummary s;
@@ -1699,15 +1713,10 @@ TEST(LinearUpdate, ARestartPairingOtherwiseMustWinWithoutTheStatedNoise) {
 // pairs cannot be decided (the data cannot tell them apart), and the refusal says so. About
 // 0.01 s.
 TEST(LinearUpdate, GuessedPairsThatDifferByShapeAloneAreRivals) {
-  TwoChainParameters tp;
-  tp.kflat = 3e7;
-  TwoChainParameters sp;
-  sp.ka = 3e5;
-  sp.kb = 5e5;
-  sp.kflat = 1e7;
-  const std::vector<Sensor> sensors = {{"a", 5, 1.0}};
-  MeasuredModes meas = synthetic_measurement(two_chain_structure(tp), sensors, 5, 3e-3, 233);
-  meas.shapes.setOnes();  // one entry each: frequency alone
+  const OneSensorChains c = one_sensor_chains(233);
+  const TwoChainParameters& sp = c.start;
+  const std::vector<Sensor>& sensors = c.sensors;
+  const MeasuredModes& meas = c.measured;
   LinearUpdateOptions o;
   o.frequency_std = 3e-3;
   LinearUpdateSummary s;
