@@ -16,6 +16,7 @@
 #include "jointlab/core/rank_correlation.h"
 #include "jointlab/core/text.h"
 #include "jointlab/core/units.h"
+#include "jointlab/data/amplitude_measure.h"
 #include "jointlab/data/csv_lines.h"
 
 namespace jointlab::data {
@@ -78,10 +79,6 @@ bool is_angular_unit(std::string_view unit) {
 // The factor a value of column k (amplitude, frequency_hz, damping_ratio, frequency_std_hz,
 // damping_std) in `unit` takes to the table's units; InputError naming the file, the column and
 // the unit when the column does not take it: a unit is converted or refused, never ignored.
-std::vector<std::string> words_of(std::string_view name);
-std::string amplitude_measure(const std::vector<std::string>& words);
-std::string measure_fix(const std::string& measure);
-
 double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> quantity,
                   const std::string& file, long line) {
   const auto refuse = [&](const std::string& why) {
@@ -114,26 +111,11 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
   // How it was measured written beside the unit ('mm/s pk-pk', 'm/s RMS'): the factor is named,
   // not merely the unit refused (with the measure deleted alone, the values were read zero to
   // peak and F_S came out 2 or 0.707 times the truth).
-  if (k == 0) {
-    std::string measure, measured_as, rest;
-    for (size_t at = 0; at < unit.size();) {
-      const size_t end = std::min(unit.find(' ', at), unit.size());
-      const std::string token = unit.substr(at, end - at);
-      at = end + 1;
-      if (token.empty()) continue;
-      if (const std::string m = amplitude_measure(words_of(token)); !m.empty()) {
-        measure = m;
-        measured_as = token;
-      } else {
-        rest += (rest.empty() ? "" : " ") + token;
-      }
-    }
-    if (!measure.empty()) {
-      throw refuse(
-          fmt::format("'{}' says how it was measured, not a unit: {}, then write 'amplitude{}'",
-                      shorten(measured_as), measure_fix(measure),
-                      parse_unit(rest) ? fmt::format(" [{}]", rest) : std::string()));
-    }
+  if (const std::optional<UnitMeasure> m = unit_measure(unit); k == 0 && m) {
+    throw refuse(
+        fmt::format("'{}' says how it was measured, not a unit: {}, then write 'amplitude{}'",
+                    shorten(m->written), measure_fix(m->measure),
+                    parse_unit(m->rest) ? fmt::format(" [{}]", m->rest) : std::string()));
   }
   if (!quantity) {
     throw refuse(fmt::format(
@@ -158,49 +140,6 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
 }
 
 // --- What a header the reader cannot use most likely meant, for a refusal that names the fix.
-
-// The words of a header name, lower-cased: runs of letters and digits (bytes of UTF-8 letters
-// such as 'ζ' and 'σ' kept in them).
-std::vector<std::string> words_of(std::string_view name) {
-  std::vector<std::string> out(1);
-  for (const char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    if (std::isalnum(u) || u >= 0x80) {
-      out.back().push_back(static_cast<char>(std::tolower(u)));
-    } else if (!out.back().empty()) {
-      out.emplace_back();
-    }
-  }
-  if (out.back().empty()) out.pop_back();
-  return out;
-}
-
-// How the words of an amplitude's name or unit say it was measured where not zero to peak:
-// "peak-to-peak" (pp, p2p, ptp, pkpk, pk-pk, pk_pk, peak to peak) or "RMS"; "" otherwise.
-std::string amplitude_measure(const std::vector<std::string>& words) {
-  const auto word = [&](std::initializer_list<const char*> ws) {
-    return std::any_of(words.begin(), words.end(), [&](const std::string& w) {
-      return std::any_of(ws.begin(), ws.end(), [&](const char* x) { return w == x; });
-    });
-  };
-  std::string flat;  // the letters and digits alone: "peaktopeak", "pkpk"
-  for (const std::string& w : words) flat += w;
-  if (word({"pp", "p2p", "ptp", "pkpk", "peak2peak"}) || flat.find("peaktopeak") != flat.npos ||
-      flat.find("pkpk") != flat.npos)
-    return "peak-to-peak";
-  if (word({"rms"})) return "RMS";
-  return {};
-}
-
-// The fix of an amplitude measured as `measure` (amplitude_measure()): read as it is, it is taken
-// for zero to peak and F_S comes out 2 (peak to peak) or 0.707 (RMS) times the truth.
-std::string measure_fix(const std::string& measure) {
-  return measure == "RMS"
-             ? "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a "
-               "sine's RMS times sqrt(2); read as it is, F_S comes out 0.707 times the truth)"
-             : "halve its values (an amplitude is read zero to peak; peak-to-peak values read as "
-               "they are give F_S twice the truth)";
-}
 
 // A header field that is not one of kNames, as the column it most likely means.
 struct Guess {
@@ -233,7 +172,7 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
     std::tie(base, g.unit) = *round;
     g.parenthesised = true;
   }
-  const std::vector<std::string> words = words_of(base);
+  const std::vector<std::string> words = header_words(base);
   const auto any = [&](auto&& pred) { return std::any_of(words.begin(), words.end(), pred); };
   const auto has = [](const std::string& w, const char* part) {
     return w.find(part) != std::string::npos;
@@ -269,7 +208,7 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
   if (amplitude) {
     // The measure in the name or in its brackets: amp_pp, amplitude_p2p, Amplitude
     // (peak-to-peak), velocity_rms [mm/s].
-    g.measure = amplitude_measure(words_of(name + " " + bracket_unit));
+    g.measure = amplitude_measure(name + " " + bracket_unit);
     if (!g.measure.empty() && g.parenthesised && !parse_unit(g.unit)) {
       g.unit.clear();  // "(peak-to-peak)", "(RMS)": the measure, not a unit
       g.parenthesised = false;
@@ -504,7 +443,7 @@ bool is_curve_label(std::string_view name) {
       "impact", "series", "measurement", "file",  "filename"};
   static constexpr std::array<std::string_view, 9> kTag = {"id",  "no",    "nr",   "number", "num",
                                                            "idx", "index", "name", "label"};
-  const std::vector<std::string> words = words_of(name);
+  const std::vector<std::string> words = header_words(name);
   const auto in = [](const auto& set, const std::string& w) {
     return std::find(set.begin(), set.end(), w) != set.end();
   };
@@ -543,20 +482,12 @@ Columns resolve_columns(const std::vector<std::string>& fields, std::optional<Qu
     // An amplitude's measure after its unit ('amplitude [m/s] (rms)'): split_name_unit would
     // say only that the unit goes in square brackets, and with the measure deleted alone the
     // values were read zero to peak (F_S 0.707 or 2 times the truth); its factor is named.
-    if (const size_t close = fields[i].rfind(']'); close != std::string::npos) {
-      const std::string after = fields[i].substr(close + 1);
-      const size_t open = fields[i].find('[');
-      const std::string measure = amplitude_measure(words_of(after));
-      if (!measure.empty() && open < close) {
-        const std::string name(trim(std::string_view(fields[i]).substr(0, open)));
-        const std::string unit(
-            trim(std::string_view(fields[i]).substr(open + 1, close - open - 1)));
-        if (lower(name) == "amplitude" || guess_column(name, unit, quantity).column == 0) {
-          throw InputError(
-              where(file, header_line,
-                    fmt::format("column {} '{}': {}, then write 'amplitude [{}]'", i + 1,
-                                shorten(fields[i]), measure_fix(measure), shorten(unit))));
-        }
+    if (const std::optional<MeasureAfterUnit> m = measure_after_unit(fields[i])) {
+      if (lower(m->name) == "amplitude" || guess_column(m->name, m->unit, quantity).column == 0) {
+        throw InputError(
+            where(file, header_line,
+                  fmt::format("column {} '{}': {}, then write 'amplitude [{}]'", i + 1,
+                              shorten(fields[i]), measure_fix(m->measure), shorten(m->unit))));
       }
     }
     const auto [name, unit] = split_name_unit(fields[i], file, header_line);

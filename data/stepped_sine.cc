@@ -10,10 +10,12 @@
 #include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <matio.h>
 
 #include "jointlab/core/error.h"
 #include "jointlab/core/text.h"
+#include "jointlab/data/amplitude_measure.h"
 #include "jointlab/data/atomic_file.h"
 #include "jointlab/data/csv_lines.h"
 #include "jointlab/data/mat_file.h"
@@ -130,9 +132,44 @@ struct CsvColumns {
   Quantity response_quantity = Quantity::kAcceleration;
 };
 
+// The response or the force amplitude a header name other than theirs means ("resp...",
+// "amp...", "acc...", "vel...", "disp...": the response; "force...": the force); "" for neither.
+std::string amplitude_meant(std::string_view name) {
+  for (const std::string& w : header_words(name)) {
+    if (w.starts_with("resp") || w.starts_with("amp") || w.starts_with("acc") ||
+        w.starts_with("vel") || w.starts_with("disp"))
+      return "response";
+    if (w.starts_with("force")) return "force";
+  }
+  return {};
+}
+
+// The fix of column `meant` ("response" or "force") measured as `measure` (amplitude_measure()):
+// both are read zero to peak; the response's is the backbone's amplitude, whose factor F_S takes.
+std::string fix_of(const std::string& meant, const std::string& measure) {
+  return meant == "response"
+             ? measure_fix(measure)
+             : measure_factor(measure) + " (a force amplitude is read zero to peak)";
+}
+
+// InputError for a `column` whose bracketed unit also says how it was measured ('[m/s^2 RMS]'):
+// the factor, then the header without it.
+void refuse_unit_measure(const std::string& column, const std::string& unit,
+                         const std::string& file, long line) {
+  if (const std::optional<UnitMeasure> m = unit_measure(unit)) {
+    throw InputError(where(
+        file, line,
+        fmt::format("column '{} [{}]': '{}' says how it was measured, not a unit: {}, then write "
+                    "'{}{}'",
+                    column, printable(unit), printable(m->written), fix_of(column, m->measure),
+                    column, parse_unit(m->rest) ? fmt::format(" [{}]", m->rest) : std::string())));
+  }
+}
+
 double force_unit(const std::string& unit, const std::string& file, long line) {
   if (unit.empty()) return 1.0;
   const auto u = parse_unit(unit);
+  if (!u) refuse_unit_measure("force", unit, file, line);
   if (!u || u->quantity != Quantity::kForce) {
     throw InputError(where(
         file, line,
@@ -153,6 +190,7 @@ void response_unit(CsvColumns& cols, const std::string& unit, std::optional<Quan
     return;
   }
   const auto u = parse_unit(unit);
+  if (!u) refuse_unit_measure("response", unit, file, cols.line);
   if (!u || u->quantity == Quantity::kForce) {
     throw InputError(where(file, cols.line,
                            fmt::format("column 'response': '{}' is not a displacement, "
@@ -179,9 +217,24 @@ CsvColumns read_columns(std::vector<std::string> header, long line, const std::s
   CsvColumns cols;
   cols.line = line;
   cols.header = std::move(header);
+  // The fix of a response or force column named as measured RMS or peak to peak ('response_rms
+  // [m/s^2]'), for the refusal of its column missing: renamed alone, it was read zero to peak
+  // and F_S came out 0.707 (RMS) or 2 (peak to peak) times the truth.
+  std::map<std::string, std::string> measured;
   for (size_t i = 0; i < cols.header.size(); ++i) {
-    auto [col, unit] = split_name_unit(cols.header[i], file, line);
-    col = lower(col);
+    // A measure after the unit ('response [m/s^2] (RMS)'): split_name_unit would say only that
+    // the unit goes in square brackets.
+    if (const std::optional<MeasureAfterUnit> m = measure_after_unit(cols.header[i])) {
+      const std::string meant = amplitude_meant(m->name);
+      if (!meant.empty()) {
+        throw InputError(where(file, line,
+                               fmt::format("column {} '{}': {}, then write '{} [{}]'", i + 1,
+                                           printable(trim(cols.header[i])),
+                                           fix_of(meant, m->measure), meant, printable(m->unit))));
+      }
+    }
+    auto [name, unit] = split_name_unit(cols.header[i], file, line);
+    const std::string col = lower(name);
     auto take = [&](int& slot) {
       if (slot >= 0) throw InputError(where(file, line, fmt::format("two '{}' columns", col)));
       slot = static_cast<int>(i);
@@ -208,8 +261,26 @@ CsvColumns read_columns(std::vector<std::string> header, long line, const std::s
       take(cols.level);
     } else if (col == "control") {
       take(cols.control);
+    } else if (const std::string measure = amplitude_measure(col + " " + unit); !measure.empty()) {
+      const std::string meant = amplitude_meant(col);
+      std::string suggested_unit = unit;
+      if (const auto round = split_round_brackets(name); unit.empty() && round)
+        suggested_unit = round->second;  // 'Force RMS (N)'
+      if (!meant.empty() && !measured.contains(meant)) {
+        measured[meant] = fmt::format(
+            "column {} '{}': {}, then rename it '{}{}'", i + 1, printable(trim(cols.header[i])),
+            fix_of(meant, measure), meant,
+            parse_unit(suggested_unit) ? fmt::format(" [{}]", suggested_unit) : std::string());
+      }
     }
   }
+  // Each missing column that a measured one stands for, with its fix (both where both are).
+  std::vector<std::string> fixes;
+  for (const auto& [c, meant] : {std::pair{cols.force, "force"}, {cols.response, "response"}}) {
+    if (c < 0 && measured.contains(meant)) fixes.push_back(measured.at(meant));
+  }
+  if (!fixes.empty())
+    throw InputError(where(file, line, fmt::format("{}", fmt::join(fixes, "; "))));
   const std::pair<int, const char*> required[] = {{cols.f, "frequency_hz"},
                                                   {cols.force, "force"},
                                                   {cols.response, "response"},

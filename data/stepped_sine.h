@@ -11,7 +11,9 @@
 // one header row with `frequency_hz` (or `frequency [Hz]`), `force [unit]`,
 // `response [unit]` and `phase [deg|rad]`, optionally `level` (rows with one level value
 // form one table, in order of first appearance) and `control` (`response`/`force` per
-// row, constant within a level); comma, semicolon or tab delimited.
+// row, constant within a level); comma, semicolon or tab delimited. Force and response are zero
+// to peak: a header that says RMS or peak to peak ('response_rms [m/s^2]', 'force [N RMS]',
+// 'response [mm/s] (pk-pk)') is refused with its factor (amplitude_measure.h).
 // MATLAB (.mat, the Brake-Reuss layout): a struct whose fields are struct arrays named
 // after their control (`ForceControl`, `ResponseControl`; any name containing "force" or
 // "response"), each element one table with vectors `frequency`, `force`, `amplitude` (or

@@ -120,6 +120,59 @@ TEST(SteppedSineCsv, BadInputNamesFileAndLine) {
   EXPECT_EQ(t[0].response_quantity, Quantity::kDisplacement);
 }
 
+// A response or force column whose header says it was measured RMS or peak to peak. Before, a
+// header 'response_rms [m/s^2]' was refused only as "no 'response' column", and renamed as told
+// its values were read zero to peak: the backbone's amplitudes came out 0.707 times the truth (a
+// table of 2 m/s^2 held, written as 1.414 RMS, gave points at 1.414), and F_S with them, which no
+// fit can tell. Now each such header names its factor first, in the backbone tables' words
+// (amplitude_measure.h); a column measured zero to peak ('acc_peak') or one beside the 'response'
+// column read is left as before.
+TEST(SteppedSineCsv, AResponseMeasuredRmsOrPeakToPeakIsToldItsFactor) {
+  auto err = [](const std::string& header) {
+    return input_error_of(
+        [&] { parse_stepped_sine_csv("# control: response\n" + header, "s.csv"); });
+  };
+  const std::string rms =
+      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
+      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth)";
+  const std::string half =
+      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
+      "give F_S twice the truth)";
+  const std::string force_rms =
+      "multiply its values by sqrt(2) = 1.4142 (a force amplitude is read zero to peak)";
+  // In the name: both columns named, each with its factor.
+  EXPECT_EQ(err("frequency_hz,force_rms [N],response_rms [m/s^2],phase [deg]\n"),
+            "s.csv:2: column 2 'force_rms [N]': " + force_rms +
+                ", then rename it 'force [N]'; column 3 'response_rms [m/s^2]': " + rms +
+                ", then rename it 'response [m/s^2]'");
+  EXPECT_EQ(err("frequency_hz,force [N],acc_pp [g],phase [deg]\n"),
+            "s.csv:2: column 3 'acc_pp [g]': " + half + ", then rename it 'response [g]'");
+  EXPECT_EQ(err("frequency_hz,Force RMS (N),response [m/s^2],phase [deg]\n"),
+            "s.csv:2: column 2 'Force RMS (N)': " + force_rms + ", then rename it 'force [N]'");
+  // Beside the unit, and after it.
+  EXPECT_EQ(err("frequency_hz,force [N],response [m/s^2 RMS],phase [deg]\n"),
+            "s.csv:2: column 'response [m/s^2 RMS]': 'RMS' says how it was measured, not a unit: " +
+                rms + ", then write 'response [m/s^2]'");
+  EXPECT_EQ(err("frequency_hz,force [pk-pk N],response [m/s^2],phase [deg]\n"),
+            "s.csv:2: column 'force [pk-pk N]': 'pk-pk' says how it was measured, not a unit: "
+            "halve its values (a force amplitude is read zero to peak), then write 'force [N]'");
+  EXPECT_EQ(err("frequency_hz,force [N],response [mm/s] (peak-to-peak),phase [deg]\n"),
+            "s.csv:2: column 3 'response [mm/s] (peak-to-peak)': " + half +
+                ", then write 'response [mm/s]'");
+  // Zero to peak by name: no factor, the missing column as before.
+  EXPECT_EQ(err("frequency_hz,force [N],acc_peak [g],phase [deg]\n"),
+            "s.csv:2: no 'response' column (need frequency_hz, force [N], response [unit], phase "
+            "[deg|rad])");
+  // An RMS column beside the response read is one more column, ignored.
+  const std::string rows = "1,1,1,0,0.7\n2,1,1,0,0.7\n3,1,1,0,0.7\n4,1,1,0,0.7\n5,1,1,0,0.7\n";
+  const auto t = parse_stepped_sine_csv(
+      "# control: response\nfrequency_hz,force [N],response [m/s^2],phase [deg],response_rms "
+      "[m/s^2]\n" +
+          rows,
+      "s.csv");
+  EXPECT_EQ(t[0].response(0), 1.0);
+}
+
 TEST(SteppedSineMat, ReadsTheBrakeReussStructLayout) {
   const auto tables = read_stepped_sine(
       testing::source_dir() + "/data/examples/brake-reuss-beam/forced_frequency_responses.mat");
