@@ -1742,6 +1742,92 @@ std::string dying_under_a_multiple(const Backbone& bb, const Multiples& multiple
       dying, below, rate, multiple_rate);
 }
 
+// Whether a stronger mode's multiple still carries the linear values' lowest point; the reason
+// if so (given the values' expanded uncertainties), else empty. The band reads its own mode
+// (amplitude a, rate sigma, omega) beside the multiple (b, sigma_m, omega_m) as a e^{-sigma t}
+// (1 + s e^{i phi}), s = b / a: the log of the second factor moves the read rate and angular
+// frequency by the real and imaginary parts of s (sigma - sigma_m + i (omega_m - omega))
+// e^{i phi} / (1 + s e^{i phi}), at most s / (1 - s) |sigma_m - sigma + i (omega_m - omega)|
+// (s < 1). At a point that follows the multiple (Backbone::harmonic) the band reads the
+// multiple, b about the point's amplitude; carried to the lowest fitted point at the
+// multiple's decay rate, b over that point's amplitude is s there. Where the pull this bounds
+// exceeds the stated uncertainty the linear values are refused. In the 1:2 twins of a double
+// beam (mode 2 at 243.8-245 Hz, 0.2-0.6 %, alpha 1e9-3e9, both modes struck or mode 1 alone,
+// read in 230:258 Hz), 35 stated linear values read s 0.04-1.06 at the lowest point (bounds
+// 1.7-2400 times the uncertainty where s < 1) and lay 1.2-15 times their expanded uncertainty
+// off mode 2, one 0.2 times (by the beat's phase; its other seed 1.4); where the nearest such
+// point lies 1.3-1.8 s earlier and the multiple died at 11-19 1/s, s < 4e-5 (bounds under 0.01
+// of the uncertainty) and the values stay, within 0.5 times their uncertainty of mode 2.
+std::string multiple_still_carries(const Backbone& bb, const Multiples& multiples, Eigen::Index lo,
+                                   double frequency_hz, double frequency_u, double damping_u) {
+  if (multiples.rate.size() != static_cast<size_t>(bb.size())) return {};
+  Eigen::Index near = -1;
+  for (Eigen::Index j = 0; j < bb.size(); ++j) {
+    const auto u = static_cast<size_t>(j);
+    if (bb.harmonic(j) == 0 || !(multiples.rate[u] > 0) || !(multiples.hz[u] > 0)) continue;
+    if (near < 0 ||
+        std::abs(bb.time_s(j) - bb.time_s(lo)) < std::abs(bb.time_s(near) - bb.time_s(lo)))
+      near = j;
+  }
+  if (near < 0) return {};
+  const auto m = static_cast<size_t>(near);
+  const double share = bb.displacement(near) *
+                       std::exp(-multiples.rate[m] * (bb.time_s(lo) - bb.time_s(near))) /
+                       bb.displacement(lo);
+  const double omega = kTwoPi * frequency_hz;
+  const double apart =
+      std::hypot(multiples.rate[m] - bb.decay_rate(lo), kTwoPi * multiples.hz[m] - omega);
+  const double pull =
+      share < 1 ? share / (1 - share) * apart : std::numeric_limits<double>::infinity();
+  if (pull / kTwoPi <= frequency_u && pull / omega <= damping_u) return {};
+  return fmt::format(
+      "no linear values: a multiple of a stronger mode's frequency (superharmonic, {:.3f} Hz at "
+      "{:.4f} s) still carries the lowest fitted point: carried there at its decay rate ({:.3g} "
+      "1/s) it is {:.2f} of that point's amplitude, and beside it the point's frequency and "
+      "damping read {}, more than their uncertainty ({:.3g} Hz, {:.3g})",
+      multiples.hz[m], bb.time_s(near), multiples.rate[m], share,
+      std::isfinite(pull)
+          ? fmt::format("up to {:.3g} Hz and {:.3g} off", pull / kTwoPi, pull / omega)
+          : std::string("the multiple more than the mode"),
+      frequency_u, damping_u);
+}
+
+// Whether the linear values' lowest point may still read an exchange's swings; the reason if
+// so, else empty. After an exchange (Backbone::exchange) with a stronger mode whose multiple
+// lies df from the band's mode, the band's envelope swings at df (the mode beside the multiple
+// it takes energy through); its turns come every 1 / (2 df), and the marking ends at the last
+// one found. A point less than half a swing after the last marked one cannot show that the
+// swings ended: the next turn was not due. Where its window w holds fewer than
+// kSwingsAveraged swings, the swings also reach its fit: a straight line fitted over w takes
+// 3 (sin x - x cos x) / x^3 of a swing's slope (x = pi df w), 30 % at df w = 1 (the window's
+// resolution), 7.6 % at df w = 2 and 3 / x^2 beyond. In the 1:2 twins of a double beam (band
+// 230:258 Hz, mode 2 at 243-245 Hz, 0.2 %, alpha 1e9-3e9, both modes struck), 14 stated linear
+// values (df w 0.27-1.24, the lowest point 0.04-0.31 of a swing after the last marked one) lay
+// 1.4-7.1 times their expanded uncertainty off mode 2 (13 of 14; the 14th 0.9); those of mode 2
+// at 246 and 247.66 Hz (df w 5.8-11.7, 0.43-3.1 swings after) within 0.3 times it.
+constexpr double kSwingsAveraged = 2.0;
+
+std::string exchange_swings_unfinished(const Backbone& bb, const Multiples& multiples,
+                                       Eigen::Index lo, double frequency_hz) {
+  const auto u = static_cast<size_t>(lo);
+  if (multiples.hz.size() != static_cast<size_t>(bb.size()) || !(multiples.hz[u] > 0)) return {};
+  double last = -std::numeric_limits<double>::infinity();
+  for (Eigen::Index j = 0; j < bb.size(); ++j) {
+    if (bb.exchange(j) != 0 && bb.time_s(j) < bb.time_s(lo)) last = std::max(last, bb.time_s(j));
+  }
+  if (!std::isfinite(last)) return {};
+  const double df = std::abs(frequency_hz - multiples.hz[u]);
+  const double swings = (bb.time_s(lo) - last) * df;
+  if (df * bb.window_s(lo) >= kSwingsAveraged || swings >= 0.5) return {};
+  return fmt::format(
+      "no linear values: the lowest fitted point ({:.4f} s) lies {:.2f} of a swing after the "
+      "last point marked as exchanging energy ({:.4f} s; the swings at {:.3f} Hz, the mode beside "
+      "a multiple of a stronger mode's frequency, {:.3f} Hz): their next turn was not due, so "
+      "the points cannot show that they ended, and the point's window ({:.3f} s) holds fewer "
+      "than {:g} of them, too few to average them out of its damping and frequency",
+      bb.time_s(lo), swings, last, df, multiples.hz[u], bb.window_s(lo), kSwingsAveraged);
+}
+
 // Linear values: the straight-line fit of the backbone's lower half, at its lowest amplitude.
 void set_linear_values(RingdownSummary& sum, const Backbone& bb, const Multiples& multiples,
                        const RingdownOptions& options) {
@@ -1788,6 +1874,11 @@ void set_linear_values(RingdownSummary& sum, const Backbone& bb, const Multiples
   sum.linear_reason = multiple_within_resolution(bb, multiples.hz, lf, lz, lf.value);
   if (!sum.linear_reason.empty()) return;
   sum.linear_reason = dying_under_a_multiple(bb, multiples, lf, options);
+  if (!sum.linear_reason.empty()) return;
+  sum.linear_reason =
+      multiple_still_carries(bb, multiples, lf.lo, lf.value, k * lf.std, k * lz.std);
+  if (!sum.linear_reason.empty()) return;
+  sum.linear_reason = exchange_swings_unfinished(bb, multiples, lf.lo, lf.value);
   if (!sum.linear_reason.empty()) return;
   sum.linear_frequency_hz = lf.value;
   sum.linear_frequency_std_hz = k * lf.std;

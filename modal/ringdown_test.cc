@@ -1083,15 +1083,24 @@ TEST(RingdownInternalResonance, ModeTwosLinearValuesRefusedWhereTheHarmonicIsUnr
     EXPECT_NEAR(r.summary.linear_frequency_hz, f2, 0.2) << r.summary.message;
   }
   // Mode 2 in tune (244 Hz, damping 0.2 %, alpha 3e9, mode 1 struck alone), read in 230:258 Hz:
-  // its lowest points lie within 0.06 Hz of 2 f1 but read steadily (reduced chi-square 1.0 in
-  // frequency, 0.1 in damping): its linear values stay, 244.003 Hz and 0.00204. Required within
-  // 0.05 Hz and 10 % (twice the errors seen over two seeds).
+  // its lowest fitted points lie within 0.09 Hz of 2 f1 and read steadily (reduced chi-square
+  // 1.0 in frequency, 0.1 in damping), so they passed the test above; but 2 f1 follows them to
+  // lower amplitudes (marked harmonic from 1.39 s), and carried back at its decay rate it is
+  // as strong as the lowest fitted point. Before, linear values 244.003 +- 0.0065 Hz and 0.002043
+  // +- 0.000018 (seed 1; seed 2 0.002045 +- 0.000015): damping 2.4 and 3.1 times its stated
+  // uncertainty off mode 2's 0.002. Required: no linear values, naming the multiple that still
+  // carries them; or within their stated uncertainty of mode 2.
   const testing::InternalResonanceRecord tuned =
       testing::internal_resonance_record(3e9, 6.5e-5, 0.002, 1e-5, 1, 4.0, 0.0, 0.0, 0.0, 244.0);
   const Ringdown rt = extract_band(tuned.velocity, tuned.fs, Quantity::kVelocity, {230, 258});
-  ASSERT_TRUE(rt.summary.has_linear()) << rt.summary.linear_reason;
-  EXPECT_NEAR(rt.summary.linear_frequency_hz, 244.0, 0.05);
-  EXPECT_NEAR(rt.summary.linear_damping / 0.002, 1.0, 0.10);
+  ASSERT_EQ(rt.summary.status, RingdownStatus::kOk) << rt.summary.message;
+  if (!rt.summary.has_linear()) {
+    EXPECT_NE(rt.summary.linear_reason.find("still carries"), std::string::npos)
+        << rt.summary.linear_reason;
+  } else {
+    EXPECT_LE(std::abs(rt.summary.linear_frequency_hz - 244.0), rt.summary.linear_frequency_std_hz);
+    EXPECT_LE(std::abs(rt.summary.linear_damping - 0.002), rt.summary.linear_damping_std);
+  }
 }
 
 // Mode 2 at 244.0 Hz, 0.05 Hz from mode 1's 2 f1, both modes struck as a hammer strikes
@@ -1135,6 +1144,69 @@ TEST(RingdownInternalResonance, ModeTwosLinearValuesRefusedWhereItDiesUnderTheHa
 // Required: no linear values, naming that; or mode 2's own within 0.2 Hz and 25 %. About 0.03 s.
 TEST(RingdownInternalResonance, ModeTwosLinearValuesRefusedWhereItDiesNoSlowerThanTheHarmonic) {
   expect_mode_two_or_refused(3e9, 244.3);
+}
+
+// The 1:2 twin (coupling `alpha`, mode 2 at `f2` Hz with damping `zeta2`, noise `seed`), both
+// modes struck as a hammer strikes (mode 2's velocity equal to mode 1's), read in 230:258 Hz.
+// Required: no linear values, the reason containing `why`; or mode 2's own within their stated
+// (expanded, k = 3) uncertainty. A twin takes about 0.02 s.
+void expect_mode_two_covered_or_refused(double alpha, double f2, double zeta2, unsigned seed,
+                                        const std::string& why) {
+  const double blow = -std::numbers::pi / 2;
+  const testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+      alpha, 6.5e-5, zeta2, 1e-5, seed, 4.0, 6.5e-5 * 122 / f2, blow, blow, f2);
+  const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {230, 258});
+  ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
+  const RingdownSummary& s = r.summary;
+  if (!s.has_linear()) {
+    EXPECT_NE(s.linear_reason.find(why), std::string::npos) << s.linear_reason;
+    return;
+  }
+  EXPECT_LE(std::abs(s.linear_frequency_hz - f2), s.linear_frequency_std_hz)
+      << s.linear_frequency_hz << " +- " << s.linear_frequency_std_hz;
+  EXPECT_LE(std::abs(s.linear_damping - zeta2), s.linear_damping_std)
+      << s.linear_damping << " +- " << s.linear_damping_std;
+}
+
+// Mode 2 at 245.0 Hz (0.4 %, alpha 3e9, seed 2): 44 points marked exchange and 9 harmonic, the
+// last of them 0.17 s before the two fitted points; 2 f1 (4.9 1/s against mode 2's 6.2) carried
+// there is 0.71 of their amplitude. Before, 244.303 +- 0.123 Hz and 0.00265 +- 0.00009, 5.7 and
+// 15 times their uncertainty off mode 2. Mode 2 at 244.1 Hz (0.4 %, alpha 1e9, seed 2) gives way
+// to 2 f1 below its fitted points (0.85 of the lowest's amplitude there): before, 244.030 +-
+// 0.007 Hz and 0.00418 +- 0.00003, 10.4 and 6.9 times it off.
+TEST(RingdownInternalResonance, ModeTwosLinearValuesRefusedWhereAMultipleStillCarriesThem) {
+  expect_mode_two_covered_or_refused(3e9, 245.0, 0.004, 2, "still carries the lowest fitted point");
+  expect_mode_two_covered_or_refused(1e9, 244.1, 0.004, 2, "still carries the lowest fitted point");
+}
+
+// Mode 2 at 243.0 Hz (0.2 %, alpha 2e9, seed 2): 80 points marked exchange, the swings of mode 2
+// beside 2 f1 (244.0 Hz) at 1.0 Hz; the two fitted points 0.04 of a swing after the last marked
+// one, their windows 0.79 s (0.8 swings). Before, damping 0.00239 +- 0.00009, 4.5 times its
+// uncertainty off mode 2's 0.002. Mode 2 at 245.0 Hz (alpha 3e9, seed 1), 0.27 of a swing
+// after: 0.00253 +- 0.00007, 7.1 times off.
+TEST(RingdownInternalResonance, ModeTwosLinearValuesRefusedWhereAnExchangesSwingsMayGoOn) {
+  expect_mode_two_covered_or_refused(2e9, 243.0, 0.002, 2,
+                                     "the points cannot show that they ended");
+  expect_mode_two_covered_or_refused(3e9, 245.0, 0.002, 1,
+                                     "the points cannot show that they ended");
+}
+
+// Where the swings are fast enough for the windows to average them (mode 2 at 247.66 Hz, 3.66 Hz
+// from 2 f1, seed 1: the lowest fitted point's window 3.2 s, 11.6 swings) or the multiple died
+// long before the fitted points (mode 2 in tune at 244.0 Hz, alpha 3e9: the nearest harmonic
+// point 1.33 s earlier, 2 f1 carried from it at 10.8 1/s is 3.4e-5 of the lowest point), mode
+// 2's linear values stay, within their uncertainty (247.658 +- 0.017 Hz, 0.00200 +- 0.00004;
+// 243.998 +- 0.006 Hz, 0.00201 +- 0.00002): a guard against refusing too much.
+TEST(RingdownInternalResonance, ModeTwosLinearValuesStayWhereNoMultipleReachesThem) {
+  for (const auto& [alpha, f2] : {std::pair{1e9, 247.66}, std::pair{3e9, 244.0}}) {
+    const double blow = -std::numbers::pi / 2;
+    const testing::InternalResonanceRecord rec = testing::internal_resonance_record(
+        alpha, 6.5e-5, 0.002, 1e-5, 1, 4.0, 6.5e-5 * 122 / f2, blow, blow, f2);
+    const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {230, 258});
+    ASSERT_TRUE(r.summary.has_linear()) << f2 << " Hz: " << r.summary.linear_reason;
+    EXPECT_LE(std::abs(r.summary.linear_frequency_hz - f2), r.summary.linear_frequency_std_hz);
+    EXPECT_LE(std::abs(r.summary.linear_damping - 0.002), r.summary.linear_damping_std);
+  }
 }
 
 // A weak coupling (alpha 3e8) moves energy one way only: mode 1's decay rate falls from the
