@@ -12,9 +12,11 @@
 #include "jointlab/correlate/linear_profile.h"
 #include "jointlab/correlate/linear_settle.h"
 #include "jointlab/correlate/linear_signs.h"
+#include "jointlab/correlate/linear_swaps.h"
 #include "jointlab/correlate/linear_sweeps.h"
 #include "jointlab/correlate/linear_tolerance.h"
 #include "jointlab/correlate/linear_uncertainty.h"
+#include "jointlab/correlate/noise_limits.h"
 
 namespace jointlab::correlate::detail {
 namespace {
@@ -165,23 +167,49 @@ bool rival_by_shape(const LinearProblem& p, const TrackedPoint& a, const Tracked
   return false;
 }
 
+// The degrees of freedom of a result: its pairs less the sets fitted.
+int degrees_of_freedom(const Settled& o, const std::vector<char>& held) {
+  const auto pairs =
+      std::count_if(o.point.columns.begin(), o.point.columns.end(), [](int c) { return c >= 0; });
+  return static_cast<int>(pairs - std::count(held.begin(), held.end(), 0));
+}
+
+// Whether `given` (a fit from the start's own pairs) and `swapped` (that fit's pairs exchanged,
+// swapped_pairings(), winning where `applies`) cannot be told apart because the given fit
+// leaves scatter beyond the stated noise: that noise may then be understated, and the chi-square
+// in its units makes any better pairing look decisive. The ratio of the two reduced chi-squares,
+// which no noise scale enters, must then reach Fisher's F's 3-sigma point over their degrees of
+// freedom, as a restart's must (linear_restarts.cc).
+bool undecided_by_scatter(const Settled& given, const Settled& swapped, bool applies,
+                          const std::vector<char>& held, double sf2) {
+  if (!applies) return false;
+  const int dg = degrees_of_freedom(given, held), ds = degrees_of_freedom(swapped, held);
+  if (dg < 1 || ds < 1) return false;
+  const double rg = 2 * given.cost / sf2 / dg, rs = 2 * swapped.cost / sf2 / ds;
+  return rg > reduced_chi2_limit(dg) && !(rg >= variance_ratio_limit(dg, ds) * rs);
+}
+
 // The outcome of lowest cost among the starts'; `costs` receives each one's cost, `decided`
 // false where another that pairs otherwise (by mode number, or by shape where that moves a set:
 // rival_by_shape()) fits within 9 chi-square units of it, each such in `rivals`, unless the
 // shapes decide between those (shapes_decide(): that one is returned, and `by_shapes` says so).
 size_t best_start(const LinearProblem& p, const std::vector<Settled>& outcomes, double sf2,
-                  const std::vector<char>& held, std::vector<std::string>& costs, bool& decided,
-                  std::vector<const TrackedPoint*>& rivals, std::string& by_shapes) {
+                  const std::vector<char>& held, size_t first_swap, std::vector<std::string>& costs,
+                  bool& decided, std::vector<const TrackedPoint*>& rivals, std::string& by_shapes) {
   size_t win = 0;
   for (size_t k = 1; k < outcomes.size(); ++k)
-    if (outcomes[k].cost < outcomes[win].cost) win = k;
+    if (2 * (outcomes[win].cost - outcomes[k].cost) / sf2 > 1e-6)
+      win = k;  // rounding ties: the first
   for (size_t k = 0; k < outcomes.size(); ++k) {
     costs.push_back(fmt::format("{:.4g}", outcomes[k].cost));
     // By mode number, as before, or by shape where that moves a set the frequencies see: by
     // shape alone (same_partners), the one-sensor beam's fits with rz at 2129 and at 100 pair
     // test mode 6 with other modes, and the update, which the beam test pins as right (K_T
     // moves by less than its sigma between them), would be refused.
-    if (k != win && 2 * (outcomes[k].cost - outcomes[win].cost) / sf2 < 9 &&
+    if (k != win &&
+        (2 * (outcomes[k].cost - outcomes[win].cost) / sf2 < 9 ||
+         undecided_by_scatter(outcomes[k], outcomes[win], k < first_swap && win >= first_swap, held,
+                              sf2)) &&
         (outcomes[k].point.columns != outcomes[win].point.columns ||
          rival_by_shape(p, outcomes[win].point, outcomes[k].point, held))) {
       decided = false;
@@ -205,6 +233,59 @@ size_t best_start(const LinearProblem& p, const std::vector<Settled>& outcomes, 
   decided = true;
   rivals.clear();
   return chosen;
+}
+
+// What the exchanged pairs' fits (outcomes from `first_swap`, each with its `why`) say against
+// the given fit (`given`) now that `win` won: where the data cannot tell a fit with one set of
+// pairs from one with the other (`decided` false, `rivals`), why the update stops (the two
+// results' pairs and sets, and by what they could not be told apart); where an exchange won,
+// the warning that says so; else "".
+std::string exchanged_pairs_note(const LinearProblem& p, const std::vector<Settled>& outcomes,
+                                 size_t given, size_t win, size_t first_swap,
+                                 const std::vector<std::string>& why,
+                                 const std::vector<const TrackedPoint*>& rivals, bool decided,
+                                 double sf2, const std::vector<char>& held) {
+  const Settled& w = outcomes[win];
+  if (decided) {
+    if (win < first_swap) return "";
+    return fmt::format(
+        "{}: that fit left a cost of {:.4g} against {:.4g}, {:.3g} chi-square units lower, so "
+        "the result is its",
+        why[win - first_swap], w.cost, outcomes[given].cost,
+        2 * (outcomes[given].cost - w.cost) / sf2);
+  }
+  // The rival that concerns an exchange: the given fit where an exchange won, else the first
+  // exchange among the rivals.
+  size_t other = outcomes.size();
+  for (size_t k = 0; k < outcomes.size(); ++k)
+    if (std::find(rivals.begin(), rivals.end(), &outcomes[k].point) != rivals.end() &&
+        (win >= first_swap ? k < first_swap : k >= first_swap)) {
+      other = k;
+      break;
+    }
+  if (other == outcomes.size()) return "";
+  const size_t swapped = win >= first_swap ? win : other;
+  const Settled& g = win >= first_swap ? outcomes[other] : w;
+  const int dg = degrees_of_freedom(g, held), dw = degrees_of_freedom(w, held);
+  const double rg = dg >= 1 ? 2 * g.cost / sf2 / dg : 0, rw = dw >= 1 ? 2 * w.cost / sf2 / dw : 0;
+  const bool by_scatter = win >= first_swap && 2 * (g.cost - w.cost) / sf2 >= 9;
+  const std::string how =
+      by_scatter
+          ? fmt::format(
+                "the fit from the first pairs left a reduced chi-square of {:.3g} over {}, beyond "
+                "the stated noise (above {:.3g}), so that noise may be understated; the exchanged "
+                "ones left {:.3g} over {}, {:.3g} times less, and without the stated noise "
+                "only a ratio beyond {:.3g} (Fisher's F's 3-sigma point over {} and {} degrees of "
+                "freedom) tells the two apart; if the noise is larger than stated, give it "
+                "(--frequency-std)",
+                rg, dg, reduced_chi2_limit(dg), rw, dw, rg / rw, variance_ratio_limit(dg, dw), dg,
+                dw)
+          : fmt::format(
+                "the two fits differ by {:.3g} chi-square units of the stated noise, "
+                "fewer than 9",
+                2 * std::abs(outcomes[other].cost - w.cost) / sf2);
+  return differing_pairs(p, w.point, w.cost, outcomes[other].point, outcomes[other].cost,
+                         fmt::format("{}; {}", why[swapped - first_swap], how));
 }
 
 // The winning start's outcome `o` as the summary's fit so far.
@@ -480,7 +561,7 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   // sensors cannot tell two candidates apart at the start, from each candidate pairing, and the
   // data decide between the results as they do at a result.
   const double sf2 = options.frequency_std * options.frequency_std;
-  const std::vector<TrackedPoint> starts = candidate_pairings(point, s.start, s.start.ties.size());
+  std::vector<TrackedPoint> starts = candidate_pairings(point, s.start, s.start.ties.size());
   if (starts.size() > kMaxPairings) {
     s.status = LinearUpdateStatus::kAmbiguous;
     s.ambiguity = fmt::format(
@@ -494,10 +575,35 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   bool decided = true;
   std::vector<const TrackedPoint*> rivals;
   std::string by_shapes;
-  const size_t win = best_start(p, outcomes, sf2, held, start_costs, decided, rivals, by_shapes);
+  const size_t first_swap = outcomes.size();
+  size_t win =
+      best_start(p, outcomes, sf2, held, first_swap, start_costs, decided, rivals, by_shapes);
+  // The pairs the result leaves to frequency alone between model modes adjacent in frequency,
+  // fitted the other way round: the data decide between the two as between the start's guesses.
+  std::string swap_note;
+  if (decided && outcomes[win].ambiguity.empty()) {
+    std::vector<SwappedPairs> swaps = swapped_pairings(p, outcomes[win].point);
+    std::vector<std::string> swap_why;
+    for (SwappedPairs& w : swaps) {
+      starts.push_back(w.point);
+      outcomes.push_back(settle(p, std::move(w.point), held));
+      swap_why.push_back(std::move(w.why));
+    }
+    if (!swaps.empty()) {
+      const size_t given = win;
+      start_costs.clear();
+      rivals.clear();
+      by_shapes.clear();
+      win = best_start(p, outcomes, sf2, held, first_swap, start_costs, decided, rivals, by_shapes);
+      swap_note = exchanged_pairs_note(p, outcomes, given, win, first_swap, swap_why, rivals,
+                                       decided, sf2, held);
+    }
+  }
   Settled& o = outcomes[win];
   take_outcome(o, s, weak_pairs);
   if (!by_shapes.empty()) s.warnings.push_back(by_shapes);
+  if (decided && !swap_note.empty()) s.warnings.push_back(swap_note);
+  if (!decided && !swap_note.empty() && o.ambiguity.empty()) o.ambiguity = swap_note;
   point = o.point;
   bool unconfirmed_refusal = false;
   if (o.ambiguity.empty()) {

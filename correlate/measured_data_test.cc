@@ -258,7 +258,11 @@ TEST(MeasuredData, LinearFrequenciesWithinTheirUncertaintyOrWithoutTrendKeepTheM
 TEST(MeasuredData, ABandThatFallsWithTheLevelWidensTheLinearUpdate) {
   TwoChainParameters p;
   const model::Model model = two_chain_structure(p);
-  const std::vector<Sensor> sensors{{"a2", 2, 1.0}, {"b2", 8, 1.0}};
+  // Two sensors on each chain: each mode's shape reads at two (a chain's mode does not move the
+  // other chain), so the MAC pairs it with its own chain's mode; with one sensor on each, each
+  // mode would be paired by frequency alone, and the chains' first modes fit as well crosswise.
+  const std::vector<Sensor> sensors{
+      {"a2", 2, 1.0}, {"a5", 5, 1.0}, {"b2", 8, 1.0}, {"b5", 11, 1.0}};
   const model::LinearModes lm = model::linear_modes(model.mass, model.linear_stiffness());
   const int first = lm.rigid_count;
   std::string files;
@@ -274,8 +278,11 @@ TEST(MeasuredData, ABandThatFallsWithTheLevelWidensTheLinearUpdate) {
           R"({}{{"band": {}, "reference_channel": "a2", "linear_frequency_hz": {:.12g},
               "linear_frequency_std_hz": 0.001, "linear_fit_amplitude_min": {},
               "operating_shape": [{{"channel": "a2", "real_m": {:.12g}, "imag_m": 0}},
-                                  {{"channel": "b2", "real_m": {:.12g}, "imag_m": 0}}]}})",
-          b ? "," : "", b + 1, f, level[h], lm.shapes(2, col), lm.shapes(8, col));
+                                  {{"channel": "a5", "real_m": {:.12g}, "imag_m": 0}},
+                                  {{"channel": "b2", "real_m": {:.12g}, "imag_m": 0}},
+                                  {{"channel": "b5", "real_m": {:.12g}, "imag_m": 0}}]}})",
+          b ? "," : "", b + 1, f, level[h], lm.shapes(2, col), lm.shapes(5, col), lm.shapes(8, col),
+          lm.shapes(11, col));
     }
     files += fmt::format(R"({}{{"file": "hit{}.csv", "bands": [{}], "outputs": []}})", h ? "," : "",
                          h, bands);
@@ -300,7 +307,7 @@ TEST(MeasuredData, ABandThatFallsWithTheLevelWidensTheLinearUpdate) {
   LinearUpdateSummary s;
   update_linear(model, {"spring.ka", "spring.kb"}, sensors, m, LinearUpdateOptions{}, &s);
   // Each mode its own uncertainty: band 1's residual over its spread, band 2's over the update's.
-  EXPECT_EQ(s.frequency_std, LinearUpdateOptions{}.frequency_std);
+  EXPECT_EQ(s.frequency_std, LinearUpdateOptions{}.frequency_std) << s.report();
   ASSERT_EQ(s.mode_frequency_std.size(), 2);
   EXPECT_NEAR(s.mode_frequency_std(0), m.frequency_std(0), 1e-15);
   EXPECT_EQ(s.mode_frequency_std(1), LinearUpdateOptions{}.frequency_std);
