@@ -515,11 +515,14 @@ void one_sided_where_taken(const LinearProblem& p, const std::vector<int>& taken
         "the data do not choose, so it is left where the fit took it, and no standard deviation "
         "is stated: hold it at a value known otherwise (--hold {}=VALUE)",
         r.name, theta(k), r.sensitivity, p.options.flat_sensitivity, r.start,
-        lowest ? fmt::format("they allow it down to {:.3g} (where the chi-square, the other sets "
-                             "fitted again, rises by 9: 3 standard deviations), and any value "
-                             "above fits them alike",
-                             *lowest)
-               : std::string("they set no lower limit within its range that can be followed"),
+        lowest
+            ? fmt::format(
+                  "they allow it down to {:.3g} (where the chi-square, the other sets "
+                  "fitted again, rises by {:.3g}: 3 standard deviations{}), and any "
+                  "value above fits them alike",
+                  *lowest, three_sigma_rise(s),
+                  three_sigma_rise(s) > 9 ? ", Student's t's: the sigmas rest on the scatter" : "")
+            : std::string("they set no lower limit within its range that can be followed"),
         r.name));
   }
 }

@@ -169,9 +169,11 @@ std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& po
                                   const std::vector<char>& held, int k,
                                   const LinearUpdateSummary& s) {
   const double base = p.evaluate(point).weighted_squared_norm();
-  const ProfileSide side = profile_side(p, point, k, -1, 0.05, held, base, sigma_variance(p, s), 9);
+  const double level = three_sigma_rise(s);
+  const ProfileSide side =
+      profile_side(p, point, k, -1, 0.05, held, base, sigma_variance(p, s), level);
   if (!side.checked || !side.bounded || side.lost) return std::nullopt;
-  return std::exp(point.x(k) - 3 * side.sigma);
+  return std::exp(point.x(k) - std::sqrt(level) * side.sigma);
 }
 
 // The combination of two sets acting together is theta_a + weight theta_b with the weight of
@@ -182,7 +184,8 @@ std::optional<double> lower_limit(const LinearProblem& p, const TrackedPoint& po
 // truth's is 6.76e5 (20 of those off; 3 of 10 seeds stated one with a sigma, 15 to 20 off, a fourth
 // bare). So set a is walked each way from the result (ln steps 0.1, 0.3, 0.9, ... to its bound, the
 // other sets fitted again at each, as profile_side does) while the chi-square stays within 9 of the
-// result's (3 standard deviations) and the pairs hold; where the combination changes there by
+// result's (3 standard deviations; Student's t's where the sigmas rest on the scatter,
+// three_sigma_rise()) and the pairs hold; where the combination changes there by
 // more than half its standard deviation (the stated one, or the stated noise's over the two
 // sets where none is stated), no value is stated and the warning says how far it runs.
 void check_combinations(const LinearProblem& p, const TrackedPoint& point,
@@ -192,6 +195,7 @@ void check_combinations(const LinearProblem& p, const TrackedPoint& point,
   const double scale =
       s.t_widening > 0 ? sigma_variance(p, s) : sf * sf * std::max(1.0, s.reduced_chi2);
   const double base = at.weighted_squared_norm();
+  const double level = three_sigma_rise(s);
   const size_t pairs = at.pairing.pairs.size();
   for (CollinearSets& c : s.collinear) {
     if (c.sets.size() != 2 || !(c.value > 0)) continue;
@@ -225,7 +229,7 @@ void check_combinations(const LinearProblem& p, const TrackedPoint& point,
         if (!q) break;
         fit(p, *q, with_a, nullptr);
         const LinearEvaluation e = p.evaluate(*q);
-        if (e.pairing.pairs.size() != pairs || (e.weighted_squared_norm() - base) / scale >= 9)
+        if (e.pairing.pairs.size() != pairs || (e.weighted_squared_norm() - base) / scale >= level)
           break;
         const double w = combination(q->x);
         low = std::min(low, w);
@@ -245,12 +249,14 @@ void check_combinations(const LinearProblem& p, const TrackedPoint& point,
         "{}their sensitivities are proportional at the result (correlation {:.6f}), but the "
         "combination that makes them so, {} + {:.4g} {} ({:.6g} there), is not what the "
         "frequencies determine: with {} moved from {:.6g} to {:.6g} and the other sets fitted "
-        "again, the chi-square stays within 9 of the result's (3 standard deviations) while it "
-        "runs from {:.6g} to {:.6g}, more than half its standard deviation ({:.3g} %) from its "
+        "again, the chi-square stays within {:.3g} of the result's (3 standard deviations{}) "
+        "while it runs from {:.6g} to {:.6g}, more than half its standard deviation ({:.3g} %) "
+        "from its "
         "value, so no value of it is stated (they fix a curved combination, as springs in series "
         "do; the split {:.6g} and {:.6g} is where the fit stopped); hold one of them at a value "
         "known otherwise (--hold NAME=VALUE) and fit the other",
-        head, c.correlation, na, c.weight, nb, c.value, na, a_low, a_high, low, high, 100 * sigma,
+        head, c.correlation, na, c.weight, nb, c.value, na, a_low, a_high, level,
+        level > 9 ? ", Student's t's: the sigmas rest on the scatter" : "", low, high, 100 * sigma,
         theta(a), theta(b));
     for (std::string& w : s.warnings)
       if (w.rfind(head, 0) == 0) w = text;
