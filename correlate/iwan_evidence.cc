@@ -2,6 +2,7 @@
 // (IwanObjective::misfit_evidence()): the linear-limit offset and the nearer mode, the low end's
 // damping and softening, and the scatter between curves with a curve lying apart.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -58,6 +59,9 @@ struct CurveScatter {
   // and leaves (add_group_shapes()).
   double each_chi2 = 0, shared_gain = 0, shared_rest = 0;
   int each_dof = 0, shared_dof = 0, shared_rest_dof = 0;
+  // Columns of the slopes (at most F_S, K_T, chi, beta and Z) freed in each curve's own fit
+  // although held (add_each_curve_alone()).
+  std::array<bool, 5> freed{};
 };
 
 // One target's curves: each one's point count, mean normalised residual, mean relative offset
@@ -125,46 +129,111 @@ std::pair<double, int> least_squares_rest(const Eigen::MatrixXd& a, const Eigen:
   return {rest.squaredNorm(), static_cast<int>(qr.rank())};
 }
 
+// Curve g's rows of the slopes (du/dx, every column) and its normalised residuals u = r sqrt(N)
+// (curve, index: as add_group_shapes()), frequency and damping together.
+void curve_system(const Eigen::MatrixXd& slopes, const std::vector<int>& curve,
+                  const std::vector<int>& index, const std::vector<double>& r, double n_points,
+                  int g, Eigen::MatrixXd& a, Eigen::VectorXd& u) {
+  std::vector<int> at;
+  for (size_t i = 0; i < curve.size(); ++i)
+    if (curve[i] == g) at.push_back(index[i]);
+  const auto k = static_cast<Eigen::Index>(at.size());
+  a.resize(2 * k, slopes.cols());
+  u.resize(2 * k);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    for (int q = 0; q < 2; ++q) {
+      a.row(2 * j + q) = slopes.row(at[static_cast<size_t>(j)] + q);
+      u(2 * j + q) = r[static_cast<size_t>(at[static_cast<size_t>(j)] + q)] * std::sqrt(n_points);
+    }
+  }
+}
+
+// Whether the curves' own values of held column c scatter about the held value: each curve's
+// linearised step in c with the columns `free` free beside it (Frisch-Waugh: c's slopes and the
+// residuals less their projections on the others'), taken over the curves whose points fix c
+// apart from those (3 or more needed); the mean of those steps has a Student's t, over their
+// count less 1 degrees of freedom, that chance reaches 5 times in 100 or more. A value held off
+// the joint's moves every curve alike (beta held at 0.35 on a joint of 0.5: t 18.9; gamma held
+// 2 % off with no scatter between hits: held in 60 of 60); hits whose joints scatter about the
+// value held move each its own way.
+bool held_value_scatters(const Eigen::MatrixXd& slopes, const std::vector<int>& free, int c,
+                         const std::vector<int>& curve, const std::vector<int>& index,
+                         const std::vector<double>& r, double n_points, int nc) {
+  std::vector<double> own;
+  for (int g = 0; g < nc; ++g) {
+    Eigen::MatrixXd a;
+    Eigen::VectorXd u;
+    curve_system(slopes, curve, index, r, n_points, g, a, u);
+    Eigen::MatrixXd others(a.rows(), static_cast<Eigen::Index>(free.size()));
+    for (size_t j = 0; j < free.size(); ++j)
+      others.col(static_cast<Eigen::Index>(j)) = a.col(free[j]);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(others);
+    qr.setThreshold(1e-10);
+    const Eigen::VectorXd ac = a.col(c) - others * qr.solve(a.col(c));
+    const Eigen::VectorXd uc = u - others * qr.solve(u);
+    if (ac.squaredNorm() > 1e-6 * a.col(c).squaredNorm())
+      own.push_back(ac.dot(uc) / ac.squaredNorm());
+  }
+  const auto m = static_cast<double>(own.size());
+  if (own.size() < 3) return false;
+  double mean = 0, ss = 0;
+  for (const double x : own) mean += x / m;
+  for (const double x : own) ss += (x - mean) * (x - mean);
+  const double se = std::sqrt(ss / (m - 1) / m);
+  if (!(se > 0)) return false;
+  const double t = std::abs(mean) / se;
+  return 2 * boost::math::cdf(boost::math::complement(boost::math::students_t(m - 1), t)) >= 0.05;
+}
+
 // Each curve of a group fitted alone, linearised (MisfitEvidence::model_misses_each_hit()): the
 // normalised residuals u = r sqrt(N) of curve g's points (curve, index: as add_group_shapes())
-// less their projection on that curve's own rows of `slopes` (du/dx, x the free ones of (ln F_S,
-// ln K_T, chi, ln beta)), frequency and damping together; then the frequency's alone with the
-// common curve's hat functions `hats` added: the chi-square they gain, over what they leave. Where
-// the hits differ only in their joints' parameters each curve's own fit leaves the noise, and a
+// less their projection on that curve's own rows of `slopes` (du/dx, x those of (ln F_S, ln K_T,
+// chi, ln beta) and Z the fit frees, then those it held at a value the options state, columns
+// marked `stated`), frequency and damping together; then the frequency's alone with the common
+// curve's hat functions `hats` added: the chi-square they gain, over what they leave. Where the
+// hits differ only in their joints' parameters each curve's own fit leaves the noise, and a
 // common curve gains no more than that noise's share; a model error leaves the same shape in every
 // hit at the same amplitude. The damping is left out of the common curve: the model's damping
 // differs from the data's own at a few tenths of a percent even where it is their truth (the
 // one-mode truth's common damping curve gains F 11-41 beyond each hit's fit, scatter or none),
 // which the 2 % noise hides in any one curve but not in a curve fitted to all of them.
-void add_each_curve_alone(const Eigen::MatrixXd& slopes, const Eigen::MatrixXd& hats,
-                          const std::vector<int>& curve, const std::vector<int>& index,
-                          const std::vector<double>& r, double n_points, int nc,
-                          CurveScatter& scatter) {
-  const int n = static_cast<int>(curve.size()), np = static_cast<int>(slopes.cols());
+// A stated column is freed there too where the curves' own values of it scatter about the value
+// held (held_value_scatters(); `freed` marks it): K_T held by --gamma at the joint's mean while it
+// scatters between hits is no error the hits share, and held, each curve kept its own K_T's
+// offset, the model was said to miss every hit (gamma held, three hits at rising levels, F_S and
+// K_T scattered 5 % and 2 %: 31 of 60 fits without a sigma for it).
+void add_each_curve_alone(const Eigen::MatrixXd& slopes, const std::vector<bool>& stated,
+                          const Eigen::MatrixXd& hats, const std::vector<int>& curve,
+                          const std::vector<int>& index, const std::vector<double>& r,
+                          double n_points, int nc, CurveScatter& scatter) {
+  std::vector<int> cols, held;
+  for (int c = 0; c < static_cast<int>(slopes.cols()); ++c)
+    (stated[static_cast<size_t>(c)] ? held : cols).push_back(c);
+  if (!held.empty() && std::all_of(held.begin(), held.end(), [&](int c) {
+        return held_value_scatters(slopes, cols, c, curve, index, r, n_points, nc);
+      })) {
+    for (const int c : held) scatter.freed[static_cast<size_t>(c)] = true;
+    cols.insert(cols.end(), held.begin(), held.end());
+  }
+  const int n = static_cast<int>(curve.size()), np = static_cast<int>(cols.size());
   const int knots = static_cast<int>(hats.cols());
-  const double root_n = std::sqrt(n_points);
   // Frequency rows: each curve's own slopes (block diagonal), then the hats.
   Eigen::MatrixXd own_f = Eigen::MatrixXd::Zero(n, nc * np + knots);
   Eigen::VectorXd u_f(n);
+  for (int i = 0; i < n; ++i) {
+    const int at = index[static_cast<size_t>(i)], g = curve[static_cast<size_t>(i)];
+    for (int c = 0; c < np; ++c) own_f(i, g * np + c) = slopes(at, cols[static_cast<size_t>(c)]);
+    u_f(i) = r[static_cast<size_t>(at)] * std::sqrt(n_points);
+  }
   for (int g = 0; g < nc; ++g) {
-    std::vector<int> rows;
-    for (int i = 0; i < n; ++i)
-      if (curve[static_cast<size_t>(i)] == g) rows.push_back(i);
-    const int k = static_cast<int>(rows.size());
-    Eigen::MatrixXd a(2 * k, np);
-    Eigen::VectorXd u(2 * k);
-    for (int j = 0; j < k; ++j) {
-      const int i = rows[static_cast<size_t>(j)], at = index[static_cast<size_t>(i)];
-      for (int q = 0; q < 2; ++q) {
-        a.row(2 * j + q) = slopes.row(at + q);
-        u(2 * j + q) = r[static_cast<size_t>(at + q)] * root_n;
-      }
-      own_f.block(i, g * np, 1, np) = slopes.row(at);
-      u_f(i) = r[static_cast<size_t>(at)] * root_n;
-    }
+    Eigen::MatrixXd a_all;
+    Eigen::VectorXd u;
+    curve_system(slopes, curve, index, r, n_points, g, a_all, u);
+    Eigen::MatrixXd a(a_all.rows(), np);
+    for (int c = 0; c < np; ++c) a.col(c) = a_all.col(cols[static_cast<size_t>(c)]);
     const auto [rest, rank] = least_squares_rest(a, u);
     scatter.each_chi2 += rest;
-    scatter.each_dof += 2 * k - rank;
+    scatter.each_dof += static_cast<int>(a.rows()) - rank;
   }
   own_f.rightCols(knots) = hats;
   const auto [rest_own, rank_own] = least_squares_rest(own_f.leftCols(nc * np), u_f);
@@ -185,7 +254,8 @@ void add_each_curve_alone(const Eigen::MatrixXd& slopes, const Eigen::MatrixXd& 
 // what the common curve cannot: the data of one against the other's.
 void add_group_shapes(const IwanTarget& t, const std::vector<int>& group,
                       const std::vector<int>& start, const std::vector<double>& r, double n_points,
-                      const Eigen::MatrixXd* slopes, CurveScatter& scatter) {
+                      const Eigen::MatrixXd* slopes, const std::vector<bool>& stated,
+                      CurveScatter& scatter) {
   const int nc = static_cast<int>(group.size());
   int n = 0;
   for (const int c : group)
@@ -232,7 +302,8 @@ void add_group_shapes(const IwanTarget& t, const std::vector<int>& group,
     scatter.common_dof += rank_common;
   }
   if (slopes)
-    add_each_curve_alone(*slopes, both.leftCols(knots), curve, index, r, n_points, nc, scatter);
+    add_each_curve_alone(*slopes, stated, both.leftCols(knots), curve, index, r, n_points, nc,
+                         scatter);
 }
 
 // add_group_shapes() over target t's curves (residuals from index k) of one amplitude scale
@@ -240,7 +311,8 @@ void add_group_shapes(const IwanTarget& t, const std::vector<int>& group,
 // quantity put the same modal amplitude elsewhere in x, where a model error would read as
 // their own shape.
 void add_hit_shapes(const IwanTarget& t, const std::vector<double>& r, int k, double n_points,
-                    const Eigen::MatrixXd* slopes, CurveScatter& scatter) {
+                    const Eigen::MatrixXd* slopes, const std::vector<bool>& stated,
+                    CurveScatter& scatter) {
   std::vector<int> start;
   for (const MeasuredBackbone& c : t.curves) {
     start.push_back(k);
@@ -253,7 +325,7 @@ void add_hit_shapes(const IwanTarget& t, const std::vector<double>& r, int k, do
         static_cast<int>(c));
   }
   for (const auto& [key, group] : groups)
-    if (group.size() >= 2) add_group_shapes(t, group, start, r, n_points, slopes, scatter);
+    if (group.size() >= 2) add_group_shapes(t, group, start, r, n_points, slopes, stated, scatter);
 }
 
 // A curve unlike the others: its offset against the mean of the target's others, in their
@@ -515,7 +587,8 @@ bool MisfitEvidence::model_misses_each_hit() const {
 }
 
 std::optional<MisfitEvidence> IwanObjective::misfit_evidence(
-    const model::IwanParameters& p, double z, const std::array<bool, 4>& held) const {
+    const model::IwanParameters& p, double z, const std::array<bool, 4>& held,
+    const std::array<bool, 4>& stated) const {
   std::vector<double> r(residual_count_), v(residual_count_);
   if (!evaluate(p, r.data(), nullptr, false, &z, nullptr, v.data())) return std::nullopt;
   // The model as given (its linear part, K_T at the start): what --mode names. At the result
@@ -542,15 +615,30 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(
   // damping apart) against the target's mean; and each curve's mean relative offset.
   CurveScatter scatter;
   for (double x : r) scatter.total += x * x;
-  // The residuals' slopes in the free ones of (ln F_S, ln K_T, chi, ln beta), in the units of
-  // u = r sqrt(N), for each curve's own fit (add_each_curve_alone()); none where a step cannot be
-  // evaluated. A held parameter stays held there: freed, each curve's own beta took up a held
+  // The residuals' slopes in the free ones of (ln F_S, ln K_T, chi, ln beta) and Z, in the units
+  // of u = r sqrt(N), for each curve's own fit (add_each_curve_alone()); none where a step cannot
+  // be evaluated. A held parameter stays held there: freed, each curve's own beta took up a held
   // beta's error, which every hit shares (beta held at 0.35 on a joint of 0.5, three hits
   // scattered 5 % / 2 %: the offsets named scatter and cluster sigmas stated in 35 of 100 fits
-  // over one range and 65 at rising levels; now 0 and 17).
+  // over one range and 65 at rising levels; now 0 and 17), unless held at a value the options
+  // state (`stated`) about which the curves' own values scatter (held_value_scatters()). Z, where
+  // fitted inside its range, is each curve's own too: held at the fit's, a structure's own damping
+  // that scatters between hits (20 % about 5e-4) kept each curve's damping offset, and each curve
+  // alone kept 4.5 times the chi-square its noise gives (median of 56 fits), leaving the frequency
+  // F alone to keep the rule from saying the model misses every hit.
   std::vector<int> free;
-  for (int k = 0; k < 4; ++k)
-    if (!held[static_cast<size_t>(k)]) free.push_back(k);
+  std::vector<bool> held_stated;
+  for (int k = 0; k < 4; ++k) {
+    const bool asserted = stated[static_cast<size_t>(k)] && held[static_cast<size_t>(k)];
+    if (!held[static_cast<size_t>(k)] || asserted) {
+      free.push_back(k);
+      held_stated.push_back(asserted);
+    }
+  }
+  if (fit_z_ && z > 1e-6 && z + 1e-6 < z_max_) {  // steps of 1e-6 (central_differences())
+    free.push_back(4);
+    held_stated.push_back(false);
+  }
   std::optional<Eigen::MatrixXd> slopes;
   if (!free.empty() && std::any_of(targets_.begin(), targets_.end(),
                                    [](const IwanTarget& t) { return t.curves.size() >= 2; })) {
@@ -569,7 +657,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(
       const CurveMeans means = curve_means(t, r, v, k, f_floor_, z_floor_);
       add_between(means, scatter);
       add_hit_shapes(t, r, k, static_cast<double>(residual_count_) / 2, slopes ? &*slopes : nullptr,
-                     scatter);
+                     held_stated, scatter);
       if (t.curves.size() >= 4) find_apart_curve(t, means, scatter);
     }
     MisfitEvidence e = low_end(t, v, f_floor_, z_floor_, k, damping_ratios, damping_max);
@@ -585,6 +673,8 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(
     out->damping_factor = upper_median(damping_ratios);
     out->damping_max = damping_max;
     out->each_hit_held = held;
+    for (size_t j = 0; j < free.size(); ++j)
+      if (free[j] < 4 && scatter.freed[j]) out->each_hit_held[static_cast<size_t>(free[j])] = false;
     if (scatter.between_curves > 0 && scatter.total > 0)
       set_scatter(scatter, static_cast<double>(residual_count_) / 2, *out);
   }

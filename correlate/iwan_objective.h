@@ -133,7 +133,10 @@ struct MisfitEvidence {
   double each_hit_chi2 = 0;
   int each_hit_dof = 0;  ///< degrees of freedom of each_hit_chi2
   /// Which of (F_S, K_T, chi, beta) each curve's own fit held at the result, as the fit held
-  /// them (--gamma, --beta, beta held by the fit, or at a bound of the search box).
+  /// them (--gamma, --beta, beta held by the fit, or at a bound of the search box), but a value
+  /// --gamma or --beta states about which the curves' own values scatter (Student's t of their
+  /// mean over the curves less 1 degrees of freedom reaching 5 % or more), freed there. The
+  /// structure's own damping Z, where fitted inside its range, is each curve's own.
   std::array<bool, 4> each_hit_held{};
   /// What a common curve of the measured frequency's residuals in ln amplitude (as
   /// between_hits_share's) then gains beyond each curve's own fit, F against the rest's own
@@ -256,9 +259,12 @@ class IwanObjective {
   Eigen::Vector2d constant_rms_errors() const;
   /// MisfitEvidence of the model at (p, z), of the target whose linear-limit offset is largest,
   /// each curve's own fit holding the parameters (F_S, K_T, chi, beta) `held` holds, as the fit
-  /// did; nullopt if p cannot be evaluated.
+  /// did, but those also `stated` (held at a value the options state: --gamma, --beta) where the
+  /// curves' own values of them scatter about it (MisfitEvidence::each_hit_held); nullopt if p
+  /// cannot be evaluated.
   std::optional<MisfitEvidence> misfit_evidence(const model::IwanParameters& p, double z,
-                                                const std::array<bool, 4>& held = {}) const;
+                                                const std::array<bool, 4>& held = {},
+                                                const std::array<bool, 4>& stated = {}) const;
   /// The targets (the measured backbones).
   const std::vector<IwanTarget>& targets() const { return targets_; }
   /// Residuals at (p, z), as residuals_at(), of the model with its structure's stiffness K (the

@@ -335,11 +335,13 @@ model::IwanParameters update_iwan(const IwanObjective& objective, const IwanUpda
   // (beta at the upper bound 0.35 of --beta-range 0.1:0.35 on a joint of 0.5, three hits
   // scattered 5 % / 2 %: freed there, each curve's beta took up the shared error, a chi-square of
   // 211 over 168 and F 1.81, and the offsets were named scatter with sigmas stated, as for
-  // --beta 0.35 before 05cc406).
+  // --beta 0.35 before 05cc406). A value --gamma or --beta states is freed there where the
+  // curves' own values scatter about it (misfit_evidence()'s `stated`).
   if (s.misfit()) {
     std::array<bool, 4> held = s.held;
     for (size_t k = 0; k < 4; ++k) held[k] = held[k] || s.bound_side[k] != 0;
-    s.evidence = objective.misfit_evidence(s.best, s.modal_ratio, held);
+    s.evidence = objective.misfit_evidence(s.best, s.modal_ratio, held,
+                                           iwan_detail::held_parameters(options));
   }
   widen_for_scatter(s, cov);
   set_sigmas(free, cov, s);
