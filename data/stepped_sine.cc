@@ -512,6 +512,16 @@ void read_table_array(matvar_t* arr, const std::string& path_name, const std::st
     };
     if (units.size() != 4) bad_units("expected 4 entries: frequency, force, response, phase");
     if (lower(units[0]) != "hz") bad_units("frequency unit is not Hz");
+    // A unit that also says how its values were measured ('m/s^2 RMS'): the factor, on the field.
+    const std::pair<size_t, std::string> measured[] = {{1, "force"}, {2, resp_name}};
+    for (const auto& [k, field] : measured) {
+      if (parse_unit(units[k])) continue;
+      if (const std::optional<UnitMeasure> m = unit_measure(units[k])) {
+        bad_units(fmt::format("'{}' says how '{}.{}' was measured, not a unit: {}, then write '{}'",
+                              m->written, base, field,
+                              fix_of(k == 1 ? "force" : "response", m->measure), m->rest));
+      }
+    }
     const auto fu = parse_unit(units[1]);
     if (!fu || fu->quantity != Quantity::kForce) bad_units("second entry is not a force unit");
     const auto ru = parse_unit(units[2]);

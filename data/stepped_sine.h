@@ -18,7 +18,7 @@
 // after their control (`ForceControl`, `ResponseControl`; any name containing "force" or
 // "response"), each element one table with vectors `frequency`, `force`, `amplitude` (or
 // `response`), `phase` and `units` ("Hz, N, m/s^2, rad": frequency, force, response and
-// phase units in that order).
+// phase units in that order; an entry that says RMS or peak to peak is refused with its factor).
 // Every defect is an InputError naming the file and the line or the field.
 #pragma once
 

@@ -1,11 +1,13 @@
 #include "jointlab/data/stepped_sine.h"
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <numbers>
 
 #include <gtest/gtest.h>
+#include <matio.h>
 
 #include "jointlab/tests/test_util.h"
 
@@ -192,6 +194,48 @@ TEST(SteppedSineMat, ReadsTheBrakeReussStructLayout) {
   // The first response-controlled level holds about 5 m/s^2 (as the file's README says).
   EXPECT_NEAR(tables[4].response.mean(), 4.987, 0.01);
   EXPECT_NEAR(tables[4].phase_rad(0), -0.110716, 1e-6);
+}
+
+// The .mat layout's units entry that also says how the values were measured ('m/s^2 RMS'):
+// before, "third entry is not a motion unit", and with the word deleted alone the amplitudes were
+// read zero to peak (0.707 times the truth); now the factor, on the field it applies to.
+TEST(SteppedSineMat, AUnitMeasuredRmsOrPeakToPeakIsToldItsFactor) {
+  const auto write = [](const std::string& name, const char* units) {
+    const auto path = testing::scratch_path("stepped_sine_test", name);
+    mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+    EXPECT_NE(mat, nullptr);
+    const char* fields[] = {"frequency", "force", "amplitude", "phase", "units"};
+    size_t one[2] = {1, 1}, five[2] = {5, 1}, len[2] = {1, std::strlen(units)};
+    matvar_t* arr = Mat_VarCreateStruct("ResponseControl", 2, one, fields, 5);
+    double f[5] = {1, 2, 3, 4, 5}, ones[5] = {1, 1, 1, 1, 1}, zeros[5] = {0, 0, 0, 0, 0};
+    double* values[4] = {f, ones, ones, zeros};
+    for (int k = 0; k < 4; ++k) {
+      Mat_VarSetStructFieldByName(
+          arr, fields[k], 0,
+          Mat_VarCreate(nullptr, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, five, values[k], 0));
+    }
+    Mat_VarSetStructFieldByName(
+        arr, "units", 0,
+        Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UTF8, 2, len, const_cast<char*>(units), 0));
+    Mat_VarWrite(mat, arr, MAT_COMPRESSION_NONE);
+    Mat_VarFree(arr);
+    Mat_Close(mat);
+    return path;
+  };
+  EXPECT_EQ(read_stepped_sine(write("zero_to_peak.mat", "Hz, N, m/s^2, rad"))[0].response(0), 1.0);
+  const auto rms = write("rms.mat", "Hz, N, m/s^2 RMS, rad");
+  EXPECT_EQ(input_error_of([&] { read_stepped_sine(rms); }),
+            rms.string() +
+                ": field 'ResponseControl(1).units' ('Hz, N, m/s^2 RMS, rad'): 'RMS' says how "
+                "'ResponseControl(1).amplitude' was measured, not a unit: multiply its values by "
+                "sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS times sqrt(2); "
+                "read as it is, F_S comes out 0.707 times the truth), then write 'm/s^2'");
+  const auto pp = write("pp.mat", "Hz, N pk-pk, m/s^2, rad");
+  EXPECT_EQ(input_error_of([&] { read_stepped_sine(pp); }),
+            pp.string() +
+                ": field 'ResponseControl(1).units' ('Hz, N pk-pk, m/s^2, rad'): 'pk-pk' says how "
+                "'ResponseControl(1).force' was measured, not a unit: halve its values (a force "
+                "amplitude is read zero to peak), then write 'N'");
 }
 
 // A truncated copy is refused as a damaged file (matio alone would read the levels before
