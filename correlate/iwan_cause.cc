@@ -256,6 +256,7 @@ std::string model_beside_scatter(const MisfitEvidence& e) {
   static const char* const names[] = {"F_S", "K_T", "chi", "beta"};
   std::vector<std::string> own, held;
   for (size_t k = 0; k < 4; ++k) (e.each_hit_held[k] ? held : own).push_back(names[k]);
+  if (e.each_hit_own_damping) own.push_back("modal_ratio");
   const auto join = [](const std::vector<std::string>& v) {
     std::string out;
     for (size_t i = 0; i < v.size(); ++i)

@@ -673,6 +673,7 @@ std::optional<MisfitEvidence> IwanObjective::misfit_evidence(
     out->damping_factor = upper_median(damping_ratios);
     out->damping_max = damping_max;
     out->each_hit_held = held;
+    out->each_hit_own_damping = slopes && !free.empty() && free.back() == 4;
     for (size_t j = 0; j < free.size(); ++j)
       if (free[j] < 4 && scatter.freed[j]) out->each_hit_held[static_cast<size_t>(free[j])] = false;
     if (scatter.between_curves > 0 && scatter.total > 0)

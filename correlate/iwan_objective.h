@@ -138,6 +138,9 @@ struct MisfitEvidence {
   /// mean over the curves less 1 degrees of freedom reaching 5 % or more), freed there. The
   /// structure's own damping Z, where fitted inside its range, is each curve's own.
   std::array<bool, 4> each_hit_held{};
+  /// Whether each curve's own fit freed the structure's own damping Z too (fitted inside its
+  /// range).
+  bool each_hit_own_damping = false;
   /// What a common curve of the measured frequency's residuals in ln amplitude (as
   /// between_hits_share's) then gains beyond each curve's own fit, F against the rest's own
   /// scatter (so noise stated too small leaves it near 1): the misfit every hit shares at the
