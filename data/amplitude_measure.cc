@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <initializer_list>
+#include <utility>
 
 #include "jointlab/core/text.h"
 
@@ -31,8 +32,13 @@ std::string amplitude_measure(std::string_view text) {
   };
   std::string flat;  // the letters and digits alone: "peaktopeak", "pkpk"
   for (const std::string& w : words) flat += w;
-  if (word({"pp", "p2p", "ptp", "pkpk", "peak2peak"}) || flat.find("peaktopeak") != flat.npos ||
-      flat.find("pkpk") != flat.npos)
+  // "p-p" (two words "p"), as oscilloscopes and vibration meters write it.
+  bool p_p = false;
+  for (size_t i = 0; i + 1 < words.size(); ++i)
+    p_p = p_p || (words[i] == "p" && words[i + 1] == "p");
+  if (p_p || word({"pp", "p2p", "ptp", "pkpk", "peak2peak"}) ||
+      flat.find("peaktopeak") != flat.npos || flat.find("pkpk") != flat.npos ||
+      flat.find("pktopk") != flat.npos || flat.find("peakpeak") != flat.npos)
     return "peak-to-peak";
   if (word({"rms"})) return "RMS";
   return {};
@@ -51,6 +57,33 @@ std::string measure_fix(const std::string& measure) {
                 "F_S twice the truth)");
 }
 
+namespace {
+
+// A unit token that joins the measure to the unit ('grms', 'Grms', 'g_rms', 'Npp', 'm/s^2-pk-pk',
+// 'g(rms)'): the measure's spelling as written after the unit, and the unit before it; none
+// where the token does not end in a measure or what precedes it could be no unit.
+std::optional<std::pair<std::string, std::string>> joined_measure(std::string_view token) {
+  std::string_view body = token;
+  if (body.ends_with(')')) body.remove_suffix(1);
+  const std::string low = lower(body);
+  for (const std::string_view s : {"peak-to-peak", "pk-to-pk", "peak-peak", "pk-pk", "pk_pk",
+                                   "pkpk", "p-p", "p2p", "ptp", "pp", "rms"}) {
+    if (low.size() <= s.size() || !low.ends_with(s)) continue;
+    std::string_view unit = body.substr(0, body.size() - s.size());
+    while (!unit.empty() && (unit.back() == '_' || unit.back() == '-' || unit.back() == '('))
+      unit.remove_suffix(1);
+    const bool unit_like = !unit.empty() && std::all_of(unit.begin(), unit.end(), [](char c) {
+      const auto u = static_cast<unsigned char>(c);
+      return std::isalnum(u) || u >= 0x80 || c == '/' || c == '^' || c == '*' || c == '.';
+    });
+    if (unit_like)
+      return std::pair{std::string(body.substr(body.size() - s.size())), std::string(unit)};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 std::optional<UnitMeasure> unit_measure(std::string_view unit) {
   UnitMeasure out;
   for (size_t at = 0; at < unit.size();) {
@@ -58,7 +91,12 @@ std::optional<UnitMeasure> unit_measure(std::string_view unit) {
     const std::string token(unit.substr(at, end - at));
     at = end + 1;
     if (token.empty()) continue;
-    if (const std::string m = amplitude_measure(token); !m.empty()) {
+    if (const auto joined = joined_measure(token)) {
+      // The unit kept in the fix: 'g_rms' told "write 'amplitude'" read values in g as m/s^2.
+      out.measure = amplitude_measure(joined->first);
+      out.written = joined->first;
+      out.rest += (out.rest.empty() ? "" : " ") + joined->second;
+    } else if (const std::string m = amplitude_measure(token); !m.empty()) {
       out.measure = m;
       out.written = token;
     } else {
@@ -67,6 +105,11 @@ std::optional<UnitMeasure> unit_measure(std::string_view unit) {
   }
   if (out.measure.empty()) return std::nullopt;
   return out;
+}
+
+std::string unit_without_measure(std::string_view unit) {
+  const std::optional<UnitMeasure> m = unit_measure(unit);
+  return m ? m->rest : std::string(trim(unit));
 }
 
 std::optional<MeasureAfterUnit> measure_after_unit(std::string_view field) {

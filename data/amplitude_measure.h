@@ -18,7 +18,8 @@ namespace jointlab::data {
 std::vector<std::string> header_words(std::string_view name);
 
 /// How the words of an amplitude's name or unit say it was measured where not zero to peak:
-/// "peak-to-peak" (pp, p2p, ptp, pkpk, pk-pk, pk_pk, peak to peak) or "RMS"; "" otherwise.
+/// "peak-to-peak" (pp, p2p, ptp, pkpk, pk-pk, pk_pk, p-p, pk-to-pk, peak-peak, peak to peak) or
+/// "RMS"; "" otherwise.
 std::string amplitude_measure(std::string_view text);
 
 /// What to do with values measured as `measure` (amplitude_measure()) to read them zero to peak:
@@ -37,8 +38,13 @@ struct UnitMeasure {
   std::string rest;     ///< the other words ("mm/s"); "" where none
 };
 
-/// The measure in a bracketed unit's words (separated by blanks); none where no word says one.
+/// The measure in a bracketed unit's words (separated by blanks, or joined to the unit as in
+/// 'grms', 'g_rms', 'Npp'); none where no word says one.
 std::optional<UnitMeasure> unit_measure(std::string_view unit);
+
+/// A unit with the measure its words say taken out ("g RMS", "grms": "g"); the unit trimmed
+/// where none says one.
+std::string unit_without_measure(std::string_view unit);
 
 /// A header "name [unit] (rms)", a measure written after the unit: the name, the unit and the
 /// measure; none where nothing after the ']' says one.

@@ -115,7 +115,7 @@ double unit_scale(size_t k, const std::string& unit, std::optional<Quantity> qua
     throw refuse(
         fmt::format("'{}' says how it was measured, not a unit: {}, then write 'amplitude{}'",
                     shorten(m->written), measure_fix(m->measure),
-                    parse_unit(m->rest) ? fmt::format(" [{}]", m->rest) : std::string()));
+                    m->rest.empty() ? std::string() : fmt::format(" [{}]", shorten(m->rest))));
   }
   if (!quantity) {
     throw refuse(fmt::format(
@@ -210,7 +210,9 @@ Guess guess_column(const std::string& name, const std::string& bracket_unit,
     // (peak-to-peak), velocity_rms [mm/s].
     g.measure = amplitude_measure(name + " " + bracket_unit);
     if (!g.measure.empty() && g.parenthesised && !parse_unit(g.unit)) {
-      g.unit.clear();  // "(peak-to-peak)", "(RMS)": the measure, not a unit
+      // "(peak-to-peak)", "(RMS)": the measure, not a unit; "(g RMS)": the unit is kept (told
+      // "rename it 'amplitude'", values in g were read as m/s^2, F_S 9.81 times off).
+      g.unit = unit_without_measure(g.unit);
       g.parenthesised = false;
     }
   }

@@ -675,6 +675,39 @@ TEST(BackboneTable, PkPkAndAMeasureBesideTheUnitAreToldTheirFactor) {
       {"a2.csv:1: column 1 'Velocity [mm/s] pk-pk': " + halve + "write 'amplitude [mm/s]'"});
 }
 
+// The measure joined to the unit ('[g_rms]', '[grms]'), 'p-p', and a unit in round brackets with
+// the measure ('Amplitude (g RMS)'). Before, '[g_rms]' and '(g RMS)' were told to write
+// 'amplitude' without the 'g': followed, values in g were read as m/s^2 (F_S 9.81 times off,
+// noted only as a unit assumed); '[grms]' and '[mm/s p-p]' were refused as unknown units without
+// the factor. Now each names the factor and keeps the unit.
+TEST(BackboneTable, AMeasureJoinedToItsUnitKeepsTheUnitInTheFix) {
+  const std::string rows = "\n1,57.9,0.01\n2,57.8,0.02\n";
+  const std::string root2 =
+      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
+      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth), then ";
+  const std::string halve =
+      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
+      "give F_S twice the truth), then ";
+  expect_refusal("j1.csv", "amplitude [g_rms],frequency_hz,damping_ratio" + rows,
+                 Quantity::kAcceleration,
+                 {"j1.csv:1: column 'amplitude [g_rms]': 'rms' says how it was measured, not a "
+                  "unit: " +
+                  root2 + "write 'amplitude [g]'"});
+  expect_refusal("j2.csv", "amplitude [grms],frequency_hz,damping_ratio" + rows,
+                 Quantity::kAcceleration,
+                 {"j2.csv:1: column 'amplitude [grms]': 'rms' says how it was measured, not a "
+                  "unit: " +
+                  root2 + "write 'amplitude [g]'"});
+  expect_refusal("j3.csv", "amplitude [mm/s p-p],frequency_hz,damping_ratio" + rows,
+                 Quantity::kVelocity,
+                 {"j3.csv:1: column 'amplitude [mm/s p-p]': 'p-p' says how it was measured, not "
+                  "a unit: " +
+                  halve + "write 'amplitude [mm/s]'"});
+  expect_refusal(
+      "j4.csv", "Amplitude (g RMS),frequency_hz,damping_ratio" + rows, Quantity::kAcceleration,
+      {"j4.csv:1: column 1 'Amplitude (g RMS)': " + root2 + "rename it 'amplitude [g]'"});
+}
+
 // A `process` (or `stepped-sine`) backbone read with another amplitude quantity than it was
 // written in: its displacement_m column says which (amplitude = displacement_m (2 pi f)^p).
 // Before, a velocity backbone read with --amplitude displacement went to the fit unsaid (its own

@@ -162,7 +162,8 @@ void refuse_unit_measure(const std::string& column, const std::string& unit,
         fmt::format("column '{} [{}]': '{}' says how it was measured, not a unit: {}, then write "
                     "'{}{}'",
                     column, printable(unit), printable(m->written), fix_of(column, m->measure),
-                    column, parse_unit(m->rest) ? fmt::format(" [{}]", m->rest) : std::string())));
+                    column,
+                    m->rest.empty() ? std::string() : fmt::format(" [{}]", printable(m->rest)))));
   }
 }
 
@@ -263,9 +264,11 @@ CsvColumns read_columns(std::vector<std::string> header, long line, const std::s
       take(cols.control);
     } else if (const std::string measure = amplitude_measure(col + " " + unit); !measure.empty()) {
       const std::string meant = amplitude_meant(col);
-      std::string suggested_unit = unit;
+      // The unit without the measure ('Force RMS (N)', 'resp [g rms]', 'Response (g RMS)'): told
+      // "rename it 'response'", values in g were read as m/s^2 (with --quantity) or refused.
+      std::string suggested_unit = unit_without_measure(unit);
       if (const auto round = split_round_brackets(name); unit.empty() && round)
-        suggested_unit = round->second;  // 'Force RMS (N)'
+        suggested_unit = unit_without_measure(round->second);
       if (!meant.empty() && !measured.contains(meant)) {
         measured[meant] = fmt::format(
             "column {} '{}': {}, then rename it '{}{}'", i + 1, printable(trim(cols.header[i])),

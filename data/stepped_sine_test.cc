@@ -175,6 +175,50 @@ TEST(SteppedSineCsv, AResponseMeasuredRmsOrPeakToPeakIsToldItsFactor) {
   EXPECT_EQ(t[0].response(0), 1.0);
 }
 
+// A measure joined to its unit ('[grms]', '[g_rms]', '[Npp]'), peak to peak written 'p-p' or
+// 'pk-to-pk', and a unit in round brackets beside the measure ('Response (g RMS)'). Before,
+// '[grms]' and '[N p-p]' were refused only as no unit (no factor), and '[g_rms]' and 'Response
+// (g RMS)' were told to write 'response' without the 'g': followed with --quantity, values in g
+// were read as m/s^2 (F_S 9.81 times off) or, zero to peak, 0.707 times the truth. Now each names
+// its factor and keeps its unit.
+TEST(SteppedSineCsv, AMeasureJoinedToItsUnitIsToldItsFactorAndKeepsTheUnit) {
+  auto err = [](const std::string& header) {
+    return input_error_of(
+        [&] { parse_stepped_sine_csv("# control: response\n" + header, "s.csv"); });
+  };
+  const std::string rms =
+      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
+      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth)";
+  const std::string half =
+      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
+      "give F_S twice the truth)";
+  EXPECT_EQ(err("frequency_hz,force [N],response [grms],phase [deg]\n"),
+            "s.csv:2: column 'response [grms]': 'rms' says how it was measured, not a unit: " +
+                rms + ", then write 'response [g]'");
+  EXPECT_EQ(err("frequency_hz,force [N],response [g_rms],phase [deg]\n"),
+            "s.csv:2: column 'response [g_rms]': 'rms' says how it was measured, not a unit: " +
+                rms + ", then write 'response [g]'");
+  EXPECT_EQ(err("frequency_hz,force [N],response [mm/s pk-to-pk],phase [deg]\n"),
+            "s.csv:2: column 'response [mm/s pk-to-pk]': 'pk-to-pk' says how it was measured, "
+            "not a unit: " +
+                half + ", then write 'response [mm/s]'");
+  EXPECT_EQ(err("frequency_hz,force [N p-p],response [g],phase [deg]\n"),
+            "s.csv:2: column 'force [N p-p]': 'p-p' says how it was measured, not a unit: halve "
+            "its values (a force amplitude is read zero to peak), then write 'force [N]'");
+  EXPECT_EQ(err("frequency_hz,force [Npp],response [g],phase [deg]\n"),
+            "s.csv:2: column 'force [Npp]': 'pp' says how it was measured, not a unit: halve "
+            "its values (a force amplitude is read zero to peak), then write 'force [N]'");
+  EXPECT_EQ(err("frequency_hz,force [N],Response (g RMS),phase [deg]\n"),
+            "s.csv:2: column 3 'Response (g RMS)': " + rms + ", then rename it 'response [g]'");
+  EXPECT_EQ(err("frequency_hz,force [N],resp [g rms],phase [deg]\n"),
+            "s.csv:2: column 3 'resp [g rms]': " + rms + ", then rename it 'response [g]'");
+  // A unit the reader does not take is kept too, for the next refusal to name ('M/S^2').
+  EXPECT_EQ(err("frequency_hz,force [N],response [M/S^2 rms],phase [deg]\n"),
+            "s.csv:2: column 'response [M/S^2 rms]': 'rms' says how it was measured, not a "
+            "unit: " +
+                rms + ", then write 'response [M/S^2]'");
+}
+
 TEST(SteppedSineMat, ReadsTheBrakeReussStructLayout) {
   const auto tables = read_stepped_sine(
       testing::source_dir() + "/data/examples/brake-reuss-beam/forced_frequency_responses.mat");
