@@ -2029,12 +2029,18 @@ void unscale(Ringdown& r, double scale) {
       "and scale";
 }
 
+// How the decay rate the partner of an exchange still takes after it enters the estimates there
+// (add_transfer): not at all, joined to their uncertainty, or taken off their decay rates.
+enum class TransferUse { kNone, kJoined, kTakenOff };
+
 // Local estimates along the span and the band-gain correction they carry.
 struct CorrectedEstimates {
   std::vector<Estimate> est;       ///< the last pass's estimates
   GainCorrection previous;         ///< the correction `est` was made with
   std::vector<ModelError> errors;  ///< each estimate's model errors (add_model_errors)
   Exchange exchange;               ///< an energy exchange with another mode, from the first pass
+  Relaxation relaxation;           ///< what the exchange's partner still does after it
+  TransferUse transfer_use = TransferUse::kNone;  ///< how add_transfer used its decay rate
 };
 
 // Local estimates along the span: a first pass on the band signal, then, where the
@@ -2122,7 +2128,7 @@ CorrectedEstimates corrected_estimates(const ChannelSpectrum& channel, const sig
   std::vector<ModelError> errors =
       add_model_errors(est, gain_steps(gain, previous, continued, earlier, bs.baseband.size()),
                        bs.dt, options.degree);
-  return {std::move(est), previous, std::move(errors), exchange};
+  return {std::move(est), previous, std::move(errors), exchange, Relaxation{}, TransferUse::kNone};
 }
 
 // Which estimates may form the backbone, with notes on those left out for the band's gain.
@@ -2237,6 +2243,9 @@ Screening screen_estimates(const CorrectedEstimates& c, const BandSetting& s, do
   return {std::move(valid), std::move(above), std::move(exchange), weak_note, gain_note};
 }
 
+// What the relaxation after an exchange does to an estimate (defined beside add_transfer).
+void relax(Estimate& e, const Transfer& t, TransferUse use);
+
 // The span's end between the grid's points. Where the kept run ends at a point whose
 // successor fails the damping limit alone (decaying, above the noise threshold, read through
 // at least half the band's gain), the span's true end lies between the two, up to a grid
@@ -2289,6 +2298,8 @@ void place_end(CorrectedEstimates& corr, Screening& screened, Run& run, const si
       m.gain_w = std::max(a.gain_w, b.gain_w);
       e.sigma_std = std::hypot(std::hypot(e.sigma_std, m.sigma), m.gain);
       e.omega_d_std = std::hypot(e.omega_d_std, std::hypot(m.omega_d, m.gain_w));
+      // After an exchange, as add_transfer did to the estimates beside it.
+      relax(e, corr.relaxation.at(e), corr.transfer_use);
     }
     if (screened_in(e, true)) {
       end = {e, m};
@@ -2382,55 +2393,81 @@ constexpr size_t kKeptAfterTransfer = 3;
 // / 9.7 % predicted against 16.9 / 12.8 / 9.9 % read), at most 2 % of the transfer.
 constexpr double kTransferShare = 0.03;
 
+// What the relaxation after an exchange does to estimate `e` (transfer `t`), as add_transfer
+// decided (`use`): a pull on the frequency beyond its one-sigma joins it in quadrature; a
+// transfer beyond the decay rate's one-sigma joins it or is taken off the decay rate.
+void relax(Estimate& e, const Transfer& t, TransferUse use) {
+  if (std::abs(t.omega) > e.omega_d_std) e.omega_d_std = std::hypot(e.omega_d_std, t.omega);
+  if (!(std::abs(t.sigma) > e.sigma_std)) return;
+  if (use == TransferUse::kJoined) {
+    e.sigma_std = std::hypot(e.sigma_std, t.sigma);
+  } else if (use == TransferUse::kTakenOff) {
+    e.sigma -= t.sigma;
+    e.sigma_std = std::hypot(e.sigma_std, kTransferShare * t.sigma);
+  }
+}
+
 std::string add_transfer(CorrectedEstimates& corr, const BandSetting& s, double noise,
                          Quantity measured, const RingdownOptions& options,
                          signal::FftCache& cache) {
   if (!(corr.exchange.partner > 1)) return "";
-  const std::vector<double> transfer = transfer_after(corr.exchange, corr.est, s, measured, cache);
-  std::vector<double> joined_std(corr.est.size());
-  size_t joined = 0, left = 0, kept = 0;
+  corr.relaxation = relaxation_after(corr.exchange, s, measured, cache);
+  if (!corr.relaxation.found()) return "";
+  std::vector<Transfer> transfer(corr.est.size());
+  size_t joined = 0, left = 0, kept = 0, pulled = 0;
   // The transfer of largest magnitude over the decay rate, signed: > 0 the partner takes energy
   // and the damping reads high, < 0 it gives energy back and the damping reads low (the 1:2
   // twin with mode 2 in tune at 0.2 %, alpha 3e9, seed 1: -13.7 %, its points read 12 % low,
-  // where the note had said "reads high by up to 13.7 %").
-  double most = 0;
+  // where the note had said "reads high by up to 13.7 %"); and the pull of largest magnitude
+  // on the frequency, signed [Hz].
+  double most = 0, most_pull = 0;
   for (size_t i = 0; i < corr.est.size(); ++i) {
     const Estimate& e = corr.est[i];
-    const bool over = std::abs(transfer[i]) > e.sigma_std;
-    joined_std[i] = over ? std::hypot(e.sigma_std, transfer[i]) : e.sigma_std;
+    transfer[i] = corr.relaxation.at(e);
     if (!(e.t > corr.exchange.end_t) || !usable(e, noise, options.snr_min)) continue;
-    const double limit = options.max_damping_rel_std * e.sigma;
-    kept += joined_std[i] <= limit;
-    if (!over) continue;
-    left += e.sigma_std <= limit && !(joined_std[i] <= limit);
-    ++joined;
-    if (std::abs(transfer[i] / e.sigma) > std::abs(most)) most = transfer[i] / e.sigma;
-  }
-  if (joined == 0) return "";
-  if (kept < kKeptAfterTransfer) {
-    // Joined, the transfer would leave no point: it is taken off the points' decay rates instead
-    // (the mode's own rate is what is read less what the partner takes), kTransferShare of it
-    // joining their uncertainty for the prediction's own error.
-    for (size_t i = 0; i < corr.est.size(); ++i) {
-      Estimate& e = corr.est[i];
-      if (!(e.t > corr.exchange.end_t) || !(std::abs(transfer[i]) > e.sigma_std)) continue;
-      e.sigma -= transfer[i];
-      e.sigma_std = std::hypot(e.sigma_std, kTransferShare * transfer[i]);
+    if (std::abs(transfer[i].omega) > e.omega_d_std) {
+      ++pulled;
+      if (std::abs(transfer[i].omega / kTwoPi) > std::abs(most_pull))
+        most_pull = transfer[i].omega / kTwoPi;
     }
-    return fmt::format(
+    const bool over = std::abs(transfer[i].sigma) > e.sigma_std;
+    const double joined_std = over ? std::hypot(e.sigma_std, transfer[i].sigma) : e.sigma_std;
+    const double limit = options.max_damping_rel_std * e.sigma;
+    kept += joined_std <= limit;
+    if (!over) continue;
+    left += e.sigma_std <= limit && !(joined_std <= limit);
+    ++joined;
+    if (std::abs(transfer[i].sigma / e.sigma) > std::abs(most)) most = transfer[i].sigma / e.sigma;
+  }
+  // Where joined the transfer would leave no point, it is taken off the points' decay rates
+  // instead (the mode's own rate is what is read less what the partner takes), kTransferShare
+  // of it joining their uncertainty for the prediction's own error.
+  corr.transfer_use = joined == 0                 ? TransferUse::kNone
+                      : kept < kKeptAfterTransfer ? TransferUse::kTakenOff
+                                                  : TransferUse::kJoined;
+  for (size_t i = 0; i < corr.est.size(); ++i) relax(corr.est[i], transfer[i], corr.transfer_use);
+  std::string note;
+  if (corr.transfer_use == TransferUse::kTakenOff) {
+    note = fmt::format(
         "after the exchange the mode at {:g} times the band still {} energy until the noise, "
         "more than the points' damping uncertainty: the transfer its bookkeeping predicts (up "
         "to {:.1f} % of the decay rate, the damping reading {} by that) is taken off {}",
         corr.exchange.partner, most < 0 ? "gives back" : "takes", 100 * std::abs(most),
         most < 0 ? "low" : "high", points(joined));
+  } else if (corr.transfer_use == TransferUse::kJoined) {
+    note = fmt::format(
+        "after the exchange the mode at {:g} times the band still {} energy: the transfer its "
+        "bookkeeping predicts (up to {:.1f} % of the decay rate) joins the damping uncertainty "
+        "of {}, {} of them past the {:.1f} % limit",
+        corr.exchange.partner, most < 0 ? "gives back" : "takes", 100 * std::abs(most),
+        points(joined), left, 100 * options.max_damping_rel_std);
   }
-  for (size_t i = 0; i < corr.est.size(); ++i) corr.est[i].sigma_std = joined_std[i];
-  return fmt::format(
-      "after the exchange the mode at {:g} times the band still {} energy: the transfer its "
-      "bookkeeping predicts (up to {:.1f} % of the decay rate) joins the damping uncertainty of "
-      "{}, {} of them past the {:.1f} % limit",
-      corr.exchange.partner, most < 0 ? "gives back" : "takes", 100 * std::abs(most),
-      points(joined), left, 100 * options.max_damping_rel_std);
+  if (pulled == 0) return note;
+  return note + (note.empty() ? "after the exchange" : ";") +
+         fmt::format(
+             " the mode at {:g} times the band still pulls the frequency: the pull its "
+             "bookkeeping predicts (up to {:+.4f} Hz) joins the frequency uncertainty of {}",
+             corr.exchange.partner, most_pull, points(pulled));
 }
 
 // A second mode in the band read: what its beat moves each point by joins the point's

@@ -248,12 +248,30 @@ void neighbour_leak(Exchange& x, const std::vector<Estimate>& est, double held_b
 Exchange swinging_exchange(const std::vector<Estimate>& est, double noise, const BandSetting& s,
                            Quantity measured, signal::FftCache& cache);
 
-/// The decay rate the partner of an exchange found still takes, as its 1:n bookkeeping over the
-/// exchange predicts, read by each estimate's own fit after the exchange's end [1/s]; 0 before
-/// it and where that bookkeeping does not explain the exchange (ringdown_exchange.cc).
-std::vector<double> transfer_after(const Exchange& x, const std::vector<Estimate>& est,
-                                   const BandSetting& s, Quantity measured,
-                                   signal::FftCache& cache);
+/// What the partner of an exchange still does to an estimate after the exchange's end.
+struct Transfer {
+  double sigma = 0;  ///< the decay rate it takes (the band's reads this much high) [1/s]
+  double omega = 0;  ///< its pull on the damped angular frequency (read this much high) [rad/s]
+};
+
+/// What the partner of an exchange still does after the exchange's end, as the exchange's 1:n
+/// bookkeeping predicts: the transfer's part of the band's ln A and the pull's part of its phase
+/// on the band's grid (none where that bookkeeping does not explain the exchange).
+struct Relaxation {
+  double end_t = std::numeric_limits<double>::infinity();  ///< the exchange's end [s]
+  double dt = 0;                                           ///< the grid's step [s]
+  int degree = 3;                                          ///< the estimates' local fit degree
+  Eigen::VectorXd log_amp;                                 ///< the transfer's part of ln A
+  Eigen::VectorXd phase;                                   ///< the pull's part of the phase [rad]
+  /// Whether a transfer is predicted.
+  bool found() const { return log_amp.size() > 0; }
+  /// What it does to estimate `e`, read by e's own local fit (none up to the exchange's end).
+  Transfer at(const Estimate& e) const;
+};
+
+/// The relaxation after the exchange `x` found in the band (ringdown_exchange.cc).
+Relaxation relaxation_after(const Exchange& x, const BandSetting& s, Quantity measured,
+                            signal::FftCache& cache);
 
 /// An energy exchange of the band's mode with another, read from the estimates, if any
 /// (ringdown_exchange.cc).
