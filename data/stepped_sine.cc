@@ -167,6 +167,24 @@ void refuse_unit_measure(const std::string& column, const std::string& unit,
   }
 }
 
+// InputError for a level label that says it was measured RMS or peak to peak ('# level: 1.414
+// m/s^2 RMS'): the sweep's force and response columns were likely written so, and read zero to
+// peak as every amplitude is, F_S came out 0.707 (RMS) or 2 times the truth without a word.
+void refuse_measured_level(const std::string& label, const std::string& file, long line) {
+  const std::optional<UnitMeasure> m = unit_measure(label);
+  if (!m) return;
+  const bool rms = m->measure == "RMS";
+  throw InputError(where(
+      file, line,
+      fmt::format("level '{}' says it was measured {}, but force and response are read zero to "
+                  "peak: where their columns hold {} values, {} (read as they are, F_S comes out "
+                  "{} the truth); then, or where they are zero to peak already, write the level "
+                  "without '{}'",
+                  printable(label), m->measure, m->measure,
+                  rms ? "multiply them by sqrt(2) = 1.4142" : "halve them",
+                  rms ? "0.707 times" : "twice", printable(m->written))));
+}
+
 double force_unit(const std::string& unit, const std::string& file, long line) {
   if (unit.empty()) return 1.0;
   const auto u = parse_unit(unit);
@@ -318,6 +336,7 @@ void add_row(const std::vector<std::string>& cells, long line, const CsvColumns&
   if (cols.level >= 0 && key.empty()) throw InputError(where(file, line, "empty level"));
   const size_t k = std::find(level_keys.begin(), level_keys.end(), key) - level_keys.begin();
   if (k == level_keys.size()) {
+    if (cols.level >= 0) refuse_measured_level(key, file, line);
     level_keys.push_back(key);
     raws.emplace_back();
     const auto file_level = metadata.find("level");
@@ -362,6 +381,7 @@ std::vector<SteppedSineTable> parse_stepped_sine_csv(const std::string& text_in,
   const std::string_view header_row =
       read_preamble(lines, name, [&](const std::string& key, const std::string& value) {
         metadata[key] = value;
+        if (key == "level") refuse_measured_level(value, name, lines.line_no());
         if (key != "control") return;
         file_control = parse_control(value);
         if (!file_control) {

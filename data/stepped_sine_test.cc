@@ -219,6 +219,38 @@ TEST(SteppedSineCsv, AMeasureJoinedToItsUnitIsToldItsFactorAndKeepsTheUnit) {
                 rms + ", then write 'response [M/S^2]'");
 }
 
+// A level labelled RMS or peak to peak ('# level: 1.414 m/s^2 RMS', a level column '2 g pk-pk').
+// Before, the label was kept as a label and the columns read zero to peak: a sweep held at 2
+// m/s^2, written 1.414 RMS with the label saying so, gave its backbone point at 0.707 times the
+// amplitude (F_S with it), without a word. Now refused on the label's line with the factor.
+TEST(SteppedSineCsv, ALevelLabelledRmsOrPeakToPeakIsRefusedWithTheFactor) {
+  const std::string rows = "1,1,1,0\n2,1,1,0\n3,1,1,0\n4,1,1,0\n5,1,1,0\n";
+  const std::string header = "frequency_hz,force [N],response [m/s^2],phase [deg]\n";
+  EXPECT_EQ(input_error_of([&] {
+              parse_stepped_sine_csv(
+                  "# control: response\n# level: 1.414 m/s^2 RMS\n" + header + rows, "s.csv");
+            }),
+            "s.csv:2: level '1.414 m/s^2 RMS' says it was measured RMS, but force and response "
+            "are read zero to peak: where their columns hold RMS values, multiply them by sqrt(2) "
+            "= 1.4142 (read as they are, F_S comes out 0.707 times the truth); then, or where "
+            "they are zero to peak already, write the level without 'RMS'");
+  EXPECT_EQ(input_error_of([&] {
+              parse_stepped_sine_csv(
+                  "# control: response\nfrequency_hz,force [N],response [g],phase [deg],level\n"
+                  "1,1,1,0,2 g pk-pk\n",
+                  "s.csv");
+            }),
+            "s.csv:3: level '2 g pk-pk' says it was measured peak-to-peak, but force and response "
+            "are read zero to peak: where their columns hold peak-to-peak values, halve them "
+            "(read as they are, F_S comes out twice the truth); then, or where they are zero to "
+            "peak already, write the level without 'pk-pk'");
+  // A level without a measure is read as before.
+  EXPECT_EQ(
+      parse_stepped_sine_csv("# control: response\n# level: 2 m/s^2\n" + header + rows, "s.csv")[0]
+          .label,
+      "level 2 m/s^2");
+}
+
 TEST(SteppedSineMat, ReadsTheBrakeReussStructLayout) {
   const auto tables = read_stepped_sine(
       testing::source_dir() + "/data/examples/brake-reuss-beam/forced_frequency_responses.mat");
