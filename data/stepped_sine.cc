@@ -540,9 +540,12 @@ void read_table_array(matvar_t* arr, const std::string& path_name, const std::st
     for (const auto& [k, field] : measured) {
       if (parse_unit(units[k])) continue;
       if (const std::optional<UnitMeasure> m = unit_measure(units[k])) {
-        bad_units(fmt::format("'{}' says how '{}.{}' was measured, not a unit: {}, then write '{}'",
+        bad_units(fmt::format("'{}' says how '{}.{}' was measured, not a unit: {}, then write {}",
                               m->written, base, field,
-                              fix_of(k == 1 ? "force" : "response", m->measure), m->rest));
+                              fix_of(k == 1 ? "force" : "response", m->measure),
+                              !m->rest.empty() ? fmt::format("'{}'", m->rest)
+                              : k == 1         ? std::string("its unit alone ('N', 'kN', 'lbf')")
+                                       : std::string("its unit alone ('m/s^2', 'g', ...)")));
       }
     }
     const auto fu = parse_unit(units[1]);

@@ -312,6 +312,22 @@ TEST(SteppedSineMat, AUnitMeasuredRmsOrPeakToPeakIsToldItsFactor) {
                 ": field 'ResponseControl(1).units' ('Hz, N pk-pk, m/s^2, rad'): 'pk-pk' says how "
                 "'ResponseControl(1).force' was measured, not a unit: halve its values (a force "
                 "amplitude is read zero to peak), then write 'N'");
+  // Joined to the unit ('g_rms': before, "then write ''", the 'g' lost; 'grms': "not a motion
+  // unit", no factor), and a measure without a unit.
+  for (const char* units : {"Hz, N, g_rms, rad", "Hz, N, grms, rad"}) {
+    const auto joined = write("joined.mat", units);
+    EXPECT_EQ(input_error_of([&] { read_stepped_sine(joined); }),
+              joined.string() + ": field 'ResponseControl(1).units' ('" + units +
+                  "'): 'rms' says how 'ResponseControl(1).amplitude' was measured, not a unit: "
+                  "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a "
+                  "sine's RMS times sqrt(2); read as it is, F_S comes out 0.707 times the truth), "
+                  "then write 'g'");
+  }
+  const auto bare = write("bare.mat", "Hz, N, RMS, rad");
+  EXPECT_NE(input_error_of([&] {
+              read_stepped_sine(bare);
+            }).find("0.707 times the truth), then write its unit alone ('m/s^2', 'g', ...)"),
+            std::string::npos);
 }
 
 // A truncated copy is refused as a damaged file (matio alone would read the levels before
