@@ -1449,17 +1449,24 @@ TEST(RingdownInternalResonance, FastSwingsOfADetunedExchangeAreMarked) {
   }
 }
 
-// The points of `b` not marked `exchange`, each required to read damping `zeta` within its
-// stated uncertainty (the k = 3 interval); returns how many there are.
-int unmarked_within_their_uncertainty(const Backbone& b, double zeta) {
+// The points of `b` not marked `exchange`, each required to read `truth` in column `value`
+// within its stated uncertainty in column `uncertainty` (the k = 3 interval); returns how many
+// there are.
+int unmarked_within(const Backbone& b, Eigen::VectorXd Backbone::*value,
+                    Eigen::VectorXd Backbone::*uncertainty, double truth) {
   int unmarked = 0;
   for (Eigen::Index i = 0; i < b.size(); ++i) {
     if (b.exchange(i) != 0) continue;
     ++unmarked;
-    EXPECT_LE(std::abs(b.damping(i) - zeta), b.damping_std(i))
-        << b.time_s(i) << " s: " << b.damping(i) << " +- " << b.damping_std(i);
+    const double read = (b.*value)(i), stated = (b.*uncertainty)(i);
+    EXPECT_LE(std::abs(read - truth), stated) << b.time_s(i) << " s: " << read << " +- " << stated;
   }
   return unmarked;
+}
+
+// The same for damping `zeta`.
+int unmarked_within_their_uncertainty(const Backbone& b, double zeta) {
+  return unmarked_within(b, &Backbone::damping, &Backbone::damping_std, zeta);
 }
 
 // After an exchange the partner still takes energy while it rings, and the band's decay rate
@@ -1519,19 +1526,6 @@ TEST(RingdownInternalResonance, ATransferGivenBackIsNamedAsReadingLow) {
   EXPECT_EQ(r.summary.message.find("reading high"), std::string::npos) << r.summary.message;
 }
 
-// The points of `b` not marked `exchange`, each required to read frequency `f_hz` within its
-// stated uncertainty (the k = 3 interval); returns how many there are.
-int unmarked_frequency_within_their_uncertainty(const Backbone& b, double f_hz) {
-  int unmarked = 0;
-  for (Eigen::Index i = 0; i < b.size(); ++i) {
-    if (b.exchange(i) != 0) continue;
-    ++unmarked;
-    EXPECT_LE(std::abs(b.frequency_hz(i) - f_hz), b.frequency_std_hz(i))
-        << b.time_s(i) << " s: " << b.frequency_hz(i) << " +- " << b.frequency_std_hz(i);
-  }
-  return unmarked;
-}
-
 // The partner that still takes energy after an exchange also pulls the band's phase: the points
 // read mode 1's frequency plus the pull, which is not the mode's own (it follows the partner's
 // amplitude and phase, not mode 1's amplitude; another hit of the same mode pulls otherwise).
@@ -1553,7 +1547,10 @@ TEST(RingdownInternalResonance, ThePullAfterAnExchangeJoinsTheFrequencyUncertain
         testing::internal_resonance_record(1e9, 6.5e-5, zeta2, 1e-5, 1, 4.0, 0.0, 0.0, 0.0, f2);
     const Ringdown r = extract_band(rec.velocity, rec.fs, Quantity::kVelocity, {110, 135});
     ASSERT_EQ(r.summary.status, RingdownStatus::kOk) << r.summary.message;
-    EXPECT_GE(unmarked_frequency_within_their_uncertainty(r.backbone, rec.f1_hz), 10) << f2;
+    EXPECT_GE(unmarked_within(r.backbone, &Backbone::frequency_hz, &Backbone::frequency_std_hz,
+                              rec.f1_hz),
+              10)
+        << f2;
     EXPECT_NE(r.summary.message.find("pulls the frequency"), std::string::npos)
         << r.summary.message;
   }
