@@ -304,12 +304,17 @@ std::string exchanged_pairs_note(const LinearProblem& p, const std::vector<Settl
       other = k;
       break;
     }
+  // Else the winner and its rival are both exchanges, told apart by the 9 units alone.
+  for (size_t k = first_swap; k < outcomes.size() && other == outcomes.size(); ++k)
+    if (k != win && std::find(rivals.begin(), rivals.end(), &outcomes[k].point) != rivals.end())
+      other = k;
   if (other == outcomes.size()) return "";
+  const bool both = win >= first_swap && other >= first_swap;
   const size_t swapped = win >= first_swap ? win : other;
-  const Settled& g = win >= first_swap ? outcomes[other] : w;
+  const Settled& g = win >= first_swap && !both ? outcomes[other] : w;
   const int dg = degrees_of_freedom(g, held), dw = degrees_of_freedom(w, held);
   const double rg = dg >= 1 ? 2 * g.cost / sf2 / dg : 0, rw = dw >= 1 ? 2 * w.cost / sf2 / dw : 0;
-  const bool by_scatter = win >= first_swap && 2 * (g.cost - w.cost) / sf2 >= 9;
+  const bool by_scatter = !both && win >= first_swap && 2 * (g.cost - w.cost) / sf2 >= 9;
   const std::string how =
       by_scatter
           ? fmt::format(
@@ -668,10 +673,12 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   }
   if (!decided && o.ambiguity.empty())
     o.ambiguity = fmt::format(
-        "at the start, {}; fitting {} of the {} candidate pairings leaves costs {} that the "
-        "data cannot tell apart: add sensors that see those model modes apart, hold a set at a "
-        "value known otherwise (--hold NAME=VALUE), or leave the mode out of the table",
-        s.start.ambiguity, outcomes.size(), starts.size(), fmt::join(start_costs, ", "));
+        "{}fitting {} of the {} candidate pairings leaves costs {} that the data cannot tell "
+        "apart: add sensors that see those model modes apart, hold a set at a value known "
+        "otherwise (--hold NAME=VALUE), or leave the mode out of the table",
+        s.start.ambiguity.empty() ? std::string()
+                                  : fmt::format("at the start, {}; ", s.start.ambiguity),
+        outcomes.size(), starts.size(), fmt::join(start_costs, ", "));
   // Flat sets are not identified by the frequencies: held (at their start) and the rest fitted
   // again. Where the pairs could not be decided between fits (not where they rest on sets only
   // unconfirmed pairs see), flat sets at the best of them are held first all the same: a set
