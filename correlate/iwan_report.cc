@@ -133,6 +133,8 @@ std::string sigma_words(const IwanUpdateSummary& s, int k) {
       return " (no sigma: the model does not describe the data, below)";
     case IwanSigmaReason::kOneHit:
       return " (no sigma: rests on one hit alone, below)";
+    case IwanSigmaReason::kHeldBetaRejected:
+      return " (no sigma: given a beta the data reject, below)";
     case IwanSigmaReason::kUnknown:
       return " (sigma unknown: no covariance at the result)";
   }
@@ -350,6 +352,18 @@ std::string bound_lines(const IwanUpdateSummary& s, const std::string& cause, bo
     }
   }
   return out;
+}
+
+// A beta held as asked that the data past phi_max reject: freed, it lowers the chi-square beyond
+// its 1 in 1000 point, and the others' sigmas given it are not the joint's.
+std::string held_beta_line(const IwanUpdateSummary& s) {
+  if (!s.held_beta_rejected()) return "";
+  return fmt::format(
+      "  WARNING: the data reach macroslip, where beta is identified, and reject beta = {:.4g} as "
+      "held (--beta): freed from this result it goes to {:.4g} and lowers the chi-square by {:.3g} "
+      "(its 1 in 1000 point for one parameter: {:.3g}); the other parameters take up its error, "
+      "so no sigma is given; hold beta at a value the data allow, or leave --beta out\n",
+      s.best.beta, s.held_beta_freed, s.held_beta_chi2_drop, s.held_beta_drop_limit);
 }
 
 // The fit with beta freed lost to the one with it held at its start: beta is then no result
@@ -795,6 +809,7 @@ std::string IwanUpdateSummary::report() const {
         cause);
   }
   out += free_beta_line(*this, cause);
+  out += held_beta_line(*this);
   out += kt_moved_line(*this, cause);
   out += not_converged_line(*this, cause, kt_range);
   out += stopped_at_bound_line(*this, cause, kt_range);

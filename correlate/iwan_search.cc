@@ -138,6 +138,8 @@ class BudgetCallback : public ceres::IterationCallback {
   int limit_;
 };
 
+}  // namespace
+
 // One local solve (Ceres, Levenberg-Marquardt on x = (ln F_S, ln gamma, chi, ln beta) in the
 // search box) from v, stopped when the evaluations used reach `limit` or after `iterations`
 // iterations; true when it met its tolerance (ceres::CONVERGENCE).
@@ -171,8 +173,6 @@ bool local_solve(Tracker& tr, const Vec4& v, int limit, int iterations) {
   ceres::Solve(so, &problem, &cs);
   return cs.termination_type == ceres::CONVERGENCE;
 }
-
-}  // namespace
 
 // `extra` (may be null): a candidate already evaluated with its cost, refined by the local
 // solve whatever its rank among the samples (the constant-backbone candidate).

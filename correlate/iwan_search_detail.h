@@ -63,6 +63,10 @@ void monte_carlo(Tracker& tr, bool log_scale, std::mt19937& rng);
 /// be null), then the polish of the best point; sets the summary's status and rounds.
 void global_local(Tracker& tr, std::mt19937& rng, const std::pair<double, Vec4>* extra);
 
+/// One local solve (Levenberg-Marquardt in the search box) from v, stopped when the evaluations
+/// used reach `limit` or after `iterations` iterations; true when it met its tolerance.
+bool local_solve(Tracker& tr, const Vec4& v, int limit, int iterations);
+
 /// The constant-backbone candidate of a fit with Z free, evaluated: (cost, v).
 std::pair<double, Vec4> constant_candidate(Tracker& tr);
 

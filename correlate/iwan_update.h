@@ -62,7 +62,9 @@ enum class IwanSigmaReason {
                   ///< (IwanUpdateSummary::misfit_sets_the_error()): no sigma
   kOneHit,  ///< one of several curves carries all its information (one_curve_share): that hit's
             ///< joint's, whose scatter between hits no one hit shows: no sigma
-  kUnknown  ///< the covariance could not be formed at the result
+  kHeldBetaRejected,  ///< fitted at a beta held as asked (--beta) that the data past phi_max
+                      ///< reject (IwanUpdateSummary::held_beta_rejected()): no sigma
+  kUnknown            ///< the covariance could not be formed at the result
 };
 
 /// The slip force that gives Iwan parameters p's microslip response (K_T, chi and R; F = K_T u -
@@ -112,6 +114,18 @@ struct IwanUpdateSummary {
   /// dissipation R at that beta) and states no sigma of its own (covariance keeps the one given
   /// beta); `free_cost` is the cost of the fit with beta freed (kFreeFitNoBetter).
   void set_beta_held_by_fit(IwanBetaHold why, double free_cost = 0);
+  /// With beta held as asked (--beta) and the data past phi_max: how much a local solve from
+  /// the result with beta freed lowers the chi-square (0: not tested), and the beta it reaches.
+  double held_beta_chi2_drop = 0;
+  double held_beta_freed = 0;  ///< the beta that local solve reaches
+  /// The drop beyond which the data reject the beta held: the 1 in 1000 point of chi-square
+  /// with one degree of freedom (10.83) times the freed fit's reduced chi-square where above 1.
+  double held_beta_drop_limit = 0;
+  /// Whether the data reject the beta held as asked (held_beta_chi2_drop above its limit): the
+  /// other parameters' sigmas, given that beta, are not the joint's.
+  bool held_beta_rejected() const {
+    return held_beta_drop_limit > 0 && held_beta_chi2_drop > held_beta_drop_limit;
+  }
   /// True where beta was held by the options (the user), not by the fit.
   bool beta_held_as_asked() const { return held[3] && beta_hold == IwanBetaHold::kOptions; }
   /// Parameter k (F_S, K_T, chi, beta) held as asked (by the options), not by the fit.
