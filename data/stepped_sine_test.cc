@@ -129,40 +129,43 @@ TEST(SteppedSineCsv, BadInputNamesFileAndLine) {
 // fit can tell. Now each such header names its factor first, in the backbone tables' words
 // (amplitude_measure.h); a column measured zero to peak ('acc_peak') or one beside the 'response'
 // column read is left as before.
+// The message a table of response control with header line `header` is refused with.
+std::string header_error(const std::string& header) {
+  return input_error_of([&] { parse_stepped_sine_csv("# control: response\n" + header, "s.csv"); });
+}
+
+// The factors the amplitude-measure messages name (amplitude_measure.h).
+const std::string kRmsFix =
+    "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
+    "times sqrt(2); read as it is, F_S comes out 0.707 times the truth)";
+const std::string kHalfFix =
+    "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
+    "give F_S twice the truth)";
+
 TEST(SteppedSineCsv, AResponseMeasuredRmsOrPeakToPeakIsToldItsFactor) {
-  auto err = [](const std::string& header) {
-    return input_error_of(
-        [&] { parse_stepped_sine_csv("# control: response\n" + header, "s.csv"); });
-  };
-  const std::string rms =
-      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
-      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth)";
-  const std::string half =
-      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
-      "give F_S twice the truth)";
   const std::string force_rms =
       "multiply its values by sqrt(2) = 1.4142 (a force amplitude is read zero to peak)";
   // In the name: both columns named, each with its factor.
-  EXPECT_EQ(err("frequency_hz,force_rms [N],response_rms [m/s^2],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force_rms [N],response_rms [m/s^2],phase [deg]\n"),
             "s.csv:2: column 2 'force_rms [N]': " + force_rms +
-                ", then rename it 'force [N]'; column 3 'response_rms [m/s^2]': " + rms +
+                ", then rename it 'force [N]'; column 3 'response_rms [m/s^2]': " + kRmsFix +
                 ", then rename it 'response [m/s^2]'");
-  EXPECT_EQ(err("frequency_hz,force [N],acc_pp [g],phase [deg]\n"),
-            "s.csv:2: column 3 'acc_pp [g]': " + half + ", then rename it 'response [g]'");
-  EXPECT_EQ(err("frequency_hz,Force RMS (N),response [m/s^2],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force [N],acc_pp [g],phase [deg]\n"),
+            "s.csv:2: column 3 'acc_pp [g]': " + kHalfFix + ", then rename it 'response [g]'");
+  EXPECT_EQ(header_error("frequency_hz,Force RMS (N),response [m/s^2],phase [deg]\n"),
             "s.csv:2: column 2 'Force RMS (N)': " + force_rms + ", then rename it 'force [N]'");
   // Beside the unit, and after it.
-  EXPECT_EQ(err("frequency_hz,force [N],response [m/s^2 RMS],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force [N],response [m/s^2 RMS],phase [deg]\n"),
             "s.csv:2: column 'response [m/s^2 RMS]': 'RMS' says how it was measured, not a unit: " +
-                rms + ", then write 'response [m/s^2]'");
-  EXPECT_EQ(err("frequency_hz,force [pk-pk N],response [m/s^2],phase [deg]\n"),
+                kRmsFix + ", then write 'response [m/s^2]'");
+  EXPECT_EQ(header_error("frequency_hz,force [pk-pk N],response [m/s^2],phase [deg]\n"),
             "s.csv:2: column 'force [pk-pk N]': 'pk-pk' says how it was measured, not a unit: "
             "halve its values (a force amplitude is read zero to peak), then write 'force [N]'");
-  EXPECT_EQ(err("frequency_hz,force [N],response [mm/s] (peak-to-peak),phase [deg]\n"),
-            "s.csv:2: column 3 'response [mm/s] (peak-to-peak)': " + half +
+  EXPECT_EQ(header_error("frequency_hz,force [N],response [mm/s] (peak-to-peak),phase [deg]\n"),
+            "s.csv:2: column 3 'response [mm/s] (peak-to-peak)': " + kHalfFix +
                 ", then write 'response [mm/s]'");
   // Zero to peak by name: no factor, the missing column as before.
-  EXPECT_EQ(err("frequency_hz,force [N],acc_peak [g],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force [N],acc_peak [g],phase [deg]\n"),
             "s.csv:2: no 'response' column (need frequency_hz, force [N], response [unit], phase "
             "[deg|rad])");
   // An RMS column beside the response read is one more column, ignored.
@@ -182,41 +185,31 @@ TEST(SteppedSineCsv, AResponseMeasuredRmsOrPeakToPeakIsToldItsFactor) {
 // were read as m/s^2 (F_S 9.81 times off) or, zero to peak, 0.707 times the truth. Now each names
 // its factor and keeps its unit.
 TEST(SteppedSineCsv, AMeasureJoinedToItsUnitIsToldItsFactorAndKeepsTheUnit) {
-  auto err = [](const std::string& header) {
-    return input_error_of(
-        [&] { parse_stepped_sine_csv("# control: response\n" + header, "s.csv"); });
-  };
-  const std::string rms =
-      "multiply its values by sqrt(2) = 1.4142 (an amplitude is read zero to peak, a sine's RMS "
-      "times sqrt(2); read as it is, F_S comes out 0.707 times the truth)";
-  const std::string half =
-      "halve its values (an amplitude is read zero to peak; peak-to-peak values read as they are "
-      "give F_S twice the truth)";
-  EXPECT_EQ(err("frequency_hz,force [N],response [grms],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force [N],response [grms],phase [deg]\n"),
             "s.csv:2: column 'response [grms]': 'rms' says how it was measured, not a unit: " +
-                rms + ", then write 'response [g]'");
-  EXPECT_EQ(err("frequency_hz,force [N],response [g_rms],phase [deg]\n"),
+                kRmsFix + ", then write 'response [g]'");
+  EXPECT_EQ(header_error("frequency_hz,force [N],response [g_rms],phase [deg]\n"),
             "s.csv:2: column 'response [g_rms]': 'rms' says how it was measured, not a unit: " +
-                rms + ", then write 'response [g]'");
-  EXPECT_EQ(err("frequency_hz,force [N],response [mm/s pk-to-pk],phase [deg]\n"),
+                kRmsFix + ", then write 'response [g]'");
+  EXPECT_EQ(header_error("frequency_hz,force [N],response [mm/s pk-to-pk],phase [deg]\n"),
             "s.csv:2: column 'response [mm/s pk-to-pk]': 'pk-to-pk' says how it was measured, "
             "not a unit: " +
-                half + ", then write 'response [mm/s]'");
-  EXPECT_EQ(err("frequency_hz,force [N p-p],response [g],phase [deg]\n"),
+                kHalfFix + ", then write 'response [mm/s]'");
+  EXPECT_EQ(header_error("frequency_hz,force [N p-p],response [g],phase [deg]\n"),
             "s.csv:2: column 'force [N p-p]': 'p-p' says how it was measured, not a unit: halve "
             "its values (a force amplitude is read zero to peak), then write 'force [N]'");
-  EXPECT_EQ(err("frequency_hz,force [Npp],response [g],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force [Npp],response [g],phase [deg]\n"),
             "s.csv:2: column 'force [Npp]': 'pp' says how it was measured, not a unit: halve "
             "its values (a force amplitude is read zero to peak), then write 'force [N]'");
-  EXPECT_EQ(err("frequency_hz,force [N],Response (g RMS),phase [deg]\n"),
-            "s.csv:2: column 3 'Response (g RMS)': " + rms + ", then rename it 'response [g]'");
-  EXPECT_EQ(err("frequency_hz,force [N],resp [g rms],phase [deg]\n"),
-            "s.csv:2: column 3 'resp [g rms]': " + rms + ", then rename it 'response [g]'");
+  EXPECT_EQ(header_error("frequency_hz,force [N],Response (g RMS),phase [deg]\n"),
+            "s.csv:2: column 3 'Response (g RMS)': " + kRmsFix + ", then rename it 'response [g]'");
+  EXPECT_EQ(header_error("frequency_hz,force [N],resp [g rms],phase [deg]\n"),
+            "s.csv:2: column 3 'resp [g rms]': " + kRmsFix + ", then rename it 'response [g]'");
   // A unit the reader does not take is kept too, for the next refusal to name ('M/S^2').
-  EXPECT_EQ(err("frequency_hz,force [N],response [M/S^2 rms],phase [deg]\n"),
+  EXPECT_EQ(header_error("frequency_hz,force [N],response [M/S^2 rms],phase [deg]\n"),
             "s.csv:2: column 'response [M/S^2 rms]': 'rms' says how it was measured, not a "
             "unit: " +
-                rms + ", then write 'response [M/S^2]'");
+                kRmsFix + ", then write 'response [M/S^2]'");
 }
 
 // A level labelled RMS or peak to peak ('# level: 1.414 m/s^2 RMS', a level column '2 g pk-pk').
