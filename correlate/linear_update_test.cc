@@ -1776,6 +1776,19 @@ MeasuredModes chain_a_modes(double noise, unsigned seed) {
   return m;
 }
 
+// update_linear() of spring.ka and spring.kb on the two chains from ka 2e5 (the rest as made),
+// sensors at both tips, with chain_a_modes(noise, seed) and the noise stated as `stated`.
+Eigen::VectorXd update_from_chain_a(double noise, unsigned seed, double stated,
+                                    LinearUpdateSummary& s) {
+  const std::vector<Sensor> sensors{{"a", 5, 1.0}, {"b", 11, 1.0}};
+  TwoChainParameters sp;
+  sp.ka = 2e5;
+  LinearUpdateOptions o;
+  o.frequency_std = stated;
+  return update_linear(two_chain_structure(sp), {"spring.ka", "spring.kb"}, sensors,
+                       chain_a_modes(noise, seed), o, &s);
+}
+
 // A measured mode that frequency alone pairs with a model mode beside an unpaired one is fitted
 // with the unpaired one too, and the data decide. The two chains seen at both tips, chain A's
 // three lowest modes measured (57.89, 201.73 and 277.79 Hz, each at chain A's tip alone, so
@@ -1788,14 +1801,8 @@ MeasuredModes chain_a_modes(double noise, unsigned seed) {
 // the refusal says so. With exact frequencies the fit with kb flat is kept (held, no standard
 // deviation) and ka is the truth's to 1e-6 (the optimiser's tolerance), as before. About 0.03 s.
 TEST(LinearUpdate, AModeBesideAnUnpairedOneIsFittedWithItToo) {
-  const std::vector<Sensor> sensors{{"a", 5, 1.0}, {"b", 11, 1.0}};
-  TwoChainParameters sp;
-  sp.ka = 2e5;
-  const std::vector<std::string> sets{"spring.ka", "spring.kb"};
-  LinearUpdateOptions o;
-  o.frequency_std = 3e-3;
   LinearUpdateSummary s;
-  update_linear(two_chain_structure(sp), sets, sensors, chain_a_modes(3e-3, 1), o, &s);
+  update_from_chain_a(3e-3, 1, 3e-3, s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << r;
   EXPECT_NE(s.ambiguity.find("beside model mode 1 (56.405 Hz), unpaired"), std::string::npos) << r;
@@ -1806,10 +1813,8 @@ TEST(LinearUpdate, AModeBesideAnUnpairedOneIsFittedWithItToo) {
   // mode (kb tuned to 2.659e5, ka 4.988e5) leaves 0.05 chi-square units less than the one on
   // chain A's (ka 4.999e5 +/- 0.656 %, kb flat): kb rests on that pair alone, and the result is
   // the latter, ka within 3 of its standard deviations of the truth (0.02 here), kb held.
-  o.frequency_std = 1e-3;
   LinearUpdateSummary f;
-  const Eigen::VectorXd t1 =
-      update_linear(two_chain_structure(sp), sets, sensors, chain_a_modes(1e-3, 5), o, &f);
+  const Eigen::VectorXd t1 = update_from_chain_a(1e-3, 5, 1e-3, f);
   const std::string rf = f.report();
   ASSERT_EQ(f.status, LinearUpdateStatus::kConverged) << rf;
   ASSERT_TRUE(f.parameters[0].relative_std.has_value()) << rf;
@@ -1817,8 +1822,7 @@ TEST(LinearUpdate, AModeBesideAnUnpairedOneIsFittedWithItToo) {
   EXPECT_FALSE(f.parameters[1].relative_std.has_value()) << rf;
 
   LinearUpdateSummary e;
-  const Eigen::VectorXd theta =
-      update_linear(two_chain_structure(sp), sets, sensors, chain_a_modes(0.0, 1), {}, &e);
+  const Eigen::VectorXd theta = update_from_chain_a(0.0, 1, LinearUpdateOptions{}.frequency_std, e);
   const std::string re = e.report();
   ASSERT_EQ(e.status, LinearUpdateStatus::kConverged) << re;
   EXPECT_NEAR(theta(0) / 5e5, 1.0, 1e-6) << re;
@@ -1837,16 +1841,9 @@ TEST(LinearUpdate, AModeBesideAnUnpairedOneIsFittedWithItToo) {
 // Now kb is flat at the result, held at its start with no standard deviation, and ka is within 3 of
 // its own (the stated noise's tail: 0.02 and 1.66 here). About 0.02 s.
 TEST(LinearUpdate, AModeMovedBesideAnUnpairedOneIsJudgedAtItsOwnEnd) {
-  const std::vector<Sensor> sensors{{"a", 5, 1.0}, {"b", 11, 1.0}};
-  TwoChainParameters sp;
-  sp.ka = 2e5;
-  const std::vector<std::string> sets{"spring.ka", "spring.kb"};
-  LinearUpdateOptions o;
-  o.frequency_std = 1e-3;
   for (const unsigned seed : {18u, 22u}) {
     LinearUpdateSummary s;
-    const Eigen::VectorXd theta =
-        update_linear(two_chain_structure(sp), sets, sensors, chain_a_modes(1e-3, seed), o, &s);
+    const Eigen::VectorXd theta = update_from_chain_a(1e-3, seed, 1e-3, s);
     const std::string r = s.report();
     ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << seed << r;
     EXPECT_FALSE(s.parameters[1].relative_std.has_value()) << seed << r;
@@ -1868,14 +1865,8 @@ TEST(LinearUpdate, AModeMovedBesideAnUnpairedOneIsJudgedAtItsOwnEnd) {
 // on, both on chain A's modes, kb is flat and ka 5.193e5; the two fits differ by 1.32 chi-square
 // units, and the refusal names both moves. About 0.02 s.
 TEST(LinearUpdate, AMovedFitIsMovedOnWhereTheSetStillRestsOnAnotherPair) {
-  const std::vector<Sensor> sensors{{"a", 5, 1.0}, {"b", 11, 1.0}};
-  TwoChainParameters sp;
-  sp.ka = 2e5;
-  const std::vector<std::string> sets{"spring.ka", "spring.kb"};
-  LinearUpdateOptions o;
-  o.frequency_std = 3e-3;
   LinearUpdateSummary s;
-  update_linear(two_chain_structure(sp), sets, sensors, chain_a_modes(3e-3, 8), o, &s);
+  update_from_chain_a(3e-3, 8, 3e-3, s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << r;
   EXPECT_NE(s.ambiguity.find("paired with the latter; then test mode 3 (279.35 Hz) was paired"),
