@@ -1656,6 +1656,13 @@ struct OneSensorChains {
   TwoChainParameters truth, start;
   std::vector<Sensor> sensors{{"a", 5, 1.0}};
   MeasuredModes measured;
+
+  /// update_linear() of kSets from the start, the noise stated as `stated`.
+  Eigen::VectorXd update(double stated, LinearUpdateSummary& s) const {
+    LinearUpdateOptions o;
+    o.frequency_std = stated;
+    return update_linear(two_chain_structure(start), kSets, sensors, measured, o, &s);
+  }
 };
 OneSensorChains one_sensor_chains(unsigned seed, double ka = 3e5, double kb = 5e5) {
   OneSensorChains c;
@@ -1686,13 +1693,8 @@ OneSensorChains one_sensor_chains(unsigned seed, double ka = 3e5, double kb = 5e
 // "converged"). About 0.05 s.
 TEST(LinearUpdate, ARestartPairingOtherwiseMustWinWithoutTheStatedNoise) {
   const OneSensorChains c = one_sensor_chains(40);
-  const TwoChainParameters& sp = c.start;
-  const std::vector<Sensor>& sensors = c.sensors;
-  const MeasuredModes& meas = c.measured;
-  LinearUpdateOptions o;
-  o.frequency_std = 1e-3;
   LinearUpdateSummary s;
-  update_linear(two_chain_structure(sp), kSets, sensors, meas, o, &s);
+  c.update(1e-3, s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << r;
   EXPECT_EQ(s.starts, 1) << r;
@@ -1707,9 +1709,8 @@ TEST(LinearUpdate, ARestartPairingOtherwiseMustWinWithoutTheStatedNoise) {
       << r;
   EXPECT_NE(r.find("spring.ka: 300000 -> not decided"), std::string::npos) << r;
 
-  o.frequency_std = 3e-3;
   LinearUpdateSummary h;
-  update_linear(two_chain_structure(sp), kSets, sensors, meas, o, &h);
+  c.update(3e-3, h);
   const std::string rh = h.report();
   ASSERT_EQ(h.status, LinearUpdateStatus::kAmbiguous) << rh;
   EXPECT_EQ(h.starts, 1) << rh;
@@ -1731,12 +1732,9 @@ TEST(LinearUpdate, ARestartPairingOtherwiseMustWinWithoutTheStatedNoise) {
 // cannot be decided, and the update says so (over seeds 1-100: none crosswise, 3 right, 97
 // refused). About 0.1 s.
 TEST(LinearUpdate, PairsAReversedStartMadeCrosswiseAreFittedExchanged) {
-  LinearUpdateOptions o;
-  o.frequency_std = 3e-3;
   const OneSensorChains c = one_sensor_chains(96, 1e6, 3e5);
   LinearUpdateSummary s;
-  const Eigen::VectorXd theta =
-      update_linear(two_chain_structure(c.start), kSets, c.sensors, c.measured, o, &s);
+  const Eigen::VectorXd theta = c.update(3e-3, s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kConverged) << r;
   EXPECT_LT(std::abs(std::log(theta(0) / c.truth.ka)), 0.1) << r;
@@ -1746,9 +1744,8 @@ TEST(LinearUpdate, PairsAReversedStartMadeCrosswiseAreFittedExchanged) {
             std::string::npos)
       << r;
 
-  const OneSensorChains d = one_sensor_chains(2, 1e6, 3e5);
   LinearUpdateSummary h;
-  update_linear(two_chain_structure(d.start), kSets, d.sensors, d.measured, o, &h);
+  one_sensor_chains(2, 1e6, 3e5).update(3e-3, h);
   const std::string rh = h.report();
   ASSERT_EQ(h.status, LinearUpdateStatus::kAmbiguous) << rh;
   EXPECT_NE(h.ambiguity.find("leave costs 2.523e-05 and 3.018e-05, which the data cannot tell "
@@ -1886,14 +1883,8 @@ TEST(LinearUpdate, AMovedFitIsMovedOnWhereTheSetStillRestsOnAnotherPair) {
 // pairs cannot be decided (the data cannot tell them apart), and the refusal says so. About
 // 0.01 s.
 TEST(LinearUpdate, GuessedPairsThatDifferByShapeAloneAreRivals) {
-  const OneSensorChains c = one_sensor_chains(233);
-  const TwoChainParameters& sp = c.start;
-  const std::vector<Sensor>& sensors = c.sensors;
-  const MeasuredModes& meas = c.measured;
-  LinearUpdateOptions o;
-  o.frequency_std = 3e-3;
   LinearUpdateSummary s;
-  update_linear(two_chain_structure(sp), kSets, sensors, meas, o, &s);
+  one_sensor_chains(233).update(3e-3, s);
   const std::string r = s.report();
   ASSERT_EQ(s.status, LinearUpdateStatus::kAmbiguous) << r;
   EXPECT_NE(s.ambiguity.find("fitting 4 of the 4 candidate pairings leaves costs 2.698e-06, "
