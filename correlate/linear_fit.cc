@@ -220,7 +220,7 @@ bool undecided_by_scatter(const Settled& given, const Settled& swapped, bool app
   const int dg = degrees_of_freedom(given, held), ds = degrees_of_freedom(swapped, held);
   if (dg < 1 || ds < 1) return false;
   const double rg = 2 * given.cost / sf2 / dg, rs = 2 * swapped.cost / sf2 / ds;
-  return rg > reduced_chi2_limit(dg) && !(rg >= variance_ratio_limit(dg, ds) * rs);
+  return rg > reduced_chi2_limit(dg) && !ratio_decides(rg, dg, rs, ds);
 }
 
 // The outcome of lowest cost among the starts'; `costs` receives each one's cost, `decided`
@@ -338,12 +338,8 @@ std::string exchanged_pairs_note(const LinearProblem& p, const std::vector<Settl
           ? fmt::format(
                 "the fit from the first pairs left a reduced chi-square of {:.3g} over {}, beyond "
                 "the stated noise (above {:.3g}), so that noise may be understated; the exchanged "
-                "ones left {:.3g} over {}, {:.3g} times less, and without the stated noise "
-                "only a ratio beyond {:.3g} (Fisher's F's 3-sigma point over {} and {} degrees of "
-                "freedom) tells the two apart; if the noise is larger than stated, give it "
-                "(--frequency-std)",
-                rg, dg, reduced_chi2_limit(dg), rw, dw, rg / rw, variance_ratio_limit(dg, dw), dg,
-                dw)
+                "ones {}",
+                rg, dg, reduced_chi2_limit(dg), ratio_undecided(rg, dg, rw, dw))
           : fmt::format(
                 "the two fits differ by {:.3g} chi-square units of the stated noise, "
                 "fewer than 9",

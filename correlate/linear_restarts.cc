@@ -92,20 +92,15 @@ std::string undecided_by_scatter(const LinearProblem& p, const LinearUpdateSumma
     return "";
   if (shapes_prefer(p, *r_end, *s_end)) return "";
   const double given = s.chi2 / s.degrees_of_freedom, restarted = r.chi2 / r.degrees_of_freedom;
-  const double limit = variance_ratio_limit(s.degrees_of_freedom, r.degrees_of_freedom);
-  if (given >= limit * restarted) return "";
+  if (ratio_decides(given, s.degrees_of_freedom, restarted, r.degrees_of_freedom)) return "";
   return differing_pairs(
       p, *r_end, r.final_cost, *s_end, s.final_cost,
-      fmt::format(
-          "the first is the fit from {}, the second the fit from {}, which left a reduced "
-          "chi-square of {:.3g} over {} degrees of freedom, beyond the stated noise (above "
-          "{:.3g}), so that noise may be understated; the first left {:.3g} over {}, {:.3g} times "
-          "less, and without the stated noise only a ratio beyond {:.3g} (Fisher's F's 3-sigma "
-          "point over {} and {} degrees of freedom) tells the two apart; if the noise is larger "
-          "than stated, give it (--frequency-std)",
-          which, given_from, given, s.degrees_of_freedom, reduced_chi2_limit(s.degrees_of_freedom),
-          restarted, r.degrees_of_freedom, given / restarted, limit, s.degrees_of_freedom,
-          r.degrees_of_freedom));
+      fmt::format("the first is the fit from {}, the second the fit from {}, which left a reduced "
+                  "chi-square of {:.3g} over {} degrees of freedom, beyond the stated noise (above "
+                  "{:.3g}), so that noise may be understated; the first {}",
+                  which, given_from, given, s.degrees_of_freedom,
+                  reduced_chi2_limit(s.degrees_of_freedom),
+                  ratio_undecided(given, s.degrees_of_freedom, restarted, r.degrees_of_freedom)));
 }
 
 // s.restarts: what was tried (`tried`, `skipped`) from the given fit's chi-square over its

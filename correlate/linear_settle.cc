@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "jointlab/correlate/noise_limits.h"
+
 namespace jointlab::correlate::detail {
 namespace {
 
@@ -51,6 +53,19 @@ std::string telling_sensor(const model::Model& model, const std::vector<Sensor>&
 }
 
 }  // namespace
+
+bool ratio_decides(double worse, int dof_worse, double better, int dof_better) {
+  return worse >= variance_ratio_limit(dof_worse, dof_better) * better;
+}
+
+std::string ratio_undecided(double worse, int dof_worse, double better, int dof_better) {
+  return fmt::format(
+      "left {:.3g} over {}, {:.3g} times less, and without the stated noise only a ratio beyond "
+      "{:.3g} (Fisher's F's 3-sigma point over {} and {} degrees of freedom) tells the two apart; "
+      "if the noise is larger than stated, give it (--frequency-std)",
+      better, dof_better, worse / better, variance_ratio_limit(dof_worse, dof_better), dof_worse,
+      dof_better);
+}
 
 // What differs between two fitted pairings that the data cannot tell apart (`why`): each
 // measured mode paired with another model mode (by shape), named with its partner at each result

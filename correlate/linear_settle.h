@@ -69,6 +69,17 @@ std::string shapes_decided(const LinearProblem& p, const TrackedPoint& a, double
 std::string differing_pairs(const LinearProblem& p, const TrackedPoint& a, double cost_a,
                             const TrackedPoint& b, double cost_b, const std::string& why);
 
+/// Whether a fit of reduced chi-square `worse` over `dof_worse` degrees of freedom is told from
+/// one of `better` over `dof_better` without the stated noise: their ratio, which no noise scale
+/// enters, reaches Fisher's F's 3-sigma point (variance_ratio_limit()).
+bool ratio_decides(double worse, int dof_worse, double better, int dof_better);
+
+/// Why ratio_decides() did not, from the better fit's "left ...": "left 0.339 over 2, 39.4 times
+/// less, and without the stated noise only a ratio beyond 740 (Fisher's F's 3-sigma point over 2
+/// and 2 degrees of freedom) tells the two apart; if the noise is larger than stated, give it
+/// (--frequency-std)".
+std::string ratio_undecided(double worse, int dof_worse, double better, int dof_better);
+
 /// Least squares with pairs followed by shape from `point`, the pairs at its result decided by
 /// the data.
 Settled settle(const LinearProblem& p, TrackedPoint point, const std::vector<char>& held);
