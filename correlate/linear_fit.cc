@@ -348,6 +348,82 @@ std::string exchanged_pairs_note(const LinearProblem& p, const std::vector<Settl
                          fmt::format("{}; {}", why[swapped - first_swap], how));
 }
 
+// The pairings of the winner `win` with two partners exchanged or a mode moved beside an
+// unpaired one (swapped_pairings()), each fitted as a further start (appended to `starts` and
+// `outcomes`), and best_start() again over all: `win`, `decided`, `rivals`, `by_shapes` and
+// `costs` follow it. Returns exchanged_pairs_note()'s note, or "" where nothing was fitted.
+std::string fit_exchanges(const LinearProblem& p, const std::vector<char>& held, double sf2,
+                          std::vector<TrackedPoint>& starts, std::vector<Settled>& outcomes,
+                          size_t& win, bool& decided, std::vector<const TrackedPoint*>& rivals,
+                          std::string& by_shapes, std::vector<std::string>& costs) {
+  const size_t first_swap = outcomes.size();
+  std::vector<std::string> swap_why;
+  std::vector<char> by_shape_only(outcomes.size(), 0);
+  // A pairing fitted already (the same partners by shape) is not fitted again. Each partner by
+  // its own shape (no cluster): a move between two modes of nearly one frequency follows
+  // another shape from there. The two chains at 0.1 % noise, seed 18: the fit tuned kb until
+  // chain B's first mode (57.880 Hz) sat 0.033 % below chain A's (57.899 Hz), within the 0.1 %
+  // cluster, and the move of test mode 1 to chain A's was taken for the given pairs and never
+  // fitted ("converged", kb 2.657e5 +/- 0.344 %, truth 3e5, 35 of those off).
+  std::vector<std::vector<size_t>> moved(outcomes.size());  // the measured modes each moved
+  const auto fit_pairing = [&](SwappedPairs& w, std::string why, std::vector<size_t> modes) {
+    if (std::any_of(outcomes.begin(), outcomes.end(), [&](const Settled& f) {
+          return same_partners(p.model.mass, f.point.modes, f.point.columns, w.point.modes,
+                               w.point.columns, 0.5, 0.0);
+        }))
+      return;
+    by_shape_only.push_back(w.unpaired);
+    starts.push_back(w.point);
+    outcomes.push_back(w.unpaired ? fit_moved(p, std::move(w.point), held)
+                                  : settle(p, std::move(w.point), held));
+    swap_why.push_back(std::move(why));
+    moved.push_back(std::move(modes));
+  };
+  // The measured modes whose partners differ between pairings `a` and `b`.
+  const auto differing = [](const TrackedPoint& a, const TrackedPoint& b) {
+    std::vector<size_t> out;
+    for (size_t i = 0; i < a.columns.size(); ++i)
+      if (a.columns[i] != b.columns[i]) out.push_back(i);
+    return out;
+  };
+  for (SwappedPairs& w : swapped_pairings(p, outcomes[win].point))
+    fit_pairing(w, w.why, differing(w.point, outcomes[win].point));
+  // A moved fit within 9 chi-square units of the given one is moved on in turn, another
+  // measured mode each time (at most kMaxPairings more fits): the given fit may have tuned a
+  // set onto two measured modes, and moving one leaves the set seen through the other. The two
+  // chains at 0.3 % noise, seeds 8, 23, 32, 60 and 85: test modes 1 and 3 both on chain B's
+  // modes, each moved alone still tuned kb, and the given fit "converged" with kb +/- 0.89 %
+  // (truth 3e5, 12 to 15 of those off); moved on, both off chain B, kb is flat, and the pairs
+  // cannot be decided.
+  size_t chained = 0;
+  for (size_t k = first_swap; k < outcomes.size(); ++k) {
+    if (!by_shape_only[k] || !(2 * (outcomes[k].cost - outcomes[win].cost) / sf2 < 9)) continue;
+    for (SwappedPairs& w : swapped_pairings(p, outcomes[k].point)) {
+      std::vector<size_t> modes = differing(w.point, outcomes[k].point);
+      if (!w.unpaired || chained >= kMaxPairings ||
+          std::any_of(modes.begin(), modes.end(), [&](size_t i) {
+            return std::find(moved[k].begin(), moved[k].end(), i) != moved[k].end();
+          }))
+        continue;
+      modes.insert(modes.end(), moved[k].begin(), moved[k].end());
+      const size_t before = outcomes.size();
+      fit_pairing(w, fmt::format("{}; then {}", swap_why[k - first_swap], w.why), std::move(modes));
+      chained += outcomes.size() - before;
+    }
+  }
+  if (outcomes.size() > first_swap) {
+    const size_t given = win;
+    costs.clear();
+    rivals.clear();
+    by_shapes.clear();
+    win = best_start(p, outcomes, sf2, held, first_swap, by_shape_only, costs, decided, rivals,
+                     by_shapes);
+    return exchanged_pairs_note(p, outcomes, given, win, first_swap, swap_why, rivals, decided, sf2,
+                                held);
+  }
+  return "";
+}
+
 // The winning start's outcome `o` as the summary's fit so far.
 void take_outcome(const Settled& o, LinearUpdateSummary& s, std::vector<PairWarning>* weak_pairs) {
   s.status = o.status;
@@ -638,79 +714,14 @@ Eigen::VectorXd fit_as_given(const model::Model& model, const std::vector<std::s
   bool decided = true;
   std::vector<const TrackedPoint*> rivals;
   std::string by_shapes;
-  const size_t first_swap = outcomes.size();
-  size_t win =
-      best_start(p, outcomes, sf2, held, first_swap, {}, start_costs, decided, rivals, by_shapes);
+  size_t win = best_start(p, outcomes, sf2, held, outcomes.size(), {}, start_costs, decided, rivals,
+                          by_shapes);
   // The pairs the result leaves to frequency alone between model modes adjacent in frequency,
   // fitted the other way round: the data decide between the two as between the start's guesses.
-  std::string swap_note;
-  if (decided && outcomes[win].ambiguity.empty()) {
-    std::vector<std::string> swap_why;
-    std::vector<char> by_shape_only(outcomes.size(), 0);
-    // A pairing fitted already (the same partners by shape) is not fitted again. Each partner by
-    // its own shape (no cluster): a move between two modes of nearly one frequency follows
-    // another shape from there. The two chains at 0.1 % noise, seed 18: the fit tuned kb until
-    // chain B's first mode (57.880 Hz) sat 0.033 % below chain A's (57.899 Hz), within the 0.1 %
-    // cluster, and the move of test mode 1 to chain A's was taken for the given pairs and never
-    // fitted ("converged", kb 2.657e5 +/- 0.344 %, truth 3e5, 35 of those off).
-    std::vector<std::vector<size_t>> moved(outcomes.size());  // the measured modes each moved
-    const auto fit_pairing = [&](SwappedPairs& w, std::string why, std::vector<size_t> modes) {
-      if (std::any_of(outcomes.begin(), outcomes.end(), [&](const Settled& f) {
-            return same_partners(p.model.mass, f.point.modes, f.point.columns, w.point.modes,
-                                 w.point.columns, 0.5, 0.0);
-          }))
-        return;
-      by_shape_only.push_back(w.unpaired);
-      starts.push_back(w.point);
-      outcomes.push_back(w.unpaired ? fit_moved(p, std::move(w.point), held)
-                                    : settle(p, std::move(w.point), held));
-      swap_why.push_back(std::move(why));
-      moved.push_back(std::move(modes));
-    };
-    // The measured modes whose partners differ between pairings `a` and `b`.
-    const auto differing = [](const TrackedPoint& a, const TrackedPoint& b) {
-      std::vector<size_t> out;
-      for (size_t i = 0; i < a.columns.size(); ++i)
-        if (a.columns[i] != b.columns[i]) out.push_back(i);
-      return out;
-    };
-    for (SwappedPairs& w : swapped_pairings(p, outcomes[win].point))
-      fit_pairing(w, w.why, differing(w.point, outcomes[win].point));
-    // A moved fit within 9 chi-square units of the given one is moved on in turn, another
-    // measured mode each time (at most kMaxPairings more fits): the given fit may have tuned a
-    // set onto two measured modes, and moving one leaves the set seen through the other. The two
-    // chains at 0.3 % noise, seeds 8, 23, 32, 60 and 85: test modes 1 and 3 both on chain B's
-    // modes, each moved alone still tuned kb, and the given fit "converged" with kb +/- 0.89 %
-    // (truth 3e5, 12 to 15 of those off); moved on, both off chain B, kb is flat, and the pairs
-    // cannot be decided.
-    size_t chained = 0;
-    for (size_t k = first_swap; k < outcomes.size(); ++k) {
-      if (!by_shape_only[k] || !(2 * (outcomes[k].cost - outcomes[win].cost) / sf2 < 9)) continue;
-      for (SwappedPairs& w : swapped_pairings(p, outcomes[k].point)) {
-        std::vector<size_t> modes = differing(w.point, outcomes[k].point);
-        if (!w.unpaired || chained >= kMaxPairings ||
-            std::any_of(modes.begin(), modes.end(), [&](size_t i) {
-              return std::find(moved[k].begin(), moved[k].end(), i) != moved[k].end();
-            }))
-          continue;
-        modes.insert(modes.end(), moved[k].begin(), moved[k].end());
-        const size_t before = outcomes.size();
-        fit_pairing(w, fmt::format("{}; then {}", swap_why[k - first_swap], w.why),
-                    std::move(modes));
-        chained += outcomes.size() - before;
-      }
-    }
-    if (outcomes.size() > first_swap) {
-      const size_t given = win;
-      start_costs.clear();
-      rivals.clear();
-      by_shapes.clear();
-      win = best_start(p, outcomes, sf2, held, first_swap, by_shape_only, start_costs, decided,
-                       rivals, by_shapes);
-      swap_note = exchanged_pairs_note(p, outcomes, given, win, first_swap, swap_why, rivals,
-                                       decided, sf2, held);
-    }
-  }
+  const std::string swap_note = decided && outcomes[win].ambiguity.empty()
+                                    ? fit_exchanges(p, held, sf2, starts, outcomes, win, decided,
+                                                    rivals, by_shapes, start_costs)
+                                    : std::string();
   Settled& o = outcomes[win];
   take_outcome(o, s, weak_pairs);
   if (!by_shapes.empty()) s.warnings.push_back(by_shapes);
